@@ -1,0 +1,11 @@
+# Warnings and sanitizers are per-target settings carried by two interface libraries,
+# not global flags: every tvf target links tvf_options.
+add_library(tvf_options INTERFACE)
+target_compile_options(tvf_options INTERFACE
+  $<$<CXX_COMPILER_ID:GNU,Clang>:-Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
+    -Wcast-align -Woverloaded-virtual -Wnull-dereference -Wimplicit-fallthrough>)
+if(TVF_SANITIZE)
+  target_compile_options(tvf_options INTERFACE
+    -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+  target_link_options(tvf_options INTERFACE -fsanitize=address,undefined)
+endif()

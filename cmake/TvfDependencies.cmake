@@ -1,0 +1,31 @@
+# Every dependency comes from a Debian package (scripts/install-deps.sh installs them).
+# A missing one stops configuration with the name of the package to install.
+macro(tvf_require pkg debian)
+  find_package(${pkg} ${ARGN} QUIET)
+  if(NOT ${pkg}_FOUND)
+    message(FATAL_ERROR "tvf needs ${pkg}: install the Debian package '${debian}' (or run scripts/install-deps.sh)")
+  endif()
+endmacro()
+
+tvf_require(Eigen3 libeigen3-dev 3.4 NO_MODULE)
+tvf_require(TBB libtbb-dev)
+tvf_require(nlohmann_json nlohmann-json3-dev)
+tvf_require(CLI11 libcli11-dev)
+tvf_require(fmt libfmt-dev)
+tvf_require(CGAL libcgal-dev)
+set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)
+
+find_package(Threads REQUIRED)
+
+if(TVF_BUILD_TESTS)
+  tvf_require(GTest libgtest-dev)
+  # Tests that read our outputs with NumPy and VTK's own readers use Debian's python3
+  # (python3-numpy, python3-vtk9), not whatever python3 comes first on PATH.
+  find_program(TVF_PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
+  if(NOT TVF_PYTHON)
+    find_program(TVF_PYTHON NAMES python3)
+  endif()
+endif()
+if(TVF_BUILD_BENCH)
+  tvf_require(benchmark libbenchmark-dev)
+endif()

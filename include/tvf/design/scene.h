@@ -1,0 +1,156 @@
+#pragma once
+// The scene: the whole design (DESIGN §10). Every client reads and writes it through
+// scene_json.h; this header is the in-memory form. Positions are world coordinates:
+// planar domains use (x, y) with z = 0; mesh domains use (x, y, z), snapped to the
+// surface when the design is evaluated.
+#include "tvf/core/types.h"
+#include "tvf/field/time_sampling.h"
+#include "tvf/mesh/grid.h"
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace tvf {
+
+// A control point of a path: a position and a time.
+struct PathPoint {
+  Vec3 position = Vec3::Zero();
+  double t = 0.0;
+};
+
+// M(t) = diag(sx, sy)·R(θ), keyed; sx, sy, θ interpolated linearly (paper §5.1).
+struct TransformKey {
+  double t = 0.0;
+  double sx = 1.0;
+  double sy = 1.0;
+  double theta = 0.0;
+};
+
+enum class SingularType {
+  source,
+  sink,
+  saddle,
+  ccw_center,
+  cw_center,
+  repelling_focus,
+  attracting_focus,
+};
+
+// Jacobian of a named type. Foci spiral with equal radial and angular rates.
+Mat2 jacobian_of(SingularType type);
+
+struct SingularElement {
+  std::optional<SingularType> type;  // empty when given by an explicit Jacobian
+  Mat2 jacobian = Mat2::Identity();
+  std::vector<PathPoint> path;       // ≥ 1 point; one point = fixed element
+  std::vector<TransformKey> transform;
+};
+
+struct RegularElement {
+  std::vector<PathPoint> pathline;  // ≥ 2 points with increasing t
+  double attach = 0.0;              // attachment strength c ≥ 0 (0: plain regular element)
+};
+
+enum class BifurcationType {
+  saddle_source_cancellation,  // eq. 1: (t + x², y)
+  saddle_sink_creation,        // eq. 2: (t − x², −y)
+  saddle_source_creation,      // (−t + x², y)
+  saddle_sink_cancellation,    // (−t − x², −y)
+};
+
+struct BifurcationElement {
+  BifurcationType type = BifurcationType::saddle_sink_creation;
+  PathPoint at;             // position and time of the bifurcation
+  double scale = 0.25;      // space scale s (world units)
+  double time_scale = 0.25; // time scale τ
+  double angle = 0.0;       // axis angle θ (radians)
+};
+
+using Element = std::variant<SingularElement, RegularElement, BifurcationElement>;
+
+// Key frames (DESIGN §10; used by the spacetime generator).
+struct KeyframeElement {
+  std::string kind;  // "singular" | "regular"
+  std::optional<SingularType> type;
+  Mat2 jacobian = Mat2::Identity();
+  Vec3 at = Vec3::Zero();
+  Vec3 vector = Vec3::UnitX();  // regular only
+};
+struct KeyframeStreamline {
+  std::vector<Vec3> points;
+  double speed = 1.0;
+};
+struct Keyframe {
+  double t = 0.0;
+  std::vector<KeyframeElement> elements;
+  std::vector<KeyframeStreamline> streamlines;
+  std::string field;  // a field file (resolved relative to the scene), or empty
+};
+
+enum class Generator { basis, constrained, spacetime, deform };
+enum class Weights { cotan, uniform, mean_value };
+
+struct SolverSettings {
+  Weights weights = Weights::cotan;
+  double temporal_weight = 30.0;
+  double tolerance = 1e-10;
+  double region_radius = 0.1;
+};
+
+// Meshes made in code (tvf additions to the format, so examples need no mesh files).
+struct SphereSpec {
+  int subdivisions = 5;  // icosphere: 10·4^s + 2 vertices
+  double radius = 1.0;
+};
+struct TorusSpec {
+  int nu = 96;  // around the z axis
+  int nv = 48;  // around the tube
+  double major_radius = 1.0;
+  double minor_radius = 0.35;
+};
+
+// Exactly one of grid, mesh, sphere, torus is set.
+struct Domain {
+  std::optional<GridSpec> grid;
+  std::string mesh;  // path as written in the scene (relative to the scene file)
+  std::optional<SphereSpec> sphere;
+  std::optional<TorusSpec> torus;
+  bool is_planar() const { return grid.has_value(); }
+};
+
+struct Scene {
+  int version = 1;
+  std::string description;  // free text (tvf addition)
+  Domain domain;
+  TimeSampling time;
+  Generator generator = Generator::basis;
+  SolverSettings solver;
+  double falloff = 8.0;  // d̂: the basis fields decay as exp(−d̂·‖x − p‖² / diam²)
+  std::vector<Element> elements;
+  std::vector<Keyframe> keyframes;
+  nlohmann::json deform;  // validated by scene_json; interpreted by the deform generator
+  nlohmann::json edits = nlohmann::json::array();  // validated list of edit entries
+
+  // Where the scene came from: used to resolve relative paths and to name the file in
+  // error messages. Empty for scenes built in code.
+  std::string source_path;
+  std::string label() const { return source_path.empty() ? std::string("scene") : source_path; }
+  // The mesh path resolved against the scene file's folder.
+  std::string resolved_mesh_path() const;
+};
+
+// Names used in the scene format (exact strings of DESIGN §10).
+const char* to_string(SingularType t);
+const char* to_string(BifurcationType t);
+const char* to_string(Generator g);
+const char* to_string(Weights w);
+std::optional<SingularType> singular_type_from_string(const std::string& s);
+std::optional<BifurcationType> bifurcation_type_from_string(const std::string& s);
+std::optional<Generator> generator_from_string(const std::string& s);
+std::optional<Weights> weights_from_string(const std::string& s);
+
+}  // namespace tvf

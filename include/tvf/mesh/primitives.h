@@ -1,0 +1,14 @@
+#pragma once
+// Meshes made in code: used by examples (no mesh files in git) and by the tests' mesh
+// catalogue.
+#include "tvf/mesh/mesh.h"
+
+namespace tvf {
+
+// Icosahedron subdivided `subdivisions` times, projected to a sphere of `radius`
+// (10·4^s + 2 vertices; s = 5 gives 10,242 and s = 6 gives 40,962).
+Mesh make_icosphere(int subdivisions, double radius = 1.0);
+// Torus around the z axis: major radius R, minor radius r, nu × nv vertices.
+Mesh make_torus(int nu, int nv, double R = 1.0, double r = 0.35);
+
+}  // namespace tvf

@@ -1,0 +1,20 @@
+#include "tvf/core/error.h"
+
+namespace tvf {
+
+void throw_input_error(const std::string& file, const std::string& where,
+                       const std::string& message) {
+  std::string text;
+  if (!file.empty()) text += file + ": ";
+  if (!where.empty()) text += where + ": ";
+  text += message;
+  throw Error(text);
+}
+
+void throw_internal_error(const char* condition, const char* file, int line,
+                          const std::string& message) {
+  throw InternalError(fmt::format("internal error at {}:{}: check '{}' failed{}{}", file, line,
+                                  condition, message.empty() ? "" : ": ", message));
+}
+
+}  // namespace tvf

@@ -1,0 +1,62 @@
+#include "support/test_meshes.h"
+
+#include "tvf/mesh/grid.h"
+#include "tvf/mesh/primitives.h"
+
+#include <map>
+
+namespace tvf::test {
+
+const Mesh& grid_mesh() {
+  static const Mesh m = make_grid(GridSpec{17, 13, {-1.0, -0.5}, {2.0, 1.0}});
+  return m;
+}
+const Mesh& icosphere_mesh() {
+  static const Mesh m = make_icosphere(3);
+  return m;
+}
+const Mesh& torus_mesh() {
+  static const Mesh m = make_torus(24, 12);
+  return m;
+}
+const Mesh& hemisphere_mesh() {
+  static const Mesh m = [] {
+    const Mesh& s = icosphere_mesh();
+    std::vector<int> remap(static_cast<size_t>(s.num_vertices()), -1);
+    std::vector<Vec3> pos;
+    std::vector<Face> faces;
+    for (int f = 0; f < s.num_faces(); ++f) {
+      const Face& t = s.face(f);
+      bool upper = true;
+      for (int v : t) upper = upper && s.position(v).z() > -1e-9;
+      if (!upper) continue;
+      Face g;
+      for (int k = 0; k < 3; ++k) {
+        int& r = remap[static_cast<size_t>(t[static_cast<size_t>(k)])];
+        if (r < 0) {
+          r = static_cast<int>(pos.size());
+          pos.push_back(s.position(t[static_cast<size_t>(k)]));
+        }
+        g[static_cast<size_t>(k)] = r;
+      }
+      faces.push_back(g);
+    }
+    return Mesh(std::move(pos), std::move(faces), "hemisphere");
+  }();
+  return m;
+}
+
+std::vector<NamedMesh> closed_meshes() {
+  return {{"icosphere", &icosphere_mesh()}, {"torus", &torus_mesh()}};
+}
+std::vector<NamedMesh> meshes_with_boundary() {
+  return {{"grid", &grid_mesh()}, {"hemisphere", &hemisphere_mesh()}};
+}
+std::vector<NamedMesh> all_meshes() {
+  auto a = closed_meshes();
+  auto b = meshes_with_boundary();
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+}  // namespace tvf::test

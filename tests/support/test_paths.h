@@ -1,0 +1,40 @@
+#pragma once
+// Paths and processes for tests: a fresh temporary folder per test, and running the
+// tvf CLI or Debian's python3 with captured output.
+#include <filesystem>
+#include <string>
+
+namespace tvf::test {
+
+// A new empty folder under the system temp dir, removed by the destructor.
+class TempDir {
+public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+private:
+  std::filesystem::path path_;
+};
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+// Runs a shell command line, capturing output.
+CommandResult run_command(const std::string& command_line);
+// Runs the tvf CLI built with the tests with the given arguments (shell-quoted by caller).
+CommandResult run_tvf(const std::string& arguments);
+
+std::string source_dir();
+std::string test_data_dir();
+std::string python();  // Debian's python3 with numpy and vtk, or "" when not found
+
+// Writes text to a file (test fixtures).
+void write_text(const std::filesystem::path& path, const std::string& text);
+std::string read_text(const std::filesystem::path& path);
+
+}  // namespace tvf::test
