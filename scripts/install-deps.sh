@@ -13,7 +13,7 @@ packages=(
   libcgal-dev            # OBJ/PLY/OFF reading (polygon soups) and mesh repair
   libgmp-dev libmpfr-dev # required by CGAL headers
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-numpy python3-vtk9   # tests read our outputs with NumPy and VTK's own readers
+  python3 python3-numpy python3-vtk9 python3-jsonschema  # tests read our outputs with NumPy, VTK and jsonschema
 )
 sudo_cmd=()
 if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi

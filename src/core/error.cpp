@@ -5,9 +5,12 @@ namespace tvf {
 void throw_input_error(const std::string& file, const std::string& where,
                        const std::string& message) {
   std::string text;
-  if (!file.empty()) text += file + ": ";
-  if (!where.empty()) text += where + ": ";
-  text += message;
+  for (const std::string* part : {&file, &where}) {
+    if (part->empty()) continue;
+    text.append(*part);
+    text.append(": ");
+  }
+  text.append(message);
   throw Error(text);
 }
 

@@ -102,7 +102,14 @@ TangentBundle::TangentBundle(const Mesh& mesh) : mesh_(&mesh) {
     return dir_[static_cast<size_t>(hj)] * std::polar(1.0, scale[vj] * mesh.corner_angle(hj));
   };
   transport_.assign(nh, cplx(1, 0));
+  // One value per edge, its conjugate for the twin: transport(twin(h)) is exactly
+  // conj(transport(h)), so anything summed over both directions cancels exactly.
   for (size_t h = 0; h < nh; ++h) {
+    const int t = mesh.twin(static_cast<int>(h));
+    if (t >= 0 && static_cast<size_t>(t) < h) {
+      transport_[h] = std::conj(transport_[static_cast<size_t>(t)]);
+      continue;
+    }
     const cplx uij = dir_[h];
     const cplx uji = direction_at_head(static_cast<int>(h));
     transport_[h] = normalized(-uji * std::conj(uij));

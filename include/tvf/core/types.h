@@ -1,7 +1,7 @@
 #pragma once
 // Small shared math types. A tangent vector is one complex number a + ib meaning
 // a·e1 + b·e2 in some tangent basis (which basis is always stated where it is used).
-#include <Eigen/Core>
+#include <Eigen/Dense>
 
 #include <complex>
 #include <numbers>

@@ -141,6 +141,10 @@ struct Scene {
   std::string label() const { return source_path.empty() ? std::string("scene") : source_path; }
   // The mesh path resolved against the scene file's folder.
   std::string resolved_mesh_path() const;
+  // Any path written in the scene (mesh, key-frame field files) resolved against the
+  // scene file's folder; absolute paths, and every path of a scene built in code, are
+  // returned unchanged.
+  std::string resolve_path(const std::string& path) const;
 };
 
 // Names used in the scene format (exact strings of DESIGN §10).

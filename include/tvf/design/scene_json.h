@@ -22,6 +22,12 @@ Scene parse_scene(const std::string& text, const std::string& label);
 // equals s and the output validates against the schema.
 nlohmann::json scene_to_json(const Scene& scene);
 // Writes the scene (pretty-printed) to a temporary name and renames it when complete.
+// A scene that would not load again (it fails validation) is refused with a tvf::Error
+// and nothing is written.
 void save_scene(const Scene& scene, const std::string& path);
+// The text save_scene writes: the canonical JSON of scene_to_json, pretty-printed with the
+// keys in the order of DESIGN §10 and short arrays and objects (points, matrices,
+// transform keys) kept on one line. Ends with a newline.
+std::string scene_to_text(const Scene& scene);
 
 }  // namespace tvf

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Runs the benchmarks and prints a Markdown table (docs/benchmarks.md).
+# Usage: bench/run.sh [build-dir]   (default build/release; builds tvf_bench first)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build/release}
+cmake --build "$build" --target tvf_bench >/dev/null
+json=$(mktemp)
+"$build/bench/tvf_bench" --benchmark_format=json --benchmark_out="$json" --benchmark_out_format=json \
+  --benchmark_repetitions=3 --benchmark_report_aggregates_only=true >/dev/null
+/usr/bin/python3 - "$json" <<'PY'
+import json, sys, platform, os
+d = json.load(open(sys.argv[1]))
+ctx = d["context"]
+print(f"Machine: {ctx.get('host_name','?')}, {ctx['num_cpus']} CPUs at {ctx['mhz_per_cpu']} MHz; "
+      f"built {ctx.get('library_build_type','?')}; {ctx['date']}")
+print()
+print("| case | vertices | frames | median time | per frame |")
+print("|---|---:|---:|---:|---:|")
+for b in d["benchmarks"]:
+    if b.get("aggregate_name") != "median":
+        continue
+    name = b["run_name"]
+    t = b["real_time"]; unit = b["time_unit"]
+    v = int(b.get("vertices", 0)); f = int(b.get("frames", 0))
+    per = f"{t / f:.3f} {unit}" if f else ""
+    print(f"| {name} | {v or ''} | {f or ''} | {t:.1f} {unit} | {per} |")
+PY
+rm -f "$json"

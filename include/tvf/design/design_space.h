@@ -1,0 +1,42 @@
+#pragma once
+// The domain a design lives on, built once from a scene: the mesh (grid, file or
+// primitive), its tangent bundle and its log map. Not movable: the bundle and log map
+// refer to the mesh.
+#include "tvf/design/scene.h"
+#include "tvf/mesh/log_map.h"
+#include "tvf/mesh/mesh_validate.h"
+#include "tvf/mesh/tangent_bundle.h"
+
+#include <memory>
+
+namespace tvf {
+
+class DesignSpace {
+public:
+  explicit DesignSpace(Mesh mesh);
+  DesignSpace(const DesignSpace&) = delete;
+  DesignSpace& operator=(const DesignSpace&) = delete;
+
+  const Mesh& mesh() const { return mesh_; }
+  const TangentBundle& bundle() const { return bundle_; }
+  const LogMap& log_map() const { return log_map_; }
+  bool planar() const { return bundle_.is_flat(); }
+  // Length unit of the falloff: the bounding-box diagonal (DESIGN §4).
+  double diameter() const { return diameter_; }
+  // The point of the domain closest to x (x itself, located in a face, on planar grids).
+  SurfacePoint locate(const Vec3& x) const;
+
+  MeshRepairReport repairs;  // what loading the mesh file repaired, if anything
+
+private:
+  Mesh mesh_;
+  TangentBundle bundle_;
+  LogMap log_map_;
+  double diameter_;
+};
+
+// Builds the domain of a scene. Mesh files are resolved relative to the scene file;
+// errors name the scene and "domain.mesh" or the mesh file.
+std::unique_ptr<DesignSpace> make_design_space(const Scene& scene);
+
+}  // namespace tvf

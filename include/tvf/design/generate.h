@@ -1,0 +1,46 @@
+#pragma once
+// Generating the field of a scene (DESIGN §5). generate() dispatches on scene.generator.
+// Available now: "basis" (basis field summation, paper §5.2, eq. 8). The constrained,
+// spacetime and deform generators are refused with a clear error until they land.
+#include "tvf/design/design_space.h"
+#include "tvf/design/scene.h"
+#include "tvf/field/field.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace tvf {
+
+struct GenerateOptions {
+  bool parallel = true;  // frames in parallel (TBB)
+  // Called as frames complete (from any thread, serialised): frames done, frames total.
+  std::function<void(int, int)> progress;
+};
+
+struct GenerateReport {
+  std::vector<std::string> warnings;  // design problems that do not stop generation
+  double seconds = 0.0;
+  int frames = 0;
+  int vertices = 0;
+};
+
+// Field of the scene on `space` (which must be make_design_space(scene)).
+// Throws tvf::Error for scenes it cannot generate (naming the scene and JSON path),
+// including fields that would not fit in this machine's memory.
+Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptions& options = {},
+               GenerateReport* report = nullptr);
+
+// Basis field summation: V(x; t) = Σ_i exp(−d‖w_i‖²) V_i(w_i; t), w_i the local
+// coordinate of x around element i, d = falloff / diam².
+Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
+                         const GenerateOptions& options = {}, GenerateReport* report = nullptr);
+
+// Checks that need the scene only (no mesh): singular paths that begin or end inside
+// the time range without a bifurcation there (DESIGN §4). One warning per problem.
+std::vector<std::string> design_warnings(const Scene& scene);
+
+// Bytes a generated field needs in memory (double complex values plus float32 export).
+std::uint64_t field_memory_bytes(int frames, int vertices);
+
+}  // namespace tvf

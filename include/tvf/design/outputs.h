@@ -1,0 +1,28 @@
+#pragma once
+// Everything `tvf generate` writes (DESIGN §11), staged and committed as a whole so a
+// failed run leaves no partial output:
+//   field.npy (N×|V|×3 float32, world vectors, frame-major), vertices.npy (|V|×3 float64),
+//   faces.npy (|F|×3 int32), times.npy (N float64), field.tvff (native, exact reload),
+//   field.pvd + field_NNNN.vtu (VTK series), coherence.csv, scene.json (canonical scene).
+#include "tvf/design/design_space.h"
+#include "tvf/design/scene.h"
+#include "tvf/field/field.h"
+
+#include <filesystem>
+#include <functional>
+#include <vector>
+
+namespace tvf {
+
+struct OutputOptions {
+  bool vtk = true;  // the VTK series can be large; `--no-vtk` skips it
+  std::function<void(const std::string&)> on_step;  // progress: name of the part written
+};
+
+// Returns the paths written (final names inside `dir`).
+std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::path& dir,
+                                                       const DesignSpace& space,
+                                                       const Field& field, const Scene& scene,
+                                                       const OutputOptions& options = {});
+
+}  // namespace tvf

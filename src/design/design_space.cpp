@@ -1,0 +1,38 @@
+#include "tvf/design/design_space.h"
+
+#include "tvf/core/error.h"
+#include "tvf/mesh/grid.h"
+#include "tvf/mesh/mesh_io.h"
+#include "tvf/mesh/primitives.h"
+
+#include <filesystem>
+
+namespace tvf {
+
+DesignSpace::DesignSpace(Mesh mesh)
+    : mesh_(std::move(mesh)), bundle_(mesh_), log_map_(bundle_), diameter_(mesh_.diameter()) {}
+
+SurfacePoint DesignSpace::locate(const Vec3& x) const { return closest_point(mesh_, x); }
+
+std::unique_ptr<DesignSpace> make_design_space(const Scene& scene) {
+  const Domain& d = scene.domain;
+  if (d.grid) return std::make_unique<DesignSpace>(make_grid(*d.grid, scene.label() + ": domain.grid"));
+  if (d.sphere)
+    return std::make_unique<DesignSpace>(make_icosphere(d.sphere->subdivisions, d.sphere->radius));
+  if (d.torus)
+    return std::make_unique<DesignSpace>(make_torus(d.torus->nu, d.torus->nv,
+                                                    d.torus->major_radius, d.torus->minor_radius));
+  if (!d.mesh.empty()) {
+    const std::string path = scene.resolved_mesh_path();
+    if (!std::filesystem::exists(path))
+      throw_input_error(scene.label(), "domain.mesh",
+                        fmt::format("the mesh file '{}' does not exist", path));
+    LoadedMesh loaded = load_mesh(path);
+    auto space = std::make_unique<DesignSpace>(std::move(loaded.mesh));
+    space->repairs = loaded.repairs;
+    return space;
+  }
+  throw_input_error(scene.label(), "domain", "no domain is given (grid, mesh, sphere or torus)");
+}
+
+}  // namespace tvf

@@ -1,0 +1,62 @@
+#include "tvf/design/outputs.h"
+
+#include "tvf/analysis/coherence.h"
+#include "tvf/core/atomic_output.h"
+#include "tvf/design/scene_json.h"
+#include "tvf/field/field_io.h"
+#include "tvf/field/npy.h"
+#include "tvf/field/vtk_io.h"
+#include "tvf/field/world_vectors.h"
+
+namespace tvf {
+
+std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::path& dir,
+                                                       const DesignSpace& space,
+                                                       const Field& field, const Scene& scene,
+                                                       const OutputOptions& options) {
+  OutputStage stage(dir);
+  const Mesh& mesh = space.mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  const auto n = static_cast<size_t>(field.frames());
+  auto step = [&](const char* what) {
+    if (options.on_step) options.on_step(what);
+  };
+
+  step("field.npy");
+  const std::vector<float> world = world_vectors_f32(space.bundle(), field);
+  write_npy(stage.file("field.npy").string(), {n, nv, 3}, world.data());
+
+  step("vertices.npy, faces.npy, times.npy");
+  std::vector<double> verts(nv * 3);
+  for (size_t v = 0; v < nv; ++v)
+    for (size_t k = 0; k < 3; ++k) verts[3 * v + k] = mesh.position(static_cast<int>(v))[static_cast<Eigen::Index>(k)];
+  write_npy(stage.file("vertices.npy").string(), {nv, 3}, verts.data());
+  std::vector<std::int32_t> faces(nf * 3);
+  for (size_t f = 0; f < nf; ++f)
+    for (size_t k = 0; k < 3; ++k) faces[3 * f + k] = mesh.face(static_cast<int>(f))[k];
+  write_npy(stage.file("faces.npy").string(), {nf, 3}, faces.data());
+  const std::vector<double> times = field.time().times();
+  write_npy(stage.file("times.npy").string(), {n}, times.data());
+
+  step("field.tvff");
+  // The copy of the scene must stay valid next to the outputs: its mesh path is made
+  // absolute (relative paths were relative to the original scene file).
+  Scene copy = scene;
+  if (!copy.domain.mesh.empty())
+    copy.domain.mesh = std::filesystem::absolute(scene.resolved_mesh_path()).lexically_normal().string();
+  const nlohmann::json scene_json = scene_to_json(copy);
+  save_field_file(stage.file("field.tvff").string(), mesh, field, scene_json);
+
+  step("coherence.csv, scene.json");
+  write_file_atomically(stage.file("coherence.csv"), coherence_csv(field, coherence(field)));
+  write_file_atomically(stage.file("scene.json"), scene_json.dump(2) + "\n");
+
+  if (options.vtk) {
+    step("field.pvd + field_NNNN.vtu");
+    write_vtk_series(stage.stage().string(), "field", space.bundle(), field);
+  }
+  return stage.commit();
+}
+
+}  // namespace tvf

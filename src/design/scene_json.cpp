@@ -1,0 +1,1141 @@
+#include "tvf/design/scene_json.h"
+
+#include "tvf/core/atomic_output.h"
+#include "tvf/core/error.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <sstream>
+
+#include <Eigen/LU>
+
+// Reading is validation: every value is checked where it is read, and the first problem
+// throws a tvf::Error "<label>: <json path>: <one sentence>". The checks, in the order a
+// scene is read: the version, unknown keys, the domain (which fixes the arity of every
+// position), the time range (which bounds every t), then the design.
+
+namespace tvf {
+namespace {
+
+using json = nlohmann::json;
+
+constexpr SingularType kSingularTypes[] = {
+    SingularType::source,     SingularType::sink,           SingularType::saddle,
+    SingularType::ccw_center, SingularType::cw_center,      SingularType::repelling_focus,
+    SingularType::attracting_focus};
+constexpr BifurcationType kBifurcationTypes[] = {
+    BifurcationType::saddle_source_cancellation, BifurcationType::saddle_sink_creation,
+    BifurcationType::saddle_source_creation, BifurcationType::saddle_sink_cancellation};
+constexpr Generator kGenerators[] = {Generator::basis, Generator::constrained,
+                                     Generator::spacetime, Generator::deform};
+constexpr Weights kWeights[] = {Weights::cotan, Weights::uniform, Weights::mean_value};
+
+constexpr int kMaxFrames = 100'000;
+constexpr int kMaxSphereSubdivisions = 9;  // make_icosphere's limit
+
+std::string join_key(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+std::string join_index(const std::string& path, size_t i) {
+  return path + "[" + std::to_string(i) + "]";
+}
+
+// ---------------------------------------------------------------------------------------
+// Compact and pretty printing (canonical key order, short containers on one line).
+
+// Rank of a key in the canonical order; DESIGN §10's order for every object of the format
+// is a subsequence of this list. Keys not listed follow, alphabetically.
+int key_rank(const std::string& key) {
+  static constexpr const char* kOrder[] = {
+      "tvf", "description", "op", "frame", "kind", "t", "domain", "grid", "mesh", "sphere", "torus",
+      "size", "min", "max", "subdivisions", "radius", "nu", "nv", "major_radius",
+      "minor_radius", "time", "frames", "range", "generator", "solver", "weights",
+      "temporal_weight", "tolerance", "region_radius", "falloff", "base", "type", "jacobian",
+      "at", "to", "vector", "path", "pathline", "attach", "elements", "keyframes", "matrix",
+      "m", "transform", "sx", "sy", "theta", "translate", "rotate", "scale", "time_scale",
+      "angle", "streamlines", "seed", "keys", "points", "speed", "field", "deform", "edits",
+      "pair", "strength"};
+  for (size_t i = 0; i < std::size(kOrder); ++i)
+    if (key == kOrder[i]) return static_cast<int>(i);
+  return static_cast<int>(std::size(kOrder));
+}
+
+std::vector<std::pair<const std::string*, const json*>> ordered_items(const json& object) {
+  std::vector<std::pair<const std::string*, const json*>> items;
+  for (auto it = object.begin(); it != object.end(); ++it) items.emplace_back(&it.key(), &it.value());
+  std::stable_sort(items.begin(), items.end(), [](const auto& a, const auto& b) {
+    return key_rank(*a.first) < key_rank(*b.first);
+  });
+  return items;
+}
+
+void write_compact(const json& v, std::string& out) {
+  if (v.is_array()) {
+    out += '[';
+    for (size_t i = 0; i < v.size(); ++i) {
+      if (i) out += ", ";
+      write_compact(v[i], out);
+    }
+    out += ']';
+  } else if (v.is_object()) {
+    out += '{';
+    bool first = true;
+    for (const auto& [k, x] : ordered_items(v)) {
+      if (!first) out += ", ";
+      first = false;
+      out += json(*k).dump();
+      out += ": ";
+      write_compact(*x, out);
+    }
+    out += '}';
+  } else {
+    out += v.dump();
+  }
+}
+
+std::string compact(const json& v) {
+  std::string s;
+  write_compact(v, s);
+  return s;
+}
+
+constexpr size_t kLineWidth = 96;
+
+// `column` is where the value starts on its line (after the indent and any key).
+void write_pretty(const json& v, size_t indent, size_t column, std::string& out) {
+  const bool container = v.is_array() || v.is_object();
+  if (container && !v.empty() && indent > 0) {
+    std::string c = compact(v);
+    if (column + c.size() + 1 <= kLineWidth) {  // + 1 for a trailing comma
+      out += c;
+      return;
+    }
+  }
+  if (!container || v.empty()) {
+    write_compact(v, out);
+    return;
+  }
+  const std::string pad(indent + 2, ' ');
+  out += v.is_array() ? "[\n" : "{\n";
+  if (v.is_array()) {
+    for (size_t i = 0; i < v.size(); ++i) {
+      out += pad;
+      write_pretty(v[i], indent + 2, pad.size(), out);
+      out += i + 1 < v.size() ? ",\n" : "\n";
+    }
+  } else {
+    const auto items = ordered_items(v);
+    for (size_t i = 0; i < items.size(); ++i) {
+      const std::string key = json(*items[i].first).dump() + ": ";
+      out += pad;
+      out += key;
+      write_pretty(*items[i].second, indent + 2, pad.size() + key.size(), out);
+      out += i + 1 < items.size() ? ",\n" : "\n";
+    }
+  }
+  out += std::string(indent, ' ');
+  out += v.is_array() ? ']' : '}';
+}
+
+// A value as messages quote it: numbers in their shortest form, strings quoted, long
+// containers cut short.
+std::string describe(const json& j) {
+  if (j.is_number_float()) return fmt::format("{}", j.get<double>());
+  if (j.is_null()) return "null";
+  std::string s = compact(j);
+  if (s.size() > 60) s = s.substr(0, 56) + " ...";
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------
+// The reader.
+
+class Reader {
+public:
+  explicit Reader(std::string label) : label_(std::move(label)) {}
+
+  Scene scene(const json& j, const std::string& source_path);
+
+private:
+  std::string label_;
+  bool planar_ = true;
+  TimeSampling time_;
+
+  [[noreturn]] void fail(const std::string& where, const std::string& message) const {
+    throw_input_error(label_, where, message);
+  }
+
+  // --- generic values
+  void check_object(const json& j, const std::string& path, const char* what) const {
+    if (!j.is_object()) fail(path, fmt::format("must be an object ({}), got {}", what, describe(j)));
+  }
+  // An object whose keys are all among `allowed`.
+  void check_keys(const json& j, const std::string& path, const char* what,
+                  std::initializer_list<const char*> allowed) const {
+    check_object(j, path, what);
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      const bool known = std::any_of(allowed.begin(), allowed.end(),
+                                     [&](const char* k) { return it.key() == k; });
+      if (!known) {
+        std::string list;
+        for (const char* k : allowed) list += (list.empty() ? "" : ", ") + std::string(k);
+        fail(path, fmt::format("unknown key \"{}\" (expected one of {})", it.key(), list));
+      }
+    }
+  }
+  static const json* get(const json& obj, const char* key) {
+    const auto it = obj.find(key);
+    return it == obj.end() ? nullptr : &*it;
+  }
+  const json& need(const json& obj, const std::string& path, const char* key,
+                   const std::string& hint) const {
+    if (const json* v = get(obj, key)) return *v;
+    fail(path, fmt::format("missing key \"{}\" ({})", key, hint));
+  }
+
+  double number(const json& j, const std::string& path) const {
+    if (!j.is_number()) fail(path, fmt::format("must be a number, got {}", describe(j)));
+    const double x = j.get<double>();
+    if (!std::isfinite(x)) fail(path, fmt::format("must be a finite number, got {}", x));
+    return x;
+  }
+  double positive(const json& j, const std::string& path) const {
+    const double x = number(j, path);
+    if (!(x > 0)) fail(path, fmt::format("must be a number > 0, got {}", x));
+    return x;
+  }
+  double non_negative(const json& j, const std::string& path) const {
+    const double x = number(j, path);
+    if (!(x >= 0)) fail(path, fmt::format("must be a number ≥ 0, got {}", x));
+    return x;
+  }
+  // An integer in [lo, hi]; 3.0 counts as an integer (as in JSON Schema), 1e12 is refused
+  // without overflow.
+  long long integer(const json& j, const std::string& path, long long lo, long long hi) const {
+    const std::string range = hi == std::numeric_limits<long long>::max()
+                                  ? fmt::format("an integer ≥ {}", lo)
+                                  : fmt::format("an integer in [{}, {}]", lo, hi);
+    auto bad = [&] { fail(path, fmt::format("must be {}, got {}", range, describe(j))); };
+    if (j.is_number_unsigned()) {
+      const auto u = j.get<std::uint64_t>();
+      if (u > static_cast<std::uint64_t>(hi)) bad();
+      const auto v = static_cast<long long>(u);
+      if (v < lo) bad();
+      return v;
+    }
+    if (j.is_number_integer()) {
+      const auto v = j.get<std::int64_t>();
+      if (v < lo || v > hi) bad();
+      return static_cast<long long>(v);
+    }
+    if (j.is_number_float()) {
+      const double x = j.get<double>();
+      if (!std::isfinite(x) || x != std::floor(x) || x < static_cast<double>(lo) ||
+          x > static_cast<double>(hi))
+        bad();
+      return static_cast<long long>(x);
+    }
+    bad();
+    return 0;
+  }
+  std::string string(const json& j, const std::string& path) const {
+    if (!j.is_string()) fail(path, fmt::format("must be a string, got {}", describe(j)));
+    return j.get<std::string>();
+  }
+  const json& array(const json& j, const std::string& path, size_t min_items,
+                    const char* what) const {
+    if (!j.is_array()) fail(path, fmt::format("must be an array of {}, got {}", what, describe(j)));
+    if (j.size() < min_items)
+      fail(path, fmt::format("needs at least {} {}, got {}", min_items, what, j.size()));
+    return j;
+  }
+  template <class E, size_t N>
+  E enumeration(const json& j, const std::string& path, const E (&all)[N], const char* what) const {
+    const std::string s = string(j, path);
+    std::string list;
+    for (E e : all) {
+      if (s == to_string(e)) return e;
+      list += (list.empty() ? "" : ", ") + std::string(to_string(e));
+    }
+    fail(path, fmt::format("unknown {} \"{}\" (expected one of {})", what, s, list));
+  }
+
+  // --- positions and times
+  const char* domain_words() const { return planar_ ? "on a grid domain" : "on a surface domain"; }
+  const char* point_form() const { return planar_ ? "[x, y]" : "[x, y, z]"; }
+  const char* path_point_form() const { return planar_ ? "[x, y, t]" : "[x, y, z, t]"; }
+
+  // n numbers; `form` says what they mean.
+  std::vector<double> numbers(const json& j, const std::string& path, size_t n,
+                              const char* form) const {
+    if (!j.is_array() || j.size() != n) {
+      const std::string got =
+          j.is_array() ? fmt::format("{} numbers: {}", j.size(), describe(j)) : describe(j);
+      fail(path, fmt::format("must be {} ({} numbers) {}, got {}", form, n, domain_words(), got));
+    }
+    std::vector<double> x(n);
+    for (size_t i = 0; i < n; ++i) x[i] = number(j[i], join_index(path, i));
+    return x;
+  }
+  Vec3 position(const json& j, const std::string& path) const {
+    const auto x = numbers(j, path, planar_ ? 2 : 3, point_form());
+    return {x[0], x[1], planar_ ? 0.0 : x[2]};
+  }
+  void check_time(double t, const std::string& where) const {
+    if (t < time_.t0 || t > time_.t1)
+      fail(where, fmt::format("t = {} is outside the time range [{}, {}]", t, time_.t0, time_.t1));
+  }
+  PathPoint path_point(const json& j, const std::string& path) const {
+    const auto x = numbers(j, path, planar_ ? 3 : 4, path_point_form());
+    PathPoint p;
+    p.position = {x[0], x[1], planar_ ? 0.0 : x[2]};
+    p.t = x.back();
+    check_time(p.t, path);
+    return p;
+  }
+  double key_time(const json& obj, const std::string& path, const char* hint) const {
+    const double t = number(need(obj, path, "t", hint), join_key(path, "t"));
+    check_time(t, join_key(path, "t"));
+    return t;
+  }
+  void check_after(double previous, double t, const std::string& where, const char* what) const {
+    if (!(t > previous))
+      fail(where, fmt::format("t = {} does not come after the previous {}'s t = {} ({})", t,
+                              what, previous, "times must strictly increase"));
+  }
+  std::vector<PathPoint> path_points(const json& j, const std::string& path, size_t min_items) const {
+    const std::string what = fmt::format("{} points", path_point_form());
+    array(j, path, min_items, what.c_str());
+    std::vector<PathPoint> points;
+    for (size_t i = 0; i < j.size(); ++i) {
+      const std::string where = join_index(path, i);
+      points.push_back(path_point(j[i], where));
+      if (i > 0) check_after(points[i - 1].t, points[i].t, where, "point");
+    }
+    return points;
+  }
+  Mat2 matrix2(const json& j, const std::string& path) const {
+    auto bad = [&] {
+      fail(path, fmt::format("must be a 2×2 matrix [[a, b], [c, d]], got {}", describe(j)));
+    };
+    if (!j.is_array() || j.size() != 2) bad();
+    Mat2 m;
+    for (size_t r = 0; r < 2; ++r) {
+      if (!j[r].is_array() || j[r].size() != 2) bad();
+      for (size_t c = 0; c < 2; ++c)
+        m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) =
+            number(j[r][c], join_index(join_index(path, r), c));
+    }
+    return m;
+  }
+  // A singular element's Jacobian: invertible, so that the singularity is isolated and has
+  // an index (the sign of det J).
+  Mat2 jacobian_matrix(const json& j, const std::string& path) const {
+    const Mat2 m = matrix2(j, path);
+    if (m.determinant() == 0)
+      fail(path, fmt::format("must be invertible (det ≠ 0) so that the singularity is isolated, "
+                             "got {}",
+                             describe(j)));
+    return m;
+  }
+  std::vector<TransformKey> transform_keys(const json& j, const std::string& path) const {
+    array(j, path, 0, "transform keys {\"t\", \"sx\", \"sy\", \"theta\"}");
+    std::vector<TransformKey> keys;
+    for (size_t i = 0; i < j.size(); ++i) {
+      const std::string p = join_index(path, i);
+      const json& k = j[i];
+      check_keys(k, p, "a transform key", {"t", "sx", "sy", "theta"});
+      TransformKey key;
+      key.t = key_time(k, p, "the time of the key");
+      if (i > 0) check_after(keys.back().t, key.t, join_key(p, "t"), "key");
+      if (const json* v = get(k, "sx")) key.sx = positive(*v, join_key(p, "sx"));
+      if (const json* v = get(k, "sy")) key.sy = positive(*v, join_key(p, "sy"));
+      if (const json* v = get(k, "theta")) key.theta = number(*v, join_key(p, "theta"));
+      keys.push_back(key);
+    }
+    return keys;
+  }
+
+  // --- parts of the scene
+  Domain domain(const json& j) const;
+  GridSpec grid(const json& j, const std::string& path) const;
+  TimeSampling time(const json& j) const;
+  SolverSettings solver(const json& j) const;
+  Element element(const json& j, const std::string& path) const;
+  SingularElement singular(const json& j, const std::string& path) const;
+  RegularElement regular(const json& j, const std::string& path) const;
+  BifurcationElement bifurcation(const json& j, const std::string& path) const;
+  std::vector<Element> elements(const json& j, const std::string& path) const;
+  std::vector<Keyframe> keyframes(const json& j) const;
+  KeyframeElement keyframe_element(const json& j, const std::string& path) const;
+  KeyframeStreamline keyframe_streamline(const json& j, const std::string& path) const;
+  json deform(const json& j) const;
+  json edits(const json& j) const;
+  json edit(const json& j, const std::string& path) const;
+};
+
+// ---------------------------------------------------------------------------------------
+// Writing (canonical form). Planar scenes get 2-D points.
+
+json point_json(const Vec3& p, bool planar) {
+  return planar ? json::array({p.x(), p.y()}) : json::array({p.x(), p.y(), p.z()});
+}
+json path_point_json(const PathPoint& p, bool planar) {
+  return planar ? json::array({p.position.x(), p.position.y(), p.t})
+                : json::array({p.position.x(), p.position.y(), p.position.z(), p.t});
+}
+json path_json(const std::vector<PathPoint>& points, bool planar) {
+  json a = json::array();
+  for (const PathPoint& p : points) a.push_back(path_point_json(p, planar));
+  return a;
+}
+json matrix_json(const Mat2& m) {
+  return json::array({json::array({m(0, 0), m(0, 1)}), json::array({m(1, 0), m(1, 1)})});
+}
+json transform_json(const std::vector<TransformKey>& keys) {
+  json a = json::array();
+  for (const TransformKey& k : keys)
+    a.push_back({{"t", k.t}, {"sx", k.sx}, {"sy", k.sy}, {"theta", k.theta}});
+  return a;
+}
+
+json element_json(const Element& element, bool planar) {
+  json j;
+  if (const auto* s = std::get_if<SingularElement>(&element)) {
+    j["kind"] = "singular";
+    if (s->type)
+      j["type"] = to_string(*s->type);
+    else
+      j["jacobian"] = matrix_json(s->jacobian);
+    j["path"] = path_json(s->path, planar);
+    j["transform"] = transform_json(s->transform);
+  } else if (const auto* r = std::get_if<RegularElement>(&element)) {
+    j["kind"] = "regular";
+    j["pathline"] = path_json(r->pathline, planar);
+    j["attach"] = r->attach;
+  } else {
+    const auto& b = std::get<BifurcationElement>(element);
+    j["kind"] = "bifurcation";
+    j["type"] = to_string(b.type);
+    j["at"] = path_point_json(b.at, planar);
+    j["scale"] = b.scale;
+    j["time_scale"] = b.time_scale;
+    j["angle"] = b.angle;
+  }
+  return j;
+}
+
+json keyframe_json(const Keyframe& k, bool planar) {
+  json j;
+  j["t"] = k.t;
+  if (!k.field.empty()) {
+    j["field"] = k.field;
+    if (k.elements.empty() && k.streamlines.empty()) return j;
+  }
+  j["elements"] = json::array();
+  for (const KeyframeElement& e : k.elements) {
+    json x;
+    x["kind"] = e.kind;
+    if (e.kind == "singular") {
+      if (e.type)
+        x["type"] = to_string(*e.type);
+      else
+        x["jacobian"] = matrix_json(e.jacobian);
+    }
+    x["at"] = point_json(e.at, planar);
+    if (e.kind == "regular") x["vector"] = point_json(e.vector, planar);
+    j["elements"].push_back(x);
+  }
+  j["streamlines"] = json::array();
+  for (const KeyframeStreamline& s : k.streamlines) {
+    json points = json::array();
+    for (const Vec3& p : s.points) points.push_back(point_json(p, planar));
+    j["streamlines"].push_back({{"points", points}, {"speed", s.speed}});
+  }
+  return j;
+}
+
+// ---------------------------------------------------------------------------------------
+// Reading, part by part.
+
+GridSpec Reader::grid(const json& j, const std::string& path) const {
+  check_keys(j, path, "a grid {\"size\": [nx, ny], \"min\": [x, y], \"max\": [x, y]}",
+             {"size", "min", "max"});
+  GridSpec g;
+  if (const json* size = get(j, "size")) {
+    const std::string p = join_key(path, "size");
+    if (!size->is_array() || size->size() != 2)
+      fail(p, fmt::format("must be [nx, ny] (2 integers), got {}", describe(*size)));
+    constexpr long long kNoBound = std::numeric_limits<long long>::max();
+    const long long nx = integer((*size)[0], join_index(p, 0), 2, kNoBound);
+    const long long ny = integer((*size)[1], join_index(p, 1), 2, kNoBound);
+    // Each factor is bounded first, so the product cannot overflow.
+    if (nx > kMaxGridVertices || ny > kMaxGridVertices || nx * ny > kMaxGridVertices)
+      fail(p, fmt::format("{} × {} vertices is more than the {} a grid may have", nx, ny,
+                          kMaxGridVertices));
+    g.nx = static_cast<int>(nx);
+    g.ny = static_cast<int>(ny);
+  }
+  auto corner = [&](const char* key, Vec2& out) {
+    if (const json* c = get(j, key)) {
+      const std::string p = join_key(path, key);
+      if (!c->is_array() || c->size() != 2)
+        fail(p, fmt::format("must be a point [x, y] (2 numbers), got {}", describe(*c)));
+      out = {number((*c)[0], join_index(p, 0)), number((*c)[1], join_index(p, 1))};
+    }
+  };
+  corner("min", g.min);
+  corner("max", g.max);
+  if (!(g.max.x() > g.min.x() && g.max.y() > g.min.y()))
+    fail(join_key(path, "max"),
+         fmt::format("must be greater than min in both coordinates, got min [{}, {}] and max [{}, {}]",
+                     g.min.x(), g.min.y(), g.max.x(), g.max.y()));
+  return g;
+}
+
+Domain Reader::domain(const json& j) const {
+  const std::string path = "domain";
+  check_keys(j, path, "one of grid, mesh, sphere, torus", {"grid", "mesh", "sphere", "torus"});
+  if (j.size() != 1) {
+    std::string given;
+    for (auto it = j.begin(); it != j.end(); ++it)
+      given += (given.empty() ? "" : " and ") + it.key();
+    fail(path, fmt::format("must name exactly one domain (grid, mesh, sphere or torus), got {}",
+                           given.empty() ? std::string("none") : given));
+  }
+  Domain d;
+  if (const json* g = get(j, "grid")) d.grid = grid(*g, "domain.grid");
+  if (const json* m = get(j, "mesh")) {
+    d.mesh = string(*m, "domain.mesh");
+    if (d.mesh.empty())
+      fail("domain.mesh", "must be the path of an OBJ, PLY or OFF file, got an empty string");
+  }
+  if (const json* s = get(j, "sphere")) {
+    const std::string p = "domain.sphere";
+    check_keys(*s, p, "a sphere {\"subdivisions\", \"radius\"}", {"subdivisions", "radius"});
+    SphereSpec sphere;
+    if (const json* v = get(*s, "subdivisions"))
+      sphere.subdivisions =
+          static_cast<int>(integer(*v, join_key(p, "subdivisions"), 0, kMaxSphereSubdivisions));
+    if (const json* v = get(*s, "radius")) sphere.radius = positive(*v, join_key(p, "radius"));
+    d.sphere = sphere;
+  }
+  if (const json* t = get(j, "torus")) {
+    const std::string p = "domain.torus";
+    check_keys(*t, p, "a torus {\"nu\", \"nv\", \"major_radius\", \"minor_radius\"}",
+               {"nu", "nv", "major_radius", "minor_radius"});
+    TorusSpec torus;
+    constexpr long long kNoBound = std::numeric_limits<long long>::max();
+    long long nu = torus.nu, nv = torus.nv;
+    if (const json* v = get(*t, "nu")) nu = integer(*v, join_key(p, "nu"), 3, kNoBound);
+    if (const json* v = get(*t, "nv")) nv = integer(*v, join_key(p, "nv"), 3, kNoBound);
+    if (nu > kMaxGridVertices || nv > kMaxGridVertices || nu * nv > kMaxGridVertices)
+      fail(p, fmt::format("nu × nv = {} × {} vertices is more than the {} a torus may have", nu,
+                          nv, kMaxGridVertices));
+    torus.nu = static_cast<int>(nu);
+    torus.nv = static_cast<int>(nv);
+    if (const json* v = get(*t, "major_radius"))
+      torus.major_radius = positive(*v, join_key(p, "major_radius"));
+    if (const json* v = get(*t, "minor_radius"))
+      torus.minor_radius = positive(*v, join_key(p, "minor_radius"));
+    if (!(torus.minor_radius < torus.major_radius))
+      fail(join_key(p, "minor_radius"),
+           fmt::format("must be less than major_radius ({}) so that the torus does not cross "
+                       "itself, got {}",
+                       torus.major_radius, torus.minor_radius));
+    d.torus = torus;
+  }
+  return d;
+}
+
+TimeSampling Reader::time(const json& j) const {
+  check_keys(j, "time", "{\"frames\": N, \"range\": [t0, t1]}", {"frames", "range"});
+  TimeSampling s;
+  if (const json* f = get(j, "frames"))
+    s.frames = static_cast<int>(integer(*f, "time.frames", 2, kMaxFrames));
+  if (const json* r = get(j, "range")) {
+    if (!r->is_array() || r->size() != 2)
+      fail("time.range", fmt::format("must be [t0, t1] (2 numbers), got {}", describe(*r)));
+    s.t0 = number((*r)[0], "time.range[0]");
+    s.t1 = number((*r)[1], "time.range[1]");
+    if (!(s.t0 < s.t1))
+      fail("time.range", fmt::format("must have t0 < t1, got [{}, {}]", s.t0, s.t1));
+  }
+  return s;
+}
+
+SolverSettings Reader::solver(const json& j) const {
+  check_keys(j, "solver", "solver settings",
+             {"weights", "temporal_weight", "tolerance", "region_radius"});
+  SolverSettings s;
+  if (const json* v = get(j, "weights")) s.weights = enumeration(*v, "solver.weights", kWeights, "weights");
+  if (const json* v = get(j, "temporal_weight"))
+    s.temporal_weight = non_negative(*v, "solver.temporal_weight");
+  if (const json* v = get(j, "tolerance")) {
+    s.tolerance = number(*v, "solver.tolerance");
+    if (!(s.tolerance > 0 && s.tolerance < 1))
+      fail("solver.tolerance", fmt::format("must be in (0, 1), got {}", s.tolerance));
+  }
+  if (const json* v = get(j, "region_radius")) s.region_radius = positive(*v, "solver.region_radius");
+  return s;
+}
+
+SingularElement Reader::singular(const json& j, const std::string& path) const {
+  check_keys(j, path, "a singular element", {"kind", "type", "jacobian", "path", "transform"});
+  SingularElement e;
+  const json* type = get(j, "type");
+  const json* jacobian = get(j, "jacobian");
+  if (type && jacobian) fail(path, "give either \"type\" or \"jacobian\", not both");
+  if (!type && !jacobian)
+    fail(path, "a singular element needs a \"type\" (source, sink, saddle, ccw_center, cw_center, "
+               "repelling_focus or attracting_focus) or a \"jacobian\" [[a, b], [c, d]]");
+  if (type) {
+    e.type = enumeration(*type, join_key(path, "type"), kSingularTypes, "singular type");
+    e.jacobian = jacobian_of(*e.type);
+  } else {
+    e.jacobian = jacobian_matrix(*jacobian, join_key(path, "jacobian"));
+  }
+  const std::string hint = fmt::format("a singular element needs a path of {} points; one point "
+                                       "makes a fixed element",
+                                       path_point_form());
+  e.path = path_points(need(j, path, "path", hint), join_key(path, "path"), 1);
+  if (const json* t = get(j, "transform")) e.transform = transform_keys(*t, join_key(path, "transform"));
+  return e;
+}
+
+RegularElement Reader::regular(const json& j, const std::string& path) const {
+  check_keys(j, path, "a regular element", {"kind", "pathline", "attach"});
+  RegularElement e;
+  const std::string hint =
+      fmt::format("a regular element needs a pathline of at least 2 {} points", path_point_form());
+  e.pathline = path_points(need(j, path, "pathline", hint), join_key(path, "pathline"), 2);
+  if (const json* a = get(j, "attach")) e.attach = non_negative(*a, join_key(path, "attach"));
+  return e;
+}
+
+BifurcationElement Reader::bifurcation(const json& j, const std::string& path) const {
+  check_keys(j, path, "a bifurcation element",
+             {"kind", "type", "at", "scale", "time_scale", "angle"});
+  BifurcationElement e;
+  e.type = enumeration(need(j, path, "type", "the bifurcation's normal form"),
+                       join_key(path, "type"), kBifurcationTypes, "bifurcation type");
+  e.at = path_point(need(j, path, "at", fmt::format("the place and time {} of the bifurcation",
+                                                    path_point_form())),
+                    join_key(path, "at"));
+  if (const json* v = get(j, "scale")) e.scale = positive(*v, join_key(path, "scale"));
+  if (const json* v = get(j, "time_scale")) e.time_scale = positive(*v, join_key(path, "time_scale"));
+  if (const json* v = get(j, "angle")) e.angle = number(*v, join_key(path, "angle"));
+  return e;
+}
+
+Element Reader::element(const json& j, const std::string& path) const {
+  check_object(j, path, "a design element with a \"kind\"");
+  const std::string kind = string(
+      need(j, path, "kind", "singular, regular or bifurcation"), join_key(path, "kind"));
+  if (kind == "singular") return singular(j, path);
+  if (kind == "regular") return regular(j, path);
+  if (kind == "bifurcation") return bifurcation(j, path);
+  fail(join_key(path, "kind"),
+       fmt::format("unknown element kind \"{}\" (expected one of singular, regular, bifurcation)", kind));
+}
+
+std::vector<Element> Reader::elements(const json& j, const std::string& path) const {
+  array(j, path, 0, "design elements");
+  std::vector<Element> out;
+  for (size_t i = 0; i < j.size(); ++i) out.push_back(element(j[i], join_index(path, i)));
+  return out;
+}
+
+KeyframeElement Reader::keyframe_element(const json& j, const std::string& path) const {
+  check_object(j, path, "a key-frame element with a \"kind\"");
+  KeyframeElement e;
+  e.kind = string(need(j, path, "kind", "singular or regular"), join_key(path, "kind"));
+  const std::string at_hint = fmt::format("the element's position {}", point_form());
+  if (e.kind == "singular") {
+    check_keys(j, path, "a key-frame singular element", {"kind", "type", "jacobian", "at"});
+    const json* type = get(j, "type");
+    const json* jacobian = get(j, "jacobian");
+    if (type && jacobian) fail(path, "give either \"type\" or \"jacobian\", not both");
+    if (!type && !jacobian)
+      fail(path, "a singular element needs a \"type\" (source, sink, saddle, ccw_center, "
+                 "cw_center, repelling_focus or attracting_focus) or a \"jacobian\" [[a, b], [c, d]]");
+    if (type) {
+      e.type = enumeration(*type, join_key(path, "type"), kSingularTypes, "singular type");
+      e.jacobian = jacobian_of(*e.type);
+    } else {
+      e.jacobian = jacobian_matrix(*jacobian, join_key(path, "jacobian"));
+    }
+    e.at = position(need(j, path, "at", at_hint), join_key(path, "at"));
+  } else if (e.kind == "regular") {
+    check_keys(j, path, "a key-frame regular element", {"kind", "at", "vector"});
+    e.at = position(need(j, path, "at", at_hint), join_key(path, "at"));
+    e.vector = position(need(j, path, "vector", fmt::format("the field's vector {} there", point_form())),
+                        join_key(path, "vector"));
+    if (e.vector.isZero(0.0))
+      fail(join_key(path, "vector"), "must not be zero (a regular element gives the field a direction)");
+  } else {
+    fail(join_key(path, "kind"),
+         fmt::format("unknown key-frame element kind \"{}\" (expected one of singular, regular)", e.kind));
+  }
+  return e;
+}
+
+KeyframeStreamline Reader::keyframe_streamline(const json& j, const std::string& path) const {
+  check_keys(j, path, "a streamline {\"points\", \"speed\"}", {"points", "speed"});
+  KeyframeStreamline s;
+  const std::string form = fmt::format("{} points", point_form());
+  const json& points = array(need(j, path, "points", "at least 2 " + form),
+                             join_key(path, "points"), 2, form.c_str());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const std::string p = join_index(join_key(path, "points"), i);
+    s.points.push_back(position(points[i], p));
+    if (i > 0 && s.points[i] == s.points[i - 1])
+      fail(p, "repeats the previous point (a streamline's direction would be undefined)");
+  }
+  if (const json* v = get(j, "speed")) s.speed = positive(*v, join_key(path, "speed"));
+  return s;
+}
+
+std::vector<Keyframe> Reader::keyframes(const json& j) const {
+  array(j, "keyframes", 0, "key frames {\"t\", \"elements\", \"streamlines\", \"field\"}");
+  std::vector<Keyframe> out;
+  for (size_t i = 0; i < j.size(); ++i) {
+    const std::string path = join_index("keyframes", i);
+    const json& k = j[i];
+    check_keys(k, path, "a key frame", {"t", "elements", "streamlines", "field"});
+    Keyframe key;
+    key.t = key_time(k, path, "the time of the key frame");
+    if (i > 0) check_after(out.back().t, key.t, join_key(path, "t"), "key frame");
+    if (const json* e = get(k, "elements")) {
+      const std::string p = join_key(path, "elements");
+      array(*e, p, 0, "key-frame elements");
+      for (size_t m = 0; m < e->size(); ++m)
+        key.elements.push_back(keyframe_element((*e)[m], join_index(p, m)));
+    }
+    if (const json* s = get(k, "streamlines")) {
+      const std::string p = join_key(path, "streamlines");
+      array(*s, p, 0, "streamlines");
+      for (size_t m = 0; m < s->size(); ++m)
+        key.streamlines.push_back(keyframe_streamline((*s)[m], join_index(p, m)));
+    }
+    if (const json* f = get(k, "field")) {
+      key.field = string(*f, join_key(path, "field"));
+      if (key.field.empty())
+        fail(join_key(path, "field"), "must be the path of a field file, got an empty string");
+      if (!key.elements.empty() || !key.streamlines.empty())
+        fail(path, "give either a \"field\" file or \"elements\" and \"streamlines\", not both");
+    }
+    if (key.field.empty() && key.elements.empty() && key.streamlines.empty())
+      fail(path, "a key frame needs at least one element or streamline, or a \"field\" file");
+    out.push_back(std::move(key));
+  }
+  return out;
+}
+
+json Reader::deform(const json& j) const {
+  check_keys(j, "deform", "the deformation {\"base\", \"matrix\" or \"transform\", \"streamlines\"}",
+             {"base", "matrix", "transform", "streamlines"});
+  json out;
+  const json& base = need(j, "deform", "base", "the field V(t0) to deform: {\"elements\": [...]}");
+  check_keys(base, "deform.base", "the base field {\"elements\": [...]}", {"elements"});
+  out["base"]["elements"] = json::array();
+  if (const json* e = get(base, "elements"))
+    for (const Element& element : elements(*e, "deform.base.elements"))
+      out["base"]["elements"].push_back(element_json(element, planar_));
+  const json* matrix = get(j, "matrix");
+  const json* transform = get(j, "transform");
+  if (matrix && transform) fail("deform", "give either \"matrix\" or \"transform\" keys, not both");
+  if (matrix) {
+    array(*matrix, "deform.matrix", 0, "matrix keys {\"t\", \"m\"}");
+    out["matrix"] = json::array();
+    double previous = 0;
+    for (size_t i = 0; i < matrix->size(); ++i) {
+      const std::string p = join_index("deform.matrix", i);
+      const json& k = (*matrix)[i];
+      check_keys(k, p, "a matrix key {\"t\", \"m\"}", {"t", "m"});
+      const double t = key_time(k, p, "the time of the key");
+      if (i > 0) check_after(previous, t, join_key(p, "t"), "key");
+      previous = t;
+      const Mat2 m = matrix2(need(k, p, "m", "the 2×2 matrix [[a, b], [c, d]] at t"), join_key(p, "m"));
+      out["matrix"].push_back({{"t", t}, {"m", matrix_json(m)}});
+    }
+  }
+  if (transform) out["transform"] = transform_json(transform_keys(*transform, "deform.transform"));
+  out["streamlines"] = json::array();
+  if (const json* s = get(j, "streamlines")) {
+    array(*s, "deform.streamlines", 0, "streamlines {\"seed\", \"keys\"}");
+    for (size_t i = 0; i < s->size(); ++i) {
+      const std::string p = join_index("deform.streamlines", i);
+      const json& line = (*s)[i];
+      check_keys(line, p, "a streamline {\"seed\", \"keys\"}", {"seed", "keys"});
+      const Vec3 seed = position(need(line, p, "seed", fmt::format("where the streamline starts, {}", point_form())),
+                                 join_key(p, "seed"));
+      const std::string kp = join_key(p, "keys");
+      const json& keys = array(need(line, p, "keys", "its keyed motion [{\"t\", \"translate\", \"rotate\", \"scale\"}]"),
+                               kp, 1, "keys {\"t\", \"translate\", \"rotate\", \"scale\"}");
+      json keys_out = json::array();
+      double previous = 0;
+      for (size_t m = 0; m < keys.size(); ++m) {
+        const std::string q = join_index(kp, m);
+        const json& k = keys[m];
+        check_keys(k, q, "a streamline key", {"t", "translate", "rotate", "scale"});
+        const double t = key_time(k, q, "the time of the key");
+        if (m > 0) check_after(previous, t, join_key(q, "t"), "key");
+        previous = t;
+        Vec3 translate = Vec3::Zero();
+        double rotate = 0.0, scale = 1.0;
+        if (const json* v = get(k, "translate")) translate = position(*v, join_key(q, "translate"));
+        if (const json* v = get(k, "rotate")) rotate = number(*v, join_key(q, "rotate"));
+        if (const json* v = get(k, "scale")) scale = positive(*v, join_key(q, "scale"));
+        keys_out.push_back({{"t", t},
+                            {"translate", point_json(translate, planar_)},
+                            {"rotate", rotate},
+                            {"scale", scale}});
+      }
+      out["streamlines"].push_back({{"seed", point_json(seed, planar_)}, {"keys", keys_out}});
+    }
+  }
+  return out;
+}
+
+json Reader::edit(const json& j, const std::string& path) const {
+  check_object(j, path, "an edit with an \"op\"");
+  const std::string op = string(
+      need(j, path, "op", "cancel, smooth, remove_bifurcation or move_bifurcation"), join_key(path, "op"));
+  json out;
+  out["op"] = op;
+  const std::string at_hint = fmt::format("the bifurcation's place and time {}", path_point_form());
+  if (op == "cancel") {
+    check_keys(j, path, "a cancel edit", {"op", "frame", "pair"});
+    out["frame"] = integer(need(j, path, "frame", "the frame to edit"), join_key(path, "frame"), 0,
+                           time_.frames - 1);
+    const std::string p = join_key(path, "pair");
+    const std::string form = fmt::format("positions {}", point_form());
+    const json& pair = need(j, path, "pair", fmt::format("the two singularities to cancel, [{0}, {0}]", point_form()));
+    if (!pair.is_array() || pair.size() != 2)
+      fail(p, fmt::format("must be two positions [{0}, {0}], got {1}", point_form(), describe(pair)));
+    const Vec3 a = position(pair[0], join_index(p, 0));
+    const Vec3 b = position(pair[1], join_index(p, 1));
+    if (a == b) fail(p, "names the same position twice (a pair is two different singularities)");
+    out["pair"] = json::array({point_json(a, planar_), point_json(b, planar_)});
+  } else if (op == "smooth") {
+    check_keys(j, path, "a smooth edit", {"op", "strength"});
+    const std::string p = join_key(path, "strength");
+    const double s = number(need(j, path, "strength", "how much to smooth, in (0, 1]"), p);
+    if (!(s > 0 && s <= 1)) fail(p, fmt::format("must be in (0, 1], got {}", s));
+    out["strength"] = s;
+  } else if (op == "remove_bifurcation") {
+    check_keys(j, path, "a remove_bifurcation edit", {"op", "at"});
+    out["at"] = path_point_json(path_point(need(j, path, "at", at_hint), join_key(path, "at")), planar_);
+  } else if (op == "move_bifurcation") {
+    check_keys(j, path, "a move_bifurcation edit", {"op", "at", "to"});
+    out["at"] = path_point_json(path_point(need(j, path, "at", at_hint), join_key(path, "at")), planar_);
+    out["to"] = path_point_json(
+        path_point(need(j, path, "to", fmt::format("where the bifurcation goes, {}", path_point_form())),
+                   join_key(path, "to")),
+        planar_);
+  } else {
+    fail(join_key(path, "op"),
+         fmt::format("unknown edit \"{}\" (expected one of cancel, smooth, remove_bifurcation, "
+                     "move_bifurcation)",
+                     op));
+  }
+  return out;
+}
+
+json Reader::edits(const json& j) const {
+  array(j, "edits", 0, "edits");
+  json out = json::array();
+  for (size_t i = 0; i < j.size(); ++i) out.push_back(edit(j[i], join_index("edits", i)));
+  return out;
+}
+
+Scene Reader::scene(const json& j, const std::string& source_path) {
+  if (!j.is_object())
+    fail("", fmt::format("a scene must be a JSON object {{\"tvf\": 1, ...}}, got {}", describe(j)));
+  // The version first: a newer file should say so rather than fail on a new key.
+  const json& version = need(j, "", "tvf", "a tvf scene starts with \"tvf\": 1, the format version");
+  if (!version.is_number())
+    fail("tvf", fmt::format("must be the number 1 (the format version), got {}", describe(version)));
+  if (version != 1)
+    fail("tvf", fmt::format("version {} is not supported (this tvf reads version 1)", describe(version)));
+  check_keys(j, "", "a scene",
+             {"tvf", "description", "domain", "time", "generator", "solver", "falloff", "elements",
+              "keyframes", "deform", "edits"});
+  Scene s;
+  s.version = 1;
+  s.source_path = source_path;
+  if (const json* d = get(j, "description")) s.description = string(*d, "description");
+  s.domain = domain(need(j, "", "domain", "grid, mesh, sphere or torus"));
+  planar_ = s.domain.is_planar();
+  if (const json* t = get(j, "time")) s.time = time(*t);
+  time_ = s.time;
+  if (const json* g = get(j, "generator")) s.generator = enumeration(*g, "generator", kGenerators, "generator");
+  if (const json* v = get(j, "solver")) s.solver = solver(*v);
+  if (const json* f = get(j, "falloff")) s.falloff = positive(*f, "falloff");
+  if (const json* e = get(j, "elements")) s.elements = elements(*e, "elements");
+  if (const json* k = get(j, "keyframes")) s.keyframes = keyframes(*k);
+  if (const json* d = get(j, "deform")) s.deform = deform(*d);
+  if (const json* e = get(j, "edits")) s.edits = edits(*e);
+  if (s.generator == Generator::deform && s.deform.is_null())
+    fail("", "missing key \"deform\" (the deform generator needs a deform block with its base field)");
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------
+// Text to JSON, with positions for syntax errors and no silently dropped duplicate keys.
+
+// Builds the DOM like nlohmann's own parser, and remembers where a parse error happened.
+class DomBuilder : public nlohmann::json_sax<json> {
+public:
+  explicit DomBuilder(json& root) : root_(root) {}
+
+  bool null() override { return add(nullptr); }
+  bool boolean(bool v) override { return add(v); }
+  bool number_integer(number_integer_t v) override { return add(v); }
+  bool number_unsigned(number_unsigned_t v) override { return add(v); }
+  bool number_float(number_float_t v, const string_t&) override { return add(v); }
+  bool string(string_t& v) override { return add(std::move(v)); }
+  bool binary(binary_t& v) override { return add(json::binary(std::move(v))); }
+  bool start_object(std::size_t) override { return open(json::object()); }
+  bool key(string_t& k) override {
+    if (stack_.back()->contains(k)) {
+      duplicate_ = paths_.back().empty() ? k : paths_.back() + "." + k;
+      return false;
+    }
+    key_ = k;
+    return true;
+  }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override { return open(json::array()); }
+  bool end_array() override { return close(); }
+  bool parse_error(std::size_t position, const std::string&,
+                   const nlohmann::detail::exception& ex) override {
+    error_position_ = position;
+    error_id_ = ex.id;
+    error_text_ = ex.what();
+    return false;
+  }
+
+  const std::string& duplicate() const { return duplicate_; }
+  std::size_t error_position() const { return error_position_; }
+  int error_id() const { return error_id_; }
+  const std::string& error_text() const { return error_text_; }
+
+private:
+  json& root_;
+  std::vector<json*> stack_;
+  std::vector<std::string> paths_;  // JSON path of each open container
+  std::string key_;
+  std::string duplicate_;
+  std::size_t error_position_ = 0;
+  int error_id_ = 0;
+  std::string error_text_;
+
+  std::string child_path() const {
+    if (stack_.empty()) return "";
+    if (stack_.back()->is_array()) return join_index(paths_.back(), stack_.back()->size());
+    return join_key(paths_.back(), key_);
+  }
+  json* insert(json&& v) {
+    if (stack_.empty()) {
+      root_ = std::move(v);
+      return &root_;
+    }
+    json& parent = *stack_.back();
+    if (parent.is_array()) {
+      parent.push_back(std::move(v));
+      return &parent.back();
+    }
+    json& slot = parent[key_];
+    slot = std::move(v);
+    return &slot;
+  }
+  bool add(json&& v) {
+    insert(std::move(v));
+    return true;
+  }
+  bool open(json&& v) {
+    std::string path = child_path();
+    stack_.push_back(insert(std::move(v)));
+    paths_.push_back(std::move(path));
+    return true;
+  }
+  bool close() {
+    stack_.pop_back();
+    paths_.pop_back();
+    return true;
+  }
+};
+
+// 1-based line and column (in code points) of the byte at `index` (0-based).
+std::pair<size_t, size_t> line_and_column(const std::string& text, size_t index) {
+  index = std::min(index, text.size());
+  size_t line = 1, column = 1;
+  for (size_t i = 0; i < index; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\n') {
+      ++line;
+      column = 1;
+    } else if ((c & 0xC0) != 0x80) {
+      ++column;
+    }
+  }
+  return {line, column};
+}
+
+bool is_word_char(char c) { return std::isalpha(static_cast<unsigned char>(c)) != 0; }
+
+json parse_text(const std::string& text, const std::string& label) {
+  json root;
+  DomBuilder builder(root);
+  if (json::sax_parse(text, &builder)) return root;
+  if (!builder.duplicate().empty())
+    throw_input_error(label, builder.duplicate(),
+                      "the key appears twice in the same object (JSON keys must be unique)");
+  // nlohmann's position counts the characters read, the last one being where it stopped.
+  size_t index = builder.error_position() > 0 ? builder.error_position() - 1 : 0;
+  index = std::min(index, text.size());
+  std::string message;
+  if (builder.error_id() == 406) {
+    // Number overflow (e.g. 1e999): point at the start of the number.
+    size_t start = std::min(index + 1, text.size());
+    while (start > 0 && std::strchr("0123456789+-.eE", text[start - 1]) != nullptr) --start;
+    size_t end = start;
+    while (end < text.size() && std::strchr("0123456789+-.eE", text[end]) != nullptr) ++end;
+    index = start;
+    message = fmt::format("the number {} is out of range (numbers must be finite)",
+                          text.substr(start, end - start));
+  } else {
+    // NaN, Infinity and friends are not JSON: say so plainly.
+    size_t start = index;
+    while (start > 0 && is_word_char(text[start - 1])) --start;
+    size_t end = start;
+    while (end < text.size() && is_word_char(text[end])) ++end;
+    std::string word = text.substr(start, end - start);
+    std::transform(word.begin(), word.end(), word.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
+      throw_input_error(label, "", "the text is empty; a scene is a JSON object {\"tvf\": 1, ...}");
+    } else if (index < text.size() && text[index] == '/') {
+      message = "comments are not allowed in JSON";
+    } else if (word == "nan" || word == "inf" || word == "infinity") {
+      index = start > 0 && (text[start - 1] == '-' || text[start - 1] == '+') ? start - 1 : start;
+      message = fmt::format("{} is not a JSON number (numbers must be finite)",
+                            text.substr(index, end - index));
+    } else {
+      // "[json.exception.parse_error.101] parse error at line 1, column 7: syntax error ..."
+      const std::string& what = builder.error_text();
+      const size_t column = what.find("column ");
+      const size_t colon = column == std::string::npos ? std::string::npos : what.find(": ", column);
+      if (colon != std::string::npos) {
+        message = what.substr(colon + 2);
+      } else {
+        const size_t bracket = what.find("] ");
+        message = bracket == std::string::npos ? what : what.substr(bracket + 2);
+      }
+    }
+  }
+  const auto [line, col] = line_and_column(text, index);
+  throw_input_error(label, fmt::format("line {}, column {}", line, col), message);
+}
+
+Scene parse_with_source(const std::string& text, const std::string& label,
+                        const std::string& source_path) {
+  return scene_from_json(parse_text(text, label), label, source_path);
+}
+
+}  // namespace
+
+Scene scene_from_json(const nlohmann::json& j, const std::string& label,
+                      const std::string& source_path) {
+  return Reader(label).scene(j, source_path);
+}
+
+Scene parse_scene(const std::string& text, const std::string& label) {
+  return parse_with_source(text, label, "");
+}
+
+Scene load_scene(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status))
+    throw_input_error("", "", fmt::format("cannot read the scene file '{}': it does not exist", path));
+  if (fs::is_directory(status))
+    throw_input_error("", "", fmt::format("cannot read the scene file '{}': it is a folder", path));
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw_input_error("", "", fmt::format("cannot read the scene file '{}': {}", path, std::strerror(errno)));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad())
+    throw_input_error("", "", fmt::format("cannot read the scene file '{}': a read error occurred", path));
+  return parse_with_source(text.str(), path, path);
+}
+
+nlohmann::json scene_to_json(const Scene& scene) {
+  const bool planar = scene.domain.is_planar();
+  json j;
+  j["tvf"] = 1;
+  j["description"] = scene.description;
+  const Domain& d = scene.domain;
+  if (d.grid) {
+    j["domain"]["grid"] = {{"size", {d.grid->nx, d.grid->ny}},
+                           {"min", {d.grid->min.x(), d.grid->min.y()}},
+                           {"max", {d.grid->max.x(), d.grid->max.y()}}};
+  } else if (d.sphere) {
+    j["domain"]["sphere"] = {{"subdivisions", d.sphere->subdivisions}, {"radius", d.sphere->radius}};
+  } else if (d.torus) {
+    j["domain"]["torus"] = {{"nu", d.torus->nu},
+                            {"nv", d.torus->nv},
+                            {"major_radius", d.torus->major_radius},
+                            {"minor_radius", d.torus->minor_radius}};
+  } else if (!d.mesh.empty()) {
+    j["domain"]["mesh"] = d.mesh;
+  } else {
+    j["domain"] = json::object();
+  }
+  j["time"] = {{"frames", scene.time.frames}, {"range", {scene.time.t0, scene.time.t1}}};
+  j["generator"] = to_string(scene.generator);
+  j["solver"] = {{"weights", to_string(scene.solver.weights)},
+                 {"temporal_weight", scene.solver.temporal_weight},
+                 {"tolerance", scene.solver.tolerance},
+                 {"region_radius", scene.solver.region_radius}};
+  j["falloff"] = scene.falloff;
+  j["elements"] = json::array();
+  for (const Element& e : scene.elements) j["elements"].push_back(element_json(e, planar));
+  j["keyframes"] = json::array();
+  for (const Keyframe& k : scene.keyframes) j["keyframes"].push_back(keyframe_json(k, planar));
+  if (!scene.deform.is_null()) j["deform"] = scene.deform;
+  j["edits"] = scene.edits.is_null() ? json::array() : scene.edits;
+  return j;
+}
+
+std::string scene_to_text(const Scene& scene) {
+  std::string text;
+  write_pretty(scene_to_json(scene), 0, 0, text);
+  text += '\n';
+  return text;
+}
+
+void save_scene(const Scene& scene, const std::string& path) {
+  const std::string text = scene_to_text(scene);
+  try {
+    // Never write a file that would not load again.
+    (void)parse_scene(text, "");
+  } catch (const Error& e) {
+    throw Error(fmt::format("cannot save the scene to '{}': {}", path, e.what()));
+  }
+  write_file_atomically(path, text);
+}
+
+}  // namespace tvf

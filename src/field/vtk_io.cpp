@@ -1,0 +1,191 @@
+#include "tvf/field/vtk_io.h"
+
+#include "tvf/core/atomic_output.h"
+#include "tvf/core/error.h"
+
+#include <tbb/parallel_for.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <system_error>
+
+namespace tvf {
+
+namespace fs = std::filesystem;
+
+static_assert(std::endian::native == std::endian::little,
+              "vtk_io.cpp writes the host's bytes as LittleEndian appended data");
+
+namespace {
+
+[[noreturn]] void fail(const fs::path& path, const std::string& message) {
+  throw_input_error(path.string(), "", message);
+}
+
+// Writes head + body + tail to `path` through a temporary sibling (complete or absent).
+void write_whole_file(const fs::path& path, const std::string& head, const std::string& body,
+                      const std::string& tail) {
+  const fs::path tmp = temporary_sibling(path);
+  std::error_code ec;
+  try {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) fail(path, "cannot open a temporary file for writing");
+    out.write(head.data(), static_cast<std::streamsize>(head.size()));
+    out.write(body.data(), static_cast<std::streamsize>(body.size()));
+    out.write(tail.data(), static_cast<std::streamsize>(tail.size()));
+    out.close();
+    if (!out) fail(path, "cannot write the file");
+    fs::rename(tmp, path, ec);
+    if (ec) fail(path, "cannot move the finished file into place (" + ec.message() + ")");
+  } catch (...) {
+    fs::remove(tmp, ec);
+    throw;
+  }
+}
+
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// The appended-data section: each array is a UInt64 byte count followed by its bytes.
+class Appended {
+public:
+  // Starts an array of `bytes` bytes and returns its offset (from the byte after '_').
+  std::uint64_t begin(std::uint64_t bytes) {
+    const auto offset = static_cast<std::uint64_t>(data_.size());
+    put(bytes);
+    return offset;
+  }
+  template <class T>
+  void put(const T& value) {
+    data_.append(reinterpret_cast<const char*>(&value), sizeof(T));
+  }
+  std::string& data() { return data_; }
+
+private:
+  std::string data_;
+};
+
+// The frame-independent part of every .vtu: points and cells.
+struct Geometry {
+  std::string appended;  // points, connectivity, offsets, types
+  std::uint64_t points = 0, connectivity = 0, offsets = 0, types = 0;
+};
+
+Geometry make_geometry(const Mesh& mesh) {
+  Geometry g;
+  Appended a;
+  const auto nv = static_cast<std::uint64_t>(mesh.num_vertices());
+  const auto nf = static_cast<std::uint64_t>(mesh.num_faces());
+  g.points = a.begin(nv * 3 * sizeof(double));
+  for (const Vec3& p : mesh.positions())
+    for (int k = 0; k < 3; ++k) a.put(p[k]);
+  g.connectivity = a.begin(nf * 3 * sizeof(std::int32_t));
+  for (const Face& f : mesh.faces())
+    for (int v : f) a.put(static_cast<std::int32_t>(v));
+  // Offsets end at 3·|F| = the number of halfedges, an int.
+  g.offsets = a.begin(nf * sizeof(std::int32_t));
+  for (std::uint64_t f = 0; f < nf; ++f) a.put(static_cast<std::int32_t>(3 * (f + 1)));
+  g.types = a.begin(nf * sizeof(std::uint8_t));
+  for (std::uint64_t f = 0; f < nf; ++f) a.put(std::uint8_t{5});  // VTK_TRIANGLE
+  g.appended = std::move(a.data());
+  return g;
+}
+
+void write_frame(const fs::path& path, const TangentBundle& bundle, const Field& field, int frame,
+                 const Geometry& g) {
+  const Mesh& mesh = bundle.mesh();
+  const int nv = mesh.num_vertices();
+  Appended a;
+  const std::uint64_t base = g.appended.size();
+  const std::uint64_t vector = base + a.begin(static_cast<std::uint64_t>(nv) * 3 * sizeof(float));
+  std::vector<float> magnitude(static_cast<size_t>(nv));
+  const auto values = field.frame(frame);
+  for (int v = 0; v < nv; ++v) {
+    const Vec3 w = bundle.vertex_to_world(v, values[static_cast<size_t>(v)]);
+    for (int k = 0; k < 3; ++k) a.put(static_cast<float>(w[k]));
+    magnitude[static_cast<size_t>(v)] = static_cast<float>(w.norm());
+  }
+  const std::uint64_t mag = base + a.begin(static_cast<std::uint64_t>(nv) * sizeof(float));
+  for (float m : magnitude) a.put(m);
+
+  const std::string head = fmt::format(
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt64\">\n"
+      "  <UnstructuredGrid>\n"
+      "    <FieldData>\n"
+      "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+      "format=\"ascii\">{:.17g}</DataArray>\n"
+      "    </FieldData>\n"
+      "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n"
+      "      <PointData Vectors=\"vector\" Scalars=\"magnitude\">\n"
+      "        <DataArray type=\"Float32\" Name=\"vector\" NumberOfComponents=\"3\" "
+      "format=\"appended\" offset=\"{}\"/>\n"
+      "        <DataArray type=\"Float32\" Name=\"magnitude\" format=\"appended\" offset=\"{}\"/>\n"
+      "      </PointData>\n"
+      "      <Points>\n"
+      "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" "
+      "offset=\"{}\"/>\n"
+      "      </Points>\n"
+      "      <Cells>\n"
+      "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"{}\"/>\n"
+      "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\"{}\"/>\n"
+      "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{}\"/>\n"
+      "      </Cells>\n"
+      "    </Piece>\n"
+      "  </UnstructuredGrid>\n"
+      "  <AppendedData encoding=\"raw\">\n"
+      "   _",
+      field.time().time(frame), nv, mesh.num_faces(), vector, mag, g.points, g.connectivity,
+      g.offsets, g.types);
+  a.data().append("\n  </AppendedData>\n</VTKFile>\n");
+  write_whole_file(path, head, g.appended, a.data());
+}
+
+std::string frame_name(const std::string& stem, int frame, int digits) {
+  return fmt::format("{}_{:0{}}.vtu", stem, frame, digits);
+}
+
+}  // namespace
+
+void write_vtk_series(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
+                      const Field& field) {
+  const Mesh& mesh = bundle.mesh();
+  TVF_CHECK(field.num_vertices() == mesh.num_vertices(), "field has {} vertices, mesh has {}",
+            field.num_vertices(), mesh.num_vertices());
+  const fs::path folder(dir);
+  int digits = 4;
+  for (int n = field.frames() - 1; n >= 10000; n /= 10) ++digits;
+
+  const Geometry geometry = make_geometry(mesh);
+  tbb::parallel_for(0, field.frames(), [&](int j) {
+    write_frame(folder / frame_name(stem, j, digits), bundle, field, j, geometry);
+  });
+
+  std::string pvd =
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+      "  <Collection>\n";
+  for (int j = 0; j < field.frames(); ++j)
+    pvd += fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n",
+                       field.time().time(j), xml_escape(frame_name(stem, j, digits)));
+  pvd += "  </Collection>\n</VTKFile>\n";
+  write_whole_file(folder / (stem + ".pvd"), pvd, {}, {});
+}
+
+}  // namespace tvf

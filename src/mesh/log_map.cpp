@@ -1,0 +1,225 @@
+#include "tvf/mesh/log_map.h"
+
+#include "tvf/core/error.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <cmath>
+
+namespace tvf {
+
+namespace {
+using SpMat = Eigen::SparseMatrix<double>;
+using SpCMat = Eigen::SparseMatrix<cplx>;
+
+double cot_at(const Mesh& mesh, int h) {
+  // Cotangent of the corner angle opposite halfedge h (at the third vertex of its face).
+  const int o = Mesh::prev(h);  // halfedge leaving the opposite vertex
+  const Vec3& a = mesh.position(mesh.tail(o));
+  const Vec3 u = mesh.position(mesh.head(o)) - a;
+  const Vec3 w = mesh.position(mesh.tail(Mesh::prev(o))) - a;
+  return u.dot(w) / u.cross(w).norm();
+}
+}  // namespace
+
+struct LogMap::Solvers {
+  Eigen::VectorXd mass;                              // lumped (barycentric) areas
+  std::vector<double> cot;                           // per halfedge: cot of opposite angle
+  Eigen::SimplicialLDLT<SpCMat> vector_heat;         // M + t L∇
+  Eigen::SimplicialLDLT<SpMat> scalar_heat;          // M + t L
+  Eigen::SimplicialLDLT<SpMat> poisson;              // L with vertex 0 pinned
+  double h = 0;                                      // mean edge length
+};
+
+LogMap::~LogMap() = default;
+
+LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
+    : bundle_(bundle), options_(options) {
+  if (bundle.is_flat()) return;
+  const Mesh& mesh = bundle.mesh();
+  const int nv = mesh.num_vertices();
+  auto s = std::make_unique<Solvers>();
+  s->h = mesh.mean_edge_length();
+  const double t = options_.time_factor * s->h * s->h;
+
+  s->mass = Eigen::VectorXd::Zero(nv);
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int v : mesh.face(f)) s->mass[v] += mesh.face_area(f) / 3.0;
+
+  s->cot.resize(static_cast<size_t>(mesh.num_halfedges()));
+  for (int h = 0; h < mesh.num_halfedges(); ++h) s->cot[static_cast<size_t>(h)] = cot_at(mesh, h);
+
+  std::vector<Eigen::Triplet<cplx>> ct;
+  std::vector<Eigen::Triplet<double>> rt, ht;
+  ct.reserve(static_cast<size_t>(nv + 4 * mesh.num_edges()));
+  rt.reserve(static_cast<size_t>(nv + 4 * mesh.num_edges()));
+  for (int v = 0; v < nv; ++v) {
+    ct.emplace_back(v, v, s->mass[v]);
+    ht.emplace_back(v, v, s->mass[v]);
+  }
+  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+    const int tw = mesh.twin(h);
+    if (tw >= 0 && tw < h) continue;  // each edge once
+    double w = 0.5 * s->cot[static_cast<size_t>(h)];
+    if (tw >= 0) w += 0.5 * s->cot[static_cast<size_t>(tw)];
+    const int i = mesh.tail(h), j = mesh.head(h);
+    const cplx rij = bundle.transport(h);  // T_i → T_j
+    // (L∇ z)_j ∋ −w·r_ij·z_i and (L∇ z)_i ∋ −w·conj(r_ij)·z_j: Hermitian.
+    ct.emplace_back(i, i, t * w);
+    ct.emplace_back(j, j, t * w);
+    ct.emplace_back(j, i, -t * w * rij);
+    ct.emplace_back(i, j, -t * w * std::conj(rij));
+    ht.emplace_back(i, i, t * w);
+    ht.emplace_back(j, j, t * w);
+    ht.emplace_back(i, j, -t * w);
+    ht.emplace_back(j, i, -t * w);
+    rt.emplace_back(i, i, w);
+    rt.emplace_back(j, j, w);
+    rt.emplace_back(i, j, -w);
+    rt.emplace_back(j, i, -w);
+  }
+  // Pin vertex 0 so that the Neumann Laplacian becomes definite; with a compatible
+  // right-hand side the solution is the one with φ_0 = 0.
+  rt.emplace_back(0, 0, 1.0);
+
+  SpCMat a(nv, nv);
+  a.setFromTriplets(ct.begin(), ct.end());
+  s->vector_heat.compute(a);
+  TVF_CHECK(s->vector_heat.info() == Eigen::Success, "vector heat factorization failed");
+  SpMat hs(nv, nv);
+  hs.setFromTriplets(ht.begin(), ht.end());
+  s->scalar_heat.compute(hs);
+  TVF_CHECK(s->scalar_heat.info() == Eigen::Success, "scalar heat factorization failed");
+  SpMat l(nv, nv);
+  l.setFromTriplets(rt.begin(), rt.end());
+  s->poisson.compute(l);
+  TVF_CHECK(s->poisson.info() == Eigen::Success, "Poisson factorization failed");
+  solvers_ = std::move(s);
+}
+
+void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
+  const Mesh& mesh = bundle_.mesh();
+  const int nv = mesh.num_vertices();
+  chart.coords.resize(static_cast<size_t>(nv));
+  chart.frame.resize(static_cast<size_t>(nv));
+  const Face& pf = mesh.face(p.face);
+  const Vec3 x = p.bary[0] * mesh.position(pf[0]) + p.bary[1] * mesh.position(pf[1]) +
+                 p.bary[2] * mesh.position(pf[2]);
+
+  if (!solvers_) {
+    // Flat: the plane's own coordinates; the frame at p is the global frame.
+    for (int v = 0; v < nv; ++v) {
+      const Vec3 d = mesh.position(v) - x;
+      chart.coords[static_cast<size_t>(v)] = cplx(d.x(), d.y());
+      chart.frame[static_cast<size_t>(v)] = cplx(1, 0);
+    }
+    return;
+  }
+  const Solvers& s = *solvers_;
+
+  // 1. Parallel transport of p's frame: heat-flow the face frame's e1, placed on the
+  //    face's corners with barycentric weights.
+  Eigen::VectorXcd y0 = Eigen::VectorXcd::Zero(nv);
+  for (int c = 0; c < 3; ++c) {
+    const int h = 3 * p.face + c;
+    y0[pf[static_cast<size_t>(c)]] += p.bary[c] * std::conj(bundle_.corner_to_face(h));
+  }
+  const Eigen::VectorXcd y = s.vector_heat.solve(y0);
+
+  // 2. Geodesic direction: the heat method's unit field X = −∇u/|∇u| per face, u the
+  //    heat flowed from p (a delta with barycentric weights). Unlike a diffused ring of
+  //    radial vectors, a point delta has no preferred direction, so X is unbiased.
+  Eigen::VectorXd u0 = Eigen::VectorXd::Zero(nv);
+  for (int c = 0; c < 3; ++c) u0[pf[static_cast<size_t>(c)]] += p.bary[c];
+  const Eigen::VectorXd u = s.scalar_heat.solve(u0);
+  std::vector<Vec3> xf(static_cast<size_t>(mesh.num_faces()));
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Face& t = mesh.face(f);
+    const Vec3 n = bundle_.face_normal(f);
+    Vec3 grad = Vec3::Zero();
+    for (int c = 0; c < 3; ++c) {
+      // Edge opposite corner c, counter-clockwise.
+      const Vec3 e = mesh.position(t[static_cast<size_t>((c + 2) % 3)]) -
+                     mesh.position(t[static_cast<size_t>((c + 1) % 3)]);
+      grad += u[t[static_cast<size_t>(c)]] * n.cross(e);
+    }
+    const double g = grad.norm();
+    xf[static_cast<size_t>(f)] = g > 0 ? Vec3(-grad / g) : Vec3::Zero();
+  }
+
+  // 3. Distance: L φ = −div X (φ grows away from p), as in the heat method.
+  Eigen::VectorXd div = Eigen::VectorXd::Zero(nv);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Vec3& xw = xf[static_cast<size_t>(f)];
+    for (int c = 0; c < 3; ++c) {
+      const int h = 3 * f + c;      // i → j
+      const int hp = Mesh::prev(h);  // k → i
+      const int i = mesh.tail(h);
+      const Vec3 e1 = mesh.position(mesh.head(h)) - mesh.position(i);
+      const Vec3 e2 = mesh.position(mesh.tail(hp)) - mesh.position(i);
+      // cot of the angle opposite e1 (at k) and opposite e2 (at j).
+      div[i] += 0.5 * (s.cot[static_cast<size_t>(h)] * e1.dot(xw) +
+                       s.cot[static_cast<size_t>(hp)] * e2.dot(xw));
+    }
+  }
+  // Make the right-hand side compatible with the Neumann Laplacian (zero sum), spreading
+  // the boundary flux by area.
+  div -= (div.sum() / s.mass.sum()) * s.mass;
+  const Eigen::VectorXd phi = s.poisson.solve(-div);
+  // Geodesic direction at the vertices: ∇φ (the gradient field closest to X, smoother
+  // than X itself), area-weighted over the faces around each vertex and carried into T_v.
+  Eigen::VectorXcd radial = Eigen::VectorXcd::Zero(nv);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Face& t = mesh.face(f);
+    const Vec3 n = bundle_.face_normal(f);
+    Vec3 grad = Vec3::Zero();
+    for (int c = 0; c < 3; ++c) {
+      const Vec3 e = mesh.position(t[static_cast<size_t>((c + 2) % 3)]) -
+                     mesh.position(t[static_cast<size_t>((c + 1) % 3)]);
+      grad += phi[t[static_cast<size_t>(c)]] * n.cross(e);
+    }
+    const cplx g = normalized(bundle_.world_to_face(f, grad)) * mesh.face_area(f);
+    for (int c = 0; c < 3; ++c)
+      radial[t[static_cast<size_t>(c)]] += std::conj(bundle_.corner_to_face(3 * f + c)) * g;
+  }
+
+  // φ is known up to a constant. Its value at p itself is too high (the heat method
+  // rounds the distance cone's tip over about an edge length), so the constant is fitted
+  // instead on the vertices around p, where the geodesic distance is the chord to O(h³).
+  double offset = 0;
+  int count = 0;
+  auto fit = [&](int v) {
+    offset += phi[v] - (mesh.position(v) - x).norm();
+    ++count;
+  };
+  for (int c : pf) {
+    fit(c);
+    for (int h : mesh.outgoing(c)) fit(mesh.head(h));
+  }
+  offset /= count;
+
+  for (int v = 0; v < nv; ++v) {
+    const cplx fr = normalized(y[v]);
+    const cplx dir = normalized(radial[v] * std::conj(fr));
+    const double dist = std::max(0.0, phi[v] - offset);
+    chart.coords[static_cast<size_t>(v)] = dist * dir;
+    chart.frame[static_cast<size_t>(v)] = fr;
+  }
+  // Near p the heat gradient's direction error is O(h / r), while the projection onto p's
+  // tangent plane agrees with the log map to second order in r. Use the projection within
+  // 3h and blend to the heat-method coordinates by 6h (they agree there to ~1 %, so the
+  // blend leaves no seam).
+  const double r_in = 3 * s.h, r_out = 6 * s.h;
+  for (int v = 0; v < nv; ++v) {
+    const cplx heat = chart.coords[static_cast<size_t>(v)];
+    const double dist = std::abs(heat);
+    if (dist >= r_out) continue;
+    const cplx chord = bundle_.world_to_face(p.face, mesh.position(v) - x);
+    const double w = dist <= r_in ? 0.0 : (dist - r_in) / (r_out - r_in);
+    const double blend = w * w * (3 - 2 * w);  // smoothstep
+    chart.coords[static_cast<size_t>(v)] = (1 - blend) * chord + blend * heat;
+  }
+}
+
+}  // namespace tvf

@@ -1,0 +1,421 @@
+#include "tvf/mesh/mesh_io.h"
+
+#include "tvf/core/atomic_output.h"
+#include "tvf/core/error.h"
+
+// CGAL stays inside this file (compile time). The per-format readers and writers are
+// called directly: we choose the format from the extension ourselves, and save_mesh
+// writes to a temporary name whose extension is not the format's.
+#include <CGAL/IO/OBJ.h>
+#include <CGAL/IO/OFF.h>
+#include <CGAL/IO/PLY.h>
+#include <CGAL/Simple_cartesian.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace tvf {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Kernel = CGAL::Simple_cartesian<double>;
+using Point = Kernel::Point_3;
+
+// A polygon as CGAL's readers fill it, refusing absurd sizes: a corrupt OFF face line
+// ("9e12 0 1 2") would otherwise make the reader allocate terabytes before it notices
+// the missing indices.
+inline constexpr std::size_t kMaxPolygonCorners = std::size_t{1} << 20;
+struct Polygon : std::vector<std::size_t> {
+  void resize(std::size_t n) {
+    if (n > kMaxPolygonCorners) throw std::length_error("polygon too large");
+    std::vector<std::size_t>::resize(n);
+  }
+};
+
+enum class Format { obj, ply, off };
+
+const char* format_name(Format f) {
+  switch (f) {
+    case Format::obj: return "OBJ";
+    case Format::ply: return "PLY";
+    case Format::off: return "OFF";
+  }
+  return "";
+}
+
+Format format_of(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".obj") return Format::obj;
+  if (ext == ".ply") return Format::ply;
+  if (ext == ".off") return Format::off;
+  throw_input_error(path, "",
+                    ext.empty()
+                        ? "the file name has no extension; a mesh must be .obj, .ply or .off"
+                        : fmt::format("unknown mesh format '{}'; a mesh must be .obj, .ply "
+                                      "or .off",
+                                      ext));
+}
+
+// When CGAL's OBJ reader gives up, find the line it stumbled on (it says nothing itself).
+// Returns "" when no line looks wrong.
+std::string diagnose_obj(const std::string& path) {
+  static const char* const known[] = {
+      "v",        "vt",         "vn",        "vp",   "f",      "o",        "g",      "s",
+      "usemtl",   "mtllib",     "bevel",     "lod",  "ctech",  "c_interp", "usemap", "stech",
+      "d_interp", "shadow_obj", "trace_obj", "p",    "cstype", "deg",      "step",   "bmat",
+      "con",      "curv",       "curv2",     "surf", "parm",   "trim",     "hole",   "scrv",
+      "sp",       "end",        "surf_1",    "q0_1", "q1_1",   "curv2d_1", "surf_2", "q0_2",
+      "q1_2",     "curv2d_2",   "bsp",       "bzp",  "cdc",    "cdp",      "res"};
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  long long vertices = 0, faces = 0;
+  for (long long number = 1; std::getline(in, line); ++number) {
+    std::istringstream words(line);
+    std::string keyword;
+    if (!(words >> keyword) || keyword.front() == '#') continue;
+    vertices += keyword == "v" ? 1 : 0;
+    faces += keyword == "f" ? 1 : 0;
+    auto quoted = [&] {
+      std::string l = line.size() > 60 ? line.substr(0, 57) + "..." : line;
+      if (!l.empty() && l.back() == '\r') l.pop_back();
+      return l;
+    };
+    if (keyword == "v") {
+      int coordinates = 0;
+      std::string word;
+      for (; coordinates < 3 && words >> word; ++coordinates) {
+        char* end = nullptr;
+        const double x = std::strtod(word.c_str(), &end);
+        if (end != word.c_str() + word.size() || !std::isfinite(x)) break;
+      }
+      if (coordinates < 3)
+        return fmt::format("line {}: the vertex '{}' does not have three finite coordinates",
+                           number, quoted());
+    } else if (std::find_if(std::begin(known), std::end(known),
+                            [&](const char* k) { return keyword == k; }) == std::end(known)) {
+      return fmt::format("line {}: '{}' is not an OBJ statement that tvf reads", number, quoted());
+    }
+  }
+  if (vertices == 0) return "the file has no vertices ('v' lines)";
+  if (faces == 0) return "the file has no faces ('f' lines)";
+  return "";
+}
+
+[[noreturn]] void fail_unreadable(const std::string& path, Format format) {
+  if (format == Format::obj) {
+    const std::string line = diagnose_obj(path);
+    if (!line.empty()) throw_input_error(path, "", line);
+  }
+  throw_input_error(path, "",
+                    fmt::format("the file is not a readable {} mesh (malformed or truncated)",
+                                format_name(format)));
+}
+
+// The element counts that a header announces must fit in the file (every element takes at
+// least one byte), so that a corrupt header cannot make the reader allocate without bound.
+void check_count(const std::string& path, Format format, long long count, const char* what,
+                 std::uintmax_t file_size) {
+  if (count < 0 || static_cast<std::uintmax_t>(count) > file_size)
+    throw_input_error(path, "",
+                      fmt::format("the {} header announces {} {}, more than the file can hold "
+                                  "(corrupt or truncated file)",
+                                  format_name(format), count, what));
+}
+
+// The counts of an OFF header, read here rather than by CGAL, whose header reader computes
+// with them in int before anyone could check them. Each must fit in the file.
+void check_off_header(const std::string& path, std::istream& in, std::uintmax_t file_size) {
+  auto unreadable = [&] { fail_unreadable(path, Format::off); };
+  // The next word, skipping '#' comments to the end of their line.
+  auto word = [&](std::string& w) {
+    for (;;) {
+      if (!(in >> w)) unreadable();
+      const auto hash = w.find('#');
+      if (hash == std::string::npos) return;
+      std::string rest;
+      std::getline(in, rest);
+      w.resize(hash);
+      if (!w.empty()) return;
+    }
+  };
+  std::string keyword;
+  word(keyword);
+  // [ST][C][N][4][n]OFF, optionally followed by BINARY.
+  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) unreadable();
+  const bool dimensional = keyword.find('n') != std::string::npos;
+  const int numbers = dimensional ? 4 : 3;
+  std::vector<long long> counts;
+  std::string w;
+  word(w);
+  if (w == "BINARY") {
+    std::string rest;
+    std::getline(in, rest);
+    for (int k = 0; k < numbers; ++k) {
+      unsigned char b[4];
+      if (!in.read(reinterpret_cast<char*>(b), 4)) unreadable();
+      const auto u = (std::uint32_t{b[0]} << 24) | (std::uint32_t{b[1]} << 16) |
+                     (std::uint32_t{b[2]} << 8) | std::uint32_t{b[3]};
+      counts.push_back(static_cast<std::int32_t>(u));
+    }
+  } else {
+    for (int k = 0; k < numbers; ++k) {
+      if (k > 0) word(w);
+      std::size_t used = 0;
+      long long value = 0;
+      try {
+        value = std::stoll(w, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != w.size()) unreadable();
+      counts.push_back(value);
+    }
+  }
+  if (dimensional && (counts[0] < 0 || counts[0] > 64)) unreadable();
+  const size_t first = dimensional ? 1 : 0;
+  check_count(path, Format::off, counts[first], "vertices", file_size);
+  check_count(path, Format::off, counts[first + 1], "faces", file_size);
+  check_count(path, Format::off, counts[first + 2], "edges", file_size);
+}
+
+// Bytes of a PLY scalar type, or 0 when the name is not one.
+int ply_type_size(const std::string& t) {
+  if (t == "char" || t == "int8" || t == "uchar" || t == "uint8") return 1;
+  if (t == "short" || t == "int16" || t == "ushort" || t == "uint16") return 2;
+  if (t == "int" || t == "int32" || t == "uint" || t == "uint32" || t == "float" || t == "float32")
+    return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+// CGAL's PLY reader trusts its header: a property before any element crashes it, an
+// element whose properties it does not know makes it loop over the announced count
+// without reading, and counts are used as given. So the header is checked first: known
+// types only, and every element's items must fit in the file (at least the size of their
+// scalars, or two characters per property in ASCII), which bounds what reading allocates.
+void check_ply_header(const std::string& path, std::istream& in, std::uintmax_t file_size) {
+  auto corrupt = [&](const std::string& what) {
+    throw_input_error(path, "", fmt::format("the PLY header {} (corrupt file)", what));
+  };
+  std::string line;
+  bool binary = false;
+  bool in_element = false;
+  std::string element;
+  long long count = 0;
+  std::uintmax_t item_bytes = 0;
+  auto finish_element = [&] {
+    if (!in_element || count == 0) return;
+    if (item_bytes == 0)
+      corrupt(fmt::format("declares {} '{}' items without any property", count, element));
+    if (static_cast<std::uintmax_t>(count) > (file_size + 1) / item_bytes)
+      corrupt(fmt::format("announces {} '{}' items, more than the file can hold", count, element));
+  };
+  for (long long number = 1; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (number == 1) {
+      if (keyword != "ply") fail_unreadable(path, Format::ply);
+      continue;
+    }
+    if (number == 2) {
+      std::string encoding;
+      words >> encoding;
+      if (keyword != "format" || (encoding != "ascii" && encoding != "binary_little_endian" &&
+                                  encoding != "binary_big_endian"))
+        fail_unreadable(path, Format::ply);
+      binary = encoding != "ascii";
+      continue;
+    }
+    if (keyword == "element") {
+      finish_element();
+      std::string count_text;
+      element.clear();
+      words >> element >> count_text;
+      std::size_t used = 0;
+      try {
+        count = std::stoll(count_text, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (element.empty() || used == 0 || used != count_text.size() || count < 0)
+        corrupt(fmt::format("has a malformed element line '{}'", line));
+      in_element = true;
+      item_bytes = 0;
+    } else if (keyword == "property") {
+      if (!in_element) corrupt(fmt::format("has the property '{}' before any element", line));
+      std::string type, size_type, index_type;
+      words >> type;
+      int bytes = 0;
+      if (type == "list") {
+        words >> size_type >> index_type;
+        const bool integer_size = size_type != "float" && size_type != "float32" &&
+                                  size_type != "double" && size_type != "float64";
+        bytes = integer_size && ply_type_size(index_type) > 0 ? ply_type_size(size_type) : 0;
+      } else {
+        bytes = ply_type_size(type);
+      }
+      if (bytes == 0) corrupt(fmt::format("has the property '{}' of an unknown type", line));
+      item_bytes += binary ? static_cast<std::uintmax_t>(bytes) : 2;
+    } else if (keyword == "end_header") {
+      finish_element();
+      return;
+    }
+  }
+  fail_unreadable(path, Format::ply);
+}
+
+}  // namespace
+
+LoadedMesh load_mesh(const std::string& path) {
+  const Format format = format_of(path);
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (!fs::exists(status)) throw_input_error(path, "", "the mesh file does not exist");
+  if (fs::is_directory(status))
+    throw_input_error(path, "", "the path is a folder, not a mesh file");
+  const std::uintmax_t file_size = fs::file_size(path, ec);
+  if (ec) throw_input_error(path, "", fmt::format("cannot read the file ({})", ec.message()));
+  if (file_size == 0) throw_input_error(path, "", "the mesh file is empty");
+
+  std::vector<Point> points;
+  std::vector<Polygon> polygons;
+  try {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw_input_error(path, "", "cannot open the mesh file for reading");
+    auto np = CGAL::parameters::verbose(false);
+    bool ok = false;
+    switch (format) {
+      case Format::obj: {
+        // CGAL's OBJ reader separates face indices by spaces only; tabs are legal too.
+        std::string text(static_cast<size_t>(file_size), '\0');
+        in.read(text.data(), static_cast<std::streamsize>(text.size()));
+        text.resize(static_cast<size_t>(in.gcount()));
+        std::replace(text.begin(), text.end(), '\t', ' ');
+        std::istringstream obj(std::move(text));
+        CGAL::IO::set_mode(obj, CGAL::IO::ASCII);
+        ok = CGAL::IO::read_OBJ(obj, points, polygons, np);
+        break;
+      }
+      case Format::off:
+        check_off_header(path, in, file_size);
+        in.clear();
+        in.seekg(0);
+        ok = CGAL::IO::read_OFF(in, points, polygons, np);
+        break;
+      case Format::ply:
+        check_ply_header(path, in, file_size);
+        in.clear();
+        in.seekg(0);
+        CGAL::IO::set_mode(in, CGAL::IO::BINARY);
+        ok = CGAL::IO::read_PLY(in, points, polygons, np);
+        break;
+    }
+    if (!ok) fail_unreadable(path, format);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw_input_error(path, "", "the mesh file is too large to read into memory");
+  } catch (const std::exception&) {
+    fail_unreadable(path, format);
+  }
+
+  if (points.empty()) throw_input_error(path, "", "the mesh file has no vertices");
+  if (points.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
+    throw_input_error(path, "",
+                      fmt::format("the mesh has {} vertices, more than the supported {}",
+                                  points.size(), std::numeric_limits<int>::max()));
+  std::vector<Vec3> positions;
+  positions.reserve(points.size());
+  for (const Point& p : points) positions.emplace_back(p.x(), p.y(), p.z());
+  points = {};
+
+  std::vector<Face> faces;
+  faces.reserve(polygons.size());
+  for (size_t i = 0; i < polygons.size(); ++i) {
+    const Polygon& poly = polygons[i];
+    if (poly.size() < 3)
+      throw_input_error(path, "",
+                        fmt::format("polygon {} has {} corner{}; a face needs at least 3", i,
+                                    poly.size(), poly.size() == 1 ? "" : "s"));
+    for (std::size_t v : poly)
+      if (v >= positions.size())
+        throw_input_error(path, "",
+                          fmt::format("polygon {} uses vertex {}, but the vertices are numbered "
+                                      "0 to {}",
+                                      i, static_cast<long long>(v), positions.size() - 1));
+    // Fan triangulation (planar convex polygons are expected).
+    for (size_t k = 1; k + 1 < poly.size(); ++k)
+      faces.push_back(
+          {static_cast<int>(poly[0]), static_cast<int>(poly[k]), static_cast<int>(poly[k + 1])});
+  }
+  polygons = {};
+
+  LoadedMesh result;
+  result.repairs = repair_triangle_soup(positions, faces);
+  result.mesh = Mesh(std::move(positions), std::move(faces), path);
+  return result;
+}
+
+void save_mesh(const Mesh& mesh, const std::string& path) {
+  const Format format = format_of(path);
+  std::vector<Point> points;
+  points.reserve(static_cast<size_t>(mesh.num_vertices()));
+  for (const Vec3& p : mesh.positions()) points.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::array<int, 3>> polygons(mesh.faces().begin(), mesh.faces().end());
+
+  const fs::path tmp = temporary_sibling(path);
+  std::error_code ec;
+  try {
+    bool ok = false;
+    {
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      if (!out) throw_input_error(path, "", "cannot open a temporary file next to it for writing");
+      // Enough digits that every double reads back exactly.
+      out.precision(std::numeric_limits<double>::max_digits10);
+      switch (format) {
+        case Format::obj:
+          CGAL::IO::set_mode(out, CGAL::IO::ASCII);
+          ok = CGAL::IO::write_OBJ(out, points, polygons);
+          break;
+        case Format::off:
+          CGAL::IO::set_mode(out, CGAL::IO::ASCII);
+          ok = CGAL::IO::write_OFF(out, points, polygons);
+          break;
+        case Format::ply:
+          CGAL::IO::set_mode(out, CGAL::IO::BINARY);
+          ok = CGAL::IO::write_PLY(out, points, polygons);
+          break;
+      }
+      out.close();
+      ok = ok && !out.fail();
+    }
+    if (!ok) throw_input_error(path, "", "cannot write the mesh file");
+    fs::rename(tmp, path, ec);
+    if (ec)
+      throw_input_error(
+          path, "",
+          fmt::format("cannot move the finished mesh file into place ({})", ec.message()));
+  } catch (...) {
+    fs::remove(tmp, ec);
+    throw;
+  }
+}
+
+}  // namespace tvf

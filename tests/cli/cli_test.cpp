@@ -1,0 +1,176 @@
+// The command line as a user meets it: the demo, generate on every example, and bad input
+// rejected with one sentence, a non-zero exit and no output left behind.
+#include "support/test_paths.h"
+
+#include "tvf/analysis/singularities.h"
+#include "tvf/design/design_space.h"
+#include "tvf/design/element_field.h"
+#include "tvf/design/scene_json.h"
+#include "tvf/field/field_io.h"
+#include "tvf/field/npy.h"
+#include "tvf/mesh/tangent_bundle.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+
+namespace tvf {
+namespace {
+
+namespace fs = std::filesystem;
+using test::run_tvf;
+using test::TempDir;
+
+int count_lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+TEST(Cli, DemoWritesEverythingAndSaysWhatToOpen) {
+  TempDir dir;
+  const auto r = run_tvf("-o '" + (dir / "demo").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("field.pvd"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find((dir / "demo").string()), std::string::npos) << r.output;
+  for (const char* name : {"field.npy", "vertices.npy", "faces.npy", "times.npy", "field.tvff",
+                           "field.pvd", "field_0000.vtu", "field_0099.vtu", "coherence.csv", "scene.json"})
+    EXPECT_TRUE(fs::exists(dir / "demo" / name)) << name;
+  // Nothing but the outputs: no staging folder left.
+  for (const auto& e : fs::directory_iterator(dir / "demo"))
+    EXPECT_NE(e.path().filename().string()[0], '.') << e.path();
+}
+
+TEST(Cli, GenerateWritesArraysWithTheContractShapes) {
+  TempDir dir;
+  const std::string scene = test::source_dir() + "/examples/01_bifurcation_templates/scene.json";
+  const auto r = run_tvf("generate '" + scene + "' -o '" + (dir / "out").string() + "' --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "");
+  const NpyArray field = read_npy((dir / "out" / "field.npy").string());
+  EXPECT_EQ(field.dtype, "<f4");
+  EXPECT_EQ(field.shape, (std::vector<size_t>{100, 65 * 65, 3}));
+  const NpyArray verts = read_npy((dir / "out" / "vertices.npy").string());
+  EXPECT_EQ(verts.dtype, "<f8");
+  EXPECT_EQ(verts.shape, (std::vector<size_t>{65 * 65, 3}));
+  // Grid order of DESIGN §11: index = iy·nx + ix.
+  EXPECT_DOUBLE_EQ(verts.values[3 * (2 * 65 + 5) + 0], -1 + 2.0 * 5 / 64);
+  EXPECT_DOUBLE_EQ(verts.values[3 * (2 * 65 + 5) + 1], -1 + 2.0 * 2 / 64);
+  const NpyArray faces = read_npy((dir / "out" / "faces.npy").string());
+  EXPECT_EQ(faces.dtype, "<i4");
+  EXPECT_EQ(faces.shape, (std::vector<size_t>{2 * 64 * 64, 3}));
+  const NpyArray times = read_npy((dir / "out" / "times.npy").string());
+  EXPECT_EQ(times.shape, (std::vector<size_t>{100}));
+  EXPECT_DOUBLE_EQ(times.values[99], 1.0);
+  // The native file reloads the same field (float32 of it is field.npy).
+  const FieldFile native = load_field_file((dir / "out" / "field.tvff").string());
+  ASSERT_EQ(native.field.frames(), 100);
+  for (size_t k = 0; k < 4225 * 100; k += 997) {
+    const cplx z = native.field.data()[k];
+    EXPECT_EQ(static_cast<float>(z.real()), static_cast<float>(field.values[3 * k]));
+    EXPECT_EQ(static_cast<float>(z.imag()), static_cast<float>(field.values[3 * k + 1]));
+    EXPECT_EQ(field.values[3 * k + 2], 0.0);
+  }
+}
+
+// The singularities the scene designs are in the generated field where the scene put
+// them: a bifurcation's node and saddle at p ± s√(∓t′)(cos θ, sin θ) with the right types.
+TEST(Cli, BifurcationExampleHasItsDesignedSingularities) {
+  TempDir dir;
+  const std::string scene_path = test::source_dir() + "/examples/01_bifurcation_templates/scene.json";
+  const auto r = run_tvf("generate '" + scene_path + "' -o '" + (dir / "out").string() + "' --quiet --no-vtk");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const FieldFile native = load_field_file((dir / "out" / "field.tvff").string());
+  const TangentBundle bundle(native.mesh);
+  const Scene scene = load_scene(scene_path);
+  const double cell = 2.0 / 64;
+  int checked = 0;
+  for (int j = 0; j < 100; j += 3) {
+    const double t = scene.time.time(j);
+    const auto sings = find_singularities(bundle, native.field, j);
+    for (const Element& e : scene.elements) {
+      const auto& b = std::get<BifurcationElement>(e);
+      const ElementState st = CompiledElement(e).at(t);
+      const bool creation = b.type == BifurcationType::saddle_sink_creation ||
+                            b.type == BifurcationType::saddle_source_creation;
+      const double tp = st.field.local_time;
+      const double arg = creation ? tp : -tp;
+      // Well inside the template's life and far enough from the merge to be resolved.
+      if (arg < 0.3 || arg > 2.0) continue;
+      const cplx offset = b.scale * std::sqrt(arg) * st.field.axis;
+      for (int sign : {+1, -1}) {
+        const cplx expected = cplx(b.at.position.x(), b.at.position.y()) + double(sign) * offset;
+        const cplx local = double(sign) * offset;
+        // The saddle is the zero where the template's Jacobian has det < 0.
+        const double h = 1e-6;
+        const cplx dx = (st.field(local + h) - st.field(local - h)) / (2 * h);
+        const cplx dy = (st.field(local + cplx(0, h)) - st.field(local - cplx(0, h))) / (2 * h);
+        const bool saddle = dx.real() * dy.imag() - dx.imag() * dy.real() < 0;
+        double best = 1e9;
+        const Singularity* found = nullptr;
+        for (const auto& s : sings) {
+          const double dist = std::abs(cplx(s.position.x(), s.position.y()) - expected);
+          if (dist < best) best = dist, found = &s;
+        }
+        ASSERT_NE(found, nullptr);
+        EXPECT_LT(best, 1.5 * cell) << "frame " << j << " element at " << b.at.position.transpose();
+        EXPECT_EQ(found->type == SingularityType::saddle, saddle) << "frame " << j;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 40);
+}
+
+struct BadInput {
+  const char* name;
+  const char* scene;      // text of scene.json
+  const char* expected;   // substring of the one-line error
+};
+
+TEST(Cli, BadInputIsOneSentenceNonZeroExitAndNoOutput) {
+  const BadInput cases[] = {
+      {"broken json", "{\"tvf\": 1, \"domain\": ", "line"},
+      {"unknown key", R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "bogus": 3})", "bogus"},
+      {"out of range t",
+       R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 7]]}]})",
+       "elements[0].path[0]"},
+      {"nan", R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "falloff": NaN})", "scene.json"},
+      {"huge grid", R"({"tvf": 1, "domain": {"grid": {"size": [100000, 100000]}}})", "domain.grid.size"},
+      {"too many frames for memory",
+       R"({"tvf": 1, "domain": {"grid": {"size": [3000, 3000]}}, "time": {"frames": 100000}})", "time.frames"},
+      {"missing mesh", R"({"tvf": 1, "domain": {"mesh": "nowhere.obj"}})", "domain.mesh"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    TempDir dir;
+    test::write_text(dir / "scene.json", c.scene);
+    const auto out = dir / "out";
+    const auto r = run_tvf("generate '" + (dir / "scene.json").string() + "' -o '" + out.string() + "'");
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_EQ(count_lines(r.output), 1) << r.output;
+    EXPECT_NE(r.output.find("scene.json"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out)) << "partial output left behind";
+  }
+}
+
+TEST(Cli, BrokenMeshIsNamedAndNothingIsWritten) {
+  TempDir dir;
+  // Three faces on one edge: non-manifold.
+  test::write_text(dir / "bad.obj",
+                   "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n");
+  test::write_text(dir / "scene.json", R"({"tvf": 1, "domain": {"mesh": "bad.obj"}})");
+  const auto r = run_tvf("generate '" + (dir / "scene.json").string() + "' -o '" + (dir / "out").string() + "'");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(count_lines(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("bad.obj"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(Cli, ValidateReportsTheDomain) {
+  const auto r = run_tvf("validate '" + test::source_dir() + "/examples/03_sphere_vortex/scene.json' --domain");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("10242 vertices"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("Euler characteristic 2"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace tvf

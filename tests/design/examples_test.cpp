@@ -1,0 +1,88 @@
+// Every example scene generates, and its field holds the singularities the scene designs,
+// where it puts them (the "must show"): each singular element's zero with its
+// index, and each bifurcation's node and saddle while the template is well resolved.
+#include "support/test_paths.h"
+
+#include "tvf/analysis/singularities.h"
+#include "tvf/design/element_field.h"
+#include "tvf/design/generate.h"
+#include "tvf/design/scene_json.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+namespace tvf {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> example_scenes() {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(test::source_dir() + "/examples"))
+    if (fs::exists(e.path() / "scene.json")) out.push_back((e.path() / "scene.json").string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Nearest found singularity to x and its distance.
+std::pair<const Singularity*, double> nearest(const std::vector<Singularity>& found, const Vec3& x) {
+  const Singularity* best = nullptr;
+  double d = 1e300;
+  for (const auto& s : found) {
+    const double e = (s.position - x).norm();
+    if (e < d) d = e, best = &s;
+  }
+  return {best, d};
+}
+
+TEST(Examples, EveryExampleHasItsDesignedSingularities) {
+  const auto scenes = example_scenes();
+  ASSERT_GE(scenes.size(), 3u);
+  for (const auto& path : scenes) {
+    SCOPED_TRACE(path);
+    const Scene scene = load_scene(path);
+    const auto space = make_design_space(scene);
+    GenerateReport report;
+    const Field field = generate(*space, scene, {}, &report);
+    const double tol = 1.5 * space->mesh().mean_edge_length();
+    int checked = 0;
+    for (int j = 0; j < scene.time.frames; j += 9) {
+      const double t = scene.time.time(j);
+      const auto found = find_singularities(space->bundle(), field, j);
+      for (size_t k = 0; k < scene.elements.size(); ++k) {
+        const Element& e = scene.elements[k];
+        const CompiledElement el(e);
+        if (!el.active(t)) continue;
+        const ElementState st = el.at(t);
+        if (std::holds_alternative<SingularElement>(e)) {
+          const SurfacePoint p = space->locate(st.position);
+          const Vec3 x = surface_position(space->mesh(), p);
+          const auto [s, d] = nearest(found, x);
+          ASSERT_NE(s, nullptr);
+          EXPECT_LT(d, tol) << "elements[" << k << "] at frame " << j;
+          EXPECT_EQ(s->index, el.index()) << "elements[" << k << "] at frame " << j;
+          ++checked;
+        } else if (const auto* b = std::get_if<BifurcationElement>(&e)) {
+          if (!space->planar()) continue;
+          const bool creation = b->type == BifurcationType::saddle_sink_creation ||
+                                b->type == BifurcationType::saddle_source_creation;
+          const double arg = creation ? st.field.local_time : -st.field.local_time;
+          if (arg < 0.3 || arg > 2.5) continue;
+          const cplx off = b->scale * std::sqrt(arg) * st.field.axis;
+          for (double sign : {1.0, -1.0}) {
+            const Vec3 x = b->at.position + sign * Vec3(off.real(), off.imag(), 0);
+            const auto [s, d] = nearest(found, x);
+            ASSERT_NE(s, nullptr);
+            EXPECT_LT(d, 2 * tol) << "elements[" << k << "] at frame " << j;
+            ++checked;
+          }
+        }
+      }
+    }
+    EXPECT_GT(checked, 10);
+  }
+}
+
+}  // namespace
+}  // namespace tvf

@@ -1,0 +1,165 @@
+#include "tvf/design/generate.h"
+
+#include "tvf/core/error.h"
+#include "tvf/design/element_field.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace tvf {
+namespace {
+
+Scene grid_scene(int n, double half, int frames) {
+  Scene s;
+  s.domain.grid = GridSpec{n, n, {-half, -half}, {half, half}};
+  s.time.frames = frames;
+  s.falloff = 8.0;
+  return s;
+}
+
+SingularElement singular(SingularType type, std::vector<PathPoint> path) {
+  SingularElement e;
+  e.type = type;
+  e.jacobian = jacobian_of(type);
+  e.path = std::move(path);
+  return e;
+}
+
+TEST(BasisSum, PlanarFieldIsTheClosedFormSum) {
+  Scene s = grid_scene(21, 1.0, 5);
+  s.elements.push_back(singular(SingularType::ccw_center, {{Vec3(-0.5, 0.2, 0), 0}, {Vec3(0.5, -0.1, 0), 1}}));
+  BifurcationElement b;
+  b.type = BifurcationType::saddle_sink_creation;
+  b.at = {Vec3(0.3, 0.4, 0), 0.5};
+  b.scale = 0.3;
+  b.time_scale = 0.4;
+  b.angle = 0.7;
+  s.elements.push_back(b);
+  const auto space = make_design_space(s);
+  const Field field = generate(*space, s);
+  const double d = s.falloff / (space->diameter() * space->diameter());
+  EXPECT_DOUBLE_EQ(space->diameter(), std::sqrt(8.0));
+  for (int j = 0; j < s.time.frames; ++j) {
+    const double t = s.time.time(j);
+    for (int v = 0; v < space->mesh().num_vertices(); v += 7) {
+      const Vec3& x = space->mesh().position(v);
+      cplx expected(0, 0);
+      for (const Element& e : s.elements) {
+        const ElementState st = CompiledElement(e).at(t);
+        const cplx w(x.x() - st.position.x(), x.y() - st.position.y());
+        expected += std::exp(-d * std::norm(w)) * st.field(w);
+      }
+      EXPECT_LT(std::abs(field.at(j, v) - expected), 1e-14) << j << " " << v;
+    }
+  }
+}
+
+TEST(BasisSum, SingularElementVanishesExactlyAtItsPosition) {
+  // A grid vertex at the element's position carries a zero vector in every frame in which
+  // the element is alone.
+  Scene s = grid_scene(11, 1.0, 3);
+  const int v = 3 * 11 + 6;  // (ix, iy) = (6, 3), near (0.2, -0.4)
+  const Vec3 at = make_grid(*s.domain.grid).position(v);
+  s.elements.push_back(singular(SingularType::saddle, {{at, 0}}));
+  const auto space = make_design_space(s);
+  const Field field = generate(*space, s);
+  for (int j = 0; j < 3; ++j) EXPECT_EQ(field.at(j, v), cplx(0, 0));
+  EXPECT_NE(field.at(0, v + 1), cplx(0, 0));
+}
+
+TEST(BasisSum, InvariantUnderScalingTheDomain) {
+  for (double scale : {1e-3, 1e3}) {
+    Scene a = grid_scene(15, 1.0, 4), b = grid_scene(15, scale, 4);
+    a.elements.push_back(singular(SingularType::repelling_focus, {{Vec3(0.1, 0.2, 0), 0}, {Vec3(-0.3, 0.1, 0), 1}}));
+    b.elements.push_back(singular(SingularType::repelling_focus,
+                                  {{Vec3(0.1 * scale, 0.2 * scale, 0), 0}, {Vec3(-0.3 * scale, 0.1 * scale, 0), 1}}));
+    const auto sa = make_design_space(a);
+    const auto sb = make_design_space(b);
+    const Field fa = generate(*sa, a), fb = generate(*sb, b);
+    for (size_t k = 0; k < fa.data().size(); ++k)
+      EXPECT_LT(std::abs(fb.data()[k] / scale - fa.data()[k]), 1e-12) << k;
+  }
+}
+
+TEST(BasisSum, ParallelAndSerialAgreeBitForBit) {
+  Scene s = grid_scene(33, 1.0, 20);
+  s.elements.push_back(singular(SingularType::source, {{Vec3(-0.5, 0, 0), 0}, {Vec3(0.5, 0.1, 0), 1}}));
+  RegularElement r;
+  r.pathline = {{Vec3(-0.8, -0.6, 0), 0}, {Vec3(0.8, -0.5, 0), 1}};
+  r.attach = 2;
+  s.elements.push_back(r);
+  const auto space = make_design_space(s);
+  GenerateOptions serial;
+  serial.parallel = false;
+  const Field a = generate(*space, s), b = generate(*space, s, serial);
+  EXPECT_EQ(a.data(), b.data());
+}
+
+TEST(BasisSum, SourceOnTheSphereIsRadialLikeOnThePlane) {
+  Scene s;
+  s.domain.sphere = SphereSpec{5, 1.0};
+  s.time.frames = 2;
+  s.falloff = 20;
+  const Vec3 p = Vec3(0.3, -0.4, 0.8).normalized();
+  s.elements.push_back(singular(SingularType::source, {{p, 0}}));
+  s.elements.push_back(singular(SingularType::ccw_center, {{-p, 0}}));
+  const auto space = make_design_space(s);
+  const Field field = generate(*space, s);
+  const double d = s.falloff / (space->diameter() * space->diameter());
+  int checked = 0;
+  for (int v = 0; v < space->mesh().num_vertices(); ++v) {
+    const Vec3& x = space->mesh().position(v);
+    const double r = std::acos(std::clamp(p.dot(x), -1.0, 1.0));
+    if (r < 0.1 || r > 1.0) continue;
+    // Geodesic direction away from p at x, and the closed-form magnitude r·exp(−d r²)
+    // (the ccw center at −p contributes exp(−d (π − r)²)·(π − r) ≤ 2e-3 here).
+    const Vec3 away = (x.dot(p) * x - p).normalized();
+    const Vec3 got = space->bundle().vertex_to_world(v, field.at(0, v));
+    const double angle = std::acos(std::clamp(got.normalized().dot(away), -1.0, 1.0));
+    EXPECT_LT(angle, 0.06) << "vertex " << v << " at distance " << r;
+    EXPECT_NEAR(got.norm(), r * std::exp(-d * r * r), 0.05 * r * std::exp(-d * r * r) + 3e-3);
+    ++checked;
+  }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(Generate, RefusesGeneratorsThatAreNotAvailableYet) {
+  Scene s = grid_scene(5, 1.0, 2);
+  s.source_path = "my.json";
+  s.generator = Generator::spacetime;
+  const auto space = make_design_space(s);
+  try {
+    generate(*space, s);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("my.json: generator:"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Generate, RefusesFieldsThatWouldNotFitInMemory) {
+  Scene s = grid_scene(2000, 1.0, 100000);
+  s.source_path = "big.json";
+  const auto space = make_design_space(s);
+  try {
+    generate(*space, s);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("big.json: time.frames:"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DesignWarnings, PathEndingInsideTheRangeWithoutBifurcation) {
+  Scene s = grid_scene(5, 1.0, 10);
+  s.elements.push_back(singular(SingularType::source, {{Vec3(0, 0, 0), 0}, {Vec3(0.2, 0, 0), 0.5}}));
+  auto w = design_warnings(s);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("elements[0]"), std::string::npos);
+  EXPECT_NE(w[0].find("ends at t = 0.5"), std::string::npos);
+  // A saddle path meeting it there provides the other half of the cancellation.
+  s.elements.push_back(singular(SingularType::saddle, {{Vec3(0.4, 0, 0), 0}, {Vec3(0.2, 0, 0), 0.5}}));
+  EXPECT_TRUE(design_warnings(s).empty());
+}
+
+}  // namespace
+}  // namespace tvf

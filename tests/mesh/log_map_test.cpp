@@ -1,0 +1,101 @@
+#include "tvf/mesh/log_map.h"
+
+#include "support/test_meshes.h"
+#include "tvf/mesh/grid.h"
+#include "tvf/mesh/primitives.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace tvf {
+namespace {
+
+// Exact log map and parallel transport on a sphere of radius 1 around p, for the frame
+// (e1, e2) at p: returns log_p(x) in that frame and the transported e1 at x (world).
+struct SphereTruth {
+  cplx log;
+  Vec3 e1_at_x;
+};
+SphereTruth sphere_truth(const Vec3& p, const Vec3& e1, const Vec3& e2, const Vec3& x) {
+  const double r = std::acos(std::clamp(p.dot(x), -1.0, 1.0));
+  const Vec3 u = (x - p.dot(x) * p).normalized();  // initial direction of the geodesic
+  const Vec3 w = p.cross(u);                       // normal of the great circle
+  const Vec3 u_at_x = -std::sin(r) * p + std::cos(r) * u;
+  const cplx dir(u.dot(e1), u.dot(e2));
+  return {r * dir / std::abs(dir), e1.dot(u) * u_at_x + e1.dot(w) * w};
+}
+
+TEST(LogMap, ExactOnPlanarDomains) {
+  const Mesh grid = make_grid(GridSpec{21, 11, {-1, -0.5}, {3, 1.5}});
+  const TangentBundle bundle(grid);
+  const LogMap log(bundle);
+  EXPECT_TRUE(log.exact());
+  SurfacePoint p{7, Vec3(0.2, 0.3, 0.5)};
+  const Face& f = grid.face(p.face);
+  const Vec3 x = 0.2 * grid.position(f[0]) + 0.3 * grid.position(f[1]) + 0.5 * grid.position(f[2]);
+  LocalChart chart;
+  log.compute(p, chart);
+  for (int v = 0; v < grid.num_vertices(); ++v) {
+    const Vec3 d = grid.position(v) - x;
+    EXPECT_EQ(chart.coords[static_cast<size_t>(v)], cplx(d.x(), d.y()));
+    EXPECT_EQ(chart.frame[static_cast<size_t>(v)], cplx(1, 0));
+  }
+}
+
+// The vector heat log map on a sphere against the closed form, for a point at a vertex
+// and a point inside a face, within the radius an element's falloff gives weight to.
+TEST(LogMap, MatchesGeodesicPolarCoordinatesOnTheSphere) {
+  const Mesh sphere = make_icosphere(5);
+  const TangentBundle bundle(sphere);
+  const LogMap log(bundle);
+  EXPECT_FALSE(log.exact());
+  for (const SurfacePoint& p : {SurfacePoint{100, Vec3(1, 0, 0)}, SurfacePoint{2345, Vec3(0.2, 0.5, 0.3)}}) {
+    const Face& f = sphere.face(p.face);
+    const Vec3 x = p.bary[0] * sphere.position(f[0]) + p.bary[1] * sphere.position(f[1]) +
+                   p.bary[2] * sphere.position(f[2]);
+    const Vec3 pn = x.normalized();
+    LocalChart chart;
+    log.compute(p, chart);
+    double max_dist_err = 0, max_angle_err = 0, max_frame_err = 0;
+    int checked = 0;
+    for (int v = 0; v < sphere.num_vertices(); ++v) {
+      const Vec3& xv = sphere.position(v);
+      const double r = std::acos(std::clamp(pn.dot(xv), -1.0, 1.0));
+      if (r < 0.05 || r > 1.5) continue;  // away from the source point and the cut locus
+      const SphereTruth truth = sphere_truth(pn, bundle.face_e1(p.face), bundle.face_e2(p.face), xv);
+      const cplx got = chart.coords[static_cast<size_t>(v)];
+      // Within a few edges of p the direction error is O(h / r): a looser bound there.
+      const double near = r < 0.15 ? 3.0 : 1.0;
+      max_dist_err = std::max(max_dist_err, std::abs(std::abs(got) - r) / r / near);
+      max_angle_err = std::max(max_angle_err, std::abs(std::arg(got / truth.log)) / near);
+      const cplx fr_truth = normalized(bundle.world_to_vertex(v, truth.e1_at_x));
+      max_frame_err = std::max(max_frame_err, std::abs(std::arg(chart.frame[static_cast<size_t>(v)] / fr_truth)));
+      ++checked;
+    }
+    EXPECT_GT(checked, 1000);
+    EXPECT_LT(max_dist_err, 0.03) << "relative distance error (×1/3 within 0.15 of p)";
+    EXPECT_LT(max_angle_err, 0.05) << "direction error (radians, ×1/3 within 0.15 of p)";
+    EXPECT_LT(max_frame_err, 0.03) << "transport error (radians)";
+  }
+}
+
+TEST(LogMap, UnchangedByUniformScaling) {
+  const Mesh& s = test::icosphere_mesh();
+  std::vector<Vec3> pos = s.positions();
+  for (auto& x : pos) x *= 1000.0;
+  const Mesh big(pos, s.faces(), "scaled");
+  const TangentBundle b1(s), b2(big);
+  const LogMap l1(b1), l2(b2);
+  const SurfacePoint p{42, Vec3(0.3, 0.3, 0.4)};
+  LocalChart c1, c2;
+  l1.compute(p, c1);
+  l2.compute(p, c2);
+  for (size_t v = 0; v < c1.coords.size(); ++v) {
+    EXPECT_LT(std::abs(c2.coords[v] / 1000.0 - c1.coords[v]), 1e-9 * (1 + std::abs(c1.coords[v])));
+    EXPECT_LT(std::abs(c2.frame[v] - c1.frame[v]), 1e-9);
+  }
+}
+
+}  // namespace
+}  // namespace tvf
