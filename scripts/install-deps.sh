@@ -14,6 +14,7 @@ packages=(
   libgmp-dev libmpfr-dev # required by CGAL headers
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-vtk9 python3-jsonschema  # tests read our outputs with NumPy, VTK and jsonschema
+  libcgal-demo           # CGAL's sample meshes: the real surfaces of examples/04 (no meshes in git)
 )
 sudo_cmd=()
 if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
@@ -23,9 +24,26 @@ for p in "${packages[@]}"; do
 done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
-  exit 0
+else
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -qq
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-"${sudo_cmd[@]}" apt-get update -qq
-"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+
+# The example meshes come out of libcgal-demo's data archive (the Stanford bunny as
+# CGAL ships it); they are extracted next to the example scenes and ignored by git.
+root=$(cd "$(dirname "$0")/.." && pwd)
+archive=/usr/share/doc/libcgal-dev/data.tar.gz
+target="$root/examples/04_surface_mesh/bunny.off"
+if [ ! -s "$target" ]; then
+  if [ ! -f "$archive" ]; then
+    echo "install-deps: $archive is missing (package libcgal-demo)" >&2
+    exit 1
+  fi
+  tmp=$(mktemp -d)
+  tar -xzf "$archive" -C "$tmp" data/meshes/bunny00.off
+  mv "$tmp/data/meshes/bunny00.off" "$target"
+  rm -rf "$tmp"
+  echo "install-deps: extracted the example mesh $target"
+fi
