@@ -36,21 +36,29 @@ fs::path temporary_sibling(const fs::path& path) {
   return path.parent_path() / name;
 }
 
-void write_file_atomically(const fs::path& path, const std::string& bytes) {
+void write_file_atomically(const fs::path& path, const std::function<void(std::ostream&)>& writer) {
   const fs::path tmp = temporary_sibling(path);
   std::error_code ec;
   try {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) fail(path, "cannot open a temporary file for writing", {});
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) fail(path, "cannot write the file", {});
+    {
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      if (!out) fail(path, "cannot open a temporary file next to it for writing", {});
+      writer(out);
+      out.close();
+      if (!out) fail(path, "cannot write the file", {});
+    }
     fs::rename(tmp, path, ec);
     if (ec) fail(path, "cannot move the finished file into place", ec);
   } catch (...) {
     fs::remove(tmp, ec);
     throw;
   }
+}
+
+void write_file_atomically(const fs::path& path, const std::string& bytes) {
+  write_file_atomically(path, [&](std::ostream& out) {
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  });
 }
 
 OutputStage::OutputStage(const fs::path& target_dir) : target_(target_dir) {

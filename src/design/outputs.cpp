@@ -43,14 +43,18 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
   // The copy of the scene must stay valid next to the outputs: its mesh path is made
   // absolute (relative paths were relative to the original scene file).
   Scene copy = scene;
-  if (!copy.domain.mesh.empty())
-    copy.domain.mesh = std::filesystem::absolute(scene.resolved_mesh_path()).lexically_normal().string();
+  auto absolute = [&](const std::string& p) {
+    return std::filesystem::absolute(scene.resolve_path(p)).lexically_normal().string();
+  };
+  if (!copy.domain.mesh.empty()) copy.domain.mesh = absolute(copy.domain.mesh);
+  for (Keyframe& k : copy.keyframes)
+    if (!k.field.empty()) k.field = absolute(k.field);
   const nlohmann::json scene_json = scene_to_json(copy);
   save_field_file(stage.file("field.tvff").string(), mesh, field, scene_json);
 
   step("coherence.csv, scene.json");
   write_file_atomically(stage.file("coherence.csv"), coherence_csv(field, coherence(field)));
-  write_file_atomically(stage.file("scene.json"), scene_json.dump(2) + "\n");
+  write_file_atomically(stage.file("scene.json"), scene_to_text(copy));
 
   if (options.vtk) {
     step("field.pvd + field_NNNN.vtu");

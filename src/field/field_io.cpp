@@ -81,12 +81,7 @@ void save_field_file(const std::string& path, const Mesh& mesh, const Field& fie
   // Pad with spaces (valid trailing JSON whitespace) so the arrays start 8-byte aligned.
   header.append((8 - (kPreamble + header.size()) % 8) % 8, ' ');
 
-  const fs::path target(path);
-  const fs::path tmp = temporary_sibling(target);
-  std::error_code ec;
-  try {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) fail(path, "cannot open a temporary file for writing");
+  write_file_atomically(fs::path(path), [&](std::ostream& out) {
     out.write(kMagic, sizeof(kMagic));
     put(out, kVersion);
     put(out, static_cast<std::uint64_t>(header.size()));
@@ -97,14 +92,7 @@ void save_field_file(const std::string& path, const Mesh& mesh, const Field& fie
       put_array(out, idx, 3);
     }
     put_array(out, reinterpret_cast<const double*>(field.data().data()), 2 * field.data().size());
-    out.close();
-    if (!out) fail(path, "cannot write the file");
-    fs::rename(tmp, target, ec);
-    if (ec) fail(path, "cannot move the finished file into place (" + ec.message() + ")");
-  } catch (...) {
-    fs::remove(tmp, ec);
-    throw;
-  }
+  });
 }
 
 FieldFile load_field_file(const std::string& path) {

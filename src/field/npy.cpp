@@ -72,23 +72,11 @@ void write_array(const std::string& path, const char* descr, const std::vector<s
   if (!count) fail(path, "array shape is too large");
   const std::string header = npy_header(path, descr, shape);
   TVF_CHECK(*count == 0 || data != nullptr, "no data for {} elements", *count);
-  const fs::path target(path);
-  const fs::path tmp = temporary_sibling(target);
-  std::error_code ec;
-  try {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) fail(path, "cannot open a temporary file for writing");
+  write_file_atomically(fs::path(path), [&](std::ostream& out) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));
     if (*count > 0)
       out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(*count * sizeof(T)));
-    out.close();
-    if (!out) fail(path, "cannot write the file");
-    fs::rename(tmp, target, ec);
-    if (ec) fail(path, "cannot move the finished file into place (" + ec.message() + ")");
-  } catch (...) {
-    fs::remove(tmp, ec);
-    throw;
-  }
+  });
 }
 
 // A minimal reader for the Python literal of an .npy header: a dict whose values are

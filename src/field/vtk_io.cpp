@@ -21,29 +21,14 @@ static_assert(std::endian::native == std::endian::little,
 
 namespace {
 
-[[noreturn]] void fail(const fs::path& path, const std::string& message) {
-  throw_input_error(path.string(), "", message);
-}
-
 // Writes head + body + tail to `path` through a temporary sibling (complete or absent).
 void write_whole_file(const fs::path& path, const std::string& head, const std::string& body,
                       const std::string& tail) {
-  const fs::path tmp = temporary_sibling(path);
-  std::error_code ec;
-  try {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) fail(path, "cannot open a temporary file for writing");
+  write_file_atomically(path, [&](std::ostream& out) {
     out.write(head.data(), static_cast<std::streamsize>(head.size()));
     out.write(body.data(), static_cast<std::streamsize>(body.size()));
     out.write(tail.data(), static_cast<std::streamsize>(tail.size()));
-    out.close();
-    if (!out) fail(path, "cannot write the file");
-    fs::rename(tmp, path, ec);
-    if (ec) fail(path, "cannot move the finished file into place (" + ec.message() + ")");
-  } catch (...) {
-    fs::remove(tmp, ec);
-    throw;
-  }
+  });
 }
 
 std::string xml_escape(const std::string& s) {

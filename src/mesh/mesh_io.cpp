@@ -380,42 +380,26 @@ void save_mesh(const Mesh& mesh, const std::string& path) {
   for (const Vec3& p : mesh.positions()) points.emplace_back(p.x(), p.y(), p.z());
   std::vector<std::array<int, 3>> polygons(mesh.faces().begin(), mesh.faces().end());
 
-  const fs::path tmp = temporary_sibling(path);
-  std::error_code ec;
-  try {
+  write_file_atomically(path, [&](std::ostream& out) {
+    // Enough digits that every double reads back exactly.
+    out.precision(std::numeric_limits<double>::max_digits10);
     bool ok = false;
-    {
-      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-      if (!out) throw_input_error(path, "", "cannot open a temporary file next to it for writing");
-      // Enough digits that every double reads back exactly.
-      out.precision(std::numeric_limits<double>::max_digits10);
-      switch (format) {
-        case Format::obj:
-          CGAL::IO::set_mode(out, CGAL::IO::ASCII);
-          ok = CGAL::IO::write_OBJ(out, points, polygons);
-          break;
-        case Format::off:
-          CGAL::IO::set_mode(out, CGAL::IO::ASCII);
-          ok = CGAL::IO::write_OFF(out, points, polygons);
-          break;
-        case Format::ply:
-          CGAL::IO::set_mode(out, CGAL::IO::BINARY);
-          ok = CGAL::IO::write_PLY(out, points, polygons);
-          break;
-      }
-      out.close();
-      ok = ok && !out.fail();
+    switch (format) {
+      case Format::obj:
+        CGAL::IO::set_mode(out, CGAL::IO::ASCII);
+        ok = CGAL::IO::write_OBJ(out, points, polygons);
+        break;
+      case Format::off:
+        CGAL::IO::set_mode(out, CGAL::IO::ASCII);
+        ok = CGAL::IO::write_OFF(out, points, polygons);
+        break;
+      case Format::ply:
+        CGAL::IO::set_mode(out, CGAL::IO::BINARY);
+        ok = CGAL::IO::write_PLY(out, points, polygons);
+        break;
     }
     if (!ok) throw_input_error(path, "", "cannot write the mesh file");
-    fs::rename(tmp, path, ec);
-    if (ec)
-      throw_input_error(
-          path, "",
-          fmt::format("cannot move the finished mesh file into place ({})", ec.message()));
-  } catch (...) {
-    fs::remove(tmp, ec);
-    throw;
-  }
+  });
 }
 
 }  // namespace tvf

@@ -45,7 +45,9 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
     const auto space = make_design_space(scene);
     GenerateReport report;
     const Field field = generate(*space, scene, {}, &report);
-    const double tol = 1.5 * space->mesh().mean_edge_length();
+    // Within a couple of edge lengths: the zero of a sampled field moves by O(h), and the
+    // neighbouring elements push it a little further.
+    const double tol = 2.5 * space->mesh().mean_edge_length();
     int checked = 0;
     for (int j = 0; j < scene.time.frames; j += 9) {
       const double t = scene.time.time(j);
