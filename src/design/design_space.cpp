@@ -1,6 +1,7 @@
 #include "tvf/design/design_space.h"
 
 #include "tvf/core/error.h"
+#include "tvf/design/generate.h"
 #include "tvf/mesh/grid.h"
 #include "tvf/mesh/mesh_io.h"
 #include "tvf/mesh/primitives.h"
@@ -16,7 +17,12 @@ SurfacePoint DesignSpace::locate(const Vec3& x) const { return closest_point(mes
 
 std::unique_ptr<DesignSpace> make_design_space(const Scene& scene) {
   const Domain& d = scene.domain;
-  if (d.grid) return std::make_unique<DesignSpace>(make_grid(*d.grid, scene.label() + ": domain.grid"));
+  // Fields that could not fit are refused before the domain is built (a huge grid takes
+  // seconds to build); meshes are checked once their size is known.
+  if (d.grid) {
+    check_field_memory(scene, static_cast<long long>(d.grid->nx) * d.grid->ny);
+    return std::make_unique<DesignSpace>(make_grid(*d.grid, scene.label() + ": domain.grid"));
+  }
   if (d.sphere)
     return std::make_unique<DesignSpace>(make_icosphere(d.sphere->subdivisions, d.sphere->radius));
   if (d.torus)
@@ -28,6 +34,7 @@ std::unique_ptr<DesignSpace> make_design_space(const Scene& scene) {
       throw_input_error(scene.label(), "domain.mesh",
                         fmt::format("the mesh file '{}' does not exist", path));
     LoadedMesh loaded = load_mesh(path);
+    check_field_memory(scene, loaded.mesh.num_vertices());
     auto space = std::make_unique<DesignSpace>(std::move(loaded.mesh));
     space->repairs = loaded.repairs;
     return space;

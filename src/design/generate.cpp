@@ -12,7 +12,7 @@
 
 namespace tvf {
 
-std::uint64_t field_memory_bytes(int frames, int vertices) {
+std::uint64_t field_memory_bytes(int frames, long long vertices) {
   // 16 bytes per complex double in memory, 12 per float32 world vector when exporting.
   return static_cast<std::uint64_t>(frames) * static_cast<std::uint64_t>(vertices) * 28u;
 }
@@ -26,16 +26,21 @@ std::uint64_t physical_memory_bytes() {
                                : std::uint64_t{1} << 34;
 }
 
-void check_memory(const Scene& scene, int frames, int vertices) {
+}  // namespace
+
+void check_field_memory(const Scene& scene, long long vertices) {
+  const int frames = scene.time.frames;
   const std::uint64_t need = field_memory_bytes(frames, vertices);
   const std::uint64_t have = physical_memory_bytes();
   if (need > have / 10 * 8)
     throw_input_error(scene.label(), "time.frames",
-                      fmt::format("{} frames × {} vertices need {:.1f} GiB, more than the {:.1f} GiB "
+                      fmt::format("{} frames × {} vertices need {:.1f} GiB, more than 80 % of the {:.1f} GiB "
                                   "of memory this machine has",
                                   frames, vertices, static_cast<double>(need) / (1u << 30),
                                   static_cast<double>(have) / (1u << 30)));
 }
+
+namespace {
 
 // An element placed at one frame: local field plus where it is.
 struct Placed {
@@ -89,7 +94,7 @@ Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
   const Mesh& mesh = space.mesh();
   const int nv = mesh.num_vertices();
   const int nframes = scene.time.frames;
-  check_memory(scene, nframes, nv);
+  check_field_memory(scene, nv);
 
   std::vector<CompiledElement> elements;
   elements.reserve(scene.elements.size());

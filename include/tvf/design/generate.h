@@ -41,6 +41,9 @@ Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
 std::vector<std::string> design_warnings(const Scene& scene);
 
 // Bytes a generated field needs in memory (double complex values plus float32 export).
-std::uint64_t field_memory_bytes(int frames, int vertices);
+std::uint64_t field_memory_bytes(int frames, long long vertices);
+// Throws tvf::Error naming the scene and "time.frames" when the field of `scene` on
+// `vertices` vertices would need more than 80 % of this machine's memory.
+void check_field_memory(const Scene& scene, long long vertices);
 
 }  // namespace tvf
