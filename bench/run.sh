@@ -8,12 +8,13 @@ cmake --build "$build" --target tvf_bench >/dev/null
 json=$(mktemp)
 "$build/bench/tvf_bench" --benchmark_format=json --benchmark_out="$json" --benchmark_out_format=json \
   --benchmark_repetitions=3 --benchmark_report_aggregates_only=true >/dev/null
-/usr/bin/python3 - "$json" <<'PY'
-import json, sys, platform, os
+build_type=$(grep -m1 '^CMAKE_BUILD_TYPE:' "$build/CMakeCache.txt" | cut -d= -f2)
+cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')
+/usr/bin/python3 - "$json" "$build_type" "$cpu" <<'PY'
+import json, sys
 d = json.load(open(sys.argv[1]))
 ctx = d["context"]
-print(f"Machine: {ctx.get('host_name','?')}, {ctx['num_cpus']} CPUs at {ctx['mhz_per_cpu']} MHz; "
-      f"built {ctx.get('library_build_type','?')}; {ctx['date']}")
+print(f"Machine: {sys.argv[3]}, {ctx['num_cpus']} cores; tvf built {sys.argv[2]}; {ctx['date']}")
 print()
 print("| case | vertices | frames | median time | per frame |")
 print("|---|---:|---:|---:|---:|")
