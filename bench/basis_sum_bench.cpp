@@ -71,3 +71,44 @@ BENCHMARK(BM_LogMapSetup)->Arg(5)->Arg(6)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// Constrained optimization per frame (paper §5.3) on the same designs.
+void BM_ConstrainedGrid(benchmark::State& state) {
+  Scene s = combined_scene();
+  s.generator = Generator::constrained;
+  const int n = static_cast<int>(state.range(0));
+  s.domain.grid = GridSpec{n, n, {-1, -1}, {1, 1}};
+  const auto space = make_design_space(s);
+  for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
+  state.counters["vertices"] = n * n;
+  state.counters["frames"] = s.time.frames;
+}
+BENCHMARK(BM_ConstrainedGrid)->Arg(65)->Arg(141)->Unit(benchmark::kMillisecond);
+
+void BM_ConstrainedSphere(benchmark::State& state) {
+  Scene s;
+  s.time.frames = 100;
+  s.falloff = 20;
+  s.generator = Generator::constrained;
+  s.domain.sphere = SphereSpec{static_cast<int>(state.range(0)), 1.0};
+  SingularElement c;
+  c.type = SingularType::ccw_center;
+  c.jacobian = jacobian_of(*c.type);
+  c.path = {{Vec3(1, 0, 0), 0}, {Vec3(0, 1, 0), 0.5}, {Vec3(-1, 0, 0), 1}};
+  SingularElement src;
+  src.type = SingularType::source;
+  src.jacobian = jacobian_of(*src.type);
+  src.path = {{Vec3(0, 0, 1), 0}};
+  s.elements = {c, src};
+  const auto space = make_design_space(s);
+  for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
+  state.counters["vertices"] = space->mesh().num_vertices();
+  state.counters["frames"] = s.time.frames;
+}
+BENCHMARK(BM_ConstrainedSphere)->Arg(5)->Arg(6)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace tvf

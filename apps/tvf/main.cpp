@@ -51,8 +51,10 @@ int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
 
   for (const auto& w : report.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (!args.quiet) {
-    std::printf("generated %d frames × %d vertices (%s generator) in %.2f s\n", report.frames,
-                report.vertices, to_string(scene.generator), report.seconds);
+    std::printf("generated %d frames × %d vertices by %s in %.2f s", report.frames, report.vertices,
+                report.method.c_str(), report.seconds);
+    if (report.residual > 0) std::printf(" (worst relative residual %.1e)", report.residual);
+    std::printf("\n");
     std::printf("wrote %zu files to %s\n", files.size(), fs::absolute(args.out).lexically_normal().c_str());
     if (demo) {
       std::printf(

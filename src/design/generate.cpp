@@ -2,7 +2,9 @@
 
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
+#include "tvf/solve/connection_laplacian.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <chrono>
@@ -88,70 +90,186 @@ std::vector<std::string> design_warnings(const Scene& scene) {
   return out;
 }
 
-Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
-                         const GenerateOptions& options, GenerateReport* report) {
-  const auto start = std::chrono::steady_clock::now();
-  const Mesh& mesh = space.mesh();
-  const int nv = mesh.num_vertices();
-  const int nframes = scene.time.frames;
-  check_field_memory(scene, nv);
+namespace {
 
+// One element at one time on the domain: its basis field (with falloff) at every vertex,
+// in each vertex's basis, and every vertex's distance from the element (geodesic on
+// surfaces).
+struct ElementOnDomain {
+  std::vector<cplx> value;
+  std::vector<double> distance;
+  SurfacePoint at;  // the face holding p(t) (surfaces only)
+};
+
+void place_element(const DesignSpace& space, const CompiledElement& el, double t, double d,
+                   LocalChart& chart, ElementOnDomain& out) {
+  const Mesh& mesh = space.mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  out.value.resize(nv);
+  out.distance.resize(nv);
+  ElementState st = el.at(t);
+  if (space.planar()) {
+    // Local coordinates are the plane's own: w = x − p, frame = global.
+    for (size_t v = 0; v < nv; ++v) {
+      const Vec3& x = mesh.position(static_cast<int>(v));
+      const cplx w(x.x() - st.position.x(), x.y() - st.position.y());
+      out.value[v] = std::exp(-d * std::norm(w)) * st.field(w);
+      out.distance[v] = std::abs(w);
+    }
+    return;
+  }
+  out.at = space.locate(st.position);
+  if (st.field.kind == LocalField::Kind::regular)
+    st.field.velocity = space.bundle().world_to_face(out.at.face, st.velocity);
+  space.log_map().compute(out.at, chart);
+  for (size_t v = 0; v < nv; ++v) {
+    const cplx w = chart.coords[v];
+    const double fall = std::exp(-d * std::norm(w));
+    out.value[v] = fall < 1e-300 ? cplx(0, 0) : fall * st.field(w) * chart.frame[v];
+    out.distance[v] = std::abs(w);
+  }
+}
+
+// Runs solve_frame(j) for every frame, in parallel or not, reporting progress.
+template <class F>
+void for_each_frame(int frames, const GenerateOptions& options, F&& solve_frame) {
+  std::mutex progress_mutex;
+  int done = 0;
+  auto run = [&](int j) {
+    solve_frame(j);
+    if (options.progress) {
+      std::lock_guard lock(progress_mutex);
+      options.progress(++done, frames);
+    }
+  };
+  if (options.parallel) {
+    tbb::parallel_for(0, frames, run);
+  } else {
+    for (int j = 0; j < frames; ++j) run(j);
+  }
+}
+
+LaplacianWeights to_laplacian_weights(Weights w) {
+  switch (w) {
+    case Weights::cotan: return LaplacianWeights::cotan;
+    case Weights::uniform: return LaplacianWeights::uniform;
+    case Weights::mean_value: return LaplacianWeights::mean_value;
+  }
+  TVF_CHECK(false, "unknown weights");
+}
+
+std::vector<CompiledElement> compile(const Scene& scene) {
   std::vector<CompiledElement> elements;
   elements.reserve(scene.elements.size());
   for (const Element& e : scene.elements) elements.emplace_back(e);
+  return elements;
+}
+
+void finish_report(GenerateReport* report, const Scene& scene, int vertices,
+                   std::chrono::steady_clock::time_point start) {
+  if (!report) return;
+  report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report->frames = scene.time.frames;
+  report->vertices = vertices;
+  auto w = design_warnings(scene);
+  report->warnings.insert(report->warnings.end(), w.begin(), w.end());
+}
+
+}  // namespace
+
+Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
+                         const GenerateOptions& options, GenerateReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  const int nv = space.mesh().num_vertices();
+  check_field_memory(scene, nv);
+  const std::vector<CompiledElement> elements = compile(scene);
   const double d = scene.falloff / (space.diameter() * space.diameter());
 
   Field field(scene.time, nv);
-  std::mutex progress_mutex;
-  int done = 0;
-
-  auto solve_frame = [&](int j) {
+  for_each_frame(scene.time.frames, options, [&](int j) {
     const double t = scene.time.time(j);
     std::span<cplx> out = field.frame(j);
     std::fill(out.begin(), out.end(), cplx(0, 0));
     LocalChart chart;
+    ElementOnDomain placed;
     for (const CompiledElement& el : elements) {
       if (!el.active(t)) continue;
-      ElementState st = el.at(t);
-      if (space.planar()) {
-        // Local coordinates are the plane's own: w = x − p, frame = global.
-        for (int v = 0; v < nv; ++v) {
-          const Vec3& x = mesh.position(v);
-          const cplx w(x.x() - st.position.x(), x.y() - st.position.y());
-          out[static_cast<size_t>(v)] += std::exp(-d * std::norm(w)) * st.field(w);
-        }
-        continue;
+      place_element(space, el, t, d, chart, placed);
+      for (size_t v = 0; v < out.size(); ++v) out[v] += placed.value[v];
+    }
+  });
+  if (report) report->method = "basis field summation";
+  finish_report(report, scene, nv, start);
+  return field;
+}
+
+Field generate_constrained(const DesignSpace& space, const Scene& scene,
+                           const GenerateOptions& options, GenerateReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  const Mesh& mesh = space.mesh();
+  const int nv = mesh.num_vertices();
+  check_field_memory(scene, nv);
+  const std::vector<CompiledElement> elements = compile(scene);
+  const double d = scene.falloff / (space.diameter() * space.diameter());
+  const ConnectionLaplacian laplacian =
+      connection_laplacian(space.bundle(), to_laplacian_weights(scene.solver.weights));
+  const DirichletSolver prototype(laplacian);
+  tbb::enumerable_thread_specific<DirichletSolver> solvers(prototype);
+
+  Field field(scene.time, nv);
+  std::mutex report_mutex;
+  double worst_residual = 0;
+  bool all_ok = true;
+  std::string method;
+  for_each_frame(scene.time.frames, options, [&](int j) {
+    const double t = scene.time.time(j);
+    std::vector<char> fixed(static_cast<size_t>(nv), 0);
+    std::vector<cplx> values(static_cast<size_t>(nv), cplx(0, 0));
+    LocalChart chart;
+    ElementOnDomain placed;
+    for (const CompiledElement& el : elements) {
+      if (!el.active(t)) continue;
+      place_element(space, el, t, d, chart, placed);
+      // The element's region: vertices within region_radius (a bifurcation's covers its
+      // pair's travel, 2·scale); its own field is imposed there.
+      double radius = scene.solver.region_radius;
+      if (const auto* b = std::get_if<BifurcationElement>(&el.element()))
+        radius = std::max(radius, 2 * b->scale);
+      for (size_t v = 0; v < values.size(); ++v) {
+        if (placed.distance[v] > radius) continue;
+        fixed[v] = 1;
+        values[v] += placed.value[v];
       }
-      const SurfacePoint p = space.locate(st.position);
-      if (st.field.kind == LocalField::Kind::regular)
-        st.field.velocity = space.bundle().world_to_face(p.face, st.velocity);
-      space.log_map().compute(p, chart);
-      for (int v = 0; v < nv; ++v) {
-        const cplx w = chart.coords[static_cast<size_t>(v)];
-        const double fall = std::exp(-d * std::norm(w));
-        if (fall < 1e-300) continue;
-        out[static_cast<size_t>(v)] += fall * st.field(w) * chart.frame[static_cast<size_t>(v)];
+      // However small the radius, the element's own face and its corners' neighbours are
+      // in the region, so the constraints enclose its singularity.
+      const SurfacePoint at = space.planar() ? space.locate(el.at(t).position) : placed.at;
+      auto include = [&](int vi) {
+        const auto v = static_cast<size_t>(vi);
+        if (placed.distance[v] <= radius) return;  // already added above
+        if (!fixed[v]) values[v] = cplx(0, 0);
+        fixed[v] = 1;
+        values[v] += placed.value[v];
+      };
+      for (int c : mesh.face(at.face)) {
+        include(c);
+        for (int h : mesh.outgoing(c)) include(mesh.head(h));
       }
     }
-    if (options.progress) {
-      std::lock_guard lock(progress_mutex);
-      options.progress(++done, nframes);
-    }
-  };
-
-  if (options.parallel) {
-    tbb::parallel_for(0, nframes, solve_frame);
-  } else {
-    for (int j = 0; j < nframes; ++j) solve_frame(j);
-  }
-
+    const SolveReport r = solvers.local().solve(fixed, values, field.frame(j));
+    std::lock_guard lock(report_mutex);
+    worst_residual = std::max(worst_residual, r.residual);
+    all_ok = all_ok && r.success;
+    method = r.method;
+  });
+  if (!all_ok)
+    throw_input_error(scene.label(), "generator",
+                      "the constrained solve failed (a part of the domain without constraints "
+                      "whose Laplacian is singular?)");
   if (report) {
-    report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    report->frames = nframes;
-    report->vertices = nv;
-    auto w = design_warnings(scene);
-    report->warnings.insert(report->warnings.end(), w.begin(), w.end());
+    report->method = "constrained optimization per frame, " + method;
+    report->residual = worst_residual;
   }
+  finish_report(report, scene, nv, start);
   return field;
 }
 
@@ -163,12 +281,12 @@ Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptio
                       "'edits' entries to generate the unedited design");
   switch (scene.generator) {
     case Generator::basis: return generate_basis_sum(space, scene, options, report);
-    case Generator::constrained:
+    case Generator::constrained: return generate_constrained(space, scene, options, report);
     case Generator::spacetime:
     case Generator::deform:
       throw_input_error(scene.label(), "generator",
                         fmt::format("the '{}' generator is not available in this version of tvf "
-                                    "(available: basis)",
+                                    "(available: basis, constrained)",
                                     to_string(scene.generator)));
   }
   TVF_CHECK(false, "unknown generator");

@@ -88,3 +88,50 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+SingularityType expected_type(SingularType t) {
+  switch (t) {
+    case SingularType::source: return SingularityType::source;
+    case SingularType::sink: return SingularityType::sink;
+    case SingularType::saddle: return SingularityType::saddle;
+    case SingularType::ccw_center:
+    case SingularType::cw_center: return SingularityType::center;
+    case SingularType::repelling_focus: return SingularityType::repelling_focus;
+    case SingularType::attracting_focus: return SingularityType::attracting_focus;
+  }
+  return SingularityType::source;
+}
+
+// The constrained generator keeps every designed singularity at its place with its type
+// in every frame (issue 3's "must show").
+TEST(Examples, ConstrainedKeepsEverySingularElementsPlaceAndTypeInEveryFrame) {
+  const Scene scene = load_scene(test::source_dir() + "/examples/05_constrained_elements/scene.json");
+  ASSERT_EQ(scene.generator, Generator::constrained);
+  const auto space = make_design_space(scene);
+  const Field field = generate(*space, scene);
+  const double tol = 1.0 * space->mesh().mean_edge_length();
+  int checked = 0;
+  for (int j = 0; j < scene.time.frames; ++j) {
+    const double t = scene.time.time(j);
+    const auto found = find_singularities(space->bundle(), field, j);
+    for (size_t k = 0; k < scene.elements.size(); ++k) {
+      const auto* s = std::get_if<SingularElement>(&scene.elements[k]);
+      if (!s || !s->type) continue;
+      const CompiledElement el(scene.elements[k]);
+      if (!el.active(t)) continue;
+      const auto [f, d] = nearest(found, el.at(t).position);
+      ASSERT_NE(f, nullptr);
+      EXPECT_LT(d, tol) << "elements[" << k << "] at frame " << j;
+      EXPECT_EQ(f->type, expected_type(*s->type)) << "elements[" << k << "] at frame " << j << ": "
+                                                  << to_string(f->type);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 300);
+}
+
+}  // namespace
+}  // namespace tvf

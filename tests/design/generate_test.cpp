@@ -2,6 +2,7 @@
 
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
+#include "tvf/solve/connection_laplacian.h"
 
 #include <gtest/gtest.h>
 
@@ -159,6 +160,77 @@ TEST(DesignWarnings, PathEndingInsideTheRangeWithoutBifurcation) {
   // A saddle path meeting it there provides the other half of the cancellation.
   s.elements.push_back(singular(SingularType::saddle, {{Vec3(0.4, 0, 0), 0}, {Vec3(0.2, 0, 0), 0.5}}));
   EXPECT_TRUE(design_warnings(s).empty());
+}
+
+}  // namespace
+}  // namespace tvf
+
+namespace tvf {
+namespace {
+
+Scene constrained_scene() {
+  Scene s = grid_scene(41, 1.0, 12);
+  s.generator = Generator::constrained;
+  s.falloff = 100;
+  s.solver.region_radius = 0.12;
+  s.elements.push_back(singular(SingularType::ccw_center, {{Vec3(-0.5, 0.4, 0), 0}, {Vec3(0.4, 0.5, 0), 1}}));
+  s.elements.push_back(singular(SingularType::saddle, {{Vec3(0.1, -0.3, 0), 0}}));
+  s.elements.push_back(singular(SingularType::source, {{Vec3(-0.6, -0.5, 0), 0}, {Vec3(-0.4, -0.55, 0), 1}}));
+  return s;
+}
+
+TEST(Constrained, RegionsTakeTheirElementsFieldExactly) {
+  const Scene s = constrained_scene();
+  const auto space = make_design_space(s);
+  GenerateReport report;
+  const Field field = generate(*space, s, {}, &report);
+  EXPECT_LT(report.residual, 1e-12);
+  EXPECT_NE(report.method.find("constrained"), std::string::npos);
+  const double d = s.falloff / (space->diameter() * space->diameter());
+  int checked = 0;
+  for (int j = 0; j < s.time.frames; ++j) {
+    const double t = s.time.time(j);
+    for (int v = 0; v < space->mesh().num_vertices(); ++v) {
+      const Vec3& x = space->mesh().position(v);
+      cplx expected(0, 0);
+      bool inside = false;
+      for (const Element& e : s.elements) {
+        const ElementState st = CompiledElement(e).at(t);
+        const cplx w(x.x() - st.position.x(), x.y() - st.position.y());
+        if (std::abs(w) > s.solver.region_radius) continue;
+        inside = true;
+        expected += std::exp(-d * std::norm(w)) * st.field(w);
+      }
+      if (!inside) continue;
+      EXPECT_EQ(field.at(j, v), expected) << j << " " << v;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 500);
+}
+
+TEST(Constrained, OutsideTheRegionsTheFieldIsHarmonic) {
+  const Scene s = constrained_scene();
+  const auto space = make_design_space(s);
+  const Field field = generate(*space, s);
+  const ConnectionLaplacian l = connection_laplacian(space->bundle());
+  // Free vertices: L z = 0 there. A free vertex is one whose value differs from every
+  // region's imposed value; test those at least 0.2 away from every element.
+  for (int j : {0, 5, 11}) {
+    const double t = s.time.time(j);
+    const auto frame = field.frame(j);
+    const Eigen::VectorXcd z = Eigen::Map<const Eigen::VectorXcd>(frame.data(), static_cast<Eigen::Index>(frame.size()));
+    const Eigen::VectorXcd lz = l.matrix * z;
+    for (int v = 0; v < space->mesh().num_vertices(); ++v) {
+      const Vec3& x = space->mesh().position(v);
+      bool far = true;
+      for (const Element& e : s.elements)
+        far = far && (x - CompiledElement(e).at(t).position).norm() > 0.2;
+      if (far) {
+        EXPECT_LT(std::abs(lz[v]), 1e-12) << j << " " << v;
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
 #pragma once
 // Generating the field of a scene (DESIGN §5). generate() dispatches on scene.generator.
-// Available now: "basis" (basis field summation, paper §5.2, eq. 8). The constrained,
-// spacetime and deform generators are refused with a clear error until they land.
+// Available now: "basis" (basis field summation, paper §5.2, eq. 8) and "constrained"
+// (paper §5.3). The spacetime and deform generators are refused with a clear error until
+// they land.
 #include "tvf/design/design_space.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
@@ -20,6 +21,8 @@ struct GenerateOptions {
 
 struct GenerateReport {
   std::vector<std::string> warnings;  // design problems that do not stop generation
+  std::string method;                 // the generator and solver used
+  double residual = 0.0;              // worst relative residual of the linear solves
   double seconds = 0.0;
   int frames = 0;
   int vertices = 0;
@@ -35,6 +38,15 @@ Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptio
 // coordinate of x around element i, d = falloff / diam².
 Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
                          const GenerateOptions& options = {}, GenerateReport* report = nullptr);
+
+// Constrained optimization per frame (paper §5.3, DESIGN §5.2): the vertices within
+// solver.region_radius of each active element (geodesic distance on surfaces; at least the
+// element's face and its corners' neighbours; a bifurcation's region covers 2·scale) take
+// that element's own basis field; every other vertex solves L z = 0 with the connection
+// Laplacian of solver.weights. Frames are solved in parallel; the symbolic factorization
+// is shared by all frames.
+Field generate_constrained(const DesignSpace& space, const Scene& scene,
+                           const GenerateOptions& options = {}, GenerateReport* report = nullptr);
 
 // Checks that need the scene only (no mesh): singular paths that begin or end inside
 // the time range without a bifurcation there (DESIGN §4). One warning per problem.

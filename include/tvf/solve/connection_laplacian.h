@@ -1,0 +1,66 @@
+#pragma once
+// The connection (vector) Laplacian of DESIGN §5:
+//   (L z)_i = Σ_j w_ij (z_i − r_ji z_j),
+// z_i a tangent vector at vertex i in its basis, r_ji = TangentBundle::transport(j→i).
+// L is positive semidefinite where the weights are positive. Cotan and uniform weights are
+// symmetric (w_ij = w_ji), which makes L Hermitian, so sparse Cholesky and CG apply;
+// mean-value weights (the paper's) are not, and need LU or BiCGStab.
+#include "tvf/mesh/tangent_bundle.h"
+
+#include <Eigen/SparseCore>
+
+#include <memory>
+#include <span>
+#include <string>
+
+namespace tvf {
+
+enum class LaplacianWeights {
+  cotan,       // w_ij = ½ (cot α_ij + cot β_ij), the angles opposite edge ij
+  uniform,     // w_ij = 1
+  mean_value,  // w_ij = (tan(γ/2) + tan(δ/2)) / |x_j − x_i|, γ, δ the angles at i beside ij
+};
+
+struct ConnectionLaplacian {
+  Eigen::SparseMatrix<cplx> matrix;  // |V| × |V|, column-major
+  Eigen::VectorXd weight_sum;        // d_i = Σ_j w_ij (the diagonal)
+  LaplacianWeights weights = LaplacianWeights::cotan;
+  bool hermitian = true;
+};
+
+ConnectionLaplacian connection_laplacian(const TangentBundle& bundle,
+                                         LaplacianWeights weights = LaplacianWeights::cotan);
+
+// The result of a linear solve: what was done and how well (STYLE 5).
+struct SolveReport {
+  std::string method;      // e.g. "sparse Cholesky (LDLᵀ)", "sparse LU"
+  int iterations = 0;      // 0 for direct methods
+  double residual = 0.0;   // ‖A z − b‖ / ‖b‖ over the free vertices (0 when b = 0)
+  bool success = false;
+};
+
+// Solves the Dirichlet problem L z = 0 at free vertices with z fixed at constrained ones
+// (DESIGN §5.2). Factor once, solve many (STYLE 4): the matrix keeps L's sparsity pattern
+// for every constraint set (constrained rows and columns become identity), so the
+// symbolic analysis is done once at construction and each solve() pays one numeric
+// factorization. Not thread-safe; copy it for each thread.
+class DirichletSolver {
+public:
+  explicit DirichletSolver(const ConnectionLaplacian& laplacian);
+  DirichletSolver(const DirichletSolver&);
+  DirichletSolver& operator=(const DirichletSolver&) = delete;
+  ~DirichletSolver();
+
+  // constrained[v] != 0 marks fixed vertices, whose values are taken from `values`
+  // (entries of free vertices are ignored). `out` receives the whole field (|V|).
+  // A connected component without constraints gets zero there.
+  SolveReport solve(std::span<const char> constrained, std::span<const cplx> values,
+                    std::span<cplx> out);
+
+private:
+  struct Impl;
+  const ConnectionLaplacian& laplacian_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tvf

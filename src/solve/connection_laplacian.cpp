@@ -1,0 +1,167 @@
+#include "tvf/solve/connection_laplacian.h"
+
+#include "tvf/core/error.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
+
+#include <cmath>
+
+namespace tvf {
+
+namespace {
+
+// Cotangent of the corner angle opposite halfedge h (at the third vertex of its face).
+double cot_opposite(const Mesh& mesh, int h) {
+  const int o = Mesh::prev(h);
+  const Vec3& a = mesh.position(mesh.tail(o));
+  const Vec3 u = mesh.position(mesh.head(o)) - a;
+  const Vec3 w = mesh.position(mesh.tail(Mesh::prev(o))) - a;
+  return u.dot(w) / u.cross(w).norm();
+}
+
+// Weight of halfedge h = i→j seen from i (both halves for symmetric weights).
+double halfedge_weight(const Mesh& mesh, int h, LaplacianWeights weights) {
+  switch (weights) {
+    case LaplacianWeights::cotan: {
+      double w = 0.5 * cot_opposite(mesh, h);
+      if (const int t = mesh.twin(h); t >= 0) w += 0.5 * cot_opposite(mesh, t);
+      return w;
+    }
+    case LaplacianWeights::uniform: return 1.0;
+    case LaplacianWeights::mean_value: {
+      // Angles at i on either side of edge ij: in h's face (between h and i→k) and in the
+      // twin's face (between i→l and h).
+      double s = std::tan(0.5 * mesh.corner_angle(h));
+      if (const int t = mesh.twin(h); t >= 0) s += std::tan(0.5 * mesh.corner_angle(Mesh::next(t)));
+      return s / mesh.edge_length(h);
+    }
+  }
+  TVF_CHECK(false, "unknown weights");
+}
+
+}  // namespace
+
+ConnectionLaplacian connection_laplacian(const TangentBundle& bundle, LaplacianWeights weights) {
+  const Mesh& mesh = bundle.mesh();
+  const int nv = mesh.num_vertices();
+  ConnectionLaplacian lap;
+  lap.weights = weights;
+  lap.hermitian = weights != LaplacianWeights::mean_value;
+  lap.weight_sum = Eigen::VectorXd::Zero(nv);
+  std::vector<Eigen::Triplet<cplx>> t;
+  t.reserve(static_cast<size_t>(nv + 2 * mesh.num_halfedges()));
+  // Row i gets, for every neighbour j, w_ij on the diagonal and −w_ij·r_ji at (i, j).
+  // Boundary edges have one halfedge; their reverse direction is handled from it.
+  auto add = [&](int i, int j, double w, cplx r_ji) {
+    lap.weight_sum[i] += w;
+    t.emplace_back(i, j, -w * r_ji);
+  };
+  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+    const int i = mesh.tail(h), j = mesh.head(h);
+    const int tw = mesh.twin(h);
+    const cplx r_ij = bundle.transport(h);  // T_i → T_j
+    if (lap.hermitian) {
+      if (tw >= 0 && tw < h) continue;  // each edge once
+      const double w = halfedge_weight(mesh, h, weights);
+      add(i, j, w, std::conj(r_ij));
+      add(j, i, w, r_ij);
+    } else {
+      add(i, j, halfedge_weight(mesh, h, weights), std::conj(r_ij));
+      if (tw < 0) {
+        // The reverse halfedge j→i does not exist: its weight from j's side, whose two
+        // angles beside the edge reduce to the one in this face.
+        const double s = std::tan(0.5 * mesh.corner_angle(Mesh::next(h)));
+        add(j, i, s / mesh.edge_length(h), r_ij);
+      }
+    }
+  }
+  for (int v = 0; v < nv; ++v) t.emplace_back(v, v, lap.weight_sum[v]);
+  lap.matrix.resize(nv, nv);
+  lap.matrix.setFromTriplets(t.begin(), t.end());
+  lap.matrix.makeCompressed();
+  return lap;
+}
+
+struct DirichletSolver::Impl {
+  Eigen::SparseMatrix<cplx> a;  // L's pattern; values rewritten per solve
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<cplx>> ldlt;
+  Eigen::SparseLU<Eigen::SparseMatrix<cplx>> lu;
+};
+
+DirichletSolver::DirichletSolver(const ConnectionLaplacian& laplacian)
+    : laplacian_(laplacian), impl_(std::make_unique<Impl>()) {
+  impl_->a = laplacian.matrix;
+  if (laplacian.hermitian)
+    impl_->ldlt.analyzePattern(impl_->a);
+  else
+    impl_->lu.analyzePattern(impl_->a);
+}
+
+DirichletSolver::DirichletSolver(const DirichletSolver& other)
+    : laplacian_(other.laplacian_), impl_(std::make_unique<Impl>()) {
+  impl_->a = laplacian_.matrix;
+  if (laplacian_.hermitian)
+    impl_->ldlt.analyzePattern(impl_->a);
+  else
+    impl_->lu.analyzePattern(impl_->a);
+}
+
+DirichletSolver::~DirichletSolver() = default;
+
+SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<const cplx> values,
+                                   std::span<cplx> out) {
+  const Eigen::Index n = laplacian_.matrix.rows();
+  TVF_CHECK(static_cast<Eigen::Index>(constrained.size()) == n && static_cast<Eigen::Index>(values.size()) == n &&
+                static_cast<Eigen::Index>(out.size()) == n,
+            "sizes {} {} {} for {} vertices", constrained.size(), values.size(), out.size(), n);
+  SolveReport report;
+  report.method = laplacian_.hermitian ? "sparse Cholesky (LDLᴴ)" : "sparse LU";
+  bool any = false;
+  for (char c : constrained) any = any || c;
+  if (!any) {
+    // No constraint: the zero field is the minimiser.
+    std::fill(out.begin(), out.end(), cplx(0, 0));
+    report.success = true;
+    return report;
+  }
+
+  // A = L with constrained rows and columns replaced by identity (same pattern);
+  // b_F = −L_FC z_C, b_C = z_C.
+  Eigen::SparseMatrix<cplx>& a = impl_->a;
+  const Eigen::SparseMatrix<cplx>& l = laplacian_.matrix;
+  Eigen::VectorXcd b = Eigen::VectorXcd::Zero(n);
+  for (Eigen::Index col = 0; col < n; ++col) {
+    const bool col_fixed = constrained[static_cast<size_t>(col)] != 0;
+    Eigen::SparseMatrix<cplx>::InnerIterator it_a(a, col);
+    for (Eigen::SparseMatrix<cplx>::InnerIterator it(l, col); it; ++it, ++it_a) {
+      const Eigen::Index row = it.row();
+      const bool row_fixed = constrained[static_cast<size_t>(row)] != 0;
+      if (row_fixed || col_fixed) {
+        it_a.valueRef() = (row == col) ? cplx(1, 0) : cplx(0, 0);
+        if (!row_fixed && col_fixed) b[row] -= it.value() * values[static_cast<size_t>(col)];
+      } else {
+        it_a.valueRef() = it.value();
+      }
+    }
+    if (col_fixed) b[col] = values[static_cast<size_t>(col)];
+  }
+
+  Eigen::VectorXcd z;
+  if (laplacian_.hermitian) {
+    impl_->ldlt.factorize(a);
+    if (impl_->ldlt.info() != Eigen::Success) return report;
+    z = impl_->ldlt.solve(b);
+  } else {
+    impl_->lu.factorize(a);
+    if (impl_->lu.info() != Eigen::Success) return report;
+    z = impl_->lu.solve(b);
+  }
+  const double bn = b.norm();
+  report.residual = bn > 0 ? (a * z - b).norm() / bn : 0.0;
+  report.success = std::isfinite(report.residual);
+  for (Eigen::Index v = 0; v < n; ++v) out[static_cast<size_t>(v)] = z[v];
+  return report;
+}
+
+}  // namespace tvf

@@ -1,0 +1,124 @@
+#include "tvf/solve/connection_laplacian.h"
+
+#include "support/test_meshes.h"
+#include "tvf/mesh/grid.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace tvf {
+namespace {
+
+constexpr LaplacianWeights kAll[] = {LaplacianWeights::cotan, LaplacianWeights::uniform,
+                                     LaplacianWeights::mean_value};
+
+TEST(ConnectionLaplacian, ConstantFieldOnThePlaneIsInTheKernel) {
+  const Mesh& grid = test::grid_mesh();
+  const TangentBundle bundle(grid);
+  for (auto w : kAll) {
+    const ConnectionLaplacian l = connection_laplacian(bundle, w);
+    const Eigen::VectorXcd c = Eigen::VectorXcd::Constant(grid.num_vertices(), cplx(0.3, -1.7));
+    EXPECT_LT((l.matrix * c).cwiseAbs().maxCoeff(), 1e-12) << static_cast<int>(w);
+  }
+}
+
+TEST(ConnectionLaplacian, HermitianForSymmetricWeightsOnly) {
+  for (const auto& [name, mesh] : test::all_meshes()) {
+    const TangentBundle bundle(*mesh);
+    for (auto w : kAll) {
+      const ConnectionLaplacian l = connection_laplacian(bundle, w);
+      const Eigen::SparseMatrix<cplx> adj = l.matrix.adjoint();
+      const double asym = (adj - l.matrix).norm() / l.matrix.norm();
+      if (w == LaplacianWeights::mean_value) {
+        EXPECT_FALSE(l.hermitian);
+      } else {
+        EXPECT_TRUE(l.hermitian);
+        EXPECT_EQ(asym, 0.0) << name;
+      }
+    }
+  }
+}
+
+TEST(ConnectionLaplacian, PositiveSemidefiniteAndDiagonalIsTheWeightSum) {
+  for (const auto& [name, mesh] : test::all_meshes()) {
+    const TangentBundle bundle(*mesh);
+    const ConnectionLaplacian l = connection_laplacian(bundle, LaplacianWeights::cotan);
+    std::mt19937 rng(3);
+    std::normal_distribution<double> g;
+    for (int k = 0; k < 5; ++k) {
+      Eigen::VectorXcd z(mesh->num_vertices());
+      for (auto& x : z) x = cplx(g(rng), g(rng));
+      const cplx q = z.dot(l.matrix * z);  // zᴴ L z
+      EXPECT_NEAR(q.imag(), 0.0, 1e-9 * std::abs(q)) << name;
+      EXPECT_GE(q.real(), -1e-12) << name;
+    }
+    for (int v = 0; v < mesh->num_vertices(); ++v)
+      EXPECT_NEAR(l.matrix.coeff(v, v).real(), l.weight_sum[v], 1e-12) << name;
+  }
+}
+
+// Linear precision: with the boundary fixed to a linear field, every weight reproduces it
+// in the interior of a planar mesh (the discrete maximum principle's exact case).
+TEST(DirichletSolver, ReproducesLinearFieldsFromTheBoundary) {
+  const Mesh grid = make_grid(GridSpec{23, 17, {-1, -0.5}, {2, 1.5}});
+  const TangentBundle bundle(grid);
+  for (auto w : kAll) {
+    const ConnectionLaplacian l = connection_laplacian(bundle, w);
+    DirichletSolver solver(l);
+    std::vector<char> fixed(static_cast<size_t>(grid.num_vertices()));
+    std::vector<cplx> values(fixed.size()), exact(fixed.size()), out(fixed.size());
+    for (int v = 0; v < grid.num_vertices(); ++v) {
+      const Vec3& x = grid.position(v);
+      exact[static_cast<size_t>(v)] = cplx(0.5, 1) + cplx(2, -1) * x.x() + cplx(-0.3, 0.7) * x.y();
+      fixed[static_cast<size_t>(v)] = grid.is_boundary_vertex(v);
+      values[static_cast<size_t>(v)] = fixed[static_cast<size_t>(v)] ? exact[static_cast<size_t>(v)] : cplx(99, 99);
+    }
+    const SolveReport r = solver.solve(fixed, values, out);
+    ASSERT_TRUE(r.success) << r.method;
+    EXPECT_LT(r.residual, 1e-12);
+    for (size_t v = 0; v < out.size(); ++v) EXPECT_LT(std::abs(out[v] - exact[v]), 1e-10) << v;
+  }
+}
+
+TEST(DirichletSolver, KeepsConstraintsExactlyAndSolvesTheFreeRows) {
+  for (const auto& [name, mesh] : test::all_meshes()) {
+    const TangentBundle bundle(*mesh);
+    const ConnectionLaplacian l = connection_laplacian(bundle);
+    DirichletSolver solver(l);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1);
+    const auto n = static_cast<size_t>(mesh->num_vertices());
+    std::vector<char> fixed(n);
+    std::vector<cplx> values(n), out(n);
+    for (size_t v = 0; v < n; ++v) {
+      fixed[v] = u(rng) > 0.8;
+      values[v] = cplx(u(rng), u(rng));
+    }
+    const SolveReport r = solver.solve(fixed, values, out);
+    ASSERT_TRUE(r.success) << name;
+    const Eigen::VectorXcd z = Eigen::Map<const Eigen::VectorXcd>(out.data(), static_cast<Eigen::Index>(n));
+    const Eigen::VectorXcd lz = l.matrix * z;
+    for (size_t v = 0; v < n; ++v) {
+      if (fixed[v]) EXPECT_EQ(out[v], values[v]) << name;
+      else EXPECT_LT(std::abs(lz[static_cast<Eigen::Index>(v)]), 1e-10) << name << " " << v;
+    }
+    // A second solve with other constraints reuses the symbolic analysis.
+    for (size_t v = 0; v < n; ++v) fixed[v] = !fixed[v] && u(rng) > 0.5;
+    EXPECT_TRUE(solver.solve(fixed, values, out).success);
+  }
+}
+
+TEST(DirichletSolver, NoConstraintGivesTheZeroField) {
+  const TangentBundle bundle(test::grid_mesh());
+  const ConnectionLaplacian l = connection_laplacian(bundle);
+  DirichletSolver solver(l);
+  const auto n = static_cast<size_t>(test::grid_mesh().num_vertices());
+  std::vector<char> fixed(n, 0);
+  std::vector<cplx> values(n, cplx(1, 1)), out(n, cplx(5, 5));
+  EXPECT_TRUE(solver.solve(fixed, values, out).success);
+  for (const cplx& z : out) EXPECT_EQ(z, cplx(0, 0));
+}
+
+}  // namespace
+}  // namespace tvf
