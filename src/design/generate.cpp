@@ -2,11 +2,14 @@
 
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
+#include "tvf/design/keyframes.h"
 #include "tvf/solve/connection_laplacian.h"
+#include "tvf/solve/spacetime.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <mutex>
@@ -101,13 +104,13 @@ struct ElementOnDomain {
   SurfacePoint at;  // the face holding p(t) (surfaces only)
 };
 
-void place_element(const DesignSpace& space, const CompiledElement& el, double t, double d,
-                   LocalChart& chart, ElementOnDomain& out) {
+void place_state(const DesignSpace& space, ElementState st, double d, LocalChart& chart,
+                 ElementOnDomain& out) {
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   out.value.resize(nv);
   out.distance.resize(nv);
-  ElementState st = el.at(t);
+  out.at = space.locate(st.position);
   if (space.planar()) {
     // Local coordinates are the plane's own: w = x − p, frame = global.
     for (size_t v = 0; v < nv; ++v) {
@@ -118,7 +121,6 @@ void place_element(const DesignSpace& space, const CompiledElement& el, double t
     }
     return;
   }
-  out.at = space.locate(st.position);
   if (st.field.kind == LocalField::Kind::regular)
     st.field.velocity = space.bundle().world_to_face(out.at.face, st.velocity);
   space.log_map().compute(out.at, chart);
@@ -127,6 +129,56 @@ void place_element(const DesignSpace& space, const CompiledElement& el, double t
     const double fall = std::exp(-d * std::norm(w));
     out.value[v] = fall < 1e-300 ? cplx(0, 0) : fall * st.field(w) * chart.frame[v];
     out.distance[v] = std::abs(w);
+  }
+}
+
+void place_element(const DesignSpace& space, const CompiledElement& el, double t, double d,
+                   LocalChart& chart, ElementOnDomain& out) {
+  place_state(space, el.at(t), d, chart, out);
+}
+
+// Imposes a placed element's own field on its region (DESIGN §5.2): the vertices within
+// `radius`, and however small the radius, the element's face and its corners'
+// neighbours, so that the constraints enclose its singularity. Overlapping regions add.
+void constrain_region(const Mesh& mesh, const ElementOnDomain& placed, double radius,
+                      std::span<char> fixed, std::span<cplx> values) {
+  auto add = [&](size_t v) {
+    if (!fixed[v]) values[v] = cplx(0, 0);
+    fixed[v] = 1;
+    values[v] += placed.value[v];
+  };
+  for (size_t v = 0; v < values.size(); ++v)
+    if (placed.distance[v] <= radius) add(v);
+  // The face's corners and their neighbours, each once.
+  std::vector<int> near;
+  for (int c : mesh.face(placed.at.face)) {
+    near.push_back(c);
+    for (int h : mesh.outgoing(c)) near.push_back(mesh.head(h));
+  }
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  for (int v : near)
+    if (placed.distance[static_cast<size_t>(v)] > radius) add(static_cast<size_t>(v));
+}
+
+// The region radius of an element: solver.region_radius, or for a bifurcation at least
+// 2·scale, so the region holds the pair it creates or cancels.
+double region_radius(const Scene& scene, const CompiledElement& el) {
+  double radius = scene.solver.region_radius;
+  if (const auto* b = std::get_if<BifurcationElement>(&el.element())) radius = std::max(radius, 2 * b->scale);
+  return radius;
+}
+
+// All active elements' regions at time t.
+void constrain_elements(const DesignSpace& space, const Scene& scene,
+                        const std::vector<CompiledElement>& elements, double t, double d,
+                        std::span<char> fixed, std::span<cplx> values) {
+  LocalChart chart;
+  ElementOnDomain placed;
+  for (const CompiledElement& el : elements) {
+    if (!el.active(t)) continue;
+    place_element(space, el, t, d, chart, placed);
+    constrain_region(space.mesh(), placed, region_radius(scene, el), fixed, values);
   }
 }
 
@@ -225,36 +277,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
     const double t = scene.time.time(j);
     std::vector<char> fixed(static_cast<size_t>(nv), 0);
     std::vector<cplx> values(static_cast<size_t>(nv), cplx(0, 0));
-    LocalChart chart;
-    ElementOnDomain placed;
-    for (const CompiledElement& el : elements) {
-      if (!el.active(t)) continue;
-      place_element(space, el, t, d, chart, placed);
-      // The element's region: vertices within region_radius (a bifurcation's covers its
-      // pair's travel, 2·scale); its own field is imposed there.
-      double radius = scene.solver.region_radius;
-      if (const auto* b = std::get_if<BifurcationElement>(&el.element()))
-        radius = std::max(radius, 2 * b->scale);
-      for (size_t v = 0; v < values.size(); ++v) {
-        if (placed.distance[v] > radius) continue;
-        fixed[v] = 1;
-        values[v] += placed.value[v];
-      }
-      // However small the radius, the element's own face and its corners' neighbours are
-      // in the region, so the constraints enclose its singularity.
-      const SurfacePoint at = space.planar() ? space.locate(el.at(t).position) : placed.at;
-      auto include = [&](int vi) {
-        const auto v = static_cast<size_t>(vi);
-        if (placed.distance[v] <= radius) return;  // already added above
-        if (!fixed[v]) values[v] = cplx(0, 0);
-        fixed[v] = 1;
-        values[v] += placed.value[v];
-      };
-      for (int c : mesh.face(at.face)) {
-        include(c);
-        for (int h : mesh.outgoing(c)) include(mesh.head(h));
-      }
-    }
+    constrain_elements(space, scene, elements, t, d, fixed, values);
     const SolveReport r = solvers.local().solve(fixed, values, field.frame(j));
     std::lock_guard lock(report_mutex);
     worst_residual = std::max(worst_residual, r.residual);
@@ -273,6 +296,71 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   return field;
 }
 
+Field generate_spacetime(const DesignSpace& space, const Scene& scene,
+                         const GenerateOptions& options, GenerateReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  const int nv = space.mesh().num_vertices();
+  check_field_memory(scene, nv);
+  if (scene.solver.weights == Weights::mean_value)
+    throw_input_error(scene.label(), "solver.weights",
+                      "the spacetime generator needs symmetric weights (cotan or uniform): "
+                      "mean-value weights make the system non-Hermitian");
+  const ConnectionLaplacian laplacian =
+      connection_laplacian(space.bundle(), to_laplacian_weights(scene.solver.weights));
+  const auto n = static_cast<size_t>(nv);
+  const auto frames = static_cast<size_t>(scene.time.frames);
+  std::vector<char> fixed(n * frames, 0);
+  std::vector<cplx> values(n * frames, cplx(0, 0));
+
+  // Key frames: whole frames held fixed.
+  std::vector<char> is_key(frames, 0);
+  for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+    const auto j = static_cast<size_t>(keyframe_frame(scene, scene.keyframes[k].t));
+    if (is_key[j])
+      throw_input_error(scene.label(), fmt::format("keyframes[{}].t", k),
+                        fmt::format("t = {} falls on frame {}, which another key frame already holds; "
+                                    "use more frames or move the key frame",
+                                    scene.keyframes[k].t, j));
+    is_key[j] = 1;
+    const std::vector<cplx> key = keyframe_field(space, scene, k, laplacian);
+    std::fill_n(fixed.begin() + static_cast<std::ptrdiff_t>(j * n), n, char{1});
+    std::copy(key.begin(), key.end(), values.begin() + static_cast<std::ptrdiff_t>(j * n));
+  }
+
+  // Element regions at every other frame (key frames and elements combine in one solve).
+  const std::vector<CompiledElement> elements = compile(scene);
+  const double d = scene.falloff / (space.diameter() * space.diameter());
+  GenerateOptions quiet = options;
+  quiet.progress = nullptr;
+  for_each_frame(scene.time.frames, quiet, [&](int j) {
+    if (is_key[static_cast<size_t>(j)]) return;
+    const std::span<char> f(fixed.data() + static_cast<size_t>(j) * n, n);
+    const std::span<cplx> v(values.data() + static_cast<size_t>(j) * n, n);
+    constrain_elements(space, scene, elements, scene.time.time(j), d, f, v);
+  });
+
+  Field field(scene.time, nv);
+  SpaceTimeSolver solver(laplacian, scene.time.frames, scene.solver.temporal_weight);
+  solver.interpolate_in_time(fixed, values, field.data());
+  SpaceTimeOptions st;
+  st.tolerance = scene.solver.tolerance;
+  st.parallel = options.parallel;
+  const SolveReport r = solver.solve(fixed, values, field.data(), st);
+  if (options.progress) options.progress(scene.time.frames, scene.time.frames);
+  if (!r.success)
+    throw_input_error(scene.label(), "solver.tolerance",
+                      fmt::format("the space-time solve stopped at relative residual {:.2e} after {} "
+                                  "iterations, short of the tolerance {:.1e}",
+                                  r.residual, r.iterations, scene.solver.tolerance));
+  if (report) {
+    report->method = "spatio-temporal optimization, " + r.method;
+    report->residual = r.residual;
+    report->iterations = r.iterations;
+  }
+  finish_report(report, scene, nv, start);
+  return field;
+}
+
 Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                GenerateReport* report) {
   if (!scene.edits.empty())
@@ -282,11 +370,11 @@ Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptio
   switch (scene.generator) {
     case Generator::basis: return generate_basis_sum(space, scene, options, report);
     case Generator::constrained: return generate_constrained(space, scene, options, report);
-    case Generator::spacetime:
+    case Generator::spacetime: return generate_spacetime(space, scene, options, report);
     case Generator::deform:
       throw_input_error(scene.label(), "generator",
                         fmt::format("the '{}' generator is not available in this version of tvf "
-                                    "(available: basis, constrained)",
+                                    "(available: basis, constrained, spacetime)",
                                     to_string(scene.generator)));
   }
   TVF_CHECK(false, "unknown generator");

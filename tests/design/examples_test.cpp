@@ -6,6 +6,7 @@
 #include "tvf/analysis/singularities.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
+#include "tvf/design/keyframes.h"
 #include "tvf/design/scene_json.h"
 
 #include <gtest/gtest.h>
@@ -82,7 +83,21 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
         }
       }
     }
-    EXPECT_GT(checked, 10);
+    // Key frames: every singular element of a key frame is in its frame.
+    for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+      const int j = keyframe_frame(scene, scene.keyframes[k].t);
+      const auto found = find_singularities(space->bundle(), field, j);
+      for (const KeyframeElement& e : scene.keyframes[k].elements) {
+        if (e.kind != "singular") continue;
+        const Mat2 jac = e.type ? jacobian_of(*e.type) : e.jacobian;
+        const auto [s, d] = nearest(found, surface_position(space->mesh(), space->locate(e.at)));
+        ASSERT_NE(s, nullptr);
+        EXPECT_LT(d, tol) << "keyframes[" << k << "]";
+        EXPECT_EQ(s->index, jac.determinant() > 0 ? 1 : -1) << "keyframes[" << k << "]";
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 0);
   }
 }
 

@@ -128,7 +128,7 @@ TEST(BasisSum, SourceOnTheSphereIsRadialLikeOnThePlane) {
 TEST(Generate, RefusesGeneratorsThatAreNotAvailableYet) {
   Scene s = grid_scene(5, 1.0, 2);
   s.source_path = "my.json";
-  s.generator = Generator::spacetime;
+  s.generator = Generator::deform;
   const auto space = make_design_space(s);
   try {
     generate(*space, s);
@@ -230,6 +230,110 @@ TEST(Constrained, OutsideTheRegionsTheFieldIsHarmonic) {
         EXPECT_LT(std::abs(lz[v]), 1e-12) << j << " " << v;
       }
     }
+  }
+}
+
+}  // namespace
+}  // namespace tvf
+
+#include "tvf/analysis/coherence.h"
+#include "tvf/analysis/singularities.h"
+#include "tvf/design/keyframes.h"
+
+namespace tvf {
+namespace {
+
+Scene keyframe_scene(int n = 33) {
+  Scene s = grid_scene(n, 1.0, 40);
+  s.generator = Generator::spacetime;
+  s.falloff = 40;
+  s.solver.tolerance = 1e-10;
+  // Regions that meet between the pair: the flow between them is then one trough, as in
+  // the normal form (t + x², y), and the pair cancels in the middle.
+  s.solver.region_radius = 0.25;
+  Keyframe k0, k1;
+  k0.t = 0;
+  KeyframeElement src;
+  src.kind = "singular";
+  src.type = SingularType::source;
+  src.at = Vec3(0.25, 0, 0);
+  KeyframeElement sad;
+  sad.kind = "singular";
+  sad.jacobian << -1, 0, 0, 1;
+  sad.at = Vec3(-0.25, 0, 0);
+  k0.elements = {sad, src};
+  k0.streamlines = {{{Vec3(-1, -0.7, 0), Vec3(1, -0.7, 0)}, 0.1}, {{Vec3(-1, 0.7, 0), Vec3(1, 0.7, 0)}, 0.1}};
+  k1.t = 1;
+  k1.streamlines = {{{Vec3(-1, -0.7, 0), Vec3(1, -0.7, 0)}, 0.1}, {{Vec3(-1, 0.7, 0), Vec3(1, 0.7, 0)}, 0.1}};
+  s.keyframes = {k0, k1};
+  return s;
+}
+
+TEST(SpaceTimeGenerator, ReproducesItsKeyFramesExactly) {
+  const Scene s = keyframe_scene();
+  const auto space = make_design_space(s);
+  GenerateReport report;
+  const Field field = generate(*space, s, {}, &report);
+  EXPECT_LE(report.residual, 1e-10);
+  EXPECT_GT(report.iterations, 0);
+  const ConnectionLaplacian l = connection_laplacian(space->bundle());
+  for (size_t k = 0; k < s.keyframes.size(); ++k) {
+    const int j = keyframe_frame(s, s.keyframes[k].t);
+    const std::vector<cplx> key = keyframe_field(*space, s, k, l);
+    for (int v = 0; v < space->mesh().num_vertices(); ++v)
+      EXPECT_EQ(field.at(j, v), key[static_cast<size_t>(v)]) << k << " " << v;
+  }
+}
+
+// Fig. 4: the saddle–source pair of the first key frame cancels on the way to the
+// second, and the change is smooth in time (no spikes in the coherence series, Fig. 18).
+TEST(SpaceTimeGenerator, PairCancelsBetweenKeyFramesSmoothly) {
+  const Scene s = keyframe_scene(65);
+  const auto space = make_design_space(s);
+  const Field field = generate(*space, s);
+  const auto first = find_singularities(space->bundle(), field, 0);
+  ASSERT_EQ(first.size(), 2u);
+  EXPECT_EQ(first[0].index + first[1].index, 0);
+  EXPECT_TRUE(find_singularities(space->bundle(), field, s.time.frames - 1).empty());
+  // The count never grows: pairs only disappear.
+  size_t last = first.size();
+  for (int j = 1; j < s.time.frames; ++j) {
+    const size_t now = find_singularities(space->bundle(), field, j).size();
+    EXPECT_LE(now, last) << "frame " << j;
+    last = now;
+  }
+  const std::vector<double> y = coherence(field);
+  const double top = *std::max_element(y.begin(), y.end());
+  for (size_t i = 1; i < y.size(); ++i) EXPECT_LT(std::abs(y[i] - y[i - 1]), 0.1 * top) << i;
+}
+
+TEST(SpaceTimeGenerator, KeyFramesAndMovingElementsCombine) {
+  Scene s = keyframe_scene();
+  // A vortex crossing the top half while the key frames hold the ends.
+  s.elements.push_back(singular(SingularType::ccw_center, {{Vec3(-0.5, 0.45, 0), 0.2}, {Vec3(0.5, 0.45, 0), 0.8}}));
+  const auto space = make_design_space(s);
+  const Field field = generate(*space, s);
+  const CompiledElement el(s.elements[0]);
+  for (int j = 10; j <= 30; j += 5) {
+    const double t = s.time.time(j);
+    const Vec3 p = el.at(t).position;
+    bool found = false;
+    for (const auto& sg : find_singularities(space->bundle(), field, j))
+      found = found || ((sg.position - p).norm() < 0.07 && sg.index == 1);
+    EXPECT_TRUE(found) << "frame " << j;
+  }
+}
+
+TEST(SpaceTimeGenerator, RefusesMeanValueWeights) {
+  Scene s = keyframe_scene();
+  s.solver.weights = Weights::mean_value;
+  s.source_path = "k.json";
+  const auto space = make_design_space(s);
+  try {
+    generate(*space, s);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("k.json: solver.weights:"), std::string::npos) << e.what();
   }
 }
 

@@ -1,8 +1,8 @@
 #pragma once
 // Generating the field of a scene (DESIGN §5). generate() dispatches on scene.generator.
-// Available now: "basis" (basis field summation, paper §5.2, eq. 8) and "constrained"
-// (paper §5.3). The spacetime and deform generators are refused with a clear error until
-// they land.
+// Available now: "basis" (basis field summation, paper §5.2, eq. 8), "constrained"
+// (paper §5.3) and "spacetime" (paper §6.1). The deform generator is refused with a clear
+// error until it lands.
 #include "tvf/design/design_space.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
@@ -23,6 +23,7 @@ struct GenerateReport {
   std::vector<std::string> warnings;  // design problems that do not stop generation
   std::string method;                 // the generator and solver used
   double residual = 0.0;              // worst relative residual of the linear solves
+  int iterations = 0;                 // iterations of the iterative solve (0 for direct)
   double seconds = 0.0;
   int frames = 0;
   int vertices = 0;
@@ -47,6 +48,14 @@ Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
 // is shared by all frames.
 Field generate_constrained(const DesignSpace& space, const Scene& scene,
                            const GenerateOptions& options = {}, GenerateReport* report = nullptr);
+
+// Spatio-temporal optimization (paper §6.1, eq. 10; DESIGN §5.3): all frames in one
+// solve. Key frames (keyframes.h) hold whole frames fixed; element regions (as in the
+// constrained generator) hold vertices at the other frames, so key frames and elements
+// combine; everything else minimises the spatial smoothness energy plus
+// solver.temporal_weight times the temporal one. Needs cotan or uniform weights.
+Field generate_spacetime(const DesignSpace& space, const Scene& scene,
+                         const GenerateOptions& options = {}, GenerateReport* report = nullptr);
 
 // Checks that need the scene only (no mesh): singular paths that begin or end inside
 // the time range without a bifurcation there (DESIGN §4). One warning per problem.

@@ -1,0 +1,152 @@
+#include "tvf/design/keyframes.h"
+
+#include "tvf/core/error.h"
+#include "tvf/design/element_field.h"
+#include "tvf/field/field_io.h"
+#include "tvf/field/field_sampler.h"
+
+#include <cmath>
+
+namespace tvf {
+
+int keyframe_frame(const Scene& scene, double t) {
+  const TimeSampling& ts = scene.time;
+  if (ts.frames <= 1) return 0;
+  const double u = (t - ts.t0) / (ts.t1 - ts.t0) * (ts.frames - 1);
+  return std::clamp(static_cast<int>(std::lround(u)), 0, ts.frames - 1);
+}
+
+namespace {
+
+// The state of a key frame's static element.
+ElementState static_state(const KeyframeElement& e) {
+  ElementState st;
+  st.active = true;
+  st.position = e.at;
+  if (e.kind == "regular") {
+    st.velocity = e.vector;
+    st.field.kind = LocalField::Kind::regular;
+    st.field.velocity = cplx(e.vector.x(), e.vector.y());
+  } else {
+    st.field.kind = LocalField::Kind::linear;
+    st.field.matrix = e.type ? jacobian_of(*e.type) : e.jacobian;
+  }
+  return st;
+}
+
+}  // namespace
+
+void keyframe_constraints(const DesignSpace& space, const Scene& scene, size_t k,
+                          std::vector<char>& fixed, std::vector<cplx>& values) {
+  const Mesh& mesh = space.mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  fixed.assign(nv, 0);
+  values.assign(nv, cplx(0, 0));
+  const Keyframe& key = scene.keyframes[k];
+  const double d = scene.falloff / (space.diameter() * space.diameter());
+  const double radius = scene.solver.region_radius;
+
+  // Elements: each imposes its own field near itself.
+  LocalChart chart;
+  for (const KeyframeElement& e : key.elements) {
+    ElementState st = static_state(e);
+    const SurfacePoint at = space.locate(st.position);
+    std::vector<cplx> value(nv);
+    std::vector<double> dist(nv);
+    if (space.planar()) {
+      for (size_t v = 0; v < nv; ++v) {
+        const Vec3& x = mesh.position(static_cast<int>(v));
+        const cplx w(x.x() - st.position.x(), x.y() - st.position.y());
+        value[v] = std::exp(-d * std::norm(w)) * st.field(w);
+        dist[v] = std::abs(w);
+      }
+    } else {
+      if (st.field.kind == LocalField::Kind::regular)
+        st.field.velocity = space.bundle().world_to_face(at.face, st.velocity);
+      space.log_map().compute(at, chart);
+      for (size_t v = 0; v < nv; ++v) {
+        const cplx w = chart.coords[v];
+        value[v] = std::exp(-d * std::norm(w)) * st.field(w) * chart.frame[v];
+        dist[v] = std::abs(w);
+      }
+    }
+    std::vector<int> region;
+    for (size_t v = 0; v < nv; ++v)
+      if (dist[v] <= radius) region.push_back(static_cast<int>(v));
+    for (int c : mesh.face(at.face)) {
+      region.push_back(c);
+      for (int h : mesh.outgoing(c)) region.push_back(mesh.head(h));
+    }
+    std::sort(region.begin(), region.end());
+    region.erase(std::unique(region.begin(), region.end()), region.end());
+    for (int vi : region) {
+      const auto v = static_cast<size_t>(vi);
+      fixed[v] = 1;
+      values[v] += value[v];
+    }
+  }
+
+  // Streamlines: the polyline's unit tangent at the corners of every face it crosses,
+  // averaged where several samples meet, scaled to the streamline's speed.
+  const double step = 0.25 * mesh.mean_edge_length();
+  for (const KeyframeStreamline& s : key.streamlines) {
+    std::vector<cplx> sum(nv, cplx(0, 0));
+    std::vector<char> hit(nv, 0);
+    for (size_t i = 0; i + 1 < s.points.size(); ++i) {
+      const Vec3 a = s.points[i], b = s.points[i + 1];
+      const double len = (b - a).norm();
+      if (len == 0) continue;
+      const Vec3 dir = (b - a) / len;
+      const int steps = std::max(1, static_cast<int>(std::ceil(len / step)));
+      for (int q = 0; q < steps; ++q) {
+        const Vec3 x = a + (b - a) * ((q + 0.5) / steps);
+        const SurfacePoint p = space.locate(x);
+        for (int c : mesh.face(p.face)) {
+          const auto v = static_cast<size_t>(c);
+          const cplx z = space.bundle().world_to_vertex(c, dir);
+          if (std::abs(z) == 0) continue;
+          sum[v] += z / std::abs(z);
+          hit[v] = 1;
+        }
+      }
+    }
+    for (size_t v = 0; v < nv; ++v) {
+      if (!hit[v] || std::abs(sum[v]) == 0) continue;
+      values[v] = (fixed[v] ? values[v] : cplx(0, 0)) + s.speed * normalized(sum[v]);
+      fixed[v] = 1;
+    }
+  }
+}
+
+std::vector<cplx> keyframe_field(const DesignSpace& space, const Scene& scene, size_t k,
+                                 const ConnectionLaplacian& laplacian) {
+  const Keyframe& key = scene.keyframes[k];
+  const auto nv = static_cast<size_t>(space.mesh().num_vertices());
+  std::vector<cplx> out(nv, cplx(0, 0));
+  if (!key.field.empty()) {
+    const std::string path = scene.resolve_path(key.field);
+    const FieldFile file = load_field_file(path);
+    if (file.mesh.num_vertices() != space.mesh().num_vertices() ||
+        file.mesh.num_faces() != space.mesh().num_faces())
+      throw_input_error(scene.label(), fmt::format("keyframes[{}].field", k),
+                        fmt::format("'{}' holds a field on {} vertices and {} faces, but the domain "
+                                    "has {} vertices and {} faces",
+                                    path, file.mesh.num_vertices(), file.mesh.num_faces(),
+                                    space.mesh().num_vertices(), space.mesh().num_faces()));
+    const TangentBundle bundle(file.mesh);
+    const FieldSampler sampler(bundle, file.field);
+    for (size_t v = 0; v < nv; ++v) out[v] = sampler.at_vertex(static_cast<int>(v), key.t);
+    return out;
+  }
+  std::vector<char> fixed;
+  std::vector<cplx> values;
+  keyframe_constraints(space, scene, k, fixed, values);
+  DirichletSolver solver(laplacian);
+  const SolveReport r = solver.solve(fixed, values, out);
+  if (!r.success)
+    throw_input_error(scene.label(), fmt::format("keyframes[{}]", k),
+                      "the key frame's constrained design could not be solved");
+  return out;
+}
+
+}  // namespace tvf

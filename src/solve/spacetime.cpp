@@ -1,0 +1,224 @@
+#include "tvf/solve/spacetime.h"
+
+#include "tvf/core/error.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <cmath>
+#include <functional>
+#include <vector>
+
+namespace tvf {
+
+namespace {
+
+using Vec = std::vector<cplx>;
+
+// Runs body(begin, end) over [0, n), in parallel blocks or not.
+template <class F>
+void blocks(size_t n, bool parallel, F&& body) {
+  if (!parallel || n < 4096) {
+    body(size_t{0}, n);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2048),
+                    [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
+}
+
+double dot_real(const Vec& a, const Vec& b, bool parallel) {
+  if (!parallel || a.size() < 4096) {
+    double s = 0;
+    for (size_t k = 0; k < a.size(); ++k) s += (std::conj(a[k]) * b[k]).real();
+    return s;
+  }
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, a.size(), 4096), 0.0,
+      [&](const tbb::blocked_range<size_t>& r, double s) {
+        for (size_t k = r.begin(); k < r.end(); ++k) s += (std::conj(a[k]) * b[k]).real();
+        return s;
+      },
+      std::plus<>());
+}
+
+}  // namespace
+
+SpaceTimeSolver::SpaceTimeSolver(const ConnectionLaplacian& laplacian, int frames,
+                                 double temporal_weight)
+    : laplacian_(laplacian), frames_(frames), b_(temporal_weight) {
+  TVF_CHECK(laplacian.hermitian, "the space-time solve needs Hermitian (cotan or uniform) weights");
+  TVF_CHECK(frames >= 1, "{} frames", frames);
+}
+
+void SpaceTimeSolver::interpolate_in_time(std::span<const char> fixed, std::span<const cplx> values,
+                                          std::span<cplx> z) const {
+  const auto n = static_cast<size_t>(vertices());
+  const auto nf = static_cast<size_t>(frames_);
+  for (size_t i = 0; i < n; ++i) {
+    long last = -1;
+    for (size_t j = 0; j <= nf; ++j) {
+      const bool at_end = j == nf;
+      if (!at_end && !fixed[j * n + i]) continue;
+      // Fill the free entries between the previous fixed frame `last` and j.
+      const size_t from = last < 0 ? 0 : static_cast<size_t>(last) + 1;
+      for (size_t k = from; k < j; ++k) {
+        cplx v(0, 0);
+        if (last >= 0 && !at_end) {
+          const double w = static_cast<double>(k - static_cast<size_t>(last)) /
+                           static_cast<double>(j - static_cast<size_t>(last));
+          v = (1 - w) * values[static_cast<size_t>(last) * n + i] + w * values[j * n + i];
+        } else if (last >= 0) {
+          v = values[static_cast<size_t>(last) * n + i];
+        } else if (!at_end) {
+          v = values[j * n + i];
+        }
+        z[k * n + i] = v;
+      }
+      if (!at_end) {
+        z[j * n + i] = values[j * n + i];
+        last = static_cast<long>(j);
+      }
+    }
+  }
+}
+
+SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const cplx> values,
+                                   std::span<cplx> z, const SpaceTimeOptions& options) const {
+  const auto n = static_cast<size_t>(vertices());
+  const auto nf = static_cast<size_t>(frames_);
+  const size_t total = n * nf;
+  TVF_CHECK(fixed.size() == total && values.size() == total && z.size() == total,
+            "space-time sizes {} {} {} for {} entries", fixed.size(), values.size(), z.size(), total);
+  SolveReport report;
+  report.method = "preconditioned CG (temporal line solves), matrix-free";
+  const auto& l = laplacian_.matrix;
+  const Eigen::VectorXd& d = laplacian_.weight_sum;
+  const Eigen::VectorXd ldiag = l.diagonal().real();
+  const bool par = options.parallel;
+
+  // y = A x over all entries (x's fixed entries included as they are).
+  auto apply = [&](const Vec& x, Vec& y) {
+    tbb::parallel_for(size_t{0}, nf, [&](size_t j) {
+      const cplx* xj = x.data() + j * n;
+      cplx* yj = y.data() + j * n;
+      for (Eigen::Index col = 0; col < l.outerSize(); ++col) yj[col] = 0;
+      // Column-major L, Hermitian: y_j = L x_j.
+      for (Eigen::Index col = 0; col < l.outerSize(); ++col) {
+        const cplx xc = xj[col];
+        if (xc == cplx(0, 0)) continue;
+        for (Eigen::SparseMatrix<cplx>::InnerIterator it(l, col); it; ++it) yj[it.row()] += it.value() * xc;
+      }
+      // + b·D·(T x) along time.
+      for (size_t i = 0; i < n; ++i) {
+        cplx t(0, 0);
+        if (j > 0) t += xj[i] - x[(j - 1) * n + i];
+        if (j + 1 < nf) t += xj[i] - x[(j + 1) * n + i];
+        yj[i] += b_ * d[static_cast<Eigen::Index>(i)] * t;
+      }
+    });
+  };
+  auto mask_free = [&](Vec& v) {
+    blocks(total, par, [&](size_t a, size_t e) {
+      for (size_t k = a; k < e; ++k)
+        if (fixed[k]) v[k] = 0;
+    });
+  };
+  // Preconditioner: every vertex's temporal line solved exactly (Thomas algorithm) on
+  // the free entries; fixed entries split the line.
+  auto precondition = [&](const Vec& r, Vec& out) {
+    tbb::parallel_for(size_t{0}, n, [&](size_t i) {
+      const double lii = ldiag[static_cast<Eigen::Index>(i)];
+      const double c = b_ * d[static_cast<Eigen::Index>(i)];
+      std::vector<double> cp(nf);
+      std::vector<cplx> dp(nf);
+      // Forward sweep over the line; a fixed entry is an identity row with zero couplings.
+      for (size_t j = 0; j < nf; ++j) {
+        const size_t k = j * n + i;
+        if (fixed[k]) {
+          cp[j] = 0;
+          dp[j] = 0;
+          continue;
+        }
+        const bool has_prev = j > 0, has_next = j + 1 < nf;
+        const double diag = lii + c * ((has_prev ? 1 : 0) + (has_next ? 1 : 0));
+        const double lower = (has_prev && !fixed[k - n]) ? -c : 0.0;  // coupling to j−1
+        const double upper = (has_next && !fixed[k + n]) ? -c : 0.0;  // coupling to j+1
+        const double denom = diag - lower * (j > 0 ? cp[j - 1] : 0.0);
+        cp[j] = upper / denom;
+        dp[j] = (r[k] - lower * (j > 0 ? dp[j - 1] : cplx(0, 0))) / denom;
+      }
+      for (size_t j = nf; j-- > 0;) {
+        const size_t k = j * n + i;
+        if (fixed[k]) {
+          out[k] = 0;
+          continue;
+        }
+        out[k] = dp[j] - (j + 1 < nf ? cp[j] * out[k + n] : cplx(0, 0));
+      }
+    });
+  };
+
+  // Right-hand side over the free entries: −A_FC z_C, from A applied to the fixed values.
+  Vec xc(total), rhs(total);
+  blocks(total, par, [&](size_t a, size_t e) {
+    for (size_t k = a; k < e; ++k) xc[k] = fixed[k] ? values[k] : cplx(0, 0);
+  });
+  apply(xc, rhs);
+  blocks(total, par, [&](size_t a, size_t e) {
+    for (size_t k = a; k < e; ++k) rhs[k] = fixed[k] ? cplx(0, 0) : -rhs[k];
+  });
+  const double bnorm = std::sqrt(dot_real(rhs, rhs, par));
+
+  // Unknown: the free part of z (initial guess from z).
+  Vec x(total), r(total), p(total), ap(total), zp(total);
+  blocks(total, par, [&](size_t a, size_t e) {
+    for (size_t k = a; k < e; ++k) x[k] = fixed[k] ? cplx(0, 0) : z[k];
+  });
+  if (bnorm == 0) {
+    std::fill(x.begin(), x.end(), cplx(0, 0));
+  } else {
+    apply(x, ap);
+    mask_free(ap);
+    blocks(total, par, [&](size_t a, size_t e) {
+      for (size_t k = a; k < e; ++k) r[k] = rhs[k] - ap[k];
+    });
+    precondition(r, zp);
+    p = zp;
+    double rz = dot_real(r, zp, par);
+    double rnorm = std::sqrt(dot_real(r, r, par));
+    int it = 0;
+    while (rnorm > options.tolerance * bnorm && it < options.max_iterations) {
+      apply(p, ap);
+      mask_free(ap);
+      const double pap = dot_real(p, ap, par);
+      if (!(pap > 0)) break;  // not positive definite on this subspace
+      const double alpha = rz / pap;
+      blocks(total, par, [&](size_t a, size_t e) {
+        for (size_t k = a; k < e; ++k) {
+          x[k] += alpha * p[k];
+          r[k] -= alpha * ap[k];
+        }
+      });
+      rnorm = std::sqrt(dot_real(r, r, par));
+      ++it;
+      if (rnorm <= options.tolerance * bnorm) break;
+      precondition(r, zp);
+      const double rz_new = dot_real(r, zp, par);
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      blocks(total, par, [&](size_t a, size_t e) {
+        for (size_t k = a; k < e; ++k) p[k] = zp[k] + beta * p[k];
+      });
+    }
+    report.iterations = it;
+    report.residual = rnorm / bnorm;
+  }
+  report.success = std::isfinite(report.residual) && report.residual <= options.tolerance;
+  blocks(total, par, [&](size_t a, size_t e) {
+    for (size_t k = a; k < e; ++k) z[k] = fixed[k] ? values[k] : x[k];
+  });
+  return report;
+}
+
+}  // namespace tvf
