@@ -16,8 +16,8 @@ d = json.load(open(sys.argv[1]))
 ctx = d["context"]
 print(f"Machine: {sys.argv[3]}, {ctx['num_cpus']} cores; tvf built {sys.argv[2]}; {ctx['date']}")
 print()
-print("| case | vertices | frames | median time | per frame |")
-print("|---|---:|---:|---:|---:|")
+print("| case | vertices | frames | median time | per frame | iterations | residual |")
+print("|---|---:|---:|---:|---:|---:|---:|")
 for b in d["benchmarks"]:
     if b.get("aggregate_name") != "median":
         continue
@@ -25,6 +25,9 @@ for b in d["benchmarks"]:
     t = b["real_time"]; unit = b["time_unit"]
     v = int(b.get("vertices", 0)); f = int(b.get("frames", 0))
     per = f"{t / f:.3f} {unit}" if f else ""
-    print(f"| {name} | {v or ''} | {f or ''} | {t:.1f} {unit} | {per} |")
+    it = b.get("iterations"); res = b.get("residual")
+    its = f"{int(it)}" if it else ""
+    ress = f"{res:.1e}" if res else ""
+    print(f"| {name} | {v or ''} | {f or ''} | {t:.1f} {unit} | {per} | {its} | {ress} |")
 PY
 rm -f "$json"
