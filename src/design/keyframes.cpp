@@ -1,5 +1,7 @@
 #include "tvf/design/keyframes.h"
 
+#include "design/element_regions.h"
+
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "tvf/field/field_io.h"
@@ -46,44 +48,12 @@ void keyframe_constraints(const DesignSpace& space, const Scene& scene, size_t k
   const double d = scene.falloff / (space.diameter() * space.diameter());
   const double radius = scene.solver.region_radius;
 
-  // Elements: each imposes its own field near itself.
+  // Elements: each imposes its own field near itself, as in the constrained generator.
   LocalChart chart;
+  detail::ElementOnDomain placed;
   for (const KeyframeElement& e : key.elements) {
-    ElementState st = static_state(e);
-    const SurfacePoint at = space.locate(st.position);
-    std::vector<cplx> value(nv);
-    std::vector<double> dist(nv);
-    if (space.planar()) {
-      for (size_t v = 0; v < nv; ++v) {
-        const Vec3& x = mesh.position(static_cast<int>(v));
-        const cplx w(x.x() - st.position.x(), x.y() - st.position.y());
-        value[v] = std::exp(-d * std::norm(w)) * st.field(w);
-        dist[v] = std::abs(w);
-      }
-    } else {
-      if (st.field.kind == LocalField::Kind::regular)
-        st.field.velocity = space.bundle().world_to_face(at.face, st.velocity);
-      space.log_map().compute(at, chart);
-      for (size_t v = 0; v < nv; ++v) {
-        const cplx w = chart.coords[v];
-        value[v] = std::exp(-d * std::norm(w)) * st.field(w) * chart.frame[v];
-        dist[v] = std::abs(w);
-      }
-    }
-    std::vector<int> region;
-    for (size_t v = 0; v < nv; ++v)
-      if (dist[v] <= radius) region.push_back(static_cast<int>(v));
-    for (int c : mesh.face(at.face)) {
-      region.push_back(c);
-      for (int h : mesh.outgoing(c)) region.push_back(mesh.head(h));
-    }
-    std::sort(region.begin(), region.end());
-    region.erase(std::unique(region.begin(), region.end()), region.end());
-    for (int vi : region) {
-      const auto v = static_cast<size_t>(vi);
-      fixed[v] = 1;
-      values[v] += value[v];
-    }
+    detail::place_state(space, static_state(e), d, chart, placed);
+    detail::constrain_region(mesh, placed, radius, fixed, values);
   }
 
   // Streamlines: the polyline's unit tangent at the corners of every face it crosses,

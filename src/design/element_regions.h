@@ -1,0 +1,154 @@
+#pragma once
+// Internal to the design module: placing elements on the domain and turning them into
+// constraints, shared by the generators (generate.cpp, keyframes.cpp, deform.cpp).
+#include "tvf/core/error.h"
+#include "tvf/design/design_space.h"
+#include "tvf/design/element_field.h"
+#include "tvf/design/generate.h"
+#include "tvf/solve/connection_laplacian.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <span>
+#include <vector>
+
+namespace tvf::detail {
+
+// One element at one time on the domain: its basis field (with falloff) at every vertex,
+// in each vertex's basis, and every vertex's distance from the element (geodesic on
+// surfaces).
+struct ElementOnDomain {
+  std::vector<cplx> value;
+  std::vector<double> distance;
+  SurfacePoint at;  // the face holding p(t) (surfaces only)
+};
+
+inline void place_state(const DesignSpace& space, ElementState st, double d, LocalChart& chart,
+                 ElementOnDomain& out) {
+  const Mesh& mesh = space.mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  out.value.resize(nv);
+  out.distance.resize(nv);
+  out.at = space.locate(st.position);
+  if (space.planar()) {
+    // Local coordinates are the plane's own: w = x − p, frame = global.
+    for (size_t v = 0; v < nv; ++v) {
+      const Vec3& x = mesh.position(static_cast<int>(v));
+      const cplx w(x.x() - st.position.x(), x.y() - st.position.y());
+      out.value[v] = std::exp(-d * std::norm(w)) * st.field(w);
+      out.distance[v] = std::abs(w);
+    }
+    return;
+  }
+  if (st.field.kind == LocalField::Kind::regular)
+    st.field.velocity = space.bundle().world_to_face(out.at.face, st.velocity);
+  space.log_map().compute(out.at, chart);
+  for (size_t v = 0; v < nv; ++v) {
+    const cplx w = chart.coords[v];
+    const double fall = std::exp(-d * std::norm(w));
+    out.value[v] = fall < 1e-300 ? cplx(0, 0) : fall * st.field(w) * chart.frame[v];
+    out.distance[v] = std::abs(w);
+  }
+}
+
+inline void place_element(const DesignSpace& space, const CompiledElement& el, double t, double d,
+                   LocalChart& chart, ElementOnDomain& out) {
+  place_state(space, el.at(t), d, chart, out);
+}
+
+// Imposes a placed element's own field on its region (DESIGN §5.2): the vertices within
+// `radius`, and however small the radius, the element's face and its corners'
+// neighbours, so that the constraints enclose its singularity. Overlapping regions add.
+inline void constrain_region(const Mesh& mesh, const ElementOnDomain& placed, double radius,
+                      std::span<char> fixed, std::span<cplx> values) {
+  auto add = [&](size_t v) {
+    if (!fixed[v]) values[v] = cplx(0, 0);
+    fixed[v] = 1;
+    values[v] += placed.value[v];
+  };
+  for (size_t v = 0; v < values.size(); ++v)
+    if (placed.distance[v] <= radius) add(v);
+  // The face's corners and their neighbours, each once.
+  std::vector<int> near;
+  for (int c : mesh.face(placed.at.face)) {
+    near.push_back(c);
+    for (int h : mesh.outgoing(c)) near.push_back(mesh.head(h));
+  }
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  for (int v : near)
+    if (placed.distance[static_cast<size_t>(v)] > radius) add(static_cast<size_t>(v));
+}
+
+// The region radius of an element: solver.region_radius, or for a bifurcation at least
+// 2·scale, so the region holds the pair it creates or cancels.
+inline double region_radius(const Scene& scene, const CompiledElement& el) {
+  double radius = scene.solver.region_radius;
+  if (const auto* b = std::get_if<BifurcationElement>(&el.element())) radius = std::max(radius, 2 * b->scale);
+  return radius;
+}
+
+// All active elements' regions at time t.
+inline void constrain_elements(const DesignSpace& space, const Scene& scene,
+                        const std::vector<CompiledElement>& elements, double t, double d,
+                        std::span<char> fixed, std::span<cplx> values) {
+  LocalChart chart;
+  ElementOnDomain placed;
+  for (const CompiledElement& el : elements) {
+    if (!el.active(t)) continue;
+    place_element(space, el, t, d, chart, placed);
+    constrain_region(space.mesh(), placed, region_radius(scene, el), fixed, values);
+  }
+}
+
+// Runs solve_frame(j) for every frame, in parallel or not, reporting progress.
+template <class F>
+void for_each_frame(int frames, const GenerateOptions& options, F&& solve_frame) {
+  std::mutex progress_mutex;
+  int done = 0;
+  auto run = [&](int j) {
+    solve_frame(j);
+    if (options.progress) {
+      std::lock_guard lock(progress_mutex);
+      options.progress(++done, frames);
+    }
+  };
+  if (options.parallel) {
+    tbb::parallel_for(0, frames, run);
+  } else {
+    for (int j = 0; j < frames; ++j) run(j);
+  }
+}
+
+inline LaplacianWeights to_laplacian_weights(Weights w) {
+  switch (w) {
+    case Weights::cotan: return LaplacianWeights::cotan;
+    case Weights::uniform: return LaplacianWeights::uniform;
+    case Weights::mean_value: return LaplacianWeights::mean_value;
+  }
+  TVF_CHECK(false, "unknown weights");
+}
+
+inline std::vector<CompiledElement> compile(const Scene& scene) {
+  std::vector<CompiledElement> elements;
+  elements.reserve(scene.elements.size());
+  for (const Element& e : scene.elements) elements.emplace_back(e);
+  return elements;
+}
+
+inline void finish_report(GenerateReport* report, const Scene& scene, int vertices,
+                   std::chrono::steady_clock::time_point start) {
+  if (!report) return;
+  report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report->frames = scene.time.frames;
+  report->vertices = vertices;
+  auto w = design_warnings(scene);
+  report->warnings.insert(report->warnings.end(), w.begin(), w.end());
+}
+
+
+}  // namespace tvf::detail
