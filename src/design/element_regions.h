@@ -151,4 +151,46 @@ inline void finish_report(GenerateReport* report, const Scene& scene, int vertic
 }
 
 
+// A polyline's tangents as constraints (DESIGN §10 key-frame streamlines, §5.4 streamline
+// deformation): the unit direction of each segment, times the speed interpolated along it,
+// at the corners of every face the segment crosses (sampled every quarter edge length),
+// averaged where samples meet. Values add to those already fixed at a vertex.
+inline void constrain_polyline(const DesignSpace& space, const std::vector<Vec3>& points,
+                               const std::vector<double>& speeds, std::span<char> fixed,
+                               std::span<cplx> values) {
+  const Mesh& mesh = space.mesh();
+  const size_t nv = values.size();
+  std::vector<cplx> sum(nv, cplx(0, 0));
+  std::vector<double> speed_sum(nv, 0.0);
+  std::vector<int> count(nv, 0);
+  const double step = 0.25 * mesh.mean_edge_length();
+  for (size_t i = 0; i + 1 < points.size(); ++i) {
+    const Vec3 a = points[i], b = points[i + 1];
+    const double len = (b - a).norm();
+    if (len == 0) continue;
+    const Vec3 dir = (b - a) / len;
+    const int steps = std::max(1, static_cast<int>(std::ceil(len / step)));
+    for (int q = 0; q < steps; ++q) {
+      const double u = (q + 0.5) / steps;
+      const Vec3 x = a + (b - a) * u;
+      const double speed = (1 - u) * speeds[i] + u * speeds[i + 1];
+      const SurfacePoint p = space.locate(x);
+      for (int c : mesh.face(p.face)) {
+        const auto v = static_cast<size_t>(c);
+        const cplx z = space.bundle().world_to_vertex(c, dir);
+        if (std::abs(z) == 0) continue;
+        sum[v] += z / std::abs(z);
+        speed_sum[v] += speed;
+        ++count[v];
+      }
+    }
+  }
+  for (size_t v = 0; v < nv; ++v) {
+    if (count[v] == 0 || std::abs(sum[v]) == 0) continue;
+    if (!fixed[v]) values[v] = cplx(0, 0);
+    values[v] += speed_sum[v] / count[v] * normalized(sum[v]);
+    fixed[v] = 1;
+  }
+}
+
 }  // namespace tvf::detail

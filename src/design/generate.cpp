@@ -230,11 +230,7 @@ Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptio
     case Generator::basis: return generate_basis_sum(space, scene, options, report);
     case Generator::constrained: return generate_constrained(space, scene, options, report);
     case Generator::spacetime: return generate_spacetime(space, scene, options, report);
-    case Generator::deform:
-      throw_input_error(scene.label(), "generator",
-                        fmt::format("the '{}' generator is not available in this version of tvf "
-                                    "(available: basis, constrained, spacetime)",
-                                    to_string(scene.generator)));
+    case Generator::deform: return generate_deform(space, scene, options, report);
   }
   TVF_CHECK(false, "unknown generator");
 }

@@ -56,36 +56,10 @@ void keyframe_constraints(const DesignSpace& space, const Scene& scene, size_t k
     detail::constrain_region(mesh, placed, radius, fixed, values);
   }
 
-  // Streamlines: the polyline's unit tangent at the corners of every face it crosses,
-  // averaged where several samples meet, scaled to the streamline's speed.
-  const double step = 0.25 * mesh.mean_edge_length();
-  for (const KeyframeStreamline& s : key.streamlines) {
-    std::vector<cplx> sum(nv, cplx(0, 0));
-    std::vector<char> hit(nv, 0);
-    for (size_t i = 0; i + 1 < s.points.size(); ++i) {
-      const Vec3 a = s.points[i], b = s.points[i + 1];
-      const double len = (b - a).norm();
-      if (len == 0) continue;
-      const Vec3 dir = (b - a) / len;
-      const int steps = std::max(1, static_cast<int>(std::ceil(len / step)));
-      for (int q = 0; q < steps; ++q) {
-        const Vec3 x = a + (b - a) * ((q + 0.5) / steps);
-        const SurfacePoint p = space.locate(x);
-        for (int c : mesh.face(p.face)) {
-          const auto v = static_cast<size_t>(c);
-          const cplx z = space.bundle().world_to_vertex(c, dir);
-          if (std::abs(z) == 0) continue;
-          sum[v] += z / std::abs(z);
-          hit[v] = 1;
-        }
-      }
-    }
-    for (size_t v = 0; v < nv; ++v) {
-      if (!hit[v] || std::abs(sum[v]) == 0) continue;
-      values[v] = (fixed[v] ? values[v] : cplx(0, 0)) + s.speed * normalized(sum[v]);
-      fixed[v] = 1;
-    }
-  }
+  // Streamlines: their tangents, with magnitude `speed`.
+  for (const KeyframeStreamline& s : key.streamlines)
+    detail::constrain_polyline(space, s.points, std::vector<double>(s.points.size(), s.speed), fixed,
+                               values);
 }
 
 std::vector<cplx> keyframe_field(const DesignSpace& space, const Scene& scene, size_t k,

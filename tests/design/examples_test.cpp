@@ -97,6 +97,24 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
         ++checked;
       }
     }
+    // Deformation: the base field's singular elements are in the first frame.
+    if (scene.generator == Generator::deform) {
+      nlohmann::json j = scene_to_json(scene);
+      j["elements"] = scene.deform.at("base").at("elements");
+      j["generator"] = "constrained";
+      j.erase("deform");
+      const Scene base = scene_from_json(j, "base");
+      const auto found = find_singularities(space->bundle(), field, 0);
+      for (const Element& e : base.elements) {
+        const auto* s = std::get_if<SingularElement>(&e);
+        if (!s) continue;
+        const auto [f, d] = nearest(found, s->path.front().position);
+        ASSERT_NE(f, nullptr);
+        EXPECT_LT(d, tol);
+        EXPECT_EQ(f->index, CompiledElement(e).index());
+        ++checked;
+      }
+    }
     EXPECT_GT(checked, 0);
   }
 }

@@ -125,16 +125,16 @@ TEST(BasisSum, SourceOnTheSphereIsRadialLikeOnThePlane) {
   EXPECT_GT(checked, 1000);
 }
 
-TEST(Generate, RefusesGeneratorsThatAreNotAvailableYet) {
+TEST(Generate, RefusesEditsUntilTheyAreAvailable) {
   Scene s = grid_scene(5, 1.0, 2);
   s.source_path = "my.json";
-  s.generator = Generator::deform;
+  s.edits = nlohmann::json::array({{{"op", "smooth"}, {"strength", 0.5}}});
   const auto space = make_design_space(s);
   try {
     generate(*space, s);
     FAIL() << "expected an error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("my.json: generator:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("my.json: edits:"), std::string::npos) << e.what();
   }
 }
 
@@ -335,6 +335,86 @@ TEST(SpaceTimeGenerator, RefusesMeanValueWeights) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("k.json: solver.weights:"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+}  // namespace tvf
+
+#include "tvf/design/scene_json.h"
+
+namespace tvf {
+namespace {
+
+Scene deform_scene(const std::string& keys) {
+  return parse_scene(R"({"tvf": 1, "domain": {"grid": {"size": [33, 33]}}, "time": {"frames": 11},
+    "generator": "deform", "falloff": 10, "solver": {"region_radius": 0.15},
+    "deform": {"base": {"elements": [{"kind": "singular", "type": "source", "path": [[0.1, -0.2, 0]]}]}, )" +
+                         keys + "}}",
+                     "deform.json");
+}
+
+TEST(Deform, TransformKeysRotateTheBaseField) {
+  const Scene s = deform_scene(R"("transform": [{"t": 1, "sx": 1, "sy": 1, "theta": 3.141592653589793}])");
+  const auto space = make_design_space(s);
+  const Field f = generate(*space, s);
+  for (int j = 0; j < s.time.frames; ++j) {
+    const double theta = kPi * s.time.time(j);
+    const Mat2 m = transform_matrix({0, 1, 1, theta});
+    for (int v = 0; v < space->mesh().num_vertices(); v += 5)
+      EXPECT_LT(std::abs(f.at(j, v) - to_complex(m * to_vec2(f.at(0, v)))), 1e-13) << j << " " << v;
+  }
+  // Source → center → sink (paper Fig. 10).
+  const auto type_at = [&](int j) {
+    const auto sg = find_singularities(space->bundle(), f, j);
+    EXPECT_EQ(sg.size(), 1u) << j;
+    return sg.empty() ? SingularityType::saddle : sg[0].type;
+  };
+  EXPECT_EQ(type_at(0), SingularityType::source);
+  EXPECT_EQ(type_at(5), SingularityType::center);
+  EXPECT_EQ(type_at(10), SingularityType::sink);
+}
+
+TEST(Deform, MatrixKeysInterpolateFromTheIdentity) {
+  const Scene s = deform_scene(R"("matrix": [{"t": 0.5, "m": [[2, 0], [0, 0.5]]}, {"t": 1, "m": [[0, -1], [1, 0]]}])");
+  const auto space = make_design_space(s);
+  const Field f = generate(*space, s);
+  Mat2 half, key1, key2;
+  half << 1.5, 0, 0, 0.75;  // t = 0.25: half way from I to diag(2, 0.5)
+  key1 << 2, 0, 0, 0.5;
+  key2 << 0, -1, 1, 0;
+  const std::pair<int, Mat2> checks[] = {{0, Mat2::Identity()}, {5, key1}, {10, key2}};
+  for (const auto& [j, m] : checks)
+    for (int v = 0; v < space->mesh().num_vertices(); v += 7)
+      EXPECT_LT(std::abs(f.at(j, v) - to_complex(m * to_vec2(f.at(0, v)))), 1e-13) << j;
+  // Frame 2.5 does not exist; check t = 0.2 (frame 2): 0.4 of the way to key 1.
+  Mat2 m2 = 0.6 * Mat2::Identity() + 0.4 * key1;
+  for (int v = 0; v < space->mesh().num_vertices(); v += 7)
+    EXPECT_LT(std::abs(f.at(2, v) - to_complex(m2 * to_vec2(f.at(0, v)))), 1e-13);
+  (void)half;
+}
+
+TEST(Deform, StreamlineDeformationStartsFromTheBaseField) {
+  const Scene plain = deform_scene(R"("transform": [])");
+  const Scene moved = deform_scene(
+      R"("streamlines": [{"seed": [0.5, 0.3], "keys": [{"t": 1, "translate": [0, -0.3], "rotate": 0.5, "scale": 1}]}])");
+  const auto space = make_design_space(plain);
+  const Field a = generate(*space, plain);
+  GenerateReport report;
+  const Field b = generate(*space, moved, {}, &report);
+  EXPECT_NE(report.method.find("streamline"), std::string::npos);
+  // At t0 the streamline is where it was traced: its tangents agree with V(t0), so the
+  // frame is the base field again up to the discretisation of the polyline.
+  double diff = 0, norm = 0;
+  for (int v = 0; v < space->mesh().num_vertices(); ++v) {
+    diff += std::norm(b.at(0, v) - a.at(0, v));
+    norm += std::norm(a.at(0, v));
+  }
+  const double initial = std::sqrt(diff / norm);
+  EXPECT_LT(initial, 0.2);
+  // Once the streamline has moved, the field differs much more.
+  double later = 0;
+  for (int v = 0; v < space->mesh().num_vertices(); ++v) later += std::norm(b.at(10, v) - a.at(10, v));
+  EXPECT_GT(std::sqrt(later / norm), 2 * initial);
 }
 
 }  // namespace

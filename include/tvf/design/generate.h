@@ -1,8 +1,8 @@
 #pragma once
 // Generating the field of a scene (DESIGN §5). generate() dispatches on scene.generator.
-// Available now: "basis" (basis field summation, paper §5.2, eq. 8), "constrained"
-// (paper §5.3) and "spacetime" (paper §6.1). The deform generator is refused with a clear
-// error until it lands.
+// Generators: "basis" (basis field summation, paper §5.2, eq. 8), "constrained" (paper
+// §5.3), "spacetime" (paper §6.1) and "deform" (paper §7). Edits are refused with a clear
+// error until they land.
 #include "tvf/design/design_space.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
@@ -56,6 +56,16 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
 // solver.temporal_weight times the temporal one. Needs cotan or uniform weights.
 Field generate_spacetime(const DesignSpace& space, const Scene& scene,
                          const GenerateOptions& options = {}, GenerateReport* report = nullptr);
+
+// Time-varying transformation (paper §7, DESIGN §5.4): V(t) = M(t) V(t0), V(t0) the
+// static constrained design of deform.base's elements, M(t) from deform.matrix keys
+// (linear from the identity) or deform.transform keys (sx, sy, θ linear). With
+// deform.streamlines, representative streamlines traced in V(t0) are moved by keyed
+// similarity transforms, and each frame is the constrained solve of the moved
+// streamlines' tangents plus the base elements' regions (transformed by M(t)); planar
+// domains only for that part. On surfaces M acts in each vertex's tangent basis.
+Field generate_deform(const DesignSpace& space, const Scene& scene,
+                      const GenerateOptions& options = {}, GenerateReport* report = nullptr);
 
 // Checks that need the scene only (no mesh): singular paths that begin or end inside
 // the time range without a bifurcation there (DESIGN §4). One warning per problem.

@@ -1,0 +1,193 @@
+// The deform generator (paper §7, DESIGN §5.4): V(t) = M(t) V(t0), and streamline
+// deformation.
+#include "design/element_regions.h"
+#include "tvf/design/generate.h"
+#include "tvf/design/hermite_path.h"
+#include "tvf/design/scene_json.h"
+#include "tvf/integrate/streamline.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+namespace tvf {
+
+using namespace detail;
+
+namespace {
+
+// M(t) from matrix keys {t, m}: linear from the identity at t0 to the first key, then
+// key to key, constant after the last.
+Mat2 matrix_at(const nlohmann::json& keys, double t0, double t) {
+  double ta = t0;
+  Mat2 ma = Mat2::Identity();
+  for (const auto& k : keys) {
+    const double tb = k.at("t").get<double>();
+    Mat2 mb;
+    mb << k.at("m")[0][0].get<double>(), k.at("m")[0][1].get<double>(), k.at("m")[1][0].get<double>(),
+        k.at("m")[1][1].get<double>();
+    if (t <= tb) {
+      if (tb <= ta) return mb;
+      const double w = std::clamp((t - ta) / (tb - ta), 0.0, 1.0);
+      return (1 - w) * ma + w * mb;
+    }
+    ta = tb;
+    ma = mb;
+  }
+  return ma;
+}
+
+// Transform keys {t, sx, sy, theta}, with the identity at t0 unless a key is there.
+std::vector<TransformKey> transform_keys(const nlohmann::json& keys, double t0) {
+  std::vector<TransformKey> out;
+  for (const auto& k : keys)
+    out.push_back({k.at("t").get<double>(), k.at("sx").get<double>(), k.at("sy").get<double>(),
+                   k.at("theta").get<double>()});
+  if (out.empty() || out.front().t > t0) out.insert(out.begin(), TransformKey{t0, 1, 1, 0});
+  return out;
+}
+
+// A keyed similarity transform of a streamline at time t: translate, rotate, scale about
+// the seed, interpolated linearly from the identity at t0.
+struct Similarity {
+  Vec2 translate = Vec2::Zero();
+  double rotate = 0;
+  double scale = 1;
+};
+Similarity similarity_at(const nlohmann::json& keys, double t0, double t) {
+  double ta = t0;
+  Similarity a;
+  for (const auto& k : keys) {
+    const double tb = k.at("t").get<double>();
+    Similarity b;
+    b.translate = Vec2(k.at("translate")[0].get<double>(), k.at("translate")[1].get<double>());
+    b.rotate = k.at("rotate").get<double>();
+    b.scale = k.at("scale").get<double>();
+    if (t <= tb) {
+      if (tb <= ta) return b;
+      const double w = std::clamp((t - ta) / (tb - ta), 0.0, 1.0);
+      return {(1 - w) * a.translate + w * b.translate, (1 - w) * a.rotate + w * b.rotate,
+              (1 - w) * a.scale + w * b.scale};
+    }
+    ta = tb;
+    a = b;
+  }
+  return a;
+}
+
+cplx apply(const Mat2& m, cplx z) { return to_complex(m * to_vec2(z)); }
+
+}  // namespace
+
+Field generate_deform(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
+                      GenerateReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  const Mesh& mesh = space.mesh();
+  const int nv = mesh.num_vertices();
+  const auto n = static_cast<size_t>(nv);
+  check_field_memory(scene, nv);
+  if (scene.deform.is_null())
+    throw_input_error(scene.label(), "deform", "the deform generator needs a deform block");
+  const nlohmann::json& def = scene.deform;
+  const double t0 = scene.time.t0;
+
+  // The base field V(t0): the static constrained design of deform.base's elements.
+  nlohmann::json base_json = scene_to_json(scene);
+  base_json["elements"] = def.at("base").value("elements", nlohmann::json::array());
+  base_json["generator"] = "constrained";
+  base_json.erase("deform");
+  base_json["keyframes"] = nlohmann::json::array();
+  base_json["edits"] = nlohmann::json::array();
+  const Scene base = scene_from_json(base_json, scene.label() + " (deform.base)", scene.source_path);
+  if (base.elements.empty())
+    throw_input_error(scene.label(), "deform.base.elements",
+                      "the base field has no elements, so there is nothing to deform");
+  const std::vector<CompiledElement> base_elements = compile(base);
+  const double d = scene.falloff / (space.diameter() * space.diameter());
+  const ConnectionLaplacian laplacian =
+      connection_laplacian(space.bundle(), to_laplacian_weights(scene.solver.weights));
+  std::vector<char> base_fixed(n, 0);
+  std::vector<cplx> base_values(n, cplx(0, 0)), v0(n);
+  constrain_elements(space, base, base_elements, t0, d, base_fixed, base_values);
+  DirichletSolver prototype(laplacian);
+  {
+    DirichletSolver s(prototype);
+    if (!s.solve(base_fixed, base_values, v0).success)
+      throw_input_error(scene.label(), "deform.base", "the base field could not be solved");
+  }
+
+  // M(t): matrix keys, or (sx, sy, θ) keys interpolated linearly.
+  const bool has_matrix = def.contains("matrix");
+  const std::vector<TransformKey> tkeys =
+      def.contains("transform") ? transform_keys(def.at("transform"), t0) : std::vector<TransformKey>{};
+  auto m_at = [&](double t) -> Mat2 {
+    if (has_matrix) return matrix_at(def.at("matrix"), t0, t);
+    if (!tkeys.empty()) return transform_matrix(interpolate_transform(tkeys, t));
+    return Mat2::Identity();
+  };
+
+  // Representative streamlines traced in V(t0).
+  const nlohmann::json streamlines = def.value("streamlines", nlohmann::json::array());
+  std::vector<Streamline> traced;
+  if (!streamlines.empty()) {
+    if (!space.planar())
+      throw_input_error(scene.label(), "deform.streamlines",
+                        "streamline deformation is available on planar domains only in this version");
+    for (size_t k = 0; k < streamlines.size(); ++k) {
+      const auto& seed = streamlines[k].at("seed");
+      const Vec3 x(seed[0].get<double>(), seed[1].get<double>(), 0);
+      try {
+        traced.push_back(trace_streamline(space.bundle(), v0, x));
+      } catch (const Error& e) {
+        throw_input_error(scene.label(), fmt::format("deform.streamlines[{}].seed", k), e.what());
+      }
+    }
+  }
+
+  Field field(scene.time, nv);
+  tbb::enumerable_thread_specific<DirichletSolver> solvers(prototype);
+  std::mutex report_mutex;
+  double worst = 0;
+  bool ok = true;
+  for_each_frame(scene.time.frames, options, [&](int j) {
+    const double t = scene.time.time(j);
+    const Mat2 m = m_at(t);
+    std::span<cplx> out = field.frame(j);
+    if (traced.empty()) {
+      for (size_t v = 0; v < n; ++v) out[v] = apply(m, v0[v]);
+      return;
+    }
+    // Streamline deformation: the base elements' regions (transformed by M(t)) and the
+    // moved streamlines' tangents constrain the frame's solve.
+    std::vector<char> fixed(base_fixed);
+    std::vector<cplx> values(n, cplx(0, 0));
+    for (size_t v = 0; v < n; ++v)
+      if (fixed[v]) values[v] = apply(m, v0[v]);
+    for (size_t k = 0; k < traced.size(); ++k) {
+      const Similarity sim = similarity_at(streamlines[k].at("keys"), t0, t);
+      const Vec3& seed = traced[k].points[traced[k].seed];
+      const cplx rot = std::polar(sim.scale, sim.rotate);
+      std::vector<Vec3> pts;
+      std::vector<double> speeds;
+      for (size_t q = 0; q < traced[k].points.size(); ++q) {
+        const cplx rel(traced[k].points[q].x() - seed.x(), traced[k].points[q].y() - seed.y());
+        const cplx moved = cplx(seed.x() + sim.translate.x(), seed.y() + sim.translate.y()) + rot * rel;
+        pts.emplace_back(moved.real(), moved.imag(), 0);
+        speeds.push_back(sim.scale * traced[k].speeds[q]);
+      }
+      constrain_polyline(space, pts, speeds, fixed, values);
+    }
+    const SolveReport r = solvers.local().solve(fixed, values, out);
+    std::lock_guard lock(report_mutex);
+    worst = std::max(worst, r.residual);
+    ok = ok && r.success;
+  });
+  if (!ok) throw_input_error(scene.label(), "deform", "a frame's constrained solve failed");
+  if (report) {
+    report->method = traced.empty() ? "time-varying transformation V(t) = M(t) V(t0)"
+                                    : "streamline deformation, constrained solve per frame";
+    report->residual = worst;
+  }
+  finish_report(report, scene, nv, start);
+  return field;
+}
+
+}  // namespace tvf
