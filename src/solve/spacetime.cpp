@@ -3,6 +3,7 @@
 #include "tvf/core/error.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
@@ -99,31 +100,40 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   const bool par = options.parallel;
 
   // y = A x over all entries (x's fixed entries included as they are).
-  auto apply = [&](const Vec& x, Vec& y) {
+  // y = A x over all entries (x's fixed entries included as they are). With `masked`,
+  // y's fixed entries are zeroed and Re <x, y> over the rest is returned (fused, so the
+  // iteration reads each vector as few times as possible: the solve is bandwidth-bound).
+  auto apply = [&](const Vec& x, Vec& y, bool masked) {
+    tbb::combinable<double> dot([] { return 0.0; });
     tbb::parallel_for(size_t{0}, nf, [&](size_t j) {
       const cplx* xj = x.data() + j * n;
       cplx* yj = y.data() + j * n;
+      const char* fj = fixed.data() + j * n;
       for (Eigen::Index col = 0; col < l.outerSize(); ++col) yj[col] = 0;
-      // Column-major L, Hermitian: y_j = L x_j.
+      // Column-major L: y_j = L x_j.
       for (Eigen::Index col = 0; col < l.outerSize(); ++col) {
         const cplx xc = xj[col];
         if (xc == cplx(0, 0)) continue;
         for (Eigen::SparseMatrix<cplx>::InnerIterator it(l, col); it; ++it) yj[it.row()] += it.value() * xc;
       }
       // + b·D·(T x) along time.
+      const cplx* xp = j > 0 ? xj - n : nullptr;
+      const cplx* xn = j + 1 < nf ? xj + n : nullptr;
+      double partial = 0;
       for (size_t i = 0; i < n; ++i) {
         cplx t(0, 0);
-        if (j > 0) t += xj[i] - x[(j - 1) * n + i];
-        if (j + 1 < nf) t += xj[i] - x[(j + 1) * n + i];
-        yj[i] += b_ * d[static_cast<Eigen::Index>(i)] * t;
+        if (xp) t += xj[i] - xp[i];
+        if (xn) t += xj[i] - xn[i];
+        cplx yi = yj[i] + b_ * d[static_cast<Eigen::Index>(i)] * t;
+        if (masked) {
+          if (fj[i]) yi = 0;
+          partial += (std::conj(xj[i]) * yi).real();
+        }
+        yj[i] = yi;
       }
+      dot.local() += partial;
     });
-  };
-  auto mask_free = [&](Vec& v) {
-    blocks(total, par, [&](size_t a, size_t e) {
-      for (size_t k = a; k < e; ++k)
-        if (fixed[k]) v[k] = 0;
-    });
+    return dot.combine(std::plus<>());
   };
   // Preconditioner: every vertex's temporal line solved exactly (Thomas algorithm) on
   // the free entries; fixed entries split the line. Lines are swept in blocks of
@@ -132,6 +142,7 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   constexpr size_t kBlock = 32;
   auto precondition = [&](const Vec& r, Vec& out) {
     const size_t nblocks = (n + kBlock - 1) / kBlock;
+    tbb::combinable<double> dot([] { return 0.0; });
     tbb::parallel_for(size_t{0}, nblocks, [&](size_t blk) {
       const size_t i0 = blk * kBlock, i1 = std::min(n, i0 + kBlock);
       const size_t w = i1 - i0;
@@ -157,13 +168,17 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
           dp[q] = (r[k] - lower * dprev) / denom;
         }
       }
+      double partial = 0;
       for (size_t j = nf; j-- > 0;) {
         for (size_t i = i0; i < i1; ++i) {
           const size_t k = j * n + i, q = j * w + (i - i0);
           out[k] = fixed[k] ? cplx(0, 0) : dp[q] - (j + 1 < nf ? cp[q] * out[k + n] : cplx(0, 0));
+          partial += (std::conj(r[k]) * out[k]).real();
         }
       }
+      dot.local() += partial;
     });
+    return dot.combine(std::plus<>());  // Re <r, M⁻¹ r>
   };
 
   // Right-hand side over the free entries: −A_FC z_C, from A applied to the fixed values.
@@ -171,7 +186,7 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   blocks(total, par, [&](size_t a, size_t e) {
     for (size_t k = a; k < e; ++k) xc[k] = fixed[k] ? values[k] : cplx(0, 0);
   });
-  apply(xc, rhs);
+  apply(xc, rhs, false);
   blocks(total, par, [&](size_t a, size_t e) {
     for (size_t k = a; k < e; ++k) rhs[k] = fixed[k] ? cplx(0, 0) : -rhs[k];
   });
@@ -185,33 +200,33 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   if (bnorm == 0) {
     std::fill(x.begin(), x.end(), cplx(0, 0));
   } else {
-    apply(x, ap);
-    mask_free(ap);
+    apply(x, ap, true);
     blocks(total, par, [&](size_t a, size_t e) {
       for (size_t k = a; k < e; ++k) r[k] = rhs[k] - ap[k];
     });
-    precondition(r, zp);
+    double rz = precondition(r, zp);
     p = zp;
-    double rz = dot_real(r, zp, par);
     double rnorm = std::sqrt(dot_real(r, r, par));
     int it = 0;
     while (rnorm > options.tolerance * bnorm && it < options.max_iterations) {
-      apply(p, ap);
-      mask_free(ap);
-      const double pap = dot_real(p, ap, par);
+      const double pap = apply(p, ap, true);
       if (!(pap > 0)) break;  // not positive definite on this subspace
       const double alpha = rz / pap;
+      // x += αp, r −= αAp and ‖r‖² in one pass.
+      tbb::combinable<double> rr([] { return 0.0; });
       blocks(total, par, [&](size_t a, size_t e) {
+        double partial = 0;
         for (size_t k = a; k < e; ++k) {
           x[k] += alpha * p[k];
           r[k] -= alpha * ap[k];
+          partial += std::norm(r[k]);
         }
+        rr.local() += partial;
       });
-      rnorm = std::sqrt(dot_real(r, r, par));
+      rnorm = std::sqrt(rr.combine(std::plus<>()));
       ++it;
       if (rnorm <= options.tolerance * bnorm) break;
-      precondition(r, zp);
-      const double rz_new = dot_real(r, zp, par);
+      const double rz_new = precondition(r, zp);
       const double beta = rz_new / rz;
       rz = rz_new;
       blocks(total, par, [&](size_t a, size_t e) {
