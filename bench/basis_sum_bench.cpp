@@ -41,11 +41,12 @@ void BM_BasisSumGrid(benchmark::State& state) {
 }
 BENCHMARK(BM_BasisSumGrid)->Arg(65)->Arg(257)->Unit(benchmark::kMillisecond);
 
-void BM_BasisSumSphere(benchmark::State& state) {
+// A vortex moving along the equator and a source at a pole, on an icosphere.
+Scene sphere_scene(int subdivisions) {
   Scene s;
   s.time.frames = 100;
   s.falloff = 20;
-  s.domain.sphere = SphereSpec{static_cast<int>(state.range(0)), 1.0};
+  s.domain.sphere = SphereSpec{subdivisions, 1.0};
   SingularElement c;
   c.type = SingularType::ccw_center;
   c.jacobian = jacobian_of(*c.type);
@@ -55,6 +56,11 @@ void BM_BasisSumSphere(benchmark::State& state) {
   src.jacobian = jacobian_of(*src.type);
   src.path = {{Vec3(0, 0, 1), 0}};
   s.elements = {c, src};
+  return s;
+}
+
+void BM_BasisSumSphere(benchmark::State& state) {
+  const Scene s = sphere_scene(static_cast<int>(state.range(0)));
   const auto space = make_design_space(s);
   for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
   state.counters["vertices"] = space->mesh().num_vertices();
@@ -89,20 +95,8 @@ void BM_ConstrainedGrid(benchmark::State& state) {
 BENCHMARK(BM_ConstrainedGrid)->Arg(65)->Arg(141)->Unit(benchmark::kMillisecond);
 
 void BM_ConstrainedSphere(benchmark::State& state) {
-  Scene s;
-  s.time.frames = 100;
-  s.falloff = 20;
+  Scene s = sphere_scene(static_cast<int>(state.range(0)));
   s.generator = Generator::constrained;
-  s.domain.sphere = SphereSpec{static_cast<int>(state.range(0)), 1.0};
-  SingularElement c;
-  c.type = SingularType::ccw_center;
-  c.jacobian = jacobian_of(*c.type);
-  c.path = {{Vec3(1, 0, 0), 0}, {Vec3(0, 1, 0), 0.5}, {Vec3(-1, 0, 0), 1}};
-  SingularElement src;
-  src.type = SingularType::source;
-  src.jacobian = jacobian_of(*src.type);
-  src.path = {{Vec3(0, 0, 1), 0}};
-  s.elements = {c, src};
   const auto space = make_design_space(s);
   for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
   state.counters["vertices"] = space->mesh().num_vertices();

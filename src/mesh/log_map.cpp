@@ -21,6 +21,22 @@ double cot_at(const Mesh& mesh, int h) {
   const Vec3 w = mesh.position(mesh.tail(Mesh::prev(o))) - a;
   return u.dot(w) / u.cross(w).norm();
 }
+// Gradient of the linear interpolant of vertex values u in face f, up to the positive
+// factor 1/(2·area): Σ_c u_c · n × e_c, e_c the edge opposite corner c (counter-clockwise).
+// Only its direction is used.
+Vec3 face_gradient(const TangentBundle& bundle, int f, const Eigen::VectorXd& u) {
+  const Mesh& mesh = bundle.mesh();
+  const Face& t = mesh.face(f);
+  const Vec3& n = bundle.face_normal(f);
+  Vec3 grad = Vec3::Zero();
+  for (int c = 0; c < 3; ++c) {
+    const Vec3 e = mesh.position(t[static_cast<size_t>((c + 2) % 3)]) -
+                   mesh.position(t[static_cast<size_t>((c + 1) % 3)]);
+    grad += u[t[static_cast<size_t>(c)]] * n.cross(e);
+  }
+  return grad;
+}
+
 }  // namespace
 
 struct LogMap::Solvers {
@@ -135,15 +151,7 @@ void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
   const Eigen::VectorXd u = s.scalar_heat.solve(u0);
   std::vector<Vec3> xf(static_cast<size_t>(mesh.num_faces()));
   for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Face& t = mesh.face(f);
-    const Vec3 n = bundle_.face_normal(f);
-    Vec3 grad = Vec3::Zero();
-    for (int c = 0; c < 3; ++c) {
-      // Edge opposite corner c, counter-clockwise.
-      const Vec3 e = mesh.position(t[static_cast<size_t>((c + 2) % 3)]) -
-                     mesh.position(t[static_cast<size_t>((c + 1) % 3)]);
-      grad += u[t[static_cast<size_t>(c)]] * n.cross(e);
-    }
+    const Vec3 grad = face_gradient(bundle_, f, u);
     const double g = grad.norm();
     xf[static_cast<size_t>(f)] = g > 0 ? Vec3(-grad / g) : Vec3::Zero();
   }
@@ -172,14 +180,7 @@ void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
   Eigen::VectorXcd radial = Eigen::VectorXcd::Zero(nv);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const Face& t = mesh.face(f);
-    const Vec3 n = bundle_.face_normal(f);
-    Vec3 grad = Vec3::Zero();
-    for (int c = 0; c < 3; ++c) {
-      const Vec3 e = mesh.position(t[static_cast<size_t>((c + 2) % 3)]) -
-                     mesh.position(t[static_cast<size_t>((c + 1) % 3)]);
-      grad += phi[t[static_cast<size_t>(c)]] * n.cross(e);
-    }
-    const cplx g = normalized(bundle_.world_to_face(f, grad)) * mesh.face_area(f);
+    const cplx g = normalized(bundle_.world_to_face(f, face_gradient(bundle_, f, phi))) * mesh.face_area(f);
     for (int c = 0; c < 3; ++c)
       radial[t[static_cast<size_t>(c)]] += std::conj(bundle_.corner_to_face(3 * f + c)) * g;
   }
