@@ -3,15 +3,21 @@
 #include "default_scene.h"
 #include "progress.h"
 
+#include "tvf/analysis/topology.h"
+#include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
 #include "tvf/design/design_space.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/outputs.h"
 #include "tvf/design/scene_json.h"
+#include "tvf/field/field_io.h"
+#include "tvf/mesh/tangent_bundle.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -68,6 +74,71 @@ int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
   return 0;
 }
 
+struct AnalyzeArgs {
+  std::string input;  // a folder written by `tvf generate`, its field.tvff, or a scene file
+  std::string out;
+  bool quiet = false;
+};
+
+// `tvf analyze DIR_OR_SCENE -o FILE.json`: the analysis JSON of DESIGN §9 for a generated
+// folder (its field.tvff) or a scene (generated first).
+int run_analyze(const AnalyzeArgs& args) {
+  const bool show = !args.quiet && cli::progress_wanted();
+  cli::Progress progress("tvf analyze", show);
+  const fs::path input(args.input);
+  std::error_code ec;
+  if (!fs::exists(input, ec))
+    throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
+                            "its field.tvff, or a scene file)", args.input));
+  Topology topology;
+  int vertices = 0;
+  std::vector<std::string> warnings;
+  if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
+    const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
+    if (!fs::exists(file, ec))
+      throw Error(fmt::format("{}: no field.tvff in this folder (write one with `tvf generate SCENE -o {}`)",
+                              args.input, args.input));
+    progress.note("reading the field");
+    const FieldFile ff = load_field_file(file.string());
+    const TangentBundle bundle(ff.mesh);
+    progress.note("analysing");
+    topology = analyze_topology(bundle, ff.field);
+    vertices = ff.mesh.num_vertices();
+  } else {
+    const Scene scene = load_scene(args.input);
+    progress.note("building the domain");
+    const auto space = make_design_space(scene);
+    GenerateOptions options;
+    options.progress = [&](int done, int total) { progress.update(done, total); };
+    GenerateReport report;
+    const Field field = generate(*space, scene, options, &report);
+    warnings = report.warnings;
+    progress.note("analysing");
+    topology = analyze_topology(space->bundle(), field);
+    vertices = space->mesh().num_vertices();
+  }
+  progress.note("writing " + args.out);
+  write_file_atomically(args.out, topology_to_json(topology).dump() + "\n");
+  progress.finish();
+
+  for (const auto& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!args.quiet) {
+    size_t fewest = SIZE_MAX, most = 0;
+    for (const auto& frame : topology.singularities) {
+      fewest = std::min(fewest, frame.size());
+      most = std::max(most, frame.size());
+    }
+    int creations = 0;
+    for (const auto& b : topology.bifurcations) creations += b.kind == BifurcationKind::creation;
+    std::printf("analysed %zu frames × %d vertices: %zu paths, %zu bifurcations (%d creations, %zu cancellations), "
+                "%zu–%zu singularities per frame; wrote %s\n",
+                topology.times.size(), vertices, topology.paths.size(), topology.bifurcations.size(), creations,
+                topology.bifurcations.size() - static_cast<size_t>(creations), topology.times.empty() ? 0 : fewest,
+                most, fs::absolute(args.out).lexically_normal().c_str());
+  }
+  return 0;
+}
+
 int run_validate(const std::string& path, bool with_domain) {
   const Scene scene = load_scene(path);
   std::printf("%s: valid tvf scene: %zu elements, %zu key frames, %d frames on [%g, %g], %s generator\n",
@@ -102,6 +173,14 @@ int main(int argc, char** argv) {
   generate_cmd->add_flag("--no-vtk", gen.no_vtk, "Skip the VTK series (.pvd/.vtu)");
   generate_cmd->add_flag("-q,--quiet", gen.quiet, "Print nothing but errors and warnings");
 
+  AnalyzeArgs analyze;
+  auto* analyze_cmd = app.add_subcommand(
+      "analyze", "Singularities, singularity paths, bifurcations and coherence of a generated field (JSON)");
+  analyze_cmd->add_option("input", analyze.input, "Folder written by `tvf generate` (or its field.tvff), or a scene file")
+      ->required();
+  analyze_cmd->add_option("-o,--output", analyze.out, "Analysis JSON to write")->required();
+  analyze_cmd->add_flag("-q,--quiet", analyze.quiet, "Print nothing but errors and warnings");
+
   std::string validate_path;
   bool validate_domain = false;
   auto* validate_cmd = app.add_subcommand("validate", "Check a scene file (and, with --domain, its mesh)");
@@ -118,6 +197,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*generate_cmd) return run_generate(load_scene(gen.scene), gen, false);
+    if (*analyze_cmd) return run_analyze(analyze);
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
     if (*default_cmd) {
       std::fputs(cli::default_scene_text(), stdout);

@@ -1,0 +1,50 @@
+#pragma once
+// The designs the benchmarks share.
+#include "tvf/design/element_field.h"
+#include "tvf/design/scene.h"
+
+namespace tvf::bench {
+
+// A moving center, a source, a bifurcation and a regular element with attachment (the
+// demo's kind of design); the domain is left for the caller.
+inline Scene combined_scene() {
+  Scene s;
+  s.time.frames = 100;
+  s.falloff = 40;
+  SingularElement c;
+  c.type = SingularType::ccw_center;
+  c.jacobian = jacobian_of(*c.type);
+  c.path = {{Vec3(-0.6, 0.45, 0), 0}, {Vec3(0, 0.6, 0), 0.5}, {Vec3(0.6, 0.45, 0), 1}};
+  SingularElement src;
+  src.type = SingularType::source;
+  src.jacobian = jacobian_of(*src.type);
+  src.path = {{Vec3(-0.55, -0.2, 0), 0}};
+  BifurcationElement b;
+  b.at = {Vec3(0.55, -0.2, 0), 0.4};
+  b.scale = 0.2;
+  RegularElement r;
+  r.pathline = {{Vec3(-0.6, -0.8, 0), 0}, {Vec3(0.6, -0.8, 0), 1}};
+  r.attach = 2;
+  s.elements = {c, src, b, r};
+  return s;
+}
+
+// A vortex moving along the equator and a source at a pole, on an icosphere.
+inline Scene sphere_scene(int subdivisions) {
+  Scene s;
+  s.time.frames = 100;
+  s.falloff = 20;
+  s.domain.sphere = SphereSpec{subdivisions, 1.0};
+  SingularElement c;
+  c.type = SingularType::ccw_center;
+  c.jacobian = jacobian_of(*c.type);
+  c.path = {{Vec3(1, 0, 0), 0}, {Vec3(0, 1, 0), 0.5}, {Vec3(-1, 0, 0), 1}};
+  SingularElement src;
+  src.type = SingularType::source;
+  src.jacobian = jacobian_of(*src.type);
+  src.path = {{Vec3(0, 0, 1), 0}};
+  s.elements = {c, src};
+  return s;
+}
+
+}  // namespace tvf::bench
