@@ -16,6 +16,11 @@ tvf_require(CGAL libcgal-dev)
 set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)
 
 find_package(Threads REQUIRED)
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(CAIRO QUIET IMPORTED_TARGET cairo)
+if(NOT CAIRO_FOUND)
+  message(FATAL_ERROR "tvf needs Cairo: install the Debian package 'libcairo2-dev' (or run scripts/install-deps.sh)")
+endif()
 
 if(TVF_BUILD_TESTS)
   tvf_require(GTest libgtest-dev)

@@ -11,6 +11,7 @@ packages=(
   libcli11-dev           # command line
   libfmt-dev libspdlog-dev
   libcgal-dev            # OBJ/PLY/OFF reading (polygon soups) and mesh repair
+  libcairo2-dev          # plots (SVG, PNG)
   libgmp-dev libmpfr-dev # required by CGAL headers
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-vtk9 python3-jsonschema  # tests read our outputs with NumPy, VTK and jsonschema

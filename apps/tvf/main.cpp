@@ -10,6 +10,7 @@
 #include "tvf/design/generate.h"
 #include "tvf/design/outputs.h"
 #include "tvf/design/scene_json.h"
+#include "tvf/render/plots.h"
 #include "tvf/field/field_io.h"
 #include "tvf/mesh/tangent_bundle.h"
 
@@ -78,6 +79,7 @@ struct AnalyzeArgs {
   std::string input;  // a folder written by `tvf generate`, its field.tvff, or a scene file
   std::string out;
   bool quiet = false;
+  bool no_plots = false;
 };
 
 // `tvf analyze DIR_OR_SCENE -o FILE.json`: the analysis JSON of DESIGN §9 for a generated
@@ -92,6 +94,7 @@ int run_analyze(const AnalyzeArgs& args) {
                             "its field.tvff, or a scene file)", args.input));
   Topology topology;
   int vertices = 0;
+  Mesh mesh;
   std::vector<std::string> warnings;
   if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
     const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
@@ -104,6 +107,7 @@ int run_analyze(const AnalyzeArgs& args) {
     progress.note("analysing");
     topology = analyze_topology(bundle, ff.field);
     vertices = ff.mesh.num_vertices();
+    mesh = ff.mesh;
   } else {
     const Scene scene = load_scene(args.input);
     progress.note("building the domain");
@@ -116,9 +120,20 @@ int run_analyze(const AnalyzeArgs& args) {
     progress.note("analysing");
     topology = analyze_topology(space->bundle(), field);
     vertices = space->mesh().num_vertices();
+    mesh = space->mesh();
   }
   progress.note("writing " + args.out);
   write_file_atomically(args.out, topology_to_json(topology).dump() + "\n");
+  // The pictures beside the JSON: STEM_coherence.{svg,png} and STEM_paths.{svg,png}.
+  std::vector<std::string> pictures;
+  if (!args.no_plots) {
+    progress.note("drawing");
+    const fs::path out(args.out);
+    const std::string stem = (out.parent_path() / out.stem()).string();
+    for (const auto& f : write_coherence_plot(stem + "_coherence", topology.times, topology.coherence))
+      pictures.push_back(f);
+    for (const auto& f : write_paths_plot(stem + "_paths", mesh, topology)) pictures.push_back(f);
+  }
   progress.finish();
 
   for (const auto& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
@@ -135,6 +150,7 @@ int run_analyze(const AnalyzeArgs& args) {
                 topology.times.size(), vertices, topology.paths.size(), topology.bifurcations.size(), creations,
                 topology.bifurcations.size() - static_cast<size_t>(creations), topology.times.empty() ? 0 : fewest,
                 most, fs::absolute(args.out).lexically_normal().c_str());
+    for (const auto& f : pictures) std::printf("  %s\n", f.c_str());
   }
   return 0;
 }
@@ -180,6 +196,8 @@ int main(int argc, char** argv) {
       ->required();
   analyze_cmd->add_option("-o,--output", analyze.out, "Analysis JSON to write")->required();
   analyze_cmd->add_flag("-q,--quiet", analyze.quiet, "Print nothing but errors and warnings");
+  analyze_cmd->add_flag("--no-plots", analyze.no_plots,
+                        "Skip the pictures (STEM_coherence and STEM_paths, .svg and .png, beside the JSON)");
 
   std::string validate_path;
   bool validate_domain = false;

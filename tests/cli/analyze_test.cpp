@@ -50,9 +50,12 @@ TEST(CliAnalyze, GeneratedFolderHasTheDesignedBifurcations) {
   ASSERT_EQ(g.exit_code, 0) << g.output;
   const auto r = run_tvf("analyze " + quoted(dir / "out") + " -o " + quoted(dir / "analysis.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(count_lines(r.output), 1) << r.output;
+  EXPECT_EQ(count_lines(r.output), 5) << r.output;  // the summary and the four pictures
   EXPECT_NE(r.output.find("4 bifurcations"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find((dir / "analysis.json").string()), std::string::npos) << r.output;
+  for (const char* picture : {"analysis_coherence.svg", "analysis_coherence.png", "analysis_paths.svg",
+                              "analysis_paths.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir / picture)) << picture;
 
   const nlohmann::json j = read_json(dir / "analysis.json");
   EXPECT_EQ(keys(j), (std::set<std::string>{"frames", "times", "singularities", "paths", "bifurcations", "coherence"}));

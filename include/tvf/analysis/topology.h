@@ -36,7 +36,7 @@ namespace tvf {
 
 // A point of a singularity path: world position and time.
 struct PathSample {
-  Vec3 position;
+  Vec3 position = Vec3::Zero();
   double t = 0.0;
 };
 
@@ -62,7 +62,7 @@ const char* to_string(BifurcationKind k);  // "creation" | "cancellation"
 
 struct Bifurcation {
   double t = 0.0;
-  Vec3 position;
+  Vec3 position = Vec3::Zero();
   BifurcationKind kind = BifurcationKind::creation;
   std::array<int, 2> paths{-1, -1};  // ids of the two paths it joins (ascending)
 };

@@ -1,0 +1,34 @@
+#pragma once
+// Pictures of an analysis that a designer reads at a glance (issue 4), drawn with Cairo
+// as SVG and PNG:
+//  - the coherence plot (paper Fig. 18): y_i = Σ_k ‖V_k(t_{i+1}) − V_k(t_i)‖ against t_i;
+//  - the space-time view of the singularity paths (paper Fig. 8, right): an oblique view
+//    of the box (u, v, t), u and v the domain's two widest axes (x and y on planar
+//    domains), paths coloured by type — green source, red sink, blue saddle, magenta
+//    center or focus — and bifurcations marked with black rings.
+// Files are written under temporary names and renamed when complete.
+#include "tvf/analysis/topology.h"
+#include "tvf/mesh/mesh.h"
+
+#include <string>
+#include <vector>
+
+namespace tvf {
+
+struct PlotOptions {
+  int width = 900;
+  int height = 600;
+  std::string title;
+};
+
+// Writes `stem`.svg and `stem`.png; returns their paths.
+std::vector<std::string> write_coherence_plot(const std::string& stem, const std::vector<double>& times,
+                                              const std::vector<double>& coherence,
+                                              const PlotOptions& options = {});
+std::vector<std::string> write_paths_plot(const std::string& stem, const Mesh& mesh,
+                                          const Topology& topology, const PlotOptions& options = {});
+
+// The colour of a singularity type in the paper's convention (RGB in [0, 1]).
+std::array<double, 3> type_color(SingularityType type);
+
+}  // namespace tvf
