@@ -25,7 +25,7 @@ for b in d["benchmarks"]:
     t = b["real_time"]; unit = b["time_unit"]
     v = int(b.get("vertices", 0)); f = int(b.get("frames", 0))
     per = f"{t / f:.3f} {unit}" if f else ""
-    it = b.get("iterations"); res = b.get("residual")
+    it = b.get("cg_iterations"); res = b.get("residual")
     its = f"{int(it)}" if it else ""
     ress = f"{res:.1e}" if res else ""
     print(f"| {name} | {v or ''} | {f or ''} | {t:.1f} {unit} | {per} | {its} | {ress} |")

@@ -43,7 +43,7 @@ void run(benchmark::State& state, Scene s) {
   for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s, {}, &report).data().data());
   state.counters["vertices"] = space->mesh().num_vertices();
   state.counters["frames"] = s.time.frames;
-  state.counters["iterations"] = report.iterations;
+  state.counters["cg_iterations"] = report.iterations;
   state.counters["residual"] = report.residual;
 }
 
