@@ -534,14 +534,7 @@ TEST(SceneJson, LoadResolvesTheMeshAgainstTheSceneFolder) {
   EXPECT_EQ(s.label(), path);
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using test::error_of;
 
 TEST(SceneJson, MissingOrUnreadableFilesAreOneSentenceNamingThePath) {
   test::TempDir dir;

@@ -16,18 +16,8 @@ namespace {
 namespace fs = std::filesystem;
 using test::read_text;
 using test::TempDir;
+using test::error_of;
 using test::write_text;
-
-template <class Fn>
-std::string error_of(Fn&& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected tvf::Error";
-  return {};
-}
 
 // Random doubles, with a few awkward ones (signed zero, subnormal, huge).
 Field random_field(const TimeSampling& ts, int nv, unsigned seed) {

@@ -14,19 +14,8 @@ namespace {
 namespace fs = std::filesystem;
 using test::read_text;
 using test::TempDir;
+using test::error_of;
 using test::write_text;
-
-// Runs `fn` and returns the tvf::Error message it throws (fails the test otherwise).
-template <class Fn>
-std::string error_of(Fn&& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected tvf::Error";
-  return {};
-}
 
 // A version 1.0 file with the given header dict (padded here) and raw data.
 std::string make_npy(std::string dict, const std::string& data) {

@@ -1,6 +1,10 @@
 #pragma once
 // Paths and processes for tests: a fresh temporary folder per test, and running the
 // tvf CLI or Debian's python3 with captured output.
+#include "tvf/core/error.h"
+
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <string>
 
@@ -32,6 +36,19 @@ CommandResult run_tvf(const std::string& arguments);
 std::string source_dir();
 std::string test_data_dir();
 std::string python();  // Debian's python3 with numpy and vtk, or "" when not found
+
+// Runs `fn` and returns the message of the tvf::Error it throws (fails the test when it
+// throws nothing).
+template <class Fn>
+std::string error_of(Fn&& fn) {
+  try {
+    fn();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected tvf::Error";
+  return {};
+}
 
 // Writes text to a file (test fixtures).
 void write_text(const std::filesystem::path& path, const std::string& text);
