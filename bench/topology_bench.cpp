@@ -28,8 +28,8 @@ void report(benchmark::State& state, const DesignSpace& space, const Field& fiel
   state.counters["crossings"] = static_cast<double>(t.stats.crossings);
 }
 
-void BM_TopologyGrid(benchmark::State& state) {
-  const Scene s = grid_scene(static_cast<int>(state.range(0)));
+// Generates the scene once, then times its analysis.
+void run(benchmark::State& state, const Scene& s) {
   const auto space = make_design_space(s);
   const Field field = generate(*space, s);
   Topology t;
@@ -39,20 +39,14 @@ void BM_TopologyGrid(benchmark::State& state) {
   }
   report(state, *space, field, t);
 }
+
+void BM_TopologyGrid(benchmark::State& state) { run(state, grid_scene(static_cast<int>(state.range(0)))); }
 BENCHMARK(BM_TopologyGrid)->Arg(65)->Arg(141)->Unit(benchmark::kMillisecond);
 
 // Example 03's design (a vortex along the equator, a source at the north pole) on an
 // icosphere: subdivisions 5 (10,242 vertices) and 6 (40,962).
 void BM_TopologySphere(benchmark::State& state) {
-  const Scene s = bench::sphere_scene(static_cast<int>(state.range(0)));
-  const auto space = make_design_space(s);
-  const Field field = generate(*space, s);
-  Topology t;
-  for (auto _ : state) {
-    t = analyze_topology(space->bundle(), field);
-    benchmark::DoNotOptimize(t.paths.data());
-  }
-  report(state, *space, field, t);
+  run(state, bench::sphere_scene(static_cast<int>(state.range(0))));
 }
 BENCHMARK(BM_TopologySphere)->Arg(5)->Arg(6)->Unit(benchmark::kMillisecond);
 
