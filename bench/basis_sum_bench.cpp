@@ -12,23 +12,15 @@ namespace {
 
 
 void BM_BasisSumGrid(benchmark::State& state) {
-  Scene s = bench::combined_scene();
-  const int n = static_cast<int>(state.range(0));
-  s.domain.grid = GridSpec{n, n, {-1, -1}, {1, 1}};
-  const auto space = make_design_space(s);
-  for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
-  state.counters["vertices"] = n * n;
-  state.counters["frames"] = s.time.frames;
+  const Scene s = bench::on_grid(bench::combined_scene(), static_cast<int>(state.range(0)));
+  bench::time_generation(state, s);
 }
 BENCHMARK(BM_BasisSumGrid)->Arg(65)->Arg(257)->Unit(benchmark::kMillisecond);
 
 
 void BM_BasisSumSphere(benchmark::State& state) {
   const Scene s = bench::sphere_scene(static_cast<int>(state.range(0)));
-  const auto space = make_design_space(s);
-  for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
-  state.counters["vertices"] = space->mesh().num_vertices();
-  state.counters["frames"] = s.time.frames;
+  bench::time_generation(state, s);
 }
 BENCHMARK(BM_BasisSumSphere)->Arg(5)->Arg(6)->Unit(benchmark::kMillisecond);
 
@@ -47,24 +39,16 @@ namespace {
 
 // Constrained optimization per frame (paper §5.3) on the same designs.
 void BM_ConstrainedGrid(benchmark::State& state) {
-  Scene s = bench::combined_scene();
+  Scene s = bench::on_grid(bench::combined_scene(), static_cast<int>(state.range(0)));
   s.generator = Generator::constrained;
-  const int n = static_cast<int>(state.range(0));
-  s.domain.grid = GridSpec{n, n, {-1, -1}, {1, 1}};
-  const auto space = make_design_space(s);
-  for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
-  state.counters["vertices"] = n * n;
-  state.counters["frames"] = s.time.frames;
+  bench::time_generation(state, s);
 }
 BENCHMARK(BM_ConstrainedGrid)->Arg(65)->Arg(141)->Unit(benchmark::kMillisecond);
 
 void BM_ConstrainedSphere(benchmark::State& state) {
   Scene s = bench::sphere_scene(static_cast<int>(state.range(0)));
   s.generator = Generator::constrained;
-  const auto space = make_design_space(s);
-  for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
-  state.counters["vertices"] = space->mesh().num_vertices();
-  state.counters["frames"] = s.time.frames;
+  bench::time_generation(state, s);
 }
 BENCHMARK(BM_ConstrainedSphere)->Arg(5)->Unit(benchmark::kMillisecond);
 

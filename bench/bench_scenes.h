@@ -1,7 +1,10 @@
 #pragma once
 // The designs the benchmarks share.
 #include "tvf/design/element_field.h"
+#include "tvf/design/generate.h"
 #include "tvf/design/scene.h"
+
+#include <benchmark/benchmark.h>
 
 namespace tvf::bench {
 
@@ -44,6 +47,20 @@ inline Scene sphere_scene(int subdivisions) {
   src.jacobian = jacobian_of(*src.type);
   src.path = {{Vec3(0, 0, 1), 0}};
   s.elements = {c, src};
+  return s;
+}
+
+// Builds the scene's domain once, then times generating its field.
+inline void time_generation(benchmark::State& state, const Scene& s) {
+  const auto space = make_design_space(s);
+  for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
+  state.counters["vertices"] = space->mesh().num_vertices();
+  state.counters["frames"] = s.time.frames;
+}
+
+// The combined design on an n × n grid over [-1, 1]².
+inline Scene on_grid(Scene s, int n) {
+  s.domain.grid = GridSpec{n, n, {-1, -1}, {1, 1}};
   return s;
 }
 

@@ -14,11 +14,7 @@ namespace tvf {
 namespace {
 
 // The benchmarks' combined design on an n × n grid.
-Scene grid_scene(int n) {
-  Scene s = bench::combined_scene();
-  s.domain.grid = GridSpec{n, n, {-1, -1}, {1, 1}};
-  return s;
-}
+Scene grid_scene(int n) { return bench::on_grid(bench::combined_scene(), n); }
 
 void report(benchmark::State& state, const DesignSpace& space, const Field& field, const Topology& t) {
   state.counters["vertices"] = space.mesh().num_vertices();

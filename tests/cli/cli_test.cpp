@@ -19,10 +19,10 @@ namespace tvf {
 namespace {
 
 namespace fs = std::filesystem;
+using test::count_lines;
 using test::run_tvf;
 using test::TempDir;
 
-int count_lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
 
 TEST(Cli, DemoWritesEverythingAndSaysWhatToOpen) {
   TempDir dir;

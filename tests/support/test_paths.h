@@ -50,6 +50,13 @@ std::string error_of(Fn&& fn) {
   return {};
 }
 
+// Number of '\n' in a command's output (one-sentence errors are one line).
+inline int count_lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
 // Writes text to a file (test fixtures).
 void write_text(const std::filesystem::path& path, const std::string& text);
 std::string read_text(const std::filesystem::path& path);
