@@ -11,9 +11,10 @@
 namespace tvf {
 
 DesignSpace::DesignSpace(Mesh mesh)
-    : mesh_(std::move(mesh)), bundle_(mesh_), log_map_(bundle_), diameter_(mesh_.diameter()) {}
+    : mesh_(std::move(mesh)), bundle_(mesh_), log_map_(bundle_), locator_(mesh_),
+      diameter_(mesh_.diameter()) {}
 
-SurfacePoint DesignSpace::locate(const Vec3& x) const { return closest_point(mesh_, x); }
+SurfacePoint DesignSpace::locate(const Vec3& x) const { return locator_.closest(x); }
 
 std::unique_ptr<DesignSpace> make_design_space(const Scene& scene) {
   const Domain& d = scene.domain;

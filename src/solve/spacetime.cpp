@@ -2,17 +2,44 @@
 
 #include "tvf/core/error.h"
 
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <vector>
 
 namespace tvf {
+
+// L split into its real diagonal and its off-diagonal entries, row-major: rows are
+// gathered (each output written once, rows independent) instead of scattered.
+struct SpaceTimeSolver::Operator {
+  std::vector<int> row_start, column;
+  std::vector<cplx> value;
+  std::vector<double> diagonal;    // L_ii
+  std::vector<double> weight_sum;  // d_i
+  int rows = 0;
+
+  // Off-diagonal part of row i applied to x.
+  cplx off(int i, const cplx* x) const {
+    cplx acc(0, 0);
+    for (int k = row_start[static_cast<size_t>(i)]; k < row_start[static_cast<size_t>(i) + 1]; ++k)
+      acc += value[static_cast<size_t>(k)] * x[column[static_cast<size_t>(k)]];
+    return acc;
+  }
+};
+
+// T_s = Q Λ Qᵀ for the frames of one segment.
+struct SpaceTimeSolver::TemporalBasis {
+  Eigen::MatrixXd q;       // count × count, orthonormal columns (the modes)
+  Eigen::VectorXd lambda;  // count
+};
 
 namespace {
 
@@ -29,19 +56,170 @@ void blocks(size_t n, bool parallel, F&& body) {
                     [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
 }
 
-double dot_real(const Vec& a, const Vec& b, bool parallel) {
-  if (!parallel || a.size() < 4096) {
+// Σ over [0, n) of term(k), in parallel blocks or not.
+template <class F>
+double sum(size_t n, bool parallel, F&& term) {
+  if (!parallel || n < 4096) {
     double s = 0;
-    for (size_t k = 0; k < a.size(); ++k) s += (std::conj(a[k]) * b[k]).real();
+    for (size_t k = 0; k < n; ++k) s += term(k);
     return s;
   }
   return tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, a.size(), 4096), 0.0,
+      tbb::blocked_range<size_t>(0, n, 4096), 0.0,
       [&](const tbb::blocked_range<size_t>& r, double s) {
-        for (size_t k = r.begin(); k < r.end(); ++k) s += (std::conj(a[k]) * b[k]).real();
+        for (size_t k = r.begin(); k < r.end(); ++k) s += term(k);
         return s;
       },
       std::plus<>());
+}
+
+// The space-time operator on one fixed set, frame-major vectors of frames × n.
+struct SpaceTime {
+  const SpaceTimeSolver::Operator& op;
+  std::span<const char> fixed;
+  size_t n, nf;
+  double b;
+  bool parallel;
+
+  // y_F = A_FF x_F for every free entry (fixed entries of x must be zero; y's are set to
+  // zero); returns Re <x, y>. Fused so the iteration reads each vector as few times as
+  // possible: the solve is bandwidth-bound.
+  double apply(std::span<const cplx> x, std::span<cplx> y) const {
+    const size_t block = 1024;
+    const size_t per_frame = (n + block - 1) / block;
+    tbb::combinable<double> dot([] { return 0.0; });
+    auto body = [&](size_t task) {
+      const size_t j = task / per_frame;
+      const size_t i0 = (task % per_frame) * block, i1 = std::min(n, i0 + block);
+      const cplx* xj = x.data() + j * n;
+      cplx* yj = y.data() + j * n;
+      const char* fj = fixed.data() + j * n;
+      const bool has_prev = j > 0, has_next = j + 1 < nf;
+      const double degree = (has_prev ? 1.0 : 0.0) + (has_next ? 1.0 : 0.0);
+      double partial = 0;
+      for (size_t i = i0; i < i1; ++i) {
+        if (fj[i]) {
+          yj[i] = 0;
+          continue;
+        }
+        const auto ii = static_cast<int>(i);
+        cplx t = degree * xj[i];
+        if (has_prev) t -= xj[i - n];
+        if (has_next) t -= xj[i + n];
+        const cplx yi = op.diagonal[i] * xj[i] + op.off(ii, xj) + b * op.weight_sum[i] * t;
+        yj[i] = yi;
+        partial += (std::conj(xj[i]) * yi).real();
+      }
+      dot.local() += partial;
+    };
+    const size_t tasks = nf * per_frame;
+    if (parallel)
+      tbb::parallel_for(size_t{0}, tasks, body);
+    else
+      for (size_t t = 0; t < tasks; ++t) body(t);
+    return dot.combine(std::plus<>());
+  }
+
+  // rhs_F = −A_FC v_C: what the fixed values ask of the free entries.
+  void right_hand_side(std::span<const cplx> values, Vec& rhs) const {
+    auto body = [&](size_t j) {
+      const cplx* vj = values.data() + j * n;
+      const char* fj = fixed.data() + j * n;
+      cplx* rj = rhs.data() + j * n;
+      for (size_t i = 0; i < n; ++i) {
+        if (fj[i]) {
+          rj[i] = 0;
+          continue;
+        }
+        cplx acc(0, 0);
+        for (int k = op.row_start[i]; k < op.row_start[i + 1]; ++k) {
+          const auto c = static_cast<size_t>(op.column[static_cast<size_t>(k)]);
+          if (fj[c]) acc -= op.value[static_cast<size_t>(k)] * vj[c];
+        }
+        const double c = b * op.weight_sum[i];
+        if (j > 0 && fj[i - n]) acc += c * vj[i - n];
+        if (j + 1 < nf && fj[i + n]) acc += c * vj[i + n];
+        rj[i] = acc;
+      }
+    };
+    if (parallel)
+      tbb::parallel_for(size_t{0}, nf, body);
+    else
+      for (size_t j = 0; j < nf; ++j) body(j);
+  }
+};
+
+// Jacobi-preconditioned CG on one temporal mode: (L_F + s·D_F) y = r over the free
+// vertices (free[i] != 0), to an absolute residual `tau`. y holds the first guess.
+// Returns the iterations, or −1 if it did not converge.
+int solve_mode(const SpaceTimeSolver::Operator& op, const char* fixed, double s, const cplx* rhs,
+               cplx* y, double tau, int max_iterations) {
+  const auto n = static_cast<size_t>(op.rows);
+  Vec r(n), z(n), p(n), ap(n);
+  std::vector<double> inv(n);
+  for (size_t i = 0; i < n; ++i) inv[i] = fixed[i] ? 0.0 : 1.0 / (op.diagonal[i] + s * op.weight_sum[i]);
+  auto apply = [&](const cplx* x, cplx* out) {
+    double dot = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (fixed[i]) {
+        out[i] = 0;
+        continue;
+      }
+      const cplx v = (op.diagonal[i] + s * op.weight_sum[i]) * x[i] + op.off(static_cast<int>(i), x);
+      out[i] = v;
+      dot += (std::conj(x[i]) * v).real();
+    }
+    return dot;
+  };
+  apply(y, ap.data());
+  double rr = 0, rz = 0;
+  for (size_t i = 0; i < n; ++i) {
+    r[i] = fixed[i] ? cplx(0, 0) : rhs[i] - ap[i];
+    z[i] = inv[i] * r[i];
+    p[i] = z[i];
+    rr += std::norm(r[i]);
+    rz += (std::conj(r[i]) * z[i]).real();
+  }
+  const double tau2 = tau * tau;
+  int it = 0;
+  while (rr > tau2) {
+    if (it == max_iterations) return -1;
+    const double pap = apply(p.data(), ap.data());
+    if (!(pap > 0)) return -1;
+    const double alpha = rz / pap;
+    double rz_new = 0;
+    rr = 0;
+    for (size_t i = 0; i < n; ++i) {
+      y[i] += alpha * p[i];
+      r[i] -= alpha * ap[i];
+      z[i] = inv[i] * r[i];
+      rr += std::norm(r[i]);
+      rz_new += (std::conj(r[i]) * z[i]).real();
+    }
+    ++it;
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    for (size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+  }
+  return it;
+}
+
+// out = in · m for a tall frame-major block (rows = 2·|V| real numbers, one column per
+// frame), split into row blocks for the threads.
+void multiply_rows(const Eigen::Map<const Eigen::MatrixXd>& in, const Eigen::MatrixXd& m,
+                   Eigen::Map<Eigen::MatrixXd> out, bool parallel) {
+  const Eigen::Index rows = in.rows();
+  const Eigen::Index block = 4096;
+  const auto count = static_cast<size_t>((rows + block - 1) / block);
+  auto body = [&](size_t b) {
+    const Eigen::Index r0 = static_cast<Eigen::Index>(b) * block;
+    const Eigen::Index len = std::min(block, rows - r0);
+    out.middleRows(r0, len).noalias() = in.middleRows(r0, len) * m;
+  };
+  if (parallel)
+    tbb::parallel_for(size_t{0}, count, body);
+  else
+    for (size_t b = 0; b < count; ++b) body(b);
 }
 
 }  // namespace
@@ -51,6 +229,25 @@ SpaceTimeSolver::SpaceTimeSolver(const ConnectionLaplacian& laplacian, int frame
     : laplacian_(laplacian), frames_(frames), b_(temporal_weight) {
   TVF_CHECK(laplacian.hermitian, "the space-time solve needs Hermitian (cotan or uniform) weights");
   TVF_CHECK(frames >= 1, "{} frames", frames);
+  auto op = std::make_shared<Operator>();
+  const Eigen::SparseMatrix<cplx, Eigen::RowMajor> rows = laplacian.matrix;
+  const auto n = static_cast<size_t>(rows.rows());
+  op->rows = static_cast<int>(n);
+  op->row_start.assign(n + 1, 0);
+  op->diagonal.assign(n, 0.0);
+  op->weight_sum.assign(laplacian.weight_sum.data(), laplacian.weight_sum.data() + n);
+  for (Eigen::Index i = 0; i < rows.outerSize(); ++i) {
+    for (Eigen::SparseMatrix<cplx, Eigen::RowMajor>::InnerIterator it(rows, i); it; ++it) {
+      if (it.col() == i) {
+        op->diagonal[static_cast<size_t>(i)] = it.value().real();
+      } else {
+        op->column.push_back(static_cast<int>(it.col()));
+        op->value.push_back(it.value());
+      }
+    }
+    op->row_start[static_cast<size_t>(i) + 1] = static_cast<int>(op->column.size());
+  }
+  op_ = std::move(op);
 }
 
 void SpaceTimeSolver::interpolate_in_time(std::span<const char> fixed, std::span<const cplx> values,
@@ -85,6 +282,76 @@ void SpaceTimeSolver::interpolate_in_time(std::span<const char> fixed, std::span
   }
 }
 
+namespace {
+
+// Whole fixed frames (key frames) and the runs of other frames between them.
+struct Segments {
+  std::vector<char> key;                            // per frame
+  std::vector<std::pair<size_t, size_t>> segments;  // [first, first + count)
+};
+
+Segments find_segments(std::span<const char> fixed, size_t n, size_t nf) {
+  Segments s;
+  s.key.assign(nf, 0);
+  for (size_t j = 0; j < nf; ++j)
+    s.key[j] = std::all_of(fixed.begin() + static_cast<std::ptrdiff_t>(j * n),
+                           fixed.begin() + static_cast<std::ptrdiff_t>((j + 1) * n), [](char c) { return c != 0; });
+  for (size_t j = 0; j < nf;) {
+    if (s.key[j]) {
+      ++j;
+      continue;
+    }
+    size_t e = j;
+    while (e < nf && !s.key[e]) ++e;
+    s.segments.emplace_back(j, e - j);
+    j = e;
+  }
+  return s;
+}
+
+}  // namespace
+
+bool SpaceTimeSolver::modes_apply(std::span<const char> fixed) const {
+  const auto n = static_cast<size_t>(vertices());
+  const auto nf = static_cast<size_t>(frames_);
+  if (fixed.size() != n * nf) return false;
+  const Segments s = find_segments(fixed, n, nf);
+  for (const auto& [first, count] : s.segments) {
+    const char* f0 = fixed.data() + first * n;
+    for (size_t j = first + 1; j < first + count; ++j)
+      if (!std::equal(f0, f0 + n, fixed.data() + j * n)) return false;
+  }
+  return true;
+}
+
+const SpaceTimeSolver::TemporalBasis& SpaceTimeSolver::temporal_basis(int first, int count) const {
+  // The segment's temporal matrix depends only on its length and on whether it touches
+  // the first or last frame (those have one temporal neighbour).
+  const int ends = (first == 0 ? 1 : 0) + (first + count == frames_ ? 2 : 0);
+  std::lock_guard lock(bases_mutex_);
+  auto& slot = bases_[{count, ends}];
+  if (!slot) {
+    Eigen::VectorXd diagonal(count), sub = Eigen::VectorXd::Constant(std::max(count - 1, 0), -1.0);
+    for (int j = 0; j < count; ++j) {
+      const int g = first + j;
+      diagonal[j] = (g > 0 ? 1.0 : 0.0) + (g + 1 < frames_ ? 1.0 : 0.0);
+    }
+    auto basis = std::make_shared<TemporalBasis>();
+    if (count == 1) {
+      basis->q = Eigen::MatrixXd::Ones(1, 1);
+      basis->lambda = diagonal;
+    } else {
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
+      eig.computeFromTridiagonal(diagonal, sub, Eigen::ComputeEigenvectors);
+      TVF_CHECK(eig.info() == Eigen::Success, "temporal eigenbasis of {} frames", count);
+      basis->q = eig.eigenvectors();
+      basis->lambda = eig.eigenvalues().cwiseMax(0.0);
+    }
+    slot = std::move(basis);
+  }
+  return *slot;
+}
+
 SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const cplx> values,
                                    std::span<cplx> z, const SpaceTimeOptions& options) const {
   const auto n = static_cast<size_t>(vertices());
@@ -92,58 +359,128 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   const size_t total = n * nf;
   TVF_CHECK(fixed.size() == total && values.size() == total && z.size() == total,
             "space-time sizes {} {} {} for {} entries", fixed.size(), values.size(), z.size(), total);
+  const bool par = options.parallel;
+  const SpaceTime a{*op_, fixed, n, nf, b_, par};
+
+  Vec rhs(total);
+  a.right_hand_side(values, rhs);
+  const double bnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(rhs[k]); }));
+
+  // The unknown: the free part of z (its first guess), fixed entries zero.
+  Vec x(total);
+  blocks(total, par, [&](size_t s, size_t e) {
+    for (size_t k = s; k < e; ++k) x[k] = fixed[k] ? cplx(0, 0) : z[k];
+  });
+
+  SolveReport report;
+  if (bnorm == 0) {
+    std::fill(x.begin(), x.end(), cplx(0, 0));
+    report.method = "nothing to solve (no fixed entry asks for a non-zero field)";
+    report.success = true;
+  } else {
+    const bool modes = options.method == SpaceTimeMethod::modes ||
+                       (options.method == SpaceTimeMethod::automatic && modes_apply(fixed));
+    if (options.method == SpaceTimeMethod::modes)
+      TVF_CHECK(modes_apply(fixed), "the temporal-mode method needs the same fixed vertices at every "
+                                    "frame between two key frames");
+    report = modes ? solve_modes(fixed, rhs, x, bnorm, options) : solve_cg(fixed, rhs, x, bnorm, options);
+  }
+  blocks(total, par, [&](size_t s, size_t e) {
+    for (size_t k = s; k < e; ++k) z[k] = fixed[k] ? values[k] : x[k];
+  });
+  return report;
+}
+
+SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<const cplx> rhs,
+                                         std::span<cplx> x, double bnorm,
+                                         const SpaceTimeOptions& options) const {
+  const auto n = static_cast<size_t>(vertices());
+  const auto nf = static_cast<size_t>(frames_);
+  const bool par = options.parallel;
+  const Segments segs = find_segments(fixed, n, nf);
+  size_t modes = 0;
+  for (const auto& s : segs.segments) modes += s.second;
+  // Q is orthogonal, so the squared residuals of the modes add up to the whole one's.
+  const double tau = 0.5 * options.tolerance * bnorm / std::sqrt(static_cast<double>(std::max<size_t>(modes, 1)));
+
+  std::atomic<int> most{0};
+  std::atomic<long> all{0};
+  std::atomic<bool> failed{false};
+  for (const auto& [first, count] : segs.segments) {
+    const TemporalBasis& basis = temporal_basis(static_cast<int>(first), static_cast<int>(count));
+    const auto rows = static_cast<Eigen::Index>(2 * n), cols = static_cast<Eigen::Index>(count);
+    // Complex |V| × count blocks seen as real 2|V| × count ones (re, im interleaved).
+    const Eigen::Map<const Eigen::MatrixXd> r_seg(reinterpret_cast<const double*>(rhs.data() + first * n), rows, cols);
+    const Eigen::Map<Eigen::MatrixXd> x_seg(reinterpret_cast<double*>(x.data() + first * n), rows, cols);
+    Eigen::MatrixXd r_hat(rows, cols), x_hat(rows, cols);
+    multiply_rows(r_seg, basis.q, Eigen::Map<Eigen::MatrixXd>(r_hat.data(), rows, cols), par);
+    multiply_rows(Eigen::Map<const Eigen::MatrixXd>(x_seg.data(), rows, cols), basis.q,
+                  Eigen::Map<Eigen::MatrixXd>(x_hat.data(), rows, cols), par);
+    const char* f = fixed.data() + first * n;
+    auto mode = [&](size_t k) {
+      const auto* rk = reinterpret_cast<const cplx*>(r_hat.col(static_cast<Eigen::Index>(k)).data());
+      auto* yk = reinterpret_cast<cplx*>(x_hat.col(static_cast<Eigen::Index>(k)).data());
+      const int it = solve_mode(*op_, f, b_ * basis.lambda[static_cast<Eigen::Index>(k)], rk, yk, tau,
+                                options.max_iterations);
+      if (it < 0) {
+        failed = true;
+        return;
+      }
+      all += it;
+      int seen = most.load();
+      while (it > seen && !most.compare_exchange_weak(seen, it)) {
+      }
+    };
+    if (par)
+      tbb::parallel_for(size_t{0}, count, mode, tbb::simple_partitioner());
+    else
+      for (size_t k = 0; k < count; ++k) mode(k);
+    const Eigen::MatrixXd qt = basis.q.transpose();
+    multiply_rows(Eigen::Map<const Eigen::MatrixXd>(x_hat.data(), rows, cols), qt, x_seg, par);
+  }
+
+  SolveReport report;
+  report.method = fmt::format("temporal eigenmodes (direct in time) with Jacobi-PCG per mode, {} modes, "
+                              "{} spatial iterations in all",
+                              modes, all.load());
+  report.iterations = most.load();
+  // The residual as it is, not as the modes add it up.
+  const SpaceTime a{*op_, fixed, n, nf, b_, par};
+  Vec ax(x.size());
+  a.apply(x, ax);
+  const double rnorm = std::sqrt(sum(x.size(), par, [&](size_t k) { return std::norm(rhs[k] - ax[k]); }));
+  report.residual = rnorm / bnorm;
+  report.success = !failed && report.residual <= options.tolerance;
+  if (!report.success && options.method != SpaceTimeMethod::modes) {
+    // Rounding (or a mode that would not converge): finish with CG from here.
+    SolveReport polish = solve_cg(fixed, rhs, x, bnorm, options);
+    polish.method = report.method + ", finished by " + polish.method;
+    polish.iterations += report.iterations;
+    return polish;
+  }
+  return report;
+}
+
+SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<const cplx> rhs_span,
+                                      std::span<cplx> x, double bnorm, const SpaceTimeOptions& options) const {
+  const auto n = static_cast<size_t>(vertices());
+  const auto nf = static_cast<size_t>(frames_);
+  const size_t total = n * nf;
+  const bool par = options.parallel;
+  const SpaceTime a{*op_, fixed, n, nf, b_, par};
+  const Operator& op = *op_;
   SolveReport report;
   report.method = "preconditioned CG (temporal line solves), matrix-free";
-  const auto& l = laplacian_.matrix;
-  const Eigen::VectorXd& d = laplacian_.weight_sum;
-  const Eigen::VectorXd ldiag = l.diagonal().real();
-  const bool par = options.parallel;
 
-  // y = A x over all entries (x's fixed entries included as they are).
-  // y = A x over all entries (x's fixed entries included as they are). With `masked`,
-  // y's fixed entries are zeroed and Re <x, y> over the rest is returned (fused, so the
-  // iteration reads each vector as few times as possible: the solve is bandwidth-bound).
-  auto apply = [&](const Vec& x, Vec& y, bool masked) {
-    tbb::combinable<double> dot([] { return 0.0; });
-    tbb::parallel_for(size_t{0}, nf, [&](size_t j) {
-      const cplx* xj = x.data() + j * n;
-      cplx* yj = y.data() + j * n;
-      const char* fj = fixed.data() + j * n;
-      for (Eigen::Index col = 0; col < l.outerSize(); ++col) yj[col] = 0;
-      // Column-major L: y_j = L x_j.
-      for (Eigen::Index col = 0; col < l.outerSize(); ++col) {
-        const cplx xc = xj[col];
-        if (xc == cplx(0, 0)) continue;
-        for (Eigen::SparseMatrix<cplx>::InnerIterator it(l, col); it; ++it) yj[it.row()] += it.value() * xc;
-      }
-      // + b·D·(T x) along time.
-      const cplx* xp = j > 0 ? xj - n : nullptr;
-      const cplx* xn = j + 1 < nf ? xj + n : nullptr;
-      double partial = 0;
-      for (size_t i = 0; i < n; ++i) {
-        cplx t(0, 0);
-        if (xp) t += xj[i] - xp[i];
-        if (xn) t += xj[i] - xn[i];
-        cplx yi = yj[i] + b_ * d[static_cast<Eigen::Index>(i)] * t;
-        if (masked) {
-          if (fj[i]) yi = 0;
-          partial += (std::conj(xj[i]) * yi).real();
-        }
-        yj[i] = yi;
-      }
-      dot.local() += partial;
-    });
-    return dot.combine(std::plus<>());
-  };
   // Preconditioner: every vertex's temporal line solved exactly (Thomas algorithm) on
   // the free entries; fixed entries split the line. Lines are swept in blocks of
   // consecutive vertices, frame by frame, so memory is read in contiguous runs rather
-  // than with a stride of |V| per line.
+  // than with a stride of |V| per line. Returns Re <r, M⁻¹ r>.
   constexpr size_t kBlock = 32;
   auto precondition = [&](const Vec& r, Vec& out) {
     const size_t nblocks = (n + kBlock - 1) / kBlock;
     tbb::combinable<double> dot([] { return 0.0; });
-    tbb::parallel_for(size_t{0}, nblocks, [&](size_t blk) {
+    auto body = [&](size_t blk) {
       const size_t i0 = blk * kBlock, i1 = std::min(n, i0 + kBlock);
       const size_t w = i1 - i0;
       std::vector<double> cp(w * nf);
@@ -157,8 +494,8 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
             dp[q] = 0;
             continue;
           }
-          const double c = b_ * d[static_cast<Eigen::Index>(i)];
-          const double diag = ldiag[static_cast<Eigen::Index>(i)] + c * ((has_prev ? 1 : 0) + (has_next ? 1 : 0));
+          const double c = b_ * op.weight_sum[i];
+          const double diag = op.diagonal[i] + c * ((has_prev ? 1 : 0) + (has_next ? 1 : 0));
           const double lower = (has_prev && !fixed[k - n]) ? -c : 0.0;  // coupling to j−1
           const double upper = (has_next && !fixed[k + n]) ? -c : 0.0;  // coupling to j+1
           const double cprev = has_prev ? cp[q - w] : 0.0;
@@ -177,69 +514,51 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
         }
       }
       dot.local() += partial;
-    });
-    return dot.combine(std::plus<>());  // Re <r, M⁻¹ r>
+    };
+    if (par)
+      tbb::parallel_for(size_t{0}, nblocks, body);
+    else
+      for (size_t b = 0; b < nblocks; ++b) body(b);
+    return dot.combine(std::plus<>());
   };
 
-  // Right-hand side over the free entries: −A_FC z_C, from A applied to the fixed values.
-  Vec xc(total), rhs(total);
-  blocks(total, par, [&](size_t a, size_t e) {
-    for (size_t k = a; k < e; ++k) xc[k] = fixed[k] ? values[k] : cplx(0, 0);
+  Vec r(total), p(total), ap(total), zp(total);
+  a.apply(x, ap);
+  blocks(total, par, [&](size_t s, size_t e) {
+    for (size_t k = s; k < e; ++k) r[k] = rhs_span[k] - ap[k];
   });
-  apply(xc, rhs, false);
-  blocks(total, par, [&](size_t a, size_t e) {
-    for (size_t k = a; k < e; ++k) rhs[k] = fixed[k] ? cplx(0, 0) : -rhs[k];
-  });
-  const double bnorm = std::sqrt(dot_real(rhs, rhs, par));
-
-  // Unknown: the free part of z (initial guess from z).
-  Vec x(total), r(total), p(total), ap(total), zp(total);
-  blocks(total, par, [&](size_t a, size_t e) {
-    for (size_t k = a; k < e; ++k) x[k] = fixed[k] ? cplx(0, 0) : z[k];
-  });
-  if (bnorm == 0) {
-    std::fill(x.begin(), x.end(), cplx(0, 0));
-  } else {
-    apply(x, ap, true);
-    blocks(total, par, [&](size_t a, size_t e) {
-      for (size_t k = a; k < e; ++k) r[k] = rhs[k] - ap[k];
+  double rz = precondition(r, zp);
+  p = zp;
+  double rnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(r[k]); }));
+  int it = 0;
+  while (rnorm > options.tolerance * bnorm && it < options.max_iterations) {
+    const double pap = a.apply(p, ap);
+    if (!(pap > 0)) break;  // not positive definite on this subspace
+    const double alpha = rz / pap;
+    // x += αp, r −= αAp and ‖r‖² in one pass.
+    tbb::combinable<double> rr([] { return 0.0; });
+    blocks(total, par, [&](size_t s, size_t e) {
+      double partial = 0;
+      for (size_t k = s; k < e; ++k) {
+        x[k] += alpha * p[k];
+        r[k] -= alpha * ap[k];
+        partial += std::norm(r[k]);
+      }
+      rr.local() += partial;
     });
-    double rz = precondition(r, zp);
-    p = zp;
-    double rnorm = std::sqrt(dot_real(r, r, par));
-    int it = 0;
-    while (rnorm > options.tolerance * bnorm && it < options.max_iterations) {
-      const double pap = apply(p, ap, true);
-      if (!(pap > 0)) break;  // not positive definite on this subspace
-      const double alpha = rz / pap;
-      // x += αp, r −= αAp and ‖r‖² in one pass.
-      tbb::combinable<double> rr([] { return 0.0; });
-      blocks(total, par, [&](size_t a, size_t e) {
-        double partial = 0;
-        for (size_t k = a; k < e; ++k) {
-          x[k] += alpha * p[k];
-          r[k] -= alpha * ap[k];
-          partial += std::norm(r[k]);
-        }
-        rr.local() += partial;
-      });
-      rnorm = std::sqrt(rr.combine(std::plus<>()));
-      ++it;
-      if (rnorm <= options.tolerance * bnorm) break;
-      const double rz_new = precondition(r, zp);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      blocks(total, par, [&](size_t a, size_t e) {
-        for (size_t k = a; k < e; ++k) p[k] = zp[k] + beta * p[k];
-      });
-    }
-    report.iterations = it;
-    report.residual = rnorm / bnorm;
+    rnorm = std::sqrt(rr.combine(std::plus<>()));
+    ++it;
+    if (rnorm <= options.tolerance * bnorm) break;
+    const double rz_new = precondition(r, zp);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    blocks(total, par, [&](size_t s, size_t e) {
+      for (size_t k = s; k < e; ++k) p[k] = zp[k] + beta * p[k];
+    });
   }
+  report.iterations = it;
+  report.residual = rnorm / bnorm;
   report.success = std::isfinite(report.residual) && report.residual <= options.tolerance;
-  blocks(total, par, [&](size_t a, size_t e) {
-    for (size_t k = a; k < e; ++k) z[k] = fixed[k] ? values[k] : x[k];
-  });
   return report;
 }
 

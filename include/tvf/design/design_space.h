@@ -3,6 +3,7 @@
 // primitive), its tangent bundle and its log map. Not movable: the bundle and log map
 // refer to the mesh.
 #include "tvf/design/scene.h"
+#include "tvf/field/point_locator.h"
 #include "tvf/mesh/log_map.h"
 #include "tvf/mesh/mesh_validate.h"
 #include "tvf/mesh/tangent_bundle.h"
@@ -32,6 +33,7 @@ private:
   Mesh mesh_;
   TangentBundle bundle_;
   LogMap log_map_;
+  PointLocator locator_;
   double diameter_;
 };
 

@@ -4,21 +4,45 @@
 //   Σ_j z_jᴴ L z_j + Σ_j Σ_i b·d_i |z_{j+1,i} − z_{j,i}|²,   d_i = Σ_k w_ik,
 // is minimised with some entries (j, i) fixed (key frames, element regions). Its normal
 // equations are A = I ⊗ L + b·(T ⊗ D), T the path-graph Laplacian in time: Hermitian
-// positive (semi)definite, solved matrix-free by preconditioned CG. The preconditioner
-// solves every vertex's temporal line exactly (a real tridiagonal system per vertex, the
-// fixed entries splitting it): with b = 30 the time couplings carry about 60/61 of each
-// diagonal, so this captures most of the operator (DESIGN §5, measured there at ~56
-// iterations for pure key frames, independent of mesh size).
+// positive (semi)definite. Two methods behind one interface (docs/architecture.md):
+//
+// * Temporal modes (direct in time). Whole fixed frames (key frames) cut time into
+//   segments. Where the fixed vertex set is the same at every frame of a segment (key
+//   frames alone, or with elements that stay put), the segment's system is a tensor
+//   product L_F ⊗ I + b·D_F ⊗ T_s, and the eigenvectors Q of the small tridiagonal T_s
+//   (T_s = Q Λ Qᵀ) decouple it into independent spatial systems (L_F + b·λ_k·D_F) y_k = r_k,
+//   one per temporal mode. Those are solved by Jacobi-preconditioned CG in parallel: the
+//   shift b·λ_k makes all but the lowest few modes nearly diagonal, so the whole solve
+//   costs a few dozen spatial sweeps instead of a few dozen space-time ones. Q is
+//   orthogonal, so the residuals of the modes add up to the residual of the whole.
+// * Matrix-free CG (anything else: moving element constraints). The preconditioner solves
+//   every vertex's temporal line exactly (a real tridiagonal system, fixed entries
+//   splitting it): with b = 30 the time couplings carry about 60/61 of each diagonal
+//   (DESIGN §5: ~60 iterations, independent of mesh size).
+//
+// The solver object keeps its set-up (row-major operator, temporal eigenbases) between
+// solves, and every solve starts from the z it is given (warm start after an edit).
 #include "tvf/solve/connection_laplacian.h"
 
+#include <map>
+#include <memory>
+#include <mutex>
 #include <span>
+#include <tuple>
 
 namespace tvf {
 
+enum class SpaceTimeMethod {
+  automatic,  // temporal modes where the fixed set allows it, else CG
+  modes,      // temporal modes, or an error where the fixed set does not allow it
+  cg,         // matrix-free CG with temporal line solves
+};
+
 struct SpaceTimeOptions {
   double tolerance = 1e-10;    // relative residual ‖b − A z‖ / ‖b‖ over the free entries
-  int max_iterations = 5000;
+  int max_iterations = 5000;   // CG iterations (per temporal mode for the mode method)
   bool parallel = true;
+  SpaceTimeMethod method = SpaceTimeMethod::automatic;
 };
 
 class SpaceTimeSolver {
@@ -37,13 +61,30 @@ public:
   void interpolate_in_time(std::span<const char> fixed, std::span<const cplx> values,
                            std::span<cplx> z) const;
 
+  // Whether the temporal-mode method applies to this fixed set (see above).
+  bool modes_apply(std::span<const char> fixed) const;
+
   int frames() const { return frames_; }
   int vertices() const { return static_cast<int>(laplacian_.matrix.rows()); }
 
+  struct Operator;  // row-major copy of L and its diagonal (private to the solver)
+  struct TemporalBasis;
+
 private:
+  // The eigenbasis of the temporal path-graph Laplacian on frames [first, first + count),
+  // computed once per segment shape and kept.
+  const TemporalBasis& temporal_basis(int first, int count) const;
+  SolveReport solve_cg(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
+                       double bnorm, const SpaceTimeOptions& options) const;
+  SolveReport solve_modes(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
+                          double bnorm, const SpaceTimeOptions& options) const;
+
   const ConnectionLaplacian& laplacian_;
   int frames_;
   double b_;
+  std::shared_ptr<const Operator> op_;
+  mutable std::mutex bases_mutex_;
+  mutable std::map<std::tuple<int, int>, std::shared_ptr<const TemporalBasis>> bases_;
 };
 
 }  // namespace tvf
