@@ -21,6 +21,12 @@ pkg_check_modules(CAIRO QUIET IMPORTED_TARGET cairo)
 if(NOT CAIRO_FOUND)
   message(FATAL_ERROR "tvf needs Cairo: install the Debian package 'libcairo2-dev' (or run scripts/install-deps.sh)")
 endif()
+# Dense products of the temporal-mode solver: OpenBLAS picks its AVX2/AVX-512 kernels at
+# run time, so one portable build runs at the machine's speed.
+pkg_check_modules(OPENBLAS QUIET IMPORTED_TARGET openblas)
+if(NOT OPENBLAS_FOUND)
+  message(FATAL_ERROR "tvf needs OpenBLAS: install the Debian package 'libopenblas-dev' (or run scripts/install-deps.sh)")
+endif()
 
 if(TVF_BUILD_TESTS)
   tvf_require(GTest libgtest-dev)

@@ -3,6 +3,7 @@
 #include "tvf/core/error.h"
 
 #include <Eigen/Eigenvalues>
+#include <cblas.h>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
@@ -204,22 +205,12 @@ int solve_mode(const SpaceTimeSolver::Operator& op, const char* fixed, double s,
   return it;
 }
 
-// out = in · m for a tall frame-major block (rows = 2·|V| real numbers, one column per
-// frame), split into row blocks for the threads.
-void multiply_rows(const Eigen::Map<const Eigen::MatrixXd>& in, const Eigen::MatrixXd& m,
-                   Eigen::Map<Eigen::MatrixXd> out, bool parallel) {
-  const Eigen::Index rows = in.rows();
-  const Eigen::Index block = 4096;
-  const auto count = static_cast<size_t>((rows + block - 1) / block);
-  auto body = [&](size_t b) {
-    const Eigen::Index r0 = static_cast<Eigen::Index>(b) * block;
-    const Eigen::Index len = std::min(block, rows - r0);
-    out.middleRows(r0, len).noalias() = in.middleRows(r0, len) * m;
-  };
-  if (parallel)
-    tbb::parallel_for(size_t{0}, count, body);
-  else
-    for (size_t b = 0; b < count; ++b) body(b);
+// out = in · m (or in · mᵀ) for a tall frame-major block: rows = 2·|V| real numbers
+// (re, im interleaved), one column per frame. OpenBLAS threads it itself.
+void multiply_rows(const double* in, const Eigen::MatrixXd& m, bool transpose, double* out, Eigen::Index rows) {
+  const auto r = static_cast<blasint>(rows), c = static_cast<blasint>(m.rows());
+  cblas_dgemm(CblasColMajor, CblasNoTrans, transpose ? CblasTrans : CblasNoTrans, r, c, c, 1.0, in, r, m.data(), c,
+              0.0, out, r);
 }
 
 }  // namespace
@@ -410,12 +401,10 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     const TemporalBasis& basis = temporal_basis(static_cast<int>(first), static_cast<int>(count));
     const auto rows = static_cast<Eigen::Index>(2 * n), cols = static_cast<Eigen::Index>(count);
     // Complex |V| × count blocks seen as real 2|V| × count ones (re, im interleaved).
-    const Eigen::Map<const Eigen::MatrixXd> r_seg(reinterpret_cast<const double*>(rhs.data() + first * n), rows, cols);
-    const Eigen::Map<Eigen::MatrixXd> x_seg(reinterpret_cast<double*>(x.data() + first * n), rows, cols);
+    auto* x_seg = reinterpret_cast<double*>(x.data() + first * n);
     Eigen::MatrixXd r_hat(rows, cols), x_hat(rows, cols);
-    multiply_rows(r_seg, basis.q, Eigen::Map<Eigen::MatrixXd>(r_hat.data(), rows, cols), par);
-    multiply_rows(Eigen::Map<const Eigen::MatrixXd>(x_seg.data(), rows, cols), basis.q,
-                  Eigen::Map<Eigen::MatrixXd>(x_hat.data(), rows, cols), par);
+    multiply_rows(reinterpret_cast<const double*>(rhs.data() + first * n), basis.q, false, r_hat.data(), rows);
+    multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
     const char* f = fixed.data() + first * n;
     auto mode = [&](size_t k) {
       const auto* rk = reinterpret_cast<const cplx*>(r_hat.col(static_cast<Eigen::Index>(k)).data());
@@ -435,8 +424,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       tbb::parallel_for(size_t{0}, count, mode, tbb::simple_partitioner());
     else
       for (size_t k = 0; k < count; ++k) mode(k);
-    const Eigen::MatrixXd qt = basis.q.transpose();
-    multiply_rows(Eigen::Map<const Eigen::MatrixXd>(x_hat.data(), rows, cols), qt, x_seg, par);
+    multiply_rows(x_hat.data(), basis.q, true, x_seg, rows);
   }
 
   SolveReport report;
