@@ -138,7 +138,9 @@ int run_analyze(const AnalyzeArgs& args) {
     const std::string stem = (out.parent_path() / out.stem()).string();
     for (const auto& f : write_coherence_plot(stem + "_coherence", topology.times, topology.coherence))
       pictures.push_back(f);
-    for (const auto& f : write_paths_plot(stem + "_paths", mesh, topology)) pictures.push_back(f);
+    PlotOptions paths_plot;
+    if (check) paths_plot.extra_paths = check->extra_paths;  // drawn dashed
+    for (const auto& f : write_paths_plot(stem + "_paths", mesh, topology, paths_plot)) pictures.push_back(f);
   }
   progress.finish();
 
