@@ -9,7 +9,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <functional>
 #include <map>
 #include <numeric>
 #include <set>
@@ -168,7 +167,7 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   };
 
   // Elements: singular ones along their paths, bifurcations at their points.
-  std::vector<std::pair<size_t, int>> designed_bifurcations;  // (feature, found bifurcation)
+  std::set<int> designed_bifs;  // found bifurcations matched to bifurcation elements
   for (size_t k = 0; k < scene.elements.size(); ++k) {
     const Element& e = scene.elements[k];
     const std::string source = fmt::format("elements[{}]", k);
@@ -225,7 +224,7 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
         if (!f.found)
           f.note = fmt::format("the {} at t = {:.3f} joins a {} and a {}, not a saddle and a {}", to_string(kind),
                                fb.t, to_string(p.type), to_string(q.type), sink ? "sink" : "source");
-        designed_bifurcations.emplace_back(out.designed.size(), f.bifurcation);
+        designed_bifs.insert(f.bifurcation);
       }
       out.designed.push_back(std::move(f));
     }
@@ -303,8 +302,6 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   }
 
   // Bifurcations: designed, implied, extra.
-  std::set<int> designed_bifs;
-  for (const auto& [feature, b] : designed_bifurcations) designed_bifs.insert(b);
   const auto is_claimed = [&](int p) { return claimed.count(p) > 0; };
   for (size_t i = 0; i < topo.bifurcations.size(); ++i) {
     if (designed_bifs.count(static_cast<int>(i))) continue;
@@ -320,8 +317,12 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   // Extra groups: union–find over extra paths joined by bifurcations and type changes.
   std::vector<int> parent(static_cast<size_t>(P));
   std::iota(parent.begin(), parent.end(), 0);
-  std::function<int(int)> root = [&](int x) {
-    while (parent[static_cast<size_t>(x)] != x) x = parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
+  auto root = [&](int x) {
+    while (parent[static_cast<size_t>(x)] != x) {
+      auto& up = parent[static_cast<size_t>(x)];
+      up = parent[static_cast<size_t>(up)];  // path halving
+      x = up;
+    }
     return x;
   };
   auto unite = [&](int a, int b) {
