@@ -1,11 +1,13 @@
 // tvf: the command line. A thin client of libtvf: parse arguments, call the library,
 // print results and errors (one sentence on stderr, non-zero exit).
 #include "default_scene.h"
+#include "design_check_output.h"
 #include "progress.h"
 
 #include "tvf/analysis/topology.h"
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
+#include "tvf/design/design_check.h"
 #include "tvf/design/design_space.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/outputs.h"
@@ -96,6 +98,7 @@ int run_analyze(const AnalyzeArgs& args) {
   int vertices = 0;
   Mesh mesh;
   std::vector<std::string> warnings;
+  std::optional<DesignCheck> check;  // the field against its scene's design, when known
   if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
     const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
     if (!fs::exists(file, ec))
@@ -108,6 +111,7 @@ int run_analyze(const AnalyzeArgs& args) {
     topology = analyze_topology(bundle, ff.field);
     vertices = ff.mesh.num_vertices();
     mesh = ff.mesh;
+    if (const auto scene = cli::scene_of_field(input, ff)) check = check_design(*scene, DesignSpace(ff.mesh), ff.field, topology);
   } else {
     const Scene scene = load_scene(args.input);
     progress.note("building the domain");
@@ -121,9 +125,11 @@ int run_analyze(const AnalyzeArgs& args) {
     topology = analyze_topology(space->bundle(), field);
     vertices = space->mesh().num_vertices();
     mesh = space->mesh();
+    check = check_design(scene, *space, field, topology);
   }
   progress.note("writing " + args.out);
   write_file_atomically(args.out, topology_to_json(topology).dump() + "\n");
+  if (check) write_file_atomically(cli::design_check_path(args.out), design_check_to_json(*check).dump(2) + "\n");
   // The pictures beside the JSON: STEM_coherence.{svg,png} and STEM_paths.{svg,png}.
   std::vector<std::string> pictures;
   if (!args.no_plots) {
@@ -132,7 +138,9 @@ int run_analyze(const AnalyzeArgs& args) {
     const std::string stem = (out.parent_path() / out.stem()).string();
     for (const auto& f : write_coherence_plot(stem + "_coherence", topology.times, topology.coherence))
       pictures.push_back(f);
-    for (const auto& f : write_paths_plot(stem + "_paths", mesh, topology)) pictures.push_back(f);
+    PlotOptions paths_plot;
+    if (check) paths_plot.extra_paths = check->extra_paths;  // drawn dashed
+    for (const auto& f : write_paths_plot(stem + "_paths", mesh, topology, paths_plot)) pictures.push_back(f);
   }
   progress.finish();
 
@@ -151,6 +159,10 @@ int run_analyze(const AnalyzeArgs& args) {
                 topology.bifurcations.size() - static_cast<size_t>(creations), topology.times.empty() ? 0 : fewest,
                 most, fs::absolute(args.out).lexically_normal().c_str());
     for (const auto& f : pictures) std::printf("  %s\n", f.c_str());
+    if (check)
+      std::printf("%s\n  %s\n", check->summary().c_str(), cli::design_check_path(args.out).c_str());
+    else
+      std::printf("no scene.json beside the field: nothing to check the design against\n");
   }
   return 0;
 }

@@ -436,51 +436,84 @@ struct Node {
   std::array<int, 2> nb{-1, -1};
 };
 
-// The type runs of a track and where it changes: returns the positions (in `types`) at
-// which a new path starts, with the type of every path.
-void split_types(const std::vector<SingularityType>& types, int min_run, std::vector<int>& starts,
-                 std::vector<SingularityType>& path_types, int& suppressed) {
+// What a change of type along a track is measured in. Without node_focus_changes a node
+// and a focus of the same stability are one class: they are topologically equivalent
+// (Hartman–Grobman; a linear sink is conjugate to a linear attracting focus) and the
+// boundary between them, equal eigenvalues, is no bifurcation. What remains is the index
+// (saddle) and, for index +1, the stability: attracting, repelling, or the non-hyperbolic
+// center between them.
+int type_class(SingularityType t, bool node_focus_changes) {
+  if (node_focus_changes) return static_cast<int>(t);
+  switch (t) {
+    case SingularityType::source:
+    case SingularityType::repelling_focus: return 0;
+    case SingularityType::sink:
+    case SingularityType::attracting_focus: return 1;
+    case SingularityType::saddle: return 2;
+    case SingularityType::center: return 3;
+  }
+  return 4;
+}
+
+// The class runs of a track and where it changes: returns the positions (in `types`) at
+// which a new path starts, with the type of every path: the type held at most of the
+// path's frames of the path's class (ties to the earlier enumerator: a node before a focus).
+void split_types(const std::vector<SingularityType>& types, int min_run, bool node_focus_changes,
+                 std::vector<int>& starts, std::vector<SingularityType>& path_types, int& suppressed) {
   starts.clear();
   path_types.clear();
+  std::vector<int> cls(types.size());
+  for (size_t i = 0; i < types.size(); ++i) cls[i] = type_class(types[i], node_focus_changes);
   struct Run {
-    int start, length;
-    SingularityType type;
+    int start, length, cls;
   };
   std::vector<Run> runs;
   for (int i = 0; i < static_cast<int>(types.size()); ++i) {
-    if (runs.empty() || runs.back().type != types[static_cast<size_t>(i)])
-      runs.push_back({i, 1, types[static_cast<size_t>(i)]});
+    if (runs.empty() || runs.back().cls != cls[static_cast<size_t>(i)])
+      runs.push_back({i, 1, cls[static_cast<size_t>(i)]});
     else
       ++runs.back().length;
   }
-  // The starting type: the first that holds long enough; else the most frequent.
+  // The starting class: the first that holds long enough; else the most frequent.
   const Run* first = nullptr;
   for (const Run& r : runs)
     if (r.length >= min_run) {
       first = &r;
       break;
     }
-  SingularityType current;
+  int current;
   if (first) {
-    current = first->type;
+    current = first->cls;
   } else {
     std::array<int, 6> count{};
-    for (const SingularityType t : types) ++count[static_cast<size_t>(t)];
-    current = types.front();
-    for (const SingularityType t : types)
-      if (count[static_cast<size_t>(t)] > count[static_cast<size_t>(current)]) current = t;
+    for (const int c : cls) ++count[static_cast<size_t>(c)];
+    current = cls.front();
+    for (const int c : cls)
+      if (count[static_cast<size_t>(c)] > count[static_cast<size_t>(current)]) current = c;
   }
+  std::vector<int> path_cls;
   starts.push_back(0);
-  path_types.push_back(current);
+  path_cls.push_back(current);
   for (const Run& r : runs) {
-    if (r.type == current) continue;
+    if (r.cls == current) continue;
     if (r.length >= min_run) {
       starts.push_back(r.start);
-      path_types.push_back(r.type);
-      current = r.type;
+      path_cls.push_back(r.cls);
+      current = r.cls;
     } else {
       ++suppressed;
     }
+  }
+  for (size_t p = 0; p < starts.size(); ++p) {
+    const size_t from = static_cast<size_t>(starts[p]);
+    const size_t to = p + 1 < starts.size() ? static_cast<size_t>(starts[p + 1]) : types.size();
+    std::array<int, 6> count{};
+    for (size_t i = from; i < to; ++i)
+      if (cls[i] == path_cls[p]) ++count[static_cast<size_t>(types[i])];
+    size_t best = 0;
+    for (size_t k = 1; k < count.size(); ++k)
+      if (count[k] > count[best]) best = k;
+    path_types.push_back(static_cast<SingularityType>(best));
   }
 }
 
@@ -779,7 +812,8 @@ Topology analyze_topology(const TangentBundle& bundle, const Field& field, const
     }
     std::vector<int> starts;
     std::vector<SingularityType> path_types;
-    split_types(types, options.type_change_samples, starts, path_types, topo.stats.suppressed_flickers);
+    split_types(types, options.type_change_samples, options.node_focus_changes, starts, path_types,
+                topo.stats.suppressed_flickers);
     topo.stats.type_changes += static_cast<int>(starts.size()) - 1;
     // Positions in tr.nodes where each path starts and ends.
     std::vector<int> fpos;

@@ -77,6 +77,25 @@ cplx apply(const Mat2& m, cplx z) { return to_complex(m * to_vec2(z)); }
 
 }  // namespace
 
+Scene deform_base_scene(const Scene& scene) {
+  nlohmann::json base_json = scene_to_json(scene);
+  base_json["elements"] = scene.deform.at("base").value("elements", nlohmann::json::array());
+  base_json["generator"] = "constrained";
+  base_json.erase("deform");
+  base_json["keyframes"] = nlohmann::json::array();
+  base_json["edits"] = nlohmann::json::array();
+  return scene_from_json(base_json, scene.label() + " (deform.base)", scene.source_path);
+}
+
+Mat2 deform_matrix(const Scene& scene, double t) {
+  const nlohmann::json& def = scene.deform;
+  const double t0 = scene.time.t0;
+  if (def.contains("matrix")) return matrix_at(def.at("matrix"), t0, t);
+  if (def.contains("transform"))
+    return transform_matrix(interpolate_transform(transform_keys(def.at("transform"), t0), t));
+  return Mat2::Identity();
+}
+
 Field generate_deform(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                       GenerateReport* report) {
   const auto start = std::chrono::steady_clock::now();
@@ -90,13 +109,7 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
   const double t0 = scene.time.t0;
 
   // The base field V(t0): the static constrained design of deform.base's elements.
-  nlohmann::json base_json = scene_to_json(scene);
-  base_json["elements"] = def.at("base").value("elements", nlohmann::json::array());
-  base_json["generator"] = "constrained";
-  base_json.erase("deform");
-  base_json["keyframes"] = nlohmann::json::array();
-  base_json["edits"] = nlohmann::json::array();
-  const Scene base = scene_from_json(base_json, scene.label() + " (deform.base)", scene.source_path);
+  const Scene base = deform_base_scene(scene);
   if (base.elements.empty())
     throw_input_error(scene.label(), "deform.base.elements",
                       "the base field has no elements, so there is nothing to deform");
@@ -115,14 +128,7 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
   }
 
   // M(t): matrix keys, or (sx, sy, θ) keys interpolated linearly.
-  const bool has_matrix = def.contains("matrix");
-  const std::vector<TransformKey> tkeys =
-      def.contains("transform") ? transform_keys(def.at("transform"), t0) : std::vector<TransformKey>{};
-  auto m_at = [&](double t) -> Mat2 {
-    if (has_matrix) return matrix_at(def.at("matrix"), t0, t);
-    if (!tkeys.empty()) return transform_matrix(interpolate_transform(tkeys, t));
-    return Mat2::Identity();
-  };
+  auto m_at = [&](double t) { return deform_matrix(scene, t); };
 
   // Representative streamlines traced in V(t0).
   const nlohmann::json streamlines = def.value("streamlines", nlohmann::json::array());

@@ -193,17 +193,35 @@ std::vector<std::string> write_paths_plot(const std::string& stem, const Mesh& m
         line(U[a], V[b], T[0], U[a], V[b], T[1]);
       }
     cairo_stroke(cr);
+    // Edge labels: the ranges of u and v along the front and side edges at t0, ticks of t
+    // up the front left edge, and the axis names at the middle of those edges.
     cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
     const char* names = "xyz";
+    const std::string un(1, names[ua]), vn(1, names[va]);
     double x, y;
-    P(hi[ua], lo[va], t0, x, y);
-    text(cr, x + 8, y, std::string(1, names[ua]), 15, 0, 0.5);
-    P(lo[ua], hi[va], t0, x, y);
-    text(cr, x - 8, y - 6, std::string(1, names[va]), 15, 1, 0.5);
-    P(lo[ua], lo[va], t1, x, y);
-    text(cr, x - 8, y, "t = " + number(t1), 13, 1, 0.5);
     P(lo[ua], lo[va], t0, x, y);
-    text(cr, x - 8, y, "t = " + number(t0), 13, 1, 0.5);
+    text(cr, x, y + 8, number(lo[ua]), 12, 0.5, 0);
+    P(hi[ua], lo[va], t0, x, y);
+    text(cr, x, y + 8, number(hi[ua]), 12, 0.5, 0);
+    P(0.5 * (lo[ua] + hi[ua]), lo[va], t0, x, y);
+    text(cr, x, y + 8, un, 15, 0.5, 0);
+    P(hi[ua], lo[va], t0, x, y);
+    text(cr, x + 8, y - 4, vn + " = " + number(lo[va]), 12, 0, 0.5);
+    P(hi[ua], hi[va], t0, x, y);
+    text(cr, x + 8, y - 4, vn + " = " + number(hi[va]), 12, 0, 0.5);
+    P(hi[ua], 0.5 * (lo[va] + hi[va]), t0, x, y);
+    text(cr, x + 22, y - 4, vn, 15, 0, 0.5);
+    const double tstep = tick_step(t1 - t0, 4);
+    cairo_set_line_width(cr, 1);
+    for (double t = std::ceil(t0 / tstep) * tstep; t <= t1 + 1e-9 * tstep; t += tstep) {
+      P(lo[ua], lo[va], t, x, y);
+      cairo_move_to(cr, x - 5, y);
+      cairo_line_to(cr, x, y);
+      cairo_stroke(cr);
+      text(cr, x - 8, y, number(t), 12, 1, 0.5);
+    }
+    P(lo[ua], lo[va], 0.5 * (t0 + t1), x, y);
+    text(cr, x - 44, y, "t", 15, 1, 0.5);
     text(cr, w / 2, 18, options.title.empty() ? "singularity paths in space-time" : options.title, 16, 0.5, 0);
     // Legend.
     const std::pair<const char*, SingularityType> legend[] = {
@@ -221,14 +239,37 @@ std::vector<std::string> write_paths_plot(const std::string& stem, const Mesh& m
     }
     cairo_new_sub_path(cr);
     cairo_arc(cr, lx + 11, ly - 4, 5, 0, 2 * kPi);
+    cairo_fill(cr);
+    text(cr, lx + 30, ly - 4, "creation", 13, 0, 0.5);
+    ly += 20;
+    cairo_set_line_width(cr, 1.8);
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, lx + 11, ly - 4, 5, 0, 2 * kPi);
     cairo_stroke(cr);
-    text(cr, lx + 30, ly - 4, "bifurcation", 13, 0, 0.5);
+    text(cr, lx + 30, ly - 4, "cancellation", 13, 0, 0.5);
+    std::vector<char> extra(topology.paths.size(), 0);
+    for (const int id : options.extra_paths)
+      if (id >= 0 && id < static_cast<int>(extra.size())) extra[static_cast<size_t>(id)] = 1;
+    if (!options.extra_paths.empty()) {
+      ly += 20;
+      const double dash[] = {5, 4};
+      cairo_set_dash(cr, dash, 2, 0);
+      cairo_set_line_width(cr, 1.4);
+      cairo_move_to(cr, lx, ly - 4);
+      cairo_line_to(cr, lx + 22, ly - 4);
+      cairo_stroke(cr);
+      cairo_set_dash(cr, nullptr, 0, 0);
+      text(cr, lx + 30, ly - 4, "extra (not designed)", 13, 0, 0.5);
+    }
     // Paths.
-    cairo_set_line_width(cr, 2.2);
     cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
     for (const SingularityPath& p : topology.paths) {
       const auto c = type_color(p.type);
       cairo_set_source_rgb(cr, c[0], c[1], c[2]);
+      const bool dashed = extra[static_cast<size_t>(p.id)] != 0;
+      const double dash[] = {5, 4};
+      cairo_set_dash(cr, dash, dashed ? 2 : 0, 0);
+      cairo_set_line_width(cr, dashed ? 1.4 : 2.4);
       for (size_t k = 0; k < p.points.size(); ++k) {
         P(p.points[k].position[ua], p.points[k].position[va], p.points[k].t, x, y);
         if (k == 0) cairo_move_to(cr, x, y);
@@ -240,15 +281,23 @@ std::vector<std::string> write_paths_plot(const std::string& stem, const Mesh& m
       }
       cairo_stroke(cr);
     }
-    // Bifurcations.
-    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_dash(cr, nullptr, 0, 0);
+    // Bifurcations: creations filled, cancellations as rings (white inside).
     cairo_set_line_width(cr, 1.8);
     for (const Bifurcation& b : topology.bifurcations) {
       P(b.position[ua], b.position[va], b.t, x, y);
       cairo_new_sub_path(cr);
-      cairo_arc(cr, x, y, 6, 0, 2 * kPi);
+      cairo_arc(cr, x, y, 5.5, 0, 2 * kPi);
+      if (b.kind == BifurcationKind::creation) {
+        cairo_set_source_rgb(cr, 0, 0, 0);
+        cairo_fill(cr);
+      } else {
+        cairo_set_source_rgb(cr, 1, 1, 1);
+        cairo_fill_preserve(cr);
+        cairo_set_source_rgb(cr, 0, 0, 0);
+        cairo_stroke(cr);
+      }
     }
-    cairo_stroke(cr);
   });
 }
 

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <random>
 #include <set>
 #include <string>
@@ -298,7 +299,9 @@ TEST(Topology, SourceTurnedIntoSinkReportsTypeChanges) {
   const TimeSampling time{0.0, 1.0, 61};
   const Field field =
       sample_planar(mesh, time, [&](const Vec2& x, double t) -> Vec2 { return rotation(theta(t)) * (x - p); });
-  const Topology topo = analyze(bundle, field);
+  TopologyOptions every_type;
+  every_type.node_focus_changes = true;
+  const Topology topo = analyze(bundle, field, every_type);
   expect_consistent(topo);
   EXPECT_TRUE(topo.bifurcations.empty());
   const std::vector<SingularityType> expected = {SingularityType::source, SingularityType::repelling_focus,
@@ -332,6 +335,90 @@ TEST(Topology, SourceTurnedIntoSinkReportsTypeChanges) {
     ASSERT_EQ(frame.size(), 1u);
     EXPECT_LE((frame[0].position.head<2>() - p).norm(), 1e-12);
   }
+}
+
+// By default a path changes type only where its topological type changes: the stability
+// of the index +1 singularity (repelling → center → attracting). Node and focus of one
+// stability are one path, named by the type most of its frames have.
+TEST(Topology, SourceTurnedIntoSinkChangesTopologicalTypeTwice) {
+  const Mesh mesh = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(mesh);
+  const Vec2 p(0.0731, -0.0417);
+  auto theta = [](double t) { return kPi * std::clamp((t - 0.2) / 0.6, 0.0, 1.0); };
+  const TimeSampling time{0.0, 1.0, 61};
+  const Field field =
+      sample_planar(mesh, time, [&](const Vec2& x, double t) -> Vec2 { return rotation(theta(t)) * (x - p); });
+  const Topology topo = analyze(bundle, field);
+  expect_consistent(topo);
+  EXPECT_TRUE(topo.bifurcations.empty());
+  ASSERT_EQ(topo.paths.size(), 3u);
+  EXPECT_EQ(topo.stats.type_changes, 2);
+  // Stability class of a Jacobian: +1 repelling, 0 center, −1 attracting.
+  auto stability = [](SingularityType t) {
+    switch (t) {
+      case SingularityType::source:
+      case SingularityType::repelling_focus: return 1;
+      case SingularityType::center: return 0;
+      default: return -1;
+    }
+  };
+  for (int k = 0; k < 3; ++k) {
+    const SingularityPath& path = topo.paths[static_cast<size_t>(k)];
+    EXPECT_EQ(stability(path.type), 1 - k) << to_string(path.type);
+    // The path's name is the type most of its frames have.
+    std::map<SingularityType, int> count;
+    for (int j = 0; j < time.frames; ++j) {
+      const double t = time.time(j);
+      const bool last = k == 2;
+      if (t >= path.birth && (t < path.death || (last && t <= path.death))) {
+        const SingularityType type = classify_jacobian(rotation(theta(t)));
+        if (stability(type) == 1 - k) ++count[type];
+      }
+    }
+    const auto most = std::max_element(count.begin(), count.end(),
+                                       [](const auto& a, const auto& b) { return a.second < b.second; });
+    ASSERT_NE(most, count.end());
+    EXPECT_EQ(path.type, most->first) << k;
+    if (k < 2) {
+      EXPECT_EQ(path.death, topo.paths[static_cast<size_t>(k + 1)].birth);
+      const int j = static_cast<int>(std::lround(path.death * 60));
+      EXPECT_EQ(stability(classify_jacobian(rotation(theta(time.time(j))))), -k);
+      EXPECT_EQ(stability(classify_jacobian(rotation(theta(time.time(j - 1))))), 1 - k);
+    }
+  }
+}
+
+// A sink whose eigenvalues pass through equality, back and forth (degenerate-node
+// territory): one sink path; with node_focus_changes, one path per run.
+TEST(Topology, NodeFocusAlternationIsOnePath) {
+  const Mesh mesh = make_grid(GridSpec{21, 21, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(mesh);
+  const Vec2 p(0.031, 0.017);
+  const TimeSampling time{0.0, 1.0, 21};
+  // Runs of 3 frames: −I plus a small rotation (attracting focus, |Im λ| = 0.3·|Re λ|) or
+  // a small shear of the eigenvalues (sink, λ = −1 ± 0.3).
+  Field field(time, mesh.num_vertices());
+  int sinks = 0;
+  for (int j = 0; j < time.frames; ++j) {
+    Mat2 J;
+    const bool focus = (j / 3) % 2 == 1;
+    if (focus)
+      J << -1, -0.3, 0.3, -1;
+    else
+      J << -1.3, 0, 0, -0.7;
+    sinks += !focus;
+    for (int v = 0; v < mesh.num_vertices(); ++v) field.at(j, v) = to_complex(J * (mesh.position(v).head<2>() - p));
+  }
+  const Topology topo = analyze(bundle, field);
+  expect_consistent(topo);
+  ASSERT_EQ(topo.paths.size(), 1u);
+  EXPECT_EQ(topo.paths[0].type, sinks * 2 > time.frames ? SingularityType::sink : SingularityType::attracting_focus);
+  EXPECT_EQ(topo.stats.type_changes, 0);
+  TopologyOptions split;
+  split.node_focus_changes = true;
+  const Topology every = analyze(bundle, field, split);
+  expect_consistent(every);
+  EXPECT_EQ(every.paths.size(), 7u);  // runs of 3 frames: 0–2, 3–5, …, 18–20
 }
 
 TEST(Topology, CenterFocusFlickerIsNotATypeChange) {

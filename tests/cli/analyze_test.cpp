@@ -50,7 +50,10 @@ TEST(CliAnalyze, GeneratedFolderHasTheDesignedBifurcations) {
   ASSERT_EQ(g.exit_code, 0) << g.output;
   const auto r = run_tvf("analyze " + quoted(dir / "out") + " -o " + quoted(dir / "analysis.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(count_lines(r.output), 5) << r.output;  // the summary and the four pictures
+  // The summary, the four pictures, the design check and its file.
+  EXPECT_EQ(count_lines(r.output), 7) << r.output;
+  EXPECT_NE(r.output.find("designed 0 singularities, 4 bifurcations: all found; no extras"), std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("4 bifurcations"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find((dir / "analysis.json").string()), std::string::npos) << r.output;
   for (const char* picture : {"analysis_coherence.svg", "analysis_coherence.png", "analysis_paths.svg",
@@ -83,6 +86,19 @@ TEST(CliAnalyze, GeneratedFolderHasTheDesignedBifurcations) {
     }
     EXPECT_EQ(found, 1) << d.kind << " at (" << d.x << ", " << d.y << ", " << d.t << ")";
   }
+  // The design check beside it (the folder's scene.json) found the four, and nothing else.
+  const nlohmann::json d = read_json(dir / "analysis_design.json");
+  EXPECT_EQ(keys(d), (std::set<std::string>{"all_found", "summary", "tolerance", "designed", "implied_bifurcations",
+                                            "extra"}));
+  EXPECT_TRUE(d["all_found"].get<bool>());
+  ASSERT_EQ(d["designed"].size(), 4u);
+  for (const auto& f : d["designed"]) {
+    EXPECT_EQ(f["kind"], "bifurcation");
+    EXPECT_TRUE(f["found"].get<bool>());
+    EXPECT_EQ(j["bifurcations"][f["bifurcation"].get<size_t>()]["kind"],
+              f["type"].get<std::string>().find("creation") != std::string::npos ? "creation" : "cancellation");
+  }
+  EXPECT_TRUE(d["extra"]["paths"].empty());
   // Each bifurcation joins a saddle and a node.
   for (const auto& b : j["bifurcations"]) {
     std::set<std::string> types;
@@ -116,6 +132,24 @@ TEST(CliAnalyze, SceneFileIsGeneratedThenAnalysedLikeItsFolder) {
   const auto t = run_tvf("analyze " + quoted(dir / "out" / "field.tvff") + " -o " + quoted(dir / "from_file.json") + " -q");
   ASSERT_EQ(t.exit_code, 0) << t.output;
   EXPECT_EQ(read_json(dir / "from_file.json"), a);
+  // The design checks agree too: the scene itself, the folder's scene.json, the one beside
+  // the field file, and (with no scene.json) the copy inside field.tvff.
+  const nlohmann::json design = read_json(dir / "from_scene_design.json");
+  EXPECT_TRUE(design["all_found"].get<bool>()) << design.dump();
+  EXPECT_EQ(read_json(dir / "from_folder_design.json"), design);
+  EXPECT_EQ(read_json(dir / "from_file_design.json"), design);
+  fs::remove(dir / "out" / "scene.json");
+  const auto e = run_tvf("analyze " + quoted(dir / "out") + " -o " + quoted(dir / "embedded.json") + " -q");
+  ASSERT_EQ(e.exit_code, 0) << e.output;
+  EXPECT_EQ(read_json(dir / "embedded_design.json"), design);
+  // A broken scene.json beside the field is bad input: one sentence naming it, no output.
+  test::write_text(dir / "out" / "scene.json", R"({"tvf": 1, "falloff": "wide"})");
+  const auto b = run_tvf("analyze " + quoted(dir / "out") + " -o " + quoted(dir / "broken.json"));
+  EXPECT_NE(b.exit_code, 0);
+  EXPECT_EQ(count_lines(b.output), 1) << b.output;
+  EXPECT_NE(b.output.find("scene.json"), std::string::npos) << b.output;
+  EXPECT_FALSE(fs::exists(dir / "broken.json"));
+  EXPECT_FALSE(fs::exists(dir / "broken_design.json"));
 }
 
 TEST(CliAnalyze, BadInputIsOneSentenceNonZeroExitAndNoOutput) {

@@ -1,9 +1,14 @@
 // Every example scene generates, and its field holds the singularities the scene designs,
 // where it puts them (the "must show"): each singular element's zero with its
-// index, and each bifurcation's node and saddle while the template is well resolved.
+// index, and each bifurcation's node and saddle while the template is well resolved; and
+// the topology analysis finds every designed feature (check_design: paths over the whole
+// life span with compatible types, bifurcations of the right kind at the right place and
+// time, key-frame and deformed elements).
 #include "support/test_paths.h"
 
 #include "tvf/analysis/singularities.h"
+#include "tvf/analysis/topology.h"
+#include "tvf/design/design_check.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframes.h"
@@ -116,6 +121,18 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
       }
     }
     EXPECT_GT(checked, 0);
+
+    // The analysis finds every designed feature.
+    const Topology topology = analyze_topology(space->bundle(), field);
+    const DesignCheck check = check_design(scene, *space, field, topology);
+    EXPECT_FALSE(check.designed.empty());
+    EXPECT_TRUE(check.all_found()) << check.summary();
+    for (const DesignedFeature& f : check.designed) {
+      EXPECT_FALSE(f.paths.empty()) << f.source;
+      if (f.kind == FeatureKind::singularity) {
+        EXPECT_EQ(f.frames_matched, f.frames) << f.source;
+      }
+    }
   }
 }
 

@@ -20,8 +20,11 @@
 // back to it is a saddle–node bifurcation (creation at a time minimum, cancellation at a
 // time maximum, at the segment's extreme point). Between bifurcations, the time range's
 // ends and the domain boundary, a curve is a track of one singularity; a track is split
-// into paths where its type (per frame, from the face's Jacobian) changes and the new
-// type holds for at least TopologyOptions::type_change_samples consecutive frames.
+// into paths where its topological type (per frame, from the face's Jacobian: saddle, or
+// for index +1 attracting, repelling or center) changes and the new type holds for at
+// least TopologyOptions::type_change_samples consecutive frames. Node and focus of the same
+// stability are one topological type (docs/analysis.md, "Type changes"); a path is named
+// by the precise type that most of its frames have.
 #include "tvf/analysis/singularities.h"
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
@@ -94,6 +97,11 @@ struct TopologyOptions {
   // least this many consecutive frames; shorter runs (center ↔ focus flicker next to the
   // 10 % thresholds of classify_jacobian) keep the current type. 1 splits at every change.
   int type_change_samples = 2;
+  // Also split where a node turns into a focus of the same stability (sink ↔
+  // attracting_focus, source ↔ repelling_focus). Off by default: the two are
+  // topologically equivalent, equal eigenvalues are no bifurcation, and near them the
+  // per-face Jacobian of a sampled field flips between the two from face to face.
+  bool node_focus_changes = false;
 };
 
 // Topology of `field` on the mesh of `bundle`. Throws tvf::Error when a value is not

@@ -67,6 +67,13 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
 Field generate_deform(const DesignSpace& space, const Scene& scene,
                       const GenerateOptions& options = {}, GenerateReport* report = nullptr);
 
+// The deform generator's parts, for checking a deformed design against its field: the
+// base design (deform.base's elements as a constrained scene; throws tvf::Error naming
+// the JSON path when they do not form a valid scene) and M(t) (the identity without keys).
+// Needs a scene with a deform block.
+Scene deform_base_scene(const Scene& scene);
+Mat2 deform_matrix(const Scene& scene, double t);
+
 // Checks that need the scene only (no mesh): singular paths that begin or end inside
 // the time range without a bifurcation there (DESIGN §4). One warning per problem.
 std::vector<std::string> design_warnings(const Scene& scene);

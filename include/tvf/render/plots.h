@@ -5,11 +5,15 @@
 //  - the space-time view of the singularity paths (paper Fig. 8, right): an oblique view
 //    of the box (u, v, t), u and v the domain's two widest axes (x and y on planar
 //    domains), paths coloured by type — green source, red sink, blue saddle, magenta
-//    center or focus — and bifurcations marked with black rings.
+//    center or focus — with the ranges of u, v and t on the box's edges, and bifurcations
+//    marked: creations as filled black discs, cancellations as black rings. Paths that a
+//    design check reports as extra (PlotOptions::extra_paths) are drawn dashed and thinner,
+//    so the designed ones stand out.
 // Files are written under temporary names and renamed when complete.
 #include "tvf/analysis/topology.h"
 #include "tvf/mesh/mesh.h"
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -19,6 +23,8 @@ struct PlotOptions {
   int width = 900;
   int height = 600;
   std::string title;
+  // Paths plot: ids of the paths the design did not ask for (design_check.h), drawn dashed.
+  std::vector<int> extra_paths;
 };
 
 // Writes `stem`.svg and `stem`.png; returns their paths.

@@ -1,0 +1,121 @@
+#pragma once
+// Does a field hold what its scene designs? (issue 4's "must show"; docs/analysis.md,
+// "Design check".) check_design matches every designed feature of a scene to the
+// topology of its field (analysis/topology.h) and lists what the field holds beyond them.
+//
+// Designed features:
+// - a singular element (elements[k]): a singularity of its index on its path p(t) at every
+//   frame of its life span [first, last path point's t];
+// - a bifurcation element: a found bifurcation of its kind (creation or cancellation)
+//   at its point and time, joining a saddle and a node of its stability (sink for
+//   saddle_sink_*, source for saddle_source_*);
+// - a singular element of a key frame (keyframes[k].elements[i]): a singularity of its
+//   index at its point in that key frame's frame;
+// - deform generator: each singular element of deform.base, fixed, at every frame, with
+//   the Jacobian M(t)·J (so a turned source is expected to become a center, then a sink).
+// A frame singularity matches when it has the feature's index, lies within
+// DesignCheckOptions::position_tolerance mean edge lengths of where the field puts the
+// designed zero, and has a compatible type. The designed zero is the element's position x
+// snapped to the domain, moved by the rest of the design: the other elements (or the
+// solve) add V(x) to the element's own field J·w, which moves its zero to first order to
+// x − J⁻¹·V(x) (one Newton step; V(x) sampled from the field, in the element's frame). The
+// type is compatible when it has the same
+// topological type (saddle; or for index +1 the stability: attracting, repelling), where
+// a center is compatible with a focus of either stability (a center is non-hyperbolic:
+// any neighbour tilts it into a focus), and a node with the focus of its stability.
+//
+// The paths that carry a matched singularity (and the two paths of a matched bifurcation)
+// are the designed paths, and so are their continuations across a type change. Every other
+// path is extra. A found bifurcation is designed (matched to a bifurcation element),
+// implied (it joins two designed paths: a designed singularity that appears or vanishes
+// between key frames, or at the end of its path, with a designed partner), or extra.
+// Extras are grouped into connected sets (paths joined by extra bifurcations and type
+// changes), each described in one line.
+#include "tvf/analysis/topology.h"
+#include "tvf/design/design_space.h"
+#include "tvf/design/scene.h"
+#include "tvf/field/field.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace tvf {
+
+struct DesignCheckOptions {
+  // How far a found singularity or bifurcation may lie from the designed point, in mean
+  // edge lengths of the domain: the zero of a sampled field moves by O(h), and the
+  // neighbouring elements push it a little further.
+  double position_tolerance = 2.5;
+  // How far a found bifurcation's time may lie from the designed one, in frame steps.
+  double time_tolerance = 2.0;
+};
+
+enum class FeatureKind { singularity, bifurcation };
+
+// One designed feature and what was found for it.
+struct DesignedFeature {
+  FeatureKind kind = FeatureKind::singularity;
+  std::string source;  // JSON path in the scene: "elements[2]", "keyframes[0].elements[1]", ...
+  std::string type;    // as designed: "ccw_center", "saddle", "jacobian", "saddle_sink_creation", ...
+  int index = 0;       // singularity: +1 or −1
+  double t_begin = 0;  // singularity: life span within the time range (a key frame: its
+  double t_end = 0;    //   frame's time twice); bifurcation: its time twice
+  Vec3 position = Vec3::Zero();  // at t_begin, on the domain
+  bool found = false;
+  // Singularity: frames of the life span, frames where a matching singularity was found,
+  // frames where the nearest singularity of the right index was in place but of an
+  // incompatible type, and the largest distance of a match (world units).
+  int frames = 0;
+  int frames_matched = 0;
+  int frames_type_differs = 0;
+  double max_distance = 0;
+  double max_shift = 0;  // largest first-order shift of the designed zero, |J⁻¹·V(x)|
+  // Bifurcation: the matched bifurcation (index into Topology::bifurcations, −1 if none),
+  // its distance (world units) and time offset (found − designed).
+  int bifurcation = -1;
+  double distance = 0;
+  double time_offset = 0;
+  std::vector<int> paths;  // ids of the found paths that carry the feature (ascending)
+  std::string note;        // what is missing when not found; empty otherwise
+};
+
+// A connected set of extra paths.
+struct ExtraGroup {
+  std::vector<int> paths;         // path ids, ascending
+  std::vector<int> bifurcations;  // bifurcations touching these paths (indices, ascending)
+  double t_begin = 0, t_end = 0;  // life span of the set
+  Vec3 center = Vec3::Zero();     // mean of the paths' points
+  std::string description;        // "saddle+sink pair, created at t=0.410, cancelled at t=0.470"
+};
+
+struct DesignCheck {
+  std::vector<DesignedFeature> designed;
+  std::vector<int> implied_bifurcations;  // indices into Topology::bifurcations
+  std::vector<int> extra_paths;           // path ids
+  std::vector<int> extra_bifurcations;    // indices into Topology::bifurcations
+  std::vector<ExtraGroup> extras;
+  double position_tolerance = 0;  // world units
+  double time_tolerance = 0;      // time units
+
+  bool all_found() const;
+  // A short human summary: the first line counts designed and found features and extras,
+  // one line follows per feature not found and per extra group (at most `max_lines`, then
+  // "… and N more"). Positions are written as the domain has them: (x, y) on planar
+  // domains, (x, y, z) on surfaces.
+  std::string summary(int max_lines = 8) const;
+};
+
+// Checks `topology` (of `field`, generated from `scene` on `space`) against the scene's design.
+// Throws tvf::Error naming the scene when the topology's frames are not the scene's.
+DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Field& field,
+                         const Topology& topology, const DesignCheckOptions& options = {});
+
+// The design-check JSON (docs/file_formats.md): {"all_found", "summary", "tolerance":
+// {"position", "time"}, "designed": [...], "implied_bifurcations", "extra": {"paths",
+// "bifurcations", "groups": [...]}}. Path ids and bifurcation indices refer to the
+// analysis JSON of the same field.
+nlohmann::json design_check_to_json(const DesignCheck& check);
+
+}  // namespace tvf

@@ -1,0 +1,485 @@
+#include "tvf/design/design_check.h"
+
+#include "tvf/core/error.h"
+#include "tvf/design/element_field.h"
+#include "tvf/design/generate.h"
+#include "tvf/design/keyframes.h"
+#include "tvf/field/field_sampler.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <numeric>
+#include <set>
+#include <tuple>
+
+namespace tvf {
+
+namespace {
+
+// Topological class of a type: stability for index +1 (center apart), saddle for −1.
+enum class Stability { repelling, attracting, center, saddle };
+Stability stability(SingularityType t) {
+  switch (t) {
+    case SingularityType::source:
+    case SingularityType::repelling_focus: return Stability::repelling;
+    case SingularityType::sink:
+    case SingularityType::attracting_focus: return Stability::attracting;
+    case SingularityType::center: return Stability::center;
+    case SingularityType::saddle: return Stability::saddle;
+  }
+  return Stability::saddle;
+}
+bool complex_eigenvalues(SingularityType t) {
+  return t == SingularityType::center || t == SingularityType::repelling_focus ||
+         t == SingularityType::attracting_focus;
+}
+// Compatible types (see the header): equal topological class; a center with any focus.
+bool compatible(SingularityType designed, SingularityType found) {
+  if (designed == SingularityType::center) return complex_eigenvalues(found);
+  if (found == SingularityType::center) return complex_eigenvalues(designed);
+  return stability(designed) == stability(found);
+}
+
+// One singularity to look for at one frame.
+struct Expected {
+  int frame;
+  Vec3 position;   // the designed point, on the domain
+  int index;
+  SingularityType type;
+  Vec3 predicted;  // where the field's value at `position` moves the zero (first order)
+};
+
+std::string position_text(const Vec3& x, bool planar) {
+  return planar ? fmt::format("({:.2f}, {:.2f})", x.x(), x.y())
+                : fmt::format("({:.2f}, {:.2f}, {:.2f})", x.x(), x.y(), x.z());
+}
+
+// Matches the expectations of one singularity feature, frame by frame.
+void match_singularity(DesignedFeature& f, const std::vector<Expected>& expected, const Topology& topo,
+                       double tol, std::set<int>& claimed) {
+  f.frames = static_cast<int>(expected.size());
+  std::set<int> paths;
+  int first_missing = -1, first_differs = -1;
+  SingularityType differs_found = SingularityType::source, differs_designed = SingularityType::source;
+  for (const Expected& e : expected) {
+    const auto& sings = topo.singularities[static_cast<size_t>(e.frame)];
+    int best = -1, best_any = -1;
+    double d_best = tol, d_any = tol;
+    for (size_t k = 0; k < sings.size(); ++k) {
+      const Singularity& s = sings[k];
+      if (s.index != e.index) continue;
+      const double d = (s.position - e.predicted).norm();
+      if (d <= d_any) d_any = d, best_any = static_cast<int>(k);
+      if (d <= d_best && compatible(e.type, s.type)) d_best = d, best = static_cast<int>(k);
+    }
+    f.max_shift = std::max(f.max_shift, (e.predicted - e.position).norm());
+    const int hit = best >= 0 ? best : best_any;
+    if (hit >= 0) {
+      const int id = topo.singularity_path[static_cast<size_t>(e.frame)][static_cast<size_t>(hit)];
+      if (id >= 0) paths.insert(id);
+    }
+    if (best >= 0) {
+      ++f.frames_matched;
+      f.max_distance = std::max(f.max_distance, d_best);
+    } else if (best_any >= 0) {
+      ++f.frames_type_differs;
+      if (first_differs < 0) {
+        first_differs = e.frame;
+        differs_found = sings[static_cast<size_t>(best_any)].type;
+        differs_designed = e.type;
+      }
+    } else if (first_missing < 0) {
+      first_missing = e.frame;
+    }
+  }
+  f.paths.assign(paths.begin(), paths.end());
+  claimed.insert(paths.begin(), paths.end());
+  f.found = f.frames > 0 && f.frames_matched == f.frames;
+  std::vector<std::string> notes;
+  if (f.frames == 0) notes.push_back("no frame falls in its life span");
+  const int missing = f.frames - f.frames_matched - f.frames_type_differs;
+  if (missing > 0)
+    notes.push_back(fmt::format("no singularity of index {:+d} within {:.3g} of where the field puts it at {} of {} "
+                                "frames (first at t = {:.3f})",
+                                f.index, tol, missing, f.frames, topo.times[static_cast<size_t>(first_missing)]));
+  if (f.frames_type_differs > 0)
+    notes.push_back(fmt::format("of another type at {} of {} frames (first at t = {:.3f}: {} where {} is designed)",
+                                f.frames_type_differs, f.frames, topo.times[static_cast<size_t>(first_differs)],
+                                to_string(differs_found), to_string(differs_designed)));
+  for (size_t k = 0; k < notes.size(); ++k) f.note += (k ? "; " : "") + notes[k];
+}
+
+}  // namespace
+
+bool DesignCheck::all_found() const {
+  return std::all_of(designed.begin(), designed.end(), [](const DesignedFeature& f) { return f.found; });
+}
+
+DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Field& field, const Topology& topo,
+                         const DesignCheckOptions& options) {
+  const int N = static_cast<int>(topo.times.size());
+  if (N != scene.time.frames)
+    throw_input_error(scene.label(), "time.frames",
+                      fmt::format("the field has {} frames but the scene designs {}: check the field against "
+                                  "the scene that made it",
+                                  N, scene.time.frames));
+  const Mesh& mesh = space.mesh();
+  DesignCheck out;
+  out.position_tolerance = options.position_tolerance * mesh.mean_edge_length();
+  const double dt = N > 1 ? (topo.times.back() - topo.times.front()) / (N - 1) : 0.0;
+  out.time_tolerance = options.time_tolerance * dt;
+  const double tol = out.position_tolerance;
+  auto on_domain = [&](const Vec3& x) { return surface_position(mesh, space.locate(x)); };
+  // Where the field puts the zero of a singularity designed at x with Jacobian J (in the
+  // element's frame, the frame of the face holding x) at frame j: one Newton step from x,
+  // x − J⁻¹·V(x), since the rest of the design adds V(x) to the element's own field.
+  const FieldSampler sampler(space.bundle(), field);
+  auto expect = [&](int j, const Vec3& x, const Mat2& J) -> Expected {
+    const SurfacePoint p = space.locate(x);
+    Expected e{j, surface_position(mesh, p), J.determinant() > 0 ? 1 : -1, classify_jacobian(J), Vec3::Zero()};
+    e.predicted = e.position;
+    const double scale = J.cwiseAbs().maxCoeff();
+    if (std::abs(J.determinant()) > 1e-12 * scale * scale) {
+      const Vec2 step = J.inverse() * to_vec2(sampler.in_face(p, topo.times[static_cast<size_t>(j)]));
+      e.predicted = e.position - step.x() * space.bundle().face_e1(p.face) - step.y() * space.bundle().face_e2(p.face);
+    }
+    return e;
+  };
+  std::set<int> claimed;
+
+  auto add_singularity = [&](const std::string& source, const std::string& type, const std::vector<Expected>& expected,
+                             int index, const Vec3& first_position) {
+    DesignedFeature f;
+    f.kind = FeatureKind::singularity;
+    f.source = source;
+    f.type = type;
+    f.index = index;
+    f.position = first_position;
+    if (!expected.empty()) {
+      f.t_begin = topo.times[static_cast<size_t>(expected.front().frame)];
+      f.t_end = topo.times[static_cast<size_t>(expected.back().frame)];
+      f.position = expected.front().position;
+    }
+    match_singularity(f, expected, topo, tol, claimed);
+    out.designed.push_back(std::move(f));
+  };
+
+  // Elements: singular ones along their paths, bifurcations at their points.
+  std::set<int> designed_bifs;  // found bifurcations matched to bifurcation elements
+  for (size_t k = 0; k < scene.elements.size(); ++k) {
+    const Element& e = scene.elements[k];
+    const std::string source = fmt::format("elements[{}]", k);
+    if (const auto* s = std::get_if<SingularElement>(&e)) {
+      const CompiledElement el(e);
+      std::vector<Expected> expected;
+      for (int j = 0; j < N; ++j) {
+        const double t = topo.times[static_cast<size_t>(j)];
+        if (!el.active(t)) continue;
+        const ElementState st = el.at(t);
+        expected.push_back(expect(j, st.position, st.field.matrix));
+      }
+      add_singularity(source, s->type ? to_string(*s->type) : "jacobian", expected, el.index(),
+                      on_domain(s->path.front().position));
+    } else if (const auto* b = std::get_if<BifurcationElement>(&e)) {
+      // Only a bifurcation strictly inside the time range is an event of the field.
+      if (N < 2 || b->at.t <= topo.times.front() || b->at.t >= topo.times.back()) continue;
+      DesignedFeature f;
+      f.kind = FeatureKind::bifurcation;
+      f.source = source;
+      f.type = to_string(b->type);
+      f.t_begin = f.t_end = b->at.t;
+      f.position = on_domain(b->at.position);
+      const bool creation = b->type == BifurcationType::saddle_sink_creation ||
+                            b->type == BifurcationType::saddle_source_creation;
+      const bool sink = b->type == BifurcationType::saddle_sink_creation ||
+                        b->type == BifurcationType::saddle_sink_cancellation;
+      const BifurcationKind kind = creation ? BifurcationKind::creation : BifurcationKind::cancellation;
+      double best_score = 1e300;
+      for (size_t i = 0; i < topo.bifurcations.size(); ++i) {
+        const Bifurcation& fb = topo.bifurcations[i];
+        if (fb.kind != kind) continue;
+        const double d = (fb.position - f.position).norm();
+        const double dtime = std::abs(fb.t - f.t_begin);
+        if (d > tol || dtime > out.time_tolerance) continue;
+        const double score = d / tol + (out.time_tolerance > 0 ? dtime / out.time_tolerance : 0.0);
+        if (score < best_score) best_score = score, f.bifurcation = static_cast<int>(i);
+      }
+      if (f.bifurcation < 0) {
+        f.note = fmt::format("no {} within {:.3g} and {:.3g} in time of ({}, t = {:.3f})", to_string(kind), tol,
+                             out.time_tolerance, position_text(f.position, space.planar()), f.t_begin);
+      } else {
+        const Bifurcation& fb = topo.bifurcations[static_cast<size_t>(f.bifurcation)];
+        f.distance = (fb.position - f.position).norm();
+        f.time_offset = fb.t - f.t_begin;
+        f.paths = {fb.paths[0], fb.paths[1]};
+        claimed.insert(f.paths.begin(), f.paths.end());
+        const SingularityPath& p = topo.paths[static_cast<size_t>(fb.paths[0])];
+        const SingularityPath& q = topo.paths[static_cast<size_t>(fb.paths[1])];
+        const SingularityPath& node = p.index > 0 ? p : q;
+        const SingularityPath& saddle = p.index > 0 ? q : p;
+        const Stability want = sink ? Stability::attracting : Stability::repelling;
+        f.found = saddle.type == SingularityType::saddle && stability(node.type) == want;
+        if (!f.found)
+          f.note = fmt::format("the {} at t = {:.3f} joins a {} and a {}, not a saddle and a {}", to_string(kind),
+                               fb.t, to_string(p.type), to_string(q.type), sink ? "sink" : "source");
+        designed_bifs.insert(f.bifurcation);
+      }
+      out.designed.push_back(std::move(f));
+    }
+  }
+
+  // Key frames: their singular elements at their frames.
+  for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+    const Keyframe& kf = scene.keyframes[k];
+    const int j = keyframe_frame(scene, kf.t);
+    for (size_t i = 0; i < kf.elements.size(); ++i) {
+      const KeyframeElement& e = kf.elements[i];
+      if (e.kind != "singular") continue;
+      const Mat2 J = e.type ? jacobian_of(*e.type) : e.jacobian;
+      const Expected ex = expect(j, e.at, J);
+      add_singularity(fmt::format("keyframes[{}].elements[{}]", k, i), e.type ? to_string(*e.type) : "jacobian",
+                      {ex}, ex.index, ex.position);
+    }
+  }
+
+  // Deformation: the base's singular elements stay in place, with Jacobian M(t)·J.
+  if (scene.generator == Generator::deform && scene.deform.is_object() && scene.deform.contains("base")) {
+    const Scene base = deform_base_scene(scene);
+    for (size_t k = 0; k < base.elements.size(); ++k) {
+      const auto* s = std::get_if<SingularElement>(&base.elements[k]);
+      if (!s) continue;
+      const CompiledElement el(base.elements[k]);
+      const ElementState st = el.at(scene.time.t0);
+      const Vec3 x = on_domain(st.position);
+      std::vector<Expected> expected;
+      for (int j = 0; j < N; ++j)
+        expected.push_back(expect(j, st.position, deform_matrix(scene, topo.times[static_cast<size_t>(j)]) * st.field.matrix));
+      add_singularity(fmt::format("deform.base.elements[{}]", k), s->type ? to_string(*s->type) : "jacobian", expected,
+                      el.index(), x);
+    }
+  }
+
+  // Continuations across type changes: a path whose last point is another's first.
+  const int P = static_cast<int>(topo.paths.size());
+  using Key = std::tuple<double, double, double, double>;
+  auto key = [](const PathSample& s) { return Key{s.t, s.position.x(), s.position.y(), s.position.z()}; };
+  std::map<Key, std::vector<int>> starts;
+  for (const SingularityPath& p : topo.paths) starts[key(p.points.front())].push_back(p.id);
+  std::vector<std::vector<int>> continuation(static_cast<size_t>(P));  // both directions
+  std::vector<std::vector<int>> type_change_at(static_cast<size_t>(P));  // p → q, at p's end
+  std::vector<std::vector<int>> continues_from(static_cast<size_t>(P));  // q ← p, at q's start
+  for (const SingularityPath& p : topo.paths) {
+    const auto it = starts.find(key(p.points.back()));
+    if (it == starts.end()) continue;
+    for (const int q : it->second) {
+      if (q == p.id) continue;
+      continuation[static_cast<size_t>(p.id)].push_back(q);
+      continuation[static_cast<size_t>(q)].push_back(p.id);
+      type_change_at[static_cast<size_t>(p.id)].push_back(q);
+      continues_from[static_cast<size_t>(q)].push_back(p.id);
+    }
+  }
+  std::vector<int> stack(claimed.begin(), claimed.end());
+  while (!stack.empty()) {
+    const int p = stack.back();
+    stack.pop_back();
+    for (const int q : continuation[static_cast<size_t>(p)])
+      if (claimed.insert(q).second) stack.push_back(q);
+  }
+  // The continuations belong to the features whose paths they continue.
+  for (DesignedFeature& f : out.designed) {
+    std::set<int> ps(f.paths.begin(), f.paths.end());
+    std::vector<int> todo(f.paths.begin(), f.paths.end());
+    while (!todo.empty()) {
+      const int p = todo.back();
+      todo.pop_back();
+      for (const int q : continuation[static_cast<size_t>(p)])
+        if (ps.insert(q).second) todo.push_back(q);
+    }
+    f.paths.assign(ps.begin(), ps.end());
+  }
+
+  // Bifurcations: designed, implied, extra.
+  const auto is_claimed = [&](int p) { return claimed.count(p) > 0; };
+  for (size_t i = 0; i < topo.bifurcations.size(); ++i) {
+    if (designed_bifs.count(static_cast<int>(i))) continue;
+    const Bifurcation& b = topo.bifurcations[i];
+    if (is_claimed(b.paths[0]) && is_claimed(b.paths[1]))
+      out.implied_bifurcations.push_back(static_cast<int>(i));
+    else
+      out.extra_bifurcations.push_back(static_cast<int>(i));
+  }
+  for (int p = 0; p < P; ++p)
+    if (!is_claimed(p)) out.extra_paths.push_back(p);
+
+  // Extra groups: union–find over extra paths joined by bifurcations and type changes.
+  std::vector<int> parent(static_cast<size_t>(P));
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int x) {
+    while (parent[static_cast<size_t>(x)] != x) {
+      auto& up = parent[static_cast<size_t>(x)];
+      up = parent[static_cast<size_t>(up)];  // path halving
+      x = up;
+    }
+    return x;
+  };
+  auto unite = [&](int a, int b) {
+    if (!is_claimed(a) && !is_claimed(b)) parent[static_cast<size_t>(root(a))] = root(b);
+  };
+  for (const Bifurcation& b : topo.bifurcations) unite(b.paths[0], b.paths[1]);
+  for (int p = 0; p < P; ++p)
+    for (const int q : continuation[static_cast<size_t>(p)]) unite(p, q);
+  std::map<int, ExtraGroup> groups;
+  for (const int p : out.extra_paths) groups[root(p)].paths.push_back(p);
+  const bool planar = space.planar();
+  const double t_first = N ? topo.times.front() : 0.0, t_last = N ? topo.times.back() : 0.0;
+  for (auto& [r, g] : groups) {
+    std::set<int> members(g.paths.begin(), g.paths.end());
+    g.t_begin = 1e300;
+    g.t_end = -1e300;
+    size_t count = 0;
+    for (const int p : g.paths) {
+      const SingularityPath& path = topo.paths[static_cast<size_t>(p)];
+      g.t_begin = std::min(g.t_begin, path.birth);
+      g.t_end = std::max(g.t_end, path.death);
+      for (const PathSample& s : path.points) g.center += s.position, ++count;
+    }
+    if (count) g.center /= static_cast<double>(count);
+    // Events, in time order.
+    std::vector<std::pair<double, std::string>> events;
+    std::set<std::pair<int, bool>> explained;  // (path, at its end) explained by a bifurcation or type change
+    for (size_t i = 0; i < topo.bifurcations.size(); ++i) {
+      const Bifurcation& b = topo.bifurcations[i];
+      const bool in0 = members.count(b.paths[0]) > 0, in1 = members.count(b.paths[1]) > 0;
+      if (!in0 && !in1) continue;
+      g.bifurcations.push_back(static_cast<int>(i));
+      const bool creation = b.kind == BifurcationKind::creation;
+      for (const int p : b.paths) explained.insert({p, !creation});
+      std::string what = creation ? "created" : "cancelled";
+      if (!in0 || !in1) {
+        const SingularityPath& other = topo.paths[static_cast<size_t>(in0 ? b.paths[1] : b.paths[0])];
+        what += fmt::format(" with a designed {}", to_string(other.type));
+      }
+      events.emplace_back(b.t, fmt::format("{} at t={:.3f}", what, b.t));
+    }
+    for (const int p : g.paths)
+      for (const int q : type_change_at[static_cast<size_t>(p)]) {
+        const SingularityPath& a = topo.paths[static_cast<size_t>(p)];
+        const SingularityPath& b = topo.paths[static_cast<size_t>(q)];
+        events.emplace_back(a.death, fmt::format("turns from {} to {}{} at t={:.3f}", to_string(a.type),
+                                                 members.count(q) ? "" : "the designed ", to_string(b.type), a.death));
+      }
+    for (const int p : g.paths) {
+      const SingularityPath& path = topo.paths[static_cast<size_t>(p)];
+      if (!continues_from[static_cast<size_t>(p)].empty() && !members.count(continues_from[static_cast<size_t>(p)].front()))
+        events.emplace_back(path.birth, fmt::format("turns from the designed {} at t={:.3f}",
+                                                    to_string(topo.paths[static_cast<size_t>(continues_from[static_cast<size_t>(p)].front())].type),
+                                                    path.birth));
+      if (!type_change_at[static_cast<size_t>(p)].empty()) explained.insert({p, true});
+      if (!continues_from[static_cast<size_t>(p)].empty()) explained.insert({p, false});
+      if (path.birth > t_first && !explained.count({p, false}))
+        events.emplace_back(path.birth, fmt::format("enters through the boundary at t={:.3f}", path.birth));
+      if (path.death < t_last && !explained.count({p, true}))
+        events.emplace_back(path.death, fmt::format("leaves through the boundary at t={:.3f}", path.death));
+    }
+    std::stable_sort(events.begin(), events.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    events.erase(std::unique(events.begin(), events.end()), events.end());
+    std::string types;
+    for (size_t k = 0; k < g.paths.size() && k < 6; ++k)
+      types += (k ? "+" : "") + std::string(to_string(topo.paths[static_cast<size_t>(g.paths[k])].type));
+    if (g.paths.size() > 6) types += "+…";
+    const std::string what = g.paths.size() == 1   ? fmt::format("1 path ({})", types)
+                             : g.paths.size() == 2 ? fmt::format("2 paths ({} pair)", types)
+                                                   : fmt::format("{} paths ({})", g.paths.size(), types);
+    g.description = fmt::format("{} living t∈[{:.3f}, {:.3f}] near {}", what, g.t_begin, g.t_end,
+                                position_text(g.center, planar));
+    for (size_t k = 0; k < events.size(); ++k) g.description += (k ? ", " : ": ") + events[k].second;
+    out.extras.push_back(std::move(g));
+  }
+  std::stable_sort(out.extras.begin(), out.extras.end(),
+                   [](const ExtraGroup& a, const ExtraGroup& b) { return a.t_begin < b.t_begin; });
+  return out;
+}
+
+std::string DesignCheck::summary(int max_lines) const {
+  int sings = 0, bifs = 0, found_count = 0;
+  for (const DesignedFeature& f : designed) {
+    (f.kind == FeatureKind::singularity ? sings : bifs) += 1;
+    found_count += f.found;
+  }
+  auto plural = [](size_t n, const char* one, const char* many) {
+    return fmt::format("{} {}", n, n == 1 ? one : many);
+  };
+  std::string s = fmt::format("designed {}, {}: ", plural(static_cast<size_t>(sings), "singularity", "singularities"),
+                              plural(static_cast<size_t>(bifs), "bifurcation", "bifurcations"));
+  s += designed.empty()          ? "nothing to find"
+       : all_found()             ? "all found"
+                                 : fmt::format("{} of {} found", found_count, designed.size());
+  if (!implied_bifurcations.empty())
+    s += fmt::format(" ({} implied by the design)", plural(implied_bifurcations.size(), "bifurcation", "bifurcations"));
+  if (extra_paths.empty() && extra_bifurcations.empty())
+    s += "; no extras";
+  else
+    s += fmt::format("; extra: {}, {}", plural(extra_paths.size(), "path", "paths"),
+                     plural(extra_bifurcations.size(), "bifurcation", "bifurcations"));
+  std::vector<std::string> lines;
+  for (const DesignedFeature& f : designed)
+    if (!f.found) lines.push_back(fmt::format("not found: {} ({}): {}", f.source, f.type, f.note));
+  for (const ExtraGroup& g : extras) lines.push_back("extra: " + g.description);
+  const size_t shown = std::min(lines.size(), static_cast<size_t>(std::max(max_lines, 0)));
+  for (size_t k = 0; k < shown; ++k) s += "\n  " + lines[k];
+  if (shown < lines.size()) s += fmt::format("\n  … and {} more (see the design JSON)", lines.size() - shown);
+  return s;
+}
+
+nlohmann::json design_check_to_json(const DesignCheck& check) {
+  using nlohmann::json;
+  auto vec3 = [](const Vec3& x) { return json::array({x.x(), x.y(), x.z()}); };
+  json designed = json::array();
+  for (const DesignedFeature& f : check.designed) {
+    json j = {{"source", f.source},
+              {"kind", f.kind == FeatureKind::singularity ? "singularity" : "bifurcation"},
+              {"type", f.type}};
+    if (f.kind == FeatureKind::singularity) {
+      j["index"] = f.index;
+      j["life"] = json::array({f.t_begin, f.t_end});
+      j["position"] = vec3(f.position);
+      j["found"] = f.found;
+      j["frames"] = {{"checked", f.frames}, {"matched", f.frames_matched}, {"type_differs", f.frames_type_differs}};
+      j["max_distance"] = f.max_distance;
+      j["max_shift"] = f.max_shift;
+    } else {
+      j["t"] = f.t_begin;
+      j["position"] = vec3(f.position);
+      j["found"] = f.found;
+      if (f.bifurcation >= 0) {
+        j["bifurcation"] = f.bifurcation;
+        j["distance"] = f.distance;
+        j["time_offset"] = f.time_offset;
+      } else {
+        j["bifurcation"] = nullptr;
+      }
+    }
+    j["paths"] = f.paths;
+    if (!f.note.empty()) j["note"] = f.note;
+    designed.push_back(std::move(j));
+  }
+  json groups = json::array();
+  for (const ExtraGroup& g : check.extras)
+    groups.push_back({{"paths", g.paths},
+                      {"bifurcations", g.bifurcations},
+                      {"life", json::array({g.t_begin, g.t_end})},
+                      {"center", vec3(g.center)},
+                      {"description", g.description}});
+  return json{{"all_found", check.all_found()},
+              {"summary", check.summary(1 << 30)},
+              {"tolerance", {{"position", check.position_tolerance}, {"time", check.time_tolerance}}},
+              {"designed", std::move(designed)},
+              {"implied_bifurcations", check.implied_bifurcations},
+              {"extra", {{"paths", check.extra_paths}, {"bifurcations", check.extra_bifurcations}, {"groups", std::move(groups)}}}};
+}
+
+}  // namespace tvf

@@ -1,0 +1,235 @@
+// The design check (design_check.h): a field generated from a scene holds the scene's
+// designed singularities and bifurcations; a feature generated but not designed is reported
+// as an extra with its kind, time and place; a designed feature the field lacks, or holds
+// with another type, is reported missing; the zeros the rest of the design moves are found
+// where the first-order shift puts them.
+#include "tvf/design/design_check.h"
+
+#include "tvf/analysis/topology.h"
+#include "tvf/core/error.h"
+#include "tvf/design/element_field.h"
+#include "tvf/design/generate.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace tvf {
+namespace {
+
+Scene grid_scene(int n, int frames, double falloff) {
+  Scene s;
+  s.domain.grid = GridSpec{n, n, {-1, -1}, {1, 1}};
+  s.time.frames = frames;
+  s.falloff = falloff;
+  return s;
+}
+
+SingularElement singular(SingularType type, std::vector<PathPoint> path) {
+  SingularElement e;
+  e.type = type;
+  e.jacobian = jacobian_of(type);
+  e.path = std::move(path);
+  return e;
+}
+
+BifurcationElement bifurcation(BifurcationType type, const Vec3& at, double t) {
+  BifurcationElement b;
+  b.type = type;
+  b.at = {at, t};
+  b.scale = 0.25;
+  b.time_scale = 0.25;
+  return b;
+}
+
+struct Generated {
+  std::unique_ptr<DesignSpace> space;
+  Field field;
+  Topology topology;
+};
+Generated generate_and_analyze(const Scene& scene) {
+  Generated g;
+  g.space = make_design_space(scene);
+  g.field = generate(*g.space, scene);
+  g.topology = analyze_topology(g.space->bundle(), g.field);
+  return g;
+}
+
+// A moving source and a saddle–sink creation, well apart (falloff 150: d = 18.75, so each
+// element's field is below 1e-8 of its strength a unit away).
+Scene designed_scene() {
+  Scene s = grid_scene(41, 21, 150);
+  s.elements.push_back(singular(SingularType::source, {{Vec3(-0.5, -0.5, 0), 0}, {Vec3(-0.45, 0.1, 0), 1}}));
+  s.elements.push_back(bifurcation(BifurcationType::saddle_sink_creation, Vec3(0.45, 0.4, 0), 0.5));
+  return s;
+}
+
+TEST(DesignCheck, FindsEveryDesignedFeatureAndNothingElse) {
+  const Scene scene = designed_scene();
+  const Generated g = generate_and_analyze(scene);
+  const DesignCheck check = check_design(scene, *g.space, g.field, g.topology);
+  ASSERT_EQ(check.designed.size(), 2u);
+  EXPECT_TRUE(check.all_found()) << check.summary();
+  const DesignedFeature& source = check.designed[0];
+  EXPECT_EQ(source.kind, FeatureKind::singularity);
+  EXPECT_EQ(source.source, "elements[0]");
+  EXPECT_EQ(source.type, "source");
+  EXPECT_EQ(source.index, 1);
+  EXPECT_EQ(source.frames, 21);
+  EXPECT_EQ(source.frames_matched, 21);
+  EXPECT_EQ(source.t_begin, 0.0);
+  EXPECT_EQ(source.t_end, 1.0);
+  EXPECT_LE(source.max_distance, check.position_tolerance);
+  ASSERT_EQ(source.paths.size(), 1u);
+  EXPECT_EQ(g.topology.paths[static_cast<size_t>(source.paths[0])].type, SingularityType::source);
+
+  const DesignedFeature& creation = check.designed[1];
+  EXPECT_EQ(creation.kind, FeatureKind::bifurcation);
+  ASSERT_GE(creation.bifurcation, 0);
+  const Bifurcation& b = g.topology.bifurcations[static_cast<size_t>(creation.bifurcation)];
+  EXPECT_EQ(b.kind, BifurcationKind::creation);
+  EXPECT_LE((b.position - Vec3(0.45, 0.4, 0)).norm(), check.position_tolerance);
+  EXPECT_LE(std::abs(b.t - 0.5), check.time_tolerance);
+  EXPECT_EQ(creation.paths.size(), 2u);
+
+  // Every path is one of the design's; nothing extra.
+  EXPECT_EQ(g.topology.paths.size(), 3u);
+  EXPECT_TRUE(check.extra_paths.empty());
+  EXPECT_TRUE(check.extra_bifurcations.empty());
+  EXPECT_TRUE(check.extras.empty());
+  EXPECT_NE(check.summary().find("designed 1 singularity, 1 bifurcation: all found; no extras"), std::string::npos)
+      << check.summary();
+  // The JSON says the same.
+  const nlohmann::json j = design_check_to_json(check);
+  EXPECT_TRUE(j.at("all_found").get<bool>());
+  EXPECT_EQ(j.at("designed").size(), 2u);
+  EXPECT_EQ(j.at("designed")[1].at("bifurcation").get<int>(), creation.bifurcation);
+  EXPECT_TRUE(j.at("extra").at("paths").empty());
+}
+
+TEST(DesignCheck, ReportsAnUndesignedPairAsOneExtraGroup) {
+  // The field holds a saddle–source cancellation that the checked design does not have.
+  Scene generated = designed_scene();
+  generated.elements.push_back(
+      bifurcation(BifurcationType::saddle_source_cancellation, Vec3(0.45, -0.5, 0), 0.6));
+  const Generated g = generate_and_analyze(generated);
+  const DesignCheck check = check_design(designed_scene(), *g.space, g.field, g.topology);
+  EXPECT_TRUE(check.all_found()) << check.summary();
+  ASSERT_EQ(check.extra_paths.size(), 2u);
+  ASSERT_EQ(check.extra_bifurcations.size(), 1u);
+  ASSERT_EQ(check.extras.size(), 1u);
+  const ExtraGroup& extra = check.extras[0];
+  EXPECT_EQ(extra.paths, check.extra_paths);
+  const Bifurcation& b = g.topology.bifurcations[static_cast<size_t>(check.extra_bifurcations[0])];
+  EXPECT_EQ(b.kind, BifurcationKind::cancellation);
+  EXPECT_LE((b.position - Vec3(0.45, -0.5, 0)).norm(), check.position_tolerance);
+  EXPECT_LE(std::abs(b.t - 0.6), check.time_tolerance);
+  // A saddle and a source, both from the first frame to the cancellation.
+  std::vector<SingularityType> types;
+  for (const int p : extra.paths) types.push_back(g.topology.paths[static_cast<size_t>(p)].type);
+  std::sort(types.begin(), types.end());
+  EXPECT_EQ(types, (std::vector<SingularityType>{SingularityType::source, SingularityType::saddle}));
+  EXPECT_EQ(extra.t_begin, 0.0);
+  EXPECT_EQ(extra.t_end, b.t);
+  EXPECT_LE((extra.center - Vec3(0.45, -0.5, 0)).norm(), 0.3);
+  EXPECT_NE(extra.description.find("pair"), std::string::npos) << extra.description;
+  EXPECT_NE(extra.description.find("cancelled at t=" + fmt::format("{:.3f}", b.t)), std::string::npos)
+      << extra.description;
+  EXPECT_NE(check.summary().find("extra: 2 paths, 1 bifurcation"), std::string::npos) << check.summary();
+  // Checked against the scene that made it, the pair is designed.
+  const DesignCheck full = check_design(generated, *g.space, g.field, g.topology);
+  EXPECT_TRUE(full.all_found()) << full.summary();
+  EXPECT_TRUE(full.extra_paths.empty());
+}
+
+TEST(DesignCheck, MissingFeaturesAndWrongTypesAreNotFound) {
+  const Scene scene = designed_scene();
+  const Generated g = generate_and_analyze(scene);
+  Scene wanted = designed_scene();
+  // A sink where the field has a source, a saddle where it has nothing, and a creation
+  // at the wrong time.
+  wanted.elements[0] = singular(SingularType::sink, {{Vec3(-0.5, -0.5, 0), 0}, {Vec3(-0.45, 0.1, 0), 1}});
+  wanted.elements.push_back(singular(SingularType::saddle, {{Vec3(0.0, -0.6, 0), 0.2}, {Vec3(0.0, -0.6, 0), 0.4}}));
+  std::get<BifurcationElement>(wanted.elements[1]).at.t = 0.8;
+  const DesignCheck check = check_design(wanted, *g.space, g.field, g.topology);
+  ASSERT_EQ(check.designed.size(), 3u);
+  EXPECT_FALSE(check.all_found());
+  const DesignedFeature& sink = check.designed[0];
+  EXPECT_FALSE(sink.found);
+  EXPECT_EQ(sink.frames_matched, 0);
+  EXPECT_EQ(sink.frames_type_differs, 21);
+  EXPECT_NE(sink.note.find("source where sink is designed"), std::string::npos) << sink.note;
+  const DesignedFeature& creation = check.designed[1];
+  EXPECT_FALSE(creation.found);
+  EXPECT_EQ(creation.bifurcation, -1);
+  const DesignedFeature& saddle = check.designed[2];
+  EXPECT_FALSE(saddle.found);
+  EXPECT_EQ(saddle.t_begin, 0.2);
+  EXPECT_EQ(saddle.t_end, 0.4);
+  EXPECT_EQ(saddle.frames, 5);  // t = 0.20, 0.25, …, 0.40
+  EXPECT_EQ(saddle.frames_matched, 0);
+  EXPECT_EQ(check.summary().find("all found"), std::string::npos);
+  EXPECT_NE(check.summary().find("not found: elements[2] (saddle)"), std::string::npos) << check.summary();
+  // The field's paths that no designed feature claims are extras: the pair of the creation.
+  EXPECT_EQ(check.extra_paths.size(), 2u);
+}
+
+TEST(DesignCheck, ZerosMovedByTheRestOfTheDesignAreFoundWhereTheShiftPutsThem) {
+  // A source with a regular element (velocity (0.2, 0)) passing 0.5 above it, wide falloff
+  // (d = 1): the regular element adds ≈ 0.2·e^{-0.25} ≈ 0.16 along x at the source, which
+  // moves its zero upstream by ≈ 0.16, more than six edge lengths.
+  Scene s = grid_scene(81, 3, 8);
+  s.elements.push_back(singular(SingularType::source, {{Vec3(-0.3, 0.1, 0), 0}}));
+  RegularElement r;
+  r.pathline = {{Vec3(-0.4, 0.6, 0), 0}, {Vec3(-0.2, 0.6, 0), 1}};
+  s.elements.push_back(r);
+  const Generated g = generate_and_analyze(s);
+  const DesignCheck check = check_design(s, *g.space, g.field, g.topology);
+  EXPECT_TRUE(check.all_found()) << check.summary();
+  ASSERT_EQ(check.designed.size(), 1u);
+  for (const DesignedFeature& f : check.designed) {
+    EXPECT_GT(f.max_shift, check.position_tolerance);
+    EXPECT_LE(f.max_distance, check.position_tolerance);
+    // The found zero really lies further than the tolerance from the designed point.
+    const auto& sings = g.topology.singularities[0];
+    double nearest = 1e300;
+    for (const Singularity& x : sings)
+      if (x.index == 1) nearest = std::min(nearest, (x.position - f.position).norm());
+    EXPECT_GT(nearest, check.position_tolerance);
+  }
+}
+
+TEST(DesignCheck, DeformedSourceIsFoundThroughItsTypeChanges) {
+  // A deformed source turned by π: a source, then (after the center) a sink, in place.
+  Scene s = grid_scene(33, 21, 20);
+  s.generator = Generator::deform;
+  s.deform = nlohmann::json::parse(R"({"base": {"elements": [{"kind": "singular", "type": "source",
+      "path": [[0.1, -0.05, 0]]}]}, "transform": [{"t": 0, "sx": 1, "sy": 1, "theta": 0},
+      {"t": 1, "sx": 1, "sy": 1, "theta": 3.141592653589793}]})");
+  const Generated g = generate_and_analyze(s);
+  const DesignCheck check = check_design(s, *g.space, g.field, g.topology);
+  ASSERT_EQ(check.designed.size(), 1u);
+  EXPECT_EQ(check.designed[0].source, "deform.base.elements[0]");
+  EXPECT_TRUE(check.all_found()) << check.summary();
+  // Every path is the source's: repelling first, attracting last (a center between when
+  // two frames fall in the center band), and none extra.
+  EXPECT_EQ(check.designed[0].paths.size(), g.topology.paths.size());
+  ASSERT_GE(g.topology.paths.size(), 2u);
+  const SingularityType first = g.topology.paths.front().type, last = g.topology.paths.back().type;
+  EXPECT_TRUE(first == SingularityType::source || first == SingularityType::repelling_focus) << to_string(first);
+  EXPECT_TRUE(last == SingularityType::sink || last == SingularityType::attracting_focus) << to_string(last);
+  EXPECT_TRUE(check.extra_paths.empty());
+}
+
+TEST(DesignCheck, RefusesATopologyOfAnotherTimeSampling) {
+  const Scene scene = designed_scene();
+  const Generated g = generate_and_analyze(scene);
+  Scene other = scene;
+  other.time.frames = 11;
+  EXPECT_THROW(check_design(other, *g.space, g.field, g.topology), Error);
+}
+
+}  // namespace
+}  // namespace tvf
