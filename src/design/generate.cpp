@@ -155,21 +155,19 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   return field;
 }
 
-Field generate_spacetime(const DesignSpace& space, const Scene& scene,
-                         const GenerateOptions& options, GenerateReport* report) {
-  const auto start = std::chrono::steady_clock::now();
+SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
+                                   const GenerateOptions& options) {
   const int nv = space.mesh().num_vertices();
   check_field_memory(scene, nv);
   if (scene.solver.weights == Weights::mean_value)
     throw_input_error(scene.label(), "solver.weights",
                       "the spacetime generator needs symmetric weights (cotan or uniform): "
                       "mean-value weights make the system non-Hermitian");
-  const ConnectionLaplacian laplacian =
-      connection_laplacian(space.bundle(), to_laplacian_weights(scene.solver.weights));
+  SpaceTimeProblem problem{connection_laplacian(space.bundle(), to_laplacian_weights(scene.solver.weights)), {}, {}};
   const auto n = static_cast<size_t>(nv);
   const auto frames = static_cast<size_t>(scene.time.frames);
-  std::vector<char> fixed(n * frames, 0);
-  std::vector<cplx> values(n * frames, cplx(0, 0));
+  problem.fixed.assign(n * frames, 0);
+  problem.values.assign(n * frames, cplx(0, 0));
 
   // Key frames: whole frames held fixed.
   std::vector<char> is_key(frames, 0);
@@ -181,9 +179,9 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
                                     "use more frames or move the key frame",
                                     scene.keyframes[k].t, j));
     is_key[j] = 1;
-    const std::vector<cplx> key = keyframe_field(space, scene, k, laplacian);
-    std::fill_n(fixed.begin() + static_cast<std::ptrdiff_t>(j * n), n, char{1});
-    std::copy(key.begin(), key.end(), values.begin() + static_cast<std::ptrdiff_t>(j * n));
+    const std::vector<cplx> key = keyframe_field(space, scene, k, problem.laplacian);
+    std::fill_n(problem.fixed.begin() + static_cast<std::ptrdiff_t>(j * n), n, char{1});
+    std::copy(key.begin(), key.end(), problem.values.begin() + static_cast<std::ptrdiff_t>(j * n));
   }
 
   // Element regions at every other frame (key frames and elements combine in one solve).
@@ -193,18 +191,25 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
   quiet.progress = nullptr;
   for_each_frame(scene.time.frames, quiet, [&](int j) {
     if (is_key[static_cast<size_t>(j)]) return;
-    const std::span<char> f(fixed.data() + static_cast<size_t>(j) * n, n);
-    const std::span<cplx> v(values.data() + static_cast<size_t>(j) * n, n);
+    const std::span<char> f(problem.fixed.data() + static_cast<size_t>(j) * n, n);
+    const std::span<cplx> v(problem.values.data() + static_cast<size_t>(j) * n, n);
     constrain_elements(space, scene, elements, scene.time.time(j), d, f, v);
   });
+  return problem;
+}
 
+Field generate_spacetime(const DesignSpace& space, const Scene& scene,
+                         const GenerateOptions& options, GenerateReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  const SpaceTimeProblem problem = spacetime_problem(space, scene, options);
+  const int nv = space.mesh().num_vertices();
   Field field(scene.time, nv);
-  SpaceTimeSolver solver(laplacian, scene.time.frames, scene.solver.temporal_weight);
-  solver.interpolate_in_time(fixed, values, field.data());
+  SpaceTimeSolver solver(problem.laplacian, scene.time.frames, scene.solver.temporal_weight);
+  solver.interpolate_in_time(problem.fixed, problem.values, field.data());
   SpaceTimeOptions st;
   st.tolerance = scene.solver.tolerance;
   st.parallel = options.parallel;
-  const SolveReport r = solver.solve(fixed, values, field.data(), st);
+  const SolveReport r = solver.solve(problem.fixed, problem.values, field.data(), st);
   if (options.progress) options.progress(scene.time.frames, scene.time.frames);
   if (!r.success)
     throw_input_error(scene.label(), "solver.tolerance",

@@ -6,6 +6,7 @@
 #include "tvf/design/design_space.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
+#include "tvf/solve/connection_laplacian.h"
 
 #include <functional>
 #include <string>
@@ -56,6 +57,17 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
 // solver.temporal_weight times the temporal one. Needs cotan or uniform weights.
 Field generate_spacetime(const DesignSpace& space, const Scene& scene,
                          const GenerateOptions& options = {}, GenerateReport* report = nullptr);
+
+// The spatio-temporal system of a scene before it is solved: the connection Laplacian
+// and which entries (frame-major, frames × |V|) are fixed, to what. generate_spacetime()
+// solves it with SpaceTimeSolver; benchmarks and edits reuse it.
+struct SpaceTimeProblem {
+  ConnectionLaplacian laplacian;
+  std::vector<char> fixed;
+  std::vector<cplx> values;
+};
+SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
+                                   const GenerateOptions& options = {});
 
 // Time-varying transformation (paper §7, DESIGN §5.4): V(t) = M(t) V(t0), V(t0) the
 // static constrained design of deform.base's elements, M(t) from deform.matrix keys

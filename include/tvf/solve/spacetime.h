@@ -36,6 +36,9 @@ enum class SpaceTimeMethod {
   automatic,  // temporal modes where the fixed set allows it, else CG
   modes,      // temporal modes, or an error where the fixed set does not allow it
   cg,         // matrix-free CG with temporal line solves
+  // The paper's kind of method, kept as the baseline of the benchmarks: the assembled
+  // sparse system, BiCGStab with a Jacobi preconditioner, one thread.
+  bicgstab_jacobi,
 };
 
 struct SpaceTimeOptions {
@@ -76,6 +79,8 @@ private:
   const TemporalBasis& temporal_basis(int first, int count) const;
   SolveReport solve_cg(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
                        double bnorm, const SpaceTimeOptions& options) const;
+  SolveReport solve_bicgstab(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
+                             double bnorm, const SpaceTimeOptions& options) const;
   SolveReport solve_modes(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
                           double bnorm, const SpaceTimeOptions& options) const;
 
