@@ -1,0 +1,63 @@
+#pragma once
+// Re-solving a region of one frame (DESIGN §7; Zhang et al. 2006, "Vector field design on
+// surfaces", pair cancellation). A region is a set of faces; its interior vertices (every
+// face around them in the region, not on the domain boundary) are re-solved by the
+// connection Laplacian (L z = 0) with every other vertex fixed at its current value, so
+// faces outside the region keep their values exactly, and the index of the region's
+// boundary (the sum of the face indices inside) is what the solve has to fill in.
+//
+// The region starts from seed faces and grows one vertex ring at a time until the result
+// is accepted. Singular faces that are not to be edited ("others") are never taken into the
+// region (they become holes whose corner values stay fixed, so those singularities do not
+// move); a region that cannot grow any further without them fails, naming the blocking one.
+#include "tvf/mesh/tangent_bundle.h"
+#include "tvf/solve/connection_laplacian.h"
+
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace tvf {
+
+struct RegionOptions {
+  int max_growth = 48;  // rings added to the seed before giving up
+};
+
+struct RegionResult {
+  bool success = false;
+  std::vector<cplx> values;   // the edited frame (|V| values in vertex bases)
+  std::vector<int> faces;     // the final region (ascending)
+  std::vector<char> interior; // |V|: 1 at the re-solved vertices
+  int growths = 0;            // rings added before success (or before giving up)
+  int remaining = 0;          // unwanted singular faces left in the region by the last try
+  int blocked_by = -1;        // a singular face that stopped the growth (-1: the ring limit)
+};
+
+class RegionSolver {
+public:
+  // `laplacian` must belong to `bundle`'s mesh and outlive the solver.
+  RegionSolver(const TangentBundle& bundle, const ConnectionLaplacian& laplacian,
+               RegionOptions options = {});
+
+  // Cancels the singularities of faces face_a and face_b (opposite indices) of `values`:
+  // the seed is a shortest chain of faces from one to the other that avoids every other
+  // singular face, plus one ring; success when no singular face is left in the region.
+  RegionResult cancel(std::span<const cplx> values, int face_a, int face_b);
+
+  // Re-solves the neighbourhood of `pinned` vertices, which take `pinned_values` (one per
+  // pinned vertex) and are held fixed: the seed is the faces around them plus one ring;
+  // success when every singular face left in the region touches a pinned vertex.
+  // `ignore` lists singular faces of `values` that may be taken into the region (the
+  // singularities being replaced).
+  RegionResult paste(std::span<const cplx> values, const std::vector<int>& pinned,
+                     std::span<const cplx> pinned_values, const std::vector<int>& ignore = {});
+
+private:
+  const TangentBundle& bundle_;
+  DirichletSolver solver_;
+  RegionOptions options_;
+  std::vector<std::vector<int>> vertex_faces_;
+};
+
+}  // namespace tvf

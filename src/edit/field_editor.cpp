@@ -1,0 +1,620 @@
+#include "tvf/edit/field_editor.h"
+
+#include "tvf/analysis/singularities.h"
+#include "tvf/analysis/topology.h"
+#include "tvf/field/field_sampler.h"
+#include "tvf/solve/spacetime.h"
+
+#include <fmt/format.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <optional>
+
+namespace tvf {
+
+// Frames [first, last] re-solved by the space-time solve: free[k] (|V| entries, 1 = free)
+// for frame first + k, empty for a frame held fixed.
+struct FieldEditor::Window {
+  int first = 0;
+  int last = -1;
+  std::vector<std::vector<char>> free;
+};
+
+namespace {
+
+std::string where(const Vec3& p) {
+  return p.z() == 0 ? fmt::format("({:.3g}, {:.3g})", p.x(), p.y())
+                    : fmt::format("({:.3g}, {:.3g}, {:.3g})", p.x(), p.y(), p.z());
+}
+std::string name(const Singularity& s) {
+  return fmt::format("{} at {}", to_string(s.type), where(s.position));
+}
+
+size_t nearest(const std::vector<Singularity>& sings, const Vec3& p) {
+  size_t best = 0;
+  for (size_t k = 1; k < sings.size(); ++k)
+    if ((sings[k].position - p).squaredNorm() < (sings[best].position - p).squaredNorm()) best = k;
+  return best;
+}
+
+// Runs a solve on one thread: parallel reductions may add in any order, and replaying the
+// edits of a scene must give the same field bit for bit.
+template <class Fn>
+SolveReport deterministic(Fn&& fn) {
+  tbb::task_arena one(1);
+  return one.execute(fn);
+}
+
+LaplacianWeights hermitian(LaplacianWeights w) {
+  return w == LaplacianWeights::mean_value ? LaplacianWeights::cotan : w;
+}
+
+// Singularity tracks through the paths of a topology: paths continue each other across
+// type changes (the old path's last sample is the new path's first), and begin or end at
+// bifurcations.
+struct Tracks {
+  std::vector<int> next, prev, created_by, cancelled_by;
+
+  explicit Tracks(const Topology& topo) {
+    const size_t n = topo.paths.size();
+    next.assign(n, -1);
+    prev.assign(n, -1);
+    created_by.assign(n, -1);
+    cancelled_by.assign(n, -1);
+    for (size_t b = 0; b < topo.bifurcations.size(); ++b)
+      for (int p : topo.bifurcations[b].paths) {
+        if (p < 0) continue;
+        (topo.bifurcations[b].kind == BifurcationKind::creation ? created_by : cancelled_by)[static_cast<size_t>(p)] =
+            static_cast<int>(b);
+      }
+    for (size_t p = 0; p < n; ++p) {
+      const auto& a = topo.paths[p];
+      if (cancelled_by[p] >= 0 || a.points.empty()) continue;
+      for (size_t q = 0; q < n; ++q) {
+        const auto& c = topo.paths[q];
+        if (q == p || created_by[q] >= 0 || prev[q] >= 0 || c.points.empty() || c.index != a.index) continue;
+        if (c.points.front().t == a.points.back().t && c.points.front().position == a.points.back().position) {
+          next[p] = static_cast<int>(q);
+          prev[q] = static_cast<int>(p);
+          break;
+        }
+      }
+    }
+  }
+  // The paths of the track from p onwards in time direction sigma (+1 forward).
+  std::vector<int> follow(int p, int sigma) const {
+    std::vector<int> out{p};
+    for (int q = sigma > 0 ? next[static_cast<size_t>(p)] : prev[static_cast<size_t>(p)]; q >= 0;
+         q = sigma > 0 ? next[static_cast<size_t>(q)] : prev[static_cast<size_t>(q)])
+      out.push_back(q);
+    return out;
+  }
+  // The bifurcation ending the track at its last path in direction sigma (-1: none).
+  int end_bifurcation(int last, int sigma) const {
+    return sigma > 0 ? cancelled_by[static_cast<size_t>(last)] : created_by[static_cast<size_t>(last)];
+  }
+};
+
+std::vector<char> membership(size_t paths, const std::vector<int>& track) {
+  std::vector<char> in(paths, 0);
+  for (int p : track) in[static_cast<size_t>(p)] = 1;
+  return in;
+}
+
+// The singularities of frame j on tracks a and b (indices into topo.singularities[j]).
+std::optional<std::array<size_t, 2>> pair_at(const Topology& topo, int j, const std::vector<char>& a,
+                                             const std::vector<char>& b) {
+  const auto& ids = topo.singularity_path[static_cast<size_t>(j)];
+  std::optional<size_t> ia, ib;
+  for (size_t k = 0; k < ids.size(); ++k) {
+    if (ids[k] < 0) continue;
+    if (a[static_cast<size_t>(ids[k])] && !ia) ia = k;
+    else if (b[static_cast<size_t>(ids[k])] && !ib) ib = k;
+  }
+  if (!ia || !ib) return std::nullopt;
+  return std::array<size_t, 2>{*ia, *ib};
+}
+
+size_t nearest_bifurcation(const Topology& topo, const PathPoint& at, double diameter, double span) {
+  size_t best = 0;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (size_t b = 0; b < topo.bifurcations.size(); ++b) {
+    const auto& bf = topo.bifurcations[b];
+    const double dx = (bf.position - at.position).norm() / diameter;
+    const double dt = (bf.t - at.t) / span;
+    const double d = dx * dx + dt * dt;
+    if (d < best_d) {
+      best_d = d;
+      best = b;
+    }
+  }
+  return best;
+}
+
+std::string bifurcation_name(const Bifurcation& b) {
+  return fmt::format("the {} bifurcation at {} at t = {:.3g}", to_string(b.kind), where(b.position), b.t);
+}
+
+}  // namespace
+
+FieldEditor::FieldEditor(const DesignSpace& space, EditSettings settings)
+    : space_(space), settings_(settings),
+      laplacian_(connection_laplacian(space.bundle(), settings.weights)),
+      st_laplacian_(settings.weights == hermitian(settings.weights)
+                        ? laplacian_
+                        : connection_laplacian(space.bundle(), hermitian(settings.weights))),
+      region_(space.bundle(), laplacian_, settings.region) {}
+
+void FieldEditor::resolve_window(Field& field, const Window& window, EditReport& report) const {
+  const int n_frames = field.frames();
+  const auto nv = static_cast<size_t>(field.num_vertices());
+  bool any = false;
+  for (const auto& f : window.free)
+    any = any || std::any_of(f.begin(), f.end(), [](char c) { return c != 0; });
+  if (!any) return;
+  // The sub-problem: the window plus one fixed frame on each side (the time couplings
+  // reach only the next frame, so this is the whole problem's solution on the window).
+  const int lo = std::max(0, window.first - 1);
+  const int hi = std::min(n_frames - 1, window.last + 1);
+  const auto frames = static_cast<size_t>(hi - lo + 1);
+  std::vector<char> fixed(frames * nv, 1);
+  std::vector<cplx> values(frames * nv);
+  for (int j = lo; j <= hi; ++j) {
+    const auto k = static_cast<size_t>(j - lo);
+    const auto src = field.frame(j);
+    std::copy(src.begin(), src.end(), values.begin() + static_cast<std::ptrdiff_t>(k * nv));
+    const int w = j - window.first;
+    if (w < 0 || j > window.last || window.free[static_cast<size_t>(w)].empty()) continue;
+    const auto& free = window.free[static_cast<size_t>(w)];
+    for (size_t v = 0; v < nv; ++v)
+      if (free[v]) fixed[k * nv + v] = 0;
+  }
+  std::vector<cplx> z = values;
+  const SpaceTimeSolver solver(st_laplacian_, static_cast<int>(frames), settings_.temporal_weight);
+  SpaceTimeOptions options;
+  options.tolerance = settings_.tolerance;
+  options.parallel = false;  // deterministic reductions: replaying edits is bit for bit
+  const SolveReport r = deterministic([&] { return solver.solve(fixed, values, z, options); });
+  if (!r.success)
+    throw EditRefused(fmt::format("the space-time re-solve of frames {}–{} stopped at relative residual {:.2e} "
+                                  "after {} iterations, short of the tolerance {:.1e}",
+                                  window.first, window.last, r.residual, r.iterations, settings_.tolerance));
+  for (int j = lo; j <= hi; ++j) {
+    auto dst = field.frame(j);
+    std::copy_n(z.begin() + static_cast<std::ptrdiff_t>(static_cast<size_t>(j - lo) * nv), nv, dst.begin());
+  }
+  report.iterations += r.iterations;
+  report.residual = std::max(report.residual, r.residual);
+  if (report.window_first < 0 || window.first < report.window_first) report.window_first = window.first;
+  report.window_last = std::max(report.window_last, window.last);
+}
+
+EditReport FieldEditor::apply(Field& field, const Edit& edit) {
+  struct Visit {
+    FieldEditor& e;
+    Field& f;
+    EditReport operator()(const CancelEdit& x) const { return e.cancel(f, x); }
+    EditReport operator()(const RemoveBifurcationEdit& x) const { return e.remove_bifurcation(f, x); }
+    EditReport operator()(const MoveBifurcationEdit& x) const { return e.move_bifurcation(f, x); }
+    EditReport operator()(const SmoothEdit& x) const { return e.smooth(f, x); }
+  };
+  return std::visit(Visit{*this, field}, edit);
+}
+
+namespace {
+
+int window_frames(const Field& field, double window) {
+  return static_cast<int>(std::lround(window * (field.frames() - 1)));
+}
+
+// Window around key frames: every non-key frame within `w` of a key frame is freed on the
+// interior of the nearest key frame's region.
+void add_flanks(int frames, const std::map<int, std::vector<char>>& key_interior, int w, int& first, int& last,
+                std::vector<std::vector<char>>& free) {
+  if (key_interior.empty()) return;
+  const int kf = key_interior.begin()->first, kl = key_interior.rbegin()->first;
+  first = std::max(0, kf - w);
+  last = std::min(frames - 1, kl + w);
+  free.assign(static_cast<size_t>(last - first + 1), {});
+  for (int j = first; j <= last; ++j) {
+    if (key_interior.count(j)) continue;
+    // Nearest key frame.
+    auto it = key_interior.lower_bound(j);
+    const std::vector<char>* best = nullptr;
+    int best_d = std::numeric_limits<int>::max();
+    if (it != key_interior.end()) {
+      best = &it->second;
+      best_d = it->first - j;
+    }
+    if (it != key_interior.begin()) {
+      auto p = std::prev(it);
+      if (j - p->first < best_d) {
+        best = &p->second;
+        best_d = j - p->first;
+      }
+    }
+    if (best && best_d <= w) free[static_cast<size_t>(j - first)] = *best;
+  }
+}
+
+}  // namespace
+
+EditReport FieldEditor::cancel(Field& field, const CancelEdit& edit) {
+  const int j = edit.frame;
+  if (j < 0 || j >= field.frames())
+    throw EditRefused(fmt::format("frame {} is outside the field's frames 0–{}", j, field.frames() - 1));
+  const auto sings = find_singularities(space_.bundle(), field, j);
+  if (sings.size() < 2)
+    throw EditRefused(fmt::format("frame {} has {} singularit{}, and cancelling needs a pair", j, sings.size(),
+                                  sings.size() == 1 ? "y" : "ies"));
+  const size_t ia = nearest(sings, edit.pair[0]);
+  const size_t ib = nearest(sings, edit.pair[1]);
+  if (ia == ib)
+    throw EditRefused(fmt::format("both positions name the same singularity, the {} at frame {}", name(sings[ia]), j));
+  if (sings[ia].index + sings[ib].index != 0)
+    throw EditRefused(fmt::format("the {} and the {} at frame {} both have index {:+d}; only a pair of index +1 "
+                                  "and −1 cancels",
+                                  name(sings[ia]), name(sings[ib]), j, sings[ia].index));
+  const RegionResult r = region_.cancel(field.frame(j), sings[ia].where.face, sings[ib].where.face);
+  if (!r.success) {
+    std::string why;
+    if (r.blocked_by >= 0) {
+      const auto it = std::find_if(sings.begin(), sings.end(),
+                                   [&](const Singularity& s) { return s.where.face == r.blocked_by; });
+      why = it != sings.end() ? fmt::format("the region would swallow the {}", name(*it))
+                              : "the region would swallow another singularity";
+    } else {
+      why = fmt::format("a region grown by {} rings still holds {} singular faces", r.growths, r.remaining);
+    }
+    throw EditRefused(fmt::format("cannot cancel the {} and the {} at frame {}: {}", name(sings[ia]),
+                                  name(sings[ib]), j, why));
+  }
+  Field out = field;
+  std::copy(r.values.begin(), r.values.end(), out.frame(j).begin());
+  EditReport report;
+  report.key_frames = {j};
+  report.region_faces = static_cast<int>(r.faces.size());
+  report.growths = r.growths;
+  Window window;
+  add_flanks(field.frames(), {{j, r.interior}}, window_frames(field, edit.window), window.first, window.last,
+             window.free);
+  resolve_window(out, window, report);
+  report.summary = fmt::format("cancelled the {} and the {} at frame {} ({} faces re-solved; frames {}–{} "
+                               "smoothed)",
+                               name(sings[ia]), name(sings[ib]), j, r.faces.size(), window.first, window.last);
+  field = std::move(out);
+  return report;
+}
+
+EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcationEdit& edit) {
+  const TangentBundle& bundle = space_.bundle();
+  TopologyOptions topt;
+  topt.parallel = false;
+  const Topology topo = analyze_topology(bundle, field, topt);
+  if (topo.bifurcations.empty()) throw EditRefused("the field has no bifurcation to remove");
+  const TimeSampling& time = field.time();
+  const double span = time.t1 > time.t0 ? time.t1 - time.t0 : 1.0;
+  const Bifurcation& bif = topo.bifurcations[nearest_bifurcation(topo, edit.at, space_.diameter(), span)];
+  const Tracks tracks(topo);
+  const int sigma = bif.kind == BifurcationKind::creation ? 1 : -1;
+  const std::vector<int> ta = tracks.follow(bif.paths[0], sigma);
+  const std::vector<int> tb = tracks.follow(bif.paths[1], sigma);
+  const int ea = tracks.end_bifurcation(ta.back(), sigma);
+  const int eb = tracks.end_bifurcation(tb.back(), sigma);
+  const bool loop = ea >= 0 && ea == eb;
+  const size_t np = topo.paths.size();
+  std::vector<char> in_a = membership(np, ta), in_b = membership(np, tb);
+
+  // Pairs to cancel, frame by frame: (frame, face of a, face of b).
+  struct Cut {
+    int frame;
+    int face_a, face_b;
+  };
+  std::vector<Cut> cuts;
+  std::string what;
+  if (loop || (ea < 0 && eb < 0)) {
+    for (int j = 0; j < field.frames(); ++j) {
+      if (sigma * (time.time(j) - bif.t) <= 0) continue;
+      if (const auto p = pair_at(topo, j, in_a, in_b))
+        cuts.push_back({j, topo.singularities[static_cast<size_t>(j)][(*p)[0]].where.face,
+                        topo.singularities[static_cast<size_t>(j)][(*p)[1]].where.face});
+    }
+    what = loop ? "an isolated loop" : "an isolated pair";
+  } else {
+    // The three-path case (paper §8.2): exactly one of the two tracks (the middle one) ends
+    // in a second bifurcation, with a third singularity whose track runs on to the other
+    // time boundary. The middle singularity is cancelled over its life together with the
+    // outer one whose removal makes the survivor jump least.
+    if (ea >= 0 && eb >= 0)
+      throw EditRefused(fmt::format("{} is not isolated: both of its singularities end in other bifurcations "
+                                    "(only isolated bifurcations and the three-path case of paper §8.2 can be "
+                                    "removed)",
+                                    bifurcation_name(bif)));
+    const bool a_middle = ea >= 0;
+    const std::vector<int>& middle = a_middle ? ta : tb;
+    const std::vector<int>& outer1 = a_middle ? tb : ta;
+    const Bifurcation& other = topo.bifurcations[static_cast<size_t>(a_middle ? ea : eb)];
+    const int m_last = middle.back();
+    const int third_start = other.paths[0] == m_last ? other.paths[1] : other.paths[0];
+    const std::vector<int> outer2 = tracks.follow(third_start, sigma);
+    if (tracks.end_bifurcation(outer2.back(), sigma) >= 0)
+      throw EditRefused(fmt::format("{} is not isolated: its singularities are connected through {} to further "
+                                    "bifurcations (only isolated bifurcations and the three-path case of paper "
+                                    "§8.2 can be removed)",
+                                    bifurcation_name(bif), bifurcation_name(other)));
+    // The survivor keeps outer1 (cancel middle with outer2) or outer2 (cancel middle with
+    // outer1); it jumps between their positions at one end of the overlap.
+    const std::vector<char> in_m = membership(np, middle), in_1 = membership(np, outer1),
+                            in_2 = membership(np, outer2);
+    const double lo = std::min(bif.t, other.t), hi = std::max(bif.t, other.t);
+    std::vector<int> frames;
+    for (int j = 0; j < field.frames(); ++j)
+      if (time.time(j) > lo && time.time(j) < hi) frames.push_back(j);
+    auto jump = [&](const std::vector<char>& keep, const std::vector<char>& then) {
+      // Distance between the kept singularity at the end of the overlap and the other
+      // outer one just past it.
+      for (auto it = frames.rbegin(); it != frames.rend(); ++it) {
+        const auto& s = topo.singularities[static_cast<size_t>(*it)];
+        const auto& ids = topo.singularity_path[static_cast<size_t>(*it)];
+        std::optional<Vec3> k, t;
+        for (size_t i = 0; i < ids.size(); ++i) {
+          if (ids[i] < 0) continue;
+          if (keep[static_cast<size_t>(ids[i])]) k = s[i].position;
+          if (then[static_cast<size_t>(ids[i])]) t = s[i].position;
+        }
+        if (k && t) return (*k - *t).norm();
+      }
+      return std::numeric_limits<double>::infinity();
+    };
+    const bool keep_outer1 = jump(in_1, in_2) <= jump(in_2, in_1);
+    const std::vector<char>& partner = keep_outer1 ? in_2 : in_1;
+    for (int j : frames)
+      if (const auto p = pair_at(topo, j, in_m, partner))
+        cuts.push_back({j, topo.singularities[static_cast<size_t>(j)][(*p)[0]].where.face,
+                        topo.singularities[static_cast<size_t>(j)][(*p)[1]].where.face});
+    what = fmt::format("the three-path configuration with {}", bifurcation_name(other));
+  }
+  if (cuts.empty())
+    throw EditRefused(fmt::format("the pair of {} exists at no frame (it lives between two frames), so there is "
+                                  "nothing to remove at the frames",
+                                  bifurcation_name(bif)));
+
+  Field out = field;
+  EditReport report;
+  std::map<int, std::vector<char>> interiors;
+  for (const Cut& c : cuts) {
+    const RegionResult r = region_.cancel(field.frame(c.frame), c.face_a, c.face_b);
+    if (!r.success) {
+      const auto& sings = topo.singularities[static_cast<size_t>(c.frame)];
+      std::string why = fmt::format("a region grown by {} rings still holds {} singular faces", r.growths,
+                                    r.remaining);
+      for (const auto& s : sings)
+        if (s.where.face == r.blocked_by) why = fmt::format("the region would swallow the {}", name(s));
+      throw EditRefused(fmt::format("cannot remove {}: at frame {} {}", bifurcation_name(bif), c.frame, why));
+    }
+    std::copy(r.values.begin(), r.values.end(), out.frame(c.frame).begin());
+    interiors.emplace(c.frame, r.interior);
+    report.key_frames.push_back(c.frame);
+    report.region_faces = std::max(report.region_faces, static_cast<int>(r.faces.size()));
+    report.growths = std::max(report.growths, r.growths);
+  }
+  Window window;
+  add_flanks(field.frames(), interiors, window_frames(field, edit.window), window.first, window.last, window.free);
+  resolve_window(out, window, report);
+  report.summary = fmt::format("removed {} ({}) by cancelling the pair at frames {}–{}", bifurcation_name(bif), what,
+                               cuts.front().frame, cuts.back().frame);
+  field = std::move(out);
+  return report;
+}
+
+EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit& edit) {
+  if (!space_.planar())
+    throw EditRefused("moving a bifurcation needs a planar domain (the bifurcation's neighbourhood is translated "
+                      "in the plane)");
+  const TangentBundle& bundle = space_.bundle();
+  const Mesh& mesh = space_.mesh();
+  TopologyOptions topt;
+  topt.parallel = false;
+  const Topology topo = analyze_topology(bundle, field, topt);
+  if (topo.bifurcations.empty()) throw EditRefused("the field has no bifurcation to move");
+  const TimeSampling& time = field.time();
+  const double span = time.t1 > time.t0 ? time.t1 - time.t0 : 1.0;
+  const Bifurcation& bif = topo.bifurcations[nearest_bifurcation(topo, edit.at, space_.diameter(), span)];
+  const Tracks tracks(topo);
+  const int sigma = bif.kind == BifurcationKind::creation ? 1 : -1;
+  const size_t np = topo.paths.size();
+  const std::vector<char> in_a = membership(np, tracks.follow(bif.paths[0], sigma));
+  const std::vector<char> in_b = membership(np, tracks.follow(bif.paths[1], sigma));
+
+  const double tb = bif.t, tn = edit.to.t;
+  const Vec3 shift(edit.to.position.x() - bif.position.x(), edit.to.position.y() - bif.position.y(), 0.0);
+  const double wt = edit.window * span;
+  const double te = tn + sigma * wt;  // the moved pair rejoins its track here
+  if (te < time.t0 || te > time.t1)
+    throw EditRefused(fmt::format("moving {} to t = {:.3g} with a window of {:.3g} reaches t = {:.3g}, outside "
+                                  "the time range [{}, {}]; use a smaller window or an earlier time",
+                                  bifurcation_name(bif), tn, wt, te, time.t0, time.t1));
+  if (wt <= 0) throw EditRefused("moving a bifurcation needs a window > 0 over which the pair rejoins its track");
+  // The pair must still live where the moved one rejoins it.
+  auto frame_of = [&](double t) {
+    return std::clamp(static_cast<int>(std::lround((t - time.t0) / span * (field.frames() - 1))), 0,
+                      field.frames() - 1);
+  };
+  if (!pair_at(topo, frame_of(te), in_a, in_b))
+    throw EditRefused(fmt::format("the pair of {} no longer exists at t = {:.3g}, where the moved pair would "
+                                  "rejoin it; use a smaller window",
+                                  bifurcation_name(bif), te));
+  const double begin = sigma > 0 ? std::min(tb, tn) : std::max(tb, tn);
+  const double h = mesh.mean_edge_length();
+  const FieldSampler original(bundle, field);
+
+  Field out = field;
+  EditReport report;
+  std::map<int, std::vector<char>> interiors;
+  for (int j = 0; j < field.frames(); ++j) {
+    const double t = time.time(j);
+    if (sigma * (t - begin) <= 0 || sigma * (t - te) > 0) continue;
+    std::vector<cplx> values(field.frame(j).begin(), field.frame(j).end());
+    std::vector<char> interior(values.size(), 0);
+    auto refuse = [&](const RegionResult& r, const char* step) {
+      std::string why = fmt::format("a region grown by {} rings still holds {} unwanted singular faces", r.growths,
+                                    r.remaining);
+      for (const auto& s : topo.singularities[static_cast<size_t>(j)])
+        if (s.where.face == r.blocked_by) why = fmt::format("the region would swallow the {}", name(s));
+      throw EditRefused(fmt::format("cannot move {}: {} at frame {}: {}", bifurcation_name(bif), step, j, why));
+    };
+    // Cancel the original pair where it exists.
+    if (sigma * (t - tb) > 0) {
+      if (const auto p = pair_at(topo, j, in_a, in_b)) {
+        const auto& s = topo.singularities[static_cast<size_t>(j)];
+        const RegionResult r = region_.cancel(values, s[(*p)[0]].where.face, s[(*p)[1]].where.face);
+        if (!r.success) refuse(r, "cancelling the pair");
+        values = r.values;
+        for (size_t v = 0; v < values.size(); ++v) interior[v] |= r.interior[v];
+        report.growths = std::max(report.growths, r.growths);
+      }
+    }
+    // Paste the moved pair.
+    if (sigma * (t - tn) > 0) {
+      const double lambda = (t - tn) / (te - tn);
+      const double source_t = tb + lambda * (te - tb);
+      const Vec3 offset = (1 - lambda) * shift;
+      const int js = frame_of(source_t);
+      Vec3 pa = bif.position, pb = bif.position;
+      if (const auto p = pair_at(topo, js, in_a, in_b)) {
+        pa = topo.singularities[static_cast<size_t>(js)][(*p)[0]].position;
+        pb = topo.singularities[static_cast<size_t>(js)][(*p)[1]].position;
+      }
+      const Vec3 centre = (pa + pb) / 2 + offset;
+      const double radius = (pa - pb).norm() / 2 + 3 * h;
+      std::vector<int> pinned;
+      std::vector<cplx> pinned_values;
+      for (int v = 0; v < mesh.num_vertices(); ++v) {
+        const Vec3& x = mesh.position(v);
+        if ((x - centre).norm() > radius) continue;
+        const Vec3 from = x - offset;
+        const SurfacePoint sp = closest_point(mesh, from);
+        if ((surface_position(mesh, sp) - from).norm() > 1e-9 * space_.diameter())
+          throw EditRefused(fmt::format("cannot move {}: at frame {} the moved pair's neighbourhood would come "
+                                        "from {}, outside the domain",
+                                        bifurcation_name(bif), j, where(from)));
+        pinned.push_back(v);
+        // Planar: the face frame is the vertex frame.
+        pinned_values.push_back(original.in_face(sp, source_t));
+      }
+      const RegionResult r = region_.paste(values, pinned, pinned_values);
+      if (!r.success) refuse(r, "placing the moved pair");
+      values = r.values;
+      for (size_t v = 0; v < values.size(); ++v) interior[v] |= r.interior[v];
+      for (int v : pinned) interior[static_cast<size_t>(v)] = 1;
+      report.growths = std::max(report.growths, r.growths);
+      report.region_faces = std::max(report.region_faces, static_cast<int>(r.faces.size()));
+    }
+    std::copy(values.begin(), values.end(), out.frame(j).begin());
+    interiors.emplace(j, std::move(interior));
+    report.key_frames.push_back(j);
+  }
+  if (report.key_frames.empty())
+    throw EditRefused(fmt::format("moving {} to t = {:.3g} changes no frame", bifurcation_name(bif), tn));
+  Window window;
+  add_flanks(field.frames(), interiors, window_frames(field, edit.window), window.first, window.last, window.free);
+  resolve_window(out, window, report);
+  report.summary = fmt::format("moved {} to {} at t = {:.3g} (frames {}–{} edited)", bifurcation_name(bif),
+                               where(edit.to.position), tn, report.key_frames.front(), report.key_frames.back());
+  field = std::move(out);
+  return report;
+}
+
+EditReport FieldEditor::smooth(Field& field, const SmoothEdit& edit) {
+  if (!(edit.strength > 0 && edit.strength <= 1))
+    throw EditRefused(fmt::format("the smoothing strength must be in (0, 1], got {}", edit.strength));
+  const auto nv = static_cast<Eigen::Index>(field.num_vertices());
+  const double mu = 1.0 / ((4 * edit.strength) * (4 * edit.strength));
+  // The Laplacian with a ghost vertex n + i joined to each vertex i by weight μ·d_i.
+  ConnectionLaplacian ghost;
+  ghost.weights = st_laplacian_.weights;
+  ghost.hermitian = true;
+  ghost.weight_sum.resize(2 * nv);
+  ghost.weight_sum << st_laplacian_.weight_sum, st_laplacian_.weight_sum;
+  std::vector<Eigen::Triplet<cplx>> triplets;
+  triplets.reserve(static_cast<size_t>(st_laplacian_.matrix.nonZeros() + 4 * nv));
+  for (Eigen::Index c = 0; c < st_laplacian_.matrix.outerSize(); ++c)
+    for (Eigen::SparseMatrix<cplx>::InnerIterator it(st_laplacian_.matrix, c); it; ++it)
+      triplets.emplace_back(it.row(), it.col(), it.value());
+  for (Eigen::Index i = 0; i < nv; ++i) {
+    const double w = mu * st_laplacian_.weight_sum[i];
+    triplets.emplace_back(i, i, w);
+    triplets.emplace_back(nv + i, nv + i, w);
+    triplets.emplace_back(i, nv + i, -w);
+    triplets.emplace_back(nv + i, i, -w);
+  }
+  ghost.matrix.resize(2 * nv, 2 * nv);
+  ghost.matrix.setFromTriplets(triplets.begin(), triplets.end());
+
+  const auto frames = static_cast<size_t>(field.frames());
+  const auto n = static_cast<size_t>(nv);
+  std::vector<char> fixed(frames * 2 * n, 0);
+  std::vector<cplx> z(frames * 2 * n);
+  for (size_t j = 0; j < frames; ++j) {
+    const auto src = field.frame(static_cast<int>(j));
+    std::copy(src.begin(), src.end(), z.begin() + static_cast<std::ptrdiff_t>(j * 2 * n));
+    std::copy(src.begin(), src.end(), z.begin() + static_cast<std::ptrdiff_t>(j * 2 * n + n));
+    std::fill_n(fixed.begin() + static_cast<std::ptrdiff_t>(j * 2 * n + n), n, char{1});
+  }
+  const std::vector<cplx> values = z;
+  const SpaceTimeSolver solver(ghost, field.frames(), settings_.temporal_weight);
+  SpaceTimeOptions options;
+  options.tolerance = settings_.tolerance;
+  options.parallel = false;
+  const SolveReport r = deterministic([&] { return solver.solve(fixed, values, z, options); });
+  if (!r.success)
+    throw EditRefused(fmt::format("the smoothing solve stopped at relative residual {:.2e} after {} iterations, "
+                                  "short of the tolerance {:.1e}",
+                                  r.residual, r.iterations, settings_.tolerance));
+  Field out = field;
+  for (size_t j = 0; j < frames; ++j)
+    std::copy_n(z.begin() + static_cast<std::ptrdiff_t>(j * 2 * n), n, out.frame(static_cast<int>(j)).begin());
+  EditReport report;
+  report.iterations = r.iterations;
+  report.residual = r.residual;
+  report.window_first = 0;
+  report.window_last = field.frames() - 1;
+  report.summary = fmt::format("smoothed every frame with strength {} ({} CG iterations)", edit.strength,
+                               r.iterations);
+  field = std::move(out);
+  return report;
+}
+
+EditSettings edit_settings(const Scene& scene) {
+  EditSettings s;
+  switch (scene.solver.weights) {
+    case Weights::cotan: s.weights = LaplacianWeights::cotan; break;
+    case Weights::uniform: s.weights = LaplacianWeights::uniform; break;
+    case Weights::mean_value: s.weights = LaplacianWeights::mean_value; break;
+  }
+  s.temporal_weight = scene.solver.temporal_weight;
+  s.tolerance = scene.solver.tolerance;
+  return s;
+}
+
+std::vector<EditReport> apply_scene_edits(const DesignSpace& space, const Scene& scene, Field& field) {
+  const std::vector<Edit> edits = edits_from_scene(scene);
+  std::vector<EditReport> reports;
+  if (edits.empty()) return reports;
+  FieldEditor editor(space, edit_settings(scene));
+  for (size_t i = 0; i < edits.size(); ++i) {
+    try {
+      reports.push_back(editor.apply(field, edits[i]));
+    } catch (const EditRefused& e) {
+      throw_input_error(scene.label(), fmt::format("edits[{}]", i), e.what());
+    }
+  }
+  return reports;
+}
+
+}  // namespace tvf

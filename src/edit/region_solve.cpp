@@ -1,0 +1,233 @@
+#include "tvf/edit/region_solve.h"
+
+#include "tvf/analysis/singularities.h"
+#include "tvf/core/error.h"
+
+#include <algorithm>
+#include <functional>
+#include <limits>
+#include <queue>
+
+namespace tvf {
+namespace {
+
+Vec3 centroid(const Mesh& mesh, int f) {
+  const Face& c = mesh.face(f);
+  return (mesh.position(c[0]) + mesh.position(c[1]) + mesh.position(c[2])) / 3.0;
+}
+
+// Shortest chain of edge-adjacent faces from a to b (Dijkstra on centroid distances) that
+// avoids blocked faces; empty when there is none.
+std::vector<int> face_chain(const Mesh& mesh, int a, int b, const std::vector<char>& blocked) {
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  std::vector<double> dist(nf, std::numeric_limits<double>::infinity());
+  std::vector<int> from(nf, -1);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  dist[static_cast<size_t>(a)] = 0;
+  queue.emplace(0.0, a);
+  while (!queue.empty()) {
+    const auto [d, f] = queue.top();
+    queue.pop();
+    if (d > dist[static_cast<size_t>(f)]) continue;
+    if (f == b) break;
+    for (int c = 0; c < 3; ++c) {
+      const int tw = mesh.twin(3 * f + c);
+      if (tw < 0) continue;
+      const int g = Mesh::face_of(tw);
+      if (blocked[static_cast<size_t>(g)] && g != b) continue;
+      const double nd = d + (centroid(mesh, g) - centroid(mesh, f)).norm();
+      if (nd < dist[static_cast<size_t>(g)]) {
+        dist[static_cast<size_t>(g)] = nd;
+        from[static_cast<size_t>(g)] = f;
+        queue.emplace(nd, g);
+      }
+    }
+  }
+  std::vector<int> chain;
+  if (!std::isfinite(dist[static_cast<size_t>(b)])) return chain;
+  for (int f = b; f >= 0; f = from[static_cast<size_t>(f)]) chain.push_back(f);
+  return chain;
+}
+
+}  // namespace
+
+RegionSolver::RegionSolver(const TangentBundle& bundle, const ConnectionLaplacian& laplacian,
+                           RegionOptions options)
+    : bundle_(bundle), solver_(laplacian), options_(options) {
+  const Mesh& mesh = bundle.mesh();
+  vertex_faces_.resize(static_cast<size_t>(mesh.num_vertices()));
+  for (int v = 0; v < mesh.num_vertices(); ++v)
+    for (int h : mesh.outgoing(v)) vertex_faces_[static_cast<size_t>(v)].push_back(Mesh::face_of(h));
+}
+
+namespace {
+
+struct GrowInput {
+  std::vector<char> region;   // seed faces (|F|)
+  std::vector<char> blocked;  // faces never taken (|F|)
+  std::vector<char> pinned;   // vertices held at pinned values (|V|)
+  std::vector<cplx> start;    // the frame with pinned values written in
+  Vec3 focus = Vec3::Zero();  // where the edit is (to name the nearest blocker)
+};
+
+}  // namespace
+
+// The grow-and-solve loop shared by cancel() and paste().
+static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver& solver,
+                                   const std::vector<std::vector<int>>& vertex_faces, int max_growth,
+                                   GrowInput in,
+                                   const std::function<int(const std::vector<int>& index, int face)>& unwanted) {
+  const Mesh& mesh = bundle.mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  RegionResult result;
+  std::vector<char> constrained(nv);
+  result.values.resize(nv);
+  for (int growth = 0;; ++growth) {
+    result.growths = growth;
+    // Interior vertices: off the domain boundary, every face around them in the region.
+    result.interior.assign(nv, 0);
+    for (size_t v = 0; v < nv; ++v) {
+      if (mesh.is_boundary_vertex(static_cast<int>(v)) || in.pinned[v]) continue;
+      bool inside = true;
+      for (int f : vertex_faces[v]) inside = inside && in.region[static_cast<size_t>(f)];
+      result.interior[v] = inside ? 1 : 0;
+    }
+    for (size_t v = 0; v < nv; ++v) constrained[v] = result.interior[v] ? 0 : 1;
+    const SolveReport r = solver.solve(constrained, in.start, result.values);
+    TVF_CHECK(r.success, "region solve failed: {} residual {}", r.method, r.residual);
+    const std::vector<int> index = face_indices(bundle, result.values);
+    result.remaining = 0;
+    for (size_t f = 0; f < nf; ++f)
+      if (in.region[f] && index[f] != 0) result.remaining += unwanted(index, static_cast<int>(f));
+    if (result.remaining == 0) {
+      result.success = true;
+      break;
+    }
+    if (growth >= max_growth) break;
+    // Grow by one vertex ring, never into blocked faces.
+    std::vector<char> next = in.region;
+    bool grew = false;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (size_t f = 0; f < nf; ++f) {
+      if (!in.region[f]) continue;
+      for (int v : mesh.face(static_cast<int>(f)))
+        for (int g : vertex_faces[static_cast<size_t>(v)]) {
+          const auto gi = static_cast<size_t>(g);
+          if (next[gi]) continue;
+          if (in.blocked[gi]) {
+            const double d = (centroid(mesh, g) - in.focus).norm();
+            if (d < nearest) {
+              nearest = d;
+              result.blocked_by = g;
+            }
+            continue;
+          }
+          next[gi] = 1;
+          grew = true;
+        }
+    }
+    if (!grew) break;
+    in.region = std::move(next);
+  }
+  if (!result.success && result.blocked_by < 0) result.blocked_by = -1;
+  for (size_t f = 0; f < nf; ++f)
+    if (in.region[f]) result.faces.push_back(static_cast<int>(f));
+  if (!result.success) result.values.assign(in.start.begin(), in.start.end());
+  return result;
+}
+
+namespace {
+
+// Adds one vertex ring to `region`, skipping blocked faces.
+void dilate(const Mesh& mesh, const std::vector<std::vector<int>>& vertex_faces, std::vector<char>& region,
+            const std::vector<char>& blocked) {
+  std::vector<char> next = region;
+  for (size_t f = 0; f < region.size(); ++f) {
+    if (!region[f]) continue;
+    for (int v : mesh.face(static_cast<int>(f)))
+      for (int g : vertex_faces[static_cast<size_t>(v)])
+        if (!blocked[static_cast<size_t>(g)]) next[static_cast<size_t>(g)] = 1;
+  }
+  region = std::move(next);
+}
+
+}  // namespace
+
+RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int face_b) {
+  const Mesh& mesh = bundle_.mesh();
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  const std::vector<int> index = face_indices(bundle_, values);
+  GrowInput in;
+  in.blocked.assign(nf, 0);
+  for (size_t f = 0; f < nf; ++f)
+    in.blocked[f] = index[f] != 0 && static_cast<int>(f) != face_a && static_cast<int>(f) != face_b;
+  in.focus = (centroid(mesh, face_a) + centroid(mesh, face_b)) / 2;
+  in.pinned.assign(static_cast<size_t>(mesh.num_vertices()), 0);
+  in.start.assign(values.begin(), values.end());
+  in.region.assign(nf, 0);
+  const std::vector<int> chain = face_chain(mesh, face_a, face_b, in.blocked);
+  if (chain.empty()) {
+    RegionResult r;
+    r.values = in.start;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (size_t f = 0; f < nf; ++f)
+      if (in.blocked[f] && (centroid(mesh, static_cast<int>(f)) - in.focus).norm() < nearest) {
+        nearest = (centroid(mesh, static_cast<int>(f)) - in.focus).norm();
+        r.blocked_by = static_cast<int>(f);
+      }
+    r.remaining = 2;
+    return r;
+  }
+  for (int f : chain) in.region[static_cast<size_t>(f)] = 1;
+  dilate(mesh, vertex_faces_, in.region, in.blocked);
+  return grow_and_solve(bundle_, solver_, vertex_faces_, options_.max_growth, std::move(in),
+                        [](const std::vector<int>&, int) { return 1; });
+}
+
+RegionResult RegionSolver::paste(std::span<const cplx> values, const std::vector<int>& pinned,
+                                 std::span<const cplx> pinned_values, const std::vector<int>& ignore) {
+  TVF_CHECK(pinned.size() == pinned_values.size(), "{} pinned vertices, {} values", pinned.size(),
+            pinned_values.size());
+  TVF_CHECK(!pinned.empty(), "nothing to paste");
+  const Mesh& mesh = bundle_.mesh();
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  const std::vector<int> index = face_indices(bundle_, values);
+  GrowInput in;
+  in.blocked.assign(nf, 0);
+  for (size_t f = 0; f < nf; ++f) in.blocked[f] = index[f] != 0;
+  for (int f : ignore) in.blocked[static_cast<size_t>(f)] = 0;
+  in.pinned.assign(nv, 0);
+  in.start.assign(values.begin(), values.end());
+  in.region.assign(nf, 0);
+  Vec3 focus = Vec3::Zero();
+  for (size_t k = 0; k < pinned.size(); ++k) {
+    const auto v = static_cast<size_t>(pinned[k]);
+    in.pinned[v] = 1;
+    in.start[v] = pinned_values[k];
+    focus += mesh.position(pinned[k]);
+    for (int f : vertex_faces_[v]) in.region[static_cast<size_t>(f)] = 1;
+  }
+  in.focus = focus / static_cast<double>(pinned.size());
+  // A pinned vertex next to a singularity that stays would move it: refuse by blocking.
+  for (size_t f = 0; f < nf; ++f)
+    if (in.region[f] && in.blocked[f]) {
+      RegionResult r;
+      r.values.assign(values.begin(), values.end());
+      r.blocked_by = static_cast<int>(f);
+      r.remaining = 1;
+      return r;
+    }
+  dilate(mesh, vertex_faces_, in.region, in.blocked);
+  const std::vector<char> pinned_mask = in.pinned;
+  return grow_and_solve(bundle_, solver_, vertex_faces_, options_.max_growth, std::move(in),
+                        [&](const std::vector<int>&, int f) {
+                          for (int v : mesh.face(f))
+                            if (pinned_mask[static_cast<size_t>(v)]) return 0;
+                          return 1;
+                        });
+}
+
+}  // namespace tvf
