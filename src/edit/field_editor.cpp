@@ -238,7 +238,10 @@ void add_flanks(int frames, const std::map<int, std::vector<char>>& key_interior
         best_d = j - p->first;
       }
     }
-    if (best && best_d <= w) free[static_cast<size_t>(j - first)] = *best;
+    // Frames within the window (the frames next to it stay fixed); not the first or last
+    // frame of the time range: nothing beyond them would hold the change back (the re-solved
+    // frames would all copy the key frame).
+    if (best && best_d <= w && j > 0 && j < frames - 1) free[static_cast<size_t>(j - first)] = *best;
   }
 }
 
