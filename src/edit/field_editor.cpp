@@ -390,8 +390,11 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
   Field out = field;
   EditReport report;
   std::map<int, std::vector<char>> interiors;
+  std::map<int, std::vector<int>> regions;
+  int rings = 0;  // the previous frame's growth: the pair changes little from frame to frame
   for (const Cut& c : cuts) {
-    const RegionResult r = region_.cancel(field.frame(c.frame), c.face_a, c.face_b);
+    const RegionResult r = region_.cancel(field.frame(c.frame), c.face_a, c.face_b, std::max(0, rings - 1));
+    rings = r.growths;
     if (!r.success) {
       const auto& sings = topo.singularities[static_cast<size_t>(c.frame)];
       std::string why = fmt::format("a region grown by {} rings still holds {} singular faces", r.growths,
@@ -402,9 +405,38 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
     }
     std::copy(r.values.begin(), r.values.end(), out.frame(c.frame).begin());
     interiors.emplace(c.frame, r.interior);
+    regions.emplace(c.frame, r.faces);
     report.key_frames.push_back(c.frame);
     report.region_faces = std::max(report.region_faces, static_cast<int>(r.faces.size()));
     report.growths = std::max(report.growths, r.growths);
+  }
+  // Second pass: every frame over the union of the regions, so that consecutive frames get
+  // consecutive fills (the regions grown frame by frame differ, and the fills jump with
+  // them). Kept only if it cancels the pair at every frame.
+  if (cuts.size() > 1) {
+    std::vector<char> in_union(static_cast<size_t>(space_.mesh().num_faces()), 0);
+    for (const auto& [j, faces] : regions)
+      for (int f : faces) in_union[static_cast<size_t>(f)] = 1;
+    std::vector<int> common;
+    for (size_t f = 0; f < in_union.size(); ++f)
+      if (in_union[f]) common.push_back(static_cast<int>(f));
+    Field second = out;
+    std::map<int, std::vector<char>> second_interiors;
+    bool ok = true;
+    for (const Cut& c : cuts) {
+      const RegionResult r = region_.cancel_in(field.frame(c.frame), c.face_a, c.face_b, common);
+      if (!r.success) {
+        ok = false;
+        break;
+      }
+      std::copy(r.values.begin(), r.values.end(), second.frame(c.frame).begin());
+      second_interiors.emplace(c.frame, r.interior);
+      report.region_faces = std::max(report.region_faces, static_cast<int>(r.faces.size()));
+    }
+    if (ok) {
+      out = std::move(second);
+      interiors = std::move(second_interiors);
+    }
   }
   Window window;
   add_flanks(field.frames(), interiors, window_frames(field, edit.window), window.first, window.last, window.free);

@@ -84,19 +84,22 @@ static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver&
   RegionResult result;
   std::vector<char> constrained(nv);
   result.values.resize(nv);
+  bool stuck = false;
   for (int growth = 0;; ++growth) {
     result.growths = growth;
-    // Interior vertices: off the domain boundary, every face around them in the region.
+    // Interior vertices: every face around them in the region. Domain boundary vertices in
+    // the region are free too (the natural boundary condition of the design), so a
+    // singularity may also leave through the domain boundary.
     result.interior.assign(nv, 0);
     for (size_t v = 0; v < nv; ++v) {
-      if (mesh.is_boundary_vertex(static_cast<int>(v)) || in.pinned[v]) continue;
+      if (in.pinned[v]) continue;
       bool inside = true;
       for (int f : vertex_faces[v]) inside = inside && in.region[static_cast<size_t>(f)];
       result.interior[v] = inside ? 1 : 0;
     }
     for (size_t v = 0; v < nv; ++v) constrained[v] = result.interior[v] ? 0 : 1;
     const SolveReport r = solver.solve(constrained, in.start, result.values);
-    TVF_CHECK(r.success, "region solve failed: {} residual {}", r.method, r.residual);
+    if (!r.success) break;  // e.g. a region that took the whole mesh: nothing holds it
     const std::vector<int> index = face_indices(bundle, result.values);
     result.remaining = 0;
     for (size_t f = 0; f < nf; ++f)
@@ -128,10 +131,14 @@ static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver&
           grew = true;
         }
     }
-    if (!grew) break;
+    if (!grew) {
+      stuck = true;
+      break;
+    }
     in.region = std::move(next);
   }
-  if (!result.success && result.blocked_by < 0) result.blocked_by = -1;
+  // Name a blocker only when it is what stopped the growth.
+  if (result.success || !stuck) result.blocked_by = -1;
   for (size_t f = 0; f < nf; ++f)
     if (in.region[f]) result.faces.push_back(static_cast<int>(f));
   if (!result.success) result.values.assign(in.start.begin(), in.start.end());
@@ -155,7 +162,7 @@ void dilate(const Mesh& mesh, const std::vector<std::vector<int>>& vertex_faces,
 
 }  // namespace
 
-RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int face_b) {
+RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int face_b, int start_rings) {
   const Mesh& mesh = bundle_.mesh();
   const auto nf = static_cast<size_t>(mesh.num_faces());
   const std::vector<int> index = face_indices(bundle_, values);
@@ -181,7 +188,30 @@ RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int 
     return r;
   }
   for (int f : chain) in.region[static_cast<size_t>(f)] = 1;
-  dilate(mesh, vertex_faces_, in.region, in.blocked);
+  const int extra = std::clamp(start_rings, 0, options_.max_growth);
+  for (int k = 0; k <= extra; ++k) dilate(mesh, vertex_faces_, in.region, in.blocked);
+  RegionResult r = grow_and_solve(bundle_, solver_, vertex_faces_, options_.max_growth - extra, std::move(in),
+                                  [](const std::vector<int>&, int) { return 1; });
+  r.growths += extra;
+  return r;
+}
+
+RegionResult RegionSolver::cancel_in(std::span<const cplx> values, int face_a, int face_b,
+                                     const std::vector<int>& region) {
+  const Mesh& mesh = bundle_.mesh();
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  const std::vector<int> index = face_indices(bundle_, values);
+  GrowInput in;
+  in.blocked.assign(nf, 0);
+  for (size_t f = 0; f < nf; ++f)
+    in.blocked[f] = index[f] != 0 && static_cast<int>(f) != face_a && static_cast<int>(f) != face_b;
+  in.focus = (centroid(mesh, face_a) + centroid(mesh, face_b)) / 2;
+  in.pinned.assign(static_cast<size_t>(mesh.num_vertices()), 0);
+  in.start.assign(values.begin(), values.end());
+  in.region.assign(nf, 0);
+  for (int f : region)
+    if (!in.blocked[static_cast<size_t>(f)]) in.region[static_cast<size_t>(f)] = 1;
+  in.region[static_cast<size_t>(face_a)] = in.region[static_cast<size_t>(face_b)] = 1;
   return grow_and_solve(bundle_, solver_, vertex_faces_, options_.max_growth, std::move(in),
                         [](const std::vector<int>&, int) { return 1; });
 }

@@ -1,10 +1,12 @@
 #pragma once
 // Re-solving a region of one frame (DESIGN §7; Zhang et al. 2006, "Vector field design on
 // surfaces", pair cancellation). A region is a set of faces; its interior vertices (every
-// face around them in the region, not on the domain boundary) are re-solved by the
-// connection Laplacian (L z = 0) with every other vertex fixed at its current value, so
-// faces outside the region keep their values exactly, and the index of the region's
-// boundary (the sum of the face indices inside) is what the solve has to fill in.
+// face around them in the region) are re-solved by the connection Laplacian (L z = 0) with
+// every other vertex fixed at its current value, so faces outside the region keep their
+// values exactly, and the index of the region's boundary (the sum of the face indices
+// inside) is what the solve has to fill in. Domain boundary vertices of the region are free
+// (the design's natural boundary condition), so a singularity may also leave through the
+// domain boundary: fixing them kept pairs next to the boundary from cancelling at all.
 //
 // The region starts from seed faces and grows one vertex ring at a time until the result
 // is accepted. Singular faces that are not to be edited ("others") are never taken into the
@@ -31,7 +33,7 @@ struct RegionResult {
   std::vector<char> interior; // |V|: 1 at the re-solved vertices
   int growths = 0;            // rings added before success (or before giving up)
   int remaining = 0;          // unwanted singular faces left in the region by the last try
-  int blocked_by = -1;        // a singular face that stopped the growth (-1: the ring limit)
+  int blocked_by = -1;        // the singular face that stopped the growth (-1: the ring limit)
 };
 
 class RegionSolver {
@@ -43,7 +45,13 @@ public:
   // Cancels the singularities of faces face_a and face_b (opposite indices) of `values`:
   // the seed is a shortest chain of faces from one to the other that avoids every other
   // singular face, plus one ring; success when no singular face is left in the region.
-  RegionResult cancel(std::span<const cplx> values, int face_a, int face_b);
+  // `start_rings` extra rings are added to the seed before the first try (a hint, e.g. what
+  // the previous frame needed; growths then counts them).
+  RegionResult cancel(std::span<const cplx> values, int face_a, int face_b, int start_rings = 0);
+
+  // As cancel(), with `region` (faces) as the seed: used to cancel a pair at many frames
+  // over one common region, so that consecutive frames get consecutive fills.
+  RegionResult cancel_in(std::span<const cplx> values, int face_a, int face_b, const std::vector<int>& region);
 
   // Re-solves the neighbourhood of `pinned` vertices, which take `pinned_values` (one per
   // pinned vertex) and are held fixed: the seed is the faces around them plus one ring;
