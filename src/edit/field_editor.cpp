@@ -247,6 +247,48 @@ void add_flanks(int frames, const std::map<int, std::vector<char>>& key_interior
 
 }  // namespace
 
+// The time window around edited key frames. First try: the key frames' re-solved vertices
+// (key_free; pasted vertices stay fixed) free together with the flanks, so the fills of
+// consecutive key frames are smoothed in time too; kept when every key frame still has the
+// singularities the frame-by-frame edit gave it (same count, same indices, each within
+// 1.5 mean edge lengths). Otherwise only the flanks (frames beyond the key frames, free on
+// flank_free of the nearest key frame) are re-solved.
+void FieldEditor::smooth_around(Field& field, const std::map<int, std::vector<char>>& key_free,
+                                const std::map<int, std::vector<char>>& flank_free, int w,
+                                EditReport& report) const {
+  Window window;
+  add_flanks(field.frames(), flank_free, w, window.first, window.last, window.free);
+  if (key_free.size() > 1) {
+    Window both = window;
+    for (const auto& [j, free] : key_free) both.free[static_cast<size_t>(j - both.first)] = free;
+    Field trial = field;
+    EditReport trial_report = report;
+    bool ok = true;
+    try {
+      resolve_window(trial, both, trial_report);
+    } catch (const EditRefused&) {
+      ok = false;
+    }
+    const double tolerance = 1.5 * space_.mesh().mean_edge_length();
+    for (auto it = key_free.begin(); ok && it != key_free.end(); ++it) {
+      const auto a = find_singularities(space_.bundle(), field, it->first);
+      const auto b = find_singularities(space_.bundle(), trial, it->first);
+      ok = a.size() == b.size();
+      for (const Singularity& x : b) {
+        if (!ok) break;
+        const Singularity& y = a[nearest(a, x.position)];
+        ok = y.index == x.index && (y.position - x.position).norm() <= tolerance;
+      }
+    }
+    if (ok) {
+      field = std::move(trial);
+      report = std::move(trial_report);
+      return;
+    }
+  }
+  resolve_window(field, window, report);
+}
+
 EditReport FieldEditor::cancel(Field& field, const CancelEdit& edit) {
   const int j = edit.frame;
   if (j < 0 || j >= field.frames())
@@ -438,9 +480,7 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
       interiors = std::move(second_interiors);
     }
   }
-  Window window;
-  add_flanks(field.frames(), interiors, window_frames(field, edit.window), window.first, window.last, window.free);
-  resolve_window(out, window, report);
+  smooth_around(out, interiors, interiors, window_frames(field, edit.window), report);
   report.summary = fmt::format("removed {} ({}) by cancelling the pair at frames {}–{}", bifurcation_name(bif), what,
                                cuts.front().frame, cuts.back().frame);
   field = std::move(out);
@@ -490,12 +530,14 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
 
   Field out = field;
   EditReport report;
-  std::map<int, std::vector<char>> interiors;
+  std::map<int, std::vector<char>> interiors;  // re-solved and pasted vertices per key frame
+  std::map<int, std::vector<char>> solved;     // re-solved vertices only
   for (int j = 0; j < field.frames(); ++j) {
     const double t = time.time(j);
     if (sigma * (t - begin) <= 0 || sigma * (t - te) > 0) continue;
     std::vector<cplx> values(field.frame(j).begin(), field.frame(j).end());
     std::vector<char> interior(values.size(), 0);
+    std::vector<int> pinned;
     auto refuse = [&](const RegionResult& r, const char* step) {
       std::string why = fmt::format("a region grown by {} rings still holds {} unwanted singular faces", r.growths,
                                     r.remaining);
@@ -527,7 +569,6 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
       }
       const Vec3 centre = (pa + pb) / 2 + offset;
       const double radius = (pa - pb).norm() / 2 + 3 * h;
-      std::vector<int> pinned;
       std::vector<cplx> pinned_values;
       for (int v = 0; v < mesh.num_vertices(); ++v) {
         const Vec3& x = mesh.position(v);
@@ -546,19 +587,20 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
       if (!r.success) refuse(r, "placing the moved pair");
       values = r.values;
       for (size_t v = 0; v < values.size(); ++v) interior[v] |= r.interior[v];
-      for (int v : pinned) interior[static_cast<size_t>(v)] = 1;
       report.growths = std::max(report.growths, r.growths);
       report.region_faces = std::max(report.region_faces, static_cast<int>(r.faces.size()));
     }
     std::copy(values.begin(), values.end(), out.frame(j).begin());
+    std::vector<char> free = interior;
+    for (int v : pinned) free[static_cast<size_t>(v)] = 0;
+    solved.emplace(j, std::move(free));
+    for (int v : pinned) interior[static_cast<size_t>(v)] = 1;
     interiors.emplace(j, std::move(interior));
     report.key_frames.push_back(j);
   }
   if (report.key_frames.empty())
     throw EditRefused(fmt::format("moving {} to t = {:.3g} changes no frame", bifurcation_name(bif), tn));
-  Window window;
-  add_flanks(field.frames(), interiors, window_frames(field, edit.window), window.first, window.last, window.free);
-  resolve_window(out, window, report);
+  smooth_around(out, solved, interiors, window_frames(field, edit.window), report);
   report.summary = fmt::format("moved {} to {} at t = {:.3g} (frames {}–{} edited)", bifurcation_name(bif),
                                where(edit.to.position), tn, report.key_frames.front(), report.key_frames.back());
   field = std::move(out);

@@ -36,6 +36,7 @@
 #include "tvf/field/field.h"
 #include "tvf/solve/connection_laplacian.h"
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -87,6 +88,8 @@ public:
 private:
   struct Window;
   void resolve_window(Field& field, const Window& window, EditReport& report) const;
+  void smooth_around(Field& field, const std::map<int, std::vector<char>>& key_free,
+                     const std::map<int, std::vector<char>>& flank_free, int w, EditReport& report) const;
 
   const DesignSpace& space_;
   EditSettings settings_;
