@@ -386,8 +386,9 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
     const Bifurcation& other = topo.bifurcations[static_cast<size_t>(a_middle ? ea : eb)];
     const int m_last = middle.back();
     const int third_start = other.paths[0] == m_last ? other.paths[1] : other.paths[0];
-    const std::vector<int> outer2 = tracks.follow(third_start, sigma);
-    if (tracks.end_bifurcation(outer2.back(), sigma) >= 0)
+    // The third singularity lives on the other side of `other` in time.
+    const std::vector<int> outer2 = tracks.follow(third_start, -sigma);
+    if (tracks.end_bifurcation(outer2.back(), -sigma) >= 0)
       throw EditRefused(fmt::format("{} is not isolated: its singularities are connected through {} to further "
                                     "bifurcations (only isolated bifurcations and the three-path case of paper "
                                     "§8.2 can be removed)",
@@ -400,28 +401,24 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
     std::vector<int> frames;
     for (int j = 0; j < field.frames(); ++j)
       if (time.time(j) > lo && time.time(j) < hi) frames.push_back(j);
-    auto jump = [&](const std::vector<char>& keep, const std::vector<char>& then) {
-      // Distance between the kept singularity at the end of the overlap and the other
-      // outer one just past it.
-      for (auto it = frames.rbegin(); it != frames.rend(); ++it) {
-        const auto& s = topo.singularities[static_cast<size_t>(*it)];
-        const auto& ids = topo.singularity_path[static_cast<size_t>(*it)];
-        std::optional<Vec3> k, t;
-        for (size_t i = 0; i < ids.size(); ++i) {
-          if (ids[i] < 0) continue;
-          if (keep[static_cast<size_t>(ids[i])]) k = s[i].position;
-          if (then[static_cast<size_t>(ids[i])]) t = s[i].position;
-        }
-        if (k && t) return (*k - *t).norm();
-      }
-      return std::numeric_limits<double>::infinity();
-    };
-    const bool keep_outer1 = jump(in_1, in_2) <= jump(in_2, in_1);
-    const std::vector<char>& partner = keep_outer1 ? in_2 : in_1;
-    for (int j : frames)
-      if (const auto p = pair_at(topo, j, in_m, partner))
-        cuts.push_back({j, topo.singularities[static_cast<size_t>(j)][(*p)[0]].where.face,
-                        topo.singularities[static_cast<size_t>(j)][(*p)[1]].where.face});
+    // At each frame of the overlap the middle singularity is cancelled with the nearer outer
+    // one (the pair that is about to meet, or has just been born), so the survivor is the
+    // outer singularity that lives on past the nearer bifurcation; it passes from one outer
+    // track to the other where they are equally near.
+    for (int j : frames) {
+      const auto& s = topo.singularities[static_cast<size_t>(j)];
+      const auto pm1 = pair_at(topo, j, in_m, in_1);
+      const auto pm2 = pair_at(topo, j, in_m, in_2);
+      std::optional<std::array<size_t, 2>> p;
+      if (pm1 && pm2)
+        p = (s[(*pm1)[0]].position - s[(*pm1)[1]].position).norm() <=
+                    (s[(*pm2)[0]].position - s[(*pm2)[1]].position).norm()
+                ? pm1
+                : pm2;
+      else
+        p = pm1 ? pm1 : pm2;
+      if (p) cuts.push_back({j, s[(*p)[0]].where.face, s[(*p)[1]].where.face});
+    }
     what = fmt::format("the three-path configuration with {}", bifurcation_name(other));
   }
   if (cuts.empty())

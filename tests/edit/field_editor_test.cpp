@@ -314,3 +314,53 @@ TEST(Edits, TypedEntriesFromTheScene) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// The S-shaped fold of paper §8.2's three-path case: V = (x³ − a·x − k·(t − ½), −y) has
+// one saddle for |k(t − ½)| > 2(a/3)^{3/2} and, in between, two saddles and a node on the
+// x axis: a saddle path (0, β), a node path (α, β) and a saddle path (α, 1).
+Field fold_field(const Mesh& mesh, int frames) {
+  Field f(TimeSampling{0.0, 1.0, frames}, mesh.num_vertices());
+  const double a = 0.25, k = 0.2;
+  for (int j = 0; j < frames; ++j)
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      const Vec3& p = mesh.position(v);
+      f.at(j, v) = cplx(p.x() * p.x() * p.x() - a * p.x() - k * (f.time().time(j) - 0.5), -p.y());
+    }
+  return f;
+}
+
+TEST(FieldEditor, TheThreePathCaseCollapsesToOneSingularity) {
+  GridSpec g;
+  g.nx = g.ny = 33;
+  const DesignSpace space(make_grid(g));
+  Field field = fold_field(space.mesh(), 21);
+  const Topology before = analyze_topology(space.bundle(), field);
+  ASSERT_EQ(before.bifurcations.size(), 2u);
+  size_t most = 0;
+  for (const auto& s : before.singularities) most = std::max(most, s.size());
+  ASSERT_EQ(most, 3u);
+
+  FieldEditor editor(space);
+  RemoveBifurcationEdit r;
+  r.at = {before.bifurcations[1].position, before.bifurcations[1].t};
+  const EditReport report = editor.remove_bifurcation(field, r);
+  EXPECT_NE(report.summary.find("three-path"), std::string::npos) << report.summary;
+
+  const Topology after = analyze_topology(space.bundle(), field);
+  EXPECT_TRUE(after.bifurcations.empty()) << after.bifurcations.size();
+  // One saddle path over the whole time range.
+  ASSERT_EQ(after.paths.size(), 1u);
+  EXPECT_EQ(after.paths[0].type, SingularityType::saddle);
+  EXPECT_EQ(after.paths[0].birth, 0.0);
+  EXPECT_EQ(after.paths[0].death, 1.0);
+  for (size_t j = 0; j < after.singularities.size(); ++j) {
+    ASSERT_EQ(after.singularities[j].size(), 1u) << "frame " << j;
+    EXPECT_EQ(after.singularities[j][0].index, -1) << "frame " << j;
+  }
+}
+
+}  // namespace
+}  // namespace tvf

@@ -12,11 +12,14 @@
 // - remove_bifurcation: the bifurcation nearest to (x, t) (analyze_topology). An isolated
 //   one — both of its singularities' tracks end on the time boundary or the domain
 //   boundary, or the two meet again in a second bifurcation (a loop) — is removed by
-//   cancelling the pair at every frame of its life span (key frames) and smoothing the
-//   window beyond it. The three-path case of paper §8.2 — the pair's tracks end in a
-//   second bifurcation with a third singularity — is collapsed to one singularity: over the
-//   overlap the middle singularity is cancelled together with the outer one whose removal
-//   makes the survivor jump least.
+//   cancelling the pair at every frame of its life span (key frames; a second pass redoes
+//   every frame over the union of the regions so consecutive frames get consecutive fills)
+//   and smoothing the window beyond it. The three-path case of paper §8.2 — one track ends
+//   in a second bifurcation with a third singularity, whose track runs on to the time or
+//   domain boundary — is collapsed to one singularity: at each frame of the overlap the
+//   middle singularity is cancelled with the nearer outer one. The survivor passes from
+//   one outer track to the other between two frames (where they are equally near): the
+//   result is one path, but it jumps there.
 // - move_bifurcation (planar domains): the bifurcation's neighbourhood is moved to the new
 //   place and time. Over the window after the new time (before it for a cancellation)
 //   each frame gets the pair of the original field at a source time that runs from the
