@@ -98,12 +98,42 @@ static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver&
       result.interior[v] = inside ? 1 : 0;
     }
     for (size_t v = 0; v < nv; ++v) constrained[v] = result.interior[v] ? 0 : 1;
+    auto count_unwanted = [&](const std::vector<cplx>& values) {
+      const std::vector<int> index = face_indices(bundle, values);
+      int n = 0;
+      for (size_t f = 0; f < nf; ++f)
+        if (in.region[f] && index[f] != 0) n += unwanted(index, static_cast<int>(f));
+      return n;
+    };
     const SolveReport r = solver.solve(constrained, in.start, result.values);
     if (!r.success) break;  // e.g. a region that took the whole mesh: nothing holds it
-    const std::vector<int> index = face_indices(bundle, result.values);
-    result.remaining = 0;
-    for (size_t f = 0; f < nf; ++f)
-      if (in.region[f] && index[f] != 0) result.remaining += unwanted(index, static_cast<int>(f));
+    result.remaining = count_unwanted(result.values);
+    if (result.remaining > 0) {
+      // Second try on the same region: fill the directions and the magnitudes separately
+      // (boundary values normalised, then the magnitudes |z| filled by the same solve), so
+      // that boundary vectors of very different lengths (an element's basis field next to
+      // its exponential falloff) cannot pull a zero into the region.
+      std::vector<cplx> unit(nv), size(nv), directions(nv), sizes(nv);
+      for (size_t v = 0; v < nv; ++v) {
+        unit[v] = std::abs(in.start[v]) > 0 ? in.start[v] / std::abs(in.start[v]) : cplx(0, 0);
+        size[v] = std::abs(in.start[v]);
+      }
+      const SolveReport ru = solver.solve(constrained, unit, directions);
+      const SolveReport rs = solver.solve(constrained, size, sizes);
+      if (ru.success && rs.success) {
+        std::vector<cplx> split(in.start);
+        for (size_t v = 0; v < nv; ++v)
+          if (result.interior[v]) {
+            const double a = std::abs(directions[v]);
+            split[v] = a > 0 ? directions[v] / a * std::abs(sizes[v]) : cplx(0, 0);
+          }
+        const int remaining = count_unwanted(split);
+        if (remaining < result.remaining) {
+          result.values = std::move(split);
+          result.remaining = remaining;
+        }
+      }
+    }
     if (result.remaining == 0) {
       result.success = true;
       break;
