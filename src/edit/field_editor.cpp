@@ -136,6 +136,62 @@ size_t nearest_bifurcation(const Topology& topo, const PathPoint& at, double dia
   return best;
 }
 
+// Point location on a planar mesh: faces bucketed on a uniform grid of about one face per
+// bucket, so a query tests a handful of faces (closest_point tests them all). Points
+// outside every face fall back to closest_point.
+class PlanarLocator {
+public:
+  explicit PlanarLocator(const Mesh& mesh) : mesh_(mesh) {
+    lo_ = mesh.bbox_min().head<2>();
+    const Vec2 hi = mesh.bbox_max().head<2>();
+    const double side = std::max(mesh.mean_edge_length(), 1e-12);
+    nx_ = std::max(1, static_cast<int>(std::ceil((hi.x() - lo_.x()) / side)));
+    ny_ = std::max(1, static_cast<int>(std::ceil((hi.y() - lo_.y()) / side)));
+    cell_ = Vec2((hi.x() - lo_.x()) / nx_, (hi.y() - lo_.y()) / ny_);
+    buckets_.resize(static_cast<size_t>(nx_) * static_cast<size_t>(ny_));
+    for (int f = 0; f < mesh.num_faces(); ++f) {
+      Vec2 a = Vec2::Constant(std::numeric_limits<double>::infinity()), b = -a;
+      for (int v : mesh.face(f)) {
+        a = a.cwiseMin(mesh.position(v).head<2>());
+        b = b.cwiseMax(mesh.position(v).head<2>());
+      }
+      const auto [ix0, iy0] = bucket(a);
+      const auto [ix1, iy1] = bucket(b);
+      for (int iy = iy0; iy <= iy1; ++iy)
+        for (int ix = ix0; ix <= ix1; ++ix)
+          buckets_[static_cast<size_t>(iy) * static_cast<size_t>(nx_) + static_cast<size_t>(ix)].push_back(f);
+    }
+  }
+  SurfacePoint locate(const Vec3& x) const {
+    const auto [ix, iy] = bucket(x.head<2>());
+    for (int f : buckets_[static_cast<size_t>(iy) * static_cast<size_t>(nx_) + static_cast<size_t>(ix)]) {
+      const Face& c = mesh_.face(f);
+      const Vec2 p0 = mesh_.position(c[0]).head<2>(), p1 = mesh_.position(c[1]).head<2>(),
+                 p2 = mesh_.position(c[2]).head<2>();
+      const Vec2 q = x.head<2>();
+      const double area = (p1 - p0).x() * (p2 - p0).y() - (p1 - p0).y() * (p2 - p0).x();
+      if (area == 0) continue;
+      const double b1 = ((q - p0).x() * (p2 - p0).y() - (q - p0).y() * (p2 - p0).x()) / area;
+      const double b2 = ((p1 - p0).x() * (q - p0).y() - (p1 - p0).y() * (q - p0).x()) / area;
+      const double b0 = 1 - b1 - b2;
+      constexpr double eps = -1e-12;
+      if (b0 >= eps && b1 >= eps && b2 >= eps) return {f, Vec3(b0, b1, b2)};
+    }
+    return closest_point(mesh_, x);
+  }
+
+private:
+  std::pair<int, int> bucket(const Vec2& p) const {
+    const int ix = std::clamp(static_cast<int>(std::floor((p.x() - lo_.x()) / cell_.x())), 0, nx_ - 1);
+    const int iy = std::clamp(static_cast<int>(std::floor((p.y() - lo_.y()) / cell_.y())), 0, ny_ - 1);
+    return {ix, iy};
+  }
+  const Mesh& mesh_;
+  Vec2 lo_, cell_;
+  int nx_ = 1, ny_ = 1;
+  std::vector<std::vector<int>> buckets_;
+};
+
 std::string bifurcation_name(const Bifurcation& b) {
   return fmt::format("the {} bifurcation at {} at t = {:.3g}", to_string(b.kind), where(b.position), b.t);
 }
@@ -524,6 +580,7 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
   const double begin = sigma > 0 ? std::min(tb, tn) : std::max(tb, tn);
   const double h = mesh.mean_edge_length();
   const FieldSampler original(bundle, field);
+  const PlanarLocator locator(mesh);
 
   Field out = field;
   EditReport report;
@@ -571,7 +628,7 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
         const Vec3& x = mesh.position(v);
         if ((x - centre).norm() > radius) continue;
         const Vec3 from = x - offset;
-        const SurfacePoint sp = closest_point(mesh, from);
+        const SurfacePoint sp = locator.locate(from);
         if ((surface_position(mesh, sp) - from).norm() > 1e-9 * space_.diameter())
           throw EditRefused(fmt::format("cannot move {}: at frame {} the moved pair's neighbourhood would come "
                                         "from {}, outside the domain",

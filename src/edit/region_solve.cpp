@@ -3,6 +3,9 @@
 #include "tvf/analysis/singularities.h"
 #include "tvf/core/error.h"
 
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseLU>
+
 #include <algorithm>
 #include <functional>
 #include <limits>
@@ -54,7 +57,7 @@ std::vector<int> face_chain(const Mesh& mesh, int a, int b, const std::vector<ch
 
 RegionSolver::RegionSolver(const TangentBundle& bundle, const ConnectionLaplacian& laplacian,
                            RegionOptions options)
-    : bundle_(bundle), solver_(laplacian), options_(options) {
+    : bundle_(bundle), laplacian_(laplacian), options_(options) {
   const Mesh& mesh = bundle.mesh();
   vertex_faces_.resize(static_cast<size_t>(mesh.num_vertices()));
   for (int v = 0; v < mesh.num_vertices(); ++v)
@@ -73,8 +76,70 @@ struct GrowInput {
 
 }  // namespace
 
+// L z = 0 at the interior vertices with every other vertex fixed: the block L_II factored
+// (L_II z_I = −L_IB z_B). Hermitian weights: sparse LDLᵀ; mean-value weights: sparse LU.
+class InteriorSolver {
+public:
+  InteriorSolver(const ConnectionLaplacian& laplacian, const std::vector<char>& interior)
+      : laplacian_(laplacian) {
+    const auto nv = interior.size();
+    index_.assign(nv, -1);
+    for (size_t v = 0; v < nv; ++v)
+      if (interior[v]) index_[v] = n_++;
+    if (n_ == 0 || n_ == static_cast<int>(nv)) return;  // nothing to solve, or nothing fixed
+    std::vector<Eigen::Triplet<cplx>> triplets;
+    const auto& l = laplacian.matrix;
+    for (Eigen::Index c = 0; c < l.outerSize(); ++c) {
+      const int ic = index_[static_cast<size_t>(c)];
+      if (ic < 0) continue;
+      for (Eigen::SparseMatrix<cplx>::InnerIterator it(l, c); it; ++it) {
+        const int ir = index_[static_cast<size_t>(it.row())];
+        if (ir >= 0) triplets.emplace_back(ir, ic, it.value());
+      }
+    }
+    Eigen::SparseMatrix<cplx> a(n_, n_);
+    a.setFromTriplets(triplets.begin(), triplets.end());
+    if (laplacian.hermitian) {
+      ldlt_.compute(a);
+      ok_ = ldlt_.info() == Eigen::Success;
+    } else {
+      lu_.compute(a);
+      ok_ = lu_.info() == Eigen::Success;
+    }
+  }
+  bool ok() const { return ok_ || n_ == 0; }
+
+  // out = values with the interior vertices re-solved.
+  void solve(const std::vector<cplx>& values, std::vector<cplx>& out) const {
+    out = values;
+    if (n_ == 0) return;
+    Eigen::VectorXcd rhs = Eigen::VectorXcd::Zero(n_);
+    const auto& l = laplacian_.matrix;
+    for (Eigen::Index c = 0; c < l.outerSize(); ++c) {
+      if (index_[static_cast<size_t>(c)] >= 0) continue;
+      const cplx zc = values[static_cast<size_t>(c)];
+      if (zc == cplx(0, 0)) continue;
+      for (Eigen::SparseMatrix<cplx>::InnerIterator it(l, c); it; ++it) {
+        const int ir = index_[static_cast<size_t>(it.row())];
+        if (ir >= 0) rhs[ir] -= it.value() * zc;
+      }
+    }
+    const Eigen::VectorXcd z = laplacian_.hermitian ? Eigen::VectorXcd(ldlt_.solve(rhs)) : Eigen::VectorXcd(lu_.solve(rhs));
+    for (size_t v = 0; v < index_.size(); ++v)
+      if (index_[v] >= 0) out[v] = z[index_[v]];
+  }
+
+private:
+  const ConnectionLaplacian& laplacian_;
+  std::vector<int> index_;
+  int n_ = 0;
+  bool ok_ = false;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<cplx>> ldlt_;
+  Eigen::SparseLU<Eigen::SparseMatrix<cplx>> lu_;
+};
+
 // The grow-and-solve loop shared by cancel() and paste().
-static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver& solver,
+static RegionResult grow_and_solve(const TangentBundle& bundle, const ConnectionLaplacian& laplacian,
                                    const std::vector<std::vector<int>>& vertex_faces, int max_growth,
                                    GrowInput in,
                                    const std::function<int(const std::vector<int>& index, int face)>& unwanted) {
@@ -82,7 +147,6 @@ static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver&
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   const auto nf = static_cast<size_t>(mesh.num_faces());
   RegionResult result;
-  std::vector<char> constrained(nv);
   result.values.resize(nv);
   bool stuck = false;
   for (int growth = 0;; ++growth) {
@@ -97,7 +161,8 @@ static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver&
       for (int f : vertex_faces[v]) inside = inside && in.region[static_cast<size_t>(f)];
       result.interior[v] = inside ? 1 : 0;
     }
-    for (size_t v = 0; v < nv; ++v) constrained[v] = result.interior[v] ? 0 : 1;
+    const InteriorSolver solver(laplacian, result.interior);
+    if (!solver.ok()) break;  // e.g. a region that took the whole mesh: nothing holds it
     auto count_unwanted = [&](const std::vector<cplx>& values) {
       const std::vector<int> index = face_indices(bundle, values);
       int n = 0;
@@ -105,8 +170,7 @@ static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver&
         if (in.region[f] && index[f] != 0) n += unwanted(index, static_cast<int>(f));
       return n;
     };
-    const SolveReport r = solver.solve(constrained, in.start, result.values);
-    if (!r.success) break;  // e.g. a region that took the whole mesh: nothing holds it
+    solver.solve(in.start, result.values);
     result.remaining = count_unwanted(result.values);
     if (result.remaining > 0) {
       // Second try on the same region: fill the directions and the magnitudes separately
@@ -118,9 +182,9 @@ static RegionResult grow_and_solve(const TangentBundle& bundle, DirichletSolver&
         unit[v] = std::abs(in.start[v]) > 0 ? in.start[v] / std::abs(in.start[v]) : cplx(0, 0);
         size[v] = std::abs(in.start[v]);
       }
-      const SolveReport ru = solver.solve(constrained, unit, directions);
-      const SolveReport rs = solver.solve(constrained, size, sizes);
-      if (ru.success && rs.success) {
+      solver.solve(unit, directions);
+      solver.solve(size, sizes);
+      {
         std::vector<cplx> split(in.start);
         for (size_t v = 0; v < nv; ++v)
           if (result.interior[v]) {
@@ -220,7 +284,7 @@ RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int 
   for (int f : chain) in.region[static_cast<size_t>(f)] = 1;
   const int extra = std::clamp(start_rings, 0, options_.max_growth);
   for (int k = 0; k <= extra; ++k) dilate(mesh, vertex_faces_, in.region, in.blocked);
-  RegionResult r = grow_and_solve(bundle_, solver_, vertex_faces_, options_.max_growth - extra, std::move(in),
+  RegionResult r = grow_and_solve(bundle_, laplacian_, vertex_faces_, options_.max_growth - extra, std::move(in),
                                   [](const std::vector<int>&, int) { return 1; });
   r.growths += extra;
   return r;
@@ -242,7 +306,7 @@ RegionResult RegionSolver::cancel_in(std::span<const cplx> values, int face_a, i
   for (int f : region)
     if (!in.blocked[static_cast<size_t>(f)]) in.region[static_cast<size_t>(f)] = 1;
   in.region[static_cast<size_t>(face_a)] = in.region[static_cast<size_t>(face_b)] = 1;
-  return grow_and_solve(bundle_, solver_, vertex_faces_, options_.max_growth, std::move(in),
+  return grow_and_solve(bundle_, laplacian_, vertex_faces_, options_.max_growth, std::move(in),
                         [](const std::vector<int>&, int) { return 1; });
 }
 
@@ -282,7 +346,7 @@ RegionResult RegionSolver::paste(std::span<const cplx> values, const std::vector
     }
   dilate(mesh, vertex_faces_, in.region, in.blocked);
   const std::vector<char> pinned_mask = in.pinned;
-  return grow_and_solve(bundle_, solver_, vertex_faces_, options_.max_growth, std::move(in),
+  return grow_and_solve(bundle_, laplacian_, vertex_faces_, options_.max_growth, std::move(in),
                         [&](const std::vector<int>&, int f) {
                           for (int v : mesh.face(f))
                             if (pinned_mask[static_cast<size_t>(v)]) return 0;

@@ -8,6 +8,10 @@
 // (the design's natural boundary condition), so a singularity may also leave through the
 // domain boundary: fixing them kept pairs next to the boundary from cancelling at all.
 //
+// The solve is the Dirichlet problem of DirichletSolver restricted to the region: only the
+// block L_II of the interior vertices is factored (L_II z_I = −L_IB z_B), a few hundred
+// vertices rather than the whole mesh, once per region and shared by the tries on it.
+//
 // The region starts from seed faces and grows one vertex ring at a time until the result
 // is accepted. Singular faces that are not to be edited ("others") are never taken into the
 // region (they become holes whose corner values stay fixed, so those singularities do not
@@ -63,7 +67,7 @@ public:
 
 private:
   const TangentBundle& bundle_;
-  DirichletSolver solver_;
+  const ConnectionLaplacian& laplacian_;
   RegionOptions options_;
   std::vector<std::vector<int>> vertex_faces_;
 };
