@@ -364,3 +364,47 @@ TEST(FieldEditor, TheThreePathCaseCollapsesToOneSingularity) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+TEST(FieldEditor, ARegionThatWouldSwallowAnotherSingularityIsRefused) {
+  // A strip one cell high: V = (f(x), y − 0.3h), f with zeros at ±0.2 and ±0.6 (indices −1,
+  // +1, −1, +1 from left to right). The outer pair is ±1, but every chain of faces between
+  // them passes through the two inner singularities.
+  GridSpec g;
+  g.nx = 33;
+  g.ny = 2;
+  g.min = Vec2(-1, 0);
+  g.max = Vec2(1, 0.0625);
+  const DesignSpace space(make_grid(g));
+  Field field(TimeSampling{0.0, 1.0, 3}, space.mesh().num_vertices());
+  for (int j = 0; j < 3; ++j)
+    for (int v = 0; v < space.mesh().num_vertices(); ++v) {
+      const Vec3& p = space.mesh().position(v);
+      const double x = p.x();
+      field.at(j, v) = cplx((x + 0.6) * (x + 0.2) * (x - 0.2) * (x - 0.6), p.y() - 0.3 * 0.0625);
+    }
+  const auto sings = find_singularities(space.bundle(), field, 1);
+  ASSERT_EQ(sings.size(), 4u);
+  const Field original = field;
+  FieldEditor editor(space);
+  CancelEdit c;
+  c.frame = 1;
+  c.pair = {Vec3(-0.6, 0.02, 0), Vec3(0.6, 0.02, 0)};
+  std::string message;
+  try {
+    editor.cancel(field, c);
+  } catch (const EditRefused& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("the region would swallow the"), std::string::npos) << message;
+  EXPECT_TRUE(bitwise_equal(field, original));
+  // The inner pair, with nothing between them, cancels.
+  c.pair = {Vec3(-0.2, 0.02, 0), Vec3(0.2, 0.02, 0)};
+  editor.cancel(field, c);
+  EXPECT_EQ(find_singularities(space.bundle(), field, 1).size(), 2u);
+}
+
+}  // namespace
+}  // namespace tvf
