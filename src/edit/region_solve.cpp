@@ -53,6 +53,54 @@ std::vector<int> face_chain(const Mesh& mesh, int a, int b, const std::vector<ch
   return chain;
 }
 
+// A blocked face that `region` encloses (-1 if none): one in a part of the complement cut
+// off from the rest, that is, from the domain boundary, or on a closed mesh from the
+// complement's largest part. Taking such a face's surroundings into the region would
+// swallow its singularity.
+int enclosed_blocked_face(const Mesh& mesh, const std::vector<char>& region, const std::vector<char>& blocked) {
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  std::vector<int> component(nf, -1);
+  std::vector<int> sizes;
+  std::vector<char> touches_boundary;
+  std::vector<int> stack;
+  for (size_t f0 = 0; f0 < nf; ++f0) {
+    if (region[f0] || component[f0] >= 0) continue;
+    const int id = static_cast<int>(sizes.size());
+    sizes.push_back(0);
+    touches_boundary.push_back(0);
+    component[f0] = id;
+    stack.assign(1, static_cast<int>(f0));
+    while (!stack.empty()) {
+      const int f = stack.back();
+      stack.pop_back();
+      ++sizes.back();
+      for (int c = 0; c < 3; ++c) {
+        const int tw = mesh.twin(3 * f + c);
+        if (tw < 0) {
+          touches_boundary.back() = 1;
+          continue;
+        }
+        const auto g = static_cast<size_t>(Mesh::face_of(tw));
+        if (region[g] || component[g] >= 0) continue;
+        component[g] = id;
+        stack.push_back(static_cast<int>(g));
+      }
+    }
+  }
+  if (sizes.empty()) return -1;
+  std::vector<char> outside(sizes.size(), 0);
+  bool any = false;
+  for (size_t k = 0; k < sizes.size(); ++k) any = any || touches_boundary[k];
+  if (any) {
+    outside = touches_boundary;
+  } else {
+    outside[static_cast<size_t>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin())] = 1;
+  }
+  for (size_t f = 0; f < nf; ++f)
+    if (blocked[f] && !region[f] && !outside[static_cast<size_t>(component[f])]) return static_cast<int>(f);
+  return -1;
+}
+
 }  // namespace
 
 RegionSolver::RegionSolver(const TangentBundle& bundle, const ConnectionLaplacian& laplacian,
@@ -225,7 +273,10 @@ static RegionResult grow_and_solve(const TangentBundle& bundle, const Connection
           grew = true;
         }
     }
-    if (!grew) {
+    // A ring that would close around another singularity would swallow it: stop there.
+    const int enclosed = grew ? enclosed_blocked_face(mesh, next, in.blocked) : -1;
+    if (enclosed >= 0) result.blocked_by = enclosed;
+    if (!grew || enclosed >= 0) {
       stuck = true;
       break;
     }
@@ -282,8 +333,32 @@ RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int 
     return r;
   }
   for (int f : chain) in.region[static_cast<size_t>(f)] = 1;
+  // And the disc on the pair: a region hugging the chain is long and thin, and its harmonic
+  // fill keeps the pair (the fill at the middle averages the boundary values nearest to it,
+  // which point the way the field between the pair does).
+  const Vec3 ca = centroid(mesh, face_a), cb = centroid(mesh, face_b);
+  const double radius = (ca - cb).norm() / 2 + 2 * mesh.mean_edge_length();
+  for (size_t f = 0; f < nf; ++f)
+    if (!in.blocked[f] && (centroid(mesh, static_cast<int>(f)) - in.focus).norm() <= radius) in.region[f] = 1;
+  const std::vector<char> chain_only = [&] {
+    std::vector<char> r(nf, 0);
+    for (int f : chain) r[static_cast<size_t>(f)] = 1;
+    return r;
+  }();
   const int extra = std::clamp(start_rings, 0, options_.max_growth);
   for (int k = 0; k <= extra; ++k) dilate(mesh, vertex_faces_, in.region, in.blocked);
+  if (enclosed_blocked_face(mesh, in.region, in.blocked) >= 0) {
+    // The disc (or the hinted rings) would swallow another singularity: the chain alone.
+    in.region = chain_only;
+    dilate(mesh, vertex_faces_, in.region, in.blocked);
+    if (const int e = enclosed_blocked_face(mesh, in.region, in.blocked); e >= 0) {
+      RegionResult r;
+      r.values = in.start;
+      r.blocked_by = e;
+      r.remaining = 2;
+      return r;
+    }
+  }
   RegionResult r = grow_and_solve(bundle_, laplacian_, vertex_faces_, options_.max_growth - extra, std::move(in),
                                   [](const std::vector<int>&, int) { return 1; });
   r.growths += extra;
@@ -306,6 +381,13 @@ RegionResult RegionSolver::cancel_in(std::span<const cplx> values, int face_a, i
   for (int f : region)
     if (!in.blocked[static_cast<size_t>(f)]) in.region[static_cast<size_t>(f)] = 1;
   in.region[static_cast<size_t>(face_a)] = in.region[static_cast<size_t>(face_b)] = 1;
+  if (const int e = enclosed_blocked_face(mesh, in.region, in.blocked); e >= 0) {
+    RegionResult r;
+    r.values = in.start;
+    r.blocked_by = e;
+    r.remaining = 2;
+    return r;
+  }
   return grow_and_solve(bundle_, laplacian_, vertex_faces_, options_.max_growth, std::move(in),
                         [](const std::vector<int>&, int) { return 1; });
 }
@@ -345,6 +427,13 @@ RegionResult RegionSolver::paste(std::span<const cplx> values, const std::vector
       return r;
     }
   dilate(mesh, vertex_faces_, in.region, in.blocked);
+  if (const int e = enclosed_blocked_face(mesh, in.region, in.blocked); e >= 0) {
+    RegionResult r;
+    r.values.assign(values.begin(), values.end());
+    r.blocked_by = e;
+    r.remaining = 1;
+    return r;
+  }
   const std::vector<char> pinned_mask = in.pinned;
   return grow_and_solve(bundle_, laplacian_, vertex_faces_, options_.max_growth, std::move(in),
                         [&](const std::vector<int>&, int f) {

@@ -14,8 +14,9 @@
 //
 // The region starts from seed faces and grows one vertex ring at a time until the result
 // is accepted. Singular faces that are not to be edited ("others") are never taken into the
-// region (they become holes whose corner values stay fixed, so those singularities do not
-// move); a region that cannot grow any further without them fails, naming the blocking one.
+// region, and the region never closes around one (a hole holding a singularity, whose
+// index the harmonic fill would have to carry around it): a ring that would swallow
+// another singularity ends the growth, and the edit fails naming it.
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/solve/connection_laplacian.h"
 
