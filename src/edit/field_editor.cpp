@@ -429,8 +429,8 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
   } else {
     // The three-path case (paper §8.2): exactly one of the two tracks (the middle one) ends
     // in a second bifurcation, with a third singularity whose track runs on to the other
-    // time boundary. The middle singularity is cancelled over its life together with the
-    // outer one whose removal makes the survivor jump least.
+    // time boundary (or the domain boundary). Over the overlap the middle singularity is
+    // cancelled with one of the two outer ones, leaving one singularity.
     if (ea >= 0 && eb >= 0)
       throw EditRefused(fmt::format("{} is not isolated: both of its singularities end in other bifurcations "
                                     "(only isolated bifurcations and the three-path case of paper §8.2 can be "
@@ -449,8 +449,6 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
                                     "bifurcations (only isolated bifurcations and the three-path case of paper "
                                     "§8.2 can be removed)",
                                     bifurcation_name(bif), bifurcation_name(other)));
-    // The survivor keeps outer1 (cancel middle with outer2) or outer2 (cancel middle with
-    // outer1); it jumps between their positions at one end of the overlap.
     const std::vector<char> in_m = membership(np, middle), in_1 = membership(np, outer1),
                             in_2 = membership(np, outer2);
     const double lo = std::min(bif.t, other.t), hi = std::max(bif.t, other.t);
