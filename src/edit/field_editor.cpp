@@ -418,6 +418,9 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
   };
   std::vector<Cut> cuts;
   std::string what;
+  // Three-path case: per cut frame, the tracks of the singularity that survives there.
+  std::map<int, const std::vector<char>*> survivor;
+  std::vector<char> in_1, in_2;
   if (loop || (ea < 0 && eb < 0)) {
     for (int j = 0; j < field.frames(); ++j) {
       if (sigma * (time.time(j) - bif.t) <= 0) continue;
@@ -449,8 +452,9 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
                                     "bifurcations (only isolated bifurcations and the three-path case of paper "
                                     "§8.2 can be removed)",
                                     bifurcation_name(bif), bifurcation_name(other)));
-    const std::vector<char> in_m = membership(np, middle), in_1 = membership(np, outer1),
-                            in_2 = membership(np, outer2);
+    const std::vector<char> in_m = membership(np, middle);
+    in_1 = membership(np, outer1);
+    in_2 = membership(np, outer2);
     const double lo = std::min(bif.t, other.t), hi = std::max(bif.t, other.t);
     std::vector<int> frames;
     for (int j = 0; j < field.frames(); ++j)
@@ -471,7 +475,10 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
                 : pm2;
       else
         p = pm1 ? pm1 : pm2;
-      if (p) cuts.push_back({j, s[(*p)[0]].where.face, s[(*p)[1]].where.face});
+      if (p) {
+        cuts.push_back({j, s[(*p)[0]].where.face, s[(*p)[1]].where.face});
+        survivor[j] = p == pm1 ? &in_2 : &in_1;
+      }
     }
     what = fmt::format("the three-path configuration with {}", bifurcation_name(other));
   }
@@ -531,11 +538,64 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
       interiors = std::move(second_interiors);
     }
   }
+  if (!survivor.empty() && space_.planar()) move_survivor(out, topo, survivor, interiors, report);
   smooth_around(out, interiors, interiors, window_frames(field, edit.window), report);
   report.summary = fmt::format("removed {} ({}) by cancelling the pair at frames {}–{}", bifurcation_name(bif), what,
                                cuts.front().frame, cuts.back().frame);
   field = std::move(out);
   return report;
+}
+
+// The three-path collapse leaves the survivor on one outer track, then on the other: a
+// jump where the cancelled partner changes. Over the cut frames the survivor is moved to
+// the straight line between its first and last positions: its neighbourhood (a disc of 3
+// edge lengths) is pasted at the new place and the region between re-solved, so the old
+// place is left without it. Planar domains (the neighbourhood is translated in the plane).
+void FieldEditor::move_survivor(Field& out, const Topology& topo, const std::map<int, const std::vector<char>*>& survivor,
+                                std::map<int, std::vector<char>>& interiors, EditReport& report) {
+  const Mesh& mesh = space_.mesh();
+  auto position_of = [&](int j) -> std::optional<std::pair<Vec3, int>> {
+    const auto& ids = topo.singularity_path[static_cast<size_t>(j)];
+    const std::vector<char>& keep = *survivor.at(j);
+    for (size_t k = 0; k < ids.size(); ++k)
+      if (ids[k] >= 0 && keep[static_cast<size_t>(ids[k])])
+        return std::make_pair(topo.singularities[static_cast<size_t>(j)][k].position,
+                              topo.singularities[static_cast<size_t>(j)][k].where.face);
+    return std::nullopt;
+  };
+  const int f0 = survivor.begin()->first, f1 = survivor.rbegin()->first;
+  const auto s0 = position_of(f0), s1 = position_of(f1);
+  if (!s0 || !s1 || f1 <= f0) return;
+  const PlanarLocator locator(mesh);
+  const double h = mesh.mean_edge_length();
+  for (const auto& [j, keep] : survivor) {
+    const auto sj = position_of(j);
+    if (!sj) continue;
+    const double w = static_cast<double>(j - f0) / static_cast<double>(f1 - f0);
+    const Vec3 target = s0->first + w * (s1->first - s0->first);
+    const Vec3 offset = target - sj->first;
+    if (offset.norm() < h) continue;
+    Field frame(TimeSampling{0.0, 1.0, 1}, out.num_vertices());
+    std::copy(out.frame(j).begin(), out.frame(j).end(), frame.frame(0).begin());
+    const FieldSampler sampler(space_.bundle(), frame);
+    std::vector<int> pinned;
+    std::vector<cplx> values;
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      if ((mesh.position(v) - target).norm() > 3 * h) continue;
+      const Vec3 from = mesh.position(v) - offset;
+      const SurfacePoint sp = locator.locate(from);
+      if ((surface_position(mesh, sp) - from).norm() > 1e-9 * space_.diameter()) return;  // keep the jump
+      pinned.push_back(v);
+      values.push_back(sampler.in_face(sp, 0.0));
+    }
+    if (pinned.empty()) continue;
+    const RegionResult r = region_.paste(out.frame(j), pinned, values, {sj->second});
+    if (!r.success) continue;  // this frame keeps the survivor where it is
+    std::copy(r.values.begin(), r.values.end(), out.frame(j).begin());
+    std::vector<char>& in = interiors[j];
+    for (size_t v = 0; v < in.size(); ++v) in[v] = in[v] || r.interior[v];
+    report.growths = std::max(report.growths, r.growths);
+  }
 }
 
 EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit& edit) {

@@ -370,6 +370,14 @@ TEST(FieldEditor, TheThreePathCaseCollapsesToOneSingularity) {
 
   const Topology after = analyze_topology(space.bundle(), field);
   EXPECT_TRUE(after.bifurcations.empty()) << after.bifurcations.size();
+  // The survivor travels from the first outer track to the other without a jump: no step
+  // between frames is more than a quarter of the whole way (a jump would be all of it).
+  const double way =
+      (after.singularities.back()[0].position - after.singularities.front()[0].position).norm();
+  ASSERT_GT(way, 1.0);
+  for (size_t j = 1; j < after.singularities.size(); ++j)
+    EXPECT_LT((after.singularities[j][0].position - after.singularities[j - 1][0].position).norm(), 0.25 * way)
+        << "frame " << j;
   // One saddle path over the whole time range.
   ASSERT_EQ(after.paths.size(), 1u);
   EXPECT_EQ(after.paths[0].type, SingularityType::saddle);

@@ -17,9 +17,11 @@
 //   and smoothing the window beyond it. The three-path case of paper §8.2 — one track ends
 //   in a second bifurcation with a third singularity, whose track runs on to the time or
 //   domain boundary — is collapsed to one singularity: at each frame of the overlap the
-//   middle singularity is cancelled with the nearer outer one. The survivor passes from
-//   one outer track to the other between two frames (where they are equally near): the
-//   result is one path, but it jumps there.
+//   middle singularity is cancelled with the nearer outer one, and (planar domains) the
+//   survivor is moved onto the straight line from its first to its last place in the
+//   overlap (its neighbourhood pasted there, the region between re-solved), so one path
+//   runs from one outer track to the other. On surfaces it passes from one outer track
+//   to the other between two frames: one path, with a jump.
 // - move_bifurcation (planar domains): the bifurcation's neighbourhood is moved to the new
 //   place and time. Over the window after the new time (before it for a cancellation)
 //   each frame gets the pair of the original field at a source time that runs from the
@@ -32,6 +34,7 @@
 //   4·√b frames in time). The pull towards the current field z⁰ is written as Dirichlet
 //   ghost vertices (one per vertex, joined to it with weight μ·d_i and fixed at z⁰), so the
 //   solve is the SpaceTimeSolver's own.
+#include "tvf/analysis/topology.h"
 #include "tvf/core/error.h"
 #include "tvf/design/design_space.h"
 #include "tvf/edit/edits.h"
@@ -91,6 +94,8 @@ public:
 private:
   struct Window;
   void resolve_window(Field& field, const Window& window, EditReport& report) const;
+  void move_survivor(Field& out, const Topology& topo, const std::map<int, const std::vector<char>*>& survivor,
+                     std::map<int, std::vector<char>>& interiors, EditReport& report);
   void smooth_around(Field& field, const std::map<int, std::vector<char>>& key_free,
                      const std::map<int, std::vector<char>>& flank_free, int w, EditReport& report) const;
 
