@@ -61,24 +61,27 @@ nlohmann::json requested_edit(const EditArgs& args, const Scene& scene) {
   };
   if (!args.cancel.empty()) {
     if (args.cancel.size() != 1 + 2 * n)
-      throw Error(fmt::format("--cancel needs FRAME {0} {0} ({1} numbers) on this {2} domain, got {3}", form,
-                              1 + 2 * n, planar ? "planar" : "surface", args.cancel.size()));
+      throw Error(fmt::format("{0}: --cancel needs FRAME {1} {1} ({2} numbers) on this {3} domain, got {4}",
+                              args.scene, form, 1 + 2 * n, planar ? "planar" : "surface", args.cancel.size()));
     const double frame = args.cancel[0];
     if (frame != std::floor(frame) || frame < 0 || frame >= scene.time.frames)
-      throw Error(fmt::format("--cancel: FRAME must be an integer in [0, {}], got {}", scene.time.frames - 1, frame));
+      throw Error(fmt::format("{}: --cancel: FRAME must be an integer in [0, {}], got {}", args.scene,
+                              scene.time.frames - 1, frame));
     e = {{"op", "cancel"},
          {"frame", static_cast<int>(frame)},
          {"pair", nlohmann::json::array({position_json(args.cancel, 1, n), position_json(args.cancel, 1 + n, n)})}};
     window();
   } else if (!args.remove_bifurcation.empty()) {
     if (args.remove_bifurcation.size() != 1 + n)
-      throw Error(fmt::format("--remove-bifurcation needs T {} ({} numbers) on this domain", form, 1 + n));
+      throw Error(fmt::format("{}: --remove-bifurcation needs T {} ({} numbers) on this domain", args.scene, form,
+                              1 + n));
     nlohmann::json at = position_json(args.remove_bifurcation, 1, n);
     at.push_back(args.remove_bifurcation[0]);
     e = {{"op", "remove_bifurcation"}, {"at", at}};
     window();
   } else if (!args.move_bifurcation.empty()) {
-    if (!planar) throw Error("--move-bifurcation works on planar (grid) domains only");
+    if (!planar)
+      throw Error(fmt::format("{}: --move-bifurcation works on planar (grid) domains only", args.scene));
     nlohmann::json at = position_json(args.move_bifurcation, 1, 2), to = position_json(args.move_bifurcation, 4, 2);
     at.push_back(args.move_bifurcation[0]);
     to.push_back(args.move_bifurcation[3]);
@@ -96,7 +99,8 @@ int run_edit(const EditArgs& args) {
   const bool given = !args.cancel.empty() || !args.remove_bifurcation.empty() || !args.move_bifurcation.empty() ||
                      !std::isnan(args.smooth) || args.undo;
   if (!given)
-    throw Error("tvf edit: say which edit: --cancel, --remove-bifurcation, --move-bifurcation, --smooth or --undo");
+    throw Error(fmt::format("{}: say which edit: --cancel, --remove-bifurcation, --move-bifurcation, --smooth or --undo",
+                            args.scene));
   Scene scene = load_scene(args.scene);
   if (args.undo) {
     if (scene.edits.empty()) throw Error(fmt::format("{}: the scene has no edits to undo", args.scene));
