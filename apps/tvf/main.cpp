@@ -2,6 +2,7 @@
 // print results and errors (one sentence on stderr, non-zero exit).
 #include "default_scene.h"
 #include "design_check_output.h"
+#include "edit_command.h"
 #include "progress.h"
 
 #include "tvf/analysis/topology.h"
@@ -64,6 +65,7 @@ int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
                 report.method.c_str(), report.seconds);
     if (report.residual > 0) std::printf(" (worst relative residual %.1e)", report.residual);
     std::printf("\n");
+    for (const auto& e : report.edits) std::printf("  edit: %s\n", e.c_str());
     std::printf("wrote %zu files to %s\n", files.size(), fs::absolute(args.out).lexically_normal().c_str());
     if (demo) {
       std::printf(
@@ -217,6 +219,9 @@ int main(int argc, char** argv) {
   validate_cmd->add_option("scene", validate_path, "Scene file (JSON)")->required();
   validate_cmd->add_flag("--domain", validate_domain, "Also build the domain (loads and checks the mesh)");
 
+  cli::EditArgs edit;
+  auto* edit_cmd = cli::add_edit_command(app, edit);
+
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
 
   try {
@@ -229,6 +234,7 @@ int main(int argc, char** argv) {
     if (*generate_cmd) return run_generate(load_scene(gen.scene), gen, false);
     if (*analyze_cmd) return run_analyze(analyze);
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
+    if (*edit_cmd) return cli::run_edit(edit);
     if (*default_cmd) {
       std::fputs(cli::default_scene_text(), stdout);
       return 0;

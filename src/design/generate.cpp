@@ -4,6 +4,7 @@
 #include "tvf/design/element_field.h"
 #include "design/element_regions.h"
 #include "tvf/design/keyframes.h"
+#include "tvf/edit/field_editor.h"
 #include "tvf/solve/connection_laplacian.h"
 #include "tvf/solve/spacetime.h"
 
@@ -227,10 +228,19 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
 
 Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                GenerateReport* report) {
-  if (!scene.edits.empty())
-    throw_input_error(scene.label(), "edits",
-                      "topological edits are not available in this version of tvf; remove the "
-                      "'edits' entries to generate the unedited design");
+  Field field = generate_unedited(space, scene, options, report);
+  // The scene's edits, in order, on the generated field (DESIGN §7; edit/field_editor.h).
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<EditReport> edits = apply_scene_edits(space, scene, field);
+  if (report && !edits.empty()) {
+    for (const EditReport& e : edits) report->edits.push_back(e.summary);
+    report->seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  return field;
+}
+
+Field generate_unedited(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
+                        GenerateReport* report) {
   switch (scene.generator) {
     case Generator::basis: return generate_basis_sum(space, scene, options, report);
     case Generator::constrained: return generate_constrained(space, scene, options, report);

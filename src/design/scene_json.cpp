@@ -62,7 +62,7 @@ int key_rank(const std::string& key) {
       "at", "to", "vector", "path", "pathline", "attach", "elements", "keyframes", "matrix",
       "m", "transform", "sx", "sy", "theta", "translate", "rotate", "scale", "time_scale",
       "angle", "streamlines", "seed", "keys", "points", "speed", "field", "deform", "edits",
-      "pair", "strength"};
+      "pair", "strength", "window"};
   for (size_t i = 0; i < std::size(kOrder); ++i)
     if (key == kOrder[i]) return static_cast<int>(i);
   return static_cast<int>(std::size(kOrder));
@@ -814,7 +814,7 @@ json Reader::edit(const json& j, const std::string& path) const {
   out["op"] = op;
   const std::string at_hint = fmt::format("the bifurcation's place and time {}", path_point_form());
   if (op == "cancel") {
-    check_keys(j, path, "a cancel edit", {"op", "frame", "pair"});
+    check_keys(j, path, "a cancel edit", {"op", "frame", "pair", "window"});
     out["frame"] = integer(need(j, path, "frame", "the frame to edit"), join_key(path, "frame"), 0,
                            time_.frames - 1);
     const std::string p = join_key(path, "pair");
@@ -833,10 +833,10 @@ json Reader::edit(const json& j, const std::string& path) const {
     if (!(s > 0 && s <= 1)) fail(p, fmt::format("must be in (0, 1], got {}", s));
     out["strength"] = s;
   } else if (op == "remove_bifurcation") {
-    check_keys(j, path, "a remove_bifurcation edit", {"op", "at"});
+    check_keys(j, path, "a remove_bifurcation edit", {"op", "at", "window"});
     out["at"] = path_point_json(path_point(need(j, path, "at", at_hint), join_key(path, "at")), planar_);
   } else if (op == "move_bifurcation") {
-    check_keys(j, path, "a move_bifurcation edit", {"op", "at", "to"});
+    check_keys(j, path, "a move_bifurcation edit", {"op", "at", "to", "window"});
     out["at"] = path_point_json(path_point(need(j, path, "at", at_hint), join_key(path, "at")), planar_);
     out["to"] = path_point_json(
         path_point(need(j, path, "to", fmt::format("where the bifurcation goes, {}", path_point_form())),
@@ -847,6 +847,17 @@ json Reader::edit(const json& j, const std::string& path) const {
          fmt::format("unknown edit \"{}\" (expected one of cancel, smooth, remove_bifurcation, "
                      "move_bifurcation)",
                      op));
+  }
+  if (op != "smooth") {
+    // Half-width of the time window re-solved around the edit, as a fraction of the time
+    // range (DESIGN §7; docs/scene_reference.md).
+    double w = 0.1;
+    if (const json* v = get(j, "window")) {
+      const std::string p = join_key(path, "window");
+      w = number(*v, p);
+      if (!(w >= 0 && w <= 1)) fail(p, fmt::format("must be in [0, 1] (a fraction of the time range), got {}", w));
+    }
+    out["window"] = w;
   }
   return out;
 }

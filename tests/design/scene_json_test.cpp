@@ -276,7 +276,7 @@ TEST(SceneJson, ReadsTheDesignExampleExactly) {
     "streamlines": [{"seed": [0.0, 0.0], "keys": [{"t": 1.0, "translate": [0.2, 0.0], "rotate": 0.5, "scale": 1.0}]}]})");
   EXPECT_EQ(s.deform, deform);
   const json edits = json::parse(R"([
-    {"op": "cancel", "frame": 40, "pair": [[0.1, 0.2], [0.15, 0.22]]},
+    {"op": "cancel", "frame": 40, "pair": [[0.1, 0.2], [0.15, 0.22]], "window": 0.1},
     {"op": "smooth", "strength": 0.5}])");
   EXPECT_EQ(s.edits, edits);
   EXPECT_TRUE(s.edits[0]["frame"].is_number_integer());
@@ -466,7 +466,8 @@ TEST(SceneJson, TextIsOrderedAndCompact) {
             std::string::npos)
       << text;
   EXPECT_NE(text.find(R"({"t": 1.0, "sx": 1.0, "sy": 1.0, "theta": 3.14159})"), std::string::npos) << text;
-  EXPECT_NE(text.find(R"({"op": "cancel", "frame": 40, "pair": [[0.1, 0.2], [0.15, 0.22]]})"), std::string::npos)
+  EXPECT_NE(text.find(R"({"op": "cancel", "frame": 40, "pair": [[0.1, 0.2], [0.15, 0.22]], "window": 0.1})"),
+            std::string::npos)
       << text;
   const size_t elements = text.find("\"elements\"");
   const size_t keyframes = text.find("\"keyframes\"");
@@ -819,7 +820,7 @@ std::vector<BadCase> bad_cases() {
       {"move without destination", planar([](json& j) { j["edits"][3].erase("to"); }), "edits[3]",
        "missing key \"to\"", true},
       {"edit with an unknown key", planar([](json& j) { j["edits"][2]["frame"] = 3; }), "edits[2]",
-       "unknown key \"frame\" (expected one of op, at)", true},
+       "unknown key \"frame\" (expected one of op, at, window)", true},
   };
 }
 

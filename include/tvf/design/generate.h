@@ -1,8 +1,8 @@
 #pragma once
 // Generating the field of a scene (DESIGN §5). generate() dispatches on scene.generator.
 // Generators: "basis" (basis field summation, paper §5.2, eq. 8), "constrained" (paper
-// §5.3), "spacetime" (paper §6.1) and "deform" (paper §7). Edits are refused with a clear
-// error until they land.
+// §5.3), "spacetime" (paper §6.1) and "deform" (paper §7). The scene's edits are then
+// applied in order (DESIGN §7, tvf/edit/field_editor.h).
 #include "tvf/design/design_space.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
@@ -22,6 +22,7 @@ struct GenerateOptions {
 
 struct GenerateReport {
   std::vector<std::string> warnings;  // design problems that do not stop generation
+  std::vector<std::string> edits;     // one sentence per edit applied (Scene::edits)
   std::string method;                 // the generator and solver used
   double residual = 0.0;              // worst relative residual of the linear solves
   int iterations = 0;                 // iterations of the iterative solve (0 for direct)
@@ -30,11 +31,15 @@ struct GenerateReport {
   int vertices = 0;
 };
 
-// Field of the scene on `space` (which must be make_design_space(scene)).
-// Throws tvf::Error for scenes it cannot generate (naming the scene and JSON path),
-// including fields that would not fit in this machine's memory.
+// Field of the scene on `space` (which must be make_design_space(scene)): the generator's
+// field with the scene's edits applied in order. Throws tvf::Error for scenes it cannot
+// generate (naming the scene and JSON path), including fields that would not fit in this
+// machine's memory and edits that cannot be applied ("scene.json: edits[2]: ...").
 Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptions& options = {},
                GenerateReport* report = nullptr);
+// The generator's field alone, before the scene's edits.
+Field generate_unedited(const DesignSpace& space, const Scene& scene, const GenerateOptions& options = {},
+                        GenerateReport* report = nullptr);
 
 // Basis field summation: V(x; t) = Σ_i exp(−d‖w_i‖²) V_i(w_i; t), w_i the local
 // coordinate of x around element i, d = falloff / diam².

@@ -1,0 +1,101 @@
+// `tvf edit SCENE --cancel … | --remove-bifurcation … | --move-bifurcation … | --smooth S |
+// --undo` as a user meets it: the edit is checked on the generated field, appended to the
+// scene's edits (or the last one dropped), and a refused edit leaves the file unchanged.
+#include "support/test_paths.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+namespace tvf {
+namespace {
+
+using test::run_tvf;
+using test::TempDir;
+
+// A flow to the right with a saddle and a source downstream of it, and a centre.
+constexpr const char* kScene = R"({"tvf": 1,
+  "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+  "time": {"frames": 21, "range": [0, 1]},
+  "generator": "constrained", "solver": {"region_radius": 0.15},
+  "falloff": 20,
+  "elements": [
+    {"kind": "regular", "pathline": [[-0.9, -0.3, 0], [-0.8, -0.3, 1]]},
+    {"kind": "singular", "jacobian": [[-1, 0], [0, 1]], "path": [[-0.3, -0.3, 0], [-0.25, -0.3, 1]]},
+    {"kind": "singular", "type": "source", "path": [[0.2, -0.3, 0]]},
+    {"kind": "singular", "type": "ccw_center", "path": [[0.1, 0.6, 0]]}]})";
+
+// Shell-quoted path (built by insert: GCC 12 warns falsely on "'" + s + "'").
+std::string q(const std::filesystem::path& p) {
+  std::string s = p.string();
+  s.insert(s.begin(), '\'');
+  s.push_back('\'');
+  return s;
+}
+
+TEST(CliEdit, AppendsCheckedEditsAndUndoes) {
+  TempDir dir;
+  const auto scene = dir / "scene.json";
+  test::write_text(scene, kScene);
+  auto r = run_tvf("edit " + q(scene) + " --cancel 10 0.2 -0.3 -0.27 -0.3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cancelled the source"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("appended as edits[0]"), std::string::npos) << r.output;
+  auto j = nlohmann::json::parse(test::read_text(scene));
+  ASSERT_EQ(j["edits"].size(), 1u);
+  EXPECT_EQ(j["edits"][0]["op"], "cancel");
+  EXPECT_EQ(j["edits"][0]["frame"], 10);
+
+  r = run_tvf("edit " + q(scene) + " --smooth 0.25 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "");
+  j = nlohmann::json::parse(test::read_text(scene));
+  ASSERT_EQ(j["edits"].size(), 2u);
+  EXPECT_EQ(j["edits"][1]["strength"], 0.25);
+
+  // The edited scene generates (its edits replayed) and reports them.
+  r = run_tvf("generate " + q(scene) + " -o " + q(dir / "out") + " --no-vtk");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("edit: cancelled"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("edit: smoothed"), std::string::npos) << r.output;
+
+  r = run_tvf("edit " + q(scene) + " --undo");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  j = nlohmann::json::parse(test::read_text(scene));
+  ASSERT_EQ(j["edits"].size(), 1u);
+  EXPECT_EQ(j["edits"][0]["op"], "cancel");
+}
+
+TEST(CliEdit, RefusalsLeaveTheSceneUnchanged) {
+  TempDir dir;
+  const auto scene = dir / "scene.json";
+  test::write_text(scene, kScene);
+  struct Case {
+    std::string args;
+    std::string says;
+  };
+  const Case cases[] = {
+      {"--cancel 10 0.2 -0.3 0.1 0.6", "both have index +1"},         // source and centre
+      {"--cancel 30 0.2 -0.3 -0.27 -0.3", "FRAME must be an integer in [0, 20]"},
+      {"--cancel 10 0.2 -0.3", "--cancel"},                            // too few numbers
+      {"--remove-bifurcation 0.5 0 0", "no bifurcation"},
+      {"--smooth 2", "edits[0].strength: must be in (0, 1]"},
+      {"--undo", "no edits to undo"},
+      {"", "say which edit"},
+  };
+  for (const Case& c : cases) {
+    const auto r = run_tvf("edit " + q(scene) + " " + c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_EQ(test::read_text(scene), kScene) << c.args;
+  }
+  // A refused edit says so in one sentence that names the file.
+  const auto r = run_tvf("edit " + q(scene) + " --cancel 10 0.2 -0.3 0.1 0.6");
+  EXPECT_EQ(test::count_lines(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find(scene.string() + ": refused to cancel"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the scene is unchanged"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace tvf
