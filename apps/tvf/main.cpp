@@ -2,6 +2,7 @@
 // print results and errors (one sentence on stderr, non-zero exit).
 #include "default_scene.h"
 #include "progress.h"
+#include "render_command.h"
 
 #include "tvf/analysis/topology.h"
 #include "tvf/core/atomic_output.h"
@@ -206,6 +207,7 @@ int main(int argc, char** argv) {
   validate_cmd->add_flag("--domain", validate_domain, "Also build the domain (loads and checks the mesh)");
 
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
+  cli::RenderCommand render(app);
 
   try {
     app.parse(argc, argv);
@@ -217,6 +219,7 @@ int main(int argc, char** argv) {
     if (*generate_cmd) return run_generate(load_scene(gen.scene), gen, false);
     if (*analyze_cmd) return run_analyze(analyze);
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
+    if (render.selected()) return render.run();
     if (*default_cmd) {
       std::fputs(cli::default_scene_text(), stdout);
       return 0;
