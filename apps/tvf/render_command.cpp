@@ -134,9 +134,11 @@ int RenderCommand::run() {
   progress.finish();
   for (const auto& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (!quiet_) {
-    std::printf("rendered %d frames of %d×%d pixels in %.2f s (texture %.1f frames/s); wrote", report.frames,
-                report.width, report.height, report.seconds,
-                report.texture_seconds > 0 ? report.frames / report.texture_seconds : 0.0);
+    std::printf("rendered %d frames of %d×%d pixels in %.2f s", report.frames, report.width, report.height,
+                report.seconds);
+    if (report.frames > 1 && report.texture_seconds > 0)
+      std::printf(" (texture %.1f frames/s)", (report.frames - 1) / report.texture_seconds);
+    std::printf("; wrote");
     for (const auto& f : report.files) std::printf(" %s", fs::absolute(f).lexically_normal().c_str());
     std::printf("\n");
   }

@@ -221,12 +221,20 @@ void TextureAnimator::blend(int k) {
         // left of and above the picture.)
         const float len = std::abs(dx) + std::abs(dy);
         const int samples = std::clamp(static_cast<int>(len * inv_cell) + 1, 1, 4);  // ~one per noise cell
-        float noise = 0;
-        for (int q = 0; q < samples; ++q) {
-          const float u = (static_cast<float>(q) + 0.5f) / static_cast<float>(samples);
-          noise += bilinear(lat, cells_x_, cells_y_, (fi - u * dx) * inv_cell + 1, (fj - u * dy) * inv_cell + 1);
+        float noise;
+        if (samples == 1) {
+          noise = bilinear(lat, cells_x_, cells_y_, (fi - 0.5f * dx) * inv_cell + 1, (fj - 0.5f * dy) * inv_cell + 1);
+        } else {
+          // Several samples along the step: the nearest cell's value is enough for each.
+          noise = 0;
+          for (int q = 0; q < samples; ++q) {
+            const float u = (static_cast<float>(q) + 0.5f) / static_cast<float>(samples);
+            const int cx = std::clamp(static_cast<int>((fi - u * dx) * inv_cell + 1.5f), 0, cells_x_ - 1);
+            const int cy = std::clamp(static_cast<int>((fj - u * dy) * inv_cell + 1.5f), 0, cells_y_ - 1);
+            noise += lat[static_cast<size_t>(cy) * static_cast<size_t>(cells_x_) + static_cast<size_t>(cx)];
+          }
+          noise /= static_cast<float>(samples);
         }
-        noise /= static_cast<float>(samples);
         float old;
         if (sx < -0.5f || sy < -0.5f || sx > static_cast<float>(w) - 0.5f || sy > static_cast<float>(h) - 0.5f)
           old = inflow;  // from outside the picture: the texture's mean, so inflow fades in
@@ -456,7 +464,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
   TextureAnimationReport report;
   report.width = animator.width();
   report.height = animator.height();
-  double texture_seconds = 0;
+  double texture_seconds = 0, warmup_seconds = 0;
   int next = first, done = 0;
   const int count = last - first + 1;
   struct Item {
@@ -475,9 +483,11 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
                                      const int k = next++;
                                      const double t = time_of(k);
                                      const auto t0 = clock::now();
+                                     const bool warm = k == first;  // the first advance warms up
                                      animator.advance(t);
                                      auto img = std::make_shared<Image>(animator.picture());
-                                     texture_seconds += std::chrono::duration<double>(clock::now() - t0).count();
+                                     (warm ? warmup_seconds : texture_seconds) +=
+                                         std::chrono::duration<double>(clock::now() - t0).count();
                                      if (options.overlay_singularities) draw_singularities(*img, animator, bundle, field, t);
                                      return {k, img};
                                    }) &
@@ -503,6 +513,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
   }
   report.frames = done;
   report.texture_seconds = texture_seconds;
+  report.warmup_seconds = warmup_seconds;
   report.seconds = std::chrono::duration<double>(clock::now() - start).count();
   return report;
 }

@@ -131,7 +131,8 @@ struct TextureAnimationReport {
   int frames = 0;                 // pictures made
   int width = 0, height = 0;
   double seconds = 0;             // total
-  double texture_seconds = 0;     // of which the texture simulation
+  double warmup_seconds = 0;      // of which the warm-up and the first picture
+  double texture_seconds = 0;     // and the texture and pictures of the other frames
   std::vector<std::string> files; // what was written
 };
 
