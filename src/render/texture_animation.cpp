@@ -392,9 +392,20 @@ namespace {
 class StagedFolder {
 public:
   explicit StagedFolder(const fs::path& target) : target_(target) {
+    if (!target_.has_filename()) target_ = target_.parent_path();  // "frames/" → "frames"
     std::error_code ec;
+    if (target_.empty() || target_ == "." || target_ == "..")
+      throw_input_error(target.string(), "", "give the frames a folder of their own (it is replaced as a whole)");
     if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
       throw_input_error(target_.string(), "", "exists and is not a folder");
+    // The folder is replaced as a whole, so it may hold nothing but frames of an earlier run.
+    if (fs::is_directory(target_, ec))
+      for (const auto& e : fs::directory_iterator(target_, ec)) {
+        const std::string name = e.path().filename().string();
+        if (!(name.starts_with("frame_") && e.path().extension() == ".png"))
+          throw_input_error(target_.string(), "",
+                            fmt::format("holds {}, which is not a frame; give a new or empty folder for the frames", name));
+      }
     if (!target_.parent_path().empty()) fs::create_directories(target_.parent_path(), ec);
     stage_ = temporary_sibling(target_);
     if (!fs::create_directory(stage_, ec) || ec)

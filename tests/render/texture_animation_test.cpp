@@ -219,6 +219,14 @@ TEST(TextureAnimation, WritesEveryFrameOrNothing) {
   names.clear();
   for (const auto& e : fs::directory_iterator(dir.path())) names.push_back(e.path().filename().string());
   EXPECT_EQ(names, std::vector<std::string>{"frames"});
+  // A folder holding anything but frames is never replaced.
+  o.last = 1;
+  test::write_text(dir / "frames" / "notes.txt", "mine");
+  EXPECT_NE(test::error_of([&] { write_texture_animation(bundle, field, o); }).find("notes.txt"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "frames" / "notes.txt"));
+  o.frames_dir = dir.path().string() + "/new/";  // a trailing slash names the folder itself
+  write_texture_animation(bundle, field, o);
+  EXPECT_TRUE(fs::exists(dir / "new" / "frame_00001.png"));
 }
 
 }  // namespace
