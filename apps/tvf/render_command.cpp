@@ -33,8 +33,10 @@ RenderCommand::RenderCommand(CLI::App& app) {
   texture_->add_option("--fps", fps_, "Frames per second of the video")->capture_default_str();
   texture_->add_option("--frames", frames_, "Pictures over the field's time range (default: the field's frames)");
   texture_->add_option("--range", range_, "Only pictures A to B of them (A:B, inclusive, from 0)");
-  texture_->add_option("--overlay", overlay_, "Draw over the texture: singularities")
-      ->check(CLI::IsMember({"singularities"}));
+  texture_->add_option("--overlay", overlay_,
+                       "Draw over the texture: singularities (the frame's, as dots), paths (the singularity paths "
+                       "so far, as trails); give both as --overlay singularities paths")
+      ->check(CLI::IsMember({"singularities", "paths"}));
   texture_->add_option("--alpha", alpha_, "Weight of the fresh noise per frame (shorter streaks when larger)")
       ->capture_default_str();
   texture_->add_option("--noise-scale", noise_scale_, "Noise cell size in pixels (default: size/256)");
@@ -82,7 +84,10 @@ int RenderCommand::run() {
   if (!range_.empty()) parse_range(range_, options.first, options.last);
   options.frames = frames_;
   options.fps = fps_;
-  options.overlay_singularities = !overlay_.empty();
+  for (const auto& what : overlay_) {
+    options.overlay_singularities |= what == "singularities";
+    options.overlay_paths |= what == "paths";
+  }
   options.texture.size = size_;
   options.texture.alpha = alpha_;
   options.texture.lic = lic_;

@@ -385,6 +385,45 @@ void draw_singularities(Image& image, const TextureAnimator& animator, const Tan
   cairo_surface_destroy(surface);
 }
 
+void draw_singularity_paths(Image& image, const TextureAnimator& animator, const Topology& topology, double t) {
+  cairo_surface_t* surface = cairo_image_surface_create_for_data(
+      reinterpret_cast<unsigned char*>(image.pixels.data()), CAIRO_FORMAT_RGB24, image.width, image.height,
+      image.width * 4);
+  cairo_t* cr = cairo_create(surface);
+  const double width = std::max(1.5, std::max(image.width, image.height) / 300.0);
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  for (const SingularityPath& path : topology.paths) {
+    if (path.points.empty() || path.points.front().t > t) continue;
+    cairo_new_path(cr);
+    for (size_t k = 0; k < path.points.size(); ++k) {
+      const PathSample& s = path.points[k];
+      Vec2 p = animator.to_pixel(s.position.head<2>());
+      if (s.t > t) {
+        // The trail ends at t: between the last sample before t and this one.
+        const PathSample& a = path.points[k - 1];
+        const double w = s.t > a.t ? (t - a.t) / (s.t - a.t) : 1.0;
+        p = animator.to_pixel(((1 - w) * a.position + w * s.position).head<2>());
+        cairo_line_to(cr, p.x(), p.y());
+        break;
+      }
+      if (k == 0) cairo_move_to(cr, p.x(), p.y());
+      else cairo_line_to(cr, p.x(), p.y());
+    }
+    // A dark casing under the coloured line keeps it readable on the texture.
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_line_width(cr, 2.2 * width);
+    cairo_stroke_preserve(cr);
+    const auto c = type_color(path.type);
+    cairo_set_source_rgb(cr, c[0], c[1], c[2]);
+    cairo_set_line_width(cr, width);
+    cairo_stroke(cr);
+  }
+  cairo_destroy(cr);
+  cairo_surface_flush(surface);
+  cairo_surface_destroy(surface);
+}
+
 namespace {
 
 // A folder that appears complete or not at all: frames go into a hidden sibling, which
@@ -458,6 +497,8 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
                fmt::format("{} is outside (0, 1000]", options.fps));
 
   TextureAnimator animator(bundle, field, options.texture);
+  Topology topology;
+  if (options.overlay_paths) topology = analyze_topology(bundle, field);
   std::unique_ptr<StagedFolder> folder;
   if (!options.frames_dir.empty()) folder = std::make_unique<StagedFolder>(options.frames_dir);
   std::unique_ptr<VideoWriter> video;
@@ -499,6 +540,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
                                      auto img = std::make_shared<Image>(animator.picture());
                                      (warm ? warmup_seconds : texture_seconds) +=
                                          std::chrono::duration<double>(clock::now() - t0).count();
+                                     if (options.overlay_paths) draw_singularity_paths(*img, animator, topology, t);
                                      if (options.overlay_singularities) draw_singularities(*img, animator, bundle, field, t);
                                      return {k, img};
                                    }) &

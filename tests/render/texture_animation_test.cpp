@@ -158,6 +158,31 @@ TEST(TextureAnimation, OverlayMarksSingularitiesInThePapersColours) {
   }
 }
 
+TEST(TextureAnimation, PathsOverlayTrailsASingularityUpToTheFrame) {
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  // A source moving from (−0.5, 0.01) to (0.5, 0.01): its path is a horizontal segment.
+  const Field field = sample(grid, TimeSampling{0, 1, 11}, [](cplx x, double t) { return x - cplx(-0.5 + t, 0.01); });
+  TextureOptions o;
+  o.size = 600;
+  TextureAnimator a(bundle, field, o);
+  a.advance(0.5);
+  const Topology topology = analyze_topology(bundle, field);
+  Image img = a.picture();
+  draw_singularity_paths(img, a, topology, 0.5);
+  const auto green = type_color(SingularityType::source);
+  auto is_green = [&](Vec2 x) {
+    const Vec2 p = a.to_pixel(x);
+    const std::uint32_t c = img.at(static_cast<int>(p.x()), static_cast<int>(p.y()));
+    return std::abs(((c >> 16) & 255) / 255.0 - green[0]) < 0.02 && std::abs(((c >> 8) & 255) / 255.0 - green[1]) < 0.02 &&
+           std::abs((c & 255) / 255.0 - green[2]) < 0.02;
+  };
+  EXPECT_TRUE(is_green(Vec2(-0.4, 0.01)));   // where it has been
+  EXPECT_TRUE(is_green(Vec2(-0.1, 0.01)));
+  EXPECT_FALSE(is_green(Vec2(0.2, 0.01)));   // where it has not been yet
+  EXPECT_FALSE(is_green(Vec2(-0.4, 0.2)));   // off the path
+}
+
 TEST(TextureAnimation, RefusesSurfacesAndBadOptions) {
   const Mesh sphere = make_icosphere(1);
   const TangentBundle bs(sphere);

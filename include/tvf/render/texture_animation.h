@@ -22,6 +22,7 @@
 // 1993) of the advected texture along the field: "LIC over advected noise". Advection
 // gives the coherence in time, the convolution smooths the grain of IBFV's blending into
 // the even streaks of the paper's figures (docs/architecture.md, "Texture animation").
+#include "tvf/analysis/topology.h"
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
@@ -115,12 +116,17 @@ private:
 void draw_singularities(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
                         const Field& field, double t);
 
+// The singularity paths up to time t drawn as trails (each path's samples with t' ≤ t),
+// in the colour of their type: where every singularity has been so far (paper Fig. 8).
+void draw_singularity_paths(Image& image, const TextureAnimator& animator, const Topology& topology, double t);
+
 struct TextureAnimationOptions {
   TextureOptions texture;
   int frames = 0;                 // pictures over the field's time range; 0: the field's frames
   int first = 0;                  // first and last picture written (inclusive); last -1: to the end
   int last = -1;
   bool overlay_singularities = false;
+  bool overlay_paths = false;     // the singularity paths so far (analysis/topology.h)
   std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
   std::string video;              // MP4 file (empty: none)
   double fps = 25.0;
