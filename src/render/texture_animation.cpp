@@ -246,34 +246,36 @@ void TextureAnimator::blend(int k) {
   tex_.swap(next_);
 }
 
+std::pair<double, double> TextureAnimator::statistics(const std::vector<float>& image) const {
+  struct Acc {
+    double sum = 0, sum2 = 0, n = 0;
+  };
+  const Acc acc = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, image.size()), Acc{},
+      [&](const tbb::blocked_range<size_t>& r, Acc a) {
+        for (size_t k = r.begin(); k < r.end(); ++k)
+          if (face_[k] >= 0) {
+            a.sum += image[k];
+            a.sum2 += static_cast<double>(image[k]) * image[k];
+            a.n += 1;
+          }
+        return a;
+      },
+      [](Acc a, const Acc& b) {
+        a.sum += b.sum;
+        a.sum2 += b.sum2;
+        a.n += b.n;
+        return a;
+      });
+  const double mean = acc.n > 0 ? acc.sum / acc.n : 0.5;
+  const double sd = acc.n > 0 ? std::sqrt(std::max(0.0, acc.sum2 / acc.n - mean * mean)) : 0.1;
+  return {mean, std::max(sd, 1e-3)};
+}
+
 void TextureAnimator::advance(double t) {
   const TimeSampling& ts = field_.time();
   const double frame_dt = ts.frames > 1 ? (ts.t1 - ts.t0) / (ts.frames - 1) : 1.0;
-  auto stats = [&] {
-    struct Acc {
-      double sum = 0, sum2 = 0, n = 0;
-    };
-    const Acc acc = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, tex_.size()), Acc{},
-        [&](const tbb::blocked_range<size_t>& r, Acc a) {
-          for (size_t k = r.begin(); k < r.end(); ++k)
-            if (face_[k] >= 0) {
-              a.sum += tex_[k];
-              a.sum2 += static_cast<double>(tex_[k]) * tex_[k];
-              a.n += 1;
-            }
-          return a;
-        },
-        [](Acc a, const Acc& b) {
-          a.sum += b.sum;
-          a.sum2 += b.sum2;
-          a.n += b.n;
-          return a;
-        });
-    const double mean = acc.n > 0 ? acc.sum / acc.n : 0.5;
-    const double sd = acc.n > 0 ? std::sqrt(std::max(0.0, acc.sum2 / acc.n - mean * mean)) : 0.1;
-    return std::pair{mean, std::max(sd, 1e-3)};
-  };
+  auto stats = [&] { return statistics(tex_); };
   if (!started_) {
     // Warm up at t: a steady texture before the first picture.
     compute_velocity(t, frame_dt);
@@ -335,15 +337,7 @@ Image TextureAnimator::picture() const {
   }
   // Statistics of what is shown (the convolution narrows the spread).
   double mean = mean_, sd = sd_;
-  if (o_.lic > 0) {
-    double s1 = 0, s2 = 0, c = 0;
-    for (size_t k = 0; k < lic_.size(); ++k)
-      if (face_[k] >= 0) s1 += lic_[k], s2 += static_cast<double>(lic_[k]) * lic_[k], c += 1;
-    if (c > 0) {
-      mean = s1 / c;
-      sd = std::max(1e-3, std::sqrt(std::max(0.0, s2 / c - mean * mean)));
-    }
-  }
+  if (o_.lic > 0) std::tie(mean, sd) = statistics(lic_);
   const float gain = static_cast<float>(o_.contrast / (4.4 * sd));
   const float m0 = static_cast<float>(mean);
   const std::vector<float>& src = *shown;

@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tvf {
@@ -88,6 +89,8 @@ public:
 private:
   void compute_velocity(double t, double dt);
   void blend(int k);
+  // Mean and standard deviation of an image over the domain's pixels.
+  std::pair<double, double> statistics(const std::vector<float>& image) const;
 
   const TangentBundle& bundle_;
   const Field& field_;
