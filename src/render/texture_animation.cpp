@@ -3,6 +3,7 @@
 #include "tvf/analysis/singularities.h"
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
+#include "tvf/integrate/evenly_spaced.h"
 #include "tvf/integrate/streamline.h"
 #include "tvf/render/plots.h"
 #include "tvf/render/video.h"
@@ -418,6 +419,33 @@ void draw_singularity_paths(Image& image, const TextureAnimator& animator, const
   cairo_surface_destroy(surface);
 }
 
+void draw_streamlines(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
+                      const Field& field, double t, double separation) {
+  const double sep_px = separation > 0 ? separation : 0.03 * std::max(image.width, image.height);
+  EvenlySpacedOptions o;
+  o.separation = sep_px / animator.pixels_per_unit();
+  const auto lines = evenly_spaced_streamlines(bundle, values_at(field, t), o);
+  cairo_surface_t* surface = cairo_image_surface_create_for_data(
+      reinterpret_cast<unsigned char*>(image.pixels.data()), CAIRO_FORMAT_RGB24, image.width, image.height,
+      image.width * 4);
+  cairo_t* cr = cairo_create(surface);
+  cairo_set_line_width(cr, std::max(1.0, std::max(image.width, image.height) / 600.0));
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  cairo_set_source_rgb(cr, 0.05, 0.05, 0.05);
+  for (const Streamline& line : lines) {
+    cairo_new_path(cr);
+    for (size_t k = 0; k < line.points.size(); ++k) {
+      const Vec2 p = animator.to_pixel(line.points[k].head<2>());
+      if (k == 0) cairo_move_to(cr, p.x(), p.y());
+      else cairo_line_to(cr, p.x(), p.y());
+    }
+    cairo_stroke(cr);
+  }
+  cairo_destroy(cr);
+  cairo_surface_flush(surface);
+  cairo_surface_destroy(surface);
+}
+
 namespace {
 
 // A folder that appears complete or not at all: frames go into a hidden sibling, which
@@ -534,6 +562,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
                                      auto img = std::make_shared<Image>(animator.picture());
                                      (warm ? warmup_seconds : texture_seconds) +=
                                          std::chrono::duration<double>(clock::now() - t0).count();
+                                     if (options.overlay_streamlines) draw_streamlines(*img, animator, bundle, field, t);
                                      if (options.overlay_paths) draw_singularity_paths(*img, animator, topology, t);
                                      if (options.overlay_singularities) draw_singularities(*img, animator, bundle, field, t);
                                      return {k, img};

@@ -183,6 +183,32 @@ TEST(TextureAnimation, PathsOverlayTrailsASingularityUpToTheFrame) {
   EXPECT_FALSE(is_green(Vec2(-0.4, 0.2)));   // off the path
 }
 
+TEST(TextureAnimation, StreamlinesOverlayFollowsTheField) {
+  const Mesh grid = make_grid(GridSpec{17, 17, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = sample(grid, TimeSampling{0, 1, 2}, [](cplx, double) { return cplx(1, 0); });
+  TextureOptions o;
+  o.size = 200;
+  o.contrast = 1e-6;  // a flat gray picture, so only the lines are dark
+  TextureAnimator a(bundle, field, o);
+  a.advance(0);
+  Image img = a.picture();
+  draw_streamlines(img, a, bundle, field, 0, 20.0);
+  // Horizontal lines 20 pixels apart: dark rows, each dark all the way across, between
+  // rows of plain gray.
+  int dark_rows = 0;
+  for (int y = 0; y < img.height; ++y) {
+    int dark = 0;
+    for (int x = 0; x < img.width; ++x) dark += (img.at(x, y) & 255u) < 100u;  // the gray is 128
+    if (dark > 0) {
+      EXPECT_GT(dark, img.width * 9 / 10) << y;
+      ++dark_rows;
+    }
+  }
+  EXPECT_GE(dark_rows, 9);
+  EXPECT_LE(dark_rows, 2 * 11);
+}
+
 TEST(TextureAnimation, RefusesSurfacesAndBadOptions) {
   const Mesh sphere = make_icosphere(1);
   const TangentBundle bs(sphere);

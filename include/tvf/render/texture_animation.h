@@ -83,7 +83,8 @@ public:
   double time() const { return t_; }
   // The texture (width × height, row-major, top row first), values about [0, 1].
   const std::vector<float>& texture() const { return tex_; }
-  // The current frame as a gray picture (contrast stretched).
+  // The current frame as a gray picture (contrast stretched). Reuses a buffer of the
+  // animator: not to be called from two threads at once.
   Image picture() const;
 
 private:
@@ -123,6 +124,13 @@ void draw_singularities(Image& image, const TextureAnimator& animator, const Tan
 // in the colour of their type: where every singularity has been so far (paper Fig. 8).
 void draw_singularity_paths(Image& image, const TextureAnimator& animator, const Topology& topology, double t);
 
+// Evenly spaced streamlines of the field at time t (integrate/evenly_spaced.h), drawn as
+// thin dark lines, `separation` apart in pixels (0: 3 % of the picture's long side).
+// Placed anew for each picture, so in an animation they do not move with the texture:
+// meant for still pictures.
+void draw_streamlines(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
+                      const Field& field, double t, double separation = 0.0);
+
 struct TextureAnimationOptions {
   TextureOptions texture;
   int frames = 0;                 // pictures over the field's time range; 0: the field's frames
@@ -130,6 +138,7 @@ struct TextureAnimationOptions {
   int last = -1;
   bool overlay_singularities = false;
   bool overlay_paths = false;     // the singularity paths so far (analysis/topology.h)
+  bool overlay_streamlines = false;  // evenly spaced streamlines of each frame
   std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
   std::string video;              // MP4 file (empty: none)
   double fps = 25.0;
