@@ -12,7 +12,8 @@ packages=(
   libcli11-dev           # command line
   libfmt-dev libspdlog-dev
   libcgal-dev            # OBJ/PLY/OFF reading (polygon soups) and mesh repair
-  libcairo2-dev          # plots (SVG, PNG)
+  libcairo2-dev          # plots and texture frames (SVG, PNG)
+  ffmpeg                 # MP4 video (tvf render texture -o OUT.mp4) and ffprobe for the tests
   libgmp-dev libmpfr-dev # required by CGAL headers
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-vtk9 python3-jsonschema  # tests read our outputs with NumPy, VTK and jsonschema

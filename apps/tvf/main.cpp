@@ -4,6 +4,7 @@
 #include "design_check_output.h"
 #include "edit_command.h"
 #include "progress.h"
+#include "render_command.h"
 
 #include "tvf/analysis/topology.h"
 #include "tvf/core/atomic_output.h"
@@ -223,6 +224,7 @@ int main(int argc, char** argv) {
   auto* edit_cmd = cli::add_edit_command(app, edit);
 
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
+  cli::RenderCommand render(app);
 
   try {
     app.parse(argc, argv);
@@ -235,6 +237,7 @@ int main(int argc, char** argv) {
     if (*analyze_cmd) return run_analyze(analyze);
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
     if (*edit_cmd) return cli::run_edit(edit);
+    if (render.selected()) return render.run();
     if (*default_cmd) {
       std::fputs(cli::default_scene_text(), stdout);
       return 0;

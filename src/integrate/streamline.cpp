@@ -1,6 +1,8 @@
 #include "tvf/integrate/streamline.h"
 
+#include "tvf/analysis/singularities.h"
 #include "tvf/core/error.h"
+#include "tvf/integrate/surface_walk.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,123 +10,141 @@
 
 namespace tvf {
 
-namespace {
-
-// Barycentric coordinates of x in planar face f (z ignored).
-Vec3 bary_in(const Mesh& mesh, int f, const Vec3& x) {
-  const Face& t = mesh.face(f);
-  const Vec2 a = mesh.position(t[0]).head<2>(), b = mesh.position(t[1]).head<2>(),
-             c = mesh.position(t[2]).head<2>();
-  const Vec2 p = x.head<2>();
-  const double det = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-  const double l1 = ((p - a).x() * (c - a).y() - (p - a).y() * (c - a).x()) / det;
-  const double l2 = ((b - a).x() * (p - a).y() - (b - a).y() * (p - a).x()) / det;
-  return {1 - l1 - l2, l1, l2};
+const char* to_string(StopReason r) {
+  switch (r) {
+    case StopReason::none: return "none";
+    case StopReason::length: return "length";
+    case StopReason::boundary: return "boundary";
+    case StopReason::singularity: return "singularity";
+    case StopReason::closed: return "closed";
+    case StopReason::rejected: return "rejected";
+    case StopReason::time_range: return "time_range";
+  }
+  return "none";
 }
 
-class PlanarWalker {
-public:
-  PlanarWalker(const TangentBundle& bundle, std::span<const cplx> values)
-      : bundle_(bundle), mesh_(bundle.mesh()), values_(values) {}
+double Streamline::length() const {
+  double len = 0;
+  for (size_t k = 1; k < points.size(); ++k) len += (points[k] - points[k - 1]).norm();
+  return len;
+}
 
-  // The field at x (in the plane's frame), or nothing outside the domain. Looks in the
-  // last face and its neighbours first, then everywhere.
-  std::optional<cplx> at(const Vec3& x) {
-    constexpr double eps = -1e-12;
-    auto inside = [&](int f, Vec3& b) {
-      b = bary_in(mesh_, f, x);
-      return b.minCoeff() >= eps;
-    };
-    Vec3 b;
-    int found = -1;
-    if (face_ >= 0) {
-      if (inside(face_, b)) found = face_;
-      for (int c = 0; c < 3 && found < 0; ++c) {
-        const int t = mesh_.twin(3 * face_ + c);
-        if (t >= 0 && inside(Mesh::face_of(t), b)) found = Mesh::face_of(t);
-      }
-    }
-    if (found < 0) {
-      const SurfacePoint p = closest_point(mesh_, x);
-      if (!inside(p.face, b)) return std::nullopt;
-      found = p.face;
-    }
-    face_ = found;
-    cplx z(0, 0);
-    for (int c = 0; c < 3; ++c)
-      z += b[c] * bundle_.corner_to_face(3 * found + c) * values_[static_cast<size_t>(mesh_.face(found)[static_cast<size_t>(c)])];
-    return z;
+std::vector<cplx> values_at(const Field& field, double t) {
+  int j = 0;
+  double w = 0;
+  field.time().locate(t, j, w);
+  const auto a = field.frame(j);
+  std::vector<cplx> out(a.begin(), a.end());
+  if (w > 0) {
+    const auto b = field.frame(j + 1);
+    for (size_t v = 0; v < out.size(); ++v) out[v] = (1.0 - w) * a[v] + w * b[v];
   }
-
-private:
-  const TangentBundle& bundle_;
-  const Mesh& mesh_;
-  std::span<const cplx> values_;
-  int face_ = -1;
-};
-
-}  // namespace
+  return out;
+}
 
 Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> values,
                             const Vec3& seed, const StreamlineOptions& options) {
   const Mesh& mesh = bundle.mesh();
-  if (!bundle.is_flat())
-    throw_input_error(mesh.source(), "", "streamlines are traced on planar domains only in this version");
+  const SurfacePoint p = closest_point(mesh, seed);
+  if (p.face < 0) throw_input_error(mesh.source(), "", "the domain has no faces to trace a streamline on");
+  if (bundle.is_flat() && (surface_position(mesh, p) - seed).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
+    throw_input_error(mesh.source(), "",
+                      fmt::format("the streamline seed ({}, {}) is outside the domain", seed.x(), seed.y()));
+  return trace_streamline(bundle, values, p, options);
+}
+
+Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> values,
+                            const SurfacePoint& seed, const StreamlineOptions& options) {
+  const Mesh& mesh = bundle.mesh();
+  TVF_CHECK(values.size() == static_cast<size_t>(mesh.num_vertices()), "{} values for {} vertices",
+            values.size(), mesh.num_vertices());
   double vmax = 0;
   for (const cplx& z : values) vmax = std::max(vmax, std::abs(z));
   const double h = options.step > 0 ? options.step : 0.5 * mesh.mean_edge_length();
   const double max_len = options.max_length > 0 ? options.max_length : mesh.diameter();
   const double stop = options.stop_speed * vmax;
+  std::vector<int> index;
+  if (options.stop_at_singular_faces) index = face_indices(bundle, values);
+  auto singular = [&](int f) { return !index.empty() && index[static_cast<size_t>(f)] != 0; };
+  const std::function<bool(int)> singular_fn = singular;
 
-  PlanarWalker walker(bundle, values);
-  const auto v0 = walker.at(seed);
-  if (!v0) throw_input_error(mesh.source(), "", fmt::format("the streamline seed ({}, {}) is outside the domain", seed.x(), seed.y()));
+  const Vec3 x0 = surface_position(mesh, seed);
+  const cplx v0 = interpolate_in_face(bundle, values, seed);
 
-  auto direction = [&](const Vec3& x, double sign) -> std::optional<Vec3> {
-    const auto z = walker.at(x);
-    if (!z || std::abs(*z) <= stop) return std::nullopt;
-    const cplx u = sign * *z / std::abs(*z);
-    return Vec3(u.real(), u.imag(), 0);
+  // Unit direction at p in p's face frame, or nothing at a zero.
+  auto direction = [&](const SurfacePoint& p, double sign) -> std::optional<cplx> {
+    const cplx z = interpolate_in_face(bundle, values, p);
+    const double n = std::abs(z);
+    if (!(n > stop) || n == 0) return std::nullopt;
+    return sign * z / n;
   };
 
-  std::vector<Vec3> half[2];
+  std::vector<SurfacePoint> half[2];
   std::vector<double> speed[2];
-  bool closed = false;
-  for (int dir = 0; dir < 2 && !closed; ++dir) {
+  StopReason why[2] = {StopReason::none, StopReason::none};
+  const int ndir = options.both_directions ? 2 : 1;
+  const long max_steps = static_cast<long>(std::ceil(max_len / h)) + 1;
+  for (int dir = 0; dir < ndir; ++dir) {
     const double sign = dir == 0 ? 1.0 : -1.0;
-    Vec3 x = seed;
-    for (double len = 0; len < max_len; len += h) {
-      const auto k1 = direction(x, sign);
-      if (!k1) break;
-      const auto k2 = direction(x + 0.5 * h * *k1, sign);
-      if (!k2) break;
-      const auto k3 = direction(x + 0.5 * h * *k2, sign);
-      if (!k3) break;
-      const auto k4 = direction(x + h * *k3, sign);
-      if (!k4) break;
-      const Vec3 next = x + h / 6 * (*k1 + 2 * *k2 + 2 * *k3 + *k4);
-      const auto z = walker.at(next);
-      if (!z) break;
-      x = next;
-      half[dir].push_back(x);
-      speed[dir].push_back(std::abs(*z));
+    SurfacePoint p = seed;
+    why[dir] = StopReason::length;
+    if (singular(p.face)) {
+      why[dir] = StopReason::singularity;
+      continue;
+    }
+    double len = 0;
+    for (long step = 0; step < max_steps && len < max_len; ++step) {
+      // RK4 with every stage's vector carried back into p's face frame.
+      const auto k1 = direction(p, sign);
+      if (!k1) { why[dir] = StopReason::singularity; break; }
+      auto stage = [&](cplx k, double frac) -> std::optional<cplx> {
+        const SurfaceWalk w = walk_surface(bundle, p, frac * h * k);
+        const auto d = direction(w.end, sign);
+        if (!d) return std::nullopt;
+        return *d / w.transport;
+      };
+      const auto k2 = stage(*k1, 0.5);
+      const auto k3 = k2 ? stage(*k2, 0.5) : std::nullopt;
+      const auto k4 = k3 ? stage(*k3, 1.0) : std::nullopt;
+      // Near a zero a stage may land on it: fall back to the Euler step there.
+      const cplx d = k4 ? (*k1 + 2.0 * *k2 + 2.0 * *k3 + *k4) / 6.0 : *k1;
+      // Stages that cancel out (|d| of unit vectors under ½: the direction turns by more
+      // than about 120° within a step) mean a zero inside the step: a sink or a source.
+      if (std::abs(d) < 0.5) { why[dir] = StopReason::singularity; break; }
+      const SurfaceWalk w = walk_surface(bundle, p, h * d, index.empty() ? std::function<bool(int)>{} : singular_fn);
+      const SurfacePoint q = w.end;
+      const Vec3 xq = surface_position(mesh, q);
+      if (options.accept && !options.accept(xq)) { why[dir] = StopReason::rejected; break; }
+      const Vec3 xp = surface_position(mesh, p);
+      p = q;
+      half[dir].push_back(p);
+      speed[dir].push_back(std::abs(interpolate_in_face(bundle, values, p)));
+      len += h * w.travelled * std::abs(d);
+      if (w.hit_boundary) { why[dir] = StopReason::boundary; break; }
+      if (w.stopped || singular(p.face)) { why[dir] = StopReason::singularity; break; }
       // Closed orbit: back next to the seed after going some way round.
-      if (len > 4 * h && (x - seed).norm() < 0.5 * h) {
-        closed = true;  // the backward half would retrace the same orbit
+      // (The last segment passes within half a step of the seed.)
+      const Vec3 seg = xq - xp;
+      const double u = seg.squaredNorm() > 0 ? std::clamp((x0 - xp).dot(seg) / seg.squaredNorm(), 0.0, 1.0) : 0.0;
+      if (len > 4 * h && (xp + u * seg - x0).norm() < 0.5 * h) {
+        why[dir] = StopReason::closed;
         break;
       }
     }
+    if (why[dir] == StopReason::closed) break;  // the other half would retrace the orbit
   }
   Streamline s;
-  for (size_t k = half[1].size(); k-- > 0;) {
-    s.points.push_back(half[1][k]);
-    s.speeds.push_back(speed[1][k]);
-  }
+  auto push = [&](const SurfacePoint& q, double sp) {
+    s.where.push_back(q);
+    s.points.push_back(surface_position(mesh, q));
+    s.speeds.push_back(sp);
+  };
+  for (size_t k = half[1].size(); k-- > 0;) push(half[1][k], speed[1][k]);
   s.seed = s.points.size();
-  s.points.push_back(seed);
-  s.speeds.push_back(std::abs(*v0));
-  s.points.insert(s.points.end(), half[0].begin(), half[0].end());
-  s.speeds.insert(s.speeds.end(), speed[0].begin(), speed[0].end());
+  push(seed, std::abs(v0));
+  for (size_t k = 0; k < half[0].size(); ++k) push(half[0][k], speed[0][k]);
+  s.stop_forward = why[0];
+  s.stop_backward = why[1];
   return s;
 }
 

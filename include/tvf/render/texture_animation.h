@@ -1,0 +1,162 @@
+#pragma once
+// Dense, temporally coherent texture animation of a time-varying field on a planar
+// domain (DESIGN §8; paper §9, Figs. 4, 6, 8), by texture advection in the manner of
+// image-based flow visualization (IBFV, van Wijk 2002): each frame is the previous frame
+// advected along the field plus a little fresh noise,
+//     F_k(x) = (1 − α)·F_{k−1}(x − d_k(x)) + α·N_k(x),
+// d_k the displacement of one frame (backward semi-Lagrangian step with the midpoint
+// rule, bilinear sampling) and N_k a noise of cells (noise_scale pixels) that switch on
+// and off, each with its own random phase, over noise_period frames. N_k is averaged
+// along each pixel's step, so that injecting it once a frame leaves no stripes across
+// the streaks. Texture therefore moves with the flow and streaks form along it; nothing
+// jumps from frame to frame. Displacements follow the field's direction at one speed
+// (TextureSpeed::uniform) or its speed, scaled once for the whole animation so that
+// relative speeds across space and time are kept (TextureSpeed::physical).
+//
+// Pixels: the domain's bounding box scaled to `size` pixels on its long side, y up in the
+// domain and down in the image; pixel (i, j) has its centre at
+// (xmin + (i + ½)/s, ymax − (j + ½)/s), s = pixels per unit. Pixels outside the domain
+// (planar meshes that are not rectangles) are drawn in `background`.
+//
+// The pictures shown are, by default, a short line integral convolution (Cabral & Leedom
+// 1993) of the advected texture along the field: "LIC over advected noise". Advection
+// gives the coherence in time, the convolution smooths the grain of IBFV's blending into
+// the even streaks of the paper's figures (docs/architecture.md, "Texture animation").
+#include "tvf/analysis/topology.h"
+#include "tvf/field/field.h"
+#include "tvf/mesh/tangent_bundle.h"
+#include "tvf/render/image.h"
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace tvf {
+
+// How far the texture moves where the field is fast or slow.
+enum class TextureSpeed {
+  uniform,   // every pixel moves pixels_per_frame along the field's direction, however
+             // weak the field (only exact zeros, under 1e-12 of the typical speed, stay
+             // still): streaks everywhere, also far out in an element's falloff, as in
+             // the paper's pictures
+  physical,  // proportional to |V|: the typical (90th-percentile) speed moves
+             // pixels_per_frame per frame of the field
+};
+
+struct TextureOptions {
+  int size = 1024;               // pixels on the long side
+  double alpha = 0.1;            // weight of the fresh noise per frame (IBFV's α)
+  double noise_scale = 0.0;      // noise cell size in pixels; 0: size / 256 (at least 1)
+  int lic = -1;                  // the pictures are line integral convolutions of the
+                                 // advected texture, lic pixels each way; -1: size / 64;
+                                 // 0: the advected texture itself (faster, grainier)
+  int noise_period = 16;         // frames of a noise cell's on/off cycle
+  TextureSpeed speed = TextureSpeed::uniform;
+  double pixels_per_frame = 0.0; // displacement per frame of the field (see TextureSpeed);
+                                 // 0: size / 128
+  int warmup = 0;                // frames advected at the first frame's time before the
+                                 // first picture; 0: ⌈3/α⌉ (a steady texture from frame 0)
+  double contrast = 1.0;         // output contrast (1: ±2.2 standard deviations fill 0–255)
+  std::uint64_t seed = 1;        // noise seed
+  std::uint32_t background = 0x00FFFFFF;
+};
+
+// The simulation: frame after frame of the animation. Throws tvf::Error on a domain that
+// is not planar, or options out of range (naming the option).
+class TextureAnimator {
+public:
+  TextureAnimator(const TangentBundle& bundle, const Field& field, const TextureOptions& options = {});
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  double pixels_per_unit() const { return ppu_; }
+  // The typical speed of the field (90th percentile of |V| over all frames and vertices).
+  double typical_speed() const { return p90_; }
+  // Image position (pixels, x right, y down) of a domain point, and back.
+  Vec2 to_pixel(const Vec2& x) const;
+
+  // Advances the texture by one frame from its current time to t (the first call
+  // warms up at t and advects nothing before it). Frames may go backwards in time.
+  void advance(double t);
+  double time() const { return t_; }
+  // The texture (width × height, row-major, top row first), values about [0, 1].
+  const std::vector<float>& texture() const { return tex_; }
+  // The current frame as a gray picture (contrast stretched). Reuses a buffer of the
+  // animator: not to be called from two threads at once.
+  Image picture() const;
+
+private:
+  void compute_velocity(double t, double dt);
+  void blend(int k);
+  // Mean and standard deviation of an image over the domain's pixels.
+  std::pair<double, double> statistics(const std::vector<float>& image) const;
+
+  const TangentBundle& bundle_;
+  const Field& field_;
+  TextureOptions o_;
+  int width_ = 0, height_ = 0;
+  double ppu_ = 1, time_scale_ = 1, p90_ = 0;
+  Vec2 lo_, hi_;
+  std::vector<int> face_;        // per pixel, -1 outside the domain
+  std::vector<float> bary_;      // per pixel, 3 barycentric coordinates
+  std::vector<float> vel_;       // displacement of one frame in pixels: all dx, then all dy
+  std::vector<float> dir_;       // unit direction of the field: all x, then all y
+  std::vector<float> tex_, next_;
+  mutable std::vector<float> lic_;
+  std::vector<float> phase_;     // per noise cell, in [0, 1)
+  int cells_x_ = 0, cells_y_ = 0;
+  std::vector<float> lattice_;   // noise cell intensities of the current step
+  double cell_ = 1;
+  long step_ = 0;
+  double t_ = 0;
+  bool started_ = false;
+  double mean_ = 0.5, sd_ = 0.1;
+};
+
+// Singularity markers over a picture, in the paper's colours (green source, red sink,
+// blue saddle, magenta center and foci): the singularities of the field at time t.
+void draw_singularities(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
+                        const Field& field, double t);
+
+// The singularity paths up to time t drawn as trails (each path's samples with t' ≤ t),
+// in the colour of their type: where every singularity has been so far (paper Fig. 8).
+void draw_singularity_paths(Image& image, const TextureAnimator& animator, const Topology& topology, double t);
+
+// Evenly spaced streamlines of the field at time t (integrate/evenly_spaced.h), drawn as
+// thin dark lines, `separation` apart in pixels (0: 3 % of the picture's long side).
+// Placed anew for each picture, so in an animation they do not move with the texture:
+// meant for still pictures.
+void draw_streamlines(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
+                      const Field& field, double t, double separation = 0.0);
+
+struct TextureAnimationOptions {
+  TextureOptions texture;
+  int frames = 0;                 // pictures over the field's time range; 0: the field's frames
+  int first = 0;                  // first and last picture written (inclusive); last -1: to the end
+  int last = -1;
+  bool overlay_singularities = false;
+  bool overlay_paths = false;     // the singularity paths so far (analysis/topology.h)
+  bool overlay_streamlines = false;  // evenly spaced streamlines of each frame
+  std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
+  std::string video;              // MP4 file (empty: none)
+  double fps = 25.0;
+  std::function<void(int done, int total)> progress;
+};
+
+struct TextureAnimationReport {
+  int frames = 0;                 // pictures made
+  int width = 0, height = 0;
+  double seconds = 0;             // total
+  double warmup_seconds = 0;      // of which the warm-up and the first picture
+  double texture_seconds = 0;     // and the texture and pictures of the other frames
+  std::vector<std::string> files; // what was written
+};
+
+// Renders the animation and writes PNG frames (into a folder that appears complete or not
+// at all) and/or an MP4. Throws tvf::Error on bad options (naming them) or a failed write.
+TextureAnimationReport write_texture_animation(const TangentBundle& bundle, const Field& field,
+                                               const TextureAnimationOptions& options);
+
+}  // namespace tvf

@@ -1,0 +1,46 @@
+#pragma once
+// MP4 video through ffmpeg (Debian package `ffmpeg`), run as a subprocess that reads raw
+// RGB frames on its standard input and encodes H.264 (yuv420p, so every player opens it;
+// odd sizes are padded by one pixel). The file is written under a temporary name and
+// renamed when ffmpeg has finished successfully; a writer destroyed before finish()
+// stops ffmpeg and removes the temporary file, leaving no partial video.
+#include "tvf/render/image.h"
+
+#include <string>
+
+namespace tvf {
+
+struct VideoOptions {
+  double fps = 25.0;
+  int crf = 18;  // H.264 quality: 0 lossless … 51 worst; 18 looks lossless
+};
+
+// True when an `ffmpeg` executable is on the PATH.
+bool ffmpeg_available();
+
+class VideoWriter {
+public:
+  // Starts ffmpeg. Throws tvf::Error naming `path` when ffmpeg is missing or cannot start.
+  VideoWriter(std::string path, int width, int height, const VideoOptions& options = {});
+  ~VideoWriter();
+  VideoWriter(const VideoWriter&) = delete;
+  VideoWriter& operator=(const VideoWriter&) = delete;
+
+  // Appends one frame (width × height). Throws tvf::Error when ffmpeg has failed.
+  void add(const Image& frame);
+  // Waits for ffmpeg and moves the video into place. Throws tvf::Error with ffmpeg's last
+  // message when encoding failed.
+  void finish();
+  int frames() const { return frames_; }
+
+private:
+  void abort();
+  std::string path_, tmp_, log_;
+  int width_, height_;
+  int pipe_ = -1;
+  int pid_ = -1;
+  int frames_ = 0;
+  std::vector<unsigned char> row_;
+};
+
+}  // namespace tvf

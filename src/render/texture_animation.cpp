@@ -1,0 +1,597 @@
+#include "tvf/render/texture_animation.h"
+
+#include "tvf/analysis/singularities.h"
+#include "tvf/core/atomic_output.h"
+#include "tvf/core/error.h"
+#include "tvf/integrate/evenly_spaced.h"
+#include "tvf/integrate/streamline.h"
+#include "tvf/render/plots.h"
+#include "tvf/render/video.h"
+
+#include <cairo.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <random>
+
+namespace tvf {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void check_option(bool ok, const std::string& name, const std::string& what) {
+  if (!ok) throw Error(fmt::format("texture option {}: {}", name, what));
+}
+
+// Bilinear sample of a w × h row-major image at (x, y) in pixel-centre coordinates
+// (pixel (i, j) is at (i, j)); clamped to the edge.
+inline float bilinear(const float* img, int w, int h, float x, float y) {
+  x = std::clamp(x, 0.0f, static_cast<float>(w - 1));
+  y = std::clamp(y, 0.0f, static_cast<float>(h - 1));
+  const int x0 = std::min(static_cast<int>(x), w - 2 < 0 ? 0 : w - 2);
+  const int y0 = std::min(static_cast<int>(y), h - 2 < 0 ? 0 : h - 2);
+  const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+  const float* r0 = img + static_cast<size_t>(y0) * static_cast<size_t>(w);
+  const float* r1 = img + static_cast<size_t>(y1) * static_cast<size_t>(w);
+  const float a = r0[x0] + fx * (r0[x1] - r0[x0]);
+  const float b = r1[x0] + fx * (r1[x1] - r1[x0]);
+  return a + fy * (b - a);
+}
+
+}  // namespace
+
+TextureAnimator::TextureAnimator(const TangentBundle& bundle, const Field& field, const TextureOptions& options)
+    : bundle_(bundle), field_(field), o_(options) {
+  const Mesh& mesh = bundle.mesh();
+  if (!bundle.is_flat())
+    throw_input_error(mesh.source(), "",
+                      "texture animation is available on planar domains only (surface texture rendering is not "
+                      "available yet)");
+  TVF_CHECK(field.num_vertices() == mesh.num_vertices(), "field of {} vertices on a mesh of {}",
+            field.num_vertices(), mesh.num_vertices());
+  check_option(o_.size >= 16 && o_.size <= 16384, "size", fmt::format("{} pixels is outside [16, 16384]", o_.size));
+  check_option(o_.alpha > 0 && o_.alpha <= 1, "alpha", fmt::format("{} is outside (0, 1]", o_.alpha));
+  check_option(std::isfinite(o_.noise_scale) && o_.noise_scale >= 0 && o_.noise_scale <= o_.size / 4.0, "noise_scale",
+               fmt::format("{} pixels is outside [0, size/4]", o_.noise_scale));
+  check_option(o_.noise_period >= 2 && o_.noise_period <= 100000, "noise_period",
+               fmt::format("{} frames is outside [2, 100000]", o_.noise_period));
+  check_option(std::isfinite(o_.pixels_per_frame) && o_.pixels_per_frame >= 0 && o_.pixels_per_frame <= o_.size,
+               "pixels_per_frame", fmt::format("{} is outside [0, size]", o_.pixels_per_frame));
+  check_option(o_.lic >= -1 && o_.lic <= 1000, "lic", fmt::format("{} pixels is outside [0, 1000] (or -1: automatic)", o_.lic));
+  if (o_.lic < 0) o_.lic = std::max(1, static_cast<int>(std::lround(o_.size / 64.0)));
+  check_option(o_.warmup >= 0 && o_.warmup <= 100000, "warmup", fmt::format("{} is outside [0, 100000]", o_.warmup));
+  check_option(std::isfinite(o_.contrast) && o_.contrast > 0 && o_.contrast <= 100, "contrast",
+               fmt::format("{} is outside (0, 100]", o_.contrast));
+  for (const cplx& z : field.data())
+    if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
+      throw_input_error(mesh.source(), "", "the field has a value that is not a finite number");
+
+  lo_ = mesh.bbox_min().head<2>();
+  hi_ = mesh.bbox_max().head<2>();
+  const Vec2 ext = hi_ - lo_;
+  ppu_ = o_.size / std::max(ext.x(), ext.y());
+  width_ = std::max(1, static_cast<int>(std::lround(ext.x() * ppu_)));
+  height_ = std::max(1, static_cast<int>(std::lround(ext.y() * ppu_)));
+  const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+
+  // Which face holds each pixel centre, and where: scan each face's pixel box.
+  face_.assign(n, -1);
+  bary_.assign(3 * n, 0.0f);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Face& t = mesh.face(f);
+    Vec2 p[3];
+    for (size_t c = 0; c < 3; ++c) p[c] = to_pixel(mesh.position(t[c]).head<2>());
+    const double x0 = std::min({p[0].x(), p[1].x(), p[2].x()}), x1 = std::max({p[0].x(), p[1].x(), p[2].x()});
+    const double y0 = std::min({p[0].y(), p[1].y(), p[2].y()}), y1 = std::max({p[0].y(), p[1].y(), p[2].y()});
+    const int i0 = std::max(0, static_cast<int>(std::floor(x0 - 0.5))), i1 = std::min(width_ - 1, static_cast<int>(std::ceil(x1 - 0.5)));
+    const int j0 = std::max(0, static_cast<int>(std::floor(y0 - 0.5))), j1 = std::min(height_ - 1, static_cast<int>(std::ceil(y1 - 0.5)));
+    const Vec2 a = p[1] - p[0], b = p[2] - p[0];
+    const double det = a.x() * b.y() - a.y() * b.x();
+    if (det == 0) continue;
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(width_) + static_cast<size_t>(i);
+        if (face_[k] >= 0) continue;
+        const Vec2 d = Vec2(i + 0.5, j + 0.5) - p[0];
+        const double l1 = (d.x() * b.y() - d.y() * b.x()) / det;
+        const double l2 = (a.x() * d.y() - a.y() * d.x()) / det;
+        const double l0 = 1 - l1 - l2;
+        constexpr double eps = -1e-9;
+        if (l0 < eps || l1 < eps || l2 < eps) continue;
+        face_[k] = f;
+        bary_[3 * k] = static_cast<float>(l0);
+        bary_[3 * k + 1] = static_cast<float>(l1);
+        bary_[3 * k + 2] = static_cast<float>(l2);
+      }
+  }
+
+  // Speed scale: the 90th percentile of |V| over the whole field moves pixels_per_frame
+  // pixels in one frame of the field.
+  {
+    std::vector<double> speeds;
+    const size_t total = field.data().size();
+    const size_t stride = std::max<size_t>(1, total / 1'000'000);
+    for (size_t k = 0; k < total; k += stride) speeds.push_back(std::abs(field.data()[k]));
+    double p90 = 0;
+    if (!speeds.empty()) {
+      auto mid = speeds.begin() + static_cast<long>(0.9 * static_cast<double>(speeds.size() - 1));
+      std::nth_element(speeds.begin(), mid, speeds.end());
+      p90 = *mid;
+    }
+    const TimeSampling& ts = field.time();
+    const double frame_dt = ts.frames > 1 ? std::abs(ts.t1 - ts.t0) / (ts.frames - 1) : 1.0;
+    const double ppf = o_.pixels_per_frame > 0 ? o_.pixels_per_frame : o_.size / 128.0;
+    time_scale_ = p90 > 0 && frame_dt > 0 ? ppf / (p90 * frame_dt) : 0.0;
+    p90_ = p90;
+  }
+
+  // Noise: cells of noise_scale pixels, each with a random phase.
+  cell_ = o_.noise_scale > 0 ? o_.noise_scale : std::max(1.0, o_.size / 256.0);
+  cells_x_ = static_cast<int>(std::ceil(width_ / cell_)) + 2;
+  cells_y_ = static_cast<int>(std::ceil(height_ / cell_)) + 2;
+  phase_.resize(static_cast<size_t>(cells_x_) * static_cast<size_t>(cells_y_));
+  std::mt19937_64 rng(o_.seed);
+  std::uniform_real_distribution<float> uni(0.0f, 1.0f);
+  for (auto& p : phase_) p = uni(rng);
+  lattice_.resize(phase_.size());
+  vel_.assign(2 * n, 0.0f);  // x displacements, then y displacements
+  dir_.assign(2 * n, 0.0f);
+  tex_.assign(n, 0.5f);
+  next_.assign(n, 0.5f);
+}
+
+Vec2 TextureAnimator::to_pixel(const Vec2& x) const {
+  return {(x.x() - lo_.x()) * ppu_, (hi_.y() - x.y()) * ppu_};
+}
+
+void TextureAnimator::compute_velocity(double t, double dt) {
+  const std::vector<cplx> values = values_at(field_, t);
+  const Mesh& mesh = bundle_.mesh();
+  const double s = dt * time_scale_;
+  const size_t n = face_.size();
+  // Uniform speed: V/max(|V|, floor) times the typical speed.
+  const bool uniform = o_.speed == TextureSpeed::uniform;
+  const double floor = 1e-12 * p90_;
+  tbb::parallel_for(tbb::blocked_range<int>(0, height_), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int i = 0; i < width_; ++i) {
+        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(width_) + static_cast<size_t>(i);
+        const int f = face_[k];
+        if (f < 0) {
+          vel_[k] = vel_[n + k] = dir_[k] = dir_[n + k] = 0.0f;
+          continue;
+        }
+        const Face& tri = mesh.face(f);
+        // Planar bundle: every frame is the plane's, so corner values add directly.
+        const cplx z = static_cast<double>(bary_[3 * k]) * values[static_cast<size_t>(tri[0])] +
+                       static_cast<double>(bary_[3 * k + 1]) * values[static_cast<size_t>(tri[1])] +
+                       static_cast<double>(bary_[3 * k + 2]) * values[static_cast<size_t>(tri[2])];
+        const double g = uniform ? s * p90_ / std::max(std::abs(z), floor) : s;
+        vel_[k] = static_cast<float>(z.real() * g);
+        vel_[n + k] = static_cast<float>(-z.imag() * g);  // image y points down
+        const double m = std::abs(z);
+        dir_[k] = m > 0 ? static_cast<float>(z.real() / m) : 0.0f;
+        dir_[n + k] = m > 0 ? static_cast<float>(-z.imag() / m) : 0.0f;
+      }
+  });
+}
+
+void TextureAnimator::blend(int k) {
+  // Noise cells switch on for the first half of their cycle and off for the second,
+  // each with its own phase (van Wijk 2002).
+  const float period = static_cast<float>(o_.noise_period);
+  for (size_t c = 0; c < phase_.size(); ++c) {
+    float u = static_cast<float>(k % o_.noise_period) / period + phase_[c];
+    u -= std::floor(u);
+    lattice_[c] = u < 0.5f ? 1.0f : 0.0f;
+  }
+  const float a = static_cast<float>(o_.alpha);
+  const float inv_cell = static_cast<float>(1.0 / cell_);
+  const int w = width_, h = height_;
+  const float* tex = tex_.data();
+  const float* vel = vel_.data();
+  const float* lat = lattice_.data();
+  float* out = next_.data();
+  const size_t n = face_.size();
+  const float inflow = static_cast<float>(mean_);
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j < rows.end(); ++j)
+      for (int i = 0; i < w; ++i) {
+        const size_t p = static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i);
+        if (face_[p] < 0) {
+          out[p] = 0.5f;
+          continue;
+        }
+        // Backward step with the midpoint rule: where did the texture here come from?
+        const float fi = static_cast<float>(i), fj = static_cast<float>(j);
+        const float mx = fi - 0.5f * vel[p], my = fj - 0.5f * vel[n + p];
+        const float dx = bilinear(vel, w, h, mx, my), dy = bilinear(vel + n, w, h, mx, my);
+        const float sx = fi - dx, sy = fj - dy;
+        // The noise injected is its mean along the step, not its value at the pixel: a
+        // noise cell fixed in space, injected once a frame at the same place, would leave
+        // a stripe every step length across the streaks. (The lattice starts one cell
+        // left of and above the picture.)
+        const float len = std::abs(dx) + std::abs(dy);
+        const int samples = std::clamp(static_cast<int>(len * inv_cell) + 1, 1, 4);  // ~one per noise cell
+        float noise;
+        if (samples == 1) {
+          noise = bilinear(lat, cells_x_, cells_y_, (fi - 0.5f * dx) * inv_cell + 1, (fj - 0.5f * dy) * inv_cell + 1);
+        } else {
+          // Several samples along the step: the nearest cell's value is enough for each.
+          noise = 0;
+          for (int q = 0; q < samples; ++q) {
+            const float u = (static_cast<float>(q) + 0.5f) / static_cast<float>(samples);
+            const int cx = std::clamp(static_cast<int>((fi - u * dx) * inv_cell + 1.5f), 0, cells_x_ - 1);
+            const int cy = std::clamp(static_cast<int>((fj - u * dy) * inv_cell + 1.5f), 0, cells_y_ - 1);
+            noise += lat[static_cast<size_t>(cy) * static_cast<size_t>(cells_x_) + static_cast<size_t>(cx)];
+          }
+          noise /= static_cast<float>(samples);
+        }
+        float old;
+        if (sx < -0.5f || sy < -0.5f || sx > static_cast<float>(w) - 0.5f || sy > static_cast<float>(h) - 0.5f)
+          old = inflow;  // from outside the picture: the texture's mean, so inflow fades in
+        else
+          old = bilinear(tex, w, h, sx, sy);
+        out[p] = (1.0f - a) * old + a * noise;
+      }
+  });
+  tex_.swap(next_);
+}
+
+std::pair<double, double> TextureAnimator::statistics(const std::vector<float>& image) const {
+  struct Acc {
+    double sum = 0, sum2 = 0, n = 0;
+  };
+  const Acc acc = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, image.size()), Acc{},
+      [&](const tbb::blocked_range<size_t>& r, Acc a) {
+        for (size_t k = r.begin(); k < r.end(); ++k)
+          if (face_[k] >= 0) {
+            a.sum += image[k];
+            a.sum2 += static_cast<double>(image[k]) * image[k];
+            a.n += 1;
+          }
+        return a;
+      },
+      [](Acc a, const Acc& b) {
+        a.sum += b.sum;
+        a.sum2 += b.sum2;
+        a.n += b.n;
+        return a;
+      });
+  const double mean = acc.n > 0 ? acc.sum / acc.n : 0.5;
+  const double sd = acc.n > 0 ? std::sqrt(std::max(0.0, acc.sum2 / acc.n - mean * mean)) : 0.1;
+  return {mean, std::max(sd, 1e-3)};
+}
+
+void TextureAnimator::advance(double t) {
+  const TimeSampling& ts = field_.time();
+  const double frame_dt = ts.frames > 1 ? (ts.t1 - ts.t0) / (ts.frames - 1) : 1.0;
+  auto stats = [&] { return statistics(tex_); };
+  if (!started_) {
+    // Warm up at t: a steady texture before the first picture.
+    compute_velocity(t, frame_dt);
+    const int warm = o_.warmup > 0 ? o_.warmup : static_cast<int>(std::ceil(3.0 / o_.alpha));
+    // Noise starts from uniform gray: start the texture from the noise itself.
+    for (int k = 0; k < warm; ++k) blend(static_cast<int>(step_++));
+    started_ = true;
+    t_ = t;
+    std::tie(mean_, sd_) = stats();
+    return;
+  }
+  const double dt = t - t_;
+  compute_velocity(0.5 * (t + t_), dt);
+  blend(static_cast<int>(step_++ % (1L << 30)));
+  t_ = t;
+  // The contrast stretch follows the texture's statistics slowly (no flicker).
+  const auto [m, s] = stats();
+  mean_ = 0.8 * mean_ + 0.2 * m;
+  sd_ = 0.8 * sd_ + 0.2 * s;
+}
+
+Image TextureAnimator::picture() const {
+  Image img(width_, height_);
+  const std::vector<float>* shown = &tex_;
+  if (o_.lic > 0) {
+    // Line integral convolution of the advected texture: its mean along the field's
+    // direction, o_.lic pixels each way in at most 6 steps each way (Euler on the
+    // frame's unit directions, nearest-pixel directions and texture values).
+    lic_.assign(tex_.size(), 0.5f);
+    const int w = width_, h = height_;
+    const size_t n = tex_.size();
+    const float* dir = dir_.data();
+    const float* tex = tex_.data();
+    const int steps = std::min(o_.lic, 6);
+    const float step = static_cast<float>(o_.lic) / static_cast<float>(steps);
+    tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        for (int i = 0; i < w; ++i) {
+          const size_t p = static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i);
+          if (face_[p] < 0) continue;
+          float sum = tex[p];
+          int count = 1;
+          for (const float sign : {step, -step}) {
+            float x = static_cast<float>(i), y = static_cast<float>(j);
+            size_t k = p;
+            for (int q = 0; q < steps; ++q) {
+              x += sign * dir[k];
+              y += sign * dir[n + k];
+              if (!(x >= 0 && y >= 0 && x <= static_cast<float>(w - 1) && y <= static_cast<float>(h - 1))) break;
+              k = static_cast<size_t>(y + 0.5f) * static_cast<size_t>(w) + static_cast<size_t>(x + 0.5f);
+              sum += tex[k];  // nearest pixel: the advected texture is smooth already
+              ++count;
+            }
+          }
+          lic_[p] = sum / static_cast<float>(count);
+        }
+    });
+    shown = &lic_;
+  }
+  // Statistics of what is shown (the convolution narrows the spread).
+  double mean = mean_, sd = sd_;
+  if (o_.lic > 0) std::tie(mean, sd) = statistics(lic_);
+  const float gain = static_cast<float>(o_.contrast / (4.4 * sd));
+  const float m0 = static_cast<float>(mean);
+  const std::vector<float>& src = *shown;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tex_.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      if (face_[k] < 0) {
+        img.pixels[k] = o_.background;
+        continue;
+      }
+      const float v = std::clamp(0.5f + (src[k] - m0) * gain, 0.0f, 1.0f);
+      img.pixels[k] = gray(static_cast<std::uint8_t>(std::lround(v * 255.0f)));
+    }
+  });
+  return img;
+}
+
+void draw_singularities(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
+                        const Field& field, double t) {
+  const std::vector<cplx> values = values_at(field, t);
+  const auto sing = find_singularities(bundle, values);
+  cairo_surface_t* surface = cairo_image_surface_create_for_data(
+      reinterpret_cast<unsigned char*>(image.pixels.data()), CAIRO_FORMAT_RGB24, image.width, image.height,
+      image.width * 4);
+  cairo_t* cr = cairo_create(surface);
+  const double r = std::max(3.5, std::max(image.width, image.height) / 110.0);
+  cairo_set_line_width(cr, std::max(1.0, r / 4));
+  for (const Singularity& s : sing) {
+    const Vec2 p = animator.to_pixel(s.position.head<2>());
+    const auto c = type_color(s.type);
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, p.x(), p.y(), r, 0, 2 * kPi);
+    cairo_set_source_rgb(cr, c[0], c[1], c[2]);
+    cairo_fill_preserve(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_stroke(cr);
+  }
+  cairo_destroy(cr);
+  cairo_surface_flush(surface);
+  cairo_surface_destroy(surface);
+}
+
+void draw_singularity_paths(Image& image, const TextureAnimator& animator, const Topology& topology, double t) {
+  cairo_surface_t* surface = cairo_image_surface_create_for_data(
+      reinterpret_cast<unsigned char*>(image.pixels.data()), CAIRO_FORMAT_RGB24, image.width, image.height,
+      image.width * 4);
+  cairo_t* cr = cairo_create(surface);
+  const double width = std::max(1.5, std::max(image.width, image.height) / 300.0);
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  for (const SingularityPath& path : topology.paths) {
+    if (path.points.empty() || path.points.front().t > t) continue;
+    cairo_new_path(cr);
+    for (size_t k = 0; k < path.points.size(); ++k) {
+      const PathSample& s = path.points[k];
+      Vec2 p = animator.to_pixel(s.position.head<2>());
+      if (s.t > t) {
+        // The trail ends at t: between the last sample before t and this one.
+        const PathSample& a = path.points[k - 1];
+        const double w = s.t > a.t ? (t - a.t) / (s.t - a.t) : 1.0;
+        p = animator.to_pixel(((1 - w) * a.position + w * s.position).head<2>());
+        cairo_line_to(cr, p.x(), p.y());
+        break;
+      }
+      if (k == 0) cairo_move_to(cr, p.x(), p.y());
+      else cairo_line_to(cr, p.x(), p.y());
+    }
+    // A dark casing under the coloured line keeps it readable on the texture.
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_line_width(cr, 2.2 * width);
+    cairo_stroke_preserve(cr);
+    const auto c = type_color(path.type);
+    cairo_set_source_rgb(cr, c[0], c[1], c[2]);
+    cairo_set_line_width(cr, width);
+    cairo_stroke(cr);
+  }
+  cairo_destroy(cr);
+  cairo_surface_flush(surface);
+  cairo_surface_destroy(surface);
+}
+
+void draw_streamlines(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
+                      const Field& field, double t, double separation) {
+  const double sep_px = separation > 0 ? separation : 0.03 * std::max(image.width, image.height);
+  EvenlySpacedOptions o;
+  o.separation = sep_px / animator.pixels_per_unit();
+  const auto lines = evenly_spaced_streamlines(bundle, values_at(field, t), o);
+  cairo_surface_t* surface = cairo_image_surface_create_for_data(
+      reinterpret_cast<unsigned char*>(image.pixels.data()), CAIRO_FORMAT_RGB24, image.width, image.height,
+      image.width * 4);
+  cairo_t* cr = cairo_create(surface);
+  cairo_set_line_width(cr, std::max(1.0, std::max(image.width, image.height) / 600.0));
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  cairo_set_source_rgb(cr, 0.05, 0.05, 0.05);
+  for (const Streamline& line : lines) {
+    cairo_new_path(cr);
+    for (size_t k = 0; k < line.points.size(); ++k) {
+      const Vec2 p = animator.to_pixel(line.points[k].head<2>());
+      if (k == 0) cairo_move_to(cr, p.x(), p.y());
+      else cairo_line_to(cr, p.x(), p.y());
+    }
+    cairo_stroke(cr);
+  }
+  cairo_destroy(cr);
+  cairo_surface_flush(surface);
+  cairo_surface_destroy(surface);
+}
+
+namespace {
+
+// A folder that appears complete or not at all: frames go into a hidden sibling, which
+// replaces the target folder on commit(); destroyed uncommitted, it is removed.
+class StagedFolder {
+public:
+  explicit StagedFolder(const fs::path& target) : target_(target) {
+    if (!target_.has_filename()) target_ = target_.parent_path();  // "frames/" → "frames"
+    std::error_code ec;
+    if (target_.empty() || target_ == "." || target_ == "..")
+      throw_input_error(target.string(), "", "give the frames a folder of their own (it is replaced as a whole)");
+    if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
+      throw_input_error(target_.string(), "", "exists and is not a folder");
+    // The folder is replaced as a whole, so it may hold nothing but frames of an earlier run.
+    if (fs::is_directory(target_, ec))
+      for (const auto& e : fs::directory_iterator(target_, ec)) {
+        const std::string name = e.path().filename().string();
+        if (!(name.starts_with("frame_") && e.path().extension() == ".png"))
+          throw_input_error(target_.string(), "",
+                            fmt::format("holds {}, which is not a frame; give a new or empty folder for the frames", name));
+      }
+    if (!target_.parent_path().empty()) fs::create_directories(target_.parent_path(), ec);
+    stage_ = temporary_sibling(target_);
+    if (!fs::create_directory(stage_, ec) || ec)
+      throw_input_error(target_.string(), "", fmt::format("cannot create the frames folder ({})", ec.message()));
+  }
+  ~StagedFolder() {
+    std::error_code ec;
+    if (!committed_) fs::remove_all(stage_, ec);
+  }
+  StagedFolder(const StagedFolder&) = delete;
+  StagedFolder& operator=(const StagedFolder&) = delete;
+  const fs::path& stage() const { return stage_; }
+  void commit() {
+    std::error_code ec;
+    fs::path old;
+    if (fs::exists(target_, ec)) {
+      old = temporary_sibling(target_);
+      fs::rename(target_, old, ec);
+      if (ec) throw_input_error(target_.string(), "", fmt::format("cannot replace the folder ({})", ec.message()));
+    }
+    fs::rename(stage_, target_, ec);
+    if (ec) {
+      if (!old.empty()) fs::rename(old, target_, ec);
+      throw_input_error(target_.string(), "", "cannot move the finished frames into place");
+    }
+    committed_ = true;
+    if (!old.empty()) fs::remove_all(old, ec);
+  }
+
+private:
+  fs::path target_, stage_;
+  bool committed_ = false;
+};
+
+}  // namespace
+
+TextureAnimationReport write_texture_animation(const TangentBundle& bundle, const Field& field,
+                                               const TextureAnimationOptions& options) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  if (options.frames_dir.empty() && options.video.empty())
+    throw Error("texture animation: give a folder for the PNG frames or an MP4 file to write");
+  const int total = options.frames > 0 ? options.frames : field.frames();
+  check_option(total >= 1 && total <= 1'000'000, "frames", fmt::format("{} is outside [1, 1000000]", total));
+  const int first = options.first;
+  const int last = options.last < 0 ? total - 1 : options.last;
+  check_option(first >= 0 && first < total, "first frame", fmt::format("{} is outside [0, {}]", first, total - 1));
+  check_option(last >= first && last < total, "last frame", fmt::format("{} is outside [{}, {}]", last, first, total - 1));
+  check_option(std::isfinite(options.fps) && options.fps > 0 && options.fps <= 1000, "fps",
+               fmt::format("{} is outside (0, 1000]", options.fps));
+
+  TextureAnimator animator(bundle, field, options.texture);
+  Topology topology;
+  if (options.overlay_paths) topology = analyze_topology(bundle, field);
+  std::unique_ptr<StagedFolder> folder;
+  if (!options.frames_dir.empty()) folder = std::make_unique<StagedFolder>(options.frames_dir);
+  std::unique_ptr<VideoWriter> video;
+  if (!options.video.empty()) {
+    const fs::path parent = fs::path(options.video).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) fs::create_directories(parent, ec);
+    VideoOptions vo;
+    vo.fps = options.fps;
+    video = std::make_unique<VideoWriter>(options.video, animator.width(), animator.height(), vo);
+  }
+
+  const TimeSampling& ts = field.time();
+  auto time_of = [&](int k) { return total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0; };
+  TextureAnimationReport report;
+  report.width = animator.width();
+  report.height = animator.height();
+  double texture_seconds = 0, warmup_seconds = 0;
+  int next = first, done = 0;
+  const int count = last - first + 1;
+  struct Item {
+    int k;
+    std::shared_ptr<Image> image;
+  };
+  // Simulate in order, encode PNGs in parallel, feed the video in order.
+  tbb::parallel_pipeline(
+      4,
+      tbb::make_filter<void, Item>(tbb::filter_mode::serial_in_order,
+                                   [&](tbb::flow_control& fc) -> Item {
+                                     if (next > last) {
+                                       fc.stop();
+                                       return {};
+                                     }
+                                     const int k = next++;
+                                     const double t = time_of(k);
+                                     const auto t0 = clock::now();
+                                     const bool warm = k == first;  // the first advance warms up
+                                     animator.advance(t);
+                                     auto img = std::make_shared<Image>(animator.picture());
+                                     (warm ? warmup_seconds : texture_seconds) +=
+                                         std::chrono::duration<double>(clock::now() - t0).count();
+                                     if (options.overlay_streamlines) draw_streamlines(*img, animator, bundle, field, t);
+                                     if (options.overlay_paths) draw_singularity_paths(*img, animator, topology, t);
+                                     if (options.overlay_singularities) draw_singularities(*img, animator, bundle, field, t);
+                                     return {k, img};
+                                   }) &
+          tbb::make_filter<Item, Item>(tbb::filter_mode::parallel,
+                                       [&](Item item) {
+                                         if (folder)
+                                           write_png((folder->stage() / fmt::format("frame_{:05d}.png", item.k)).string(),
+                                                     *item.image);
+                                         return item;
+                                       }) &
+          tbb::make_filter<Item, void>(tbb::filter_mode::serial_in_order, [&](Item item) {
+            if (video) video->add(*item.image);
+            ++done;
+            if (options.progress) options.progress(done, count);
+          }));
+  if (video) {
+    video->finish();
+    report.files.push_back(options.video);
+  }
+  if (folder) {
+    folder->commit();
+    report.files.push_back(options.frames_dir);
+  }
+  report.frames = done;
+  report.texture_seconds = texture_seconds;
+  report.warmup_seconds = warmup_seconds;
+  report.seconds = std::chrono::duration<double>(clock::now() - start).count();
+  return report;
+}
+
+}  // namespace tvf

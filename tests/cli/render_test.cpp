@@ -1,0 +1,96 @@
+// `tvf render texture INPUT -o OUT…` as a user meets it: PNG frames and MP4 from a scene or
+// a generated folder, a clear sentence for surfaces and bad options, and no partial output.
+#include "support/test_paths.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+namespace tvf {
+namespace {
+
+namespace fs = std::filesystem;
+using test::count_lines;
+using test::run_tvf;
+using test::TempDir;
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+constexpr const char* kSmallScene = R"({"tvf": 1,
+  "domain": {"grid": {"size": [17, 17], "min": [-1, -1], "max": [1, 1]}},
+  "time": {"frames": 6, "range": [0, 1]},
+  "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.3, 0, 0], [0.3, 0, 1]]},
+               {"kind": "singular", "type": "source", "path": [[0.5, 0.5, 0]]}]})";
+
+int count_pngs(const fs::path& dir) {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) n += e.path().extension() == ".png";
+  return n;
+}
+
+TEST(CliRender, TextureFramesFromASceneAndAFolder) {
+  TempDir dir;
+  test::write_text(dir / "scene.json", kSmallScene);
+  const auto r = run_tvf("render texture " + quoted(dir / "scene.json") + " -o " + quoted(dir / "frames") +
+                         " --size 64 --overlay singularities");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(count_lines(r.output), 1) << r.output;  // the summary; no progress in a pipe
+  EXPECT_NE(r.output.find("rendered 6 frames of 64×64"), std::string::npos) << r.output;
+  EXPECT_EQ(count_pngs(dir / "frames"), 6);
+
+  ASSERT_EQ(run_tvf("generate " + quoted(dir / "scene.json") + " -o " + quoted(dir / "gen") + " -q --no-vtk").exit_code, 0);
+  const auto q = run_tvf("render texture " + quoted(dir / "gen") + " -o " + quoted(dir / "f2") +
+                         " --size 32 --frames 11 --range 2:5 -q");
+  ASSERT_EQ(q.exit_code, 0) << q.output;
+  EXPECT_EQ(q.output, "");
+  EXPECT_EQ(count_pngs(dir / "f2"), 4);
+  EXPECT_TRUE(fs::exists(dir / "f2" / "frame_00002.png"));
+  EXPECT_TRUE(fs::exists(dir / "f2" / "frame_00005.png"));
+}
+
+TEST(CliRender, Mp4DecodesWithTheRightFrameCount) {
+  if (test::run_command("command -v ffprobe >/dev/null 2>&1").exit_code != 0)
+    GTEST_SKIP() << "ffprobe not installed (Debian package ffmpeg)";
+  TempDir dir;
+  test::write_text(dir / "scene.json", kSmallScene);
+  const auto r = run_tvf("render texture " + quoted(dir / "scene.json") + " -o " + quoted(dir / "a.mp4") +
+                         " -o " + quoted(dir / "frames") + " --size 48 --frames 9 --fps 10 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto p = test::run_command("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                                   "stream=nb_read_frames -of csv=p=0 " + quoted(dir / "a.mp4"));
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  EXPECT_EQ(std::stoi(p.output), 9);
+  EXPECT_EQ(count_pngs(dir / "frames"), 9);
+}
+
+TEST(CliRender, SurfacesAndBadOptionsAreOneSentenceAndLeaveNothing) {
+  TempDir dir;
+  test::write_text(dir / "sphere.json", R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 2}},
+    "time": {"frames": 3}, "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 1, 0]]}]})");
+  const auto s = run_tvf("render texture " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "out"));
+  EXPECT_NE(s.exit_code, 0);
+  EXPECT_EQ(count_lines(s.output), 1) << s.output;
+  EXPECT_NE(s.output.find("sphere.json"), std::string::npos) << s.output;
+  EXPECT_NE(s.output.find("not available yet"), std::string::npos) << s.output;
+
+  test::write_text(dir / "scene.json", kSmallScene);
+  for (const std::string bad : {"--range 3", "--range 4:9", "--size 5", "--alpha 2", "--fps 0"}) {
+    const auto r = run_tvf("render texture " + quoted(dir / "scene.json") + " -o " + quoted(dir / "out") + " " + bad);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_EQ(count_lines(r.output), 1) << bad << ": " << r.output;
+  }
+  const auto m = run_tvf("render texture " + quoted(dir / "missing") + " -o " + quoted(dir / "out"));
+  EXPECT_NE(m.exit_code, 0);
+  EXPECT_NE(m.output.find("no such file"), std::string::npos) << m.output;
+  // Nothing but the inputs is left.
+  int entries = 0;
+  for (const auto& e : fs::directory_iterator(dir.path())) {
+    entries += 1;
+    EXPECT_NE(e.path().filename(), "out");
+  }
+  EXPECT_EQ(entries, 2);
+}
+
+}  // namespace
+}  // namespace tvf
