@@ -1,10 +1,14 @@
 #include "tvf/solve/spacetime.h"
 
+#include "tvf/core/error.h"
+
 #include "support/test_meshes.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <string>
 
 namespace tvf {
 namespace {
@@ -92,6 +96,77 @@ TEST(SpaceTime, SolvesTheAssembledSystem) {
     const SolveReport again = solver.solve(fixed, values, z, opt);
     EXPECT_LE(again.iterations, 1) << name;
   }
+}
+
+// Key frames in the middle (so segments with a Neumann end at the first and last frame)
+// and static element regions (the same vertices at every frame): the temporal-mode method
+// applies, and its result is the CG's and the paper's BiCGStab's to the tolerance, on
+// planar and curved meshes.
+TEST(SpaceTime, TemporalModesAgreeWithCGAndBiCGStab) {
+  for (const auto& [name, mesh] : test::all_meshes()) {
+    const TangentBundle bundle(*mesh);
+    const ConnectionLaplacian l = connection_laplacian(bundle);
+    const int nf = 12;
+    const auto n = static_cast<size_t>(mesh->num_vertices());
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<char> fixed(n * nf, 0), element(n, 0);
+    std::vector<cplx> values(n * nf);
+    for (size_t i = 0; i < n; ++i) element[i] = u(rng) > 0.9;
+    for (int j = 0; j < nf; ++j)
+      for (size_t i = 0; i < n; ++i) {
+        const size_t k = static_cast<size_t>(j) * n + i;
+        fixed[k] = (j == 3 || j == 8) || element[i];  // key frames 3 and 8, elements everywhere else
+        values[k] = cplx(u(rng), u(rng));
+      }
+    SpaceTimeSolver solver(l, nf, 30.0);
+    ASSERT_TRUE(solver.modes_apply(fixed)) << name;
+    SpaceTimeOptions opt;
+    opt.tolerance = 1e-11;
+    std::vector<std::vector<cplx>> results;
+    for (auto method : {SpaceTimeMethod::modes, SpaceTimeMethod::cg, SpaceTimeMethod::bicgstab_jacobi}) {
+      opt.method = method;
+      std::vector<cplx> z(n * nf, cplx(0, 0));
+      const SolveReport r = solver.solve(fixed, values, z, opt);
+      ASSERT_TRUE(r.success) << name << " " << r.method << " residual " << r.residual;
+      EXPECT_LE(r.residual, 1e-11) << name << " " << r.method;
+      results.push_back(z);
+    }
+    double scale = 0, d_cg = 0, d_bicg = 0;
+    for (size_t k = 0; k < n * nf; ++k) {
+      scale = std::max(scale, std::abs(results[0][k]));
+      d_cg = std::max(d_cg, std::abs(results[0][k] - results[1][k]));
+      d_bicg = std::max(d_bicg, std::abs(results[0][k] - results[2][k]));
+    }
+    EXPECT_LT(d_cg, 1e-8 * scale) << name;
+    EXPECT_LT(d_bicg, 1e-8 * scale) << name;
+  }
+}
+
+// A fixed set that moves in time (a moving element) couples the modes: automatic takes
+// CG, and asking for the modes is refused.
+TEST(SpaceTime, MovingConstraintsTakeCG) {
+  const Mesh& grid = test::grid_mesh();
+  const TangentBundle bundle(grid);
+  const ConnectionLaplacian l = connection_laplacian(bundle);
+  const int nf = 6;
+  const auto n = static_cast<size_t>(grid.num_vertices());
+  std::vector<char> fixed(n * nf, 0);
+  std::vector<cplx> values(n * nf, cplx(0, 0)), z(n * nf, cplx(0, 0));
+  for (size_t i = 0; i < n; ++i) fixed[i] = 1, values[i] = cplx(1, 0);
+  for (int j = 1; j < nf; ++j) {
+    const size_t k = static_cast<size_t>(j) * n + static_cast<size_t>(j);  // vertex j at frame j
+    fixed[k] = 1;
+    values[k] = cplx(0, 1);
+  }
+  SpaceTimeSolver solver(l, nf, 30.0);
+  EXPECT_FALSE(solver.modes_apply(fixed));
+  const SolveReport r = solver.solve(fixed, values, z);
+  EXPECT_TRUE(r.success);
+  EXPECT_NE(r.method.find("CG"), std::string::npos) << r.method;
+  SpaceTimeOptions modes;
+  modes.method = SpaceTimeMethod::modes;
+  EXPECT_THROW(solver.solve(fixed, values, z, modes), InternalError);  // a caller's mistake
 }
 
 TEST(SpaceTime, InterpolationInTimeIsTheFirstGuess) {
