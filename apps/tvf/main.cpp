@@ -15,6 +15,8 @@
 #include "tvf/design/outputs.h"
 #include "tvf/design/scene_json.h"
 #include "tvf/render/plots.h"
+#include "tvf/render/texture_animation.h"
+#include "tvf/render/video.h"
 #include "tvf/field/field_io.h"
 #include "tvf/mesh/tangent_bundle.h"
 
@@ -57,7 +59,24 @@ int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
   OutputOptions out_options;
   out_options.vtk = !args.no_vtk;
   out_options.on_step = [&](const std::string& what) { progress.note("writing " + what); };
-  const auto files = write_field_outputs(args.out, *space, field, scene, out_options);
+  auto files = write_field_outputs(args.out, *space, field, scene, out_options);
+  // The demo ends with what the field is for: a texture animation of it (planar scenes).
+  std::string demo_video;
+  if (demo && space->planar()) {
+    if (ffmpeg_available()) {
+      TextureAnimationOptions video;
+      video.texture.size = 512;
+      video.overlay_singularities = true;
+      video.video = (fs::path(args.out) / "demo.mp4").string();
+      progress.note("rendering demo.mp4");
+      video.progress = [&](int done, int total) { progress.update(done, total); };
+      for (const auto& f : write_texture_animation(space->bundle(), field, video).files) files.push_back(f);
+      demo_video = video.video;
+    } else {
+      std::fprintf(stderr, "note: ffmpeg is not installed, so the demo video was skipped "
+                           "(scripts/install-deps.sh installs it)\n");
+    }
+  }
   progress.finish();
 
   for (const auto& w : report.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
@@ -75,6 +94,8 @@ int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
           "  field.tvff      the native field file (reloads exactly)\n"
           "  coherence.csv   temporal coherence per frame (paper Fig. 18)\n"
           "  scene.json      the scene that made it: edit it and run `tvf generate scene.json -o DIR`\n");
+      if (!demo_video.empty())
+        std::printf("  demo.mp4        the field as a texture animation, singularities coloured by type\n");
     }
   }
   return 0;

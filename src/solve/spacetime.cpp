@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
@@ -151,42 +152,54 @@ struct SpaceTime {
   }
 };
 
+// Scratch vectors of one thread's mode solves, kept between modes (fresh |V|-sized
+// vectors per mode cost more in page faults than the sweeps of a high mode).
+struct ModeScratch {
+  Vec r, p, ap;
+  std::vector<double> diagonal, inverse;
+  void resize(size_t n) {
+    if (r.size() == n) return;
+    r.resize(n), p.resize(n), ap.resize(n), diagonal.resize(n), inverse.resize(n);
+  }
+};
+
 // Jacobi-preconditioned CG on one temporal mode: (L_F + s·D_F) y = r over the free
-// vertices (free[i] != 0), to an absolute residual `tau`. y holds the first guess.
+// vertices (fixed[i] == 0), to an absolute residual `tau`. y holds the first guess.
 // Returns the iterations, or −1 if it did not converge.
 int solve_mode(const SpaceTimeSolver::Operator& op, const char* fixed, double s, const cplx* rhs,
-               cplx* y, double tau, int max_iterations) {
+               cplx* y, double tau, int max_iterations, ModeScratch& w) {
   const auto n = static_cast<size_t>(op.rows);
-  Vec r(n), z(n), p(n), ap(n);
-  std::vector<double> inv(n);
-  for (size_t i = 0; i < n; ++i) inv[i] = fixed[i] ? 0.0 : 1.0 / (op.diagonal[i] + s * op.weight_sum[i]);
+  w.resize(n);
+  cplx *r = w.r.data(), *p = w.p.data(), *ap = w.ap.data();
+  double *diagonal = w.diagonal.data(), *inverse = w.inverse.data();
+  for (size_t i = 0; i < n; ++i) {
+    diagonal[i] = fixed[i] ? 0.0 : op.diagonal[i] + s * op.weight_sum[i];
+    inverse[i] = fixed[i] ? 0.0 : 1.0 / diagonal[i];
+  }
+  // out = A x on the free rows (fixed rows: 0; fixed entries of x are 0); returns Re <x, Ax>.
   auto apply = [&](const cplx* x, cplx* out) {
     double dot = 0;
     for (size_t i = 0; i < n; ++i) {
-      if (fixed[i]) {
-        out[i] = 0;
-        continue;
-      }
-      const cplx v = (op.diagonal[i] + s * op.weight_sum[i]) * x[i] + op.off(static_cast<int>(i), x);
+      const cplx v = fixed[i] ? cplx(0, 0) : diagonal[i] * x[i] + op.off(static_cast<int>(i), x);
       out[i] = v;
-      dot += (std::conj(x[i]) * v).real();
+      dot += x[i].real() * v.real() + x[i].imag() * v.imag();
     }
     return dot;
   };
-  apply(y, ap.data());
+  apply(y, ap);
   double rr = 0, rz = 0;
   for (size_t i = 0; i < n; ++i) {
     r[i] = fixed[i] ? cplx(0, 0) : rhs[i] - ap[i];
-    z[i] = inv[i] * r[i];
-    p[i] = z[i];
-    rr += std::norm(r[i]);
-    rz += (std::conj(r[i]) * z[i]).real();
+    p[i] = inverse[i] * r[i];
+    const double q = std::norm(r[i]);
+    rr += q;
+    rz += inverse[i] * q;
   }
   const double tau2 = tau * tau;
   int it = 0;
   while (rr > tau2) {
     if (it == max_iterations) return -1;
-    const double pap = apply(p.data(), ap.data());
+    const double pap = apply(p, ap);
     if (!(pap > 0)) return -1;
     const double alpha = rz / pap;
     double rz_new = 0;
@@ -194,14 +207,14 @@ int solve_mode(const SpaceTimeSolver::Operator& op, const char* fixed, double s,
     for (size_t i = 0; i < n; ++i) {
       y[i] += alpha * p[i];
       r[i] -= alpha * ap[i];
-      z[i] = inv[i] * r[i];
-      rr += std::norm(r[i]);
-      rz_new += (std::conj(r[i]) * z[i]).real();
+      const double q = std::norm(r[i]);
+      rr += q;
+      rz_new += inverse[i] * q;
     }
     ++it;
     const double beta = rz_new / rz;
     rz = rz_new;
-    for (size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+    for (size_t i = 0; i < n; ++i) p[i] = inverse[i] * r[i] + beta * p[i];
   }
   return it;
 }
@@ -410,11 +423,12 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     multiply_rows(reinterpret_cast<const double*>(rhs.data() + first * n), basis.q, false, r_hat.data(), rows);
     multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
     const char* f = fixed.data() + first * n;
+    tbb::enumerable_thread_specific<ModeScratch> scratch;
     auto mode = [&](size_t k) {
       const auto* rk = reinterpret_cast<const cplx*>(r_hat.col(static_cast<Eigen::Index>(k)).data());
       auto* yk = reinterpret_cast<cplx*>(x_hat.col(static_cast<Eigen::Index>(k)).data());
       const int it = solve_mode(*op_, f, b_ * basis.lambda[static_cast<Eigen::Index>(k)], rk, yk, tau,
-                                options.max_iterations);
+                                options.max_iterations, scratch.local());
       if (it < 0) {
         failed = true;
         return;

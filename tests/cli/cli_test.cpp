@@ -36,6 +36,14 @@ TEST(Cli, DemoWritesEverythingAndSaysWhatToOpen) {
   // Nothing but the outputs: no staging folder left.
   for (const auto& e : fs::directory_iterator(dir / "demo"))
     EXPECT_NE(e.path().filename().string()[0], '.') << e.path();
+  // It ends with the texture animation of the demo, one video frame per field frame.
+  if (test::run_command("command -v ffprobe >/dev/null 2>&1").exit_code != 0)
+    GTEST_SKIP() << "ffprobe not installed (Debian package ffmpeg): demo.mp4 not checked";
+  EXPECT_NE(r.output.find("demo.mp4"), std::string::npos) << r.output;
+  const auto p = test::run_command("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                                   "stream=nb_read_frames -of csv=p=0 '" + (dir / "demo" / "demo.mp4").string() + "'");
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  EXPECT_EQ(std::stoi(p.output), 100);
 }
 
 TEST(Cli, GenerateWritesArraysWithTheContractShapes) {
