@@ -88,34 +88,49 @@ struct SpaceTime {
   // zero); returns Re <x, y>. Fused so the iteration reads each vector as few times as
   // possible: the solve is bandwidth-bound.
   double apply(std::span<const cplx> x, std::span<cplx> y) const {
-    const size_t block = 1024;
-    const size_t per_frame = (n + block - 1) / block;
+    // Tasks of a block of rows × a block of frames: each entry of L (column, value) is
+    // loaded once for kFrames frames, whose products are independent (the sweep is
+    // bound by loads and complex multiply-adds, not by the few flops of a row).
+    constexpr size_t kFrames = 4;
+    const size_t block = 512;
+    const size_t row_blocks = (n + block - 1) / block;
+    const size_t frame_blocks = (nf + kFrames - 1) / kFrames;
     tbb::combinable<double> dot([] { return 0.0; });
     auto body = [&](size_t task) {
-      const size_t j = task / per_frame;
-      const size_t i0 = (task % per_frame) * block, i1 = std::min(n, i0 + block);
-      const cplx* xj = x.data() + j * n;
-      cplx* yj = y.data() + j * n;
-      const char* fj = fixed.data() + j * n;
-      const bool has_prev = j > 0, has_next = j + 1 < nf;
-      const double degree = (has_prev ? 1.0 : 0.0) + (has_next ? 1.0 : 0.0);
+      const size_t j0 = (task / row_blocks) * kFrames, nj = std::min(kFrames, nf - j0);
+      const size_t i0 = (task % row_blocks) * block, i1 = std::min(n, i0 + block);
+      const cplx* xs = x.data();
       double partial = 0;
       for (size_t i = i0; i < i1; ++i) {
-        if (fj[i]) {
-          yj[i] = 0;
-          continue;
+        double re[kFrames] = {}, im[kFrames] = {};
+        for (int e = op.row_start[i]; e < op.row_start[i + 1]; ++e) {
+          const cplx v = op.value[static_cast<size_t>(e)];
+          const cplx* xc = xs + j0 * n + static_cast<size_t>(op.column[static_cast<size_t>(e)]);
+          for (size_t f = 0; f < nj; ++f) {
+            const cplx u = xc[f * n];
+            re[f] += v.real() * u.real() - v.imag() * u.imag();
+            im[f] += v.real() * u.imag() + v.imag() * u.real();
+          }
         }
-        const auto ii = static_cast<int>(i);
-        cplx t = degree * xj[i];
-        if (has_prev) t -= xj[i - n];
-        if (has_next) t -= xj[i + n];
-        const cplx yi = op.diagonal[i] * xj[i] + op.off(ii, xj) + b * op.weight_sum[i] * t;
-        yj[i] = yi;
-        partial += (std::conj(xj[i]) * yi).real();
+        const double c = b * op.weight_sum[i];
+        for (size_t f = 0; f < nj; ++f) {
+          const size_t j = j0 + f, k = j * n + i;
+          if (fixed[k]) {
+            y[k] = 0;
+            continue;
+          }
+          const cplx xi = xs[k];
+          cplx t(0, 0);
+          if (j > 0) t += xi - xs[k - n];
+          if (j + 1 < nf) t += xi - xs[k + n];
+          const cplx yi = op.diagonal[i] * xi + cplx(re[f], im[f]) + c * t;
+          y[k] = yi;
+          partial += xi.real() * yi.real() + xi.imag() * yi.imag();
+        }
       }
       dot.local() += partial;
     };
-    const size_t tasks = nf * per_frame;
+    const size_t tasks = frame_blocks * row_blocks;
     if (parallel)
       tbb::parallel_for(size_t{0}, tasks, body);
     else
@@ -544,46 +559,50 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
   report.method = "preconditioned CG (temporal line solves), matrix-free";
 
   // Preconditioner: every vertex's temporal line solved exactly (Thomas algorithm) on
-  // the free entries; fixed entries split the line. Lines are swept in blocks of
-  // consecutive vertices, frame by frame, so memory is read in contiguous runs rather
-  // than with a stride of |V| per line. Returns Re <r, M⁻¹ r>.
-  constexpr size_t kBlock = 32;
+  // the free entries; fixed entries split the line. The elimination depends on the fixed
+  // set only, so it is done once here (lower coupling, 1/pivot, upper multiplier per
+  // entry; all zero at fixed entries), and each application is two branch-free sweeps
+  // over frames, vertex-contiguous inside a frame. Returns Re <r, M⁻¹ r>.
+  std::vector<double> lower(total), pivot(total), upper(total);
+  blocks(n, par, [&](size_t i0, size_t i1) {
+    for (size_t j = 0; j < nf; ++j) {
+      const bool has_prev = j > 0, has_next = j + 1 < nf;
+      for (size_t i = i0; i < i1; ++i) {
+        const size_t k = j * n + i;
+        if (fixed[k]) {
+          lower[k] = pivot[k] = upper[k] = 0;
+          continue;
+        }
+        const double c = b_ * op.weight_sum[i];
+        const double diag = op.diagonal[i] + c * ((has_prev ? 1 : 0) + (has_next ? 1 : 0));
+        const double lo = (has_prev && !fixed[k - n]) ? -c : 0.0;  // coupling to j−1
+        const double up = (has_next && !fixed[k + n]) ? -c : 0.0;  // coupling to j+1
+        const double denom = diag - lo * (has_prev ? upper[k - n] : 0.0);
+        lower[k] = lo;
+        pivot[k] = 1.0 / denom;
+        upper[k] = up / denom;
+      }
+    }
+  });
   auto precondition = [&](const Vec& r, Vec& out) {
+    constexpr size_t kBlock = 256;
     const size_t nblocks = (n + kBlock - 1) / kBlock;
     tbb::combinable<double> dot([] { return 0.0; });
     auto body = [&](size_t blk) {
       const size_t i0 = blk * kBlock, i1 = std::min(n, i0 + kBlock);
-      const size_t w = i1 - i0;
-      std::vector<double> cp(w * nf);
-      std::vector<cplx> dp(w * nf);
-      for (size_t j = 0; j < nf; ++j) {
-        const bool has_prev = j > 0, has_next = j + 1 < nf;
+      for (size_t i = i0; i < i1; ++i) out[i] = r[i] * pivot[i];
+      for (size_t j = 1; j < nf; ++j)
         for (size_t i = i0; i < i1; ++i) {
-          const size_t k = j * n + i, q = j * w + (i - i0);
-          if (fixed[k]) {
-            cp[q] = 0;
-            dp[q] = 0;
-            continue;
-          }
-          const double c = b_ * op.weight_sum[i];
-          const double diag = op.diagonal[i] + c * ((has_prev ? 1 : 0) + (has_next ? 1 : 0));
-          const double lower = (has_prev && !fixed[k - n]) ? -c : 0.0;  // coupling to j−1
-          const double upper = (has_next && !fixed[k + n]) ? -c : 0.0;  // coupling to j+1
-          const double cprev = has_prev ? cp[q - w] : 0.0;
-          const cplx dprev = has_prev ? dp[q - w] : cplx(0, 0);
-          const double denom = diag - lower * cprev;
-          cp[q] = upper / denom;
-          dp[q] = (r[k] - lower * dprev) / denom;
+          const size_t k = j * n + i;
+          out[k] = (r[k] - lower[k] * out[k - n]) * pivot[k];
         }
-      }
       double partial = 0;
-      for (size_t j = nf; j-- > 0;) {
+      for (size_t j = nf; j-- > 0;)
         for (size_t i = i0; i < i1; ++i) {
-          const size_t k = j * n + i, q = j * w + (i - i0);
-          out[k] = fixed[k] ? cplx(0, 0) : dp[q] - (j + 1 < nf ? cp[q] * out[k + n] : cplx(0, 0));
-          partial += (std::conj(r[k]) * out[k]).real();
+          const size_t k = j * n + i;
+          if (j + 1 < nf) out[k] -= upper[k] * out[k + n];
+          partial += r[k].real() * out[k].real() + r[k].imag() * out[k].imag();
         }
-      }
       dot.local() += partial;
     };
     if (par)
