@@ -210,6 +210,18 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
   SpaceTimeOptions st;
   st.tolerance = scene.solver.tolerance;
   st.parallel = options.parallel;
+  switch (scene.solver.method) {
+    case SolverMethod::automatic: st.method = SpaceTimeMethod::automatic; break;
+    case SolverMethod::cg: st.method = SpaceTimeMethod::cg; break;
+    case SolverMethod::bicgstab: st.method = SpaceTimeMethod::bicgstab_jacobi; break;
+    case SolverMethod::modes:
+      if (!solver.modes_apply(problem.fixed))
+        throw_input_error(scene.label(), "solver.method",
+                          "\"modes\" needs the same fixed vertices at every frame between two key frames "
+                          "(key frames and elements that stay put); a moving element needs \"cg\" or \"auto\"");
+      st.method = SpaceTimeMethod::modes;
+      break;
+  }
   const SolveReport r = solver.solve(problem.fixed, problem.values, field.data(), st);
   if (options.progress) options.progress(scene.time.frames, scene.time.frames);
   if (!r.success)

@@ -68,6 +68,15 @@ const char* to_string(SingularType t) { return name_of(kSingularNames, t); }
 const char* to_string(BifurcationType t) { return name_of(kBifurcationNames, t); }
 const char* to_string(Generator g) { return name_of(kGeneratorNames, g); }
 const char* to_string(Weights w) { return name_of(kWeightNames, w); }
+const char* to_string(SolverMethod m) {
+  switch (m) {
+    case SolverMethod::automatic: return "auto";
+    case SolverMethod::modes: return "modes";
+    case SolverMethod::cg: return "cg";
+    case SolverMethod::bicgstab: return "bicgstab";
+  }
+  return "auto";
+}
 
 std::optional<SingularType> singular_type_from_string(const std::string& s) {
   return value_of(kSingularNames, s);

@@ -37,6 +37,8 @@ constexpr BifurcationType kBifurcationTypes[] = {
 constexpr Generator kGenerators[] = {Generator::basis, Generator::constrained,
                                      Generator::spacetime, Generator::deform};
 constexpr Weights kWeights[] = {Weights::cotan, Weights::uniform, Weights::mean_value};
+constexpr SolverMethod kSolverMethods[] = {SolverMethod::automatic, SolverMethod::modes, SolverMethod::cg,
+                                           SolverMethod::bicgstab};
 
 constexpr int kMaxFrames = 100'000;
 constexpr int kMaxSphereSubdivisions = 9;  // make_icosphere's limit
@@ -58,7 +60,7 @@ int key_rank(const std::string& key) {
       "tvf", "description", "op", "frame", "kind", "t", "domain", "grid", "mesh", "sphere", "torus",
       "size", "min", "max", "subdivisions", "radius", "nu", "nv", "major_radius",
       "minor_radius", "time", "frames", "range", "generator", "solver", "weights",
-      "temporal_weight", "tolerance", "region_radius", "falloff", "base", "type", "jacobian",
+      "temporal_weight", "tolerance", "region_radius", "method", "falloff", "base", "type", "jacobian",
       "at", "to", "vector", "path", "pathline", "attach", "elements", "keyframes", "matrix",
       "m", "transform", "sx", "sy", "theta", "translate", "rotate", "scale", "time_scale",
       "angle", "streamlines", "seed", "keys", "points", "speed", "field", "deform", "edits",
@@ -574,7 +576,7 @@ TimeSampling Reader::time(const json& j) const {
 
 SolverSettings Reader::solver(const json& j) const {
   check_keys(j, "solver", "solver settings",
-             {"weights", "temporal_weight", "tolerance", "region_radius"});
+             {"weights", "temporal_weight", "tolerance", "region_radius", "method"});
   SolverSettings s;
   if (const json* v = get(j, "weights")) s.weights = enumeration(*v, "solver.weights", kWeights, "weights");
   if (const json* v = get(j, "temporal_weight"))
@@ -585,6 +587,8 @@ SolverSettings Reader::solver(const json& j) const {
       fail("solver.tolerance", fmt::format("must be in (0, 1), got {}", s.tolerance));
   }
   if (const json* v = get(j, "region_radius")) s.region_radius = positive(*v, "solver.region_radius");
+  if (const json* v = get(j, "method"))
+    s.method = enumeration(*v, "solver.method", kSolverMethods, "solver method");
   return s;
 }
 
@@ -1120,7 +1124,8 @@ nlohmann::json scene_to_json(const Scene& scene) {
   j["solver"] = {{"weights", to_string(scene.solver.weights)},
                  {"temporal_weight", scene.solver.temporal_weight},
                  {"tolerance", scene.solver.tolerance},
-                 {"region_radius", scene.solver.region_radius}};
+                 {"region_radius", scene.solver.region_radius},
+                 {"method", to_string(scene.solver.method)}};
   j["falloff"] = scene.falloff;
   j["elements"] = json::array();
   for (const Element& e : scene.elements) j["elements"].push_back(element_json(e, planar));

@@ -327,6 +327,35 @@ TEST(SpaceTimeGenerator, KeyFramesAndMovingElementsCombine) {
   }
 }
 
+// solver.method picks the space-time solve; every method meets the tolerance, so they
+// agree; "modes" is refused, naming the key, when an element moves.
+TEST(SpaceTimeGenerator, SolverMethodsAgreeAndModesNeedAStillFixedSet) {
+  Scene s = keyframe_scene();
+  const auto space = make_design_space(s);
+  GenerateReport auto_report, cg_report;
+  const Field a = generate(*space, s, {}, &auto_report);
+  s.solver.method = SolverMethod::cg;
+  const Field c = generate(*space, s, {}, &cg_report);
+  EXPECT_NE(auto_report.method.find("temporal eigenmodes"), std::string::npos) << auto_report.method;
+  EXPECT_NE(cg_report.method.find("CG (temporal line solves)"), std::string::npos) << cg_report.method;
+  double scale = 0, diff = 0;
+  for (size_t k = 0; k < a.data().size(); ++k) {
+    scale = std::max(scale, std::abs(a.data()[k]));
+    diff = std::max(diff, std::abs(a.data()[k] - c.data()[k]));
+  }
+  EXPECT_LT(diff, 1e-7 * scale);
+
+  s.solver.method = SolverMethod::modes;
+  s.source_path = "m.json";
+  s.elements.push_back(singular(SingularType::ccw_center, {{Vec3(-0.5, 0.45, 0), 0.2}, {Vec3(0.5, 0.45, 0), 0.8}}));
+  try {
+    generate(*space, s);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("m.json: solver.method:"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SpaceTimeGenerator, RefusesMeanValueWeights) {
   Scene s = keyframe_scene();
   s.solver.weights = Weights::mean_value;

@@ -89,6 +89,7 @@ void expect_same_scene(const Scene& a, const Scene& b) {
   EXPECT_EQ(a.time.frames, b.time.frames);
   EXPECT_EQ(a.generator, b.generator);
   EXPECT_EQ(a.solver.weights, b.solver.weights);
+  EXPECT_EQ(a.solver.method, b.solver.method);
   EXPECT_EQ(a.solver.temporal_weight, b.solver.temporal_weight);
   EXPECT_EQ(a.solver.tolerance, b.solver.tolerance);
   EXPECT_EQ(a.solver.region_radius, b.solver.region_radius);
@@ -707,6 +708,8 @@ std::vector<BadCase> bad_cases() {
        "unknown generator \"magic\" (expected one of basis, constrained, spacetime, deform)", true},
       {"unknown weights", planar([](json& j) { j["solver"]["weights"] = "cot"; }), "solver.weights",
        "unknown weights \"cot\" (expected one of cotan, uniform, mean_value)", true},
+      {"unknown solver method", planar([](json& j) { j["solver"]["method"] = "lu"; }), "solver.method",
+       "unknown solver method \"lu\" (expected one of auto, modes, cg, bicgstab)", true},
       {"tolerance 1", planar([](json& j) { j["solver"]["tolerance"] = 1; }), "solver.tolerance",
        "must be in (0, 1), got 1", true},
       {"negative temporal weight", planar([](json& j) { j["solver"]["temporal_weight"] = -1; }),

@@ -93,12 +93,16 @@ struct Keyframe {
 
 enum class Generator { basis, constrained, spacetime, deform };
 enum class Weights { cotan, uniform, mean_value };
+// How the spacetime generator solves (SpaceTimeSolver): auto takes the temporal modes
+// where the fixed set allows them, else CG; bicgstab is the paper's kind of method.
+enum class SolverMethod { automatic, modes, cg, bicgstab };
 
 struct SolverSettings {
   Weights weights = Weights::cotan;
   double temporal_weight = 30.0;
   double tolerance = 1e-10;
   double region_radius = 0.1;
+  SolverMethod method = SolverMethod::automatic;
 };
 
 // Meshes made in code (tvf additions to the format, so examples need no mesh files).
@@ -152,6 +156,7 @@ const char* to_string(SingularType t);
 const char* to_string(BifurcationType t);
 const char* to_string(Generator g);
 const char* to_string(Weights w);
+const char* to_string(SolverMethod m);
 std::optional<SingularType> singular_type_from_string(const std::string& s);
 std::optional<BifurcationType> bifurcation_type_from_string(const std::string& s);
 std::optional<Generator> generator_from_string(const std::string& s);
