@@ -38,6 +38,12 @@ struct SpaceTimeSolver::Operator {
   }
 };
 
+// The vectors of a solve (each resized only when the problem's size changes).
+struct SpaceTimeSolver::Workspace {
+  std::vector<cplx> rhs, x, r, p, ap, zp;
+  std::vector<double> r_hat, x_hat, lower, pivot, upper;
+};
+
 // T_s = Q Λ Qᵀ for the frames of one segment.
 struct SpaceTimeSolver::TemporalBasis {
   Eigen::MatrixXd q;       // count × count, orthonormal columns (the modes)
@@ -47,6 +53,17 @@ struct SpaceTimeSolver::TemporalBasis {
 namespace {
 
 using Vec = std::vector<cplx>;
+
+// v with n entries, reusing its storage (contents unspecified: callers overwrite them).
+template <class T>
+std::vector<T>& sized(std::vector<T>& v, size_t n) {
+  if (v.size() != n) {
+    v.clear();
+    v.shrink_to_fit();
+    v.resize(n);
+  }
+  return v;
+}
 
 // Runs body(begin, end) over [0, n), in parallel blocks or not.
 template <class F>
@@ -84,10 +101,10 @@ struct SpaceTime {
   double b;
   bool parallel;
 
-  // y_F = A_FF x_F for every free entry (fixed entries of x must be zero; y's are set to
-  // zero); returns Re <x, y>. Fused so the iteration reads each vector as few times as
-  // possible: the solve is bandwidth-bound.
-  double apply(std::span<const cplx> x, std::span<cplx> y) const {
+  // Visits (A x)_k for every free entry k: emit(k, x_k, (A x)_k) returns what to add up;
+  // fixed entries get skip(k). Fixed entries of x must be zero.
+  template <class Emit, class Skip>
+  double sweep(std::span<const cplx> x, Emit&& emit, Skip&& skip) const {
     // Tasks of a block of rows × a block of frames: each entry of L (column, value) is
     // loaded once for kFrames frames, whose products are independent (the sweep is
     // bound by loads and complex multiply-adds, not by the few flops of a row).
@@ -116,16 +133,14 @@ struct SpaceTime {
         for (size_t f = 0; f < nj; ++f) {
           const size_t j = j0 + f, k = j * n + i;
           if (fixed[k]) {
-            y[k] = 0;
+            skip(k);
             continue;
           }
           const cplx xi = xs[k];
           cplx t(0, 0);
           if (j > 0) t += xi - xs[k - n];
           if (j + 1 < nf) t += xi - xs[k + n];
-          const cplx yi = op.diagonal[i] * xi + cplx(re[f], im[f]) + c * t;
-          y[k] = yi;
-          partial += xi.real() * yi.real() + xi.imag() * yi.imag();
+          partial += emit(k, xi, op.diagonal[i] * xi + cplx(re[f], im[f]) + c * t);
         }
       }
       dot.local() += partial;
@@ -136,6 +151,23 @@ struct SpaceTime {
     else
       for (size_t t = 0; t < tasks; ++t) body(t);
     return dot.combine(std::plus<>());
+  }
+
+  // y_F = A_FF x_F (y's fixed entries zero); returns Re <x, y>, fused so an iteration
+  // reads each vector as few times as possible.
+  double apply(std::span<const cplx> x, std::span<cplx> y) const {
+    return sweep(
+        x,
+        [&](size_t k, cplx xi, cplx yi) {
+          y[k] = yi;
+          return xi.real() * yi.real() + xi.imag() * yi.imag();
+        },
+        [&](size_t k) { y[k] = 0; });
+  }
+
+  // ‖rhs − A_FF x‖² over the free entries, without storing A x.
+  double residual_norm2(std::span<const cplx> x, std::span<const cplx> rhs) const {
+    return sweep(x, [&](size_t k, cplx, cplx yi) { return std::norm(rhs[k] - yi); }, [](size_t) {});
   }
 
   // rhs_F = −A_FC v_C: what the fixed values ask of the free entries.
@@ -381,13 +413,14 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
             "space-time sizes {} {} {} for {} entries", fixed.size(), values.size(), z.size(), total);
   const bool par = options.parallel;
   const SpaceTime a{*op_, fixed, n, nf, b_, par};
-
-  Vec rhs(total);
+  std::lock_guard lock(work_mutex_);
+  if (!work_) work_ = std::make_shared<Workspace>();
+  Vec& rhs = sized(work_->rhs, total);
   a.right_hand_side(values, rhs);
   const double bnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(rhs[k]); }));
 
   // The unknown: the free part of z (its first guess), fixed entries zero.
-  Vec x(total);
+  Vec& x = sized(work_->x, total);
   blocks(total, par, [&](size_t s, size_t e) {
     for (size_t k = s; k < e; ++k) x[k] = fixed[k] ? cplx(0, 0) : z[k];
   });
@@ -434,7 +467,8 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     const auto rows = static_cast<Eigen::Index>(2 * n), cols = static_cast<Eigen::Index>(count);
     // Complex |V| × count blocks seen as real 2|V| × count ones (re, im interleaved).
     auto* x_seg = reinterpret_cast<double*>(x.data() + first * n);
-    Eigen::MatrixXd r_hat(rows, cols), x_hat(rows, cols);
+    Eigen::Map<Eigen::MatrixXd> r_hat(sized(work_->r_hat, static_cast<size_t>(rows * cols)).data(), rows, cols);
+    Eigen::Map<Eigen::MatrixXd> x_hat(sized(work_->x_hat, static_cast<size_t>(rows * cols)).data(), rows, cols);
     multiply_rows(reinterpret_cast<const double*>(rhs.data() + first * n), basis.q, false, r_hat.data(), rows);
     multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
     const char* f = fixed.data() + first * n;
@@ -467,9 +501,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   report.iterations = most.load();
   // The residual as it is, not as the modes add it up.
   const SpaceTime a{*op_, fixed, n, nf, b_, par};
-  Vec ax(x.size());
-  a.apply(x, ax);
-  const double rnorm = std::sqrt(sum(x.size(), par, [&](size_t k) { return std::norm(rhs[k] - ax[k]); }));
+  const double rnorm = std::sqrt(a.residual_norm2(x, rhs));
   report.residual = rnorm / bnorm;
   report.success = !failed && report.residual <= options.tolerance;
   if (!report.success && options.method != SpaceTimeMethod::modes) {
@@ -563,7 +595,9 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
   // set only, so it is done once here (lower coupling, 1/pivot, upper multiplier per
   // entry; all zero at fixed entries), and each application is two branch-free sweeps
   // over frames, vertex-contiguous inside a frame. Returns Re <r, M⁻¹ r>.
-  std::vector<double> lower(total), pivot(total), upper(total);
+  std::vector<double>& lower = sized(work_->lower, total);
+  std::vector<double>& pivot = sized(work_->pivot, total);
+  std::vector<double>& upper = sized(work_->upper, total);
   blocks(n, par, [&](size_t i0, size_t i1) {
     for (size_t j = 0; j < nf; ++j) {
       const bool has_prev = j > 0, has_next = j + 1 < nf;
@@ -612,7 +646,10 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
     return dot.combine(std::plus<>());
   };
 
-  Vec r(total), p(total), ap(total), zp(total);
+  Vec& r = sized(work_->r, total);
+  Vec& p = sized(work_->p, total);
+  Vec& ap = sized(work_->ap, total);
+  Vec& zp = sized(work_->zp, total);
   a.apply(x, ap);
   blocks(total, par, [&](size_t s, size_t e) {
     for (size_t k = s; k < e; ++k) r[k] = rhs_span[k] - ap[k];

@@ -20,8 +20,9 @@
 //   splitting it): with b = 30 the time couplings carry about 60/61 of each diagonal
 //   (DESIGN §5: ~60 iterations, independent of mesh size).
 //
-// The solver object keeps its set-up (row-major operator, temporal eigenbases) between
-// solves, and every solve starts from the z it is given (warm start after an edit).
+// The solver object keeps its set-up (row-major operator, temporal eigenbases, the solve's
+// vectors) between solves, and every solve starts from the z it is given (warm start
+// after an edit). Calls to solve() on one object are serialised.
 #include "tvf/solve/connection_laplacian.h"
 
 #include <map>
@@ -72,6 +73,7 @@ public:
 
   struct Operator;  // row-major copy of L and its diagonal (private to the solver)
   struct TemporalBasis;
+  struct Workspace;  // the vectors of a solve, kept for the next one
 
 private:
   // The eigenbasis of the temporal path-graph Laplacian on frames [first, first + count),
@@ -89,6 +91,10 @@ private:
   double b_;
   std::shared_ptr<const Operator> op_;
   mutable std::mutex bases_mutex_;
+  // Solves on one object run one at a time; their vectors are reused (fresh ones cost
+  // page faults comparable to a warm re-solve).
+  mutable std::mutex work_mutex_;
+  mutable std::shared_ptr<Workspace> work_;
   mutable std::map<std::tuple<int, int>, std::shared_ptr<const TemporalBasis>> bases_;
 };
 
