@@ -307,10 +307,14 @@ void dilate(const Mesh& mesh, const std::vector<std::vector<int>>& vertex_faces,
 
 }  // namespace
 
-RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int face_b, int start_rings) {
-  const Mesh& mesh = bundle_.mesh();
+namespace {
+
+// What a cancellation of the pair in faces a and b starts from: every other singular
+// face blocked, nothing pinned, an empty region.
+GrowInput cancellation_input(const TangentBundle& bundle, std::span<const cplx> values, int face_a, int face_b) {
+  const Mesh& mesh = bundle.mesh();
   const auto nf = static_cast<size_t>(mesh.num_faces());
-  const std::vector<int> index = face_indices(bundle_, values);
+  const std::vector<int> index = face_indices(bundle, values);
   GrowInput in;
   in.blocked.assign(nf, 0);
   for (size_t f = 0; f < nf; ++f)
@@ -319,6 +323,15 @@ RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int 
   in.pinned.assign(static_cast<size_t>(mesh.num_vertices()), 0);
   in.start.assign(values.begin(), values.end());
   in.region.assign(nf, 0);
+  return in;
+}
+
+}  // namespace
+
+RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int face_b, int start_rings) {
+  const Mesh& mesh = bundle_.mesh();
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  GrowInput in = cancellation_input(bundle_, values, face_a, face_b);
   const std::vector<int> chain = face_chain(mesh, face_a, face_b, in.blocked);
   if (chain.empty()) {
     RegionResult r;
@@ -368,16 +381,7 @@ RegionResult RegionSolver::cancel(std::span<const cplx> values, int face_a, int 
 RegionResult RegionSolver::cancel_in(std::span<const cplx> values, int face_a, int face_b,
                                      const std::vector<int>& region) {
   const Mesh& mesh = bundle_.mesh();
-  const auto nf = static_cast<size_t>(mesh.num_faces());
-  const std::vector<int> index = face_indices(bundle_, values);
-  GrowInput in;
-  in.blocked.assign(nf, 0);
-  for (size_t f = 0; f < nf; ++f)
-    in.blocked[f] = index[f] != 0 && static_cast<int>(f) != face_a && static_cast<int>(f) != face_b;
-  in.focus = (centroid(mesh, face_a) + centroid(mesh, face_b)) / 2;
-  in.pinned.assign(static_cast<size_t>(mesh.num_vertices()), 0);
-  in.start.assign(values.begin(), values.end());
-  in.region.assign(nf, 0);
+  GrowInput in = cancellation_input(bundle_, values, face_a, face_b);
   for (int f : region)
     if (!in.blocked[static_cast<size_t>(f)]) in.region[static_cast<size_t>(f)] = 1;
   in.region[static_cast<size_t>(face_a)] = in.region[static_cast<size_t>(face_b)] = 1;
