@@ -2,7 +2,6 @@
 
 #include "tvf/core/error.h"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/IterativeLinearSolvers>
 #include <cblas.h>
 #include <fmt/format.h>
@@ -363,6 +362,17 @@ Segments find_segments(std::span<const char> fixed, size_t n, size_t nf) {
 
 }  // namespace
 
+// The transforms cost 6·m flops per entry for a segment of m frames (three products with
+// the m × m basis), a CG iteration about 40: past this length CG is cheaper.
+constexpr size_t kMostModeFrames = 1024;
+
+size_t SpaceTimeSolver::longest_segment(std::span<const char> fixed) const {
+  size_t most = 0;
+  for (const auto& s : find_segments(fixed, static_cast<size_t>(vertices()), static_cast<size_t>(frames_)).segments)
+    most = std::max(most, s.second);
+  return most;
+}
+
 bool SpaceTimeSolver::modes_apply(std::span<const char> fixed) const {
   const auto n = static_cast<size_t>(vertices());
   const auto nf = static_cast<size_t>(frames_);
@@ -378,26 +388,42 @@ bool SpaceTimeSolver::modes_apply(std::span<const char> fixed) const {
 
 const SpaceTimeSolver::TemporalBasis& SpaceTimeSolver::temporal_basis(int first, int count) const {
   // The segment's temporal matrix depends only on its length and on whether it touches
-  // the first or last frame (those have one temporal neighbour).
-  const int ends = (first == 0 ? 1 : 0) + (first + count == frames_ ? 2 : 0);
+  // the first or last frame (those have one temporal neighbour, a free "Neumann" end;
+  // a key frame beyond the end makes it a "Dirichlet" end). Its eigenvectors are the
+  // discrete sine/cosine bases of those ends (j = 0 … m−1, k = 0 … m−1):
+  //   Dirichlet–Dirichlet  sin(π(k+1)(j+1)/(m+1)),   λ = 2 − 2cos(π(k+1)/(m+1))
+  //   Neumann–Dirichlet    cos(π(2k+1)(j+½)/(2m+1)), λ = 2 − 2cos(π(2k+1)/(2m+1))
+  //   Neumann–Neumann      cos(πk(j+½)/m),           λ = 2 − 2cos(πk/m)
+  // (Dirichlet–Neumann: the second, mirrored), normalised here. The tests solve all four
+  // kinds of segment against CG.
+  const bool left_open = first == 0, right_open = first + count == frames_;
+  const int ends = (left_open ? 1 : 0) + (right_open ? 2 : 0);
   std::lock_guard lock(bases_mutex_);
   auto& slot = bases_[{count, ends}];
   if (!slot) {
-    Eigen::VectorXd diagonal(count), sub = Eigen::VectorXd::Constant(std::max(count - 1, 0), -1.0);
-    for (int j = 0; j < count; ++j) {
-      const int g = first + j;
-      diagonal[j] = (g > 0 ? 1.0 : 0.0) + (g + 1 < frames_ ? 1.0 : 0.0);
-    }
     auto basis = std::make_shared<TemporalBasis>();
-    if (count == 1) {
-      basis->q = Eigen::MatrixXd::Ones(1, 1);
-      basis->lambda = diagonal;
-    } else {
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
-      eig.computeFromTridiagonal(diagonal, sub, Eigen::ComputeEigenvectors);
-      TVF_CHECK(eig.info() == Eigen::Success, "temporal eigenbasis of {} frames", count);
-      basis->q = eig.eigenvectors();
-      basis->lambda = eig.eigenvalues().cwiseMax(0.0);
+    const int m = count;
+    basis->q.resize(m, m);
+    basis->lambda.resize(m);
+    for (int k = 0; k < m; ++k) {
+      double angle = 0;  // of λ = 2 − 2cos(angle)
+      for (int j = 0; j < m; ++j) {
+        double q = 0;
+        if (!left_open && !right_open) {
+          angle = kPi * (k + 1) / (m + 1);
+          q = std::sin(angle * (j + 1));
+        } else if (left_open != right_open) {
+          angle = kPi * (2 * k + 1) / (2 * m + 1);
+          const int jj = left_open ? j : m - 1 - j;
+          q = std::cos(angle * (jj + 0.5));
+        } else {
+          angle = kPi * k / m;
+          q = std::cos(angle * (j + 0.5));
+        }
+        basis->q(j, k) = q;
+      }
+      basis->q.col(k).normalize();
+      basis->lambda[k] = 2.0 - 2.0 * std::cos(angle);
     }
     slot = std::move(basis);
   }
@@ -432,7 +458,8 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
     report.success = true;
   } else {
     const bool modes = options.method == SpaceTimeMethod::modes ||
-                       (options.method == SpaceTimeMethod::automatic && modes_apply(fixed));
+                       (options.method == SpaceTimeMethod::automatic && modes_apply(fixed) &&
+                        longest_segment(fixed) <= kMostModeFrames);
     if (options.method == SpaceTimeMethod::modes)
       TVF_CHECK(modes_apply(fixed), "the temporal-mode method needs the same fixed vertices at every "
                                     "frame between two key frames");

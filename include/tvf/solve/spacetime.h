@@ -34,7 +34,7 @@
 namespace tvf {
 
 enum class SpaceTimeMethod {
-  automatic,  // temporal modes where the fixed set allows it, else CG
+  automatic,  // temporal modes where the fixed set allows it (segments up to 1024 frames), else CG
   modes,      // temporal modes, or an error where the fixed set does not allow it
   cg,         // matrix-free CG with temporal line solves
   // The paper's kind of method, kept as the baseline of the benchmarks: the assembled
@@ -79,6 +79,7 @@ private:
   // The eigenbasis of the temporal path-graph Laplacian on frames [first, first + count),
   // computed once per segment shape and kept.
   const TemporalBasis& temporal_basis(int first, int count) const;
+  size_t longest_segment(std::span<const char> fixed) const;
   SolveReport solve_cg(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
                        double bnorm, const SpaceTimeOptions& options) const;
   SolveReport solve_bicgstab(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
