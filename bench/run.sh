@@ -30,8 +30,8 @@ runs = [json.load(open(f)) for f in files]
 ctx = runs[0]["context"] if runs else {"num_cpus": "?", "date": "?"}
 print(f"Machine: {sys.argv[3]}, {ctx['num_cpus']} cores; tvf built {sys.argv[2]}; {ctx['date']}")
 print()
-print("| case | vertices | frames | median time | per frame | iterations | residual | peak memory | method |")
-print("|---|---:|---:|---:|---:|---:|---:|---:|---|")
+print("| case | vertices | frames | median time | per frame | CPU, all threads | iterations | residual | peak memory | method |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
 for d in runs:
     rows = [b for b in d["benchmarks"] if b.get("aggregate_name") == "median"]
     if not rows:  # a single repetition reports the run itself
@@ -46,5 +46,6 @@ for d in runs:
         ress = f"{res:.1e}" if res else ""
         mems = (f"{mem / 1024:.1f} GiB" if mem >= 1024 else f"{mem:.0f} MiB") if mem else ""
         label = b.get("label", "").replace("|", "/")
-        print(f"| {name} | {v or ''} | {f or ''} | {t:.1f} {unit} | {per} | {its} | {ress} | {mems} | {label} |")
+        cpu = b.get("cpu_ms"); cpus = f"{cpu:.1f} ms" if cpu else ""
+        print(f"| {name} | {v or ''} | {f or ''} | {t:.1f} {unit} | {per} | {cpus} | {its} | {ress} | {mems} | {label} |")
 PY
