@@ -19,7 +19,8 @@ while read -r name; do
   base=${name%%/iterations:*}
   "$bench" --benchmark_filter="^${base}(/iterations:[0-9]+)?(/repeats:[0-9]+)?\$" \
     --benchmark_repetitions="$reps" --benchmark_report_aggregates_only=true \
-    --benchmark_out="$dir/$i.json" --benchmark_out_format=json >/dev/null
+    --benchmark_out="$dir/$i.json" --benchmark_out_format=json >/dev/null 2>"$dir/$i.err" ||
+    { cat "$dir/$i.err" >&2; exit 1; }
 done < <("$bench" --benchmark_list_tests --benchmark_filter="$filter")
 build_type=$(grep -m1 '^CMAKE_BUILD_TYPE:' "$build/CMakeCache.txt" | cut -d= -f2)
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')
