@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <random>
 
 namespace tvf {
@@ -58,18 +59,22 @@ struct ParticleSystem::Impl {
     p.up = Vec2(c * d.x() - s * d.y(), s * d.x() + c * d.y());
   }
 
-  Particle spawn(double time) {
+  // A new particle at a random place of the box [lo, hi] inside the domain.
+  Particle spawn(double time, const Vec2& lo, const Vec2& hi) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     Particle p;
     p.id = next_id++;
     for (int attempt = 0; attempt < 1000; ++attempt) {
-      const Vec2 x(view.lo.x() + u(rng) * (view.hi.x() - view.lo.x()), view.lo.y() + u(rng) * (view.hi.y() - view.lo.y()));
+      const Vec2 x(lo.x() + u(rng) * (hi.x() - lo.x()), lo.y() + u(rng) * (hi.y() - lo.y()));
       if (const auto sp = locator.locate(x)) {
         p.where = *sp;
         p.position = x;
         break;
       }
-      if (attempt == 999) throw Error("particles: found no place inside the domain");
+      if (attempt == 999) {
+        if (lo != view.lo || hi != view.hi) return spawn(time, view.lo, view.hi);
+        throw Error("particles: found no place inside the domain");
+      }
     }
     p.angle = std::isnan(o.spin) ? 2 * kPi * u(rng) : o.spin;
     p.colour = kLeafColours[std::uniform_int_distribution<size_t>(0, std::size(kLeafColours) - 1)(rng)];
@@ -84,7 +89,7 @@ struct ParticleSystem::Impl {
     check_option(std::isfinite(t_new) && t_new >= std::min(ts.t0, ts.t1) && t_new <= std::max(ts.t0, ts.t1), "time",
                  fmt::format("{} is outside the field's time range", t_new));
     if (!started) {
-      for (int k = 0; k < o.count; ++k) particles.push_back(spawn(t_new));
+      for (int k = 0; k < o.count; ++k) particles.push_back(spawn(t_new, view.lo, view.hi));
     } else if (t_new != t) {
       std::vector<char> lost(particles.size(), 0);
       tbb::parallel_for(size_t{0}, particles.size(), [&](size_t k) {
@@ -101,9 +106,32 @@ struct ParticleSystem::Impl {
         p.position = line.points.back().head<2>();
         orient(p, t_new);
       });
+      // Lost particles come back where the particles are sparsest: in a random one of the
+      // least occupied cells of a coarse grid (about 8 particles a cell), so that the
+      // picture stays evenly covered where the flow spreads them out.
+      const int cells = std::max(1, static_cast<int>(std::sqrt(o.count / 8.0)));
+      const int cx = cells, cy = std::max(1, static_cast<int>(std::lround(cells * (view.hi.y() - view.lo.y()) /
+                                                                            (view.hi.x() - view.lo.x()))));
+      const Vec2 csize((view.hi.x() - view.lo.x()) / cx, (view.hi.y() - view.lo.y()) / cy);
+      std::vector<int> count(static_cast<size_t>(cx * cy), 0);
+      auto cell_of = [&](const Vec2& x) {
+        const int i = std::clamp(static_cast<int>((x.x() - view.lo.x()) / csize.x()), 0, cx - 1);
+        const int j = std::clamp(static_cast<int>((x.y() - view.lo.y()) / csize.y()), 0, cy - 1);
+        return static_cast<size_t>(j * cx + i);
+      };
+      for (size_t k = 0; k < particles.size(); ++k)
+        if (!lost[k]) ++count[cell_of(particles[k].position)];
       for (size_t k = 0; k < particles.size(); ++k)
         if (lost[k]) {
-          particles[k] = spawn(t_new);
+          const int least = *std::min_element(count.begin(), count.end());
+          std::vector<size_t> candidates;
+          for (size_t c = 0; c < count.size(); ++c)
+            if (count[c] == least) candidates.push_back(c);
+          const size_t c = candidates[std::uniform_int_distribution<size_t>(0, candidates.size() - 1)(rng)];
+          const Vec2 lo = view.lo + Vec2(static_cast<double>(c % static_cast<size_t>(cx)) * csize.x(),
+                                         static_cast<double>(c / static_cast<size_t>(cx)) * csize.y());
+          particles[k] = spawn(t_new, lo, lo + csize);
+          ++count[cell_of(particles[k].position)];
           ++respawned;
         }
     }

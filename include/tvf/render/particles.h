@@ -4,8 +4,9 @@
 // (integrate/pathline.h), each keeping a constant angle between its up direction and the
 // advection direction at its position: up = R(angle)·V/|V|. As the flow turns, the
 // sprites turn with it — the spinning of the paper's leaves. Where the field vanishes
-// (|V| below 1e-12 of its typical speed) a sprite keeps its last orientation. A sprite
-// carried out of the domain comes back at a random place, so the count stays constant.
+// (|V| below 1e-12 of its largest |V|) a sprite keeps its last orientation. A sprite
+// carried out of the domain comes back at a random place of the least occupied cell of a
+// coarse grid, so the count stays constant and the picture evenly covered.
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/mesh/tangent_bundle.h"
