@@ -279,7 +279,7 @@ Potential make_potential(const Mesh& mesh, const CrowdSpec& spec) {
       for (const auto& o : spec.obstacles)
         if (o.distance(x) < radius) cost[k] = kInf;
       for (const auto& g : spec.goals)
-        if (g.distance(x) < 0.5 * p.h && std::isfinite(cost[k])) source[k] = 1;
+        if (g.distance(x) < 0 && std::isfinite(cost[k])) source[k] = 1;  // nodes inside a goal
       sources += source[k] ? 1 : 0;
     }
   check_spec(sources > 0, "no goal covers a free cell of the fast-marching grid (goals too small, outside the domain, "
@@ -408,8 +408,11 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
       for (int s = 0; s < spec.steps_per_frame && result.arrived[a] < 0; ++s) {
         const double t0 = time_of(k - 1) + (time_of(k) - time_of(k - 1)) * s / spec.steps_per_frame;
         const double dt = std::abs(time_of(k) - time_of(k - 1)) / spec.steps_per_frame;
+        const Vec2 g0 = pot.direction(x);
         auto velocity = [&](const Vec2& p, double t) {
-          Vec2 v = spec.weight_goal * pot.direction(p);
+          // Inside a goal (φ = 0, no descent) the midpoint keeps the direction of the step's start.
+          const Vec2 g = pot.direction(p);
+          Vec2 v = spec.weight_goal * (g.squaredNorm() > 0 ? g : g0);
           if (spec.weight_field > 0 && fscale > 0)
             if (const auto sp = locator.locate(p)) v += spec.weight_field * sampler.world(*sp, t).head<2>() / fscale;
           return Vec2(speed * v);
