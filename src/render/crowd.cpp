@@ -356,7 +356,10 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
   const double fscale = typical_speed(field);
   const TimeSampling& ts = field.time();
   const double span = std::abs(ts.t1 - ts.t0) > 0 ? std::abs(ts.t1 - ts.t0) : 1.0;
-  const double speed = spec.speed > 0 ? spec.speed : 1.5 * diag / span;
+  // G moves at the field's local speed, but at least at `speed` (by default a quarter of
+  // the field's typical speed; 1.5 diagonals over the time range for a zero field): ω_G and ω_F weigh
+  // terms of the same size, and where the field is weak the goal still draws agents on.
+  const double speed = spec.speed > 0 ? spec.speed : fscale > 0 ? 0.25 * fscale : 1.5 * diag / span;
   const Vec2 lo = mesh.bbox_min().head<2>(), hi = mesh.bbox_max().head<2>();
   auto blocked = [&](const Vec2& x) {
     for (const auto& o : spec.obstacles)
@@ -412,10 +415,10 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         auto velocity = [&](const Vec2& p, double t) {
           // Inside a goal (φ = 0, no descent) the midpoint keeps the direction of the step's start.
           const Vec2 g = pot.direction(p);
-          Vec2 v = spec.weight_goal * (g.squaredNorm() > 0 ? g : g0);
-          if (spec.weight_field > 0 && fscale > 0)
-            if (const auto sp = locator.locate(p)) v += spec.weight_field * sampler.world(*sp, t).head<2>() / fscale;
-          return Vec2(speed * v);
+          Vec2 f(0, 0);
+          if (const auto sp = locator.locate(p)) f = sampler.world(*sp, t).head<2>();
+          return Vec2(spec.weight_goal * std::max(speed, f.norm()) * (g.squaredNorm() > 0 ? g : g0) +
+                      spec.weight_field * f);
         };
         // Midpoint rule.
         const double dir = time_of(k) >= time_of(k - 1) ? 1.0 : -1.0;

@@ -74,7 +74,7 @@ TEST(CliRenderApps, PainterlyFramesFromAPictureAndAMask) {
 TEST(CliRenderApps, CrowdTrajectoriesAsCsvAndFrames) {
   TempDir dir;
   test::write_text(dir / "scene.json", kScene);
-  test::write_text(dir / "crowd.json", R"({"agents": 6, "weights": {"goal": 1, "field": 0},
+  test::write_text(dir / "crowd.json", R"({"agents": 6, "speed": 4, "weights": {"goal": 1, "field": 0},
     "start": [{"rectangle": {"min": [-0.9, -0.2], "max": [-0.7, 0.2]}}],
     "goals": [{"circle": {"center": [0.8, 0], "radius": 0.15}}],
     "obstacles": [{"circle": {"center": [0, 0], "radius": 0.3}}]})");

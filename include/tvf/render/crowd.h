@@ -4,11 +4,15 @@
 // G = −∇φ/|∇φ| the direction down a continuum-crowd style potential φ (Treuille et al.
 // 2006): the travel time to the nearest goal around obstacles, the solution of the eikonal
 // equation |∇φ| = 1 outside obstacles (grown by the agents' radius), φ = 0 on goal cells,
-// by fast marching on a regular grid over the domain's bounding box; F the designed field,
-// divided by its typical speed (90th percentile of |V|) so that both terms are of unit
-// size. An agent moves `speed` domain units per unit of the field's time per unit of the
-// combined direction, stops on reaching a goal, and never enters an obstacle (a step that
-// would end inside one is pushed back to its boundary, counted in CrowdResult::contacts).
+// by fast marching on a regular grid over the domain's bounding box, times the larger of
+// the field's local speed |F| and a floor `speed` (by default a quarter of the field's
+// typical speed, the 90th percentile of |V|), so that both terms are of the same size and the goal still
+// draws agents on where the field is weak; F the designed field as it is, so that with
+// ω_G = 0 and ω_F = 1 agents
+// follow the field's pathlines exactly (the reference pathlines drawn in Fig. 16). Agents
+// step by the midpoint rule, stop on reaching a goal, and never enter an obstacle (a step
+// that would end inside one is pushed back to its boundary, counted in
+// CrowdResult::contacts).
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
@@ -43,7 +47,9 @@ struct CrowdSpec {
   std::vector<CrowdShape> goals;
   std::vector<CrowdShape> starts;   // agents start spread evenly over these (outside obstacles)
   int agents = 40;
-  double speed = 0;                 // domain units per unit time; 0: 1.5 bounding-box diagonals over the time range
+  double speed = 0;                 // least speed of the goal term, domain units per unit time; 0: a quarter
+                                    // of the field's typical speed (1.5 box diagonals over the time range for a
+                                    // zero field)
   double weight_goal = 0.5;         // ω_G
   double weight_field = 0.5;        // ω_F
   int grid = 160;                   // fast-marching cells on the long side
