@@ -56,19 +56,19 @@ RenderCommand::RenderCommand(CLI::App& app) {
   texture_->add_option("--seed", seed_, "Noise seed")->capture_default_str();
   texture_->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
 
-  auto common = [&](CLI::App* sub, const char* outputs) {
+  auto common = [&](CLI::App* sub, const char* outputs, bool seeded) {
     sub->add_option("input", input_, "Folder written by `tvf generate` (or its field.tvff), or a scene file")
         ->required();
     sub->add_option("-o,--output", outputs_, outputs)->required();
     sub->add_option("--fps", fps_, "Frames per second of the video")->capture_default_str();
     sub->add_option("--frames", frames_, "Pictures over the field's time range (default: the field's frames)");
-    sub->add_option("--seed", seed_, "Random seed")->capture_default_str();
+    if (seeded) sub->add_option("--seed", seed_, "Random seed")->capture_default_str();
     sub->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
   };
   const char* frames_or_video = "Output: a folder of PNG frames, or a file ending in .mp4 (give -o twice for both)";
   painterly_ = render_->add_subcommand(
       "painterly", "Painterly animation: brush strokes over a picture, oriented and carried by the field (planar domains)");
-  common(painterly_, frames_or_video);
+  common(painterly_, frames_or_video, true);
   painterly_->add_option("--image", image_, "The picture to paint (PNG); the domain is stretched onto it")->required();
   painterly_->add_option("--mask", mask_,
                          "Where the field applies (PNG, white: moving strokes; black: strokes stay put); "
@@ -79,7 +79,8 @@ RenderCommand::RenderCommand(CLI::App& app) {
 
   crowd_ = render_->add_subcommand(
       "crowd", "Crowd steering: agents moving by w_goal*G + w_field*F around obstacles to goals (planar domains)");
-  common(crowd_, "Output: a folder of PNG frames, a file ending in .mp4, and/or a file ending in .csv (trajectories)");
+  common(crowd_, "Output: a folder of PNG frames, a file ending in .mp4, and/or a file ending in .csv (trajectories)",
+         false);
   crowd_->add_option("--crowd", crowd_file_, "The crowd file (JSON: agents, start, goals, obstacles, weights)")
       ->required();
   crowd_->add_option("--w-goal", weight_goal_, "Weight of the goal direction G (overrides the crowd file)");
@@ -88,7 +89,7 @@ RenderCommand::RenderCommand(CLI::App& app) {
 
   particles_ = render_->add_subcommand(
       "particles", "Particles with self-spin: leaves carried by the field, at a constant angle to it (planar domains)");
-  common(particles_, frames_or_video);
+  common(particles_, frames_or_video, true);
   particles_->add_option("--count", count_, "Number of particles")->capture_default_str();
   particles_->add_option("--particle-size", particle_size_, "Leaf length in pixels")->capture_default_str();
   particles_->add_option("--spin", spin_,
@@ -203,8 +204,8 @@ int RenderCommand::run_crowd() {
   options.fps = fps_;
   options.size = app_size_;
   CrowdSpec spec = load_crowd_spec(crowd_file_);
-  if (weight_goal_ >= 0) spec.weight_goal = weight_goal_;
-  if (weight_field_ >= 0) spec.weight_field = weight_field_;
+  if (weight_goal_) spec.weight_goal = *weight_goal_;
+  if (weight_field_) spec.weight_field = *weight_field_;
   Input in = load_input(input_, progress, "crowd");
   const TangentBundle bundle(in.mesh);
   progress.note("simulating");

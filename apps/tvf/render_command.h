@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,7 +51,7 @@ private:
   double stroke_width_ = 6, stroke_length_ = 24, density_ = 2;
   // crowd
   std::string crowd_file_, csv_;
-  double weight_goal_ = -1, weight_field_ = -1;
+  std::optional<double> weight_goal_, weight_field_;
   // particles
   int count_ = 2000;
   int app_size_ = 800;  // crowd and particles: pixels on the long side
