@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Writes the example's picture and mask (standard library only, no binaries in git):
 
-    python3 make_image.py            # -> lake.png (480×360) and lake_mask.png
+    python3 make_image.py            # -> lake.png (480×360), lake_mask.png, sun_mask.png
 
 lake.png: an evening sky with a sun over dark hills and a lake with ripples and the sun's
 reflection; lake_mask.png: white over the lake (where the field moves the strokes), black
-elsewhere (strokes stay put), as in the paper's Fig. 1 where only the water is animated.
+elsewhere (strokes stay put), as in the paper's Fig. 1 where only the water is animated;
+sun_mask.png: white in a disc round the sun, for the burning sun of Fig. 17 (scene_sun.json).
 """
 import math
 import struct
@@ -54,6 +55,8 @@ def main():
     rows = [[v for x in range(W) for v in pixel(x, y)] for y in range(H)]
     png("lake.png", rows)
     png("lake_mask.png", [[255 if y >= HORIZON else 0 for x in range(W) for _ in range(3)] for y in range(H)])
+    png("sun_mask.png", [[255 if math.hypot(x - 330, y - 150) < 95 else 0 for x in range(W) for _ in range(3)]
+                         for y in range(H)])
     return 0
 
 
