@@ -45,8 +45,8 @@ Image ramp(int w, int h) {
 
 TEST(FastMarching, EmptyGridGivesEuclideanDistanceToFirstOrder) {
   // A point source in the middle of an empty grid: φ approaches the distance r, first-order
-  // in h (the upwind scheme overestimates off the axes by at most a few per cent of r plus
-  // a few cells), and the error shrinks as the grid is refined.
+  // in h (the upwind scheme overestimates off the axes, most on the diagonals), and the
+  // error shrinks as the grid is refined.
   double previous = std::numeric_limits<double>::infinity();
   for (int n : {41, 81, 161}) {
     const double h = 2.0 / (n - 1);
@@ -65,9 +65,12 @@ TEST(FastMarching, EmptyGridGivesEuclideanDistanceToFirstOrder) {
         if (i == c || j == c) worst_axis = std::max(worst_axis, std::abs(e));
       }
     EXPECT_LT(worst_axis, 1e-12) << "exact along the grid axes";
-    // First-order: the largest error (on the diagonals, r ≈ √2) within 0.1·r_max + 2h.
-    EXPECT_LT(worst, 0.1 * std::sqrt(2.0) + 2 * h) << n;
-    EXPECT_LT(worst, previous) << "refining the grid reduces the error";
+    // First-order with a point source: the error grows like h·log(r/h) (the source's
+    // kink); here bounded by h·(1 + ln(r_max/h)), r_max = √2 (0.051, 0.031, 0.018 measured
+    // for h = 0.05, 0.025, 0.0125), and it falls by at least a quarter each time h halves.
+    const double r_max = std::sqrt(2.0);
+    EXPECT_LT(worst, h * (1 + std::log(r_max / h))) << n;
+    EXPECT_LT(worst, 0.75 * previous) << "refining the grid reduces the error";
     previous = worst;
   }
 }
