@@ -7,10 +7,14 @@
 #include "tvf/design/generate.h"
 #include "tvf/design/scene_json.h"
 #include "tvf/field/field_io.h"
+#include "tvf/render/crowd.h"
+#include "tvf/render/painterly.h"
+#include "tvf/render/particles.h"
 #include "tvf/render/texture_animation.h"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
@@ -51,6 +55,47 @@ RenderCommand::RenderCommand(CLI::App& app) {
   texture_->add_option("--contrast", contrast_, "Contrast of the pictures")->capture_default_str();
   texture_->add_option("--seed", seed_, "Noise seed")->capture_default_str();
   texture_->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
+
+  auto common = [&](CLI::App* sub, const char* outputs, bool seeded) {
+    sub->add_option("input", input_, "Folder written by `tvf generate` (or its field.tvff), or a scene file")
+        ->required();
+    sub->add_option("-o,--output", outputs_, outputs)->required();
+    sub->add_option("--fps", fps_, "Frames per second of the video")->capture_default_str();
+    sub->add_option("--frames", frames_, "Pictures over the field's time range (default: the field's frames)");
+    if (seeded) sub->add_option("--seed", seed_, "Random seed")->capture_default_str();
+    sub->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
+  };
+  const char* frames_or_video = "Output: a folder of PNG frames, or a file ending in .mp4 (give -o twice for both)";
+  painterly_ = render_->add_subcommand(
+      "painterly", "Painterly animation: brush strokes over a picture, oriented and carried by the field (planar domains)");
+  common(painterly_, frames_or_video, true);
+  painterly_->add_option("--image", image_, "The picture to paint (PNG); the domain is stretched onto it")->required();
+  painterly_->add_option("--mask", mask_,
+                         "Where the field applies (PNG, white: moving strokes; black: strokes stay put); "
+                         "default: everywhere");
+  painterly_->add_option("--stroke-width", stroke_width_, "Stroke width in pixels")->capture_default_str();
+  painterly_->add_option("--stroke-length", stroke_length_, "Stroke length in pixels")->capture_default_str();
+  painterly_->add_option("--density", density_, "Strokes covering a pixel on average")->capture_default_str();
+
+  crowd_ = render_->add_subcommand(
+      "crowd", "Crowd steering: agents moving by w_goal*G + w_field*F around obstacles to goals (planar domains)");
+  common(crowd_, "Output: a folder of PNG frames, a file ending in .mp4, and/or a file ending in .csv (trajectories)",
+         false);
+  crowd_->add_option("--crowd", crowd_file_, "The crowd file (JSON: agents, start, goals, obstacles, weights)")
+      ->required();
+  crowd_->add_option("--w-goal", weight_goal_, "Weight of the goal direction G (overrides the crowd file)");
+  crowd_->add_option("--w-field", weight_field_, "Weight of the designed field F (overrides the crowd file)");
+  crowd_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
+
+  particles_ = render_->add_subcommand(
+      "particles", "Particles with self-spin: leaves carried by the field, at a constant angle to it (planar domains)");
+  common(particles_, frames_or_video, true);
+  particles_->add_option("--count", count_, "Number of particles")->capture_default_str();
+  particles_->add_option("--particle-size", particle_size_, "Leaf length in pixels")->capture_default_str();
+  particles_->add_option("--spin", spin_,
+                         "Angle in degrees from the advection direction to each leaf's up direction "
+                         "(default: random per leaf)");
+  particles_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
 }
 
 namespace {
@@ -69,19 +114,169 @@ void parse_range(const std::string& text, int& first, int& last) {
 
 }  // namespace
 
-int RenderCommand::run() {
-  if (!texture_->parsed()) return 1;
-  const bool show = !quiet_ && progress_wanted();
-  Progress progress("tvf render texture", show);
+namespace {
 
-  TextureAnimationOptions options;
-  for (const auto& out : outputs_) {
+struct Input {
+  Mesh mesh;
+  Field field;
+  std::vector<std::string> warnings;
+};
+
+// Reads a field (folder or .tvff) or generates one from a scene; planar domains only.
+Input load_input(const std::string& input_name, Progress& progress, const char* kind) {
+  const fs::path input(input_name);
+  std::error_code ec;
+  if (!fs::exists(input, ec))
+    throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
+                            "its field.tvff, or a scene file)", input_name));
+  const std::string surface_note = fmt::format(
+      "surface rendering is not available yet: `tvf render {}` draws planar domains only", kind);
+  Input in;
+  if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
+    const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
+    if (!fs::exists(file, ec))
+      throw Error(fmt::format("{}: no field.tvff in this folder (write one with `tvf generate SCENE -o {}`)",
+                              input_name, input_name));
+    progress.note("reading the field");
+    FieldFile ff = load_field_file(file.string());
+    in.mesh = std::move(ff.mesh);
+    in.field = std::move(ff.field);
+  } else {
+    const Scene scene = load_scene(input_name);
+    progress.note("building the domain");
+    const auto space = make_design_space(scene);
+    if (!space->planar()) throw Error(fmt::format("{}: {}", input_name, surface_note));
+    GenerateOptions gen;
+    gen.progress = [&](int done, int total) { progress.update(done, total); };
+    GenerateReport report;
+    in.field = generate(*space, scene, gen, &report);
+    in.warnings = report.warnings;
+    in.mesh = space->mesh();
+  }
+  if (!in.mesh.is_planar_xy()) throw Error(fmt::format("{}: {}", input_name, surface_note));
+  return in;
+}
+
+// Splits the -o outputs into a frames folder and an MP4.
+void split_outputs(const std::vector<std::string>& outputs, std::string& frames_dir, std::string& video) {
+  for (const auto& out : outputs) {
     const bool mp4 = fs::path(out).extension() == ".mp4" || fs::path(out).extension() == ".MP4";
-    std::string& slot = mp4 ? options.video : options.frames_dir;
+    std::string& slot = mp4 ? video : frames_dir;
     if (!slot.empty())
       throw Error(fmt::format("{}: give at most one {} output", out, mp4 ? "MP4" : "frames folder"));
     slot = out;
   }
+}
+
+void print_report(const char* what, int frames, int width, int height, double seconds,
+                  const std::vector<std::string>& files) {
+  std::printf("rendered %d %s frames of %d×%d pixels in %.2f s; wrote", frames, what, width, height, seconds);
+  for (const auto& f : files) std::printf(" %s", fs::absolute(f).lexically_normal().c_str());
+  std::printf("\n");
+}
+
+}  // namespace
+
+int RenderCommand::run() {
+  if (texture_->parsed()) return run_texture();
+  if (painterly_->parsed()) return run_painterly();
+  if (crowd_->parsed()) return run_crowd();
+  if (particles_->parsed()) return run_particles();
+  return 1;
+}
+
+int RenderCommand::run_crowd() {
+  const bool show = !quiet_ && progress_wanted();
+  Progress progress("tvf render crowd", show);
+  CrowdAnimationOptions options;
+  std::vector<std::string> pictures;
+  for (const auto& out : outputs_) {
+    if (fs::path(out).extension() == ".csv" || fs::path(out).extension() == ".CSV") {
+      if (!options.csv.empty()) throw Error(fmt::format("{}: give at most one CSV output", out));
+      options.csv = out;
+    } else {
+      pictures.push_back(out);
+    }
+  }
+  split_outputs(pictures, options.frames_dir, options.video);
+  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
+  options.frames = frames_;
+  options.fps = fps_;
+  options.size = app_size_;
+  CrowdSpec spec = load_crowd_spec(crowd_file_);
+  if (weight_goal_) spec.weight_goal = *weight_goal_;
+  if (weight_field_) spec.weight_field = *weight_field_;
+  Input in = load_input(input_, progress, "crowd");
+  const TangentBundle bundle(in.mesh);
+  progress.note("simulating");
+  options.progress = [&](int done, int total) { progress.update(done, total); };
+  CrowdResult result;
+  const AnimationReport report = write_crowd_animation(bundle, in.field, spec, options, &result);
+  progress.finish();
+  for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!quiet_) {
+    const long arrived = std::count_if(result.arrived.begin(), result.arrived.end(), [](int k) { return k >= 0; });
+    std::printf("%ld of %zu agents reached a goal\n", arrived, result.arrived.size());
+    print_report("crowd", report.frames, report.width, report.height, report.seconds, report.files);
+  }
+  return 0;
+}
+
+int RenderCommand::run_particles() {
+  const bool show = !quiet_ && progress_wanted();
+  Progress progress("tvf render particles", show);
+  ParticleAnimationOptions options;
+  split_outputs(outputs_, options.frames_dir, options.video);
+  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
+  options.frames = frames_;
+  options.fps = fps_;
+  options.particles.count = count_;
+  options.particles.size = particle_size_;
+  options.particles.spin = std::isnan(spin_) ? spin_ : spin_ * kPi / 180.0;
+  options.particles.image_size = app_size_;
+  options.particles.seed = seed_;
+  Input in = load_input(input_, progress, "particles");
+  const TangentBundle bundle(in.mesh);
+  progress.note("rendering");
+  options.progress = [&](int done, int total) { progress.update(done, total); };
+  const AnimationReport report = write_particle_animation(bundle, in.field, options);
+  progress.finish();
+  for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!quiet_) print_report("particle", report.frames, report.width, report.height, report.seconds, report.files);
+  return 0;
+}
+
+int RenderCommand::run_painterly() {
+  const bool show = !quiet_ && progress_wanted();
+  Progress progress("tvf render painterly", show);
+  PainterlyAnimationOptions options;
+  split_outputs(outputs_, options.frames_dir, options.video);
+  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
+  options.frames = frames_;
+  options.fps = fps_;
+  options.painterly.stroke_width = stroke_width_;
+  options.painterly.stroke_length = stroke_length_;
+  options.painterly.density = density_;
+  options.painterly.seed = seed_;
+  const Image image = read_png(image_);
+  const Image mask = mask_.empty() ? Image() : read_png(mask_);
+  Input in = load_input(input_, progress, "painterly");
+  const TangentBundle bundle(in.mesh);
+  progress.note("painting");
+  options.progress = [&](int done, int total) { progress.update(done, total); };
+  const AnimationReport report = write_painterly_animation(bundle, in.field, image, mask, options);
+  progress.finish();
+  for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!quiet_) print_report("painterly", report.frames, report.width, report.height, report.seconds, report.files);
+  return 0;
+}
+
+int RenderCommand::run_texture() {
+  const bool show = !quiet_ && progress_wanted();
+  Progress progress("tvf render texture", show);
+
+  TextureAnimationOptions options;
+  split_outputs(outputs_, options.frames_dir, options.video);
   if (!range_.empty()) parse_range(range_, options.first, options.last);
   options.frames = frames_;
   options.fps = fps_;
@@ -100,40 +295,10 @@ int RenderCommand::run() {
   options.texture.seed = seed_;
   if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
 
-  const fs::path input(input_);
-  std::error_code ec;
-  if (!fs::exists(input, ec))
-    throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
-                            "its field.tvff, or a scene file)", input_));
-  const std::string surface_note =
-      "surface texture rendering is not available yet: `tvf render texture` draws planar domains only "
-      "(surfaces will be rendered with offscreen OpenGL in a later version)";
-  std::vector<std::string> warnings;
-  Mesh mesh;
-  Field field;
-  if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
-    const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
-    if (!fs::exists(file, ec))
-      throw Error(fmt::format("{}: no field.tvff in this folder (write one with `tvf generate SCENE -o {}`)", input_,
-                              input_));
-    progress.note("reading the field");
-    FieldFile ff = load_field_file(file.string());
-    mesh = std::move(ff.mesh);
-    field = std::move(ff.field);
-  } else {
-    const Scene scene = load_scene(input_);
-    progress.note("building the domain");
-    const auto space = make_design_space(scene);
-    if (!space->planar()) throw Error(fmt::format("{}: {}", input_, surface_note));
-    GenerateOptions gen;
-    gen.progress = [&](int done, int total) { progress.update(done, total); };
-    GenerateReport report;
-    field = generate(*space, scene, gen, &report);
-    warnings = report.warnings;
-    mesh = space->mesh();
-  }
-  const TangentBundle bundle(mesh);
-  if (!bundle.is_flat()) throw Error(fmt::format("{}: {}", input_, surface_note));
+  Input in = load_input(input_, progress, "texture");
+  const std::vector<std::string>& warnings = in.warnings;
+  const Field& field = in.field;
+  const TangentBundle bundle(in.mesh);
 
   progress.note("rendering");
   options.progress = [&](int done, int total) { progress.update(done, total); };

@@ -1,10 +1,13 @@
 #pragma once
-// `tvf render texture INPUT -o OUT…`: texture animation of a field as PNG frames and/or
-// MP4 (render/texture_animation.h). INPUT is a folder written by `tvf generate`, its
-// field.tvff, or a scene (generated first).
+// `tvf render KIND INPUT -o OUT…`: pictures and videos of a field as PNG frames and/or
+// MP4. KIND is texture (render/texture_animation.h), painterly (render/painterly.h),
+// crowd (render/crowd.h) or particles (render/particles.h). INPUT is a folder written by
+// `tvf generate`, its field.tvff, or a scene (generated first).
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +24,13 @@ public:
 private:
   CLI::App* render_ = nullptr;
   CLI::App* texture_ = nullptr;
+  CLI::App* painterly_ = nullptr;
+  CLI::App* crowd_ = nullptr;
+  CLI::App* particles_ = nullptr;
+  int run_texture();
+  int run_painterly();
+  int run_crowd();
+  int run_particles();
   std::string input_;
   std::vector<std::string> outputs_;
   int size_ = 1024;
@@ -36,6 +46,16 @@ private:
   unsigned long long seed_ = 1;
   bool quiet_ = false;
   bool physical_ = false;
+  // painterly
+  std::string image_, mask_;
+  double stroke_width_ = 6, stroke_length_ = 24, density_ = 2;
+  // crowd
+  std::string crowd_file_, csv_;
+  std::optional<double> weight_goal_, weight_field_;
+  // particles
+  int count_ = 2000;
+  int app_size_ = 800;  // crowd and particles: pixels on the long side
+  double particle_size_ = 10, spin_ = std::nan("");
 };
 
 }  // namespace tvf::cli

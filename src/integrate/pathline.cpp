@@ -43,8 +43,9 @@ Pathline trace_pathline(const TangentBundle& bundle, const Field& field, const S
   double dt = options.dt > 0 ? options.dt : 0.25 * frame_dt;
   if (!(dt > 0)) dt = std::abs(span) > 0 ? std::abs(span) : 1.0;
   const double sign = span < 0 ? -1.0 : 1.0;
-  double vmax = 0;
-  for (const cplx& z : field.data()) vmax = std::max(vmax, std::abs(z));
+  double vmax = 0;  // the whole field's largest |V|: only needed for a non-zero stop speed
+  if (options.stop_speed > 0)
+    for (const cplx& z : field.data()) vmax = std::max(vmax, std::abs(z));
   const double stop = options.stop_speed * vmax;
 
   const FieldSampler sampler(bundle, field);

@@ -5,6 +5,7 @@
 #include "tvf/core/error.h"
 #include "tvf/integrate/evenly_spaced.h"
 #include "tvf/integrate/streamline.h"
+#include "tvf/render/frame_output.h"
 #include "tvf/render/plots.h"
 #include "tvf/render/video.h"
 
@@ -445,63 +446,6 @@ void draw_streamlines(Image& image, const TextureAnimator& animator, const Tange
   cairo_surface_flush(surface);
   cairo_surface_destroy(surface);
 }
-
-namespace {
-
-// A folder that appears complete or not at all: frames go into a hidden sibling, which
-// replaces the target folder on commit(); destroyed uncommitted, it is removed.
-class StagedFolder {
-public:
-  explicit StagedFolder(const fs::path& target) : target_(target) {
-    if (!target_.has_filename()) target_ = target_.parent_path();  // "frames/" → "frames"
-    std::error_code ec;
-    if (target_.empty() || target_ == "." || target_ == "..")
-      throw_input_error(target.string(), "", "give the frames a folder of their own (it is replaced as a whole)");
-    if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
-      throw_input_error(target_.string(), "", "exists and is not a folder");
-    // The folder is replaced as a whole, so it may hold nothing but frames of an earlier run.
-    if (fs::is_directory(target_, ec))
-      for (const auto& e : fs::directory_iterator(target_, ec)) {
-        const std::string name = e.path().filename().string();
-        if (!(name.starts_with("frame_") && e.path().extension() == ".png"))
-          throw_input_error(target_.string(), "",
-                            fmt::format("holds {}, which is not a frame; give a new or empty folder for the frames", name));
-      }
-    if (!target_.parent_path().empty()) fs::create_directories(target_.parent_path(), ec);
-    stage_ = temporary_sibling(target_);
-    if (!fs::create_directory(stage_, ec) || ec)
-      throw_input_error(target_.string(), "", fmt::format("cannot create the frames folder ({})", ec.message()));
-  }
-  ~StagedFolder() {
-    std::error_code ec;
-    if (!committed_) fs::remove_all(stage_, ec);
-  }
-  StagedFolder(const StagedFolder&) = delete;
-  StagedFolder& operator=(const StagedFolder&) = delete;
-  const fs::path& stage() const { return stage_; }
-  void commit() {
-    std::error_code ec;
-    fs::path old;
-    if (fs::exists(target_, ec)) {
-      old = temporary_sibling(target_);
-      fs::rename(target_, old, ec);
-      if (ec) throw_input_error(target_.string(), "", fmt::format("cannot replace the folder ({})", ec.message()));
-    }
-    fs::rename(stage_, target_, ec);
-    if (ec) {
-      if (!old.empty()) fs::rename(old, target_, ec);
-      throw_input_error(target_.string(), "", "cannot move the finished frames into place");
-    }
-    committed_ = true;
-    if (!old.empty()) fs::remove_all(old, ec);
-  }
-
-private:
-  fs::path target_, stage_;
-  bool committed_ = false;
-};
-
-}  // namespace
 
 TextureAnimationReport write_texture_animation(const TangentBundle& bundle, const Field& field,
                                                const TextureAnimationOptions& options) {

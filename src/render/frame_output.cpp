@@ -1,0 +1,96 @@
+#include "tvf/render/frame_output.h"
+
+#include "tvf/core/atomic_output.h"
+#include "tvf/core/error.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace tvf {
+
+namespace fs = std::filesystem;
+
+// A folder that appears complete or not at all: frames go into a hidden sibling, which
+// replaces the target folder on commit(); destroyed uncommitted, it is removed.
+StagedFolder::StagedFolder(const fs::path& target) : target_(target) {
+    if (!target_.has_filename()) target_ = target_.parent_path();  // "frames/" → "frames"
+    std::error_code ec;
+    if (target_.empty() || target_ == "." || target_ == "..")
+      throw_input_error(target.string(), "", "give the frames a folder of their own (it is replaced as a whole)");
+    if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
+      throw_input_error(target_.string(), "", "exists and is not a folder");
+    // The folder is replaced as a whole, so it may hold nothing but frames of an earlier run.
+    if (fs::is_directory(target_, ec))
+      for (const auto& e : fs::directory_iterator(target_, ec)) {
+        const std::string name = e.path().filename().string();
+        if (!(name.starts_with("frame_") && e.path().extension() == ".png"))
+          throw_input_error(target_.string(), "",
+                            fmt::format("holds {}, which is not a frame; give a new or empty folder for the frames", name));
+      }
+    if (!target_.parent_path().empty()) fs::create_directories(target_.parent_path(), ec);
+    stage_ = temporary_sibling(target_);
+    if (!fs::create_directory(stage_, ec) || ec)
+      throw_input_error(target_.string(), "", fmt::format("cannot create the frames folder ({})", ec.message()));
+  }
+StagedFolder::~StagedFolder() {
+    std::error_code ec;
+    if (!committed_) fs::remove_all(stage_, ec);
+  }
+void StagedFolder::commit() {
+    std::error_code ec;
+    fs::path old;
+    if (fs::exists(target_, ec)) {
+      old = temporary_sibling(target_);
+      fs::rename(target_, old, ec);
+      if (ec) throw_input_error(target_.string(), "", fmt::format("cannot replace the folder ({})", ec.message()));
+    }
+    fs::rename(stage_, target_, ec);
+    if (ec) {
+      if (!old.empty()) fs::rename(old, target_, ec);
+      throw_input_error(target_.string(), "", "cannot move the finished frames into place");
+    }
+    committed_ = true;
+    if (!old.empty()) fs::remove_all(old, ec);
+  }
+
+
+FrameOutput::FrameOutput(const std::string& frames_dir, const std::string& video, int width, int height, double fps)
+    : frames_dir_(frames_dir), video_(video), width_(width), height_(height) {
+  if (frames_dir.empty() && video.empty())
+    throw Error("give a folder for the PNG frames or an MP4 file to write");
+  if (!(std::isfinite(fps) && fps > 0 && fps <= 1000))
+    throw Error(fmt::format("fps {} is outside (0, 1000]", fps));
+  if (!frames_dir.empty()) folder_ = std::make_unique<StagedFolder>(frames_dir);
+  if (!video.empty()) {
+    const fs::path parent = fs::path(video).parent_path();
+    std::error_code ec;
+    if (!parent.empty()) fs::create_directories(parent, ec);
+    VideoOptions vo;
+    vo.fps = fps;
+    writer_ = std::make_unique<VideoWriter>(video, width, height, vo);
+  }
+}
+
+void FrameOutput::add(const Image& frame) {
+  if (frame.width != width_ || frame.height != height_)
+    throw Error(fmt::format("frame of {}×{} pixels given to an output of {}×{}", frame.width, frame.height, width_, height_));
+  if (folder_) write_png((folder_->stage() / fmt::format("frame_{:05d}.png", count_)).string(), frame);
+  if (writer_) writer_->add(frame);
+  ++count_;
+}
+
+std::vector<std::string> FrameOutput::finish() {
+  std::vector<std::string> files;
+  if (writer_) {
+    writer_->finish();
+    files.push_back(video_);
+  }
+  if (folder_) {
+    folder_->commit();
+    files.push_back(frames_dir_);
+  }
+  return files;
+}
+
+}  // namespace tvf

@@ -1,0 +1,123 @@
+// `tvf render painterly | crowd | particles` as a user meets them: frames, video and CSV
+// from a scene, one clear sentence for a bad input, and no partial output.
+#include "support/test_paths.h"
+
+#include "tvf/render/image.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace tvf {
+namespace {
+
+namespace fs = std::filesystem;
+using test::count_lines;
+using test::run_tvf;
+using test::TempDir;
+
+std::string quoted(const fs::path& p) {
+  std::string s(1, '\'');  // built by appending: "'" + … + "'" trips GCC 12's -Wrestrict (a false positive)
+  s += p.string();
+  s += '\'';
+  return s;
+}
+
+constexpr const char* kScene = R"({"tvf": 1,
+  "domain": {"grid": {"size": [17, 17], "min": [-1, -1], "max": [1, 1]}},
+  "time": {"frames": 5, "range": [0, 1]},
+  "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.3, 0, 0], [0.3, 0, 1]]}]})";
+
+int count_pngs(const fs::path& dir) {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) n += e.path().extension() == ".png";
+  return n;
+}
+
+TEST(CliRenderApps, PainterlyFramesFromAPictureAndAMask) {
+  TempDir dir;
+  test::write_text(dir / "scene.json", kScene);
+  Image picture(64, 48), mask(64, 48);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      picture.at(x, y) = rgb(static_cast<std::uint8_t>(4 * x), static_cast<std::uint8_t>(5 * y), 128);
+      mask.at(x, y) = y > 24 ? 0x00FFFFFFu : 0u;
+    }
+  write_png((dir / "picture.png").string(), picture);
+  write_png((dir / "mask.png").string(), mask);
+  const auto r = run_tvf("render painterly " + quoted(dir / "scene.json") + " --image " + quoted(dir / "picture.png") +
+                         " --mask " + quoted(dir / "mask.png") + " -o " + quoted(dir / "frames") +
+                         " --stroke-width 3 --stroke-length 8 --density 1.5");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("rendered 5 painterly frames of 64×48"), std::string::npos) << r.output;
+  EXPECT_EQ(count_pngs(dir / "frames"), 5);
+  const Image f = read_png((dir / "frames" / "frame_00004.png").string());
+  EXPECT_EQ(f.width, 64);
+  EXPECT_EQ(f.height, 48);
+
+  // A missing picture: one sentence naming it, nothing written.
+  const auto m = run_tvf("render painterly " + quoted(dir / "scene.json") + " --image " + quoted(dir / "nope.png") +
+                         " -o " + quoted(dir / "out"));
+  EXPECT_NE(m.exit_code, 0);
+  EXPECT_EQ(count_lines(m.output), 1) << m.output;
+  EXPECT_NE(m.output.find("nope.png"), std::string::npos) << m.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  const auto d = run_tvf("render painterly " + quoted(dir / "scene.json") + " --image " + quoted(dir / "picture.png") +
+                         " -o " + quoted(dir / "out") + " --density 0");
+  EXPECT_NE(d.exit_code, 0);
+  EXPECT_NE(d.output.find("density"), std::string::npos) << d.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+TEST(CliRenderApps, CrowdTrajectoriesAsCsvAndFrames) {
+  TempDir dir;
+  test::write_text(dir / "scene.json", kScene);
+  test::write_text(dir / "crowd.json", R"({"agents": 6, "speed": 4, "weights": {"goal": 1, "field": 0},
+    "start": [{"rectangle": {"min": [-0.9, -0.2], "max": [-0.7, 0.2]}}],
+    "goals": [{"circle": {"center": [0.8, 0], "radius": 0.15}}],
+    "obstacles": [{"circle": {"center": [0, 0], "radius": 0.3}}]})");
+  const auto r = run_tvf("render crowd " + quoted(dir / "scene.json") + " --crowd " + quoted(dir / "crowd.json") +
+                         " -o " + quoted(dir / "frames") + " -o " + quoted(dir / "paths.csv") + " --size 100 --frames 30");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("6 of 6 agents reached a goal"), std::string::npos) << r.output;
+  EXPECT_EQ(count_pngs(dir / "frames"), 30);
+  std::ifstream csv(dir / "paths.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "agent,frame,t,x,y,arrived");
+  int rows = 0;
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_EQ(rows, 6 * 30);
+
+  test::write_text(dir / "bad.json", R"({"agents": 6, "start": [], "goals": [{"circle": {"center": [0, 0]}}]})");
+  const auto b = run_tvf("render crowd " + quoted(dir / "scene.json") + " --crowd " + quoted(dir / "bad.json") +
+                         " -o " + quoted(dir / "out.csv"));
+  EXPECT_NE(b.exit_code, 0);
+  EXPECT_EQ(count_lines(b.output), 1) << b.output;
+  EXPECT_NE(b.output.find("bad.json: goals[0].circle"), std::string::npos) << b.output;
+  EXPECT_FALSE(fs::exists(dir / "out.csv"));
+}
+
+TEST(CliRenderApps, ParticlesVideoDecodes) {
+  if (test::run_command("command -v ffprobe >/dev/null 2>&1").exit_code != 0)
+    GTEST_SKIP() << "ffprobe not installed (Debian package ffmpeg)";
+  TempDir dir;
+  test::write_text(dir / "scene.json", kScene);
+  const auto r = run_tvf("render particles " + quoted(dir / "scene.json") + " -o " + quoted(dir / "leaves.mp4") +
+                         " --count 200 --size 96 --frames 7 --spin 30 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "");
+  const auto p = test::run_command("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                                   "stream=nb_read_frames -of csv=p=0 " + quoted(dir / "leaves.mp4"));
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  EXPECT_EQ(std::stoi(p.output), 7);
+  const auto c = run_tvf("render particles " + quoted(dir / "scene.json") + " -o " + quoted(dir / "x.mp4") + " --count 0");
+  EXPECT_NE(c.exit_code, 0);
+  EXPECT_NE(c.output.find("count"), std::string::npos) << c.output;
+  EXPECT_FALSE(fs::exists(dir / "x.mp4"));
+}
+
+}  // namespace
+}  // namespace tvf
