@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 namespace tvf::cli {
 
 RenderCommand::RenderCommand(CLI::App& app) {
-  render_ = app.add_subcommand("render", "Pictures and videos of a field (texture animation)");
+  render_ = app.add_subcommand("render", "Pictures and videos of a field (texture animation, painterly strokes, crowds, particles)");
   render_->require_subcommand(1);
   texture_ = render_->add_subcommand(
       "texture", "Dense texture animation (IBFV texture advection) of a field on a planar domain: PNG frames and/or MP4");
