@@ -18,14 +18,8 @@ namespace {
 namespace fs = std::filesystem;
 using test::count_lines;
 using test::run_tvf;
+using test::quoted;
 using test::TempDir;
-
-std::string quoted(const fs::path& p) {
-  std::string s = p.string();
-  s.insert(s.begin(), '\'');
-  s.push_back('\'');
-  return s;
-}
 
 nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(test::read_text(p)); }
 

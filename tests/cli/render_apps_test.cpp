@@ -16,14 +16,8 @@ namespace {
 namespace fs = std::filesystem;
 using test::count_lines;
 using test::run_tvf;
+using test::quoted;
 using test::TempDir;
-
-std::string quoted(const fs::path& p) {
-  std::string s(1, '\'');  // built by appending: "'" + … + "'" trips GCC 12's -Wrestrict (a false positive)
-  s += p.string();
-  s += '\'';
-  return s;
-}
 
 constexpr const char* kScene = R"({"tvf": 1,
   "domain": {"grid": {"size": [17, 17], "min": [-1, -1], "max": [1, 1]}},

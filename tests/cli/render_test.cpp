@@ -13,14 +13,8 @@ namespace {
 namespace fs = std::filesystem;
 using test::count_lines;
 using test::run_tvf;
+using test::quoted;
 using test::TempDir;
-
-std::string quoted(const fs::path& p) {
-  // Built with append: GCC 12 reports a false -Wrestrict for "'" + std::string.
-  std::string s = "'";
-  s.append(p.string()).push_back('\'');
-  return s;
-}
 
 constexpr const char* kSmallScene = R"({"tvf": 1,
   "domain": {"grid": {"size": [17, 17], "min": [-1, -1], "max": [1, 1]}},

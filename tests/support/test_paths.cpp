@@ -41,6 +41,14 @@ CommandResult run_tvf(const std::string& arguments) {
   return run_command(std::string("'") + TVF_CLI_PATH + "' " + arguments);
 }
 
+std::string quoted(const std::filesystem::path& path) {
+  // Built by appending: "'" + std::string trips GCC 12's -Wrestrict (a false positive).
+  std::string s(1, '\'');
+  s += path.string();
+  s += '\'';
+  return s;
+}
+
 std::string source_dir() { return TVF_SOURCE_DIR; }
 std::string test_data_dir() { return TVF_TEST_DATA_DIR; }
 std::string python() { return TVF_PYTHON; }

@@ -32,6 +32,8 @@ struct CommandResult {
 CommandResult run_command(const std::string& command_line);
 // Runs the tvf CLI built with the tests with the given arguments (shell-quoted by caller).
 CommandResult run_tvf(const std::string& arguments);
+// A path in single quotes, for command lines (test paths have no quotes of their own).
+std::string quoted(const std::filesystem::path& path);
 
 std::string source_dir();
 std::string test_data_dir();
