@@ -136,6 +136,23 @@ size_t nearest_bifurcation(const Topology& topo, const PathPoint& at, double dia
   return best;
 }
 
+// The topology an edit works on (one thread: replay must be bit for bit).
+Topology analyze_for_edit(const TangentBundle& bundle, const Field& field) {
+  TopologyOptions options;
+  options.parallel = false;
+  return analyze_topology(bundle, field, options);
+}
+
+// The bifurcation an edit names by its space-time point `at` (the nearest, space in
+// domain diameters and time in time ranges); refused when the field has none.
+size_t named_bifurcation(const Topology& topo, const Field& field, const PathPoint& at, double diameter,
+                         const char* what) {
+  if (topo.bifurcations.empty()) throw EditRefused(fmt::format("the field has no bifurcation to {}", what));
+  const TimeSampling& time = field.time();
+  const double span = time.t1 > time.t0 ? time.t1 - time.t0 : 1.0;
+  return nearest_bifurcation(topo, at, diameter, span);
+}
+
 // Point location on a planar mesh: faces bucketed on a uniform grid of about one face per
 // bucket, so a query tests a handful of faces (closest_point tests them all). Points
 // outside every face fall back to closest_point.
@@ -394,13 +411,9 @@ EditReport FieldEditor::cancel(Field& field, const CancelEdit& edit) {
 
 EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcationEdit& edit) {
   const TangentBundle& bundle = space_.bundle();
-  TopologyOptions topt;
-  topt.parallel = false;
-  const Topology topo = analyze_topology(bundle, field, topt);
-  if (topo.bifurcations.empty()) throw EditRefused("the field has no bifurcation to remove");
+  const Topology topo = analyze_for_edit(bundle, field);
+  const Bifurcation& bif = topo.bifurcations[named_bifurcation(topo, field, edit.at, space_.diameter(), "remove")];
   const TimeSampling& time = field.time();
-  const double span = time.t1 > time.t0 ? time.t1 - time.t0 : 1.0;
-  const Bifurcation& bif = topo.bifurcations[nearest_bifurcation(topo, edit.at, space_.diameter(), span)];
   const Tracks tracks(topo);
   const int sigma = bif.kind == BifurcationKind::creation ? 1 : -1;
   const std::vector<int> ta = tracks.follow(bif.paths[0], sigma);
@@ -604,13 +617,10 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
                       "in the plane)");
   const TangentBundle& bundle = space_.bundle();
   const Mesh& mesh = space_.mesh();
-  TopologyOptions topt;
-  topt.parallel = false;
-  const Topology topo = analyze_topology(bundle, field, topt);
-  if (topo.bifurcations.empty()) throw EditRefused("the field has no bifurcation to move");
+  const Topology topo = analyze_for_edit(bundle, field);
+  const Bifurcation& bif = topo.bifurcations[named_bifurcation(topo, field, edit.at, space_.diameter(), "move")];
   const TimeSampling& time = field.time();
   const double span = time.t1 > time.t0 ? time.t1 - time.t0 : 1.0;
-  const Bifurcation& bif = topo.bifurcations[nearest_bifurcation(topo, edit.at, space_.diameter(), span)];
   const Tracks tracks(topo);
   const int sigma = bif.kind == BifurcationKind::creation ? 1 : -1;
   const size_t np = topo.paths.size();
