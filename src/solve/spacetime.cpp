@@ -40,7 +40,17 @@ struct SpaceTimeSolver::Operator {
 // The vectors of a solve (each resized only when the problem's size changes).
 struct SpaceTimeSolver::Workspace {
   std::vector<cplx> rhs, x, r, p, ap, zp;
-  std::vector<double> r_hat, x_hat, lower, pivot, upper;
+  std::vector<double> lower, pivot, upper;
+  // What the temporal-mode method leaves for the next solve (a warm re-solve after an
+  // edit): per segment, the modes of the right-hand side and of the result. They stay
+  // valid while the fixed set is the same; the next solve then transforms only the rows
+  // whose right-hand side changed, and skips the transform of its first guess when that
+  // guess is this result.
+  std::vector<char> fixed;                         // the fixed set they belong to
+  std::vector<cplx> previous_rhs;
+  std::vector<std::vector<double>> r_hat, x_hat;   // per segment, 2|V| × frames
+  bool modes_kept = false;                         // r_hat, x_hat belong to previous_rhs, x
+  bool same_fixed = false, same_guess = false;     // set by solve() for solve_modes()
 };
 
 // T_s = Q Λ Qᵀ for the frames of one segment.
@@ -211,9 +221,10 @@ struct ModeScratch {
 
 // Jacobi-preconditioned CG on one temporal mode: (L_F + s·D_F) y = r over the free
 // vertices (fixed[i] == 0), to an absolute residual `tau`. y holds the first guess.
-// Returns the iterations, or −1 if it did not converge.
+// Returns the iterations, or −1 if it did not converge; residual2 gets ‖r‖² at the end
+// (the recurrence's).
 int solve_mode(const SpaceTimeSolver::Operator& op, const char* fixed, double s, const cplx* rhs,
-               cplx* y, double tau, int max_iterations, ModeScratch& w) {
+               cplx* y, double tau, int max_iterations, ModeScratch& w, double& residual2) {
   const auto n = static_cast<size_t>(op.rows);
   w.resize(n);
   cplx *r = w.r.data(), *p = w.p.data(), *ap = w.ap.data();
@@ -262,6 +273,7 @@ int solve_mode(const SpaceTimeSolver::Operator& op, const char* fixed, double s,
     rz = rz_new;
     for (size_t i = 0; i < n; ++i) p[i] = inverse[i] * r[i] + beta * p[i];
   }
+  residual2 = rr;
   return it;
 }
 
@@ -362,9 +374,46 @@ Segments find_segments(std::span<const char> fixed, size_t n, size_t nf) {
 
 }  // namespace
 
+namespace {
+
+// r_hat += Qᵀ (rhs − previous) over the frames of a segment, for the vertices whose
+// right-hand side changed there (an edit's are few: a key frame's region). Returns false,
+// doing nothing, when too many changed for this to beat the whole transform.
+bool update_modes_of_changed_rows(std::span<const cplx> rhs, const Vec& previous, size_t first, size_t count, size_t n,
+                                  const Eigen::MatrixXd& q, Eigen::Map<Eigen::MatrixXd>& r_hat, bool parallel) {
+  if (previous.size() != rhs.size()) return false;
+  std::vector<char> row_changed(n, 0);
+  blocks(n, parallel, [&](size_t i0, size_t i1) {
+    for (size_t j = first; j < first + count; ++j)
+      for (size_t i = i0; i < i1; ++i)
+        if (rhs[j * n + i] != previous[j * n + i]) row_changed[i] = 1;
+  });
+  std::vector<size_t> rows;
+  for (size_t i = 0; i < n; ++i)
+    if (row_changed[i]) rows.push_back(i);
+  if (rows.size() > n / 8) return false;
+  Eigen::VectorXd delta_re(static_cast<Eigen::Index>(count)), delta_im(static_cast<Eigen::Index>(count));
+  for (const size_t i : rows) {
+    for (size_t j = 0; j < count; ++j) {
+      const cplx d = rhs[(first + j) * n + i] - previous[(first + j) * n + i];
+      delta_re[static_cast<Eigen::Index>(j)] = d.real();
+      delta_im[static_cast<Eigen::Index>(j)] = d.imag();
+    }
+    r_hat.row(static_cast<Eigen::Index>(2 * i)) += (q.transpose() * delta_re).transpose();
+    r_hat.row(static_cast<Eigen::Index>(2 * i + 1)) += (q.transpose() * delta_im).transpose();
+  }
+  return true;
+}
+
+}  // namespace
+
 // The transforms cost 6·m flops per entry for a segment of m frames (three products with
 // the m × m basis), a CG iteration about 40: past this length CG is cheaper.
 constexpr size_t kMostModeFrames = 1024;
+
+// Tolerances from which the temporal-mode method reports the residual its modes add up
+// to instead of measuring it with another sweep over all frames.
+constexpr double kModeResidualTolerance = 1e-8;
 
 size_t SpaceTimeSolver::longest_segment(std::span<const char> fixed) const {
   size_t most = 0;
@@ -441,15 +490,31 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   const SpaceTime a{*op_, fixed, n, nf, b_, par};
   std::lock_guard lock(work_mutex_);
   if (!work_) work_ = std::make_shared<Workspace>();
-  Vec& rhs = sized(work_->rhs, total);
+  Workspace& w = *work_;
+  w.same_fixed = w.modes_kept && std::equal(fixed.begin(), fixed.end(), w.fixed.begin(), w.fixed.end());
+  if (!w.same_fixed) {
+    w.modes_kept = false;
+    w.fixed.assign(fixed.begin(), fixed.end());
+  }
+  std::swap(w.rhs, w.previous_rhs);  // the last solve's right-hand side, for solve_modes
+  Vec& rhs = sized(w.rhs, total);
   a.right_hand_side(values, rhs);
   const double bnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(rhs[k]); }));
 
-  // The unknown: the free part of z (its first guess), fixed entries zero.
-  Vec& x = sized(work_->x, total);
+  // The unknown: the free part of z (its first guess), fixed entries zero; noting
+  // whether it is the last solve's result (whose modes are kept).
+  Vec& x = sized(w.x, total);
+  std::atomic<bool> changed{false};
   blocks(total, par, [&](size_t s, size_t e) {
-    for (size_t k = s; k < e; ++k) x[k] = fixed[k] ? cplx(0, 0) : z[k];
+    bool differs = false;
+    for (size_t k = s; k < e; ++k) {
+      const cplx v = fixed[k] ? cplx(0, 0) : z[k];
+      differs = differs || v != x[k];
+      x[k] = v;
+    }
+    if (differs) changed = true;
   });
+  w.same_guess = w.same_fixed && !changed;
 
   SolveReport report;
   if (bnorm == 0) {
@@ -463,11 +528,13 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
     if (options.method == SpaceTimeMethod::modes)
       TVF_CHECK(modes_apply(fixed), "the temporal-mode method needs the same fixed vertices at every "
                                     "frame between two key frames");
+    if (!modes) w.modes_kept = false;
     if (options.method == SpaceTimeMethod::bicgstab_jacobi)
       report = solve_bicgstab(fixed, rhs, x, bnorm, options);
     else
       report = modes ? solve_modes(fixed, rhs, x, bnorm, options) : solve_cg(fixed, rhs, x, bnorm, options);
   }
+  if (bnorm == 0) w.modes_kept = false;
   blocks(total, par, [&](size_t s, size_t e) {
     for (size_t k = s; k < e; ++k) z[k] = fixed[k] ? values[k] : x[k];
   });
@@ -484,27 +551,40 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   size_t modes = 0;
   for (const auto& s : segs.segments) modes += s.second;
   // Q is orthogonal, so the squared residuals of the modes add up to the whole one's.
-  const double tau = 0.5 * options.tolerance * bnorm / std::sqrt(static_cast<double>(std::max<size_t>(modes, 1)));
+  // Each mode gets an equal share of the tolerance, with room for the transforms'
+  // rounding where the residual is then measured (see kModeResidualTolerance).
+  const double share = options.tolerance >= kModeResidualTolerance ? 0.95 : 0.5;
+  const double tau = share * options.tolerance * bnorm / std::sqrt(static_cast<double>(std::max<size_t>(modes, 1)));
 
   std::atomic<int> most{0};
   std::atomic<long> all{0};
+  tbb::combinable<double> modes_rr([] { return 0.0; });
   std::atomic<bool> failed{false};
-  for (const auto& [first, count] : segs.segments) {
+  Workspace& w = *work_;
+  const bool kept = w.modes_kept && w.r_hat.size() == segs.segments.size();
+  w.modes_kept = false;  // until this solve has left its own modes
+  w.r_hat.resize(segs.segments.size());
+  w.x_hat.resize(segs.segments.size());
+  for (size_t si = 0; si < segs.segments.size(); ++si) {
+    const auto [first, count] = segs.segments[si];
     const TemporalBasis& basis = temporal_basis(static_cast<int>(first), static_cast<int>(count));
     const auto rows = static_cast<Eigen::Index>(2 * n), cols = static_cast<Eigen::Index>(count);
     // Complex |V| × count blocks seen as real 2|V| × count ones (re, im interleaved).
     auto* x_seg = reinterpret_cast<double*>(x.data() + first * n);
-    Eigen::Map<Eigen::MatrixXd> r_hat(sized(work_->r_hat, static_cast<size_t>(rows * cols)).data(), rows, cols);
-    Eigen::Map<Eigen::MatrixXd> x_hat(sized(work_->x_hat, static_cast<size_t>(rows * cols)).data(), rows, cols);
-    multiply_rows(reinterpret_cast<const double*>(rhs.data() + first * n), basis.q, false, r_hat.data(), rows);
-    multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
+    Eigen::Map<Eigen::MatrixXd> r_hat(sized(w.r_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
+    Eigen::Map<Eigen::MatrixXd> x_hat(sized(w.x_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
+    if (!kept || !update_modes_of_changed_rows(rhs, w.previous_rhs, first, count, n, basis.q, r_hat, par))
+      multiply_rows(reinterpret_cast<const double*>(rhs.data() + first * n), basis.q, false, r_hat.data(), rows);
+    if (!kept || !w.same_guess) multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
     const char* f = fixed.data() + first * n;
     tbb::enumerable_thread_specific<ModeScratch> scratch;
     auto mode = [&](size_t k) {
       const auto* rk = reinterpret_cast<const cplx*>(r_hat.col(static_cast<Eigen::Index>(k)).data());
       auto* yk = reinterpret_cast<cplx*>(x_hat.col(static_cast<Eigen::Index>(k)).data());
+      double rr = 0;
       const int it = solve_mode(*op_, f, b_ * basis.lambda[static_cast<Eigen::Index>(k)], rk, yk, tau,
-                                options.max_iterations, scratch.local());
+                                options.max_iterations, scratch.local(), rr);
+      modes_rr.local() += rr;
       if (it < 0) {
         failed = true;
         return;
@@ -526,11 +606,20 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
                               "{} spatial iterations in all",
                               modes, all.load());
   report.iterations = most.load();
-  // The residual as it is, not as the modes add it up.
-  const SpaceTime a{*op_, fixed, n, nf, b_, par};
-  const double rnorm = std::sqrt(a.residual_norm2(x, rhs));
+  // Q is orthogonal, so the modes' residuals add up to the whole one's, up to the
+  // rounding of the transforms (~1e-14 relative). Where the tolerance leaves room for
+  // that (a warm re-solve to 1e-6), that sum is the residual; tighter, it is measured
+  // as it is (and CG finishes the solve if rounding left it short).
+  double rnorm = 0;
+  if (options.tolerance >= kModeResidualTolerance) {
+    rnorm = std::sqrt(modes_rr.combine(std::plus<>()));
+  } else {
+    const SpaceTime a{*op_, fixed, n, nf, b_, par};
+    rnorm = std::sqrt(a.residual_norm2(x, rhs));
+  }
   report.residual = rnorm / bnorm;
   report.success = !failed && report.residual <= options.tolerance;
+  w.modes_kept = report.success;  // x_hat holds the modes of x, r_hat those of rhs
   if (!report.success && options.method != SpaceTimeMethod::modes) {
     // Rounding (or a mode that would not converge): finish with CG from here.
     SolveReport polish = solve_cg(fixed, rhs, x, bnorm, options);
