@@ -22,7 +22,9 @@
 //
 // The solver object keeps its set-up (row-major operator, temporal eigenbases, the solve's
 // vectors) between solves, and every solve starts from the z it is given (warm start
-// after an edit). Calls to solve() on one object are serialised.
+// after an edit). It also keeps the temporal modes of its last solve, so a re-solve with
+// the same fixed set transforms only what changed (docs/architecture.md). Calls to
+// solve() on one object are serialised.
 #include "tvf/solve/connection_laplacian.h"
 
 #include <map>
