@@ -110,6 +110,9 @@ RenderCommand::RenderCommand(CLI::App& app) {
       ->capture_default_str();
   grass_->add_option("--wind-speed", grass_wind_,
                      "Field speed |V| that bends a strand fully (default: the field's 99th percentile)");
+  grass_->add_option("--response", grass_response_,
+                     "Exponent of the bend's response to the wind (above 1: stiff grass that stands in a breeze)")
+      ->capture_default_str();
   grass_->add_option("--elevation", grass_elevation_, "Camera degrees above the ground (90: top-down)")
       ->capture_default_str();
   grass_->add_option("-s,--size", grass_size_, "Pixels on the long side of the picture")->capture_default_str();
@@ -277,6 +280,7 @@ int RenderCommand::run_grass() {
   options.grass.length = grass_length_;
   options.grass.bend = grass_bend_;
   options.grass.wind_speed = grass_wind_;
+  options.grass.response = grass_response_;
   options.grass.seed = seed_;
   options.render.elevation = grass_elevation_;
   options.render.image_size = grass_size_;

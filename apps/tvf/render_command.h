@@ -60,7 +60,7 @@ private:
   double particle_size_ = 10, spin_ = std::nan("");
   // grass
   int grass_count_ = 32000, grass_segments_ = 4, grass_size_ = 960;
-  double grass_length_ = 0.035, grass_bend_ = 75, grass_wind_ = 0, grass_elevation_ = 40;
+  double grass_length_ = 0.035, grass_bend_ = 75, grass_wind_ = 0, grass_response_ = 1, grass_elevation_ = 50;
 };
 
 }  // namespace tvf::cli

@@ -123,7 +123,8 @@ struct Meadow::Impl {
     const double speed = v.head<2>().norm();
     // Bend as a horizontal vector of angle: toward V by s·bend, plus the strand's lean.
     Vec2 b = lean[k];
-    if (speed > 0) b += std::min(1.0, speed / wind) * o.bend * kDeg * Vec2(v.x() / speed, v.y() / speed);
+    if (speed > 0)
+      b += std::pow(std::min(1.0, speed / wind), o.response) * o.bend * kDeg * Vec2(v.x() / speed, v.y() / speed);
     const double theta = b.norm();
     const double len = seglen[k] * o.segments;
     if (theta == 0) return roots[k] + Vec3(0, 0, len);
@@ -158,6 +159,8 @@ Meadow::Meadow(const TangentBundle& bundle, const Field& field, const GrassOptio
                fmt::format("{} degrees is outside [0, 45]", o.lean));
   check_option(std::isfinite(o.wind_speed) && o.wind_speed >= 0, "wind speed",
                fmt::format("{} must be ≥ 0 (0: automatic)", o.wind_speed));
+  check_option(std::isfinite(o.response) && o.response >= 0.1 && o.response <= 10, "response",
+               fmt::format("{} is outside [0.1, 10]", o.response));
   check_option(o.ik_iterations >= 1 && o.ik_iterations <= 1000, "IK iterations",
                fmt::format("{} is outside [1, 1000]", o.ik_iterations));
   check_option(std::isfinite(o.ik_tolerance) && o.ik_tolerance > 0, "IK tolerance",
@@ -242,7 +245,7 @@ struct GrassRenderer::Impl {
       const double h = u(rng), v = 0.8 + 0.4 * u(rng);
       c = v * Vec3(0.22 + 0.18 * h, 0.50 + 0.08 * u(rng), 0.10 + 0.06 * (1 - h));
     }
-    light = Vec3(0.25, -0.35, 0.9).normalized();
+    light = Vec3(0.1, -0.15, 1.0).normalized();
   }
 
   Vec2 project(const Vec3& x) const {

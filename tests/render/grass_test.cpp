@@ -39,7 +39,9 @@ TEST(Fabrik, KeepsSegmentLengthsAndRootAndReachesAReachableTarget) {
     EXPECT_EQ(joints[0], root);
     for (int i = 1; i < n; ++i)
       EXPECT_NEAR((joints[static_cast<size_t>(i)] - joints[static_cast<size_t>(i - 1)]).norm() / l, 1.0, 1e-12);
-    if (n > 2) EXPECT_LT(r.tip_error, 1e-9 * reach) << trial;  // two joints reach along one line only
+    if (n > 2) {  // two joints reach along one line only
+      EXPECT_LT(r.tip_error, 1e-9 * reach) << trial;
+    }
   }
 }
 
@@ -94,6 +96,7 @@ TEST(Grass, TipsFollowAUniformFieldAndBendMoreInAStrongerOne) {
     o.lean = 0;  // no random lean: every tip follows the field
     o.wind_speed = 1.0;
     o.ik_tolerance = 1e-6;
+    o.ik_iterations = 1000;
     Meadow meadow(bundle, field, o);
     const Vec2 dir(std::cos(angle), std::sin(angle));
     std::vector<double> weak(static_cast<size_t>(meadow.strands()));

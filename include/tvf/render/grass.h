@@ -3,9 +3,10 @@
 // domain (the ground, z = 0, z up), each a rigid skeleton of `segments` equal segments
 // whose tip is pulled by an inverse-kinematics solve (FABRIK, Aristidou & Lasenby 2011)
 // toward a target set by the field at its root:
-//   - the wind strength s = min(1, |V(root, t)| / wind_speed) bends the strand so that its
-//     tip tangent leans θ = s·bend from the vertical toward V (plus a small random lean per
-//     strand, fixed for the whole animation);
+//   - the wind strength s = min(1, |V(root, t)| / wind_speed)^response bends the strand so
+//     that its tip tangent leans θ = s·bend from the vertical toward V (plus a small random
+//     lean per strand, fixed for the whole animation); a response above 1 makes the grass
+//     stiff, standing in a light breeze and lying down in a strong wind;
 //   - the target is where the tip of a circular arc of the strand's length with that tip
 //     angle would be: at angle θ/2 from the vertical, at distance L·sin(θ/2)/(θ/2).
 // The solve starts from the previous frame's pose, so the animation is coherent. Roots
@@ -15,7 +16,8 @@
 // Rendering: lit lines with Cairo seen by a perspective camera over the ground (looking
 // toward +y from the −y side, `elevation` degrees above the horizon; 90 is straight down):
 // strands drawn far to near, each segment shaded by its tangent (Kajiya–Kay diffuse and
-// specular for a sun over the viewer's shoulder), darker toward the root, thinner toward
+// specular for a sun high above, a little behind the viewer: bent strands catch it
+// whichever way they lean, standing ones stay dark), darker toward the root, thinner toward
 // the tip.
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
@@ -49,6 +51,7 @@ struct GrassOptions {
   double length_variation = 0.3;  // lengths spread uniformly over ±½ of this fraction
   double bend = 75.0;           // degrees: tip angle from the vertical at full wind
   double wind_speed = 0.0;      // |V| that bends fully; 0: the 99th percentile of |V| in the field
+  double response = 1.0;        // exponent of the bend's response to |V| / wind_speed
   double lean = 8.0;            // degrees: random lean of each strand (0: none)
   int ik_iterations = 12;
   double ik_tolerance = 1e-3;   // tip error, as a fraction of the strand's length
@@ -84,7 +87,7 @@ private:
 
 struct GrassRenderOptions {
   int image_size = 960;          // pixels on the long side
-  double elevation = 40.0;       // camera degrees above the horizon (90: top-down)
+  double elevation = 50.0;       // camera degrees above the horizon (90: top-down)
   double field_of_view = 35.0;   // degrees, vertical
   double width = 0.05;           // blade width at the root, as a fraction of the strand length
   std::uint32_t sky = 0x00B8CCD8;
