@@ -60,14 +60,16 @@ def draw(ax, x, f, v, div, vmax, title):
     colours = cmap(0.5 + 0.5 * np.clip(div[visible][order] / vmax, -1, 1))
     colours[:, :3] *= shade[:, None]
     ax.add_collection(PolyCollection(proj[fv], facecolors=colours, edgecolors="none"))
-    # Arrows at a thinned set of front vertices.
-    front = np.nonzero(x @ view > 0.25)[0][::7]
+    # Arrows at the first 642 vertices (an icosphere keeps its coarser levels' vertices
+    # first, so these are evenly spread), on the front half, length by speed.
+    front = np.nonzero(x[:642] @ view > 0.15)[0]
     pv = np.stack([v[front] @ right, v[front] @ up], 1)
     speed = np.linalg.norm(v[front], axis=1)
-    scale = np.percentile(speed, 90) + 1e-12
-    pv = pv / scale * 0.07
-    ax.quiver(proj[front, 0], proj[front, 1], pv[:, 0], pv[:, 1], angles="xy", scale_units="xy", scale=1,
-              width=0.003, headwidth=3.5, color="black")
+    scale = np.percentile(np.linalg.norm(v, axis=1), 90) + 1e-12
+    pv = pv / scale * 0.11
+    ax.quiver(proj[front, 0] - 0.5 * pv[:, 0], proj[front, 1] - 0.5 * pv[:, 1], pv[:, 0], pv[:, 1], angles="xy",
+              scale_units="xy", scale=1, width=0.0045, headwidth=3.5, headlength=4, headaxislength=3.5,
+              color="#202020")
     ax.set_xlim(-1.05, 1.05); ax.set_ylim(-1.05, 1.05); ax.set_aspect("equal"); ax.axis("off")
     ax.set_title(title, fontsize=10)
 

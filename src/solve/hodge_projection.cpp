@@ -25,6 +25,8 @@ namespace {
 using SpMat = Eigen::SparseMatrix<double>;
 
 constexpr int kMaxIterations = 40;
+// Relative residual ‖b − Aφ‖/‖b‖ at which CG stops: round-off level for A's conditioning.
+constexpr double kTolerance = 1e-13;
 
 int find_root(std::vector<int>& parent, int v) {
   while (parent[static_cast<size_t>(v)] != v) {
@@ -198,7 +200,7 @@ ProjectionStats DivergenceFreeProjector::project(std::span<cplx> z) const {
       Eigen::VectorXd zr = impl_->ldlt.solve(r);
       Eigen::VectorXd p = zr;
       double rz = r.dot(zr);
-      for (int step = 0; step < kMaxIterations && r.norm() > 1e-15 * bn; ++step) {
+      for (int step = 0; step < kMaxIterations && r.norm() > kTolerance * bn; ++step) {
         const Eigen::VectorXd ap = impl_->a * p;
         const double pap = p.dot(ap);
         if (!(pap > 0)) break;
