@@ -660,7 +660,7 @@ std::vector<BadCase> bad_cases() {
        "must be the number 1 (the format version), got \"1\"", true},
       {"unknown top-level key", planar([](json& j) { j["fallof"] = 8; }), "",
        "unknown key \"fallof\" (expected one of tvf, description, domain, time, generator, solver, "
-       "falloff, elements, keyframes, deform, edits)",
+       "falloff, elements, keyframes, deform, edits, incompressible)",
        true},
       {"unknown element key", planar([](json& j) { j["elements"][0]["pth"] = json::array(); }),
        "elements[0]", "unknown key \"pth\" (expected one of kind, type, jacobian, path, transform)", true},
