@@ -126,6 +126,7 @@ int run_edit(const EditArgs& args) {
   const auto space = make_design_space(scene);
   GenerateOptions options;
   options.progress = [&](int done, int total) { progress.update(done, total); };
+  options.project = false;  // edits act before the "incompressible" projection
   Field field = generate(*space, scene, options);
   progress.note("applying the edit");
   FieldEditor editor(*space, edit_settings(scene));

@@ -58,6 +58,7 @@ int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
 
   OutputOptions out_options;
   out_options.vtk = !args.no_vtk;
+  if (report.incompressible) out_options.incompressible = &*report.incompressible;
   out_options.on_step = [&](const std::string& what) { progress.note("writing " + what); };
   auto files = write_field_outputs(args.out, *space, field, scene, out_options);
   // The demo ends with what the field is for: a texture animation of it (planar scenes).
@@ -86,6 +87,10 @@ int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
     if (report.residual > 0) std::printf(" (worst relative residual %.1e)", report.residual);
     std::printf("\n");
     for (const auto& e : report.edits) std::printf("  edit: %s\n", e.c_str());
+    if (const auto& inc = report.incompressible)
+      std::printf("  incompressible (%s boundary): RMS divergence %.3g before, %.2g after (worst frame; "
+                  "divergence.json has every frame)\n",
+                  to_string(inc->boundary), inc->max_before, inc->max_after);
     std::printf("wrote %zu files to %s\n", files.size(), fs::absolute(args.out).lexically_normal().c_str());
     if (demo) {
       std::printf(

@@ -8,6 +8,7 @@
 #include "tvf/design/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/render/crowd.h"
+#include "tvf/render/grass.h"
 #include "tvf/render/painterly.h"
 #include "tvf/render/particles.h"
 #include "tvf/render/texture_animation.h"
@@ -24,7 +25,8 @@ namespace fs = std::filesystem;
 namespace tvf::cli {
 
 RenderCommand::RenderCommand(CLI::App& app) {
-  render_ = app.add_subcommand("render", "Pictures and videos of a field (texture animation, painterly strokes, crowds, particles)");
+  render_ = app.add_subcommand(
+      "render", "Pictures and videos of a field (texture animation, painterly strokes, crowds, particles, grass)");
   render_->require_subcommand(1);
   texture_ = render_->add_subcommand(
       "texture", "Dense texture animation (IBFV texture advection) of a field on a planar domain: PNG frames and/or MP4");
@@ -96,6 +98,24 @@ RenderCommand::RenderCommand(CLI::App& app) {
                          "Angle in degrees from the advection direction to each leaf's up direction "
                          "(default: random per leaf)");
   particles_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
+
+  grass_ = render_->add_subcommand(
+      "grass", "Grass: strands rooted on the ground whose tips an IK solve pulls toward the field (planar domains)");
+  common(grass_, frames_or_video, true);
+  grass_->add_option("--count", grass_count_, "Number of strands")->capture_default_str();
+  grass_->add_option("--segments", grass_segments_, "Rigid segments per strand")->capture_default_str();
+  grass_->add_option("--length", grass_length_, "Strand length as a fraction of the domain's longer side")
+      ->capture_default_str();
+  grass_->add_option("--bend", grass_bend_, "Degrees the tip leans from the vertical in full wind")
+      ->capture_default_str();
+  grass_->add_option("--wind-speed", grass_wind_,
+                     "Field speed |V| that bends a strand fully (default: the field's 99th percentile)");
+  grass_->add_option("--response", grass_response_,
+                     "Exponent of the bend's response to the wind (above 1: stiff grass that stands in a breeze)")
+      ->capture_default_str();
+  grass_->add_option("--elevation", grass_elevation_, "Camera degrees above the ground (90: top-down)")
+      ->capture_default_str();
+  grass_->add_option("-s,--size", grass_size_, "Pixels on the long side of the picture")->capture_default_str();
 }
 
 namespace {
@@ -182,6 +202,7 @@ int RenderCommand::run() {
   if (painterly_->parsed()) return run_painterly();
   if (crowd_->parsed()) return run_crowd();
   if (particles_->parsed()) return run_particles();
+  if (grass_->parsed()) return run_grass();
   return 1;
 }
 
@@ -243,6 +264,34 @@ int RenderCommand::run_particles() {
   progress.finish();
   for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (!quiet_) print_report("particle", report.frames, report.width, report.height, report.seconds, report.files);
+  return 0;
+}
+
+int RenderCommand::run_grass() {
+  const bool show = !quiet_ && progress_wanted();
+  Progress progress("tvf render grass", show);
+  GrassAnimationOptions options;
+  split_outputs(outputs_, options.frames_dir, options.video);
+  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
+  options.frames = frames_;
+  options.fps = fps_;
+  options.grass.count = grass_count_;
+  options.grass.segments = grass_segments_;
+  options.grass.length = grass_length_;
+  options.grass.bend = grass_bend_;
+  options.grass.wind_speed = grass_wind_;
+  options.grass.response = grass_response_;
+  options.grass.seed = seed_;
+  options.render.elevation = grass_elevation_;
+  options.render.image_size = grass_size_;
+  Input in = load_input(input_, progress, "grass");
+  const TangentBundle bundle(in.mesh);
+  progress.note("growing");
+  options.progress = [&](int done, int total) { progress.update(done, total); };
+  const AnimationReport report = write_grass_animation(bundle, in.field, options);
+  progress.finish();
+  for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!quiet_) print_report("grass", report.frames, report.width, report.height, report.seconds, report.files);
   return 0;
 }
 

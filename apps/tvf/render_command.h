@@ -1,7 +1,7 @@
 #pragma once
 // `tvf render KIND INPUT -o OUT…`: pictures and videos of a field as PNG frames and/or
 // MP4. KIND is texture (render/texture_animation.h), painterly (render/painterly.h),
-// crowd (render/crowd.h) or particles (render/particles.h). INPUT is a folder written by
+// crowd (render/crowd.h), particles (render/particles.h) or grass (render/grass.h). INPUT is a folder written by
 // `tvf generate`, its field.tvff, or a scene (generated first).
 #include <CLI/CLI.hpp>
 
@@ -27,10 +27,12 @@ private:
   CLI::App* painterly_ = nullptr;
   CLI::App* crowd_ = nullptr;
   CLI::App* particles_ = nullptr;
+  CLI::App* grass_ = nullptr;
   int run_texture();
   int run_painterly();
   int run_crowd();
   int run_particles();
+  int run_grass();
   std::string input_;
   std::vector<std::string> outputs_;
   int size_ = 1024;
@@ -56,6 +58,9 @@ private:
   int count_ = 2000;
   int app_size_ = 800;  // crowd and particles: pixels on the long side
   double particle_size_ = 10, spin_ = std::nan("");
+  // grass
+  int grass_count_ = 32000, grass_segments_ = 4, grass_size_ = 960;
+  double grass_length_ = 0.035, grass_bend_ = 75, grass_wind_ = 0, grass_response_ = 1, grass_elevation_ = 50;
 };
 
 }  // namespace tvf::cli

@@ -248,6 +248,18 @@ Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptio
     for (const EditReport& e : edits) report->edits.push_back(e.summary);
     report->seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
+  // Last: the divergence-free projection, so that neither the generator nor an edit can
+  // leave divergence in the field the scene asks to be incompressible.
+  if (scene.incompressible && options.project) {
+    IncompressibleOptions io;
+    io.boundary = *scene.incompressible;
+    io.parallel = options.parallel;
+    IncompressibleReport r = make_incompressible(space.bundle(), field, io);
+    if (report) {
+      report->seconds += r.seconds;
+      report->incompressible = std::move(r);
+    }
+  }
   return field;
 }
 

@@ -10,6 +10,18 @@
 
 namespace tvf {
 
+nlohmann::json incompressible_report_json(const IncompressibleReport& r, const TimeSampling& time) {
+  return {{"boundary", to_string(r.boundary)},
+          {"method", r.method},
+          {"seconds", r.seconds},
+          {"max_before", r.max_before},
+          {"max_after", r.max_after},
+          {"worst_residual", r.worst_residual},
+          {"times", time.times()},
+          {"before", r.before},
+          {"after", r.after}};
+}
+
 std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::path& dir,
                                                        const DesignSpace& space,
                                                        const Field& field, const Scene& scene,
@@ -55,6 +67,12 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
   step("coherence.csv, scene.json");
   write_file_atomically(stage.file("coherence.csv"), coherence_csv(field, coherence(field)));
   write_file_atomically(stage.file("scene.json"), scene_to_text(copy));
+
+  if (options.incompressible) {
+    step("divergence.json");
+    write_file_atomically(stage.file("divergence.json"),
+                          incompressible_report_json(*options.incompressible, field.time()).dump(2) + "\n");
+  }
 
   if (options.vtk) {
     step("field.pvd + field_NNNN.vtu");

@@ -40,6 +40,8 @@ constexpr Weights kWeights[] = {Weights::cotan, Weights::uniform, Weights::mean_
 constexpr SolverMethod kSolverMethods[] = {SolverMethod::automatic, SolverMethod::modes, SolverMethod::cg,
                                            SolverMethod::bicgstab};
 
+constexpr FluxBoundary kFluxBoundaries[] = {FluxBoundary::no_flux, FluxBoundary::open};
+
 constexpr int kMaxFrames = 100'000;
 constexpr int kMaxSphereSubdivisions = 9;  // make_icosphere's limit
 
@@ -64,7 +66,7 @@ int key_rank(const std::string& key) {
       "at", "to", "vector", "path", "pathline", "attach", "elements", "keyframes", "matrix",
       "m", "transform", "sx", "sy", "theta", "translate", "rotate", "scale", "time_scale",
       "angle", "streamlines", "seed", "keys", "points", "speed", "field", "deform", "edits",
-      "pair", "strength", "window"};
+      "incompressible", "boundary", "pair", "strength", "window"};
   for (size_t i = 0; i < std::size(kOrder); ++i)
     if (key == kOrder[i]) return static_cast<int>(i);
   return static_cast<int>(std::size(kOrder));
@@ -381,6 +383,7 @@ private:
   KeyframeStreamline keyframe_streamline(const json& j, const std::string& path) const;
   json deform(const json& j) const;
   json edits(const json& j) const;
+  std::optional<FluxBoundary> incompressible(const json& j) const;
   json edit(const json& j, const std::string& path) const;
 };
 
@@ -873,6 +876,19 @@ json Reader::edits(const json& j) const {
   return out;
 }
 
+// "incompressible": true | false | {"boundary": "no_flux" | "open"}.
+std::optional<FluxBoundary> Reader::incompressible(const json& j) const {
+  if (j.is_boolean()) return j.get<bool>() ? std::optional(FluxBoundary::no_flux) : std::nullopt;
+  if (!j.is_object())
+    fail("incompressible", fmt::format("must be true, false or an object {{\"boundary\": \"no_flux\" | \"open\"}}, "
+                                       "got {}",
+                                       describe(j)));
+  check_keys(j, "incompressible", "{\"boundary\"}", {"boundary"});
+  FluxBoundary b = FluxBoundary::no_flux;
+  if (const json* v = get(j, "boundary")) b = enumeration(*v, "incompressible.boundary", kFluxBoundaries, "boundary");
+  return b;
+}
+
 Scene Reader::scene(const json& j, const std::string& source_path) {
   if (!j.is_object())
     fail("", fmt::format("a scene must be a JSON object {{\"tvf\": 1, ...}}, got {}", describe(j)));
@@ -884,7 +900,7 @@ Scene Reader::scene(const json& j, const std::string& source_path) {
     fail("tvf", fmt::format("version {} is not supported (this tvf reads version 1)", describe(version)));
   check_keys(j, "", "a scene",
              {"tvf", "description", "domain", "time", "generator", "solver", "falloff", "elements",
-              "keyframes", "deform", "edits"});
+              "keyframes", "deform", "edits", "incompressible"});
   Scene s;
   s.version = 1;
   s.source_path = source_path;
@@ -900,6 +916,7 @@ Scene Reader::scene(const json& j, const std::string& source_path) {
   if (const json* k = get(j, "keyframes")) s.keyframes = keyframes(*k);
   if (const json* d = get(j, "deform")) s.deform = deform(*d);
   if (const json* e = get(j, "edits")) s.edits = edits(*e);
+  if (const json* i = get(j, "incompressible")) s.incompressible = incompressible(*i);
   if (s.generator == Generator::deform && s.deform.is_null())
     fail("", "missing key \"deform\" (the deform generator needs a deform block with its base field)");
   return s;
@@ -1133,6 +1150,7 @@ nlohmann::json scene_to_json(const Scene& scene) {
   for (const Keyframe& k : scene.keyframes) j["keyframes"].push_back(keyframe_json(k, planar));
   if (!scene.deform.is_null()) j["deform"] = scene.deform;
   j["edits"] = scene.edits.is_null() ? json::array() : scene.edits;
+  if (scene.incompressible) j["incompressible"] = {{"boundary", to_string(*scene.incompressible)}};
   return j;
 }
 

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 
 namespace tvf {
 namespace {
@@ -76,6 +77,32 @@ TEST(Cli, GenerateWritesArraysWithTheContractShapes) {
     EXPECT_EQ(static_cast<float>(z.imag()), static_cast<float>(field.values[3 * k + 1]));
     EXPECT_EQ(field.values[3 * k + 2], 0.0);
   }
+}
+
+TEST(Cli, IncompressibleSceneReportsDivergenceBeforeAndAfter) {
+  TempDir dir;
+  test::write_text(dir / "scene.json", R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 3}},
+    "time": {"frames": 4}, "elements": [{"kind": "singular", "type": "source", "path": [[1, 0, 0, 0]]},
+    {"kind": "singular", "type": "ccw_center", "path": [[0, 0, 1, 0]]}], "incompressible": true})");
+  const auto r = run_tvf("generate '" + (dir / "scene.json").string() + "' -o '" + (dir / "out").string() + "' --no-vtk");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("incompressible (no_flux boundary): RMS divergence"), std::string::npos) << r.output;
+  std::ifstream in(dir / "out" / "divergence.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["boundary"], "no_flux");
+  ASSERT_EQ(j["before"].size(), 4u);
+  ASSERT_EQ(j["after"].size(), 4u);
+  for (size_t k = 0; k < 4; ++k) {
+    EXPECT_GT(j["before"][k].get<double>(), 0.1);
+    EXPECT_LT(j["after"][k].get<double>(), 1e-10 * j["before"][k].get<double>());
+  }
+  // Written into the canonical scene beside the field; a plain scene writes no report.
+  EXPECT_NE(test::read_text(dir / "out" / "scene.json").find(R"("incompressible": {"boundary": "no_flux"})"),
+            std::string::npos);
+  const auto plain = run_tvf("generate '" + test::source_dir() + "/examples/03_sphere_vortex/scene.json' -o '" +
+                             (dir / "plain").string() + "' --no-vtk --quiet");
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_FALSE(fs::exists(dir / "plain" / "divergence.json"));
 }
 
 // The singularities the scene designs are in the generated field where the scene put

@@ -1,4 +1,4 @@
-// `tvf render painterly | crowd | particles` as a user meets them: frames, video and CSV
+// `tvf render painterly | crowd | particles | grass` as a user meets them: frames, video and CSV
 // from a scene, one clear sentence for a bad input, and no partial output.
 #include "support/test_paths.h"
 
@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -111,6 +112,25 @@ TEST(CliRenderApps, ParticlesVideoDecodes) {
   EXPECT_NE(c.exit_code, 0);
   EXPECT_NE(c.output.find("count"), std::string::npos) << c.output;
   EXPECT_FALSE(fs::exists(dir / "x.mp4"));
+}
+
+TEST(CliRenderApps, GrassFramesAndOneSentenceForBadOptions) {
+  TempDir dir;
+  test::write_text(dir / "scene.json", kScene);
+  const auto r = run_tvf("render grass " + quoted(dir / "scene.json") + " -o " + quoted(dir / "frames") +
+                         " --count 300 --segments 3 --size 120 --frames 3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("rendered 3 grass frames"), std::string::npos) << r.output;
+  EXPECT_EQ(count_pngs(dir / "frames"), 3);
+  const Image frame = read_png((dir / "frames" / "frame_00002.png").string());
+  EXPECT_EQ(std::max(frame.width, frame.height), 120);
+  for (const std::string bad : {"--segments 0", "--length 2", "--bend -5", "--wind-speed -1", "--elevation 5"}) {
+    const auto c = run_tvf("render grass " + quoted(dir / "scene.json") + " -o " + quoted(dir / "bad") + " " + bad);
+    EXPECT_NE(c.exit_code, 0) << bad;
+    EXPECT_NE(c.output.find("grass option"), std::string::npos) << bad << ": " << c.output;
+    EXPECT_EQ(count_lines(c.output), 1) << c.output;
+    EXPECT_FALSE(fs::exists(dir / "bad")) << bad;
+  }
 }
 
 }  // namespace

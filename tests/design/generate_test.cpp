@@ -451,3 +451,49 @@ TEST(Deform, StreamlineDeformationStartsFromTheBaseField) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// "incompressible": generate() projects after the generator (and the edits); the report
+// carries the divergence before and after; generate_unedited and project = false do not.
+TEST(Generate, IncompressibleScenesAreProjectedLastAndReported) {
+  Scene s;
+  s.domain.grid = GridSpec{21, 21, {-1, -1}, {1, 1}};
+  s.time.frames = 5;
+  SingularElement source;
+  source.type = SingularType::source;
+  source.jacobian = jacobian_of(SingularType::source);
+  source.path = {{Vec3(-0.3, 0.1, 0), 0.0}, {Vec3(0.3, -0.1, 0), 1.0}};
+  s.elements.push_back(source);
+  SingularElement centre = source;
+  centre.type = SingularType::ccw_center;
+  centre.jacobian = jacobian_of(SingularType::ccw_center);
+  centre.path = {{Vec3(0.4, 0.4, 0), 0.0}};
+  s.elements.push_back(centre);
+  const auto space = make_design_space(s);
+  const Field plain = generate(*space, s);
+  for (FluxBoundary b : {FluxBoundary::no_flux, FluxBoundary::open}) {
+    s.incompressible = b;
+    GenerateReport report;
+    const Field field = generate(*space, s, {}, &report);
+    ASSERT_TRUE(report.incompressible.has_value());
+    EXPECT_EQ(report.incompressible->boundary, b);
+    const DivergenceFreeProjector p(space->bundle(), b);
+    for (int j = 0; j < s.time.frames; ++j) {
+      const double before = p.divergence_rms(plain.frame(j));
+      EXPECT_DOUBLE_EQ(report.incompressible->before[static_cast<size_t>(j)], before);
+      EXPECT_LT(p.divergence_rms(field.frame(j)), 1e-11 * before);
+      EXPECT_LT(report.incompressible->after[static_cast<size_t>(j)], 1e-11 * before);
+    }
+    EXPECT_EQ(generate_unedited(*space, s).data(), plain.data());
+    GenerateOptions off;
+    off.project = false;
+    GenerateReport none;
+    EXPECT_EQ(generate(*space, s, off, &none).data(), plain.data());
+    EXPECT_FALSE(none.incompressible.has_value());
+  }
+}
+
+}  // namespace
+}  // namespace tvf

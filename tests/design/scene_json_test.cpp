@@ -122,6 +122,7 @@ void expect_same_scene(const Scene& a, const Scene& b) {
   }
   EXPECT_EQ(a.deform, b.deform);
   EXPECT_EQ(a.edits, b.edits);
+  EXPECT_EQ(a.incompressible, b.incompressible);
   EXPECT_EQ(a.source_path, b.source_path);
 }
 
@@ -659,7 +660,7 @@ std::vector<BadCase> bad_cases() {
        "must be the number 1 (the format version), got \"1\"", true},
       {"unknown top-level key", planar([](json& j) { j["fallof"] = 8; }), "",
        "unknown key \"fallof\" (expected one of tvf, description, domain, time, generator, solver, "
-       "falloff, elements, keyframes, deform, edits)",
+       "falloff, elements, keyframes, deform, edits, incompressible)",
        true},
       {"unknown element key", planar([](json& j) { j["elements"][0]["pth"] = json::array(); }),
        "elements[0]", "unknown key \"pth\" (expected one of kind, type, jacobian, path, transform)", true},
@@ -824,6 +825,12 @@ std::vector<BadCase> bad_cases() {
        "missing key \"to\"", true},
       {"edit with an unknown key", planar([](json& j) { j["edits"][2]["frame"] = 3; }), "edits[2]",
        "unknown key \"frame\" (expected one of op, at, window)", true},
+      {"incompressible boundary", planar([](json& j) { j["incompressible"] = {{"boundary", "closed"}}; }),
+       "incompressible.boundary", "unknown boundary \"closed\" (expected one of no_flux, open)", true},
+      {"incompressible unknown key", planar([](json& j) { j["incompressible"] = {{"tolerance", 1e-9}}; }),
+       "incompressible", "unknown key \"tolerance\" (expected one of boundary)", true},
+      {"incompressible as a number", planar([](json& j) { j["incompressible"] = 1; }), "incompressible",
+       "must be true, false or an object", true},
   };
 }
 
@@ -922,6 +929,43 @@ TEST(SceneSchema, RejectsTheBadInputsItCanExpress) {
   ASSERT_EQ(results.size(), files.size());
   for (size_t i = 0; i < files.size(); ++i)
     EXPECT_EQ(results[i].rfind("invalid: ", 0), 0u) << names[i] << ": " << results[i];
+}
+
+}  // namespace
+}  // namespace tvf
+
+namespace tvf {
+namespace {
+
+TEST(SceneJson, IncompressibleTakesABooleanOrABoundaryAndRoundTrips) {
+  auto read = [](const std::string& value) {
+    return parse_scene(R"({"tvf": 1, "domain": {"grid": {}}, "incompressible": )" + value + "}", "i.json");
+  };
+  EXPECT_FALSE(parse_scene(R"({"tvf": 1, "domain": {"grid": {}}})", "i.json").incompressible);
+  EXPECT_FALSE(read("false").incompressible);
+  EXPECT_EQ(read("true").incompressible, FluxBoundary::no_flux);
+  EXPECT_EQ(read("{}").incompressible, FluxBoundary::no_flux);
+  EXPECT_EQ(read(R"({"boundary": "open"})").incompressible, FluxBoundary::open);
+  for (const char* v : {"true", R"({"boundary": "open"})", "false"}) {
+    const Scene s = read(v);
+    const Scene back = parse_scene(scene_to_text(s), "back.json");
+    EXPECT_EQ(back.incompressible, s.incompressible) << v;
+    EXPECT_EQ(scene_to_text(back), scene_to_text(s)) << v;
+  }
+  EXPECT_EQ(scene_to_json(read("true"))["incompressible"], nlohmann::json({{"boundary", "no_flux"}}));
+}
+
+TEST(SceneJson, BadIncompressibleValuesNameThePath) {
+  auto error = [](const std::string& value) {
+    return test::error_of(
+        [&] { parse_scene(R"({"tvf": 1, "domain": {"grid": {}}, "incompressible": )" + value + "}", "i.json"); });
+  };
+  EXPECT_EQ(error(R"({"boundary": "wall"})"),
+            "i.json: incompressible.boundary: unknown boundary \"wall\" (expected one of no_flux, open)");
+  EXPECT_EQ(error(R"({"boundry": "open"})"),
+            "i.json: incompressible: unknown key \"boundry\" (expected one of boundary)");
+  EXPECT_NE(error("1").find("i.json: incompressible: must be true, false or an object"), std::string::npos);
+  EXPECT_NE(error(R"("yes")").find("i.json: incompressible:"), std::string::npos);
 }
 
 }  // namespace

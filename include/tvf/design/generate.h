@@ -2,13 +2,18 @@
 // Generating the field of a scene (DESIGN §5). generate() dispatches on scene.generator.
 // Generators: "basis" (basis field summation, paper §5.2, eq. 8), "constrained" (paper
 // §5.3), "spacetime" (paper §6.1) and "deform" (paper §7). The scene's edits are then
-// applied in order (DESIGN §7, tvf/edit/field_editor.h).
+// applied in order (DESIGN §7, tvf/edit/field_editor.h), and last, when the scene says
+// "incompressible", every frame is projected onto the divergence-free fields
+// (tvf/solve/hodge_projection.h): generator → edits → projection, so the field written is
+// divergence-free whatever the edits did.
 #include "tvf/design/design_space.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
 #include "tvf/solve/connection_laplacian.h"
+#include "tvf/solve/hodge_projection.h"
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +23,9 @@ struct GenerateOptions {
   bool parallel = true;  // frames in parallel (TBB)
   // Called as frames complete (from any thread, serialised): frames done, frames total.
   std::function<void(int, int)> progress;
+  // Apply the scene's "incompressible" projection (generate() only). `tvf edit` turns it
+  // off to check a new edit on the field that the edit will really act on.
+  bool project = true;
 };
 
 struct GenerateReport {
@@ -29,10 +37,14 @@ struct GenerateReport {
   double seconds = 0.0;
   int frames = 0;
   int vertices = 0;
+  // Set when the scene's "incompressible" projection ran: divergence per frame before and
+  // after it.
+  std::optional<IncompressibleReport> incompressible;
 };
 
 // Field of the scene on `space` (which must be make_design_space(scene)): the generator's
-// field with the scene's edits applied in order. Throws tvf::Error for scenes it cannot
+// field with the scene's edits applied in order, then projected onto the divergence-free
+// fields when scene.incompressible is set (and options.project). Throws tvf::Error for scenes it cannot
 // generate (naming the scene and JSON path), including fields that would not fit in this
 // machine's memory and edits that cannot be applied ("scene.json: edits[2]: ...").
 Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptions& options = {},

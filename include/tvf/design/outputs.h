@@ -3,10 +3,14 @@
 // failed run leaves no partial output:
 //   field.npy (N×|V|×3 float32, world vectors, frame-major), vertices.npy (|V|×3 float64),
 //   faces.npy (|F|×3 int32), times.npy (N float64), field.tvff (native, exact reload),
-//   field.pvd + field_NNNN.vtu (VTK series), coherence.csv, scene.json (canonical scene).
+//   field.pvd + field_NNNN.vtu (VTK series), coherence.csv, scene.json (canonical scene),
+//   and divergence.json when the scene is "incompressible" (OutputOptions::incompressible).
 #include "tvf/design/design_space.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
+#include "tvf/solve/hodge_projection.h"
+
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <functional>
@@ -17,7 +21,13 @@ namespace tvf {
 struct OutputOptions {
   bool vtk = true;  // the VTK series can be large; `--no-vtk` skips it
   std::function<void(const std::string&)> on_step;  // progress: name of the part written
+  // The projection's report (GenerateReport::incompressible): written as divergence.json.
+  const IncompressibleReport* incompressible = nullptr;
 };
+
+// divergence.json: {"boundary", "method", "seconds", "max_before", "max_after",
+// "worst_residual", "times": [...], "before": [...], "after": [...]} (docs/file_formats.md).
+nlohmann::json incompressible_report_json(const IncompressibleReport& report, const TimeSampling& time);
 
 // Returns the paths written (final names inside `dir`).
 std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::path& dir,

@@ -6,6 +6,7 @@
 #include "tvf/core/types.h"
 #include "tvf/field/time_sampling.h"
 #include "tvf/mesh/grid.h"
+#include "tvf/solve/hodge_projection.h"
 
 #include <nlohmann/json.hpp>
 
@@ -138,6 +139,10 @@ struct Scene {
   std::vector<Keyframe> keyframes;
   nlohmann::json deform;  // validated by scene_json; interpreted by the deform generator
   nlohmann::json edits = nlohmann::json::array();  // validated list of edit entries
+  // "incompressible" (tvf addition): when set, every frame is projected onto the
+  // divergence-free fields after the generator and the edits (solve/hodge_projection.h),
+  // with this boundary condition.
+  std::optional<FluxBoundary> incompressible;
 
   // Where the scene came from: used to resolve relative paths and to name the file in
   // error messages. Empty for scenes built in code.
