@@ -27,8 +27,9 @@ CLI::App* add_edit_command(CLI::App& app, EditArgs& args) {
                                  "T X Y: remove the bifurcation nearest to (X, Y) at time T (T X Y Z on surfaces)")
                      ->expected(3, 4);
   auto* move = cmd->add_option("--move-bifurcation", args.move_bifurcation,
-                               "T X Y T2 X2 Y2: move the bifurcation nearest to (X, Y) at T to (X2, Y2) at T2")
-                   ->expected(6, 6);
+                               "T X Y T2 X2 Y2: move the bifurcation nearest to (X, Y) at T to (X2, Y2) at T2 "
+                               "(T X Y Z T2 X2 Y2 Z2 on surfaces)")
+                   ->expected(6, 8);
   auto* smooth = cmd->add_option("--smooth", args.smooth, "S: smooth the whole field in space and time, S in (0, 1]");
   auto* undo = cmd->add_flag("--undo", args.undo, "Drop the last edit");
   cmd->add_option("--window", args.window,
@@ -80,11 +81,14 @@ nlohmann::json requested_edit(const EditArgs& args, const Scene& scene) {
     e = {{"op", "remove_bifurcation"}, {"at", at}};
     window();
   } else if (!args.move_bifurcation.empty()) {
-    if (!planar)
-      throw Error(fmt::format("{}: --move-bifurcation works on planar (grid) domains only", args.scene));
-    nlohmann::json at = position_json(args.move_bifurcation, 1, 2), to = position_json(args.move_bifurcation, 4, 2);
+    if (args.move_bifurcation.size() != 2 * (1 + n))
+      throw Error(fmt::format("{}: --move-bifurcation needs T {} T2 {} ({} numbers) on this {} domain, got {}",
+                              args.scene, form, form, 2 * (1 + n), planar ? "planar" : "surface",
+                              args.move_bifurcation.size()));
+    nlohmann::json at = position_json(args.move_bifurcation, 1, n),
+                   to = position_json(args.move_bifurcation, 2 + n, n);
     at.push_back(args.move_bifurcation[0]);
-    to.push_back(args.move_bifurcation[3]);
+    to.push_back(args.move_bifurcation[1 + n]);
     e = {{"op", "move_bifurcation"}, {"at", at}, {"to", to}};
     window();
   } else {

@@ -4,7 +4,7 @@
 #include "tvf/design/generate.h"
 #include "tvf/design/hermite_path.h"
 #include "tvf/design/scene_json.h"
-#include "tvf/integrate/streamline.h"
+#include "tvf/design/streamline_deform.h"
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -45,34 +45,6 @@ std::vector<TransformKey> transform_keys(const nlohmann::json& keys, double t0) 
   return out;
 }
 
-// A keyed similarity transform of a streamline at time t: translate, rotate, scale about
-// the seed, interpolated linearly from the identity at t0.
-struct Similarity {
-  Vec2 translate = Vec2::Zero();
-  double rotate = 0;
-  double scale = 1;
-};
-Similarity similarity_at(const nlohmann::json& keys, double t0, double t) {
-  double ta = t0;
-  Similarity a;
-  for (const auto& k : keys) {
-    const double tb = k.at("t").get<double>();
-    Similarity b;
-    b.translate = Vec2(k.at("translate")[0].get<double>(), k.at("translate")[1].get<double>());
-    b.rotate = k.at("rotate").get<double>();
-    b.scale = k.at("scale").get<double>();
-    if (t <= tb) {
-      if (tb <= ta) return b;
-      const double w = std::clamp((t - ta) / (tb - ta), 0.0, 1.0);
-      return {(1 - w) * a.translate + w * b.translate, (1 - w) * a.rotate + w * b.rotate,
-              (1 - w) * a.scale + w * b.scale};
-    }
-    ta = tb;
-    a = b;
-  }
-  return a;
-}
-
 cplx apply(const Mat2& m, cplx z) { return to_complex(m * to_vec2(z)); }
 
 }  // namespace
@@ -105,7 +77,6 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
   check_field_memory(scene, nv);
   if (scene.deform.is_null())
     throw_input_error(scene.label(), "deform", "the deform generator needs a deform block");
-  const nlohmann::json& def = scene.deform;
   const double t0 = scene.time.t0;
 
   // The base field V(t0): the static constrained design of deform.base's elements.
@@ -130,23 +101,8 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
   // M(t): matrix keys, or (sx, sy, θ) keys interpolated linearly.
   auto m_at = [&](double t) { return deform_matrix(scene, t); };
 
-  // Representative streamlines traced in V(t0).
-  const nlohmann::json streamlines = def.value("streamlines", nlohmann::json::array());
-  std::vector<Streamline> traced;
-  if (!streamlines.empty()) {
-    if (!space.planar())
-      throw_input_error(scene.label(), "deform.streamlines",
-                        "streamline deformation is available on planar domains only in this version");
-    for (size_t k = 0; k < streamlines.size(); ++k) {
-      const auto& seed = streamlines[k].at("seed");
-      const Vec3 x(seed[0].get<double>(), seed[1].get<double>(), 0);
-      try {
-        traced.push_back(trace_streamline(space.bundle(), v0, x));
-      } catch (const Error& e) {
-        throw_input_error(scene.label(), fmt::format("deform.streamlines[{}].seed", k), e.what());
-      }
-    }
-  }
+  // Representative streamlines traced in V(t0), moved over time (streamline_deform.h).
+  const StreamlineDeformation deformation(space, scene, v0);
 
   Field field(scene.time, nv);
   tbb::enumerable_thread_specific<DirichletSolver> solvers(prototype);
@@ -157,7 +113,7 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
     const double t = scene.time.time(j);
     const Mat2 m = m_at(t);
     std::span<cplx> out = field.frame(j);
-    if (traced.empty()) {
+    if (deformation.size() == 0) {
       for (size_t v = 0; v < n; ++v) out[v] = apply(m, v0[v]);
       return;
     }
@@ -167,20 +123,7 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
     std::vector<cplx> values(n, cplx(0, 0));
     for (size_t v = 0; v < n; ++v)
       if (fixed[v]) values[v] = apply(m, v0[v]);
-    for (size_t k = 0; k < traced.size(); ++k) {
-      const Similarity sim = similarity_at(streamlines[k].at("keys"), t0, t);
-      const Vec3& seed = traced[k].points[traced[k].seed];
-      const cplx rot = std::polar(sim.scale, sim.rotate);
-      std::vector<Vec3> pts;
-      std::vector<double> speeds;
-      for (size_t q = 0; q < traced[k].points.size(); ++q) {
-        const cplx rel(traced[k].points[q].x() - seed.x(), traced[k].points[q].y() - seed.y());
-        const cplx moved = cplx(seed.x() + sim.translate.x(), seed.y() + sim.translate.y()) + rot * rel;
-        pts.emplace_back(moved.real(), moved.imag(), 0);
-        speeds.push_back(sim.scale * traced[k].speeds[q]);
-      }
-      constrain_polyline(space, pts, speeds, fixed, values);
-    }
+    for (const MovedStreamline& line : deformation.at(t)) constrain_polyline(space, line.points, line.speeds, fixed, values);
     const SolveReport r = solvers.local().solve(fixed, values, out);
     std::lock_guard lock(report_mutex);
     worst = std::max(worst, r.residual);
@@ -188,7 +131,7 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
   });
   if (!ok) throw_input_error(scene.label(), "deform", "a frame's constrained solve failed");
   if (report) {
-    report->method = traced.empty() ? "time-varying transformation V(t) = M(t) V(t0)"
+    report->method = deformation.size() == 0 ? "time-varying transformation V(t) = M(t) V(t0)"
                                     : "streamline deformation, constrained solve per frame";
     report->residual = worst;
   }

@@ -4,6 +4,7 @@
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframes.h"
+#include "tvf/edit/edits.h"
 #include "tvf/field/field_sampler.h"
 
 #include <fmt/format.h>
@@ -149,7 +150,22 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   };
   std::set<int> claimed;
 
-  auto add_singularity = [&](const std::string& source, const std::string& type, const std::vector<Expected>& expected,
+  // The scene's edits (validated with the scene). Cancelled pairs: the frame, the window
+  // (frames each way) and the two positions on the domain.
+  const std::vector<Edit> edits = edits_from_scene(scene);
+  struct Cut {
+    size_t edit;
+    int frame, window;
+    std::array<Vec3, 2> pair;
+  };
+  std::vector<Cut> cuts;
+  for (size_t i = 0; i < edits.size(); ++i)
+    if (const auto* c = std::get_if<CancelEdit>(&edits[i]))
+      cuts.push_back({i, c->frame, static_cast<int>(std::lround(c->window * (N - 1))),
+                      {on_domain(c->pair[0]), on_domain(c->pair[1])}});
+  auto edit_name = [](size_t i) { return fmt::format("edits[{}]", i); };
+
+  auto add_singularity = [&](const std::string& source, const std::string& type, const std::vector<Expected>& all,
                              int index, const Vec3& first_position) {
     DesignedFeature f;
     f.kind = FeatureKind::singularity;
@@ -157,17 +173,44 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     f.type = type;
     f.index = index;
     f.position = first_position;
-    if (!expected.empty()) {
-      f.t_begin = topo.times[static_cast<size_t>(expected.front().frame)];
-      f.t_end = topo.times[static_cast<size_t>(expected.back().frame)];
-      f.position = expected.front().position;
+    if (!all.empty()) {
+      f.t_begin = topo.times[static_cast<size_t>(all.front().frame)];
+      f.t_end = topo.times[static_cast<size_t>(all.back().frame)];
+      f.position = all.front().position;
+    }
+    // Frames in the window of a cancel edit that takes this singularity away are not checked.
+    std::vector<Expected> expected;
+    for (const Expected& e : all) {
+      const Cut* by = nullptr;
+      for (const Cut& c : cuts)
+        if (std::abs(e.frame - c.frame) <= c.window)
+          for (const Vec3& x : c.pair)
+            if (std::min((e.position - x).norm(), (e.predicted - x).norm()) <= tol) by = &c;
+      if (by) {
+        ++f.frames_edited;
+        f.edit = edit_name(by->edit);
+      } else {
+        expected.push_back(e);
+      }
     }
     match_singularity(f, expected, topo, tol, claimed);
+    if (f.frames == 0 && f.frames_edited > 0) {
+      f.found = true;  // every frame of its life is in the edit's window
+      f.note.clear();
+    }
     out.designed.push_back(std::move(f));
   };
 
-  // Elements: singular ones along their paths, bifurcations at their points.
+  // Elements: singular ones along their paths, bifurcations at their points (matched
+  // below, once the edits have said where they are expected).
   std::set<int> designed_bifs;  // found bifurcations matched to bifurcation elements
+  struct BifurcationFeature {
+    size_t feature;  // index into out.designed
+    BifurcationKind kind;
+    bool sink;       // joins a sink (else a source)
+    bool typed;      // false: an edit's own feature, either kind and any pair
+  };
+  std::vector<BifurcationFeature> bifurcation_features;
   for (size_t k = 0; k < scene.elements.size(); ++k) {
     const Element& e = scene.elements[k];
     const std::string source = fmt::format("elements[{}]", k);
@@ -195,37 +238,8 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
                             b->type == BifurcationType::saddle_source_creation;
       const bool sink = b->type == BifurcationType::saddle_sink_creation ||
                         b->type == BifurcationType::saddle_sink_cancellation;
-      const BifurcationKind kind = creation ? BifurcationKind::creation : BifurcationKind::cancellation;
-      double best_score = 1e300;
-      for (size_t i = 0; i < topo.bifurcations.size(); ++i) {
-        const Bifurcation& fb = topo.bifurcations[i];
-        if (fb.kind != kind) continue;
-        const double d = (fb.position - f.position).norm();
-        const double dtime = std::abs(fb.t - f.t_begin);
-        if (d > tol || dtime > out.time_tolerance) continue;
-        const double score = d / tol + (out.time_tolerance > 0 ? dtime / out.time_tolerance : 0.0);
-        if (score < best_score) best_score = score, f.bifurcation = static_cast<int>(i);
-      }
-      if (f.bifurcation < 0) {
-        f.note = fmt::format("no {} within {:.3g} and {:.3g} in time of ({}, t = {:.3f})", to_string(kind), tol,
-                             out.time_tolerance, position_text(f.position, space.planar()), f.t_begin);
-      } else {
-        const Bifurcation& fb = topo.bifurcations[static_cast<size_t>(f.bifurcation)];
-        f.distance = (fb.position - f.position).norm();
-        f.time_offset = fb.t - f.t_begin;
-        f.paths = {fb.paths[0], fb.paths[1]};
-        claimed.insert(f.paths.begin(), f.paths.end());
-        const SingularityPath& p = topo.paths[static_cast<size_t>(fb.paths[0])];
-        const SingularityPath& q = topo.paths[static_cast<size_t>(fb.paths[1])];
-        const SingularityPath& node = p.index > 0 ? p : q;
-        const SingularityPath& saddle = p.index > 0 ? q : p;
-        const Stability want = sink ? Stability::attracting : Stability::repelling;
-        f.found = saddle.type == SingularityType::saddle && stability(node.type) == want;
-        if (!f.found)
-          f.note = fmt::format("the {} at t = {:.3f} joins a {} and a {}, not a saddle and a {}", to_string(kind),
-                               fb.t, to_string(p.type), to_string(q.type), sink ? "sink" : "source");
-        designed_bifs.insert(f.bifurcation);
-      }
+      bifurcation_features.push_back(
+          {out.designed.size(), creation ? BifurcationKind::creation : BifurcationKind::cancellation, sink, true});
       out.designed.push_back(std::move(f));
     }
   }
@@ -259,6 +273,121 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
       add_singularity(fmt::format("deform.base.elements[{}]", k), s->type ? to_string(*s->type) : "jacobian", expected,
                       el.index(), x);
     }
+  }
+
+  // Edits that remove or move bifurcations, in order: each refers to the bifurcation
+  // feature nearest to its `at` (space in tolerances, time in time tolerances) within twice
+  // the tolerances, or else is a feature of its own.
+  const double span = N > 1 ? topo.times.back() - topo.times.front() : 1.0;
+  const double time_tol = out.time_tolerance > 0 ? out.time_tolerance : span;
+  for (size_t i = 0; i < edits.size(); ++i) {
+    const auto* remove = std::get_if<RemoveBifurcationEdit>(&edits[i]);
+    const auto* move = std::get_if<MoveBifurcationEdit>(&edits[i]);
+    if (!remove && !move) continue;
+    const PathPoint& at = remove ? remove->at : move->at;
+    const Vec3 x = on_domain(at.position);
+    DesignedFeature* target = nullptr;
+    double best = 2.0;
+    for (const BifurcationFeature& bf : bifurcation_features) {
+      DesignedFeature& f = out.designed[bf.feature];
+      if (f.expected_absent) continue;
+      const double score = std::max((f.position - x).norm() / tol, std::abs(f.t_begin - at.t) / time_tol);
+      if (score <= best) best = score, target = &f;
+    }
+    if (!target) {
+      DesignedFeature f;
+      f.kind = FeatureKind::bifurcation;
+      f.source = edit_name(i);
+      f.type = op_name(edits[i]);
+      f.t_begin = f.t_end = at.t;
+      f.position = x;
+      bifurcation_features.push_back({out.designed.size(), BifurcationKind::creation, false, false});
+      out.designed.push_back(std::move(f));
+      target = &out.designed.back();
+    }
+    target->edit = edit_name(i);
+    if (remove) {
+      target->expected_absent = true;
+    } else {
+      target->moved = true;
+      target->position = on_domain(move->to.position);
+      target->t_begin = target->t_end = move->to.t;
+    }
+  }
+  for (const BifurcationFeature& bf : bifurcation_features) {
+    DesignedFeature& f = out.designed[bf.feature];
+    const bool any_kind = !bf.typed || f.expected_absent;
+    double best_score = 1e300;
+    for (size_t i = 0; i < topo.bifurcations.size(); ++i) {
+      const Bifurcation& fb = topo.bifurcations[i];
+      if (!any_kind && fb.kind != bf.kind) continue;
+      const double d = (fb.position - f.position).norm();
+      const double dtime = std::abs(fb.t - f.t_begin);
+      if (d > tol || dtime > out.time_tolerance) continue;
+      const double score = d / tol + (out.time_tolerance > 0 ? dtime / out.time_tolerance : 0.0);
+      if (score < best_score) best_score = score, f.bifurcation = static_cast<int>(i);
+    }
+    const std::string kind_text = any_kind ? "bifurcation" : to_string(bf.kind);
+    if (f.expected_absent) {
+      f.found = f.bifurcation < 0;
+      if (!f.found) {
+        const Bifurcation& fb = topo.bifurcations[static_cast<size_t>(f.bifurcation)];
+        f.distance = (fb.position - f.position).norm();
+        f.time_offset = fb.t - f.t_begin;
+        f.note = fmt::format("the {} at ({}, t = {:.3f}) is still there, although {} removes it", to_string(fb.kind),
+                             position_text(fb.position, space.planar()), fb.t, f.edit);
+        f.bifurcation = -1;
+      }
+      continue;
+    }
+    if (f.bifurcation < 0) {
+      f.note = fmt::format("no {} within {:.3g} and {:.3g} in time of ({}, t = {:.3f}){}", kind_text, tol,
+                           out.time_tolerance, position_text(f.position, space.planar()), f.t_begin,
+                           f.moved ? fmt::format(", where {} moves it", f.edit) : "");
+      continue;
+    }
+    const Bifurcation& fb = topo.bifurcations[static_cast<size_t>(f.bifurcation)];
+    f.distance = (fb.position - f.position).norm();
+    f.time_offset = fb.t - f.t_begin;
+    f.paths = {fb.paths[0], fb.paths[1]};
+    claimed.insert(f.paths.begin(), f.paths.end());
+    designed_bifs.insert(f.bifurcation);
+    if (!bf.typed) {
+      f.found = true;
+      continue;
+    }
+    const SingularityPath& p = topo.paths[static_cast<size_t>(fb.paths[0])];
+    const SingularityPath& q = topo.paths[static_cast<size_t>(fb.paths[1])];
+    const SingularityPath& node = p.index > 0 ? p : q;
+    const SingularityPath& saddle = p.index > 0 ? q : p;
+    const Stability want = bf.sink ? Stability::attracting : Stability::repelling;
+    f.found = saddle.type == SingularityType::saddle && stability(node.type) == want;
+    if (!f.found)
+      f.note = fmt::format("the {} at t = {:.3f} joins a {} and a {}, not a saddle and a {}", to_string(bf.kind), fb.t,
+                           to_string(p.type), to_string(q.type), bf.sink ? "sink" : "source");
+  }
+
+  // Cancelled pairs: absent at their frames.
+  for (const Cut& c : cuts) {
+    DesignedFeature f;
+    f.kind = FeatureKind::singularity;
+    f.source = edit_name(c.edit);
+    f.type = "cancel";
+    f.edit = f.source;
+    f.expected_absent = true;
+    f.t_begin = f.t_end = topo.times[static_cast<size_t>(c.frame)];
+    f.position = c.pair[0];
+    f.frames = 1;
+    f.found = true;
+    for (const Singularity& sg : topo.singularities[static_cast<size_t>(c.frame)])
+      for (const Vec3& x : c.pair)
+        if (f.found && (sg.position - x).norm() <= tol) {
+          f.found = false;
+          f.note = fmt::format("the {} at {} is still there at frame {}, although {} cancels it", to_string(sg.type),
+                               position_text(sg.position, space.planar()), c.frame, f.edit);
+        }
+    f.frames_matched = f.found ? 1 : 0;
+    out.designed.push_back(std::move(f));
   }
 
   // Continuations across type changes: a path whose last point is another's first.
@@ -425,9 +554,27 @@ std::string DesignCheck::summary(int max_lines) const {
   else
     s += fmt::format("; extra: {}, {}", plural(extra_paths.size(), "path", "paths"),
                      plural(extra_bifurcations.size(), "bifurcation", "bifurcations"));
+  int removed = 0, moved = 0;
+  for (const DesignedFeature& f : designed) {
+    removed += f.expected_absent && f.found;
+    moved += f.moved && f.found;
+  }
+  if (removed || moved) {
+    std::string parts = removed ? fmt::format("{} removed", removed) : "";
+    if (moved) parts += fmt::format("{}{} moved", removed ? ", " : "", moved);
+    s += fmt::format(" ({} as edited)", parts);
+  }
   std::vector<std::string> lines;
-  for (const DesignedFeature& f : designed)
-    if (!f.found) lines.push_back(fmt::format("not found: {} ({}): {}", f.source, f.type, f.note));
+  for (const DesignedFeature& f : designed) {
+    if (!f.found) {
+      lines.push_back(fmt::format("not found: {} ({}): {}", f.source, f.type, f.note));
+    } else if (f.expected_absent) {
+      lines.push_back(fmt::format("removed as edited: {} ({}) by {}", f.source, f.type, f.edit));
+    } else if (f.moved) {
+      lines.push_back(fmt::format("moved as edited: {} ({}) by {}: found {:.3g} from its new place, {:+.3f} in time",
+                                  f.source, f.type, f.edit, f.distance, f.time_offset));
+    }
+  }
   for (const ExtraGroup& g : extras) lines.push_back("extra: " + g.description);
   const size_t shown = std::min(lines.size(), static_cast<size_t>(std::max(max_lines, 0)));
   for (size_t k = 0; k < shown; ++k) s += "\n  " + lines[k];
@@ -464,6 +611,11 @@ nlohmann::json design_check_to_json(const DesignCheck& check) {
       }
     }
     j["paths"] = f.paths;
+    if (!f.edit.empty()) {
+      j["edit"] = f.edit;
+      j["expected"] = f.expected_absent ? "absent" : f.moved ? "moved" : "present";
+      if (f.kind == FeatureKind::singularity) j["frames"]["edited"] = f.frames_edited;
+    }
     if (!f.note.empty()) j["note"] = f.note;
     designed.push_back(std::move(j));
   }

@@ -3,6 +3,7 @@
 #include "tvf/analysis/singularities.h"
 #include "tvf/analysis/topology.h"
 #include "tvf/field/field_sampler.h"
+#include "tvf/mesh/chart_inverse.h"
 #include "tvf/solve/spacetime.h"
 
 #include <fmt/format.h>
@@ -611,10 +612,65 @@ void FieldEditor::move_survivor(Field& out, const Topology& topo, const std::map
   }
 }
 
+namespace {
+
+// Where the moved pair's neighbourhood comes from (move_bifurcation): local coordinates
+// around the bifurcation, in which the neighbourhood is translated, and their inverse.
+// Planar domains: the plane's own coordinates (the neighbourhood is translated in the
+// plane). Surfaces: the log map at the bifurcation (log_map.h), inverted by point location
+// in the log-coordinate triangulation (chart_inverse.h); vectors are carried in the chart's
+// frame (the frame at the bifurcation, parallel-transported), as element fields are.
+class MoveChart {
+public:
+  MoveChart(const DesignSpace& space, const Vec3& at) : space_(space) {
+    if (space.planar()) {
+      planar_.emplace(space.mesh());
+      return;
+    }
+    space.log_map().compute(space.locate(at), chart_);
+    // The disc in which the chart is inverted: half the domain's diameter (on a unit sphere
+    // about 100°, short of the cut locus at the antipode).
+    inverse_.emplace(space.bundle(), chart_, 0.5 * space.diameter());
+  }
+  bool planar() const { return planar_.has_value(); }
+  // Local coordinates of a vertex, or of a surface point.
+  cplx vertex(int v) const {
+    const Vec3& x = space_.mesh().position(v);
+    return planar() ? cplx(x.x(), x.y()) : chart_.coords[static_cast<size_t>(v)];
+  }
+  cplx point(const SurfacePoint& q, const Vec3& world) const {
+    return planar() ? cplx(world.x(), world.y()) : inverse_->coords(q);
+  }
+  // Whether vertex v has trustworthy coordinates (inside the inverted disc).
+  bool charted(int v) const { return planar() || std::abs(chart_.coords[static_cast<size_t>(v)]) <= inverse_->radius(); }
+  // The surface point with local coordinates w (nullopt outside the domain or the disc).
+  std::optional<SurfacePoint> locate(cplx w) const {
+    if (planar()) {
+      const Vec3 from(w.real(), w.imag(), 0.0);
+      const SurfacePoint sp = planar_->locate(from);
+      if ((surface_position(space_.mesh(), sp) - from).norm() > 1e-9 * space_.diameter()) return std::nullopt;
+      return sp;
+    }
+    return inverse_->locate(w);
+  }
+  // A vector in the frame of face q.face (at the source point q) as the value at vertex v
+  // after the move: on planar domains the frames are all the global frame.
+  cplx carry(cplx in_face, const SurfacePoint& q, int v) const {
+    if (planar()) return in_face;
+    return in_face / inverse_->frame_in_face(q) * chart_.frame[static_cast<size_t>(v)];
+  }
+  double radius() const { return planar() ? std::numeric_limits<double>::infinity() : inverse_->radius(); }
+
+private:
+  const DesignSpace& space_;
+  std::optional<PlanarLocator> planar_;
+  LocalChart chart_;
+  std::optional<ChartInverse> inverse_;
+};
+
+}  // namespace
+
 EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit& edit) {
-  if (!space_.planar())
-    throw EditRefused("moving a bifurcation needs a planar domain (the bifurcation's neighbourhood is translated "
-                      "in the plane)");
   const TangentBundle& bundle = space_.bundle();
   const Mesh& mesh = space_.mesh();
   const Topology topo = analyze_for_edit(bundle, field);
@@ -628,7 +684,14 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
   const std::vector<char> in_b = membership(np, tracks.follow(bif.paths[1], sigma));
 
   const double tb = bif.t, tn = edit.to.t;
-  const Vec3 shift(edit.to.position.x() - bif.position.x(), edit.to.position.y() - bif.position.y(), 0.0);
+  const MoveChart chart(space_, bif.position);
+  // The move in local coordinates: on a surface the log map of the new place.
+  const SurfacePoint to_point = space_.locate(edit.to.position);
+  const cplx shift = chart.point(to_point, edit.to.position) - chart.point(space_.locate(bif.position), bif.position);
+  if (!chart.planar() && !chart.locate(shift + chart.point(space_.locate(bif.position), bif.position)))
+    throw EditRefused(fmt::format("cannot move {} to {}: it lies beyond the disc of radius {:.3g} around the "
+                                  "bifurcation in which its local chart is used",
+                                  bifurcation_name(bif), where(edit.to.position), chart.radius()));
   const double wt = edit.window * span;
   const double te = tn + sigma * wt;  // the moved pair rejoins its track here
   if (te < time.t0 || te > time.t1)
@@ -648,7 +711,6 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
   const double begin = sigma > 0 ? std::min(tb, tn) : std::max(tb, tn);
   const double h = mesh.mean_edge_length();
   const FieldSampler original(bundle, field);
-  const PlanarLocator locator(mesh);
 
   Field out = field;
   EditReport report;
@@ -682,28 +744,35 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
     if (sigma * (t - tn) > 0) {
       const double lambda = (t - tn) / (te - tn);
       const double source_t = tb + lambda * (te - tb);
-      const Vec3 offset = (1 - lambda) * shift;
+      const cplx offset = (1 - lambda) * shift;
       const int js = frame_of(source_t);
-      Vec3 pa = bif.position, pb = bif.position;
+      const SurfacePoint bp = space_.locate(bif.position);
+      cplx pa = chart.point(bp, bif.position), pb = pa;
       if (const auto p = pair_at(topo, js, in_a, in_b)) {
-        pa = topo.singularities[static_cast<size_t>(js)][(*p)[0]].position;
-        pb = topo.singularities[static_cast<size_t>(js)][(*p)[1]].position;
+        const Singularity& sa = topo.singularities[static_cast<size_t>(js)][(*p)[0]];
+        const Singularity& sb = topo.singularities[static_cast<size_t>(js)][(*p)[1]];
+        pa = chart.point(sa.where, sa.position);
+        pb = chart.point(sb.where, sb.position);
       }
-      const Vec3 centre = (pa + pb) / 2 + offset;
-      const double radius = (pa - pb).norm() / 2 + 3 * h;
+      const cplx centre = (pa + pb) / 2.0 + offset;
+      const double radius = std::abs(pa - pb) / 2 + 3 * h;
       std::vector<cplx> pinned_values;
       for (int v = 0; v < mesh.num_vertices(); ++v) {
-        const Vec3& x = mesh.position(v);
-        if ((x - centre).norm() > radius) continue;
-        const Vec3 from = x - offset;
-        const SurfacePoint sp = locator.locate(from);
-        if ((surface_position(mesh, sp) - from).norm() > 1e-9 * space_.diameter())
+        if (!chart.charted(v) || std::abs(chart.vertex(v) - centre) > radius) continue;
+        const cplx from = chart.vertex(v) - offset;
+        const auto sp = chart.locate(from);
+        if (!sp) {
+          const std::string place =
+              chart.planar() ? fmt::format("{}, outside the domain", where(Vec3(from.real(), from.imag(), 0.0)))
+                             : fmt::format("beyond the disc of radius {:.3g} around the bifurcation in which its "
+                                           "local chart is used",
+                                           chart.radius());
           throw EditRefused(fmt::format("cannot move {}: at frame {} the moved pair's neighbourhood would come "
-                                        "from {}, outside the domain",
-                                        bifurcation_name(bif), j, where(from)));
+                                        "from {}",
+                                        bifurcation_name(bif), j, place));
+        }
         pinned.push_back(v);
-        // Planar: the face frame is the vertex frame.
-        pinned_values.push_back(original.in_face(sp, source_t));
+        pinned_values.push_back(chart.carry(original.in_face(*sp, source_t), *sp, v));
       }
       const RegionResult r = region_.paste(values, pinned, pinned_values);
       if (!r.success) refuse(r, "placing the moved pair");

@@ -80,6 +80,7 @@ TEST(CliEdit, RefusalsLeaveTheSceneUnchanged) {
       {"--cancel 30 0.2 -0.3 -0.27 -0.3", "FRAME must be an integer in [0, 20]"},
       {"--cancel 10 0.2 -0.3", "--cancel"},                            // too few numbers
       {"--remove-bifurcation 0.5 0 0", "no bifurcation"},
+      {"--move-bifurcation 0.4 0 0 0.5 0.3 0.3 0.1", "--move-bifurcation needs T X Y T2 X Y (6 numbers)"},
       {"--smooth 2", "edits[0].strength: must be in (0, 1]"},
       {"--undo", "no edits to undo"},
       {"", "say which edit"},
@@ -95,6 +96,30 @@ TEST(CliEdit, RefusalsLeaveTheSceneUnchanged) {
   EXPECT_EQ(test::count_lines(r.output), 1) << r.output;
   EXPECT_NE(r.output.find(scene.string() + ": refused to cancel"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("the scene is unchanged"), std::string::npos) << r.output;
+}
+
+// On a surface --move-bifurcation takes T X Y Z T2 X2 Y2 Z2 and moves the creation through
+// the log map (tests/edit/field_editor_test.cpp checks where it ends up).
+TEST(CliEdit, MovesABifurcationOnASphere) {
+  TempDir dir;
+  const auto scene = dir / "sphere.json";
+  const std::string text = R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 4, "radius": 1}},
+    "time": {"frames": 21, "range": [0, 1]}, "falloff": 120,
+    "elements": [{"kind": "bifurcation", "type": "saddle_sink_creation", "at": [0.6, 0, 0.8, 0.4],
+                  "scale": 0.3, "time_scale": 0.3, "angle": 0},
+                 {"kind": "singular", "type": "ccw_center", "path": [[-0.6, -0.6, 0.5292, 0]]}]})";
+  test::write_text(scene, text);
+  auto r = run_tvf("edit " + q(scene) + " --move-bifurcation 0.4 0.6 0 0.8 0.49 0 0.6");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("T X Y Z T2 X Y Z (8 numbers) on this surface domain"), std::string::npos) << r.output;
+  EXPECT_EQ(test::read_text(scene), text);
+  r = run_tvf("edit " + q(scene) + " --move-bifurcation 0.4 0.6 0 0.8 0.49 0 0.6 0.8 --window 0.25");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("moved the creation bifurcation"), std::string::npos) << r.output;
+  const auto j = nlohmann::json::parse(test::read_text(scene));
+  ASSERT_EQ(j["edits"].size(), 1u);
+  EXPECT_EQ(j["edits"][0]["op"], "move_bifurcation");
+  EXPECT_EQ(j["edits"][0]["to"], nlohmann::json::parse("[0, 0.6, 0.8, 0.49]"));
 }
 
 }  // namespace

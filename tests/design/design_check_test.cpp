@@ -9,6 +9,7 @@
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
+#include "tvf/design/scene_json.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -229,6 +230,62 @@ TEST(DesignCheck, RefusesATopologyOfAnotherTimeSampling) {
   Scene other = scene;
   other.time.frames = 11;
   EXPECT_THROW(check_design(other, *g.space, g.field, g.topology), Error);
+}
+
+}  // namespace
+}  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// A cancel edit: the pair is expected absent at its frame, and the designed singularities
+// it takes away are not checked in the edit's window (they come back after it).
+TEST(DesignCheck, ACancelledPairIsExpectedAbsentAtItsFrame) {
+  const Scene scene = scene_from_json(nlohmann::json::parse(R"({"tvf": 1,
+    "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 21, "range": [0, 1]},
+    "generator": "constrained", "solver": {"region_radius": 0.15},
+    "falloff": 20,
+    "elements": [
+      {"kind": "regular", "pathline": [[-0.9, -0.3, 0], [-0.8, -0.3, 1]]},
+      {"kind": "singular", "jacobian": [[-1, 0], [0, 1]], "path": [[-0.3, -0.3, 0], [-0.25, -0.3, 1]]},
+      {"kind": "singular", "type": "source", "path": [[0.2, -0.3, 0]]},
+      {"kind": "singular", "type": "ccw_center", "path": [[0.1, 0.6, 0]]}],
+    "edits": [{"op": "cancel", "frame": 10, "pair": [[0.2, -0.3], [-0.275, -0.3]]}]})"),
+                                      "cancel.json");
+  const Generated g = generate_and_analyze(scene);
+  const DesignCheck check = check_design(scene, *g.space, g.field, g.topology);
+  EXPECT_TRUE(check.all_found()) << check.summary();
+  const auto feature = [&](const DesignCheck& c, const std::string& source) {
+    const auto it = std::find_if(c.designed.begin(), c.designed.end(),
+                                 [&](const DesignedFeature& f) { return f.source == source; });
+    EXPECT_NE(it, c.designed.end()) << source;
+    return *it;
+  };
+  const DesignedFeature cancel = feature(check, "edits[0]");
+  EXPECT_EQ(cancel.type, "cancel");
+  EXPECT_TRUE(cancel.expected_absent);
+  EXPECT_TRUE(cancel.found);
+  EXPECT_NE(check.summary().find("removed as edited: edits[0] (cancel)"), std::string::npos) << check.summary();
+  // The saddle and the source are checked outside the window (±2 frames) and found there;
+  // the centre is not concerned.
+  for (const char* source : {"elements[1]", "elements[2]"}) {
+    const DesignedFeature f = feature(check, source);
+    EXPECT_EQ(f.edit, "edits[0]") << source;
+    EXPECT_GE(f.frames_edited, 1) << source;
+    EXPECT_LE(f.frames_edited, 5) << source;
+    EXPECT_EQ(f.frames + f.frames_edited, 21) << source;
+    EXPECT_TRUE(f.found) << source;
+  }
+  EXPECT_TRUE(feature(check, "elements[3]").edit.empty());
+  // The field without the edit still has the pair at frame 10: the check says so.
+  const Field unedited = generate_unedited(*g.space, scene);
+  const DesignCheck before = check_design(scene, *g.space, unedited, analyze_topology(g.space->bundle(), unedited));
+  EXPECT_FALSE(before.all_found());
+  const DesignedFeature still = feature(before, "edits[0]");
+  EXPECT_FALSE(still.found);
+  EXPECT_NE(still.note.find("is still there at frame 10, although edits[0] cancels it"), std::string::npos)
+      << still.note;
 }
 
 }  // namespace

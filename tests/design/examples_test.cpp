@@ -139,9 +139,11 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
     if (!designs_singularities) continue;
     EXPECT_GT(checked, 0);
 
-    // The analysis finds every designed feature.
+    // The analysis finds every designed feature (of the design without its edits).
+    Scene unedited = scene;
+    unedited.edits = nlohmann::json::array();
     const Topology topology = analyze_topology(space->bundle(), field);
-    const DesignCheck check = check_design(scene, *space, field, topology);
+    const DesignCheck check = check_design(unedited, *space, field, topology);
     EXPECT_FALSE(check.designed.empty());
     EXPECT_TRUE(check.all_found()) << check.summary();
     for (const DesignedFeature& f : check.designed) {
@@ -150,6 +152,30 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
         EXPECT_EQ(f.frames_matched, f.frames) << f.source;
       }
     }
+    if (scene.edits.empty()) continue;
+    // The edited design: what an edit removes is absent ("removed as edited"), what it
+    // moves is at its new place and time, everything else as designed.
+    const Field edited = generate(*space, scene);
+    const DesignCheck after = check_design(scene, *space, edited, analyze_topology(space->bundle(), edited));
+    EXPECT_TRUE(after.all_found()) << after.summary();
+    int changed = 0;
+    for (const DesignedFeature& f : after.designed) {
+      if (f.edit.empty()) continue;
+      ++changed;
+      EXPECT_TRUE(f.expected_absent || f.moved) << f.source;
+      EXPECT_EQ(f.paths.empty(), f.expected_absent) << f.source;
+    }
+    EXPECT_GT(changed, 0) << after.summary();
+    // The unedited field does not pass the edited design's check: the removed bifurcation
+    // is still there, the moved one is not at its new place.
+    const DesignCheck before = check_design(scene, *space, field, topology);
+    EXPECT_FALSE(before.all_found()) << before.summary();
+    for (const DesignedFeature& f : before.designed)
+      if (!f.edit.empty()) {
+        EXPECT_FALSE(f.found) << f.source;
+        EXPECT_NE(f.note.find(f.expected_absent ? "still there" : "where " + f.edit + " moves it"), std::string::npos)
+            << f.note;
+      }
   }
 }
 

@@ -8,6 +8,7 @@
 #include "tvf/design/generate.h"
 #include "tvf/design/scene_json.h"
 #include "tvf/edit/edits.h"
+#include "tvf/field/field_sampler.h"
 
 #include <gtest/gtest.h>
 
@@ -91,6 +92,42 @@ TEST(EditExamples, BifurcationMoveMovesItToTheCorner) {
   EXPECT_LT(std::abs(b.t - move.to.t), 2 * e.dt);
   EXPECT_EQ(e.after.paths.size(), e.before.paths.size());
   // Outside the window the singularities are where they were.
+  const int last = static_cast<int>(std::lround((move.to.t + move.window) / e.dt)) + 1;
+  for (int j : {0, 20, last, last + 10, e.scene.time.frames - 1}) {
+    const auto& a = e.before.singularities[static_cast<size_t>(j)];
+    const auto& c = e.after.singularities[static_cast<size_t>(j)];
+    ASSERT_EQ(a.size(), c.size()) << "frame " << j;
+    for (size_t k = 0; k < a.size(); ++k) EXPECT_LT((a[k].position - c[k].position).norm(), e.cell) << j;
+  }
+}
+
+TEST(EditExamples, BifurcationMoveOnTheSphereMovesItAQuarterTurnRoundThePole) {
+  BeforeAfter e("20_sphere_bifurcation_move");
+  const auto edits = edits_from_scene(e.scene);
+  ASSERT_EQ(edits.size(), 1u);
+  const auto& move = std::get<MoveBifurcationEdit>(edits[0]);
+  const Vec3 to = surface_position(e.space->mesh(), e.space->locate(move.to.position));
+  // The designed creation, before; the same creation at the new place and time, after,
+  // and none left at the old place.
+  auto creations_near = [&](const Topology& topo, const Vec3& x, double t) {
+    std::vector<const Bifurcation*> out;
+    for (const auto& b : topo.bifurcations)
+      if (b.kind == BifurcationKind::creation && (b.position - x).norm() < 2 * e.cell && std::abs(b.t - t) < 2 * e.dt)
+        out.push_back(&b);
+    return out;
+  };
+  const auto original = creations_near(e.before, move.at.position.normalized(), move.at.t);
+  ASSERT_EQ(original.size(), 1u);
+  EXPECT_EQ(creations_near(e.after, to, move.to.t).size(), 1u);
+  for (const auto& b : e.after.bifurcations)
+    EXPECT_GT((b.position - original[0]->position).norm(), 3 * e.cell) << b.position.transpose() << " t = " << b.t;
+  // Every other bifurcation stays where it was.
+  for (const Bifurcation& b : e.before.bifurcations) {
+    if (&b == original[0]) continue;
+    EXPECT_NE(match(e.after.bifurcations, b, e.cell, e.dt), nullptr) << b.t;
+  }
+  EXPECT_EQ(e.after.bifurcations.size(), e.before.bifurcations.size());
+  // Outside the window every singularity is where it was (within an edge length).
   const int last = static_cast<int>(std::lround((move.to.t + move.window) / e.dt)) + 1;
   for (int j : {0, 20, last, last + 10, e.scene.time.frames - 1}) {
     const auto& a = e.before.singularities[static_cast<size_t>(j)];

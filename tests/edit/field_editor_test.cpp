@@ -407,3 +407,94 @@ TEST(FieldEditor, ARegionThatWouldSwallowAnotherSingularityIsRefused) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// A saddle–sink creation on the unit sphere (icosphere, 2,562 vertices) at t = 0.4 and a
+// storm (a centre) away from it, moved through the log map at the creation.
+json sphere_move_scene() {
+  return json::parse(R"({"tvf": 1,
+    "domain": {"sphere": {"subdivisions": 4, "radius": 1}},
+    "time": {"frames": 21, "range": [0, 1]},
+    "falloff": 120,
+    "elements": [
+      {"kind": "bifurcation", "type": "saddle_sink_creation", "at": [0.6, 0, 0.8, 0.4],
+       "scale": 0.3, "time_scale": 0.3, "angle": 0},
+      {"kind": "singular", "type": "ccw_center", "path": [[-0.6, -0.6, 0.5292, 0]]}],
+    "edits": [{"op": "move_bifurcation", "at": [0.6, 0, 0.8, 0.4], "to": [0, 0.6, 0.8, 0.49],
+               "window": 0.25}]})");
+}
+
+TEST(FieldEditor, MovingABifurcationOnTheSphere) {
+  const json j = sphere_move_scene();
+  Design d(j);  // generate_unedited: the design before its edit
+  const TangentBundle& bundle = d.space->bundle();
+  const double cell = d.space->mesh().mean_edge_length();
+  const Topology before = analyze_topology(bundle, d.field);
+  const Vec3 from = Vec3(0.6, 0, 0.8), to = Vec3(0, 0.6, 0.8);
+  auto nearest_creation = [&](const Topology& topo, const Vec3& x) {
+    const Bifurcation* best = nullptr;
+    for (const auto& b : topo.bifurcations)
+      if (b.kind == BifurcationKind::creation &&
+          (!best || (b.position - x).norm() < (best->position - x).norm()))
+        best = &b;
+    return best;
+  };
+  const Bifurcation* original = nearest_creation(before, from);
+  ASSERT_TRUE(original);
+  ASSERT_LT((original->position - from).norm(), 2 * cell);
+
+  // Replay from the scene: twice the same bits, and the same as the editor by hand.
+  const Field edited = generate(*d.space, d.scene);
+  EXPECT_TRUE(bitwise_equal(edited, generate(*d.space, d.scene)));
+  Field by_hand = d.field;
+  apply_scene_edits(*d.space, d.scene, by_hand);
+  EXPECT_TRUE(bitwise_equal(edited, by_hand));
+
+  const Topology after = analyze_topology(bundle, edited);
+  // The creation is at the new place and time (within two edge lengths and two frames),
+  // and none is left at the old place.
+  const Bifurcation* moved = nearest_creation(after, to);
+  ASSERT_TRUE(moved);
+  EXPECT_LT((moved->position - to).norm(), 2 * cell) << moved->position.transpose();
+  EXPECT_NEAR(moved->t, 0.49, 2 * 0.05);
+  for (const auto& b : after.bifurcations)
+    EXPECT_GT((b.position - original->position).norm(), 3 * cell) << b.position.transpose() << " t = " << b.t;
+  // Every other singularity (away from the old and the new place of the pair) stays within
+  // one edge length of where it was, at every frame.
+  for (int k = 0; k < d.field.frames(); ++k) {
+    const auto& old_k = before.singularities[static_cast<size_t>(k)];
+    const auto& new_k = after.singularities[static_cast<size_t>(k)];
+    for (const auto& s : old_k) {
+      if ((s.position - from).norm() < 0.6 || (s.position - to).norm() < 0.6) continue;
+      const Singularity* n = nearest_to(new_k, s.position);
+      ASSERT_TRUE(n) << "frame " << k;
+      EXPECT_LE((n->position - s.position).norm(), cell) << "frame " << k << " " << to_string(s.type);
+      EXPECT_EQ(n->index, s.index);
+    }
+  }
+}
+
+TEST(FieldEditor, MovingABifurcationOnTheSphereBeyondItsChartIsRefused) {
+  json j = sphere_move_scene();
+  j.erase("edits");
+  Design d(j);
+  FieldEditor editor(*d.space, edit_settings(d.scene));
+  MoveBifurcationEdit m;
+  m.at = {Vec3(0.6, 0, 0.8), 0.4};
+  m.to = {Vec3(-0.6, 0, -0.8), 0.49};  // the antipode: beyond the chart's disc
+  m.window = 0.25;
+  Field field = d.field;
+  std::string message;
+  try {
+    editor.move_bifurcation(field, m);
+  } catch (const EditRefused& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("beyond the disc"), std::string::npos) << message;
+  EXPECT_TRUE(bitwise_equal(field, d.field));
+}
+
+}  // namespace
+}  // namespace tvf

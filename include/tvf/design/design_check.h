@@ -24,6 +24,20 @@
 // a center is compatible with a focus of either stability (a center is non-hyperbolic:
 // any neighbour tilts it into a focus), and a node with the focus of its stability.
 //
+// Edits (the scene's `edits`, applied after the generator) change what is expected:
+// - remove_bifurcation: the bifurcation element whose designed point (or, after an earlier
+//   move, its new point) is nearest to the edit's `at`, within twice the tolerances, is
+//   expected absent: "removed as edited" when no bifurcation of either kind lies within the
+//   tolerances of its point and time, not found ("still there") otherwise. An edit that
+//   names no designed bifurcation is a feature of its own ("edits[i]"), checked the same way.
+// - move_bifurcation: that bifurcation element is expected at the edit's `to` instead (an
+//   edit that names no designed bifurcation: a bifurcation of either kind expected there).
+// - cancel: the pair is expected absent at the edit's frame (a feature "edits[i]": no
+//   singularity within the tolerance of either of the edit's positions); a designed
+//   singularity within the tolerance of one of them is not checked at the frames of the
+//   edit's window (its pair vanishes shortly before the frame and comes back after it).
+// - smooth changes nothing that is expected.
+//
 // The paths that carry a matched singularity (and the two paths of a matched bifurcation)
 // are the designed paths, and so are their continuations across a type change. Every other
 // path is extra. A found bifurcation is designed (matched to a bifurcation element),
@@ -79,6 +93,11 @@ struct DesignedFeature {
   double time_offset = 0;
   std::vector<int> paths;  // ids of the found paths that carry the feature (ascending)
   std::string note;        // what is missing when not found; empty otherwise
+  // Edits that change what is expected of the feature (see above).
+  std::string edit;              // "edits[i]" of the last such edit; empty when none
+  bool expected_absent = false;  // removed or cancelled by the edit: `found` means absent
+  bool moved = false;            // bifurcation: position and t_begin are the edit's `to`
+  int frames_edited = 0;         // singularity: frames left out, in a cancel edit's window
 };
 
 // A connected set of extra paths.
@@ -99,6 +118,7 @@ struct DesignCheck {
   double position_tolerance = 0;  // world units
   double time_tolerance = 0;      // time units
 
+  // Every feature is as designed and edited: found, or absent where an edit removes it.
   bool all_found() const;
   // A short human summary: the first line counts designed and found features and extras,
   // one line follows per feature not found and per extra group (at most `max_lines`, then

@@ -90,9 +90,10 @@ SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
 // static constrained design of deform.base's elements, M(t) from deform.matrix keys
 // (linear from the identity) or deform.transform keys (sx, sy, θ linear). With
 // deform.streamlines, representative streamlines traced in V(t0) are moved by keyed
-// similarity transforms, and each frame is the constrained solve of the moved
-// streamlines' tangents plus the base elements' regions (transformed by M(t)); planar
-// domains only for that part. On surfaces M acts in each vertex's tangent basis.
+// similarity transforms (streamline_deform.h: on surfaces in the log-map chart around
+// each seed), and each frame is the constrained solve of the moved streamlines' tangents
+// plus the base elements' regions (transformed by M(t)). On surfaces M acts in each
+// vertex's tangent basis.
 Field generate_deform(const DesignSpace& space, const Scene& scene,
                       const GenerateOptions& options = {}, GenerateReport* report = nullptr);
 

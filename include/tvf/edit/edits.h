@@ -37,7 +37,8 @@ struct RemoveBifurcationEdit {
   double window = kDefaultEditWindow;
 };
 
-// Move the bifurcation nearest to `at` to the place and time `to` (planar domains).
+// Move the bifurcation nearest to `at` to the place and time `to` (on a surface, `to` is
+// snapped to the surface).
 struct MoveBifurcationEdit {
   PathPoint at;
   PathPoint to;

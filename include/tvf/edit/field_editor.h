@@ -22,12 +22,16 @@
 //   overlap (its neighbourhood pasted there, the region between re-solved), so one path
 //   runs from one outer track to the other. On surfaces it passes from one outer track
 //   to the other between two frames: one path, with a jump.
-// - move_bifurcation (planar domains): the bifurcation's neighbourhood is moved to the new
-//   place and time. Over the window after the new time (before it for a cancellation)
-//   each frame gets the pair of the original field at a source time that runs from the
-//   old bifurcation time to the window's end, translated by an offset that shrinks from
-//   the full move to zero, so the moved pair joins its original track at the window's end;
-//   where the original pair no longer belongs, it is cancelled. The edited frames are key
+// - move_bifurcation: the bifurcation's neighbourhood is moved to the new place and time.
+//   Over the window after the new time (before it for a cancellation) each frame gets the
+//   pair of the original field at a source time that runs from the old bifurcation time to
+//   the window's end, translated by an offset that shrinks from the full move to zero, so
+//   the moved pair joins its original track at the window's end; where the original pair
+//   no longer belongs, it is cancelled. The translation happens in local coordinates
+//   around the old bifurcation: the plane's own on planar domains, the log map on surfaces
+//   (the move is log_p(new place); a vertex x of the moved neighbourhood takes the field at
+//   the surface point whose log coordinates are log_p(x) − offset, found by
+//   ChartInverse, its vector carried in the chart's frame). The edited frames are key
 //   frames; the frames beyond are smoothed.
 // - smooth: min Σ_j z_jᴴ L z_j + b Σ |Δ_t z|² + μ Σ_j Σ_i d_i |z_ij − z⁰_ij|² over the
 //   whole field, μ = 1 / (4·strength)² (strength 1 smooths over about 4 edges in space and

@@ -1,0 +1,136 @@
+#include "tvf/design/streamline_deform.h"
+
+#include "tvf/core/error.h"
+#include "tvf/integrate/streamline.h"
+#include "tvf/mesh/chart_inverse.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <optional>
+
+namespace tvf {
+
+namespace {
+
+// A keyed similarity transform of a streamline at time t: translate, rotate, scale about
+// the seed, interpolated linearly from the identity at t0. translate: (x, y) on planar
+// domains, a world vector on surfaces.
+struct Similarity {
+  Vec3 translate = Vec3::Zero();
+  double rotate = 0;
+  double scale = 1;
+};
+Similarity similarity_at(const nlohmann::json& keys, double t0, double t) {
+  double ta = t0;
+  Similarity a;
+  for (const auto& k : keys) {
+    const double tb = k.at("t").get<double>();
+    Similarity b;
+    const auto& tr = k.at("translate");
+    b.translate = Vec3(tr[0].get<double>(), tr[1].get<double>(), tr.size() > 2 ? tr[2].get<double>() : 0.0);
+    b.rotate = k.at("rotate").get<double>();
+    b.scale = k.at("scale").get<double>();
+    if (t <= tb) {
+      if (tb <= ta) return b;
+      const double w = std::clamp((t - ta) / (tb - ta), 0.0, 1.0);
+      return {(1 - w) * a.translate + w * b.translate, (1 - w) * a.rotate + w * b.rotate,
+              (1 - w) * a.scale + w * b.scale};
+    }
+    ta = tb;
+    a = b;
+  }
+  return a;
+}
+
+}  // namespace
+
+struct StreamlineDeformation::Line {
+  Streamline traced;
+  // Surfaces: the chart around the seed, its inverse and the traced points' log coordinates.
+  SurfacePoint seed;
+  LocalChart chart;
+  std::optional<ChartInverse> inverse;
+  std::vector<cplx> coords;
+};
+
+StreamlineDeformation::~StreamlineDeformation() = default;
+
+StreamlineDeformation::StreamlineDeformation(const DesignSpace& space, const Scene& scene,
+                                             std::span<const cplx> base)
+    : space_(space), scene_(scene) {
+  if (!scene.deform.is_object() || !scene.deform.contains("streamlines")) return;
+  const nlohmann::json& streamlines = scene.deform.at("streamlines");
+  const Mesh& mesh = space.mesh();
+  for (size_t k = 0; k < streamlines.size(); ++k) {
+    const auto& seed = streamlines[k].at("seed");
+    const Vec3 x(seed[0].get<double>(), seed[1].get<double>(), seed.size() > 2 ? seed[2].get<double>() : 0.0);
+    auto line = std::make_unique<Line>();
+    try {
+      if (space.planar()) {
+        line->traced = trace_streamline(space.bundle(), base, x);
+      } else {
+        line->seed = space.locate(x);
+        space.log_map().compute(line->seed, line->chart);
+        line->inverse.emplace(space.bundle(), line->chart, 0.5 * space.diameter());
+        // Trace within the inner half of the chart's disc, so the moved curve has room.
+        const ChartInverse& inverse = *line->inverse;
+        const double reach = 0.5 * inverse.radius();
+        StreamlineOptions options;
+        options.accept = [&](const Vec3& p) { return std::abs(inverse.coords(space.locate(p))) <= reach; };
+        line->traced = trace_streamline(space.bundle(), base, line->seed, options);
+        for (const SurfacePoint& q : line->traced.where) line->coords.push_back(inverse.coords(q));
+      }
+    } catch (const Error& e) {
+      throw_input_error(scene.label(), fmt::format("deform.streamlines[{}].seed", k), e.what());
+    }
+    if (line->traced.points.size() < 2)
+      throw_input_error(scene.label(), fmt::format("deform.streamlines[{}].seed", k),
+                        fmt::format("the streamline from {} stops at once (a singularity or the boundary of the "
+                                    "base field there)",
+                                    space.planar() ? fmt::format("({}, {})", x.x(), x.y())
+                                                   : fmt::format("({}, {}, {})", x.x(), x.y(), x.z())));
+    (void)mesh;
+    lines_.push_back(std::move(line));
+  }
+}
+
+std::vector<MovedStreamline> StreamlineDeformation::at(double t) const {
+  const nlohmann::json& streamlines = scene_.deform.at("streamlines");
+  const double t0 = scene_.time.t0;
+  std::vector<MovedStreamline> out(lines_.size());
+  for (size_t k = 0; k < lines_.size(); ++k) {
+    const Line& line = *lines_[k];
+    const Streamline& traced = line.traced;
+    const Similarity sim = similarity_at(streamlines[k].at("keys"), t0, t);
+    const cplx rot = std::polar(sim.scale, sim.rotate);
+    MovedStreamline& m = out[k];
+    m.seed = traced.seed;
+    for (size_t q = 0; q < traced.points.size(); ++q) m.speeds.push_back(sim.scale * traced.speeds[q]);
+    if (space_.planar()) {
+      const Vec3& seed = traced.points[traced.seed];
+      for (const Vec3& p : traced.points) {
+        const cplx rel(p.x() - seed.x(), p.y() - seed.y());
+        const cplx moved = cplx(seed.x() + sim.translate.x(), seed.y() + sim.translate.y()) + rot * rel;
+        m.points.emplace_back(moved.real(), moved.imag(), 0);
+      }
+      continue;
+    }
+    // In the chart around the seed: log coordinates w ↦ T + s·e^{iθ}·w, back to the surface.
+    const cplx shift = space_.bundle().world_to_face(line.seed.face, sim.translate);
+    const cplx origin = line.coords[traced.seed];
+    for (size_t q = 0; q < traced.points.size(); ++q) {
+      const cplx w = shift + origin + rot * (line.coords[q] - origin);
+      const auto p = line.inverse->locate(w);
+      if (!p)
+        throw_input_error(scene_.label(), fmt::format("deform.streamlines[{}].keys", k),
+                          fmt::format("at t = {:.3g} the moved streamline leaves the disc of radius {:.3g} around "
+                                      "its seed in which its log-map chart is used; move or turn it less",
+                                      t, line.inverse->radius()));
+      m.points.push_back(surface_position(space_.mesh(), *p));
+    }
+  }
+  return out;
+}
+
+}  // namespace tvf
