@@ -522,9 +522,9 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
   // Overlay quads in clip space.
   std::vector<OverlayVertex> quads;
   const double bias = 2e-3;  // NDC depth towards the camera
-  auto clip_of = [&](const Vec3& x) {
+  auto clip_of = [&](const Vec3& x, double lift = 1.0) {
     Eigen::Vector4d c = pv * Eigen::Vector4d(x.x(), x.y(), x.z(), 1.0);
-    c.z() -= bias * c.w();
+    c.z() -= lift * bias * c.w();
     return c;
   };
   auto push_quad = [&](const Eigen::Vector4d (&c)[4], const float color[4], const float (&disc)[4][3]) {
@@ -538,11 +538,12 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
     }
   };
   const float no_disc[4][3] = {};
-  auto add_line = [&](const RenderLine& line, double width, std::uint32_t color) {
+  // Casings lie under the coloured lines (a little farther back).
+  auto add_line = [&](const RenderLine& line, double width, std::uint32_t color, double lift) {
     float col[4];
     unpack(color, col);
     for (size_t i = 0; i + 1 < line.points.size(); ++i) {
-      const Eigen::Vector4d a = clip_of(line.points[i]), b = clip_of(line.points[i + 1]);
+      const Eigen::Vector4d a = clip_of(line.points[i], lift), b = clip_of(line.points[i + 1], lift);
       if (a.w() <= 0 || b.w() <= 0) continue;  // behind the camera
       const Vec2 sa(a.x() / a.w() * 0.5 * o.width, a.y() / a.w() * 0.5 * o.height);
       const Vec2 sb(b.x() / b.w() * 0.5 * o.width, b.y() / b.w() * 0.5 * o.height);
@@ -564,8 +565,8 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
     }
   };
   for (const auto& line : lines)
-    if (line.casing) add_line(line, 2.2 * line.width, 0x000000);
-  for (const auto& line : lines) add_line(line, line.width, line.color);
+    if (line.casing) add_line(line, 2.2 * line.width, 0x000000, 1.0);
+  for (const auto& line : lines) add_line(line, line.width, line.color, 1.5);
   for (const auto& mk : markers) {
     Eigen::Vector4d c = clip_of(mk.position);
     if (c.w() <= 0) continue;

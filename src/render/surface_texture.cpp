@@ -160,7 +160,7 @@ SurfaceTextureAnimator::SurfaceTextureAnimator(const TangentBundle& bundle, cons
     const double ppf = (o_.pixels_per_frame > 0 ? o_.pixels_per_frame : o_.size / 128.0) / ppu_;  // world units
     time_scale_ = p90_ > 0 && frame_dt > 0 ? ppf / (p90_ * frame_dt) : 0.0;
   }
-  cell_ = (o_.noise_scale > 0 ? o_.noise_scale : std::max(1.5 * view_.spacing, o_.size / 256.0)) / ppu_;
+  cell_ = (o_.noise_scale > 0 ? o_.noise_scale : std::max(view_.spacing, o_.size / 512.0)) / ppu_;
   tex_.assign(ns, 0.5f);
   next_.assign(ns, 0.5f);
 }
@@ -192,21 +192,14 @@ float SurfaceTextureAnimator::lattice(long ix, long iy, long iz, long step) cons
 }
 
 float SurfaceTextureAnimator::noise(const Vec3& a, const Vec3& b, long step) const {
-  // Mean along the step (as on the plane), each sample trilinear in the cell lattice.
+  // Mean along the step (as on the plane) of the cells the step crosses: nearest cell,
+  // sharp-edged, so the injected noise keeps its full contrast at the cell scale.
   const int samples = std::clamp(static_cast<int>((b - a).norm() / cell_) + 1, 1, 4);
   float sum = 0;
   for (int q = 0; q < samples; ++q) {
     const Vec3 x = (a + (b - a) * ((q + 0.5) / samples)) / cell_;
-    const double fx = std::floor(x.x()), fy = std::floor(x.y()), fz = std::floor(x.z());
-    const long ix = static_cast<long>(fx), iy = static_cast<long>(fy), iz = static_cast<long>(fz);
-    const double dx = x.x() - fx, dy = x.y() - fy, dz = x.z() - fz;
-    double v = 0;
-    for (int c = 0; c < 8; ++c) {
-      const int cx = c & 1, cy = (c >> 1) & 1, cz = c >> 2;
-      const double w = (cx ? dx : 1 - dx) * (cy ? dy : 1 - dy) * (cz ? dz : 1 - dz);
-      if (w > 0) v += w * lattice(ix + cx, iy + cy, iz + cz, step);
-    }
-    sum += static_cast<float>(v);
+    sum += lattice(static_cast<long>(std::floor(x.x())), static_cast<long>(std::floor(x.y())),
+                   static_cast<long>(std::floor(x.z())), step);
   }
   return sum / static_cast<float>(samples);
 }
@@ -383,6 +376,7 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
   ro.height = animator.height();
   ro.background = options.texture.background;
   ro.lighting = options.surface.lighting;
+  ro.ambient = 0.5;
   Topology topology;
   if (options.overlay_paths) topology = analyze_topology(bundle, field);
   std::unique_ptr<StagedFolder> folder;

@@ -11,7 +11,8 @@
 //     T_k(p) = (1 − α)·T_{k−1}(p − d_k(p)) + α·N_k(p):
 // the sample's source p − d_k(p) is found by walking back along the surface
 // (integrate/surface_walk.h) with the midpoint rule, its value interpolated linearly in the
-// small triangle holding it; N_k is a noise of cubic cells (noise_scale pixels) of world
+// small triangle holding it; N_k is a noise of cubic cells (noise_scale pixels; default
+// the sample spacing, or size/512 when larger) of world
 // space that switch on and off with random phases over noise_period frames, averaged along
 // the step. The pictures are a short line integral convolution of T along the field on the
 // surface (walks of the unit direction), contrast stretched, as the vertex colours of the

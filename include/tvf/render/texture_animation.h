@@ -138,7 +138,7 @@ struct SurfaceView {
   Vec3 direction{1.0, -0.6, 0.5};
   Vec3 up{0.0, 0.0, 1.0};
   double fov = 30.0;        // vertical field of view, degrees
-  double spacing = 1.25;    // texture samples apart on the screen, pixels
+  double spacing = 1.0;     // texture samples apart on the screen, pixels
   long max_samples = 4'000'000;  // the subdivision is capped so that samples stay below this
   bool lighting = true;     // headlight shading
 };
