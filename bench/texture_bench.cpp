@@ -71,6 +71,8 @@ void BM_SurfaceTextureFrame(benchmark::State& state) {
   ro.width = ro.height = o.size;
   animator.advance(0.0);
   int k = 0;
+  timespec c0{}, c1{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
   for (auto _ : state) {
     k = (k + 1) % field.frames();
     animator.advance(field.time().time(k));
@@ -78,6 +80,10 @@ void BM_SurfaceTextureFrame(benchmark::State& state) {
     const Image img = renderer.render(animator.camera(), ro);
     benchmark::DoNotOptimize(img.pixels.data());
   }
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+  const double cpu = (static_cast<double>(c1.tv_sec - c0.tv_sec) + 1e-9 * static_cast<double>(c1.tv_nsec - c0.tv_nsec)) /
+                     static_cast<double>(state.iterations());
+  state.counters["cpu_ms"] = 1e3 * cpu;  // all threads, llvmpipe's included
   state.counters["samples"] = static_cast<double>(animator.sample_positions().size());
   state.counters["fps"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
