@@ -109,15 +109,16 @@ Vec3 Camera::project(const Vec3& x, int width, int height) const {
 
 namespace {
 
-// One EGL display for the process (eglTerminate would end it for every renderer):
-// initialised by the first renderer, terminated with the last.
+// One EGL display for the process, initialised by the first renderer and kept: terminating
+// it would unload Mesa's driver, whose few process-lifetime allocations would then show up
+// in leak checks as unnamed frames (tests/lsan.supp names the driver instead), and a later
+// renderer would pay for loading it again.
 std::mutex display_mutex;
 EGLDisplay shared_display = EGL_NO_DISPLAY;
-int display_users = 0;
 
 EGLDisplay acquire_display() {
   std::lock_guard lock(display_mutex);
-  if (display_users == 0) {
+  if (shared_display == EGL_NO_DISPLAY) {
     const char* ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
     if (!ext || !std::strstr(ext, "EGL_MESA_platform_surfaceless"))
       throw Error("offscreen rendering: EGL has no surfaceless platform (install Mesa's EGL: Debian packages "
@@ -132,16 +133,7 @@ EGLDisplay acquire_display() {
                               eglGetError()));
     shared_display = d;
   }
-  ++display_users;
   return shared_display;
-}
-
-void release_display() {
-  std::lock_guard lock(display_mutex);
-  if (--display_users == 0) {
-    eglTerminate(shared_display);
-    shared_display = EGL_NO_DISPLAY;
-  }
 }
 
 const char* kMeshVertex = R"(#version 300 es
@@ -386,7 +378,6 @@ MeshRenderer::MeshRenderer() : impl_(std::make_unique<Impl>()) {
     glBindVertexArray(0);
   } catch (...) {
     if (m.context != EGL_NO_CONTEXT) eglDestroyContext(m.display, m.context);
-    release_display();
     throw;
   }
 }
@@ -405,7 +396,6 @@ MeshRenderer::~MeshRenderer() {
   }
   eglDestroyContext(m.display, m.context);
   eglReleaseThread();
-  release_display();
 }
 
 std::string MeshRenderer::renderer_name() const { return impl_->name; }
@@ -517,13 +507,19 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
   const double near = std::max(zmin * 0.9, 1e-3 * dist);
   const double far = std::max(zmax * 1.1, near * 1.01);
   const Eigen::Matrix4d proj = camera.projection(aspect, near, far);
-  const Eigen::Matrix4d pv = proj * view;
 
   // Overlay quads in clip space.
   std::vector<OverlayVertex> quads;
   const double bias = 2e-3;  // NDC depth towards the camera
-  auto clip_of = [&](const Vec3& x, double lift = 1.0) {
-    Eigen::Vector4d c = pv * Eigen::Vector4d(x.x(), x.y(), x.z(), 1.0);
+  // Overlays come `pixels` (at their depth) towards the camera, so that a surface tilted
+  // away under a marker or a wide line does not cut it, plus a small depth bias.
+  const double pixel_at_unit_depth = 2 * std::tan(0.5 * camera.fov_y * kPi / 180.0) / o.height;
+  auto clip_of = [&](const Vec3& x, double lift = 1.0, double pixels = 0.0) {
+    Eigen::Vector4d e = view * Eigen::Vector4d(x.x(), x.y(), x.z(), 1.0);
+    // Along the ray to the eye (the eye space's origin): the point stays where it is seen.
+    const double dist_e = e.head<3>().norm();
+    if (dist_e > 0) e.head<3>() *= std::max(0.1, 1.0 - pixels * pixel_at_unit_depth * std::max(-e.z(), 0.0) / dist_e);
+    Eigen::Vector4d c = proj * e;
     c.z() -= lift * bias * c.w();
     return c;
   };
@@ -538,12 +534,12 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
     }
   };
   const float no_disc[4][3] = {};
-  // Casings lie under the coloured lines (a little farther back).
   auto add_line = [&](const RenderLine& line, double width, std::uint32_t color, double lift) {
     float col[4];
     unpack(color, col);
     for (size_t i = 0; i + 1 < line.points.size(); ++i) {
-      const Eigen::Vector4d a = clip_of(line.points[i], lift), b = clip_of(line.points[i + 1], lift);
+      const double shift = 2.2 * line.width;  // the same for the casing and the line
+      const Eigen::Vector4d a = clip_of(line.points[i], lift, shift), b = clip_of(line.points[i + 1], lift, shift);
       if (a.w() <= 0 || b.w() <= 0) continue;  // behind the camera
       const Vec2 sa(a.x() / a.w() * 0.5 * o.width, a.y() / a.w() * 0.5 * o.height);
       const Vec2 sb(b.x() / b.w() * 0.5 * o.width, b.y() / b.w() * 0.5 * o.height);
@@ -566,9 +562,12 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
   };
   for (const auto& line : lines)
     if (line.casing) add_line(line, 2.2 * line.width, 0x000000, 1.0);
+  // Casings are drawn without writing depth, so that the coloured lines over them are not
+  // hidden by them (their caps and depths differ a little).
+  const size_t casing_vertices = quads.size();
   for (const auto& line : lines) add_line(line, line.width, line.color, 1.5);
   for (const auto& mk : markers) {
-    Eigen::Vector4d c = clip_of(mk.position);
+    Eigen::Vector4d c = clip_of(mk.position, 1.0, 2 * mk.radius);
     if (c.w() <= 0) continue;
     c.z() -= 3 * bias * c.w();  // markers above lines
     float col[4];
@@ -616,7 +615,12 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
     glBindBuffer(GL_ARRAY_BUFFER, m.overlay_buffer);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(quads.size() * sizeof(OverlayVertex)), quads.data(),
                  GL_STREAM_DRAW);
-    glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(quads.size()));
+    if (casing_vertices > 0) {
+      glDepthMask(GL_FALSE);
+      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(casing_vertices));
+      glDepthMask(GL_TRUE);
+    }
+    glDrawArrays(GL_TRIANGLES, static_cast<GLint>(casing_vertices), static_cast<GLsizei>(quads.size() - casing_vertices));
   }
   glBindVertexArray(0);
   // Resolve the samples and read the picture back (bottom row first).

@@ -5,7 +5,9 @@
 #include "tvf/render/surface_texture.h"
 
 #include "support/test_paths.h"
+#include "tvf/analysis/singularities.h"
 #include "tvf/core/error.h"
+#include "tvf/integrate/streamline.h"
 #include "tvf/mesh/primitives.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/video.h"
@@ -123,6 +125,19 @@ TEST(MeshRenderer, LinesAndMarkersShowInFrontAndHideBehind) {
   EXPECT_GT(blue, 40);
   const Vec3 m = cam.project(marker.position, o.width, o.height);
   EXPECT_EQ(img.at(static_cast<int>(m.x()), static_cast<int>(m.y())), 0x0000FFu);
+  // A casing lies under its line: the line keeps every pixel, the casing shows around it.
+  RenderLine cased = front;
+  cased.casing = true;
+  const Image with_casing = renderer.render(cam, o, std::vector<RenderLine>{cased});
+  const Image without = renderer.render(cam, o, std::vector<RenderLine>{front});
+  int red_cased = 0, red_plain = 0, black = 0;
+  for (size_t k = 0; k < without.pixels.size(); ++k) {
+    red_cased += with_casing.pixels[k] == 0xFF0000u;
+    red_plain += without.pixels[k] == 0xFF0000u;
+    black += with_casing.pixels[k] == 0u;
+  }
+  EXPECT_EQ(red_cased, red_plain);
+  EXPECT_GT(black, red_plain / 2);
 }
 
 TEST(MeshRenderer, RefusesBadInput) {
@@ -249,8 +264,8 @@ TEST(SurfaceTexture, VideoOfASurfaceHasEveryFrame) {
   for (const auto& e : fs::directory_iterator(dir / "frames")) pngs += e.path().extension() == ".png";
   EXPECT_EQ(pngs, 7);
   // A frame shows the textured sphere: many gray levels inside, white around, and the
-  // two singularities at the poles' markers (the rotation's centers, magenta) where
-  // the camera sees the north pole.
+  // rotation's center near the north pole (in view from the default direction) as a
+  // magenta marker (0.8, 0.1, 0.8) where the camera sees it.
   const Image img = read_png((dir / "frames" / "frame_00003.png").string());
   int white = 0;
   std::vector<int> levels(256, 0);
@@ -259,6 +274,14 @@ TEST(SurfaceTexture, VideoOfASurfaceHasEveryFrame) {
     const auto r8 = (px >> 16) & 255u, g8 = (px >> 8) & 255u, b8 = px & 255u;
     if (r8 == g8 && g8 == b8) ++levels[r8];
   }
+  SurfaceTextureAnimator a(s.bundle, s.field, o.texture, o.surface);
+  const auto sing = find_singularities(s.bundle, values_at(s.field, 0.5));  // frame 3 of 7
+  ASSERT_EQ(sing.size(), 2u);
+  const Vec3 north = sing[0].position.z() > 0 ? sing[0].position : sing[1].position;
+  EXPECT_GT(north.z(), 0.95);
+  const Vec3 pole = a.camera().project(north, img.width, img.height);
+  const std::uint32_t at_pole = img.at(static_cast<int>(pole.x()), static_cast<int>(pole.y()));
+  EXPECT_EQ(at_pole, rgb(204, 26, 204)) << std::hex << at_pole;
   EXPECT_GT(white, img.width * img.height / 5);
   EXPECT_GT(std::count_if(levels.begin(), levels.end(), [](int n) { return n > 0; }), 100);
 }
