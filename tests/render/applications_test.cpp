@@ -6,6 +6,7 @@
 #include "tvf/render/painterly.h"
 #include "tvf/render/particles.h"
 
+#include "support/test_paths.h"
 #include "tvf/core/error.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/field/point_locator.h"
@@ -200,6 +201,15 @@ TEST(Crowd, AvoidingAgentsKeepTheirDistanceAndStillReachTheGoal) {
     msg = e.what();
   }
   EXPECT_NE(msg.find("avoidance.distance"), std::string::npos) << msg;
+}
+
+TEST(Crowd, ExampleCrowdFilesRead) {
+  const CrowdSpec plain = load_crowd_spec(test::source_dir() + "/examples/13_crowd/crowd.json");
+  EXPECT_EQ(plain.separation, 0.0);
+  const CrowdSpec dense = load_crowd_spec(test::source_dir() + "/examples/13_crowd/crowd_dense.json");
+  EXPECT_EQ(dense.agents, 120);
+  EXPECT_DOUBLE_EQ(dense.separation, 0.045);
+  EXPECT_DOUBLE_EQ(dense.avoidance_weight, 1.0);
 }
 
 TEST(Crowd, BadCrowdFilesNameTheJsonPath) {
