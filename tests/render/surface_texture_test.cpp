@@ -242,6 +242,23 @@ TEST(SurfaceTexture, FramesAreCoherentAndMoveWithTheFlow) {
   EXPECT_GT(with_flow, 0.8);  // (1 − α) of the texture is the moved one
 }
 
+TEST(SurfaceTexture, StreamlineOverlayFollowsTheFieldOnTheSurface) {
+  Spin s;
+  // The rotation about z: streamlines are circles of constant height on the sphere.
+  const auto lines = surface_streamline_lines(s.bundle, s.field, 0.5, 30, 1.5, 3);
+  ASSERT_GE(lines.size(), 25u);  // seeds on the poles' faces may stop at once
+  for (const RenderLine& l : lines) {
+    ASSERT_GE(l.points.size(), 2u);
+    double zmin = l.points[0].z(), zmax = zmin;
+    for (const Vec3& p : l.points) {
+      EXPECT_NEAR(p.norm(), 1.0, 0.02);  // on the mesh (its faces are chords of the sphere)
+      zmin = std::min(zmin, p.z());
+      zmax = std::max(zmax, p.z());
+    }
+    EXPECT_LT(zmax - zmin, 0.03);
+  }
+}
+
 TEST(SurfaceTexture, VideoOfASurfaceHasEveryFrame) {
   if (!ffmpeg_available() || test::run_command("command -v ffprobe >/dev/null 2>&1").exit_code != 0)
     GTEST_SKIP() << "ffmpeg/ffprobe not installed (Debian package ffmpeg)";
