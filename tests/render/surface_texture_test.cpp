@@ -4,6 +4,7 @@
 #include "tvf/render/mesh_renderer.h"
 #include "tvf/render/surface_texture.h"
 
+#include "support/test_meshes.h"
 #include "support/test_paths.h"
 #include "tvf/analysis/singularities.h"
 #include "tvf/core/error.h"
@@ -257,6 +258,24 @@ TEST(SurfaceTexture, StreamlineOverlayFollowsTheFieldOnTheSurface) {
     }
     EXPECT_LT(zmax - zmin, 0.03);
   }
+}
+
+TEST(SurfaceTexture, OpenSurfacesKeepAFiniteTexture) {
+  // A hemisphere (boundary on the equator) with flow leaving and entering through it.
+  const Mesh& mesh = test::hemisphere_mesh();
+  const TangentBundle bundle(mesh);
+  const Field field = sample_world(bundle, TimeSampling{0, 1, 5}, [](const Vec3& x, double t) {
+    return Vec3(Vec3(1, 0.5 * t, 0) - x.dot(Vec3(1, 0.5 * t, 0)) * x);
+  });
+  TextureOptions o;
+  o.size = 96;
+  SurfaceTextureAnimator a(bundle, field, o);
+  for (int k = 0; k < 5; ++k) a.advance(field.time().time(k));
+  for (const float v : a.texture()) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << v;
+  const auto shown = a.shown();
+  const auto [lo, hi] = std::minmax_element(shown.begin(), shown.end());
+  EXPECT_EQ(*lo, 0.0f);  // contrast stretched over the whole range
+  EXPECT_EQ(*hi, 1.0f);
 }
 
 TEST(SurfaceTexture, VideoOfASurfaceHasEveryFrame) {
