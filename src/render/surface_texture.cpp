@@ -164,6 +164,7 @@ SurfaceTextureAnimator::SurfaceTextureAnimator(const TangentBundle& bundle, cons
   cell_ = (o_.noise_scale > 0 ? o_.noise_scale : std::max(view_.spacing, o_.size / 512.0)) / ppu_;
   tex_.assign(ns, 0.5f);
   next_.assign(ns, 0.5f);
+  seed_hash_ = splitmix(o_.seed);
 }
 
 float SurfaceTextureAnimator::texture_at(const SurfacePoint& p) const {
@@ -183,7 +184,7 @@ float SurfaceTextureAnimator::texture_at(const SurfacePoint& p) const {
 }
 
 float SurfaceTextureAnimator::lattice(long ix, long iy, long iz, long step) const {
-  const std::uint64_t h = splitmix(splitmix(splitmix(splitmix(o_.seed) ^ static_cast<std::uint64_t>(ix)) ^
+  const std::uint64_t h = splitmix(splitmix(splitmix(seed_hash_ ^ static_cast<std::uint64_t>(ix)) ^
                                             static_cast<std::uint64_t>(iy)) ^
                                    static_cast<std::uint64_t>(iz));
   const double phase = static_cast<double>(h >> 11) * 0x1.0p-53;
@@ -219,7 +220,7 @@ void SurfaceTextureAnimator::advance(double t) {
       for (size_t q = r.begin(); q < r.end(); ++q) {
         const SurfacePoint& p = points_[q];
         auto displacement = [&](cplx z) {
-          const double m = std::abs(z);
+          const double m = std::sqrt(std::norm(z));  // not std::abs: hypot is slow here
           if (m <= floor) return cplx(0, 0);
           return uniform ? z * (s * p90_ / m) : z * s;
         };
@@ -266,7 +267,7 @@ std::vector<float> SurfaceTextureAnimator::shown() const {
           SurfacePoint p = points_[q];
           for (int k = 0; k < steps; ++k) {
             const cplx z = interpolate_in_face(bundle_, values_, p);
-            const double m = std::abs(z);
+            const double m = std::sqrt(std::norm(z));  // not std::abs: hypot is slow here
             if (m <= floor) break;
             const SurfaceWalk w = walk_surface(bundle_, p, z * (sign / m));
             p = w.end;

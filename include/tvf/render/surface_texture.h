@@ -87,6 +87,7 @@ private:
   long step_ = 0;
   double t_ = 0;
   bool started_ = false;
+  std::uint64_t seed_hash_ = 0;  // the noise seed, mixed
 };
 
 // The renderer's lines for the singularity paths up to time t (trails in the colours of
