@@ -2,6 +2,9 @@
 // at 1024 × 1024 on 2 cores. One iteration advances the texture by one frame and makes
 // its picture (the per-frame work; PNG encoding and video are outside it).
 #include "tvf/render/texture_animation.h"
+#include "tvf/mesh/primitives.h"
+#include "tvf/render/mesh_renderer.h"
+#include "tvf/render/surface_texture.h"
 
 #include "bench_scenes.h"
 
@@ -44,6 +47,47 @@ void BM_TextureFrame(benchmark::State& state) {
 // Arguments: size, LIC length (size/64 is the default; 0: the advected texture only).
 BENCHMARK(BM_TextureFrame)->Args({512, 8})->Args({1024, 0})->Args({1024, 16})
     ->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// One frame of the texture animation on a 20,000-vertex surface (a 200 × 100 torus, a
+// time-varying swirl round its axis) at SIZE × SIZE: advect the texture samples, the LIC
+// along the surface, the vertex colours, and the offscreen OpenGL picture (llvmpipe on a
+// machine without a GPU).
+void BM_SurfaceTextureFrame(benchmark::State& state) {
+  const Mesh torus = make_torus(200, 100);
+  const TangentBundle bundle(torus);
+  Field field(TimeSampling{0, 1, 40}, torus.num_vertices());
+  for (int j = 0; j < field.frames(); ++j)
+    for (int v = 0; v < torus.num_vertices(); ++v) {
+      const Vec3& x = torus.position(v);
+      const Vec3 w = Vec3::UnitZ().cross(x) + (0.5 + field.time().time(j)) * Vec3(0, 0, 1).cross(x).cross(x).normalized();
+      field.at(j, v) = bundle.world_to_vertex(v, w);
+    }
+  TextureOptions o;
+  o.size = static_cast<int>(state.range(0));
+  SurfaceTextureAnimator animator(bundle, field, o);
+  MeshRenderer renderer;
+  renderer.set_mesh(animator.sample_positions(), animator.sample_triangles());
+  RenderOptions ro;
+  ro.width = ro.height = o.size;
+  animator.advance(0.0);
+  int k = 0;
+  timespec c0{}, c1{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
+  for (auto _ : state) {
+    k = (k + 1) % field.frames();
+    animator.advance(field.time().time(k));
+    renderer.set_colors(animator.colors());
+    const Image img = renderer.render(animator.camera(), ro);
+    benchmark::DoNotOptimize(img.pixels.data());
+  }
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+  const double cpu = (static_cast<double>(c1.tv_sec - c0.tv_sec) + 1e-9 * static_cast<double>(c1.tv_nsec - c0.tv_nsec)) /
+                     static_cast<double>(state.iterations());
+  state.counters["cpu_ms"] = 1e3 * cpu;  // all threads, llvmpipe's included
+  state.counters["samples"] = static_cast<double>(animator.sample_positions().size());
+  state.counters["fps"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_SurfaceTextureFrame)->Arg(512)->Arg(800)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace tvf

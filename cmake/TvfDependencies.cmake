@@ -27,6 +27,12 @@ pkg_check_modules(OPENBLAS QUIET IMPORTED_TARGET openblas)
 if(NOT OPENBLAS_FOUND)
   message(FATAL_ERROR "tvf needs OpenBLAS: install the Debian package 'libopenblas-dev' (or run scripts/install-deps.sh)")
 endif()
+# Offscreen OpenGL for surface pictures (render/mesh_renderer.h): OpenGL ES 3 through
+# EGL's surfaceless platform on Mesa (llvmpipe on machines without a GPU).
+pkg_check_modules(EGL QUIET IMPORTED_TARGET egl glesv2)
+if(NOT EGL_FOUND)
+  message(FATAL_ERROR "tvf needs EGL and OpenGL ES: install the Debian packages 'libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri' (or run scripts/install-deps.sh)")
+endif()
 
 if(TVF_BUILD_TESTS)
   tvf_require(GTest libgtest-dev)

@@ -29,7 +29,8 @@ RenderCommand::RenderCommand(CLI::App& app) {
       "render", "Pictures and videos of a field (texture animation, painterly strokes, crowds, particles, grass)");
   render_->require_subcommand(1);
   texture_ = render_->add_subcommand(
-      "texture", "Dense texture animation (IBFV texture advection) of a field on a planar domain: PNG frames and/or MP4");
+      "texture", "Dense texture animation (IBFV texture advection) of a field on a planar domain, or on a surface seen "
+      "from a camera (offscreen OpenGL): PNG frames and/or MP4");
   texture_->add_option("input", input_, "Folder written by `tvf generate` (or its field.tvff), or a scene file")
       ->required();
   texture_->add_option("-o,--output", outputs_,
@@ -57,6 +58,16 @@ RenderCommand::RenderCommand(CLI::App& app) {
   texture_->add_option("--contrast", contrast_, "Contrast of the pictures")->capture_default_str();
   texture_->add_option("--seed", seed_, "Noise seed")->capture_default_str();
   texture_->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
+  // Surfaces: the camera and the texture's samples (render/surface_texture.h).
+  texture_->add_option("--view", view_, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default 1,-0.6,0.5)")
+      ->delimiter(',')
+      ->expected(3);
+  texture_->add_option("--up", up_, "Surfaces: the direction that points up in the picture, X,Y,Z (default 0,0,1)")
+      ->delimiter(',')
+      ->expected(3);
+  texture_->add_option("--fov", fov_, "Surfaces: vertical field of view of the camera in degrees")->capture_default_str();
+  texture_->add_option("--spacing", spacing_, "Surfaces: pixels between the texture's samples on the screen")
+      ->capture_default_str();
 
   auto common = [&](CLI::App* sub, const char* outputs, bool seeded) {
     sub->add_option("input", input_, "Folder written by `tvf generate` (or its field.tvff), or a scene file")
@@ -142,15 +153,16 @@ struct Input {
   std::vector<std::string> warnings;
 };
 
-// Reads a field (folder or .tvff) or generates one from a scene; planar domains only.
-Input load_input(const std::string& input_name, Progress& progress, const char* kind) {
+// Reads a field (folder or .tvff) or generates one from a scene; planar domains only
+// unless `surfaces` (texture animation draws both).
+Input load_input(const std::string& input_name, Progress& progress, const char* kind, bool surfaces = false) {
   const fs::path input(input_name);
   std::error_code ec;
   if (!fs::exists(input, ec))
     throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
                             "its field.tvff, or a scene file)", input_name));
   const std::string surface_note = fmt::format(
-      "surface rendering is not available yet: `tvf render {}` draws planar domains only", kind);
+      "the domain is a surface: `tvf render {}` draws planar domains only (`tvf render texture` draws surfaces)", kind);
   Input in;
   if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
     const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
@@ -165,7 +177,7 @@ Input load_input(const std::string& input_name, Progress& progress, const char* 
     const Scene scene = load_scene(input_name);
     progress.note("building the domain");
     const auto space = make_design_space(scene);
-    if (!space->planar()) throw Error(fmt::format("{}: {}", input_name, surface_note));
+    if (!space->planar() && !surfaces) throw Error(fmt::format("{}: {}", input_name, surface_note));
     GenerateOptions gen;
     gen.progress = [&](int done, int total) { progress.update(done, total); };
     GenerateReport report;
@@ -173,7 +185,7 @@ Input load_input(const std::string& input_name, Progress& progress, const char* 
     in.warnings = report.warnings;
     in.mesh = space->mesh();
   }
-  if (!in.mesh.is_planar_xy()) throw Error(fmt::format("{}: {}", input_name, surface_note));
+  if (!in.mesh.is_planar_xy() && !surfaces) throw Error(fmt::format("{}: {}", input_name, surface_note));
   return in;
 }
 
@@ -343,8 +355,12 @@ int RenderCommand::run_texture() {
   options.texture.contrast = contrast_;
   options.texture.seed = seed_;
   if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
+  if (!view_.empty()) options.surface.direction = Vec3(view_[0], view_[1], view_[2]);
+  if (!up_.empty()) options.surface.up = Vec3(up_[0], up_[1], up_[2]);
+  options.surface.fov = fov_;
+  options.surface.spacing = spacing_;
 
-  Input in = load_input(input_, progress, "texture");
+  Input in = load_input(input_, progress, "texture", true);
   const std::vector<std::string>& warnings = in.warnings;
   const Field& field = in.field;
   const TangentBundle bundle(in.mesh);

@@ -48,6 +48,8 @@ private:
   unsigned long long seed_ = 1;
   bool quiet_ = false;
   bool physical_ = false;
+  std::vector<double> view_, up_;  // surfaces
+  double fov_ = 30, spacing_ = 1.0;
   // painterly
   std::string image_, mask_;
   double stroke_width_ = 6, stroke_length_ = 24, density_ = 2;

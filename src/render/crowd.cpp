@@ -13,6 +13,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
+#include <functional>
+#include <unordered_map>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -139,8 +142,8 @@ Vec2 CrowdShape::push_out(const Vec2& x, double margin) const {
 
 CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
   const Reader r{file};
-  r.keys(j, "", {"agents", "speed", "weights", "grid", "agent_radius", "steps_per_frame", "start", "goals",
-                 "obstacles"});
+  r.keys(j, "", {"agents", "speed", "weights", "grid", "agent_radius", "steps_per_frame", "avoidance", "start",
+                 "goals", "obstacles"});
   CrowdSpec s;
   if (j.contains("agents")) s.agents = r.integer(j["agents"], "agents", 1, 100000);
   if (j.contains("speed")) s.speed = r.number(j["speed"], "speed", 0, 1e12);
@@ -152,6 +155,13 @@ CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
   if (j.contains("grid")) s.grid = r.integer(j["grid"], "grid", 8, 4096);
   if (j.contains("agent_radius")) s.agent_radius = r.number(j["agent_radius"], "agent_radius", 0, 1e12);
   if (j.contains("steps_per_frame")) s.steps_per_frame = r.integer(j["steps_per_frame"], "steps_per_frame", 1, 1000);
+  if (j.contains("avoidance")) {
+    r.keys(j["avoidance"], "avoidance", {"distance", "weight"});
+    if (!j["avoidance"].contains("distance")) r.fail("avoidance", "needs distance (the least distance between agents)");
+    s.separation = r.number(j["avoidance"]["distance"], "avoidance.distance", 0, 1e12);
+    if (j["avoidance"].contains("weight"))
+      s.avoidance_weight = r.number(j["avoidance"]["weight"], "avoidance.weight", 0, 1e6);
+  }
   if (!j.contains("start")) r.fail("start", "missing: give the shapes the agents start in");
   if (!j.contains("goals")) r.fail("goals", "missing: give at least one goal shape");
   s.starts = r.shapes(j["start"], "start");
@@ -239,6 +249,9 @@ struct Potential {
   Vec2 origin;
   std::vector<double> phi;
   std::vector<Vec2> descent;  // unit direction down φ per node (0 where none)
+  // The same without growing the obstacles by the agents' radius: where agents pushed
+  // by others stand inside that margin (φ = ∞ there), they go on down this one.
+  std::vector<Vec2> descent_margin;
 
   Vec2 node(int i, int j) const { return origin + Vec2(i * h, j * h); }
 
@@ -248,14 +261,18 @@ struct Potential {
     const int i = std::clamp(static_cast<int>(std::floor(g.x())), 0, nx - 2);
     const int j = std::clamp(static_cast<int>(std::floor(g.y())), 0, ny - 2);
     const double fx = std::clamp(g.x() - i, 0.0, 1.0), fy = std::clamp(g.y() - j, 0.0, 1.0);
-    Vec2 sum(0, 0);
-    for (int q = 0; q < 4; ++q) {
-      const int a = i + (q & 1), b = j + (q >> 1);
-      const double w = ((q & 1) ? fx : 1 - fx) * ((q >> 1) ? fy : 1 - fy);
-      sum += w * descent[static_cast<size_t>(b) * static_cast<size_t>(nx) + static_cast<size_t>(a)];
+    for (const auto* field : {&descent, &descent_margin}) {
+      if (field->empty()) continue;
+      Vec2 sum(0, 0);
+      for (int q = 0; q < 4; ++q) {
+        const int a = i + (q & 1), b = j + (q >> 1);
+        const double w = ((q & 1) ? fx : 1 - fx) * ((q >> 1) ? fy : 1 - fy);
+        sum += w * (*field)[static_cast<size_t>(b) * static_cast<size_t>(nx) + static_cast<size_t>(a)];
+      }
+      const double n = sum.norm();
+      if (n > 1e-12) return sum / n;
     }
-    const double n = sum.norm();
-    return n > 1e-12 ? Vec2(sum / n) : Vec2(0, 0);
+    return {0, 0};
   }
 };
 
@@ -285,25 +302,130 @@ Potential make_potential(const Mesh& mesh, const CrowdSpec& spec) {
   check_spec(sources > 0, "no goal covers a free cell of the fast-marching grid (goals too small, outside the domain, "
                           "or inside obstacles)");
   p.phi = fast_marching(p.nx, p.ny, p.h, cost, source);
-  p.descent.assign(n, Vec2(0, 0));
-  auto at = [&](int i, int j) {
-    return i < 0 || j < 0 || i >= p.nx || j >= p.ny ? kInf
-                                                    : p.phi[static_cast<size_t>(j) * static_cast<size_t>(p.nx) +
-                                                            static_cast<size_t>(i)];
+  auto descent_of = [&](const std::vector<double>& phi) {
+    std::vector<Vec2> descent(n, Vec2(0, 0));
+    auto at = [&](int i, int j) {
+      return i < 0 || j < 0 || i >= p.nx || j >= p.ny
+                 ? kInf
+                 : phi[static_cast<size_t>(j) * static_cast<size_t>(p.nx) + static_cast<size_t>(i)];
+    };
+    for (int j = 0; j < p.ny; ++j)
+      for (int i = 0; i < p.nx; ++i) {
+        const double c = at(i, j);
+        if (!std::isfinite(c)) continue;
+        auto slope = [&](double lo_v, double hi_v) {  // upwind ∂φ: towards the smaller neighbour
+          if (std::min(lo_v, hi_v) >= c) return 0.0;
+          return lo_v < hi_v ? (c - lo_v) / p.h : (hi_v - c) / p.h;
+        };
+        const Vec2 grad(slope(at(i - 1, j), at(i + 1, j)), slope(at(i, j - 1), at(i, j + 1)));
+        const double nrm = grad.norm();
+        if (nrm > 0) descent[static_cast<size_t>(j) * static_cast<size_t>(p.nx) + static_cast<size_t>(i)] = -grad / nrm;
+      }
+    return descent;
   };
-  for (int j = 0; j < p.ny; ++j)
-    for (int i = 0; i < p.nx; ++i) {
-      const double c = at(i, j);
-      if (!std::isfinite(c)) continue;
-      auto slope = [&](double lo_v, double hi_v) {  // upwind ∂φ: towards the smaller neighbour
-        if (std::min(lo_v, hi_v) >= c) return 0.0;
-        return lo_v < hi_v ? (c - lo_v) / p.h : (hi_v - c) / p.h;
-      };
-      const Vec2 grad(slope(at(i - 1, j), at(i + 1, j)), slope(at(i, j - 1), at(i, j + 1)));
-      const double nrm = grad.norm();
-      if (nrm > 0) p.descent[static_cast<size_t>(j) * static_cast<size_t>(p.nx) + static_cast<size_t>(i)] = -grad / nrm;
-    }
+  p.descent = descent_of(p.phi);
+  if (!spec.obstacles.empty()) {
+    // The margin's own potential: only the obstacles themselves blocked.
+    std::vector<double> tight(n, 1.0);
+    std::vector<char> tight_source(n, 0);
+    for (int j = 0; j < p.ny; ++j)
+      for (int i = 0; i < p.nx; ++i) {
+        const size_t k = static_cast<size_t>(j) * static_cast<size_t>(p.nx) + static_cast<size_t>(i);
+        const Vec2 x = p.node(i, j);
+        for (const auto& o : spec.obstacles)
+          if (o.distance(x) < 0) tight[k] = kInf;
+        for (const auto& g : spec.goals)
+          if (g.distance(x) < 0 && std::isfinite(tight[k])) tight_source[k] = 1;
+      }
+    p.descent_margin = descent_of(fast_marching(p.nx, p.ny, p.h, tight, tight_source));
+  }
   return p;
+}
+
+// Agents by cells of a uniform grid, for the neighbours within a distance.
+class NeighbourGrid {
+public:
+  explicit NeighbourGrid(double cell) : cell_(cell) {}
+  void insert(const Vec2& p, int id) { cells_[key(index(p.x()), index(p.y()))].push_back(id); }
+  // Calls f(id) for every id in the cells within r of p (a superset of those within r).
+  template <class F>
+  void for_each_near(const Vec2& p, double r, F&& f) const {
+    for (long j = index(p.y() - r); j <= index(p.y() + r); ++j)
+      for (long i = index(p.x() - r); i <= index(p.x() + r); ++i) {
+        const auto it = cells_.find(key(i, j));
+        if (it != cells_.end())
+          for (int id : it->second) f(id);
+      }
+  }
+  // The distance from p to the nearest of points[id] within r (+∞ if none).
+  double nearest(const std::vector<Vec2>& points, const Vec2& p, double r) const {
+    double best = kInf;
+    for_each_near(p, r, [&](int id) { best = std::min(best, (points[static_cast<size_t>(id)] - p).norm()); });
+    return best;
+  }
+
+private:
+  long index(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  static std::uint64_t key(long i, long j) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) << 32) | static_cast<std::uint32_t>(j);
+  }
+  double cell_;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
+};
+
+// Agent–agent separation after a step: pairs of active agents closer than `sep` are
+// pushed apart along the line joining them, half the overlap each (Jacobi iterations of
+// position-based dynamics), each position kept in the box and out of obstacles by
+// `fix`. Pairs still too close after the iterations go back to their positions `old`,
+// which kept the distance: so no two active agents are ever closer than sep.
+void separate(std::vector<Vec2>& x, const std::vector<Vec2>& old, const std::vector<char>& active, double sep,
+              const std::function<Vec2(const Vec2&)>& fix, const std::function<bool(const Vec2&)>& free) {
+  const size_t n = x.size();
+  const double tolerance = sep * (1 - 1e-9);
+  std::vector<Vec2> correction(n, Vec2(0, 0));
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    NeighbourGrid grid(sep);
+    for (size_t a = 0; a < n; ++a)
+      if (active[a]) grid.insert(x[a], static_cast<int>(a));
+    std::atomic<bool> overlap = false;
+    tbb::parallel_for(size_t{0}, n, [&](size_t a) {
+      correction[a] = Vec2(0, 0);
+      if (!active[a]) return;
+      grid.for_each_near(x[a], sep, [&](int b) {
+        if (static_cast<size_t>(b) == a) return;
+        const Vec2 d = x[a] - x[static_cast<size_t>(b)];
+        const double r = d.norm();
+        if (r >= tolerance) return;
+        overlap = true;
+        // Coincident agents part along x, the lower index to the left.
+        const Vec2 u = r > 0 ? Vec2(d / r) : Vec2(a < static_cast<size_t>(b) ? -1.0 : 1.0, 0.0);
+        correction[a] += 0.5 * 1.001 * (sep - r) * u;
+      });
+    });
+    if (!overlap) return;
+    for (size_t a = 0; a < n; ++a)
+      if (active[a] && correction[a].squaredNorm() > 0) {
+        const Vec2 p = fix(x[a] + correction[a]);
+        x[a] = free(p) ? p : old[a];
+      }
+  }
+  // The guarantee: revert both agents of any pair still too close, until none is.
+  for (bool again = true; again;) {
+    again = false;
+    NeighbourGrid grid(sep);
+    for (size_t a = 0; a < n; ++a)
+      if (active[a]) grid.insert(x[a], static_cast<int>(a));
+    for (size_t a = 0; a < n; ++a) {
+      if (!active[a]) continue;
+      grid.for_each_near(x[a], sep, [&](int b) {
+        const size_t bb = static_cast<size_t>(b);
+        if (bb == a || (x[a] - x[bb]).norm() >= tolerance) return;
+        if (x[a] != old[a] || x[bb] != old[bb]) again = true;
+        x[a] = old[a];
+        x[bb] = old[bb];
+      });
+    }
+  }
 }
 
 // Halton sequence value of index k in base b.
@@ -339,6 +461,9 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
              "weights must be finite and not negative");
   check_spec(spec.steps_per_frame >= 1 && spec.steps_per_frame <= 1000, "steps_per_frame is outside [1, 1000]");
   check_spec(!spec.starts.empty() && !spec.goals.empty(), "give start and goal shapes");
+  check_spec(std::isfinite(spec.separation) && spec.separation >= 0, "avoidance distance must be finite and not negative");
+  check_spec(std::isfinite(spec.avoidance_weight) && spec.avoidance_weight >= 0,
+             "avoidance weight must be finite and not negative");
   const int total = frames > 0 ? frames : field.frames();
   check_spec(total >= 1 && total <= 1'000'000, fmt::format("frames {} is outside [1, 1000000]", total));
 
@@ -369,6 +494,9 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
 
   // Starting positions: a Halton sequence over each start shape's box, inside the shape,
   // in the domain and outside obstacles; agents go round the start shapes in turn.
+  const bool avoid = spec.separation > 0;
+  const double sep = spec.separation;
+  NeighbourGrid placed_grid(avoid ? sep : 1.0);
   std::vector<Vec2> start;
   std::vector<int> tried(spec.starts.size(), 0);
   for (int a = 0; a < spec.agents; ++a) {
@@ -380,12 +508,16 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
     for (int attempt = 0; attempt < 10000 && !placed; ++attempt) {
       const int k = ++tried[s];
       const Vec2 x(blo.x() + (bhi.x() - blo.x()) * halton(k, 2), blo.y() + (bhi.y() - blo.y()) * halton(k, 3));
-      if (shape.contains(x) && !blocked(x)) {
+      if (shape.contains(x) && !blocked(x) && (!avoid || placed_grid.nearest(start, x, sep) >= sep)) {
+        if (avoid) placed_grid.insert(x, static_cast<int>(start.size()));
         start.push_back(x);
         placed = true;
       }
     }
-    check_spec(placed, fmt::format("start[{}] has no free place in the domain outside the obstacles", s));
+    check_spec(placed, avoid ? fmt::format("start[{}] has no free place in the domain outside the obstacles at least "
+                                           "avoidance.distance {} from the other agents (fewer agents, or larger start "
+                                           "shapes)", s, sep)
+                             : fmt::format("start[{}] has no free place in the domain outside the obstacles", s));
   }
 
   auto time_of = [&](int k) { return total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0; };
@@ -402,40 +534,83 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
     return false;
   };
 
-  tbb::parallel_for(size_t{0}, na, [&](size_t a) {
-    Vec2 x = start[a];
-    auto& path = result.positions[a];
-    path.push_back(x);
-    if (at_goal(x)) result.arrived[a] = 0;
-    for (int k = 1; k < total; ++k) {
-      for (int s = 0; s < spec.steps_per_frame && result.arrived[a] < 0; ++s) {
-        const double t0 = time_of(k - 1) + (time_of(k) - time_of(k - 1)) * s / spec.steps_per_frame;
-        const double dt = std::abs(time_of(k) - time_of(k - 1)) / spec.steps_per_frame;
-        const Vec2 g0 = pot.direction(x);
+  // All agents step together (avoidance needs everyone's positions): per step, each
+  // active agent's midpoint step of ω_G·G + ω_F·F (+ the separation term), obstacles
+  // pushed out, then the separation constraint projected (avoidance on).
+  std::vector<Vec2> x = start, moved(na);
+  std::vector<char> active(na, 1);
+  for (size_t a = 0; a < na; ++a) {
+    result.positions[a].push_back(x[a]);
+    if (at_goal(x[a])) {
+      result.arrived[a] = 0;
+      active[a] = 0;
+    }
+  }
+  const double range = 2.0 * sep;  // the separation term acts within this distance
+  for (int k = 1; k < total; ++k) {
+    for (int s = 0; s < spec.steps_per_frame; ++s) {
+      const double t0 = time_of(k - 1) + (time_of(k) - time_of(k - 1)) * s / spec.steps_per_frame;
+      const double dt = std::abs(time_of(k) - time_of(k - 1)) / spec.steps_per_frame;
+      const double dir = time_of(k) >= time_of(k - 1) ? 1.0 : -1.0;
+      NeighbourGrid grid(avoid ? range : 1.0);
+      if (avoid)
+        for (size_t a = 0; a < na; ++a)
+          if (active[a]) grid.insert(x[a], static_cast<int>(a));
+      tbb::parallel_for(size_t{0}, na, [&](size_t a) {
+        moved[a] = x[a];
+        if (!active[a]) return;
+        const Vec2 g0 = pot.direction(x[a]);
+        auto field_at = [&](const Vec2& p, double t) {
+          if (const auto sp = locator.locate(p)) return Vec2(sampler.world(*sp, t).head<2>());
+          return Vec2(0, 0);
+        };
         auto velocity = [&](const Vec2& p, double t) {
           // Inside a goal (φ = 0, no descent) the midpoint keeps the direction of the step's start.
           const Vec2 g = pot.direction(p);
-          Vec2 f(0, 0);
-          if (const auto sp = locator.locate(p)) f = sampler.world(*sp, t).head<2>();
+          const Vec2 f = field_at(p, t);
           return Vec2(spec.weight_goal * std::max(speed, f.norm()) * (g.squaredNorm() > 0 ? g : g0) +
                       spec.weight_field * f);
         };
-        // Midpoint rule.
-        const double dir = time_of(k) >= time_of(k - 1) ? 1.0 : -1.0;
-        const Vec2 mid = (x + 0.5 * dt * velocity(x, t0)).cwiseMax(lo).cwiseMin(hi);
-        Vec2 next = x + dt * velocity(mid, t0 + 0.5 * dir * dt);
+        // The separation term (a social force): away from every agent closer than
+        // `range`, growing linearly from 0 at `range` to the agent's own speed at `sep`.
+        Vec2 push(0, 0);
+        if (avoid) {
+          const double own = std::max(speed, field_at(x[a], t0).norm());
+          grid.for_each_near(x[a], range, [&](int b) {
+            if (static_cast<size_t>(b) == a) return;
+            const Vec2 d = x[a] - x[static_cast<size_t>(b)];
+            const double r = d.norm();
+            if (r >= range || r <= 0) return;
+            push += spec.avoidance_weight * own * std::min(1.0, (range - r) / (range - sep)) * (d / r);
+          });
+        }
+        const Vec2 mid = (x[a] + 0.5 * dt * (velocity(x[a], t0) + push)).cwiseMax(lo).cwiseMin(hi);
+        Vec2 next = x[a] + dt * (velocity(mid, t0 + 0.5 * dir * dt) + push);
         next = next.cwiseMax(lo).cwiseMin(hi);
         for (const auto& o : spec.obstacles)
           if (o.contains(next)) {
             next = o.push_out(next, 1e-9 * diag);
             ++contacts[a];
           }
-        if (!locator.locate(next)) next = x;  // a step off a non-rectangular domain is refused
-        x = next;
-        if (at_goal(x)) result.arrived[a] = k;
-      }
-      path.push_back(x);
+        if (!locator.locate(next)) next = x[a];  // a step off a non-rectangular domain is refused
+        moved[a] = next;
+      });
+      if (avoid) separate(moved, x, active, sep, [&](const Vec2& p) {
+        Vec2 q = p.cwiseMax(lo).cwiseMin(hi);
+        for (const auto& o : spec.obstacles)
+          if (o.contains(q)) q = o.push_out(q, 1e-9 * diag);
+        return q;
+      }, [&](const Vec2& p) { return !blocked(p); });
+      x.swap(moved);
+      for (size_t a = 0; a < na; ++a)
+        if (active[a] && at_goal(x[a])) {
+          result.arrived[a] = k;
+          active[a] = 0;  // it leaves the crowd through the goal
+        }
     }
+    for (size_t a = 0; a < na; ++a) result.positions[a].push_back(x[a]);
+  }
+  tbb::parallel_for(size_t{0}, na, [&](size_t a) {
     // The reference pathline: where the field alone carries the agent's start.
     if (const auto sp = locator.locate(start[a])) {
       PathlineOptions po;

@@ -7,6 +7,7 @@
 #include "tvf/integrate/streamline.h"
 #include "tvf/render/frame_output.h"
 #include "tvf/render/plots.h"
+#include "tvf/render/surface_texture.h"
 #include "tvf/render/video.h"
 
 #include <cairo.h>
@@ -55,8 +56,8 @@ TextureAnimator::TextureAnimator(const TangentBundle& bundle, const Field& field
   const Mesh& mesh = bundle.mesh();
   if (!bundle.is_flat())
     throw_input_error(mesh.source(), "",
-                      "texture animation is available on planar domains only (surface texture rendering is not "
-                      "available yet)");
+                      "TextureAnimator draws planar domains; surfaces have SurfaceTextureAnimator "
+                      "(render/surface_texture.h)");
   TVF_CHECK(field.num_vertices() == mesh.num_vertices(), "field of {} vertices on a mesh of {}",
             field.num_vertices(), mesh.num_vertices());
   check_option(o_.size >= 16 && o_.size <= 16384, "size", fmt::format("{} pixels is outside [16, 16384]", o_.size));
@@ -462,6 +463,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
   check_option(std::isfinite(options.fps) && options.fps > 0 && options.fps <= 1000, "fps",
                fmt::format("{} is outside (0, 1000]", options.fps));
 
+  if (!bundle.is_flat()) return write_surface_texture_animation(bundle, field, options, first, last, total);
   TextureAnimator animator(bundle, field, options.texture);
   Topology topology;
   if (options.overlay_paths) topology = analyze_topology(bundle, field);

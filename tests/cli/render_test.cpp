@@ -1,5 +1,5 @@
 // `tvf render texture INPUT -o OUT…` as a user meets it: PNG frames and MP4 from a scene or
-// a generated folder, a clear sentence for surfaces and bad options, and no partial output.
+// a generated folder, surfaces from a camera, a clear sentence for bad options, and no partial output.
 #include "support/test_paths.h"
 
 #include <gtest/gtest.h>
@@ -63,15 +63,34 @@ TEST(CliRender, Mp4DecodesWithTheRightFrameCount) {
   EXPECT_EQ(count_pngs(dir / "frames"), 9);
 }
 
-TEST(CliRender, SurfacesAndBadOptionsAreOneSentenceAndLeaveNothing) {
+TEST(CliRender, SurfaceTextureFromACamera) {
   TempDir dir;
   test::write_text(dir / "sphere.json", R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 2}},
     "time": {"frames": 3}, "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 1, 0]]}]})");
-  const auto s = run_tvf("render texture " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "out"));
-  EXPECT_NE(s.exit_code, 0);
-  EXPECT_EQ(count_lines(s.output), 1) << s.output;
-  EXPECT_NE(s.output.find("sphere.json"), std::string::npos) << s.output;
-  EXPECT_NE(s.output.find("not available yet"), std::string::npos) << s.output;
+  const auto s = run_tvf("render texture " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "out") +
+                         " --size 64 --view 0,-1,1 --overlay singularities paths");
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_NE(s.output.find("rendered 3 frames of 64×64"), std::string::npos) << s.output;
+  EXPECT_EQ(count_pngs(dir / "out"), 3);
+  // A camera looking along its up direction still has an up; a zero view is an error.
+  EXPECT_EQ(run_tvf("render texture " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "o2") +
+                    " --size 32 --view 0,0,1 -q").exit_code, 0);
+  const auto z = run_tvf("render texture " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "o3") +
+                         " --size 32 --view 0,0,0 -q");
+  EXPECT_NE(z.exit_code, 0);
+  EXPECT_EQ(count_lines(z.output), 1) << z.output;
+  EXPECT_NE(z.output.find("view"), std::string::npos) << z.output;
+  EXPECT_FALSE(fs::exists(dir / "o3"));
+  // The other kinds still draw planar domains only, and say so in one sentence.
+  const auto p = run_tvf("render particles " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "p"));
+  EXPECT_NE(p.exit_code, 0);
+  EXPECT_EQ(count_lines(p.output), 1) << p.output;
+  EXPECT_NE(p.output.find("sphere.json"), std::string::npos) << p.output;
+  EXPECT_NE(p.output.find("planar domains only"), std::string::npos) << p.output;
+}
+
+TEST(CliRender, BadOptionsAreOneSentenceAndLeaveNothing) {
+  TempDir dir;
 
   test::write_text(dir / "scene.json", kSmallScene);
   for (const std::string bad : {"--range 3", "--range 4:9", "--size 5", "--alpha 2", "--fps 0"}) {
@@ -88,7 +107,7 @@ TEST(CliRender, SurfacesAndBadOptionsAreOneSentenceAndLeaveNothing) {
     entries += 1;
     EXPECT_NE(e.path().filename(), "out");
   }
-  EXPECT_EQ(entries, 2);
+  EXPECT_EQ(entries, 1);
 }
 
 }  // namespace

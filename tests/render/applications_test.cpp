@@ -6,6 +6,7 @@
 #include "tvf/render/painterly.h"
 #include "tvf/render/particles.h"
 
+#include "support/test_paths.h"
 #include "tvf/core/error.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/field/point_locator.h"
@@ -15,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -145,6 +147,71 @@ TEST(Crowd, WithoutTheGoalTermAgentsFollowTheReferencePathlines) {
   }
 }
 
+// A dense crowd through a gap: 60 agents of separation 0.08 (their start box holds them
+// only a little apart), a wall with one opening between them and the goal.
+CrowdSpec dense_crowd(double separation) {
+  CrowdSpec spec;
+  spec.agents = 60;
+  spec.weight_goal = 1;
+  spec.weight_field = 0;
+  spec.speed = 3;
+  spec.separation = separation;
+  spec.starts = {CrowdShape::rectangle({-0.95, -0.5}, {-0.4, 0.5})};
+  spec.goals = {CrowdShape::rectangle({0.7, -0.4}, {0.95, 0.4})};
+  spec.obstacles = {CrowdShape::rectangle({-0.05, -1.0}, {0.05, -0.15}), CrowdShape::rectangle({-0.05, 0.15}, {0.05, 1.0})};
+  return spec;
+}
+
+// Least distance between two agents that are both still on their way, over all pictures.
+double least_distance(const CrowdResult& r) {
+  double least = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < r.times.size(); ++k)
+    for (size_t a = 0; a < r.positions.size(); ++a)
+      for (size_t b = a + 1; b < r.positions.size(); ++b) {
+        auto on_way = [&](size_t i) { return r.arrived[i] < 0 || static_cast<size_t>(r.arrived[i]) > k; };
+        if (on_way(a) && on_way(b)) least = std::min(least, (r.positions[a][k] - r.positions[b][k]).norm());
+      }
+  return least;
+}
+
+TEST(Crowd, AvoidingAgentsKeepTheirDistanceAndStillReachTheGoal) {
+  const Mesh grid = make_grid(GridSpec{33, 33, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = sample(grid, TimeSampling{0, 1, 61}, [](cplx, double) { return cplx(0, 1); });
+  const double sep = 0.08;
+  // Without avoidance the crowd squeezes through the gap: agents come much closer.
+  const CrowdResult free = simulate_crowd(bundle, field, dense_crowd(0));
+  EXPECT_LT(least_distance(free), 0.5 * sep);
+  const CrowdResult r = simulate_crowd(bundle, field, dense_crowd(sep));
+  EXPECT_GE(least_distance(r), sep * (1 - 1e-6));
+  for (size_t a = 0; a < r.positions.size(); ++a) {
+    EXPECT_GE(r.arrived[a], 0) << "agent " << a << " did not reach the goal; it ended at " << r.positions[a].back().transpose();
+    for (const Vec2& p : r.positions[a])
+      for (const auto& o : dense_crowd(sep).obstacles) EXPECT_GE(o.distance(p), 0) << "agent " << a << " at " << p.transpose();
+  }
+  // Avoidance makes them queue: the last arrival comes later than without it.
+  EXPECT_GT(*std::max_element(r.arrived.begin(), r.arrived.end()),
+            *std::max_element(free.arrived.begin(), free.arrived.end()));
+  // A start box too small for the agents at that distance is an error naming it.
+  CrowdSpec tight = dense_crowd(0.5);
+  std::string msg;
+  try {
+    simulate_crowd(bundle, field, tight);
+  } catch (const Error& e) {
+    msg = e.what();
+  }
+  EXPECT_NE(msg.find("avoidance.distance"), std::string::npos) << msg;
+}
+
+TEST(Crowd, ExampleCrowdFilesRead) {
+  const CrowdSpec plain = load_crowd_spec(test::source_dir() + "/examples/13_crowd/crowd.json");
+  EXPECT_EQ(plain.separation, 0.0);
+  const CrowdSpec dense = load_crowd_spec(test::source_dir() + "/examples/13_crowd/crowd_dense.json");
+  EXPECT_EQ(dense.agents, 120);
+  EXPECT_DOUBLE_EQ(dense.separation, 0.045);
+  EXPECT_DOUBLE_EQ(dense.avoidance_weight, 1.0);
+}
+
 TEST(Crowd, BadCrowdFilesNameTheJsonPath) {
   auto message = [](const char* text) {
     try {
@@ -162,6 +229,12 @@ TEST(Crowd, BadCrowdFilesNameTheJsonPath) {
                 .find("goals[0]"),
             std::string::npos);
   EXPECT_NE(message(R"({"goals": []})").find("c.json: start"), std::string::npos);
+  EXPECT_NE(message(R"({"start": [{"circle": {"center": [0, 0], "radius": 1}}], "goals": [{"circle": {"center": [0, 0], "radius": 1}}], "avoidance": {"distance": -1}})")
+                .find("avoidance.distance"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"start": [{"circle": {"center": [0, 0], "radius": 1}}], "goals": [{"circle": {"center": [0, 0], "radius": 1}}], "avoidance": {"weight": 1}})")
+                .find("avoidance"),
+            std::string::npos);
 }
 
 // --- Particles ------------------------------------------------------------------------------

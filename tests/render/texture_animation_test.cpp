@@ -209,12 +209,12 @@ TEST(TextureAnimation, StreamlinesOverlayFollowsTheField) {
   EXPECT_LE(dark_rows, 2 * 11);
 }
 
-TEST(TextureAnimation, RefusesSurfacesAndBadOptions) {
+TEST(TextureAnimation, SendsSurfacesElsewhereAndRefusesBadOptions) {
   const Mesh sphere = make_icosphere(1);
   const TangentBundle bs(sphere);
   const Field fs(TimeSampling{0, 1, 2}, sphere.num_vertices());
   const std::string msg = test::error_of([&] { TextureAnimator(bs, fs); });
-  EXPECT_NE(msg.find("not available yet"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("SurfaceTextureAnimator"), std::string::npos) << msg;
 
   const Mesh grid = make_grid(GridSpec{5, 5, {-1, -1}, {1, 1}});
   const TangentBundle bundle(grid);

@@ -10,9 +10,9 @@
 // draws agents on where the field is weak; F the designed field as it is, so that with
 // ω_G = 0 and ω_F = 1 agents
 // follow the field's pathlines exactly (the reference pathlines drawn in Fig. 16). Agents
-// step by the midpoint rule, stop on reaching a goal, and never enter an obstacle (a step
-// that would end inside one is pushed back to its boundary, counted in
-// CrowdResult::contacts).
+// may also avoid each other (CrowdSpec::separation). Agents step together by the midpoint
+// rule, stop on reaching a goal, and never enter an obstacle (a step that would end inside
+// one is pushed back to its boundary, counted in CrowdResult::contacts).
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
@@ -55,6 +55,16 @@ struct CrowdSpec {
   int grid = 160;                   // fast-marching cells on the long side
   double agent_radius = 0;          // obstacles grow by this for the potential; 0: 1.5 grid cells
   int steps_per_frame = 4;          // agent steps between two pictures
+  // Agent–agent avoidance (off when separation is 0): no two agents on their way come
+  // closer than `separation` (domain units between centres). Each step adds a separation
+  // term (a social force, Helbing & Molnár 1995) pushing an agent away from every agent
+  // within 2·separation, growing linearly to avoidance_weight × the agent's own speed at
+  // `separation`; after the step, pairs still closer are pushed apart along the line
+  // joining them (position-based projection), and a pair that cannot be separated keeps
+  // its previous, separated positions for that step. Agents that reach a goal leave the
+  // crowd (they no longer count). Start positions keep the distance too.
+  double separation = 0;
+  double avoidance_weight = 1.0;
 };
 
 // Reads the crowd file (JSON, docs/file_formats.md). Throws tvf::Error naming the file and

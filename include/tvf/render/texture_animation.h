@@ -131,6 +131,18 @@ void draw_singularity_paths(Image& image, const TextureAnimator& animator, const
 void draw_streamlines(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
                       const Field& field, double t, double separation = 0.0);
 
+// How a surface is looked at (render/surface_texture.h). The camera frames the mesh's
+// bounding box from `direction` (from the mesh's centre towards the eye) with `up`
+// pointing up in the picture.
+struct SurfaceView {
+  Vec3 direction{1.0, -0.6, 0.5};
+  Vec3 up{0.0, 0.0, 1.0};
+  double fov = 30.0;        // vertical field of view, degrees
+  double spacing = 1.0;     // texture samples apart on the screen, pixels
+  long max_samples = 4'000'000;  // the subdivision is capped so that samples stay below this
+  bool lighting = true;     // headlight shading
+};
+
 struct TextureAnimationOptions {
   TextureOptions texture;
   int frames = 0;                 // pictures over the field's time range; 0: the field's frames
@@ -141,6 +153,8 @@ struct TextureAnimationOptions {
   bool overlay_streamlines = false;  // evenly spaced streamlines of each frame
   std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
   std::string video;              // MP4 file (empty: none)
+  SurfaceView surface;            // surfaces only (render/surface_texture.h): the camera, samples
+  int streamline_seeds = 150;     // surfaces only: streamlines of the overlay
   double fps = 25.0;
   std::function<void(int done, int total)> progress;
 };
@@ -155,7 +169,8 @@ struct TextureAnimationReport {
 };
 
 // Renders the animation and writes PNG frames (into a folder that appears complete or not
-// at all) and/or an MP4. Throws tvf::Error on bad options (naming them) or a failed write.
+// at all) and/or an MP4: on planar domains TextureAnimator's pictures, on surfaces
+// SurfaceTextureAnimator's (render/surface_texture.h) seen through options.surface. Throws tvf::Error on bad options (naming them) or a failed write.
 TextureAnimationReport write_texture_animation(const TangentBundle& bundle, const Field& field,
                                                const TextureAnimationOptions& options);
 

@@ -1,0 +1,108 @@
+#pragma once
+// Dense, temporally coherent texture animation on a triangle-mesh surface (DESIGN §8;
+// paper §9, Figs. 3 and 9), the surface counterpart of texture_animation.h, shown from a
+// camera through the offscreen OpenGL renderer (mesh_renderer.h).
+//
+// The texture lives on texture samples: the vertices of the mesh with every face split
+// regularly into n² small triangles (n from the wanted sample spacing in pixels of the
+// picture), so that samples lie about `spacing` pixels apart on the screen whatever the
+// mesh's own resolution. Each sample is a point of the mesh (face, barycentric
+// coordinates). Every frame, as on the plane (IBFV, van Wijk 2002),
+//     T_k(p) = (1 − α)·T_{k−1}(p − d_k(p)) + α·N_k(p):
+// the sample's source p − d_k(p) is found by walking back along the surface
+// (integrate/surface_walk.h) with the midpoint rule, its value interpolated linearly in the
+// small triangle holding it; N_k is a noise of cubic cells (noise_scale pixels; default
+// the sample spacing, or size/512 when larger) of world
+// space that switch on and off with random phases over noise_period frames, averaged along
+// the step. The pictures are a short line integral convolution of T along the field on the
+// surface (walks of the unit direction), contrast stretched, as the vertex colours of the
+// subdivided mesh, lit by a headlight.
+#include "tvf/analysis/topology.h"
+#include "tvf/field/field.h"
+#include "tvf/field/field_sampler.h"
+#include "tvf/mesh/tangent_bundle.h"
+#include "tvf/render/mesh_renderer.h"
+#include "tvf/render/texture_animation.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace tvf {
+
+// The simulation on the surface. TextureOptions' lengths in pixels (noise_scale,
+// pixels_per_frame, lic) are pixels of the picture at the framed distance; `size` is the
+// picture's side (square). Throws tvf::Error on a planar domain (use TextureAnimator) or
+// options out of range (naming them).
+class SurfaceTextureAnimator {
+public:
+  SurfaceTextureAnimator(const TangentBundle& bundle, const Field& field, const TextureOptions& options = {},
+                         const SurfaceView& view = {});
+
+  int width() const { return size_; }
+  int height() const { return size_; }
+  const Camera& camera() const { return camera_; }
+  double pixels_per_unit() const { return ppu_; }
+  int subdivision() const { return n_; }
+  // The texture samples: world positions, places on the mesh, and small triangles.
+  const std::vector<Vec3>& sample_positions() const { return positions_; }
+  const std::vector<SurfacePoint>& sample_points() const { return points_; }
+  const std::vector<Face>& sample_triangles() const { return triangles_; }
+
+  // As TextureAnimator::advance: one frame from the current time to t (the first call
+  // warms up at t).
+  void advance(double t);
+  double time() const { return t_; }
+  // The texture at the samples (about [0, 1]).
+  const std::vector<float>& texture() const { return tex_; }
+  // The texture's value at a point of the mesh (linear in the small triangle holding it).
+  float texture_at(const SurfacePoint& p) const;
+  // The shown values: the line integral convolution of the texture (or the texture when
+  // lic is 0), contrast stretched into [0, 1].
+  std::vector<float> shown() const;
+  // Vertex colours (gray) of the subdivided mesh for the current frame.
+  std::vector<std::uint32_t> colors() const;
+
+private:
+  int local_index(int i, int j) const { return j * (n_ + 1) - j * (j - 1) / 2 + i; }  // (i, j) of a face's grid
+  int sample_of(int f, int i, int j) const {
+    return grid_[static_cast<size_t>(f) * static_cast<size_t>(per_face_) + static_cast<size_t>(local_index(i, j))];
+  }
+  float noise(const Vec3& a, const Vec3& b, long step) const;
+  float lattice(long ix, long iy, long iz, long step) const;
+
+  const TangentBundle& bundle_;
+  const Field& field_;
+  TextureOptions o_;
+  SurfaceView view_;
+  Camera camera_;
+  int size_ = 800;
+  double ppu_ = 1, p90_ = 0, time_scale_ = 0, cell_ = 1;
+  int n_ = 1, per_face_ = 3;
+  std::vector<int> grid_;             // per face, (n+1)(n+2)/2 sample ids
+  std::vector<Vec3> positions_;
+  std::vector<SurfacePoint> points_;
+  std::vector<Face> triangles_;
+  std::vector<float> tex_, next_;
+  std::vector<cplx> values_;          // vertex values of the current step
+  long step_ = 0;
+  double t_ = 0;
+  bool started_ = false;
+  std::uint64_t seed_hash_ = 0;  // the noise seed, mixed
+};
+
+// The renderer's lines for the singularity paths up to time t (trails in the colours of
+// their types, with a dark casing) and markers for the singularities of the field at t.
+std::vector<RenderLine> singularity_path_lines(const Topology& topology, double t, double width);
+std::vector<RenderMarker> singularity_markers(const TangentBundle& bundle, const Field& field, double t,
+                                              double radius);
+// Streamlines of the field at t from `seeds` evenly spread over the surface (dark lines).
+std::vector<RenderLine> surface_streamline_lines(const TangentBundle& bundle, const Field& field, double t,
+                                                 int seeds, double width, std::uint64_t seed = 1);
+
+// The animation on a surface: write_texture_animation's work for a surface domain, after
+// it has checked the options; pictures first..last of total over the field's time range.
+TextureAnimationReport write_surface_texture_animation(const TangentBundle& bundle, const Field& field,
+                                                       const TextureAnimationOptions& options, int first, int last,
+                                                       int total);
+
+}  // namespace tvf
