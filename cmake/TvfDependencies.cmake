@@ -28,6 +28,12 @@ if(NOT OPENBLAS_FOUND)
   message(FATAL_ERROR "tvf needs OpenBLAS: install the Debian package 'libopenblas-dev' (or run scripts/install-deps.sh)")
 endif()
 
+# The designer's HTTP server (tvf serve).
+pkg_check_modules(HTTPLIB QUIET IMPORTED_TARGET GLOBAL cpp-httplib)
+if(NOT HTTPLIB_FOUND)
+  message(FATAL_ERROR "tvf serve needs cpp-httplib: install the Debian package 'libcpp-httplib-dev' (or run scripts/install-deps.sh)")
+endif()
+
 if(TVF_BUILD_TESTS)
   tvf_require(GTest libgtest-dev)
   # Tests that read our outputs with NumPy and VTK's own readers use Debian's python3

@@ -8,6 +8,9 @@
 #include "tvf/field/field.h"
 #include "tvf/solve/connection_laplacian.h"
 
+#include "tvf/core/error.h"
+
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -18,7 +21,19 @@ struct GenerateOptions {
   bool parallel = true;  // frames in parallel (TBB)
   // Called as frames complete (from any thread, serialised): frames done, frames total.
   std::function<void(int, int)> progress;
+  // When set, generation checks it between frames (and before and after whole solves and
+  // each edit) and stops with GenerationCancelled once it is true. The designer's server
+  // sets it when a newer edit makes the running solve pointless.
+  const std::atomic<bool>* cancel = nullptr;
 };
+
+// Thrown by generate*() when GenerateOptions::cancel became true; no field is returned.
+class GenerationCancelled : public Error {
+public:
+  GenerationCancelled() : Error("generation cancelled") {}
+};
+// Throws GenerationCancelled when options.cancel is set and true.
+void check_cancelled(const GenerateOptions& options);
 
 struct GenerateReport {
   std::vector<std::string> warnings;  // design problems that do not stop generation

@@ -1,0 +1,119 @@
+// End-to-end test of the designer (issue 7): `tvf serve` in a fresh folder, Debian's
+// Chromium driven by playwright-core. Open the page, place a vortex and a saddle, draw a
+// pathline, play the timeline, cancel the vortex–saddle pair, reload and find the design
+// intact. Screenshots go to --out (looked at by people, not compared by the test).
+// Usage: node e2e/designer.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
+import fs from "node:fs";
+import { args, check, Designer, launch, nearest, startServer, stopServer, tempDir } from "./harness.mjs";
+
+const a = args();
+const dir = tempDir("tvf-e2e-");
+const browser = await launch(a.chromium);
+const server = await startServer(a.tvf, dir);
+let failed = false;
+let page;
+try {
+  page = await browser.newPage({ viewport: { width: 1280, height: 860 } });
+  const errors = [];
+  page.on("pageerror", (e) => errors.push(e.message));
+  await page.goto(server.url);
+  const d = new Designer(page, server.url);
+  await d.settled();
+  check((await page.title()) === "tvf designer", "the page opens");
+  await d.shot(a.out, "01_demo_scene.png");
+
+  await page.click("#new");
+  await d.settled();
+  check((await d.scene()).scene.elements.length === 0, "New starts an empty design");
+
+  // A vortex and a saddle beside it, both fixed.
+  await d.tool("singular");
+  await page.selectOption("#singular-type", "ccw_center");
+  await d.click([-0.35, 0.3]);
+  await d.settled();
+  await page.selectOption("#singular-type", "saddle");
+  await d.click([0.15, 0.3]);
+  await d.settled();
+  let frame = await d.frame();
+  check(nearest(frame, ["center", "repelling_focus", "attracting_focus"], [-0.35, 0.3]) < 0.08, "the vortex is in the field");
+  check(nearest(frame, ["saddle"], [0.15, 0.3]) < 0.08, "the saddle is in the field");
+
+  // A pathline drawn along the bottom, from t = 0 to 1.
+  await d.tool("pathline");
+  await d.drag([[-0.8, -0.6], [-0.3, -0.45], [0.3, -0.5], [0.8, -0.6]]);
+  const st = await d.settled();
+  const elements = (await d.scene()).scene.elements;
+  check(elements.length === 3 && elements[2].kind === "regular" && elements[2].pathline.length >= 2, "the pathline is a regular element");
+  check(elements[2].pathline[0][2] === 0 && elements[2].pathline.at(-1)[2] === 1, "the pathline spans its life span");
+  await d.goto(50);
+  await d.settled();
+  await d.shot(a.out, "02_vortex_saddle_pathline.png");
+
+  // Play the timeline.
+  const before = await page.evaluate(() => window.tvf.state.frame);
+  await page.click("#play");
+  await page.waitForTimeout(1500);
+  await page.click("#play");
+  const after = await page.evaluate(() => window.tvf.state.frame);
+  check(after !== before, `playing moves the time (frame ${before} → ${after})`);
+  await d.shot(a.out, "03_played.png");
+
+  // Cancel a pair at frame 50: the placed saddle and the index +1 singularity nearest to it.
+  await d.goto(50);
+  await d.settled();
+  await d.tool("cancel");
+  frame = await d.frame();
+  const saddle = frame.singularities.find((s) => s.type === "saddle" && Math.hypot(s.position[0] - 0.15, s.position[1] - 0.3) < 0.1);
+  const distance = (s) => Math.hypot(s.position[0] - saddle.position[0], s.position[1] - saddle.position[1]);
+  const center = frame.singularities.filter((s) => s.index === 1).sort((p, q) => distance(p) - distance(q))[0];
+  check(center && saddle, "the pair to cancel is at frame 50");
+  await d.click(center.position);
+  await d.click(saddle.position);
+  await page.waitForFunction(() => !document.getElementById("message").textContent.startsWith("applying"), null, { timeout: 60000 });
+  const msg = await page.textContent("#message");
+  check(/cancel/i.test(msg) && !(await page.locator("#message.error").count()), `the cancel edit is applied: "${msg.trim()}"`);
+  await d.settled();
+  frame = await d.frame();
+  const plus = ["source", "sink", "center", "repelling_focus", "attracting_focus"];
+  check(nearest(frame, ["saddle"], saddle.position) > 0.05 && nearest(frame, plus, center.position) > 0.05,
+    `the pair is gone at frame 50 (${center.type} at ${center.position.map((v) => v.toFixed(2))}, saddle at ${saddle.position.map((v) => v.toFixed(2))})`);
+  const edited = await d.scene();
+  check(edited.scene.edits.length === 1 && edited.scene.edits[0].op === "cancel", "the edit is in the scene");
+  await d.shot(a.out, "04_pair_cancelled.png");
+
+  // Reload: the same design, the same field.
+  await page.reload();
+  await d.settled();
+  const reloaded = await d.scene();
+  check(JSON.stringify(reloaded.scene) === JSON.stringify(edited.scene), "after a reload the design is intact");
+  const onDisk = JSON.parse(fs.readFileSync(`${dir}/scene.json`, "utf8"));
+  check(onDisk.elements.length === 3 && onDisk.edits.length === 1, "the scene file holds the design");
+
+  // Undo the edit, then redo it.
+  await page.click("#undo");
+  await d.settled();
+  check((await d.scene()).scene.edits.length === 0, "undo drops the edit");
+  await page.click("#redo");
+  await d.settled();
+  check((await d.scene()).scene.edits.length === 1, "redo brings it back");
+  await d.goto(50);
+  await d.settled();
+  await d.shot(a.out, "05_reloaded.png");
+  check(errors.length === 0, `no errors in the page${errors.length ? ": " + errors.join("; ") : ""}`);
+} catch (e) {
+  failed = true;
+  console.error(e.message);
+  if (page) await page.screenshot({ path: `${a.out}/failure.png` }).catch(() => {});
+  if (page)
+    console.error(
+      await page
+        .evaluate(() => JSON.stringify({ frame: window.tvf.state.frames.get(window.tvf.state.frame)?.singularities, message: document.getElementById("message").textContent }))
+        .catch(() => ""),
+    );
+  console.error(server.output());
+} finally {
+  await browser.close();
+  await stopServer(server);
+  fs.rmSync(dir, { recursive: true, force: true });
+}
+process.exit(failed ? 1 : 0);
