@@ -22,26 +22,22 @@ try {
   check((await page.title()) === "tvf designer", "the page opens");
   await d.shot(a.out, "01_demo_scene.png");
 
-  await page.click("#new");
-  await d.settled();
+  await d.change(() => page.click("#new"));
   check((await d.scene()).scene.elements.length === 0, "New starts an empty design");
 
   // A vortex and a saddle beside it, both fixed.
   await d.tool("singular");
   await page.selectOption("#singular-type", "ccw_center");
-  await d.click([-0.35, 0.3]);
-  await d.settled();
+  await d.change(() => d.click([-0.35, 0.3]));
   await page.selectOption("#singular-type", "saddle");
-  await d.click([0.15, 0.3]);
-  await d.settled();
+  await d.change(() => d.click([0.15, 0.3]));
   let frame = await d.frame();
   check(nearest(frame, ["center", "repelling_focus", "attracting_focus"], [-0.35, 0.3]) < 0.08, "the vortex is in the field");
   check(nearest(frame, ["saddle"], [0.15, 0.3]) < 0.08, "the saddle is in the field");
 
   // A pathline drawn along the bottom, from t = 0 to 1.
   await d.tool("pathline");
-  await d.drag([[-0.8, -0.6], [-0.3, -0.45], [0.3, -0.5], [0.8, -0.6]]);
-  const st = await d.settled();
+  await d.change(() => d.drag([[-0.8, -0.6], [-0.3, -0.45], [0.3, -0.5], [0.8, -0.6]]));
   const elements = (await d.scene()).scene.elements;
   check(elements.length === 3 && elements[2].kind === "regular" && elements[2].pathline.length >= 2, "the pathline is a regular element");
   check(elements[2].pathline[0][2] === 0 && elements[2].pathline.at(-1)[2] === 1, "the pathline spans its life span");
@@ -90,15 +86,29 @@ try {
   check(onDisk.elements.length === 3 && onDisk.edits.length === 1, "the scene file holds the design");
 
   // Undo the edit, then redo it.
-  await page.click("#undo");
-  await d.settled();
+  await d.change(() => page.click("#undo"));
   check((await d.scene()).scene.edits.length === 0, "undo drops the edit");
-  await page.click("#redo");
-  await d.settled();
+  await d.change(() => page.click("#redo"));
   check((await d.scene()).scene.edits.length === 1, "redo brings it back");
   await d.goto(50);
   await d.settled();
   await d.shot(a.out, "05_reloaded.png");
+
+  // Surfaces: the sphere; a click on the surface places a source there.
+  await d.change(() => page.selectOption("#domain", "sphere"));
+  check(await page.locator("#surface canvas").isVisible(), "the sphere is shown in 3-D");
+  await d.tool("singular");
+  await page.uncheck("#keyframe-mode");
+  await page.selectOption("#singular-type", "source");
+  const box = await page.locator("#surface canvas").boundingBox();
+  await d.change(() => page.mouse.click(box.x + box.width / 2, box.y + box.height / 2));
+  const onSphere = (await d.scene()).scene;
+  const p = onSphere.elements[0]?.path[0];
+  check(p && p.length === 4 && Math.abs(Math.hypot(p[0], p[1], p[2]) - 1) < 0.05, `a source picked on the sphere at (${p?.slice(0, 3).map((v) => v.toFixed(2))})`);
+  frame = await d.frame();
+  const nearSource = frame.singularities.some((s) => s.type === "source" && Math.hypot(s.position[0] - p[0], s.position[1] - p[1], s.position[2] - p[2]) < 0.1);
+  check(nearSource, "the field on the sphere has a source there");
+  await d.shot(a.out, "06_sphere.png");
   check(errors.length === 0, `no errors in the page${errors.length ? ": " + errors.join("; ") : ""}`);
 } catch (e) {
   failed = true;

@@ -107,6 +107,18 @@ export class Designer {
       await this.page.waitForTimeout(50);
     }
   }
+  // Runs an action that changes the scene and waits until the server has the change
+  // (a newer revision) and the page shows its field.
+  async change(action, timeout = 30000) {
+    const before = (await this.status()).revision;
+    await action();
+    const start = Date.now();
+    while ((await this.status()).revision <= before) {
+      if (Date.now() - start > timeout) throw new Error("the action did not change the scene");
+      await this.page.waitForTimeout(25);
+    }
+    return this.settled(timeout);
+  }
   async tool(name) {
     await this.page.click(`#tools label:has(input[value="${name}"])`);
   }

@@ -18,20 +18,18 @@ try {
   const d = new Designer(page, server.url);
   await d.settled();
   const started = Date.now();
-  await page.click("#new");
-  await d.settled();
+  await d.change(() => page.click("#new"));
 
   // Key frame at t = 0: two storms.
   await d.tool("singular");
   await page.selectOption("#singular-type", "ccw_center");
   await page.check("#keyframe-mode");
   await d.goto(0);
-  await d.click([-0.45, 0.1]);
-  await d.click([0.45, -0.1]);
+  await d.change(() => d.click([-0.45, 0.1]));
+  await d.change(() => d.click([0.45, -0.1]));
   // Key frame at t = 1: one storm between them.
   await d.goto(99);
-  await d.click([0, 0]);
-  const st = await d.settled(60000);
+  const st = await d.change(() => d.click([0, 0]), 60000);
   const scene = (await d.scene()).scene;
   check(scene.generator === "spacetime" && scene.keyframes.length === 2, "two key frames, spacetime generator");
   check(scene.keyframes[0].elements.length === 2 && scene.keyframes[1].elements.length === 1, "two storms, then one");

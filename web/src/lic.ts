@@ -54,39 +54,47 @@ export interface LicOptions {
 }
 
 // LIC image (width × height, row-major, top row first, values in [0, 1]) of the field.
-// Pixel (i, j) has its centre at world (xmin + (i + ½)·dx, ymax − (j + ½)·dy). Each step
-// follows the field's direction for one pixel (the field's speed does not matter).
+// Pixel (i, j) has its centre at world (xmin + (i + ½)·dx, ymax − (j + ½)·dy). The field's
+// direction is sampled once per pixel; each step then moves one pixel along the direction
+// of the pixel it is in (the field's speed does not matter), `length` steps each way.
 export function lic(f: GridField, o: LicOptions): Float32Array {
   const { width: w, height: h } = o;
   const length = Math.max(1, Math.round(o.length ?? w / 20));
   const tex = o.noise ?? noise(w, h);
   const dx = (f.max[0] - f.min[0]) / w;
   const dy = (f.max[1] - f.min[1]) / h;
+  // Unit direction per pixel, in pixels (y down); 0 where the field vanishes.
+  const du = new Float32Array(w * h);
+  const dv = new Float32Array(w * h);
+  for (let j = 0; j < h; ++j)
+    for (let i = 0; i < w; ++i) {
+      const [u, v] = sample(f, f.min[0] + (i + 0.5) * dx, f.max[1] - (j + 0.5) * dy);
+      const pu = u / dx;
+      const pv = -v / dy;
+      const n = Math.hypot(pu, pv);
+      if (n > 1e-12) {
+        du[j * w + i] = pu / n;
+        dv[j * w + i] = pv / n;
+      }
+    }
   const out = new Float32Array(w * h);
-  const toPx = (x: number, y: number): [number, number] => [(x - f.min[0]) / dx - 0.5, (f.max[1] - y) / dy - 0.5];
   for (let j = 0; j < h; ++j) {
     for (let i = 0; i < w; ++i) {
-      const x0 = f.min[0] + (i + 0.5) * dx;
-      const y0 = f.max[1] - (j + 0.5) * dy;
       let sum = tex[j * w + i];
       let count = 1;
-      for (const dir of [1, -1]) {
-        let x = x0;
-        let y = y0;
-        for (let k = 0; k < length; ++k) {
-          const [u, v] = sample(f, x, y);
-          // Direction in pixels (y down): one pixel per step.
-          const pu = u / dx;
-          const pv = v / dy;
-          const n = Math.hypot(pu, pv);
-          if (!(n > 1e-12)) break;
-          x += (dir * pu) / n * dx;
-          y += (dir * pv) / n * dy;
-          const [px, py] = toPx(x, y);
-          const ii = Math.round(px);
-          const jj = Math.round(py);
-          if (ii < 0 || jj < 0 || ii >= w || jj >= h) break;
-          sum += tex[jj * w + ii];
+      for (let dir = 1; dir >= -1; dir -= 2) {
+        let x = i + 0.5;
+        let y = j + 0.5;
+        let k = j * w + i;
+        for (let step = 0; step < length; ++step) {
+          const a = du[k];
+          const b = dv[k];
+          if (a === 0 && b === 0) break;
+          x += dir * a;
+          y += dir * b;
+          if (x < 0 || y < 0 || x >= w || y >= h) break;
+          k = Math.floor(y) * w + Math.floor(x);
+          sum += tex[k];
           ++count;
         }
       }
@@ -95,10 +103,10 @@ export function lic(f: GridField, o: LicOptions): Float32Array {
   }
   // Contrast stretch: mean ± 2.5 standard deviations to [0, 1].
   let mean = 0;
-  for (const v of out) mean += v;
+  for (let k = 0; k < out.length; ++k) mean += out[k];
   mean /= out.length;
   let variance = 0;
-  for (const v of out) variance += (v - mean) * (v - mean);
+  for (let k = 0; k < out.length; ++k) variance += (out[k] - mean) * (out[k] - mean);
   const sd = Math.sqrt(variance / out.length) || 1;
   for (let k = 0; k < out.length; ++k) out[k] = Math.min(1, Math.max(0, 0.5 + (out[k] - mean) / (5 * sd)));
   return out;

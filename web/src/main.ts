@@ -20,7 +20,7 @@ const slider = $<HTMLInputElement>("time");
 const message = $<HTMLPreElement>("message");
 const sceneText = $<HTMLTextAreaElement>("scene-json");
 
-const LIC_SIZE = 280;
+const LIC_SIZE = 256;
 const licNoise = noise(LIC_SIZE, LIC_SIZE, 7);
 
 interface State {
@@ -156,6 +156,9 @@ async function loadResult(revision: number) {
     setupDomainView();
   }
   const g = mesh.grid;
+  // The space-time view is of planar domains (a surface × time has no picture in 3-D).
+  $("spacetime").hidden = !g;
+  $("spacetime-title").hidden = !g;
   if (g) spacetime.set(analysis, g.min, g.max, [analysis.times[0], analysis.times[analysis.times.length - 1]]);
   coherence.set(analysis.times, analysis.coherence);
   listBifurcations();
@@ -252,7 +255,7 @@ function texture(f: Frame): HTMLCanvasElement {
   if (c) return c;
   const g = state.mesh!.grid!;
   const field: GridField = { nx: g.size[0], ny: g.size[1], min: g.min, max: g.max, vectors: f.vectors };
-  const img = lic(field, { width: LIC_SIZE, height: LIC_SIZE, noise: licNoise, length: 12 });
+  const img = lic(field, { width: LIC_SIZE, height: LIC_SIZE, noise: licNoise, length: 10 });
   c = document.createElement("canvas");
   c.width = LIC_SIZE;
   c.height = LIC_SIZE;

@@ -117,7 +117,15 @@ export class SpaceTimeView {
     if (hit) this.onPick(hit.object.userData.index as number);
   }
 
+  // Draws on the next animation frame; calls before it coalesce (playing the timeline
+  // moves the time plane every frame, and a software-GL browser draws slowly).
+  private pending = false;
   render() {
-    this.renderer.render(this.scene, this.camera);
+    if (this.pending) return;
+    this.pending = true;
+    requestAnimationFrame(() => {
+      this.pending = false;
+      this.renderer.render(this.scene, this.camera);
+    });
   }
 }

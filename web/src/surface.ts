@@ -28,7 +28,7 @@ export class SurfaceView {
     this.camera = new THREE.PerspectiveCamera(40, w / h, 0.001, 1000);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener("change", () => this.render());
-    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x667788, 2.2));
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8899aa, 3.0));
     this.scene.add(this.overlay);
     const el = this.renderer.domElement;
     // A click (not a drag of the camera) picks a point.
@@ -54,7 +54,7 @@ export class SurfaceView {
     g.setIndex(mesh.faces);
     g.computeVertexNormals();
     g.computeBoundingSphere();
-    this.surface = new THREE.Mesh(g, new THREE.MeshStandardMaterial({ color: 0xd6dde6, roughness: 0.9, side: THREE.DoubleSide }));
+    this.surface = new THREE.Mesh(g, new THREE.MeshStandardMaterial({ color: 0xe8edf3, roughness: 0.9, side: THREE.DoubleSide }));
     this.scene.add(this.surface);
     const s = g.boundingSphere!;
     this.radius = s.radius;
@@ -71,14 +71,16 @@ export class SurfaceView {
     }
     const n = this.positions.length / 3;
     const step = Math.max(1, Math.floor(n / 1500));
-    let typical = 0;
-    for (let v = 0; v < n; v += step) typical = Math.max(typical, Math.hypot(frame.vectors[3 * v], frame.vectors[3 * v + 1], frame.vectors[3 * v + 2]));
-    const len = (0.05 * this.radius) / (typical || 1);
+    // Directions only (a designed field's speed falls off far from its elements): every
+    // arrow has the same length; exact zeros get none.
+    const len = 0.045 * this.radius;
     const seg: number[] = [];
     for (let v = 0; v < n; v += step) {
       const p = [this.positions[3 * v], this.positions[3 * v + 1], this.positions[3 * v + 2]];
       const d = [frame.vectors[3 * v], frame.vectors[3 * v + 1], frame.vectors[3 * v + 2]];
-      seg.push(...p, p[0] + len * d[0], p[1] + len * d[1], p[2] + len * d[2]);
+      const m = Math.hypot(d[0], d[1], d[2]);
+      if (!(m > 0)) continue;
+      seg.push(...p, p[0] + (len * d[0]) / m, p[1] + (len * d[1]) / m, p[2] + (len * d[2]) / m);
     }
     const g = new THREE.BufferGeometry();
     g.setAttribute("position", new THREE.Float32BufferAttribute(seg, 3));
@@ -106,7 +108,13 @@ export class SurfaceView {
     if (hit) this.onPick([hit.point.x, hit.point.y, hit.point.z]);
   }
 
+  private pending = false;
   render() {
-    this.renderer.render(this.scene, this.camera);
+    if (this.pending) return;
+    this.pending = true;
+    requestAnimationFrame(() => {
+      this.pending = false;
+      this.renderer.render(this.scene, this.camera);
+    });
   }
 }
