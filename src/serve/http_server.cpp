@@ -15,9 +15,13 @@ namespace tvf::serve {
 
 namespace {
 
+// With a charset, cpp-httplib leaves the body uncompressed: on loopback, sending 100 kB
+// takes microseconds, while its Brotli (quality 11) takes half a second for a frame.
+constexpr const char* kJson = "application/json; charset=utf-8";
+
 void send_json(httplib::Response& res, const json& body, int status = 200) {
   res.status = status;
-  res.set_content(body.dump(), "application/json");
+  res.set_content(body.dump(), kJson);
 }
 
 void send_error(httplib::Response& res, int status, const std::string& message) {
@@ -48,7 +52,7 @@ std::string host_name(const std::string& header) {
 
 std::string mime_type(const fs::path& p) {
   const std::string ext = p.extension().string();
-  if (ext == ".json") return "application/json";
+  if (ext == ".json") return kJson;
   if (ext == ".mp4") return "video/mp4";
   if (ext == ".png") return "image/png";
   if (ext == ".svg") return "image/svg+xml";
@@ -166,6 +170,8 @@ struct HttpServer::Impl {
 
     std::error_code ec;
     if (!options.web_root.empty() && fs::is_regular_file(options.web_root / "index.html", ec)) {
+      // The bundle is served as it is (see kJson: compressing it would cost seconds).
+      server.set_file_extension_and_mimetype_mapping("js", "application/javascript; charset=utf-8");
       server.set_mount_point("/", options.web_root.string());
     } else {
       server.Get("/", [](const httplib::Request&, httplib::Response& res) {

@@ -41,7 +41,7 @@ json body(const httplib::Result& r, int status) {
   EXPECT_TRUE(r) << "no response";
   if (!r) return {};
   EXPECT_EQ(r->status, status) << r->body;
-  EXPECT_EQ(r->get_header_value("Content-Type"), "application/json") << r->body;
+  EXPECT_EQ(r->get_header_value("Content-Type"), "application/json; charset=utf-8") << r->body;
   return json::parse(r->body, nullptr, false);
 }
 
@@ -55,6 +55,10 @@ TEST(ServeHttp, SceneFrameAnalysisAndEditsOverHttp) {
   EXPECT_EQ(frame["frame"], 20);
   EXPECT_EQ(frame["vectors"].size(), 33u * 33u * 3u);
   EXPECT_EQ(body(f.client->Get("/api/status"), 200)["state"], "ready");
+  // Sent as it is, even to a browser that accepts Brotli (which took 0.5 s a frame).
+  auto plain = f.client->Get("/api/frame/3", httplib::Headers{{"Accept-Encoding", "br, gzip"}});
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->get_header_value("Content-Encoding"), "");
   EXPECT_FALSE(body(f.client->Get("/api/analysis"), 200)["paths"].empty());
 
   scene["scene"]["falloff"] = 15;

@@ -45,6 +45,17 @@ try {
   await d.settled();
   await d.shot(a.out, "02_vortex_saddle_pathline.png");
 
+  // Select, drag and delete: a source placed, moved, removed.
+  await page.selectOption("#singular-type", "source");
+  await d.tool("singular");
+  await d.change(() => d.click([0.5, -0.1]));
+  await d.tool("select");
+  await d.change(() => d.drag([[0.5, -0.1], [0.55, -0.05], [0.6, 0.0]]));
+  let moved = (await d.scene()).scene.elements[3];
+  check(moved?.type === "source" && Math.hypot(moved.path[0][0] - 0.6, moved.path[0][1]) < 0.02, "a dragged element moves");
+  await d.change(() => page.keyboard.press("Delete"));
+  check((await d.scene()).scene.elements.length === 3, "Delete removes the selected element");
+
   // Play the timeline.
   const before = await page.evaluate(() => window.tvf.state.frame);
   await page.click("#play");
