@@ -540,7 +540,10 @@ function play(on: boolean) {
   const step = async () => {
     if (!state.playing) return;
     const frames = scene().time.frames;
-    await showFrame((state.frame + 1) % frames);
+    const next = (state.frame + 1) % frames;
+    // Ask for the frames after it while this one is drawn.
+    for (let k = 1; k <= 3; ++k) void frameData((next + k) % frames).catch(() => undefined);
+    await showFrame(next);
     playTimer = window.setTimeout(step, 60);
   };
   if (on) void step();
