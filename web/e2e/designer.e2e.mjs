@@ -105,6 +105,41 @@ try {
   await d.settled();
   await d.shot(a.out, "05_reloaded.png");
 
+  // On a new design: a bifurcation inserted at t = 0.5, moved (picked in the list, clicked
+  // at its new place at t = 0.6), then removed from the list: edits of the field, kept in
+  // the scene. (A new one, because a design changed after an edit may no longer hold
+  // what the edit names; the server then reports the failed edit.)
+  await d.change(() => page.click("#new"));
+  const analysis = () => page.evaluate(() => fetch("api/analysis").then((r) => r.json()));
+  const creationNear = (an, x, y, t) =>
+    an.bifurcations.findIndex((b) => b.kind === "creation" && Math.hypot(b.position[0] - x, b.position[1] - y) < 0.12 && Math.abs(b.t - t) < 0.06);
+  const applied = async () => {
+    await page.waitForFunction(() => !document.getElementById("message").textContent.startsWith("applying"), null, { timeout: 60000 });
+    return { text: (await page.textContent("#message")).trim(), error: (await page.locator("#message.error").count()) > 0 };
+  };
+  await d.goto(50);
+  await d.tool("bifurcation");
+  await page.selectOption("#bifurcation-type", "saddle_sink_creation");
+  await d.change(() => d.click([-0.1, -0.3]));
+  let an = await analysis();
+  let i = creationNear(an, -0.1, -0.3, 0.5);
+  check(i >= 0, "the inserted bifurcation is in the field (a creation near (-0.1, -0.3) at t = 0.5)");
+  await page.locator(`#bifurcations > div:nth-child(${i + 1}) button`, { hasText: "go to" }).click();
+  await d.tool("move-bifurcation");
+  await d.goto(60);
+  const edits0 = (await d.scene()).scene.edits.length;
+  await d.change(() => d.click([0.3, -0.3]), 60000);
+  let m = await applied();
+  check(!m.error && (await d.scene()).scene.edits.at(-1).op === "move_bifurcation", `the bifurcation is moved: "${m.text}"`);
+  an = await analysis();
+  i = creationNear(an, 0.3, -0.3, 0.6);
+  check(i >= 0, "the field has the creation at its new place and time");
+  await d.change(() => page.locator(`#bifurcations > div:nth-child(${i + 1}) button`, { hasText: "remove" }).click(), 60000);
+  m = await applied();
+  check(!m.error && (await d.scene()).scene.edits.length === edits0 + 2, `the bifurcation is removed: "${m.text}"`);
+  check(creationNear(await analysis(), 0.3, -0.3, 0.6) < 0, "the field no longer has it");
+  await d.shot(a.out, "06_bifurcation_edits.png");
+
   // Surfaces: the sphere; a click on the surface places a source there.
   await d.change(() => page.selectOption("#domain", "sphere"));
   check(await page.locator("#surface canvas").isVisible(), "the sphere is shown in 3-D");
@@ -119,7 +154,7 @@ try {
   frame = await d.frame();
   const nearSource = frame.singularities.some((s) => s.type === "source" && Math.hypot(s.position[0] - p[0], s.position[1] - p[1], s.position[2] - p[2]) < 0.1);
   check(nearSource, "the field on the sphere has a source there");
-  await d.shot(a.out, "06_sphere.png");
+  await d.shot(a.out, "07_sphere.png");
   check(errors.length === 0, `no errors in the page${errors.length ? ": " + errors.join("; ") : ""}`);
 } catch (e) {
   failed = true;

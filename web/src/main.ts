@@ -217,6 +217,7 @@ function listBifurcations() {
     go.textContent = "go to";
     go.onclick = () => {
       selectBifurcation(i);
+      say(`bifurcation ${i} picked: the Move bifurcation tool moves it to a click at the current time`);
       void showFrame(S.frameOf(scene(), b.t));
     };
     const remove = document.createElement("button");
@@ -245,7 +246,7 @@ function selectBifurcation(i: number) {
 spacetime.onPick = (i) => {
   selectBifurcation(i);
   const b = state.analysis!.bifurcations[i];
-  say(`bifurcation ${i}: ${b.kind} at t = ${b.t.toFixed(3)}: "remove" or "go to" in the list below`);
+  say(`bifurcation ${i}: ${b.kind} at t = ${b.t.toFixed(3)}: "remove" in the list, or the Move bifurcation tool and a click where it should go`);
 };
 
 // ---- drawing the planar canvas ----------------------------------------------------------
@@ -428,6 +429,11 @@ canvas.addEventListener("pointerdown", (e) => {
     redraw();
   } else if (state.tool === "cancel") {
     pickForCancel(p, view().worldLength(20));
+  } else if (state.tool === "move-bifurcation") {
+    const b = state.analysis?.bifurcations[state.selectedBifurcation];
+    if (!b) return say("pick a bifurcation first: click it in the space-time view or press go to in the list", true);
+    const t = Number(currentTime().toFixed(4));
+    void edit(S.moveBifurcationEdit(rounded(b.position.slice(0, 2)), b.t, p, t));
   } else {
     state.stroke = [p];
   }
