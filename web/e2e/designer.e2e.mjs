@@ -155,6 +155,22 @@ try {
   const nearSource = frame.singularities.some((s) => s.type === "source" && Math.hypot(s.position[0] - p[0], s.position[1] - p[1], s.position[2] - p[2]) < 0.1);
   check(nearSource, "the field on the sphere has a source there");
   await d.shot(a.out, "07_sphere.png");
+
+  // An uploaded mesh: a bumpy 12 × 12 patch as OBJ.
+  let obj = "";
+  for (let j = 0; j < 12; ++j)
+    for (let i = 0; i < 12; ++i) obj += `v ${i / 11} ${j / 11} ${(0.1 * Math.sin(3 * i / 11) * Math.cos(2 * j / 11)).toFixed(5)}\n`;
+  for (let j = 0; j + 1 < 12; ++j)
+    for (let i = 0; i + 1 < 12; ++i) {
+      const v = j * 12 + i + 1;
+      obj += `f ${v} ${v + 1} ${v + 13}\nf ${v} ${v + 13} ${v + 12}\n`;
+    }
+  await d.change(() => page.setInputFiles("#upload", { name: "patch.obj", mimeType: "model/obj", buffer: Buffer.from(obj) }));
+  const uploaded = (await d.scene()).scene;
+  const meshData = await page.evaluate(() => fetch("api/mesh").then((r) => r.json()));
+  check(uploaded.domain.mesh === "patch.obj" && fs.existsSync(`${dir}/patch.obj`) && meshData.vertices.length === 144 * 3,
+    "an uploaded OBJ becomes the domain (144 vertices, stored in the working folder)");
+  await d.shot(a.out, "08_uploaded_mesh.png");
   check(errors.length === 0, `no errors in the page${errors.length ? ": " + errors.join("; ") : ""}`);
 } catch (e) {
   failed = true;
