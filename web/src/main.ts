@@ -330,6 +330,13 @@ function redraw() {
       line([e.at, [e.at[0] + e.scale * Math.cos(a), e.at[1] + e.scale * Math.sin(a)]], BIFURCATION_COLOR, 2);
     }
   }
+  // Deformed streamlines: the seed, and each key's move.
+  const deform = s.deform as S.DeformBlock | undefined;
+  for (const e of deform?.base?.elements ?? []) if (e.kind === "singular") ring(v, e.path[0].slice(0, -1), typeColor(e.type ?? "saddle"), 9);
+  for (const sl of deform?.streamlines ?? []) {
+    square(v, sl.seed, PATHLINE_COLOR);
+    for (const k of sl.keys) line([sl.seed, [sl.seed[0] + k.translate[0], sl.seed[1] + k.translate[1]]], PATHLINE_COLOR, 2, [4, 3]);
+  }
   const j = state.frame;
   for (const k of s.keyframes ?? []) {
     if (S.frameOf(s, k.t) !== j) continue;
@@ -481,6 +488,11 @@ canvas.addEventListener("pointerup", (e) => {
     } else if (state.tool === "streamline") {
       if (isClick) return say("drag to draw a streamline", true);
       void change(S.addKeyframeStreamline(scene(), t, resample(stroke, 8)), `streamline in the key frame at t = ${t}`);
+    } else if (state.tool === "deform") {
+      if (isClick) return say("drag from the streamline's seed to where it should be at the current time", true);
+      const turn = Number($<HTMLInputElement>("deform-turn").value) || 0;
+      const d = rounded([p[0] - stroke[0][0], p[1] - stroke[0][1]]);
+      void change(S.addDeformStreamline(scene(), stroke[0], d, t, turn), `streamline from (${stroke[0].join(", ")}) moved by (${d.join(", ")}) at t = ${t}`);
     } else if (state.tool === "bifurcation") {
       const type = $<HTMLSelectElement>("bifurcation-type").value;
       const dx = p[0] - stroke[0][0];
@@ -573,6 +585,11 @@ $("play").addEventListener("click", () => play(!state.playing));
 $("delete").addEventListener("click", deleteSelected);
 $("undo").addEventListener("click", () => void undo());
 $("redo").addEventListener("click", () => void redo());
+$("rotate-field").addEventListener("click", () => {
+  const theta = Number($<HTMLInputElement>("field-turn").value);
+  if (!Number.isFinite(theta)) return say("give the turn in radians", true);
+  void change(S.setDeformTransform(scene(), theta), `the field turns by ${theta} rad over the time range (deform generator)`);
+});
 $("new").addEventListener("click", () => void change(S.emptyScene(), "new empty design on the 65² grid"));
 $<HTMLSelectElement>("generator").addEventListener("change", (e) =>
   void change({ ...scene(), generator: (e.target as HTMLSelectElement).value }, "generator changed"),

@@ -283,3 +283,54 @@ export function removeBifurcationEdit(position: Vec, t: number) {
 export function moveBifurcationEdit(position: Vec, t: number, to: Vec, t2: number) {
   return { op: "move_bifurcation", at: [...position, t], to: [...to, t2] };
 }
+
+// Field deformation (paper §7, the deform generator): the design so far becomes the base
+// field V(t0) (its elements move into deform.base; key frames are not part of it).
+function toDeform(s: Scene): NonNullable<DeformBlock> {
+  if (s.generator !== "deform" || !s.deform) {
+    s.deform = { base: { elements: s.elements ?? [] }, streamlines: [] };
+    s.elements = [];
+    s.generator = "deform";
+  }
+  return s.deform as DeformBlock;
+}
+export interface DeformBlock {
+  base: { elements: Element[] };
+  matrix?: unknown[];
+  transform?: { t: number; sx: number; sy: number; theta: number }[];
+  streamlines?: { seed: Vec; keys: { t: number; translate: Vec; rotate: number; scale: number }[] }[];
+}
+
+// A representative streamline (traced in V(t0) from `seed`) moved by `translate` and
+// turned by `rotate` radians by time t (> the first time; keys of one streamline stay in
+// increasing t: a key at the same frame is replaced).
+export function addDeformStreamline(scene: Scene, seed: Vec, translate: Vec, t: number, rotate = 0, scale = 1): Scene {
+  if (!(t > scene.time.range[0])) throw new Error("move the time past the start: a deformation key needs t after the first frame");
+  const s = clone(scene);
+  const d = toDeform(s);
+  d.streamlines ??= [];
+  const key = { t, translate: [...translate], rotate, scale };
+  const near = d.streamlines.find((sl) => Math.hypot(...sl.seed.map((v, k) => v - seed[k])) < 1e-6);
+  if (near) {
+    near.keys = near.keys.filter((k) => frameOf(s, k.t) !== frameOf(s, t));
+    near.keys.push(key);
+    near.keys.sort((a, b) => a.t - b.t);
+  } else {
+    d.streamlines.push({ seed: [...seed], keys: [key] });
+  }
+  return s;
+}
+
+// The whole field turned by theta radians (and scaled by sx, sy) from the first time to
+// the last: M(t) keys of the deform generator (sx, sy, θ interpolated linearly).
+export function setDeformTransform(scene: Scene, theta: number, sx = 1, sy = 1): Scene {
+  const s = clone(scene);
+  const d = toDeform(s);
+  const [t0, t1] = s.time.range;
+  delete d.matrix;
+  d.transform = [
+    { t: t0, sx: 1, sy: 1, theta: 0 },
+    { t: t1, sx, sy, theta },
+  ];
+  return s;
+}

@@ -61,3 +61,28 @@ describe("scene changes", () => {
     expect(S.moveBifurcationEdit([0, 0], 0.5, [0.1, 0], 0.6)).toEqual({ op: "move_bifurcation", at: [0, 0, 0.5], to: [0.1, 0, 0.6] });
   });
 });
+
+describe("deformation", () => {
+  it("moves the design into the base field and keys streamlines by time", () => {
+    let s = S.addSingular(S.emptyScene(), "saddle", [0.4, 0.1], undefined, 0);
+    s = S.addDeformStreamline(s, [0, 0.6], [0, -0.2], 1, 0.8);
+    expect(s.generator).toBe("deform");
+    expect(s.elements).toEqual([]);
+    const d = s.deform as S.DeformBlock;
+    expect(d.base.elements).toHaveLength(1);
+    expect(d.streamlines).toEqual([{ seed: [0, 0.6], keys: [{ t: 1, translate: [0, -0.2], rotate: 0.8, scale: 1 }] }]);
+    s = S.addDeformStreamline(s, [0, 0.6], [0.1, 0], 0.5);
+    s = S.addDeformStreamline(s, [0, 0.6], [0.2, 0], 0.5); // same frame: replaced
+    expect((s.deform as S.DeformBlock).streamlines![0].keys.map((k) => k.t)).toEqual([0.5, 1]);
+    expect((s.deform as S.DeformBlock).base.elements).toHaveLength(1); // kept, not nested again
+    expect(() => S.addDeformStreamline(s, [0, 0], [0, 0], 0)).toThrow(/after the first frame/);
+  });
+
+  it("keys a rotation of the whole field from the first time to the last", () => {
+    const s = S.setDeformTransform(S.addSingular(S.emptyScene(), "source", [0, 0], undefined, 0), Math.PI);
+    expect((s.deform as S.DeformBlock).transform).toEqual([
+      { t: 0, sx: 1, sy: 1, theta: 0 },
+      { t: 1, sx: 1, sy: 1, theta: Math.PI },
+    ]);
+  });
+});
