@@ -95,6 +95,7 @@ struct Session::State {
   std::string state = "running";
   std::string error;
   int done = 0, total = 0;
+  long long cancelled = 0;  // solves stopped because a newer change came
   std::shared_ptr<const Result> result;
   std::shared_ptr<const DesignSpace> space;
   std::string space_key;
@@ -168,13 +169,16 @@ struct Session::State {
       lock.unlock();
       std::shared_ptr<Result> made;
       std::string failure;
+      bool stopped = false;
       try {
         made = generate_result(job, job_revision, *flag);
       } catch (const GenerationCancelled&) {
+        stopped = true;
       } catch (const std::exception& e) {
         failure = e.what();
       }
       lock.lock();
+      if (stopped) ++cancelled;
       if (job_revision != revision) continue;  // superseded: its successor is pending
       if (made) {
         result = std::move(made);
@@ -385,7 +389,8 @@ json Session::status() const {
             {"result_revision", s_->result ? s_->result->revision : 0},
             {"state", s_->state},
             {"progress", {s_->done, s_->total}},
-            {"error", s_->error}};
+            {"error", s_->error},
+            {"cancelled", s_->cancelled}};
   if (s_->result) {
     j["warnings"] = s_->result->warnings;
     j["method"] = s_->result->method;

@@ -10,7 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <fstream>
 
 namespace tvf::serve {
@@ -136,6 +138,35 @@ TEST(ServeSession, EditsApplyToTheFieldAndARestartedSessionComesBackToThem) {
   EXPECT_LT(worst, 1e-5);
   EXPECT_EQ(f["singularities"].size(), frame_after["singularities"].size());
   EXPECT_EQ(status_of([&] { again.undo(); }), 409);  // the undo history is per session
+}
+
+TEST(ServeSession, ANewerChangeCancelsTheRunningSolve) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.parallel = false;  // frame by frame, so the solve is surely still running below
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(60));
+  json big = s.scene()["scene"];
+  big["domain"]["grid"]["size"] = {129, 129};
+  big["time"]["frames"] = 400;
+  s.put_scene(big);
+  // Wait until the big solve is under way, then change the scene again.
+  const auto start = std::chrono::steady_clock::now();
+  while (s.status()["progress"][0].get<int>() < 2) {
+    ASSERT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(60));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(s.status()["state"], "running");
+  json small = big;
+  small["domain"]["grid"]["size"] = {17, 17};
+  small["time"]["frames"] = 11;
+  s.put_scene(small);
+  ASSERT_TRUE(s.wait_idle(60));
+  const json st = s.status();
+  EXPECT_EQ(st["cancelled"], 1);
+  EXPECT_EQ(st["state"], "ready");
+  EXPECT_EQ(st["result_revision"], st["revision"]);
+  EXPECT_EQ(s.frame(10)["vectors"].size(), 17u * 17u * 3u);
 }
 
 TEST(ServeSession, NothingOutsideTheWorkingFolder) {

@@ -73,7 +73,8 @@ public:
   nlohmann::json redo();
 
   // {"revision", "result_revision", "state": "running" | "ready" | "failed",
-  //  "progress": [done, total], "error", "warnings", "method", "seconds"}
+  //  "progress": [done, total], "error", "cancelled" (solves stopped by newer changes so
+  //  far), "warnings", "method", "seconds"}
   nlohmann::json status() const;
   // Waits until the current revision has a result or failed; false on timeout.
   bool wait_idle(double seconds) const;
