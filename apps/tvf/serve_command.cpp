@@ -27,7 +27,7 @@ ServeCommand::ServeCommand(CLI::App& app) {
                    "Working folder: the scene, uploads, exports and videos live here and nothing outside it is "
                    "read or written (default: the scene's folder, else the current folder)");
   cmd_->add_option("--host", host_, "Address to listen on (default 127.0.0.1: this machine only)");
-  cmd_->add_option("--port", port_, "Port (default 8080; 0: any free port)");
+  cmd_->add_option("--port", port_, "Port (default 8080; 0: any free port)")->check(CLI::Range(0, 65535));
   cmd_->add_option("--web", web_, "Folder of the built front end (default: the one this tvf was built with)");
   cmd_->add_flag("-q,--quiet", quiet_, "Print nothing but the address and errors");
 }
