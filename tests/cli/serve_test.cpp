@@ -31,7 +31,9 @@ TEST(CliServe, BadArgumentsAreOneSentenceAndWriteNothing) {
     const auto r = run_tvf(c.args);
     EXPECT_NE(r.exit_code, 0) << c.args;
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\n" << r.output;
-    if (c.one_line) EXPECT_EQ(test::count_lines(r.output), 1) << r.output;
+    if (c.one_line) {
+      EXPECT_EQ(test::count_lines(r.output), 1) << r.output;
+    }
     EXPECT_TRUE(std::filesystem::is_empty(work)) << c.args;
   }
 }
