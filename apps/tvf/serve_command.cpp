@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -17,6 +18,12 @@
 namespace fs = std::filesystem;
 
 namespace tvf::cli {
+
+namespace {
+std::atomic<bool> g_stop_requested{false};
+static_assert(std::atomic<bool>::is_always_lock_free);  // safe to set in a signal handler
+extern "C" void on_signal(int) { g_stop_requested.store(true); }
+}  // namespace
 
 ServeCommand::ServeCommand(CLI::App& app) {
   cmd_ = app.add_subcommand("serve", "The interactive designer in the browser: serves it and its JSON API locally");
@@ -47,14 +54,6 @@ int ServeCommand::run() {
   }
   so.initial_scene = default_scene_text();
 
-  // Ctrl-C and SIGTERM stop the server from a thread of their own (the scene is saved
-  // after every change anyway); blocked here before any other thread starts.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-
   serve::Session session(so);
   serve::ServerOptions ho;
   ho.host = host_;
@@ -66,17 +65,23 @@ int ServeCommand::run() {
   std::printf("tvf serve: designing %s\n  open %s in a browser (Ctrl-C stops)\n", session.scene_path().c_str(),
               server.url().c_str());
   std::fflush(stdout);
-  std::atomic<bool> signalled{false};
-  std::thread waiter([&] {
-    int sig = 0;
-    sigwait(&signals, &sig);
-    signalled = true;
+  // Ctrl-C and SIGTERM stop the server: the handler only sets a flag (all it may do), and
+  // a thread of ours watches it. (Blocking the signals and sigwait() would not do: the
+  // threads OpenBLAS starts when the program loads would still take them.) The scene is
+  // saved after every change anyway.
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+  std::atomic<bool> finished{false};
+  std::thread watcher([&] {
+    while (!g_stop_requested.load() && !finished.load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
     server.stop();
   });
   server.run();
-  // run() also returns when the server fails; wake the waiter then.
-  if (!signalled) pthread_kill(waiter.native_handle(), SIGTERM);
-  waiter.join();
+  finished = true;  // run() also returns when the server fails
+  watcher.join();
   if (!quiet_) std::printf("tvf serve: stopped; the design is in %s\n", session.scene_path().c_str());
   return 0;
 }

@@ -38,5 +38,21 @@ TEST(CliServe, BadArgumentsAreOneSentenceAndWriteNothing) {
   }
 }
 
+TEST(CliServe, StopsCleanlyOnSigtermWithTheDesignSaved) {
+  test::TempDir dir;
+  const auto work = dir / "work";
+  const auto log = dir / "log.txt";
+  // Start it, wait for its address, send SIGTERM, and report its exit status.
+  const std::string script = "'" TVF_CLI_PATH "' serve --dir " + quoted(work) + " --port 0 > " + quoted(log) +
+                             " 2>&1 & pid=$!; for i in $(seq 300); do grep -q 'open http' " + quoted(log) +
+                             " && break; sleep 0.1; done; kill -TERM $pid; wait $pid; echo exit=$?";
+  const auto r = test::run_command(script);
+  EXPECT_NE(r.output.find("exit=0"), std::string::npos) << r.output << test::read_text(log);
+  const std::string out = test::read_text(log);
+  EXPECT_NE(out.find("open http://127.0.0.1:"), std::string::npos) << out;
+  EXPECT_NE(out.find("stopped; the design is in"), std::string::npos) << out;
+  EXPECT_TRUE(std::filesystem::exists(work / "scene.json"));
+}
+
 }  // namespace
 }  // namespace tvf
