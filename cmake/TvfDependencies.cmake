@@ -34,6 +34,12 @@ if(NOT EGL_FOUND)
   message(FATAL_ERROR "tvf needs EGL and OpenGL ES: install the Debian packages 'libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri' (or run scripts/install-deps.sh)")
 endif()
 
+# The designer's HTTP server (tvf serve).
+pkg_check_modules(HTTPLIB QUIET IMPORTED_TARGET GLOBAL cpp-httplib)
+if(NOT HTTPLIB_FOUND)
+  message(FATAL_ERROR "tvf serve needs cpp-httplib: install the Debian package 'libcpp-httplib-dev' (or run scripts/install-deps.sh)")
+endif()
+
 if(TVF_BUILD_TESTS)
   tvf_require(GTest libgtest-dev)
   # Tests that read our outputs with NumPy and VTK's own readers use Debian's python3

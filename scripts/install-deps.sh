@@ -19,7 +19,12 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-numpy python3-vtk9 python3-jsonschema  # tests read our outputs with NumPy, VTK and jsonschema
   libcgal-demo           # CGAL's sample meshes: the real surfaces of examples/04 (no meshes in git)
+  libcpp-httplib-dev     # tvf serve: the designer's HTTP server
+  chromium               # the designer's end-to-end test (web/e2e, playwright-core drives it)
 )
+# The designer's front end (web/) is built with npm; a Node.js that brings its own npm
+# (e.g. NodeSource's) is kept as it is.
+command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 sudo_cmd=()
 if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
 missing=()

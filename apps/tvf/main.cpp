@@ -5,6 +5,7 @@
 #include "edit_command.h"
 #include "progress.h"
 #include "render_command.h"
+#include "serve_command.h"
 
 #include "tvf/analysis/topology.h"
 #include "tvf/core/atomic_output.h"
@@ -251,6 +252,7 @@ int main(int argc, char** argv) {
 
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
   cli::RenderCommand render(app);
+  cli::ServeCommand serve(app);
 
   try {
     app.parse(argc, argv);
@@ -264,6 +266,7 @@ int main(int argc, char** argv) {
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
     if (*edit_cmd) return cli::run_edit(edit);
     if (render.selected()) return render.run();
+    if (serve.selected()) return serve.run();
     if (*default_cmd) {
       std::fputs(cli::default_scene_text(), stdout);
       return 0;

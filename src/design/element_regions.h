@@ -111,6 +111,7 @@ void for_each_frame(int frames, const GenerateOptions& options, F&& solve_frame)
   std::mutex progress_mutex;
   int done = 0;
   auto run = [&](int j) {
+    check_cancelled(options);
     solve_frame(j);
     if (options.progress) {
       std::lock_guard lock(progress_mutex);

@@ -222,7 +222,9 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
       st.method = SpaceTimeMethod::modes;
       break;
   }
+  check_cancelled(options);
   const SolveReport r = solver.solve(problem.fixed, problem.values, field.data(), st);
+  check_cancelled(options);
   if (options.progress) options.progress(scene.time.frames, scene.time.frames);
   if (!r.success)
     throw_input_error(scene.label(), "solver.tolerance",
@@ -241,6 +243,7 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
 Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                GenerateReport* report) {
   Field field = generate_unedited(space, scene, options, report);
+  check_cancelled(options);
   // The scene's edits, in order, on the generated field (DESIGN §7; edit/field_editor.h).
   const auto start = std::chrono::steady_clock::now();
   const std::vector<EditReport> edits = apply_scene_edits(space, scene, field);
@@ -263,8 +266,13 @@ Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptio
   return field;
 }
 
+void check_cancelled(const GenerateOptions& options) {
+  if (options.cancel && options.cancel->load(std::memory_order_relaxed)) throw GenerationCancelled();
+}
+
 Field generate_unedited(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                         GenerateReport* report) {
+  check_cancelled(options);
   switch (scene.generator) {
     case Generator::basis: return generate_basis_sum(space, scene, options, report);
     case Generator::constrained: return generate_constrained(space, scene, options, report);

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 
 namespace tvf {
@@ -139,6 +140,34 @@ TEST(Generate, AppliesTheScenesEditsAfterTheGenerator) {
   double change = 0;
   for (size_t k = 0; k < plain.data().size(); ++k) change += std::abs(edited.data()[k] - plain.data()[k]);
   EXPECT_GT(change, 0.0);
+}
+
+TEST(Generate, StopsWhenCancelled) {
+  Scene s = grid_scene(17, 1.0, 30);
+  s.generator = Generator::constrained;
+  s.elements.push_back(singular(SingularType::source, {{Vec3(0.2, 0.1, 0), 0}}));
+  const auto space = make_design_space(s);
+  std::atomic<bool> cancel{false};
+  GenerateOptions o;
+  o.parallel = false;
+  o.cancel = &cancel;
+  int done = 0;
+  o.progress = [&](int d, int) {
+    done = d;
+    if (d == 3) cancel = true;  // a newer request arrives after three frames
+  };
+  EXPECT_THROW(generate(*space, s, o), GenerationCancelled);
+  EXPECT_EQ(done, 3);  // no frame started after the flag was set
+  cancel = false;
+  done = 0;
+  o.progress = [&](int d, int) { done = d; };
+  EXPECT_EQ(generate(*space, s, o).frames(), 30);
+  EXPECT_EQ(done, 30);
+  for (Generator g : {Generator::basis, Generator::spacetime}) {
+    s.generator = g;
+    cancel = true;
+    EXPECT_THROW(generate(*space, s, o), GenerationCancelled) << to_string(g);
+  }
 }
 
 TEST(Generate, RefusesFieldsThatWouldNotFitInMemory) {

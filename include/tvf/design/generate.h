@@ -12,6 +12,9 @@
 #include "tvf/solve/connection_laplacian.h"
 #include "tvf/solve/hodge_projection.h"
 
+#include "tvf/core/error.h"
+
+#include <atomic>
 #include <functional>
 #include <optional>
 #include <string>
@@ -26,7 +29,19 @@ struct GenerateOptions {
   // Apply the scene's "incompressible" projection (generate() only). `tvf edit` turns it
   // off to check a new edit on the field that the edit will really act on.
   bool project = true;
+  // When set, generation checks it between frames (and before and after whole solves and
+  // each edit) and stops with GenerationCancelled once it is true. The designer's server
+  // sets it when a newer edit makes the running solve pointless.
+  const std::atomic<bool>* cancel = nullptr;
 };
+
+// Thrown by generate*() when GenerateOptions::cancel became true; no field is returned.
+class GenerationCancelled : public Error {
+public:
+  GenerationCancelled() : Error("generation cancelled") {}
+};
+// Throws GenerationCancelled when options.cancel is set and true.
+void check_cancelled(const GenerateOptions& options);
 
 struct GenerateReport {
   std::vector<std::string> warnings;  // design problems that do not stop generation

@@ -1,0 +1,49 @@
+#pragma once
+// The designer's HTTP server (cpp-httplib, Debian package libcpp-httplib-dev): the JSON
+// API of docs/serve_api.md over a Session, and the built front end (web/dist) as static
+// files. Lives in the tvf_serve library, outside libtvf (STYLE 14: the core opens no
+// socket).
+//
+// Safety: binds to 127.0.0.1 unless told otherwise; request bodies are limited
+// (ServerOptions::max_body); API writes need Content-Type application/json (a page of
+// another site cannot send that without a CORS preflight, which is never granted); on a
+// loopback address, requests whose Host header is not a loopback name are refused (DNS
+// rebinding); every error is a JSON body {"error": "..."} with a 4xx status, and an
+// unexpected exception a 500, never a crash.
+#include "tvf/serve/session.h"
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace tvf::serve {
+
+struct ServerOptions {
+  std::string host = "127.0.0.1";
+  int port = 8080;                       // 0: any free port (see HttpServer::port())
+  std::filesystem::path web_root;        // the built front end; empty or missing: a note page
+  std::size_t max_body = 64u << 20;      // bytes (uploaded meshes are the large requests)
+};
+
+class HttpServer {
+public:
+  // Binds the port; throws tvf::Error naming host and port when that fails.
+  HttpServer(Session& session, ServerOptions options);
+  ~HttpServer();  // stops and joins
+  HttpServer(const HttpServer&) = delete;
+  HttpServer& operator=(const HttpServer&) = delete;
+
+  int port() const;
+  std::string url() const;  // http://host:port/
+  // Serves until stop() (from another thread or a signal handler's thread).
+  void run();
+  // Serves in a background thread (tests).
+  void start();
+  void stop();
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tvf::serve

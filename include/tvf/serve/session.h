@@ -1,0 +1,114 @@
+#pragma once
+// The designer's session (issue 7, docs/serve_api.md): one scene in a working folder, the
+// field it makes, its analysis, and the history of changes. Headless and socket-free:
+// http_server.h puts it on HTTP; tests drive it directly or over HTTP.
+//
+// - Every change (a new scene, an edit, undo, redo) is validated first, then the scene is
+//   saved to the working folder (atomically, scene_json.h's save_scene), so a restarted
+//   session comes back to the last design; a refused change leaves scene and file as
+//   they were.
+// - The field is generated in a background thread. A newer change cancels the older
+//   solve (GenerateOptions::cancel); readers always get the last finished result, tagged
+//   with the revision of the scene that made it.
+// - Paths: every file the session reads or writes (the scene, meshes and key-frame field
+//   files named by the scene, exports, videos, uploads) lies inside the working folder;
+//   a path that leaves it is refused.
+#include "tvf/core/error.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace tvf::serve {
+
+// A request that cannot be served: an HTTP status (400 bad input, 403 path outside the
+// working folder, 404 missing, 409 conflict/no field yet, 422 refused edit, 503 busy) and
+// one sentence saying why.
+class RequestError : public Error {
+public:
+  RequestError(int status, const std::string& message) : Error(message), status_(status) {}
+  int status() const { return status_; }
+
+private:
+  int status_;
+};
+
+struct SessionOptions {
+  std::filesystem::path dir = ".";     // working folder (created if missing)
+  std::string scene = "scene.json";    // scene file, relative to dir
+  // Scene text used when the scene file does not exist yet (e.g. the default demo scene).
+  std::string initial_scene;
+  bool parallel = true;                // frames in parallel while generating
+  int history = 200;                   // undo steps kept (in memory)
+  double edit_wait_seconds = 120;      // how long an edit waits for the running solve
+};
+
+class Session {
+public:
+  // Loads dir/scene (or writes initial_scene there) and starts generating it. Throws
+  // tvf::Error when the scene file is invalid (naming the file and JSON path).
+  explicit Session(SessionOptions options);
+  ~Session();  // cancels the running solve and joins the worker
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  const std::filesystem::path& dir() const;
+  std::filesystem::path scene_path() const;
+
+  // {"revision", "scene", "text" (the file's text, scene_to_text), "path", "can_undo",
+  //  "can_redo"}
+  nlohmann::json scene() const;
+  // Replaces the whole scene (validated; its edits are checked when it generates).
+  // Returns scene(). Throws RequestError(400) naming the JSON path of a problem.
+  nlohmann::json put_scene(const nlohmann::json& scene);
+  // Appends one entry to the scene's `edits` (DESIGN §7: {"op": "cancel", "frame": 40,
+  // "pair": [[x, y], [x, y]]}, remove_bifurcation, move_bifurcation, smooth). It is
+  // applied to the current field first (waiting for a running solve); a refused edit is
+  // RequestError(422) and changes nothing. The edited field becomes the current result at
+  // once, without regenerating. Returns {"revision", "summary"}.
+  nlohmann::json edit(const nlohmann::json& edit);
+  nlohmann::json undo();  // RequestError(409) when there is nothing to undo
+  nlohmann::json redo();
+
+  // {"revision", "result_revision", "state": "running" | "ready" | "failed",
+  //  "progress": [done, total], "error", "cancelled" (solves stopped by newer changes so
+  //  far), "warnings", "method", "seconds"}
+  nlohmann::json status() const;
+  // Waits until the current revision has a result or failed; false on timeout.
+  bool wait_idle(double seconds) const;
+
+  // The domain of the last result: {"revision", "planar", "grid": {"size", "min", "max"}
+  // (planar grids), "vertices": [x, y, z, ...], "faces": [i, j, k, ...]}.
+  nlohmann::json mesh() const;
+  // One frame of the last result: {"revision", "frame", "t", "frames", "vectors": world
+  // [x, y, z] per vertex, flattened, "singularities": [{"position", "type", "index",
+  // "path"}]}. Frame in [0, frames − 1]. RequestError(409) before the first result.
+  nlohmann::json frame(int frame) const;
+  // The analysis JSON of DESIGN §9 of the last result, plus "revision".
+  nlohmann::json analysis() const;
+
+  // Writes the field outputs of `tvf generate` (npy, native, and VTK unless format is
+  // "npy") into the folder request["dir"] (default "export") inside the working folder.
+  // Returns {"files": [paths relative to the working folder]}.
+  nlohmann::json export_field(const nlohmann::json& request);
+  // Renders the texture animation of the last result to request["name"] (default
+  // "video.mp4"; .mp4 needs ffmpeg) with request["size"] pixels (default 512) and
+  // singularity markers unless request["singularities"] is false. Planar domains.
+  nlohmann::json render_video(const nlohmann::json& request);
+  // Stores an uploaded mesh (OBJ, PLY or OFF, by the name's extension) in the working
+  // folder under `name` (a plain file name). Returns {"file": name}.
+  nlohmann::json upload_mesh(const std::string& name, const std::string& bytes);
+
+  // A path inside the working folder for a relative path from a request; throws
+  // RequestError(400) for an empty or absolute path and RequestError(403) for one that
+  // leaves the folder (through "..", or a link).
+  std::filesystem::path resolve(const std::string& relative) const;
+
+private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
+}  // namespace tvf::serve

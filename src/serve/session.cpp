@@ -1,0 +1,563 @@
+#include "tvf/serve/session.h"
+
+#include "tvf/analysis/topology.h"
+#include "tvf/core/atomic_output.h"
+#include "tvf/design/design_space.h"
+#include "tvf/design/generate.h"
+#include "tvf/design/outputs.h"
+#include "tvf/design/scene_json.h"
+#include "tvf/edit/edits.h"
+#include "tvf/edit/field_editor.h"
+#include "tvf/field/world_vectors.h"
+#include "tvf/render/texture_animation.h"
+#include "tvf/render/video.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <chrono>
+#include <cstdlib>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace tvf::serve {
+
+namespace {
+
+// What one generation made: everything the readers need, immutable once published.
+struct Result {
+  long long revision = 0;
+  Scene scene;
+  std::shared_ptr<const DesignSpace> space;
+  Field field;
+  Topology topology;
+  std::vector<std::string> warnings;
+  std::string method;
+  double seconds = 0;
+};
+
+bool inside(const fs::path& root, const fs::path& p) {
+  auto r = root.begin(), q = p.begin();
+  for (; r != root.end(); ++r, ++q) {
+    if (r->empty()) continue;  // trailing separator of the root
+    if (q == p.end() || *r != *q) return false;
+  }
+  return true;
+}
+
+json vec3(const Vec3& v, bool planar) {
+  return planar ? json::array({v.x(), v.y()}) : json::array({v.x(), v.y(), v.z()});
+}
+
+// float32 values as the JSON numbers that print them shortest (7 significant digits,
+// float32's precision): a float widened to double would print 17 digits.
+std::vector<double> compact(const std::vector<float>& values) {
+  std::vector<double> out(values.size());
+  char buffer[32];
+  for (size_t i = 0; i < values.size(); ++i) {
+    const auto end = fmt::format_to_n(buffer, sizeof buffer - 1, "{:.7g}", values[i]).out;
+    *end = '\0';
+    out[i] = std::strtod(buffer, nullptr);
+  }
+  return out;
+}
+
+// The key a design space is cached under: the domain as the scene writes it.
+std::string domain_key(const Scene& scene) {
+  return scene_to_json(scene)["domain"].dump() + "|" + scene.resolved_mesh_path();
+}
+
+}  // namespace
+
+struct Session::State {
+  SessionOptions options;
+  fs::path dir;  // canonical working folder
+
+  mutable std::mutex mutex;
+  mutable std::condition_variable changed;  // a result was published or a solve failed
+  std::condition_variable work;             // the worker has something to do
+  Scene scene;
+  long long revision = 1;
+  std::deque<json> undo, redo;
+
+  // Generation: the worker takes the newest revision; an older one still running is
+  // cancelled through its own flag.
+  bool pending = false;
+  bool stop = false;
+  std::shared_ptr<std::atomic<bool>> cancel;
+  std::string state = "running";
+  std::string error;
+  int done = 0, total = 0;
+  long long cancelled = 0;  // solves stopped because a newer change came
+  std::shared_ptr<const Result> result;
+  std::shared_ptr<const DesignSpace> space;
+  std::string space_key;
+  std::thread worker;
+
+  // Serialises edits (each one reads the current field and appends to the scene).
+  std::mutex edit_mutex;
+
+  fs::path scene_path() const { return dir / options.scene; }
+
+  // Every path the scene names must stay inside the working folder.
+  void check_scene_paths(const Scene& s) const {
+    auto check = [&](const std::string& path, const std::string& where) {
+      if (path.empty()) return;
+      const fs::path p = fs::weakly_canonical(fs::path(s.resolve_path(path)));
+      if (!inside(dir, p))
+        throw RequestError(403, fmt::format("{}: {}: \"{}\" is outside the working folder {}", options.scene, where,
+                                            path, dir.string()));
+    };
+    if (!s.domain.mesh.empty()) check(s.domain.mesh, "domain.mesh");
+    for (size_t k = 0; k < s.keyframes.size(); ++k)
+      check(s.keyframes[k].field, fmt::format("keyframes[{}].field", k));
+  }
+
+  Scene parse(const json& j) const {
+    try {
+      Scene s = scene_from_json(j, options.scene, scene_path().string());
+      check_scene_paths(s);
+      return s;
+    } catch (const RequestError&) {
+      throw;
+    } catch (const Error& e) {
+      throw RequestError(400, e.what());
+    }
+  }
+
+  // Makes `next` the current scene: saved first (so a failed save changes nothing), then
+  // the revision advances and a solve is scheduled. Caller holds `mutex`.
+  void commit(Scene next, bool record_undo, bool schedule_solve) {
+    save_scene(next, scene_path().string());
+    if (record_undo) {
+      undo.push_back(scene_to_json(scene));
+      while (static_cast<int>(undo.size()) > options.history) undo.pop_front();
+      redo.clear();
+    }
+    scene = std::move(next);
+    ++revision;
+    if (schedule_solve) schedule();
+  }
+
+  void schedule() {
+    if (cancel) cancel->store(true);
+    pending = true;
+    state = "running";
+    error.clear();
+    done = 0;
+    total = scene.time.frames;
+    work.notify_one();
+  }
+
+  void run_worker() {
+    std::unique_lock lock(mutex);
+    for (;;) {
+      work.wait(lock, [&] { return pending || stop; });
+      if (stop) return;
+      pending = false;
+      const Scene job = scene;
+      const long long job_revision = revision;
+      auto flag = std::make_shared<std::atomic<bool>>(false);
+      cancel = flag;
+      lock.unlock();
+      std::shared_ptr<Result> made;
+      std::string failure;
+      bool stopped = false;
+      try {
+        made = generate_result(job, job_revision, *flag);
+      } catch (const GenerationCancelled&) {
+        stopped = true;
+      } catch (const std::exception& e) {
+        failure = e.what();
+      }
+      lock.lock();
+      if (stopped) ++cancelled;
+      if (job_revision != revision) continue;  // superseded: its successor is pending
+      if (made) {
+        result = std::move(made);
+        state = "ready";
+      } else if (!failure.empty()) {
+        state = "failed";
+        error = failure;
+      }
+      changed.notify_all();
+    }
+  }
+
+  std::shared_ptr<const DesignSpace> space_for(const Scene& s) {
+    const std::string key = domain_key(s);
+    {
+      std::lock_guard lock(mutex);
+      if (space && key == space_key) return space;
+    }
+    std::shared_ptr<const DesignSpace> made = make_design_space(s);
+    std::lock_guard lock(mutex);
+    space = made;
+    space_key = key;
+    return made;
+  }
+
+  std::shared_ptr<Result> generate_result(const Scene& s, long long rev, const std::atomic<bool>& flag) {
+    const auto start = std::chrono::steady_clock::now();
+    auto r = std::make_shared<Result>();
+    r->revision = rev;
+    r->scene = s;
+    r->space = space_for(s);
+    GenerateOptions go;
+    go.parallel = options.parallel;
+    go.cancel = &flag;
+    go.progress = [this](int d, int t) {
+      std::lock_guard lock(mutex);
+      done = d;
+      total = t;
+    };
+    GenerateReport report;
+    r->field = generate(*r->space, s, go, &report);
+    check_cancelled(go);
+    TopologyOptions to;
+    to.parallel = options.parallel;
+    r->topology = analyze_topology(r->space->bundle(), r->field, to);
+    r->warnings = report.warnings;
+    r->method = report.method;
+    r->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return r;
+  }
+
+  std::shared_ptr<const Result> current_result() const {
+    std::lock_guard lock(mutex);
+    if (!result)
+      throw RequestError(409, state == "failed" ? "the scene has no field: " + error
+                                                : std::string("the field is still being generated; try again"));
+    return result;
+  }
+
+  json scene_json() const {
+    return {{"revision", revision},
+            {"scene", scene_to_json(scene)},
+            {"text", scene_to_text(scene)},
+            {"path", options.scene},
+            {"can_undo", !undo.empty()},
+            {"can_redo", !redo.empty()}};
+  }
+};
+
+Session::Session(SessionOptions options) : s_(std::make_unique<State>()) {
+  s_->options = std::move(options);
+  std::error_code ec;
+  fs::create_directories(s_->options.dir, ec);
+  if (ec || !fs::is_directory(s_->options.dir))
+    throw Error(fmt::format("{}: cannot use this folder as the working folder: {}", s_->options.dir.string(),
+                            ec ? ec.message() : "not a folder"));
+  s_->dir = fs::canonical(s_->options.dir);
+  const fs::path rel(s_->options.scene);
+  if (rel.empty() || rel.is_absolute() || !inside(s_->dir, fs::weakly_canonical(s_->dir / rel)))
+    throw Error(fmt::format("{}: the scene must be a file inside the working folder {}", s_->options.scene,
+                            s_->dir.string()));
+  const fs::path path = s_->scene_path();
+  if (fs::exists(path)) {
+    s_->scene = load_scene(path.string());
+  } else {
+    if (s_->options.initial_scene.empty())
+      throw Error(fmt::format("{}: no such scene file, and no scene to start from", path.string()));
+    s_->scene = parse_scene(s_->options.initial_scene, path.string());
+    s_->scene.source_path = path.string();
+    save_scene(s_->scene, path.string());
+  }
+  s_->check_scene_paths(s_->scene);
+  s_->worker = std::thread([this] { s_->run_worker(); });
+  std::lock_guard lock(s_->mutex);
+  s_->schedule();
+}
+
+Session::~Session() {
+  {
+    std::lock_guard lock(s_->mutex);
+    s_->stop = true;
+    if (s_->cancel) s_->cancel->store(true);
+    s_->work.notify_all();
+  }
+  if (s_->worker.joinable()) s_->worker.join();
+}
+
+const fs::path& Session::dir() const { return s_->dir; }
+fs::path Session::scene_path() const { return s_->scene_path(); }
+
+json Session::scene() const {
+  std::lock_guard lock(s_->mutex);
+  return s_->scene_json();
+}
+
+json Session::put_scene(const json& j) {
+  Scene next = s_->parse(j);
+  std::lock_guard lock(s_->mutex);
+  s_->commit(std::move(next), true, true);
+  return s_->scene_json();
+}
+
+json Session::edit(const json& entry) {
+  if (!entry.is_object()) throw RequestError(400, "edit: expected a JSON object such as {\"op\": \"cancel\", ...}");
+  std::lock_guard edit_lock(s_->edit_mutex);
+  Scene base;
+  long long base_revision = 0;
+  {
+    std::lock_guard lock(s_->mutex);
+    base = s_->scene;
+    base_revision = s_->revision;
+  }
+  json j = scene_to_json(base);
+  j["edits"].push_back(entry);
+  const std::string where = fmt::format("edits[{}]", j["edits"].size() - 1);
+  const Scene edited = s_->parse(j);
+  const Edit e = edits_from_scene(edited).back();
+
+  // The field of the scene as it is now.
+  std::shared_ptr<const Result> r;
+  {
+    std::unique_lock lock(s_->mutex);
+    const bool ready = s_->changed.wait_for(
+        lock, std::chrono::duration<double>(s_->options.edit_wait_seconds),
+        [&] { return (s_->result && s_->result->revision == base_revision) || s_->state == "failed"; });
+    if (s_->state == "failed" && !(s_->result && s_->result->revision == base_revision))
+      throw RequestError(409, "the scene has no field to edit: " + s_->error);
+    if (!ready) throw RequestError(503, "the field is still being generated; try the edit again");
+    r = s_->result;
+  }
+  auto made = std::make_shared<Result>();
+  made->scene = edited;
+  made->space = r->space;
+  made->field = r->field;
+  made->warnings = r->warnings;
+  made->method = r->method;
+  EditReport report;
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    FieldEditor editor(*r->space, edit_settings(base));
+    report = editor.apply(made->field, e);
+  } catch (const EditRefused& refused) {
+    throw RequestError(422, fmt::format("refused to {}: {}; the scene is unchanged", describe(e), refused.what()));
+  } catch (const Error& err) {
+    throw RequestError(422, fmt::format("{}: {}", where, err.what()));
+  }
+  TopologyOptions to;
+  to.parallel = s_->options.parallel;
+  made->topology = analyze_topology(r->space->bundle(), made->field, to);
+  made->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::lock_guard lock(s_->mutex);
+  if (s_->revision != base_revision)
+    throw RequestError(409, "the scene changed while the edit was applied; the edit was not recorded");
+  s_->commit(edited, true, false);
+  made->revision = s_->revision;
+  if (s_->cancel) s_->cancel->store(true);
+  s_->result = std::move(made);
+  s_->state = "ready";
+  s_->error.clear();
+  s_->changed.notify_all();
+  return {{"revision", s_->revision}, {"summary", report.summary}};
+}
+
+json Session::undo() {
+  std::lock_guard lock(s_->mutex);
+  if (s_->undo.empty()) throw RequestError(409, "nothing to undo");
+  Scene previous = s_->parse(s_->undo.back());
+  s_->redo.push_back(scene_to_json(s_->scene));
+  s_->undo.pop_back();
+  s_->commit(std::move(previous), false, true);
+  return s_->scene_json();
+}
+
+json Session::redo() {
+  std::lock_guard lock(s_->mutex);
+  if (s_->redo.empty()) throw RequestError(409, "nothing to redo");
+  Scene next = s_->parse(s_->redo.back());
+  s_->undo.push_back(scene_to_json(s_->scene));
+  s_->redo.pop_back();
+  s_->commit(std::move(next), false, true);
+  return s_->scene_json();
+}
+
+json Session::status() const {
+  std::lock_guard lock(s_->mutex);
+  json j = {{"revision", s_->revision},
+            {"result_revision", s_->result ? s_->result->revision : 0},
+            {"state", s_->state},
+            {"progress", {s_->done, s_->total}},
+            {"error", s_->error},
+            {"cancelled", s_->cancelled}};
+  if (s_->result) {
+    j["warnings"] = s_->result->warnings;
+    j["method"] = s_->result->method;
+    j["seconds"] = s_->result->seconds;
+  }
+  return j;
+}
+
+bool Session::wait_idle(double seconds) const {
+  std::unique_lock lock(s_->mutex);
+  return s_->changed.wait_for(lock, std::chrono::duration<double>(seconds), [&] {
+    return (s_->result && s_->result->revision == s_->revision) || s_->state == "failed";
+  });
+}
+
+json Session::mesh() const {
+  const auto r = s_->current_result();
+  const Mesh& m = r->space->mesh();
+  const bool planar = r->scene.domain.is_planar();
+  std::vector<float> v;
+  v.reserve(static_cast<size_t>(m.num_vertices()) * 3);
+  for (const Vec3& p : m.positions())
+    for (int k = 0; k < 3; ++k) v.push_back(static_cast<float>(p[k]));
+  std::vector<int> f;
+  f.reserve(static_cast<size_t>(m.num_faces()) * 3);
+  for (const Face& face : m.faces()) f.insert(f.end(), face.begin(), face.end());
+  json j = {{"revision", r->revision}, {"planar", planar}, {"vertices", compact(v)}, {"faces", f}};
+  if (planar) {
+    const GridSpec& g = *r->scene.domain.grid;
+    j["grid"] = {{"size", {g.nx, g.ny}}, {"min", {g.min.x(), g.min.y()}}, {"max", {g.max.x(), g.max.y()}}};
+  }
+  return j;
+}
+
+json Session::frame(int j) const {
+  const auto r = s_->current_result();
+  const int frames = r->field.frames();
+  if (j < 0 || j >= frames)
+    throw RequestError(400, fmt::format("frame: {} is outside [0, {}]", j, frames - 1));
+  const bool planar = r->scene.domain.is_planar();
+  json sing = json::array();
+  const auto& list = r->topology.singularities[static_cast<size_t>(j)];
+  for (size_t k = 0; k < list.size(); ++k)
+    sing.push_back({{"position", vec3(list[k].position, planar)},
+                    {"type", to_string(list[k].type)},
+                    {"index", list[k].index},
+                    {"path", r->topology.singularity_path[static_cast<size_t>(j)][k]}});
+  return {{"revision", r->revision},
+          {"frame", j},
+          {"frames", frames},
+          {"t", r->field.time().time(j)},
+          {"vectors", compact(world_vectors_f32(r->space->bundle(), r->field, j))},
+          {"singularities", sing}};
+}
+
+json Session::analysis() const {
+  const auto r = s_->current_result();
+  json j = topology_to_json(r->topology);
+  j["revision"] = r->revision;
+  return j;
+}
+
+fs::path Session::resolve(const std::string& relative) const {
+  if (relative.empty()) throw RequestError(400, "path: empty");
+  if (relative.find('\0') != std::string::npos) throw RequestError(400, "path: contains a NUL character");
+  const fs::path rel(relative);
+  if (rel.is_absolute() || rel.has_root_name() || rel.has_root_directory())
+    throw RequestError(400, fmt::format("path \"{}\": give a path relative to the working folder", relative));
+  for (const auto& part : rel)
+    if (part == "..") throw RequestError(403, fmt::format("path \"{}\": leaves the working folder", relative));
+  const fs::path p = fs::weakly_canonical(s_->dir / rel);
+  if (!inside(s_->dir, p)) throw RequestError(403, fmt::format("path \"{}\": leaves the working folder", relative));
+  return p;
+}
+
+namespace {
+
+void check_keys(const json& request, const char* what, std::initializer_list<const char*> keys) {
+  if (!request.is_object()) throw RequestError(400, fmt::format("{}: expected a JSON object", what));
+  for (auto it = request.begin(); it != request.end(); ++it)
+    if (std::find_if(keys.begin(), keys.end(), [&](const char* k) { return it.key() == k; }) == keys.end())
+      throw RequestError(400, fmt::format("{}: unknown key \"{}\"", what, it.key()));
+}
+
+std::string string_or(const json& request, const char* key, const char* what, const std::string& fallback) {
+  if (!request.contains(key)) return fallback;
+  if (!request[key].is_string()) throw RequestError(400, fmt::format("{}.{}: expected a string", what, key));
+  return request[key].get<std::string>();
+}
+
+}  // namespace
+
+json Session::export_field(const json& request) {
+  check_keys(request, "export", {"dir", "format"});
+  const std::string format = string_or(request, "format", "export", "all");
+  if (format != "all" && format != "npy" && format != "vtk")
+    throw RequestError(400, fmt::format("export.format: \"{}\" is not one of all, npy, vtk", format));
+  const fs::path out = resolve(string_or(request, "dir", "export", "export"));
+  const auto r = s_->current_result();
+  OutputOptions o;
+  o.vtk = format != "npy";
+  json files = json::array();
+  try {
+    for (const fs::path& f : write_field_outputs(out, *r->space, r->field, r->scene, o))
+      files.push_back(fs::relative(f, s_->dir).generic_string());
+  } catch (const Error& e) {
+    throw RequestError(400, e.what());
+  }
+  return {{"revision", r->revision}, {"files", files}};
+}
+
+json Session::render_video(const json& request) {
+  check_keys(request, "render", {"name", "size", "singularities", "paths"});
+  const std::string name = string_or(request, "name", "render", "video.mp4");
+  const fs::path out = resolve(name);
+  int size = 512;
+  if (request.contains("size")) {
+    if (!request["size"].is_number_integer() || request["size"].get<long long>() < 16 ||
+        request["size"].get<long long>() > 4096)
+      throw RequestError(400, "render.size: expected an integer in [16, 4096]");
+    size = request["size"].get<int>();
+  }
+  auto flag = [&](const char* key, bool fallback) {
+    if (!request.contains(key)) return fallback;
+    if (!request[key].is_boolean()) throw RequestError(400, fmt::format("render.{}: expected true or false", key));
+    return request[key].get<bool>();
+  };
+  const auto r = s_->current_result();
+  if (!r->space->planar()) throw RequestError(400, "render: videos are made of planar domains only");
+  TextureAnimationOptions o;
+  o.texture.size = size;
+  o.overlay_singularities = flag("singularities", true);
+  o.overlay_paths = flag("paths", false);
+  const std::string ext = out.extension().string();
+  if (ext == ".mp4") {
+    if (!ffmpeg_available()) throw RequestError(400, "render: ffmpeg is not installed (scripts/install-deps.sh)");
+    o.video = out.string();
+  } else if (ext.empty()) {
+    o.frames_dir = out.string();
+  } else {
+    throw RequestError(400, fmt::format("render.name \"{}\": give an .mp4 file or a folder for PNG frames", name));
+  }
+  try {
+    const TextureAnimationReport rep = write_texture_animation(r->space->bundle(), r->field, o);
+    return {{"revision", r->revision},
+            {"file", fs::relative(out, s_->dir).generic_string()},
+            {"frames", rep.frames},
+            {"width", rep.width},
+            {"height", rep.height},
+            {"seconds", rep.seconds}};
+  } catch (const Error& e) {
+    throw RequestError(400, e.what());
+  }
+}
+
+json Session::upload_mesh(const std::string& name, const std::string& bytes) {
+  const fs::path n(name);
+  if (name.empty() || n.has_parent_path() || n.filename() != n)
+    throw RequestError(400, fmt::format("upload \"{}\": give a plain file name", name));
+  std::string ext = n.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext != ".obj" && ext != ".ply" && ext != ".off")
+    throw RequestError(400, fmt::format("upload \"{}\": meshes are .obj, .ply or .off files", name));
+  if (bytes.empty()) throw RequestError(400, fmt::format("upload \"{}\": the file is empty", name));
+  const fs::path out = resolve(name);
+  write_file_atomically(out, bytes);
+  return {{"file", name}};
+}
+
+}  // namespace tvf::serve

@@ -1,0 +1,218 @@
+// The designer's session (tvf/serve/session.h): scene changes are validated and saved,
+// the field follows in the background, edits apply to the current field, undo/redo, and
+// nothing outside the working folder is read or written.
+#include "tvf/serve/session.h"
+
+#include "support/test_paths.h"
+#include "test_scene.h"
+
+#include "tvf/design/scene_json.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+#include <fstream>
+
+namespace tvf::serve {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+SessionOptions options_in(const test::TempDir& dir) {
+  SessionOptions o;
+  o.dir = dir.path();
+  o.initial_scene = test::kServeScene;
+  return o;
+}
+
+int status_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const RequestError& e) {
+    return e.status();
+  }
+  ADD_FAILURE() << "expected a RequestError";
+  return 0;
+}
+
+// Distance from p to the nearest singularity of the given type in a frame (inf if none).
+double nearest(const json& frame, const std::string& type, double x, double y) {
+  double best = INFINITY;
+  for (const auto& s : frame["singularities"])
+    if (s["type"] == type) best = std::min(best, std::hypot(s["position"][0].get<double>() - x,
+                                                            s["position"][1].get<double>() - y));
+  return best;
+}
+
+TEST(ServeSession, StartsFromTheInitialSceneSavesItAndGeneratesIt) {
+  test::TempDir dir;
+  Session s(options_in(dir));
+  ASSERT_TRUE(fs::exists(dir / "scene.json"));
+  EXPECT_EQ(load_scene((dir / "scene.json").string()).elements.size(), 4u);
+  ASSERT_TRUE(s.wait_idle(60));
+  const json st = s.status();
+  EXPECT_EQ(st["state"], "ready");
+  EXPECT_EQ(st["result_revision"], st["revision"]);
+  const json f = s.frame(10);
+  EXPECT_EQ(f["vectors"].size(), 33u * 33u * 3u);
+  EXPECT_DOUBLE_EQ(f["t"].get<double>(), 0.5);
+  EXPECT_LT(nearest(f, "source", 0.2, -0.3), 0.1);
+  EXPECT_LT(nearest(f, "saddle", -0.275, -0.3), 0.1);
+  const json m = s.mesh();
+  EXPECT_EQ(m["vertices"].size(), 33u * 33u * 3u);
+  EXPECT_EQ(m["faces"].size(), 32u * 32u * 2u * 3u);
+  EXPECT_EQ(m["grid"]["size"][0], 33);
+  EXPECT_EQ(status_of([&] { s.frame(21); }), 400);
+  EXPECT_EQ(status_of([&] { s.frame(-1); }), 400);
+  const json a = s.analysis();
+  EXPECT_EQ(a["frames"], 21);
+  EXPECT_FALSE(a["paths"].empty());
+}
+
+TEST(ServeSession, RefusedScenesChangeNothingAndUndoRedoWalkTheHistory) {
+  test::TempDir dir;
+  Session s(options_in(dir));
+  const std::string before = test::read_text(dir / "scene.json");
+  json bad = s.scene()["scene"];
+  bad["time"]["frames"] = -3;
+  try {
+    s.put_scene(bad);
+    ADD_FAILURE() << "accepted frames = -3";
+  } catch (const RequestError& e) {
+    EXPECT_EQ(e.status(), 400);
+    EXPECT_NE(std::string(e.what()).find("time.frames"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(test::read_text(dir / "scene.json"), before);
+  EXPECT_FALSE(s.scene()["can_undo"].get<bool>());
+
+  json next = s.scene()["scene"];
+  next["falloff"] = 12.0;
+  const long long r0 = s.scene()["revision"];
+  const json after = s.put_scene(next);
+  EXPECT_EQ(after["revision"].get<long long>(), r0 + 1);
+  EXPECT_TRUE(after["can_undo"].get<bool>());
+  EXPECT_EQ(load_scene((dir / "scene.json").string()).falloff, 12.0);
+  s.undo();
+  EXPECT_EQ(load_scene((dir / "scene.json").string()).falloff, 20.0);
+  EXPECT_TRUE(s.scene()["can_redo"].get<bool>());
+  s.redo();
+  EXPECT_EQ(load_scene((dir / "scene.json").string()).falloff, 12.0);
+  EXPECT_EQ(status_of([&] { s.redo(); }), 409);
+  ASSERT_TRUE(s.wait_idle(60));
+  EXPECT_EQ(s.status()["result_revision"], s.status()["revision"]);
+}
+
+TEST(ServeSession, EditsApplyToTheFieldAndARestartedSessionComesBackToThem) {
+  test::TempDir dir;
+  json frame_after;
+  {
+    Session s(options_in(dir));
+    ASSERT_TRUE(s.wait_idle(60));
+    ASSERT_LT(nearest(s.frame(10), "source", 0.2, -0.3), 0.1);
+    // A source and a centre (both index +1) cannot be cancelled: refused, nothing changes.
+    EXPECT_EQ(status_of([&] { s.edit({{"op", "cancel"}, {"frame", 10}, {"pair", {{0.2, -0.3}, {0.1, 0.6}}}}); }),
+              422);
+    EXPECT_TRUE(load_scene((dir / "scene.json").string()).edits.empty());
+    EXPECT_EQ(status_of([&] { s.edit({{"op", "cancel"}, {"frame", 99}, {"pair", {{0, 0}, {1, 1}}}}); }), 400);
+    EXPECT_EQ(status_of([&] { s.edit({{"op", "explode"}}); }), 400);
+
+    const json r = s.edit({{"op", "cancel"}, {"frame", 10}, {"pair", {{0.2, -0.3}, {-0.27, -0.3}}}});
+    EXPECT_NE(r["summary"].get<std::string>().find("cancelled"), std::string::npos) << r;
+    frame_after = s.frame(10);
+    EXPECT_EQ(frame_after["revision"], r["revision"]);
+    EXPECT_GT(nearest(frame_after, "source", 0.2, -0.3), 0.1);
+    EXPECT_GT(nearest(frame_after, "saddle", -0.275, -0.3), 0.1);
+    EXPECT_EQ(load_scene((dir / "scene.json").string()).edits.size(), 1u);
+  }
+  // A new session on the folder replays the saved edit: the same field.
+  Session again(options_in(dir));
+  ASSERT_TRUE(again.wait_idle(60));
+  const json f = again.frame(10);
+  ASSERT_EQ(f["vectors"].size(), frame_after["vectors"].size());
+  double worst = 0;
+  for (size_t i = 0; i < f["vectors"].size(); ++i)
+    worst = std::max(worst, std::abs(f["vectors"][i].get<double>() - frame_after["vectors"][i].get<double>()));
+  EXPECT_LT(worst, 1e-5);
+  EXPECT_EQ(f["singularities"].size(), frame_after["singularities"].size());
+  EXPECT_EQ(status_of([&] { again.undo(); }), 409);  // the undo history is per session
+}
+
+TEST(ServeSession, ANewerChangeCancelsTheRunningSolve) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.parallel = false;  // frame by frame, so the solve is surely still running below
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(60));
+  json big = s.scene()["scene"];
+  big["domain"]["grid"]["size"] = {129, 129};
+  big["time"]["frames"] = 400;
+  s.put_scene(big);
+  // Wait until the big solve is under way, then change the scene again.
+  const auto start = std::chrono::steady_clock::now();
+  while (s.status()["progress"][0].get<int>() < 2) {
+    ASSERT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(60));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(s.status()["state"], "running");
+  json small = big;
+  small["domain"]["grid"]["size"] = {17, 17};
+  small["time"]["frames"] = 11;
+  s.put_scene(small);
+  ASSERT_TRUE(s.wait_idle(60));
+  const json st = s.status();
+  EXPECT_EQ(st["cancelled"], 1);
+  EXPECT_EQ(st["state"], "ready");
+  EXPECT_EQ(st["result_revision"], st["revision"]);
+  EXPECT_EQ(s.frame(10)["vectors"].size(), 17u * 17u * 3u);
+}
+
+TEST(ServeSession, NothingOutsideTheWorkingFolder) {
+  test::TempDir dir;
+  Session s(options_in(dir));
+  EXPECT_EQ(status_of([&] { s.resolve("../escape.json"); }), 403);
+  EXPECT_EQ(status_of([&] { s.resolve("a/../../escape.json"); }), 403);
+  EXPECT_EQ(status_of([&] { s.resolve("/etc/passwd"); }), 400);
+  EXPECT_EQ(status_of([&] { s.resolve(""); }), 400);
+  fs::create_directory_symlink("/tmp", dir / "link");
+  EXPECT_EQ(status_of([&] { s.resolve("link/x"); }), 403);
+  EXPECT_EQ(s.resolve("out/field.npy"), fs::canonical(dir.path()) / "out" / "field.npy");
+
+  json scene = s.scene()["scene"];
+  scene["domain"] = {{"mesh", "../../etc/bunny.obj"}};
+  scene["elements"] = json::array();
+  try {
+    s.put_scene(scene);
+    ADD_FAILURE() << "accepted a mesh outside the working folder";
+  } catch (const RequestError& e) {
+    EXPECT_EQ(e.status(), 403) << e.what();
+  }
+  EXPECT_EQ(status_of([&] { s.upload_mesh("../m.obj", "v 0 0 0\n"); }), 400);
+  EXPECT_EQ(status_of([&] { s.upload_mesh("m.exe", "v 0 0 0\n"); }), 400);
+  EXPECT_EQ(status_of([&] { s.export_field({{"dir", "../out"}}); }), 403);
+  EXPECT_EQ(status_of([&] { s.export_field({{"dir", "out"}, {"colour", "red"}}); }), 400);
+  EXPECT_EQ(status_of([&] { s.render_video({{"name", "/tmp/v.mp4"}}); }), 400);
+}
+
+TEST(ServeSession, ExportsTheFieldInsideTheWorkingFolder) {
+  test::TempDir dir;
+  Session s(options_in(dir));
+  ASSERT_TRUE(s.wait_idle(60));
+  const json r = s.export_field({{"dir", "exported"}, {"format", "npy"}});
+  bool has_field = false;
+  for (const auto& f : r["files"]) {
+    EXPECT_TRUE(fs::exists(dir / f.get<std::string>())) << f;
+    has_field |= f == "exported/field.npy";
+  }
+  EXPECT_TRUE(has_field) << r;
+  // N × |V| × 3 float32 after a header of at most 256 bytes.
+  const auto bytes = fs::file_size(dir / "exported" / "field.npy");
+  EXPECT_GE(bytes, 21u * 33u * 33u * 3u * 4u);
+  EXPECT_LE(bytes, 21u * 33u * 33u * 3u * 4u + 256u);
+  EXPECT_FALSE(fs::exists(dir / "exported" / "field.pvd"));
+}
+
+}  // namespace
+}  // namespace tvf::serve

@@ -1,0 +1,105 @@
+// The JSON API of `tvf serve` (docs/serve_api.md). Every call returns the parsed body or
+// throws ApiError with the server's one-sentence message.
+import type { Scene } from "./scene";
+
+export class ApiError extends Error {
+  constructor(
+    readonly status: number,
+    message: string,
+  ) {
+    super(message);
+  }
+}
+
+async function call<T>(method: string, path: string, body?: unknown): Promise<T> {
+  const init: RequestInit = { method };
+  if (body !== undefined) {
+    init.body = JSON.stringify(body);
+    init.headers = { "Content-Type": "application/json" };
+  } else if (method !== "GET") {
+    init.headers = { "Content-Type": "application/json" };
+  }
+  const res = await fetch(path, init);
+  const text = await res.text();
+  let json: unknown;
+  try {
+    json = JSON.parse(text);
+  } catch {
+    throw new ApiError(res.status, `${method} ${path}: the server answered ${res.status} without JSON`);
+  }
+  if (!res.ok) throw new ApiError(res.status, (json as { error?: string }).error ?? `HTTP ${res.status}`);
+  return json as T;
+}
+
+export interface SceneState {
+  revision: number;
+  scene: Scene;
+  text?: string; // the scene as the file holds it (keys in the order of DESIGN §10)
+  path: string;
+  can_undo: boolean;
+  can_redo: boolean;
+}
+export interface Status {
+  revision: number;
+  result_revision: number;
+  state: "running" | "ready" | "failed";
+  progress: [number, number];
+  error: string;
+  warnings?: string[];
+  method?: string;
+  seconds?: number;
+}
+export interface FrameSingularity {
+  position: number[];
+  type: string;
+  index: number;
+  path: number;
+}
+export interface Frame {
+  revision: number;
+  frame: number;
+  frames: number;
+  t: number;
+  vectors: number[];
+  singularities: FrameSingularity[];
+}
+export interface MeshData {
+  revision: number;
+  planar: boolean;
+  grid?: { size: [number, number]; min: [number, number]; max: [number, number] };
+  vertices: number[];
+  faces: number[];
+}
+export interface Analysis {
+  revision: number;
+  frames: number;
+  times: number[];
+  paths: { id: number; type: string; birth: number; death: number; points: number[][] }[];
+  bifurcations: { t: number; position: number[]; kind: string; paths: number[] }[];
+  coherence: number[];
+}
+
+export const api = {
+  scene: () => call<SceneState>("GET", "api/scene"),
+  putScene: (scene: Scene) => call<SceneState>("PUT", "api/scene", scene),
+  edit: (edit: unknown) => call<{ revision: number; summary: string }>("POST", "api/edit", edit),
+  undo: () => call<SceneState>("POST", "api/undo"),
+  redo: () => call<SceneState>("POST", "api/redo"),
+  status: () => call<Status>("GET", "api/status"),
+  mesh: () => call<MeshData>("GET", "api/mesh"),
+  frame: (j: number) => call<Frame>("GET", `api/frame/${j}`),
+  analysis: () => call<Analysis>("GET", "api/analysis"),
+  exportField: (format: string, dir: string) => call<{ files: string[] }>("POST", "api/export", { format, dir }),
+  render: (name: string, size: number) =>
+    call<{ file: string; frames: number; seconds: number }>("POST", "api/render", { name, size }),
+  async upload(file: File): Promise<{ file: string }> {
+    const res = await fetch(`api/upload?name=${encodeURIComponent(file.name)}`, {
+      method: "POST",
+      headers: { "Content-Type": "application/octet-stream" },
+      body: await file.arrayBuffer(),
+    });
+    const json = await res.json();
+    if (!res.ok) throw new ApiError(res.status, json.error ?? `HTTP ${res.status}`);
+    return json;
+  },
+};

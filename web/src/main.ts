@@ -1,0 +1,676 @@
+// The tvf designer: the page that `tvf serve` serves. Every change is a new scene (or an
+// edit entry) sent to the server, which validates it, saves it, and re-solves in the
+// background; the page polls the status and shows the newest finished field.
+import "./style.css";
+import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneState } from "./api";
+import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
+import { CoherencePlot } from "./coherence";
+import { lic, noise, type GridField } from "./lic";
+import * as S from "./scene";
+import { SpaceTimeView } from "./spacetime";
+import { SurfaceView } from "./surface";
+import { resample } from "./stroke";
+import { rounded, View } from "./view";
+
+const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
+
+const canvas = $<HTMLCanvasElement>("field");
+const ctx = canvas.getContext("2d")!;
+const slider = $<HTMLInputElement>("time");
+const message = $<HTMLPreElement>("message");
+const sceneText = $<HTMLTextAreaElement>("scene-json");
+
+const LIC_SIZE = 256;
+const licNoise = noise(LIC_SIZE, LIC_SIZE, 7);
+
+interface State {
+  scene?: SceneState;
+  mesh?: MeshData;
+  meshKey?: string;
+  resultRevision: number;
+  analysis?: Analysis;
+  frames: Map<number, Frame>;
+  textures: Map<number, HTMLCanvasElement>;
+  frame: number;
+  tool: string;
+  selected?: S.Handle;
+  selectedBifurcation: number;
+  drag?: { handle: S.Handle; scene: S.Scene };
+  stroke?: S.Vec[];
+  cancelPicks: number[][];
+  playing: boolean;
+  jsonDirty: boolean;
+}
+const state: State = {
+  resultRevision: -1,
+  frames: new Map(),
+  textures: new Map(),
+  frame: 0,
+  tool: "select",
+  selectedBifurcation: -1,
+  cancelPicks: [],
+  playing: false,
+  jsonDirty: false,
+};
+
+const spacetime = new SpaceTimeView($("spacetime"));
+const coherence = new CoherencePlot($("coherence"));
+let surface: SurfaceView | undefined;
+
+function say(text: string, error = false) {
+  message.textContent = text;
+  message.classList.toggle("error", error);
+}
+
+function scene(): S.Scene {
+  return state.scene!.scene;
+}
+function planar(): boolean {
+  return !!state.scene && S.isPlanar(scene());
+}
+function currentTime(): number {
+  return state.scene ? S.frameTime(scene(), state.frame) : 0;
+}
+function view(): View {
+  const g = scene().domain.grid!;
+  return new View(canvas.width, canvas.height, [g.min[0], g.min[1]], [g.max[0], g.max[1]]);
+}
+
+// ---- talking to the server ------------------------------------------------------------
+
+function showScene(s: SceneState) {
+  const framesChanged = !state.scene || state.scene.scene.time.frames !== s.scene.time.frames;
+  state.scene = s;
+  $("scene-path").textContent = s.path;
+  if (!state.jsonDirty) sceneText.value = s.text ?? JSON.stringify(s.scene, null, 2);
+  $<HTMLButtonElement>("undo").disabled = !s.can_undo;
+  $<HTMLButtonElement>("redo").disabled = !s.can_redo;
+  $<HTMLSelectElement>("generator").value = s.scene.generator;
+  const d = s.scene.domain;
+  $<HTMLSelectElement>("domain").value = d.grid ? "grid" : d.sphere ? "sphere" : d.torus ? "torus" : "mesh";
+  if (framesChanged) {
+    slider.max = String(s.scene.time.frames - 1);
+    state.frame = Math.min(state.frame, s.scene.time.frames - 1);
+    slider.value = String(state.frame);
+    $<HTMLInputElement>("life-start").value = String(s.scene.time.range[0]);
+    $<HTMLInputElement>("life-end").value = String(s.scene.time.range[1]);
+  }
+  const ticks = $("keyframe-ticks");
+  ticks.innerHTML = "";
+  for (const k of s.scene.keyframes ?? []) {
+    const tick = document.createElement("span");
+    const j = S.frameOf(s.scene, k.t);
+    tick.style.left = `${(100 * j) / Math.max(1, s.scene.time.frames - 1)}%`;
+    tick.title = `key frame t = ${k.t}`;
+    ticks.appendChild(tick);
+  }
+  redraw();
+}
+
+async function change(next: S.Scene, what: string) {
+  try {
+    showScene(await api.putScene(next));
+    say(what);
+  } catch (e) {
+    say((e as Error).message, true);
+    redraw();
+  }
+}
+
+async function edit(entry: unknown) {
+  say("applying the edit…");
+  try {
+    const r = await api.edit(entry);
+    say(r.summary);
+    showScene(await api.scene());
+  } catch (e) {
+    say((e as Error).message, true);
+  }
+}
+
+async function poll() {
+  try {
+    const st = await api.status();
+    const label = $("status");
+    label.dataset.state = st.state;
+    if (st.state === "running") label.textContent = `rev ${st.revision} · solving ${st.progress[0]}/${st.progress[1]}…`;
+    else if (st.state === "failed") label.textContent = `rev ${st.revision} · failed: ${st.error}`;
+    else label.textContent = `rev ${st.revision} · ready in ${(st.seconds ?? 0).toFixed(2)} s`;
+    if (st.result_revision !== state.resultRevision && st.result_revision > 0) await loadResult(st.result_revision);
+  } catch (e) {
+    $("status").textContent = `server unreachable (${(e as Error).message})`;
+  }
+  setTimeout(poll, state.playing ? 400 : 200);
+}
+
+async function loadResult(revision: number) {
+  const [analysis, mesh] = await Promise.all([api.analysis(), api.mesh()]);
+  state.resultRevision = revision;
+  state.frames.clear();
+  state.textures.clear();
+  state.analysis = analysis;
+  const key = JSON.stringify(mesh.grid ?? mesh.vertices.length);
+  if (key !== state.meshKey || !mesh.planar) {
+    state.mesh = mesh;
+    state.meshKey = key;
+    setupDomainView();
+  }
+  const g = mesh.grid;
+  // The space-time view is of planar domains (a surface × time has no picture in 3-D).
+  $("spacetime").hidden = !g;
+  $("spacetime-title").hidden = !g;
+  if (g) spacetime.set(analysis, g.min, g.max, [analysis.times[0], analysis.times[analysis.times.length - 1]]);
+  coherence.set(analysis.times, analysis.coherence);
+  listBifurcations();
+  await showFrame(state.frame);
+}
+
+function setupDomainView() {
+  const isPlanar = state.mesh!.planar;
+  canvas.hidden = !isPlanar;
+  const host = $("surface");
+  host.hidden = isPlanar;
+  if (!isPlanar) {
+    if (!surface) {
+      surface = new SurfaceView(host);
+      surface.onPick = surfacePick;
+    }
+    surface.setMesh(state.mesh!);
+  }
+}
+
+async function frameData(j: number): Promise<Frame> {
+  let f = state.frames.get(j);
+  if (!f) {
+    f = await api.frame(j);
+    if (f.revision === state.resultRevision) state.frames.set(j, f);
+  }
+  return f;
+}
+
+async function showFrame(j: number) {
+  state.frame = j;
+  slider.value = String(j);
+  $("time-label").textContent = `t = ${currentTime().toFixed(3)}`;
+  coherence.setTime(currentTime());
+  spacetime.setTime(currentTime());
+  if (state.resultRevision < 0) return redraw();
+  try {
+    const f = await frameData(j);
+    if (f.frame !== state.frame) return;
+    if (!planar() && surface) surface.setFrame(f, markers());
+  } catch (e) {
+    if (!(e instanceof ApiError && e.status === 409)) say((e as Error).message, true);
+  }
+  redraw();
+}
+
+function listBifurcations() {
+  const host = $("bifurcations");
+  host.innerHTML = "";
+  const a = state.analysis!;
+  a.bifurcations.forEach((b, i) => {
+    const row = document.createElement("div");
+    row.className = "bifurcation" + (i === state.selectedBifurcation ? " selected" : "");
+    row.textContent = `${b.kind} at t = ${b.t.toFixed(3)} (${b.position.slice(0, planar() ? 2 : 3).map((v) => v.toFixed(2)).join(", ")})`;
+    const go = document.createElement("button");
+    go.textContent = "go to";
+    go.onclick = () => {
+      selectBifurcation(i);
+      say(`bifurcation ${i} picked: the Move bifurcation tool moves it to a click at the current time`);
+      void showFrame(S.frameOf(scene(), b.t));
+    };
+    const remove = document.createElement("button");
+    remove.textContent = "remove";
+    remove.className = "remove-bifurcation";
+    remove.onclick = () => void edit(S.removeBifurcationEdit(b.position.slice(0, planar() ? 2 : 3), b.t));
+    const move = document.createElement("button");
+    move.textContent = "move to current t";
+    move.title = "Move this bifurcation to the current time (same place); planar domains";
+    move.onclick = () => {
+      const p = b.position.slice(0, 2);
+      void edit(S.moveBifurcationEdit(p, b.t, p, currentTime()));
+    };
+    row.append(go, remove);
+    if (planar()) row.append(move);
+    host.appendChild(row);
+  });
+  if (a.bifurcations.length === 0) host.textContent = "no bifurcations";
+}
+
+function selectBifurcation(i: number) {
+  state.selectedBifurcation = i;
+  spacetime.highlight(i);
+  listBifurcations();
+}
+spacetime.onPick = (i) => {
+  selectBifurcation(i);
+  const b = state.analysis!.bifurcations[i];
+  say(`bifurcation ${i}: ${b.kind} at t = ${b.t.toFixed(3)}: "remove" in the list, or the Move bifurcation tool and a click where it should go`);
+};
+
+// ---- drawing the planar canvas ----------------------------------------------------------
+
+function texture(f: Frame): HTMLCanvasElement {
+  let c = state.textures.get(f.frame);
+  if (c) return c;
+  const g = state.mesh!.grid!;
+  const field: GridField = { nx: g.size[0], ny: g.size[1], min: g.min, max: g.max, vectors: f.vectors };
+  const img = lic(field, { width: LIC_SIZE, height: LIC_SIZE, noise: licNoise, length: 10 });
+  c = document.createElement("canvas");
+  c.width = LIC_SIZE;
+  c.height = LIC_SIZE;
+  const ictx = c.getContext("2d")!;
+  const data = ictx.createImageData(LIC_SIZE, LIC_SIZE);
+  for (let k = 0; k < img.length; ++k) {
+    const g8 = Math.round(40 + 215 * img[k]);
+    data.data.set([g8, g8, g8, 255], 4 * k);
+  }
+  ictx.putImageData(data, 0, 0);
+  state.textures.set(f.frame, c);
+  if (state.textures.size > 400) state.textures.clear();
+  return c;
+}
+
+function markers(): number[][] {
+  return S.handles(scene(), currentTime()).map((h) => h.position);
+}
+
+function redraw() {
+  if (!state.scene || !planar()) return;
+  const v = view();
+  const s = state.drag?.scene ?? scene();
+  const t = currentTime();
+  ctx.fillStyle = "#fff";
+  ctx.fillRect(0, 0, canvas.width, canvas.height);
+  const f = state.frames.get(state.frame);
+  if (f && state.mesh?.grid) {
+    const [x0, y0] = v.toCanvas([state.mesh.grid.min[0], state.mesh.grid.max[1]]);
+    const [x1, y1] = v.toCanvas([state.mesh.grid.max[0], state.mesh.grid.min[1]]);
+    ctx.imageSmoothingEnabled = true;
+    ctx.drawImage(texture(f), x0, y0, x1 - x0, y1 - y0);
+  }
+  const line = (pts: number[][], color: string, width = 2, dash: number[] = []) => {
+    if (pts.length < 2) return;
+    ctx.strokeStyle = color;
+    ctx.lineWidth = width;
+    ctx.setLineDash(dash);
+    ctx.beginPath();
+    pts.forEach((p, i) => {
+      const [x, y] = v.toCanvas(p);
+      if (i === 0) ctx.moveTo(x, y);
+      else ctx.lineTo(x, y);
+    });
+    ctx.stroke();
+    ctx.setLineDash([]);
+  };
+  // Design elements.
+  for (const e of s.elements ?? []) {
+    if (e.kind === "singular") {
+      line(e.path, "#0f172a", 1.5, [5, 4]);
+      const p = S.singularPosition(e, t);
+      if (p) ring(v, p, typeColor(e.type ?? "saddle"), 9);
+    } else if (e.kind === "regular") {
+      line(e.pathline, PATHLINE_COLOR, 3);
+      for (const q of e.pathline) dot(v, q, PATHLINE_COLOR, 3);
+      const p = S.singularPosition({ kind: "singular", path: e.pathline }, t);
+      if (p) ring(v, p, PATHLINE_COLOR, 6);
+    } else {
+      const [x, y] = v.toCanvas(e.at);
+      const r = 8 + (Math.abs(e.at[e.at.length - 1] - t) < 0.02 ? 3 : 0);
+      ctx.fillStyle = BIFURCATION_COLOR;
+      ctx.beginPath();
+      ctx.moveTo(x, y - r);
+      ctx.lineTo(x + r, y);
+      ctx.lineTo(x, y + r);
+      ctx.lineTo(x - r, y);
+      ctx.closePath();
+      ctx.fill();
+      const a = e.angle;
+      line([e.at, [e.at[0] + e.scale * Math.cos(a), e.at[1] + e.scale * Math.sin(a)]], BIFURCATION_COLOR, 2);
+    }
+  }
+  // Deformed streamlines: the seed, and each key's move.
+  const deform = s.deform as S.DeformBlock | undefined;
+  for (const e of deform?.base?.elements ?? []) if (e.kind === "singular") ring(v, e.path[0].slice(0, -1), typeColor(e.type ?? "saddle"), 9);
+  for (const sl of deform?.streamlines ?? []) {
+    square(v, sl.seed, PATHLINE_COLOR);
+    for (const k of sl.keys) line([sl.seed, [sl.seed[0] + k.translate[0], sl.seed[1] + k.translate[1]]], PATHLINE_COLOR, 2, [4, 3]);
+  }
+  const j = state.frame;
+  for (const k of s.keyframes ?? []) {
+    if (S.frameOf(s, k.t) !== j) continue;
+    for (const e of k.elements ?? []) square(v, e.at, typeColor(e.type ?? "saddle"));
+    for (const sl of k.streamlines ?? []) line(sl.points, STREAMLINE_COLOR, 3);
+  }
+  // Singularities of the field at this frame.
+  for (const sg of f?.singularities ?? []) dot(v, sg.position, typeColor(sg.type), 6, "#fff");
+  for (const p of state.cancelPicks) ring(v, p, "#111827", 12);
+  if (state.selected) {
+    const h = S.handles(s, t).find((x) => JSON.stringify(x.handle) === JSON.stringify(state.selected));
+    if (h) ring(v, h.position, "#f97316", 14);
+  }
+  if (state.stroke) line(state.stroke, "#f97316", 2);
+}
+
+function dot(v: View, p: number[], color: string, r: number, outline?: string) {
+  const [x, y] = v.toCanvas(p);
+  ctx.fillStyle = color;
+  ctx.beginPath();
+  ctx.arc(x, y, r, 0, 2 * Math.PI);
+  ctx.fill();
+  if (outline) {
+    ctx.strokeStyle = outline;
+    ctx.lineWidth = 1.5;
+    ctx.stroke();
+  }
+}
+function ring(v: View, p: number[], color: string, r: number) {
+  const [x, y] = v.toCanvas(p);
+  ctx.strokeStyle = color;
+  ctx.lineWidth = 2.5;
+  ctx.beginPath();
+  ctx.arc(x, y, r, 0, 2 * Math.PI);
+  ctx.stroke();
+}
+function square(v: View, p: number[], color: string) {
+  const [x, y] = v.toCanvas(p);
+  ctx.strokeStyle = color;
+  ctx.lineWidth = 3;
+  ctx.strokeRect(x - 9, y - 9, 18, 18);
+}
+
+// ---- interaction ------------------------------------------------------------------------
+
+function selectedType() {
+  return $<HTMLSelectElement>("singular-type").value;
+}
+function lifeSpan(): [number, number] {
+  return [Number($<HTMLInputElement>("life-start").value), Number($<HTMLInputElement>("life-end").value)];
+}
+function keyframeMode() {
+  return $<HTMLInputElement>("keyframe-mode").checked;
+}
+
+function eventWorld(e: PointerEvent): number[] {
+  const r = canvas.getBoundingClientRect();
+  return rounded(view().toWorld(((e.clientX - r.left) * canvas.width) / r.width, ((e.clientY - r.top) * canvas.height) / r.height));
+}
+
+function nearestSingularity(p: number[], radius: number): number[] | undefined {
+  const f = state.frames.get(state.frame);
+  let best: number[] | undefined;
+  let bestD = radius;
+  for (const s of f?.singularities ?? []) {
+    const d = Math.hypot(...p.map((v, k) => v - s.position[k]));
+    if (d < bestD) {
+      bestD = d;
+      best = s.position;
+    }
+  }
+  return best ? rounded(best) : undefined;
+}
+
+function pickForCancel(p: number[], radius: number) {
+  const s = nearestSingularity(p, radius);
+  if (!s) return say("click closer to a singularity (the filled dots)", true);
+  state.cancelPicks.push(s);
+  redraw();
+  if (state.cancelPicks.length === 2) {
+    const [a, b] = state.cancelPicks;
+    state.cancelPicks = [];
+    void edit(S.cancelEdit(state.frame, a, b));
+  } else {
+    say("now click the other singularity of the pair");
+  }
+}
+
+canvas.addEventListener("pointerdown", (e) => {
+  if (!state.scene || !planar()) return;
+  canvas.setPointerCapture(e.pointerId);
+  const p = eventWorld(e);
+  const radius = view().worldLength(12);
+  if (state.tool === "select") {
+    state.selected = S.pick(scene(), currentTime(), p, radius);
+    if (state.selected) state.drag = { handle: state.selected, scene: scene() };
+    redraw();
+  } else if (state.tool === "cancel") {
+    pickForCancel(p, view().worldLength(20));
+  } else if (state.tool === "move-bifurcation") {
+    const b = state.analysis?.bifurcations[state.selectedBifurcation];
+    if (!b) return say("pick a bifurcation first: click it in the space-time view or press go to in the list", true);
+    const t = Number(currentTime().toFixed(4));
+    void edit(S.moveBifurcationEdit(rounded(b.position.slice(0, 2)), b.t, p, t));
+  } else {
+    state.stroke = [p];
+  }
+});
+
+canvas.addEventListener("pointermove", (e) => {
+  if (!state.scene || !planar()) return;
+  const p = eventWorld(e);
+  if (state.drag) {
+    state.drag.scene = S.moveHandle(scene(), state.drag.handle, p);
+    redraw();
+  } else if (state.stroke) {
+    const last = state.stroke[state.stroke.length - 1];
+    if (Math.hypot(p[0] - last[0], p[1] - last[1]) > view().worldLength(4)) {
+      state.stroke.push(p);
+      redraw();
+    }
+  }
+});
+
+canvas.addEventListener("pointerup", (e) => {
+  if (!state.scene || !planar()) return;
+  const p = eventWorld(e);
+  if (state.drag) {
+    const d = state.drag;
+    state.drag = undefined;
+    if (JSON.stringify(d.scene) !== JSON.stringify(scene())) void change(d.scene, "moved");
+    return;
+  }
+  const stroke = state.stroke;
+  state.stroke = undefined;
+  if (!stroke) return;
+  if (Math.hypot(p[0] - stroke[stroke.length - 1][0], p[1] - stroke[stroke.length - 1][1]) > 1e-9) stroke.push(p);
+  const isClick = stroke.length < 2 || Math.hypot(p[0] - stroke[0][0], p[1] - stroke[0][1]) < view().worldLength(6);
+  const t = Number(currentTime().toFixed(4));
+  const [ts, te] = lifeSpan();
+  try {
+    if (state.tool === "singular") {
+      if (keyframeMode()) void change(S.addKeyframeSingular(scene(), t, selectedType(), stroke[0]), `${selectedType()} in the key frame at t = ${t}`);
+      else if (isClick) void change(S.addSingular(scene(), selectedType(), stroke[0], undefined, ts), `fixed ${selectedType()} placed`);
+      else void change(S.addSingular(scene(), selectedType(), stroke[0], p, ts, te), `${selectedType()} moving from t = ${ts} to ${te}`);
+    } else if (state.tool === "pathline") {
+      if (isClick) return say("drag to draw a pathline", true);
+      void change(S.addPathline(scene(), resample(stroke, 6), ts, te), `pathline from t = ${ts} to ${te}`);
+    } else if (state.tool === "streamline") {
+      if (isClick) return say("drag to draw a streamline", true);
+      void change(S.addKeyframeStreamline(scene(), t, resample(stroke, 8)), `streamline in the key frame at t = ${t}`);
+    } else if (state.tool === "deform") {
+      if (isClick) return say("drag from the streamline's seed to where it should be at the current time", true);
+      const turn = Number($<HTMLInputElement>("deform-turn").value) || 0;
+      const d = rounded([p[0] - stroke[0][0], p[1] - stroke[0][1]]);
+      void change(S.addDeformStreamline(scene(), stroke[0], d, t, turn), `streamline from (${stroke[0].join(", ")}) moved by (${d.join(", ")}) at t = ${t}`);
+    } else if (state.tool === "bifurcation") {
+      const type = $<HTMLSelectElement>("bifurcation-type").value;
+      const dx = p[0] - stroke[0][0];
+      const dy = p[1] - stroke[0][1];
+      const scale = isClick ? 0.25 : Math.max(0.05, Math.round(Math.hypot(dx, dy) * 1000) / 1000);
+      const angle = isClick ? 0 : Math.round(Math.atan2(dy, dx) * 1000) / 1000;
+      void change(S.addBifurcation(scene(), type, stroke[0], t, scale, angle), `${type} at t = ${t}`);
+    }
+  } catch (err) {
+    say((err as Error).message, true);
+  }
+  redraw();
+});
+
+function surfacePick(p: number[]) {
+  if (!state.scene) return;
+  const at = rounded(p);
+  const t = Number(currentTime().toFixed(4));
+  if (state.tool === "singular") {
+    if (keyframeMode()) void change(S.addKeyframeSingular(scene(), t, selectedType(), at), `${selectedType()} in the key frame at t = ${t}`);
+    else void change(S.addSingular(scene(), selectedType(), at, undefined, lifeSpan()[0]), `fixed ${selectedType()} placed`);
+  } else if (state.tool === "bifurcation") {
+    void change(S.addBifurcation(scene(), $<HTMLSelectElement>("bifurcation-type").value, at, t), "bifurcation placed");
+  } else if (state.tool === "cancel") {
+    pickForCancel(at, 0.2);
+  } else if (state.tool === "select") {
+    state.selected = S.pick(scene(), t, at, 0.1);
+    say(state.selected ? "selected: Delete removes it" : "nothing here");
+  } else {
+    say("on surfaces, draw with Singular, Bifurcation and Cancel pair (pathlines and streamlines: in the scene JSON)", true);
+  }
+}
+
+function deleteSelected() {
+  if (!state.selected) return say("select an element first (Select tool)", true);
+  const h = state.selected;
+  state.selected = undefined;
+  void change(S.removeHandle(scene(), h), "deleted");
+}
+
+async function undo() {
+  try {
+    showScene(await api.undo());
+    say("undone");
+  } catch (e) {
+    say((e as Error).message, true);
+  }
+}
+async function redo() {
+  try {
+    showScene(await api.redo());
+    say("redone");
+  } catch (e) {
+    say((e as Error).message, true);
+  }
+}
+
+let playTimer: number | undefined;
+function play(on: boolean) {
+  state.playing = on;
+  $("play").textContent = on ? "❚❚" : "▶";
+  if (playTimer !== undefined) clearTimeout(playTimer);
+  const step = async () => {
+    if (!state.playing) return;
+    const frames = scene().time.frames;
+    const next = (state.frame + 1) % frames;
+    // Ask for the frames after it while this one is drawn.
+    for (let k = 1; k <= 3; ++k) void frameData((next + k) % frames).catch(() => undefined);
+    await showFrame(next);
+    playTimer = window.setTimeout(step, 60);
+  };
+  if (on) void step();
+}
+
+// ---- wiring -----------------------------------------------------------------------------
+
+for (const t of S.SINGULAR_TYPES) $("singular-type").append(new Option(t, t));
+for (const t of S.BIFURCATION_TYPES) $("bifurcation-type").append(new Option(t, t));
+$<HTMLSelectElement>("singular-type").value = "ccw_center";
+document.querySelectorAll<HTMLInputElement>("input[name=tool]").forEach((r) =>
+  r.addEventListener("change", () => {
+    state.tool = r.value;
+    state.cancelPicks = [];
+    state.selected = undefined;
+    redraw();
+  }),
+);
+slider.addEventListener("input", () => void showFrame(Number(slider.value)));
+$("play").addEventListener("click", () => play(!state.playing));
+$("delete").addEventListener("click", deleteSelected);
+$("undo").addEventListener("click", () => void undo());
+$("redo").addEventListener("click", () => void redo());
+$("rotate-field").addEventListener("click", () => {
+  const theta = Number($<HTMLInputElement>("field-turn").value);
+  if (!Number.isFinite(theta)) return say("give the turn in radians", true);
+  void change(S.setDeformTransform(scene(), theta), `the field turns by ${theta} rad over the time range (deform generator)`);
+});
+$("new").addEventListener("click", () => void change(S.emptyScene(), "new empty design on the 65² grid"));
+$<HTMLSelectElement>("generator").addEventListener("change", (e) =>
+  void change({ ...scene(), generator: (e.target as HTMLSelectElement).value }, "generator changed"),
+);
+$<HTMLSelectElement>("domain").addEventListener("change", (e) => {
+  const d = (e.target as HTMLSelectElement).value;
+  const domain = d === "grid" ? S.emptyScene().domain : d === "sphere" ? { sphere: { subdivisions: 4, radius: 1 } } : { torus: {} };
+  void change({ ...scene(), domain, elements: [], keyframes: [], edits: [], deform: undefined }, `new design on the ${d}`);
+});
+$<HTMLInputElement>("upload").addEventListener("change", async (e) => {
+  const file = (e.target as HTMLInputElement).files?.[0];
+  if (!file) return;
+  try {
+    const r = await api.upload(file);
+    await change({ ...scene(), domain: { mesh: r.file }, elements: [], keyframes: [], edits: [], deform: undefined }, `designing on ${r.file}`);
+  } catch (err) {
+    say((err as Error).message, true);
+  }
+});
+sceneText.addEventListener("input", () => {
+  state.jsonDirty = true;
+  $("scene-dirty").textContent = "(edited: Apply to use it)";
+});
+$("apply-json").addEventListener("click", async () => {
+  let parsed: S.Scene;
+  try {
+    parsed = JSON.parse(sceneText.value);
+  } catch (err) {
+    return say(`scene JSON: ${(err as Error).message}`, true);
+  }
+  state.jsonDirty = false;
+  $("scene-dirty").textContent = "";
+  await change(parsed, "scene applied");
+});
+$("export-npy").addEventListener("click", async () => {
+  try {
+    const r = await api.exportField("npy", "export");
+    say(`exported ${r.files.length} files into export/: ${r.files.join(", ")}`);
+  } catch (e) {
+    say((e as Error).message, true);
+  }
+});
+$("export-vtk").addEventListener("click", async () => {
+  try {
+    const r = await api.exportField("vtk", "export");
+    say(`exported ${r.files.length} files into export/ (field.pvd opens in ParaView)`);
+  } catch (e) {
+    say((e as Error).message, true);
+  }
+});
+$("render-video").addEventListener("click", async () => {
+  say("rendering video.mp4…");
+  try {
+    const r = await api.render("video.mp4", 512);
+    const a = $<HTMLAnchorElement>("video-link");
+    a.href = `api/files/${r.file}?rev=${state.resultRevision}`;
+    a.hidden = false;
+    say(`rendered ${r.file}: ${r.frames} frames in ${r.seconds.toFixed(1)} s`);
+  } catch (e) {
+    say((e as Error).message, true);
+  }
+});
+document.addEventListener("keydown", (e) => {
+  if ((e.target as HTMLElement).tagName === "TEXTAREA" || (e.target as HTMLElement).tagName === "INPUT") return;
+  if (e.key === "Delete" || e.key === "Backspace") deleteSelected();
+  else if ((e.ctrlKey || e.metaKey) && e.key.toLowerCase() === "z") void (e.shiftKey ? redo() : undo());
+  else if (e.key === " ") {
+    e.preventDefault();
+    play(!state.playing);
+  } else if (e.key === "ArrowRight") void showFrame(Math.min(scene().time.frames - 1, state.frame + 1));
+  else if (e.key === "ArrowLeft") void showFrame(Math.max(0, state.frame - 1));
+});
+
+// For the end-to-end test and the curious: the state, read-only.
+(window as unknown as { tvf: unknown }).tvf = { state, view: () => (planar() ? view() : undefined) };
+
+(async () => {
+  try {
+    showScene(await api.scene());
+  } catch (e) {
+    say((e as Error).message, true);
+  }
+  void poll();
+})();

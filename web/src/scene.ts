@@ -1,0 +1,336 @@
+// The scene as the designer changes it (DESIGN §10, docs/scene_reference.md). Every
+// function here is pure: it returns a new scene and leaves its argument as it was, so
+// the caller can send the result to the server (which validates it) and undo is the
+// server's. Positions are world coordinates: [x, y] on planar grids, [x, y, z] on
+// surfaces; path points add the time t.
+
+export type Vec = number[];
+
+export interface SingularElement {
+  kind: "singular";
+  type?: string;
+  jacobian?: number[][];
+  path: Vec[];
+  transform?: unknown[];
+}
+export interface RegularElement {
+  kind: "regular";
+  pathline: Vec[];
+  attach?: number;
+}
+export interface BifurcationElement {
+  kind: "bifurcation";
+  type: string;
+  at: Vec;
+  scale: number;
+  time_scale: number;
+  angle: number;
+}
+export type Element = SingularElement | RegularElement | BifurcationElement;
+
+export interface KeyframeElement {
+  kind: "singular" | "regular";
+  type?: string;
+  jacobian?: number[][];
+  at: Vec;
+  vector?: Vec;
+}
+export interface Keyframe {
+  t: number;
+  elements?: KeyframeElement[];
+  streamlines?: { points: Vec[]; speed?: number }[];
+  field?: string;
+}
+
+export interface Scene {
+  tvf: number;
+  description?: string;
+  domain: { grid?: { size: number[]; min: number[]; max: number[] }; mesh?: string; sphere?: unknown; torus?: unknown };
+  time: { frames: number; range: number[] };
+  generator: string;
+  solver?: Record<string, unknown>;
+  falloff?: number;
+  elements?: Element[];
+  keyframes?: Keyframe[];
+  deform?: unknown;
+  edits?: unknown[];
+  [key: string]: unknown;
+}
+
+export const SINGULAR_TYPES = [
+  "source",
+  "sink",
+  "saddle",
+  "ccw_center",
+  "cw_center",
+  "repelling_focus",
+  "attracting_focus",
+] as const;
+
+export const BIFURCATION_TYPES = [
+  "saddle_source_cancellation",
+  "saddle_sink_creation",
+  "saddle_source_creation",
+  "saddle_sink_cancellation",
+] as const;
+
+function clone<T>(x: T): T {
+  return JSON.parse(JSON.stringify(x)) as T;
+}
+
+export function isPlanar(scene: Scene): boolean {
+  return scene.domain.grid !== undefined;
+}
+
+// Time of frame j (DESIGN §3).
+export function frameTime(scene: Scene, j: number): number {
+  const [t0, t1] = scene.time.range;
+  const n = scene.time.frames;
+  return n > 1 ? t0 + ((t1 - t0) * j) / (n - 1) : t0;
+}
+
+// Nearest frame of time t.
+export function frameOf(scene: Scene, t: number): number {
+  const [t0, t1] = scene.time.range;
+  const n = scene.time.frames;
+  if (n <= 1 || t1 === t0) return 0;
+  return Math.min(n - 1, Math.max(0, Math.round(((t - t0) / (t1 - t0)) * (n - 1))));
+}
+
+// An empty design on the paper's 65×65 grid over [−1, 1]², 100 frames. The constrained
+// generator keeps every element at its place with its type (paper §5.3), which is what a
+// designer placing elements by hand expects; the basis sum lets wide elements shift
+// each other.
+export function emptyScene(): Scene {
+  return {
+    tvf: 1,
+    description: "designed in the browser (tvf serve)",
+    domain: { grid: { size: [65, 65], min: [-1, -1], max: [1, 1] } },
+    time: { frames: 100, range: [0, 1] },
+    generator: "constrained",
+    falloff: 8,
+    elements: [],
+    keyframes: [],
+    edits: [],
+  };
+}
+
+// A singular element: one point (fixed for the whole time) or a straight path from `from`
+// at ts to `to` at te.
+export function addSingular(scene: Scene, type: string, from: Vec, to?: Vec, ts?: number, te?: number): Scene {
+  const s = clone(scene);
+  const path = to && ts !== undefined && te !== undefined && te > ts ? [[...from, ts], [...to, te]] : [[...from, ts ?? s.time.range[0]]];
+  (s.elements ??= []).push({ kind: "singular", type, path });
+  return s;
+}
+
+// A regular element along a drawn pathline: the drawn points, spread evenly in time from
+// ts to te (needs te > ts and at least two points).
+export function addPathline(scene: Scene, points: Vec[], ts: number, te: number, attach = 0): Scene {
+  if (points.length < 2) throw new Error("a pathline needs at least two points");
+  if (!(te > ts)) throw new Error("a pathline needs an end time after its start time");
+  const s = clone(scene);
+  const n = points.length;
+  const pathline = points.map((p, i) => [...p, ts + ((te - ts) * i) / (n - 1)]);
+  const e: RegularElement = { kind: "regular", pathline };
+  if (attach > 0) e.attach = attach;
+  (s.elements ??= []).push(e);
+  return s;
+}
+
+export function addBifurcation(scene: Scene, type: string, at: Vec, t: number, scale = 0.25, angle = 0, timeScale = 0.25): Scene {
+  const s = clone(scene);
+  (s.elements ??= []).push({ kind: "bifurcation", type, at: [...at, t], scale, time_scale: timeScale, angle });
+  return s;
+}
+
+// The key frame at time t (snapped to its frame), created when missing. Key frames need
+// the spatio-temporal generator (paper §6.1), so the scene switches to it.
+function keyframeAt(s: Scene, t: number): Keyframe {
+  const j = frameOf(s, t);
+  s.keyframes ??= [];
+  let k = s.keyframes.find((kf) => frameOf(s, kf.t) === j);
+  if (!k) {
+    k = { t: frameTime(s, j), elements: [] };
+    s.keyframes.push(k);
+    s.keyframes.sort((a, b) => a.t - b.t);
+  }
+  if (s.generator !== "spacetime") s.generator = "spacetime";
+  return k;
+}
+
+export function addKeyframeSingular(scene: Scene, t: number, type: string, at: Vec): Scene {
+  const s = clone(scene);
+  (keyframeAt(s, t).elements ??= []).push({ kind: "singular", type, at: [...at] });
+  return s;
+}
+
+export function addKeyframeStreamline(scene: Scene, t: number, points: Vec[]): Scene {
+  if (points.length < 2) throw new Error("a streamline needs at least two points");
+  const s = clone(scene);
+  (keyframeAt(s, t).streamlines ??= []).push({ points: points.map((p) => [...p]) });
+  return s;
+}
+
+// What can be picked and moved on the canvas at a time t.
+export type Handle =
+  | { kind: "element"; index: number; point: number } // elements[index], its path/pathline point or `at`
+  | { kind: "keyframe"; key: number; index: number }; // keyframes[key].elements[index]
+
+// Position of a singular element at time t: its path interpolated linearly between
+// control points (for drawing; the generator's Hermite spline passes through the same
+// points), or undefined outside its life span.
+export function singularPosition(e: SingularElement, t: number): Vec | undefined {
+  const p = e.path;
+  if (p.length === 1) return p[0].slice(0, -1);
+  const tt = (q: Vec) => q[q.length - 1];
+  if (t < tt(p[0]) - 1e-9 || t > tt(p[p.length - 1]) + 1e-9) return undefined;
+  for (let i = 0; i + 1 < p.length; ++i) {
+    const a = p[i];
+    const b = p[i + 1];
+    if (t <= tt(b) + 1e-9) {
+      const w = tt(b) > tt(a) ? (t - tt(a)) / (tt(b) - tt(a)) : 0;
+      return a.slice(0, -1).map((v, k) => v + w * (b[k] - v));
+    }
+  }
+  return p[p.length - 1].slice(0, -1);
+}
+
+// Handles visible at time t with their positions.
+export function handles(scene: Scene, t: number): { handle: Handle; position: Vec }[] {
+  const out: { handle: Handle; position: Vec }[] = [];
+  (scene.elements ?? []).forEach((e, index) => {
+    if (e.kind === "singular") {
+      // The control point nearest in time is the one a drag moves.
+      let best = 0;
+      e.path.forEach((q, i) => {
+        if (Math.abs(q[q.length - 1] - t) < Math.abs(e.path[best][e.path[best].length - 1] - t)) best = i;
+      });
+      const pos = e.path.length === 1 ? e.path[0].slice(0, -1) : singularPosition(e, t);
+      if (pos) out.push({ handle: { kind: "element", index, point: best }, position: pos });
+    } else if (e.kind === "regular") {
+      e.pathline.forEach((q, point) => out.push({ handle: { kind: "element", index, point }, position: q.slice(0, -1) }));
+    } else {
+      out.push({ handle: { kind: "element", index, point: 0 }, position: e.at.slice(0, -1) });
+    }
+  });
+  const j = frameOf(scene, t);
+  (scene.keyframes ?? []).forEach((k, key) => {
+    if (frameOf(scene, k.t) !== j) return;
+    (k.elements ?? []).forEach((e, index) => out.push({ handle: { kind: "keyframe", key, index }, position: e.at }));
+  });
+  return out;
+}
+
+// The handle nearest to p within `radius` (world units), if any.
+export function pick(scene: Scene, t: number, p: Vec, radius: number): Handle | undefined {
+  let best: Handle | undefined;
+  let bestD = radius;
+  for (const h of handles(scene, t)) {
+    const d = Math.hypot(...h.position.map((v, k) => v - p[k]));
+    if (d <= bestD) {
+      bestD = d;
+      best = h.handle;
+    }
+  }
+  return best;
+}
+
+// Moves a handle to p. A singular element with one point moves; one with a path moves the
+// control point nearest in time; a pathline point or a bifurcation moves in space only.
+export function moveHandle(scene: Scene, h: Handle, p: Vec): Scene {
+  const s = clone(scene);
+  if (h.kind === "keyframe") {
+    const e = s.keyframes?.[h.key]?.elements?.[h.index];
+    if (e) e.at = [...p];
+    return s;
+  }
+  const e = s.elements?.[h.index];
+  if (!e) return s;
+  if (e.kind === "singular") {
+    const q = e.path[h.point];
+    e.path[h.point] = [...p, q[q.length - 1]];
+  } else if (e.kind === "regular") {
+    const q = e.pathline[h.point];
+    e.pathline[h.point] = [...p, q[q.length - 1]];
+  } else {
+    e.at = [...p, e.at[e.at.length - 1]];
+  }
+  return s;
+}
+
+// Removes what a handle names (a whole element, or a key-frame element; a key frame left
+// with nothing in it is removed too).
+export function removeHandle(scene: Scene, h: Handle): Scene {
+  const s = clone(scene);
+  if (h.kind === "element") {
+    s.elements?.splice(h.index, 1);
+  } else {
+    const k = s.keyframes?.[h.key];
+    k?.elements?.splice(h.index, 1);
+    if (k && !(k.elements?.length) && !(k.streamlines?.length) && !k.field) s.keyframes?.splice(h.key, 1);
+  }
+  return s;
+}
+
+// The edit entries of DESIGN §7 the view sends (positions as the domain writes them).
+export function cancelEdit(frame: number, a: Vec, b: Vec) {
+  return { op: "cancel", frame, pair: [a, b] };
+}
+export function removeBifurcationEdit(position: Vec, t: number) {
+  return { op: "remove_bifurcation", at: [...position, t] };
+}
+export function moveBifurcationEdit(position: Vec, t: number, to: Vec, t2: number) {
+  return { op: "move_bifurcation", at: [...position, t], to: [...to, t2] };
+}
+
+// Field deformation (paper §7, the deform generator): the design so far becomes the base
+// field V(t0) (its elements move into deform.base; key frames are not part of it).
+function toDeform(s: Scene): NonNullable<DeformBlock> {
+  if (s.generator !== "deform" || !s.deform) {
+    s.deform = { base: { elements: s.elements ?? [] }, streamlines: [] };
+    s.elements = [];
+    s.generator = "deform";
+  }
+  return s.deform as DeformBlock;
+}
+export interface DeformBlock {
+  base: { elements: Element[] };
+  matrix?: unknown[];
+  transform?: { t: number; sx: number; sy: number; theta: number }[];
+  streamlines?: { seed: Vec; keys: { t: number; translate: Vec; rotate: number; scale: number }[] }[];
+}
+
+// A representative streamline (traced in V(t0) from `seed`) moved by `translate` and
+// turned by `rotate` radians by time t (> the first time; keys of one streamline stay in
+// increasing t: a key at the same frame is replaced).
+export function addDeformStreamline(scene: Scene, seed: Vec, translate: Vec, t: number, rotate = 0, scale = 1): Scene {
+  if (!(t > scene.time.range[0])) throw new Error("move the time past the start: a deformation key needs t after the first frame");
+  const s = clone(scene);
+  const d = toDeform(s);
+  d.streamlines ??= [];
+  const key = { t, translate: [...translate], rotate, scale };
+  const near = d.streamlines.find((sl) => Math.hypot(...sl.seed.map((v, k) => v - seed[k])) < 1e-6);
+  if (near) {
+    near.keys = near.keys.filter((k) => frameOf(s, k.t) !== frameOf(s, t));
+    near.keys.push(key);
+    near.keys.sort((a, b) => a.t - b.t);
+  } else {
+    d.streamlines.push({ seed: [...seed], keys: [key] });
+  }
+  return s;
+}
+
+// The whole field turned by theta radians (and scaled by sx, sy) from the first time to
+// the last: M(t) keys of the deform generator (sx, sy, θ interpolated linearly).
+export function setDeformTransform(scene: Scene, theta: number, sx = 1, sy = 1): Scene {
+  const s = clone(scene);
+  const d = toDeform(s);
+  const [t0, t1] = s.time.range;
+  delete d.matrix;
+  d.transform = [
+    { t: t0, sx: 1, sy: 1, theta: 0 },
+    { t: t1, sx, sy, theta },
+  ];
+  return s;
+}

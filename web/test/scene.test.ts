@@ -1,0 +1,88 @@
+import { describe, expect, it } from "vitest";
+import * as S from "../src/scene";
+
+describe("scene changes", () => {
+  it("leave their argument unchanged and add what they say", () => {
+    const s0 = S.emptyScene();
+    const before = JSON.stringify(s0);
+    const s1 = S.addSingular(s0, "ccw_center", [0.1, 0.2], [0.5, 0.2], 0.2, 0.8);
+    expect(JSON.stringify(s0)).toBe(before);
+    expect(s1.elements).toEqual([{ kind: "singular", type: "ccw_center", path: [[0.1, 0.2, 0.2], [0.5, 0.2, 0.8]] }]);
+    const fixed = S.addSingular(s0, "source", [0, 0], undefined, 0);
+    expect(fixed.elements![0]).toEqual({ kind: "singular", type: "source", path: [[0, 0, 0]] });
+  });
+
+  it("spread a drawn pathline evenly over its life span", () => {
+    const s = S.addPathline(S.emptyScene(), [[-1, 0], [0, 0.5], [1, 0]], 0.2, 0.6);
+    const e = s.elements![0] as S.RegularElement;
+    const times = e.pathline.map((p) => p[2]);
+    [0.2, 0.4, 0.6].forEach((t, i) => expect(times[i]).toBeCloseTo(t, 12));
+    expect(e.pathline.map((p) => p.slice(0, 2))).toEqual([[-1, 0], [0, 0.5], [1, 0]]);
+    expect(() => S.addPathline(S.emptyScene(), [[0, 0]], 0, 1)).toThrow(/two points/);
+    expect(() => S.addPathline(S.emptyScene(), [[0, 0], [1, 1]], 0.5, 0.5)).toThrow(/end time/);
+  });
+
+  it("put key-frame elements into one key frame per frame and switch to the spacetime generator", () => {
+    let s = S.addKeyframeSingular(S.emptyScene(), 0, "ccw_center", [0.5, -0.5]);
+    s = S.addKeyframeSingular(s, 0.001, "ccw_center", [0.5, 0.5]); // same frame of 100
+    s = S.addKeyframeSingular(s, 1, "ccw_center", [0.6, 0]);
+    expect(s.generator).toBe("spacetime");
+    expect(s.keyframes!.map((k) => k.t)).toEqual([0, 1]);
+    expect(s.keyframes![0].elements).toHaveLength(2);
+    s = S.addKeyframeStreamline(s, 1, [[-1, 0], [1, 0]]);
+    expect(s.keyframes![1].streamlines).toEqual([{ points: [[-1, 0], [1, 0]] }]);
+  });
+
+  it("pick, move and remove handles at the current time", () => {
+    let s = S.addSingular(S.emptyScene(), "source", [-0.5, 0], [0.5, 0], 0, 1);
+    s = S.addKeyframeSingular(s, 0.5, "sink", [0, 0.5]);
+    expect(S.singularPosition(s.elements![0] as S.SingularElement, 0.5)).toEqual([0, 0]);
+    const h = S.pick(s, 0.9, [0.4, 0.01], 0.1); // position at t = 0.9 is (0.4, 0)
+    expect(h).toEqual({ kind: "element", index: 0, point: 1 });
+    const moved = S.moveHandle(s, h!, [0.5, 0.4]);
+    expect((moved.elements![0] as S.SingularElement).path[1]).toEqual([0.5, 0.4, 1]);
+    expect(S.pick(s, 0.9, [0, 0.5], 0.1)).toBeUndefined(); // the key frame is at t = 0.5
+    const k = S.pick(s, 0.5, [0, 0.5], 0.1)!;
+    expect(k).toEqual({ kind: "keyframe", key: 0, index: 0 });
+    expect(S.removeHandle(s, k).keyframes).toEqual([]);
+    expect(S.removeHandle(s, h!).elements).toEqual([]);
+  });
+
+  it("map times and frames both ways", () => {
+    const s = S.emptyScene();
+    expect(S.frameTime(s, 99)).toBe(1);
+    expect(S.frameOf(s, S.frameTime(s, 37))).toBe(37);
+    expect(S.frameOf(s, 7)).toBe(99);
+  });
+
+  it("write the edits of DESIGN §7", () => {
+    expect(S.cancelEdit(40, [0.1, 0.2], [0.15, 0.22])).toEqual({ op: "cancel", frame: 40, pair: [[0.1, 0.2], [0.15, 0.22]] });
+    expect(S.removeBifurcationEdit([0.1, 0.2], 0.5)).toEqual({ op: "remove_bifurcation", at: [0.1, 0.2, 0.5] });
+    expect(S.moveBifurcationEdit([0, 0], 0.5, [0.1, 0], 0.6)).toEqual({ op: "move_bifurcation", at: [0, 0, 0.5], to: [0.1, 0, 0.6] });
+  });
+});
+
+describe("deformation", () => {
+  it("moves the design into the base field and keys streamlines by time", () => {
+    let s = S.addSingular(S.emptyScene(), "saddle", [0.4, 0.1], undefined, 0);
+    s = S.addDeformStreamline(s, [0, 0.6], [0, -0.2], 1, 0.8);
+    expect(s.generator).toBe("deform");
+    expect(s.elements).toEqual([]);
+    const d = s.deform as S.DeformBlock;
+    expect(d.base.elements).toHaveLength(1);
+    expect(d.streamlines).toEqual([{ seed: [0, 0.6], keys: [{ t: 1, translate: [0, -0.2], rotate: 0.8, scale: 1 }] }]);
+    s = S.addDeformStreamline(s, [0, 0.6], [0.1, 0], 0.5);
+    s = S.addDeformStreamline(s, [0, 0.6], [0.2, 0], 0.5); // same frame: replaced
+    expect((s.deform as S.DeformBlock).streamlines![0].keys.map((k) => k.t)).toEqual([0.5, 1]);
+    expect((s.deform as S.DeformBlock).base.elements).toHaveLength(1); // kept, not nested again
+    expect(() => S.addDeformStreamline(s, [0, 0], [0, 0], 0)).toThrow(/after the first frame/);
+  });
+
+  it("keys a rotation of the whole field from the first time to the last", () => {
+    const s = S.setDeformTransform(S.addSingular(S.emptyScene(), "source", [0, 0], undefined, 0), Math.PI);
+    expect((s.deform as S.DeformBlock).transform).toEqual([
+      { t: 0, sx: 1, sy: 1, theta: 0 },
+      { t: 1, sx: 1, sy: 1, theta: Math.PI },
+    ]);
+  });
+});
