@@ -5,6 +5,7 @@
 #include "edit_command.h"
 #include "progress.h"
 #include "render_command.h"
+#include "synth_command.h"
 
 #include "tvf/analysis/topology.h"
 #include "tvf/core/atomic_output.h"
@@ -246,6 +247,7 @@ int main(int argc, char** argv) {
 
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
   cli::RenderCommand render(app);
+  cli::SynthCommand synth(*app.get_subcommand("render"));
 
   try {
     app.parse(argc, argv);
@@ -258,6 +260,7 @@ int main(int argc, char** argv) {
     if (*analyze_cmd) return run_analyze(analyze);
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
     if (*edit_cmd) return cli::run_edit(edit);
+    if (synth.selected()) return synth.run();
     if (render.selected()) return render.run();
     if (*default_cmd) {
       std::fputs(cli::default_scene_text(), stdout);
