@@ -88,6 +88,14 @@ ExemplarIndex::ExemplarIndex(const Exemplar& exemplar, const ExemplarIndexOption
   Eigen::Map<Eigen::MatrixXf> R(reduced_values_.data(), reduced_, count_);
   R = B.transpose() * (all.colwise() - mean.cast<float>());
 
+  sorted_.resize(static_cast<size_t>(channels_));
+  for (int c = 0; c < channels_; ++c) {
+    auto& v = sorted_[static_cast<size_t>(c)];
+    for (size_t i = static_cast<size_t>(c); i < exemplar.pixels.size(); i += static_cast<size_t>(channels_))
+      v.push_back(exemplar.pixels[i]);
+    std::sort(v.begin(), v.end());
+  }
+
   tree_ = std::make_unique<Tree>();
   tree_->cloud = {reduced_values_.data(), static_cast<size_t>(count_), static_cast<size_t>(reduced_)};
   tree_->tree = std::make_unique<KdTree>(static_cast<int>(reduced_), tree_->cloud,
@@ -115,8 +123,8 @@ int ExemplarIndex::nearest(const float* query, float& distance2) const {
     projected[j] = s;
   }
   const int k = std::min({options_.candidates, kMaxCandidates, count_});
-  std::uint32_t index[kMaxCandidates];
-  float dist[kMaxCandidates];
+  std::uint32_t index[kMaxCandidates] = {};
+  float dist[kMaxCandidates] = {};
   nanoflann::KNNResultSet<float, std::uint32_t> result(static_cast<size_t>(k));
   result.init(index, dist);
   tree_->tree->findNeighbors(result, projected, nanoflann::SearchParams(32, options_.search_eps));
@@ -209,6 +217,20 @@ OptimizeReport optimize_texture(const Neighbourhoods& nb, const ExemplarIndex& i
         const size_t i = s * static_cast<size_t>(C) + static_cast<size_t>(c);
         const double m = acc[i] / wsum[s];
         x[i] = static_cast<float>(temporal ? (m + lambda * target[i]) / (1 + lambda) : m);
+      }
+    }
+    if (options.histogram_matching && samples > 1) {
+      std::vector<std::uint32_t> order(samples);
+      for (int c = 0; c < C; ++c) {
+        const auto& ex = index.sorted_channel(c);
+        for (size_t s = 0; s < samples; ++s) order[s] = static_cast<std::uint32_t>(s);
+        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+          return x[a * static_cast<size_t>(C) + static_cast<size_t>(c)] < x[b * static_cast<size_t>(C) + static_cast<size_t>(c)];
+        });
+        for (size_t k = 0; k < samples; ++k) {
+          const size_t e = std::min(ex.size() - 1, (2 * k + 1) * ex.size() / (2 * samples));
+          x[order[k] * static_cast<size_t>(C) + static_cast<size_t>(c)] = ex[e];
+        }
       }
     }
     double total = 0;

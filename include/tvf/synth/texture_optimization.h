@@ -15,6 +15,9 @@
 //  - M-step: every sample becomes the weighted average of what the matched exemplar
 //    neighbourhoods say about it (each tap splats its exemplar value with its
 //    interpolation weights), with Kwatra's robust weights ω_p = ‖x_p − z_p‖^(r−2), r = 0.8.
+// Averaging overlapping patches washes out contrast and colour; as in Kopf et al. 2007
+// (solid texture synthesis), each M-step ends with a histogram match: every channel of the
+// output is mapped monotonically (by rank) onto the exemplar's distribution of that channel.
 // Temporal coherence (Kwatra, Adalsteinsson, Kim, Kwatra, Carlson, Lin 2007): an optional
 // target x̃ (the previous frame advected by the flow) is blended in as a soft constraint,
 // x ← (x_M + λ·x̃)/(1 + λ).
@@ -68,6 +71,8 @@ public:
   int pca_dimensions() const { return reduced_; }
   double explained_variance() const { return explained_; }  // fraction kept by the PCA
   const Exemplar& exemplar() const { return exemplar_; }
+  // The exemplar's values of channel c, sorted ascending.
+  const std::vector<float>& sorted_channel(int c) const { return sorted_[static_cast<size_t>(c)]; }
 
   // The exemplar neighbourhood nearest to `query` (dimension() floats); its squared
   // distance in full dimension in `distance2`.
@@ -87,6 +92,7 @@ private:
   std::vector<float> mean_;                   // dimension
   std::vector<float> basis_;                  // reduced × dimension, rows orthonormal
   std::vector<float> reduced_values_;         // count × reduced
+  std::vector<std::vector<float>> sorted_;    // per channel
   std::unique_ptr<Tree> tree_;
 };
 
@@ -94,6 +100,7 @@ struct OptimizeOptions {
   int iterations = 3;
   double robust_exponent = 0.8;   // Kwatra's r (2: plain least squares)
   double temporal_weight = 0.0;   // λ of the soft target (0: none)
+  bool histogram_matching = true; // map each channel onto the exemplar's histogram (by rank)
 };
 
 struct OptimizeReport {
