@@ -108,6 +108,9 @@ Input load_input(const std::string& input_name, Progress& progress) {
 Exemplar exemplar_for(const std::string& name, int channels, int size, std::uint64_t seed) {
   std::error_code ec;
   if (!fs::exists(name, ec) && fs::path(name).extension().empty()) {
+    if (name != "stripes" && name != "pebbles" && name != "ridges" && name != "dunes")
+      throw Error(fmt::format("--exemplar {}: no such picture, and not a procedural exemplar "
+                              "(stripes, pebbles, ridges or dunes)", name));
     const ProceduralExemplar kind = parse_procedural_exemplar(name);
     Exemplar e = make_procedural_exemplar(kind, size, seed);
     if (e.channels != channels)
