@@ -66,11 +66,13 @@ ExemplarIndex::ExemplarIndex(const Exemplar& exemplar, const ExemplarIndexOption
             *v++ = exemplar.at((x0 + c) % exemplar.width, (y0 + r) % exemplar.height, k);
     }
 
-  // PCA of the neighbourhood vectors.
+  // PCA of the neighbourhood vectors (in double; the centred matrix is formed explicitly,
+  // not as a broadcast expression inside a product).
   const auto D = static_cast<Eigen::Index>(dimension_);
   const Eigen::Map<const Eigen::MatrixXf> all(values_.data(), D, count_);  // one column each
-  const Eigen::VectorXd mean = all.cast<double>().rowwise().mean();
-  Eigen::MatrixXd centred = all.cast<double>().colwise() - mean;
+  Eigen::MatrixXd centred = all.cast<double>();
+  const Eigen::VectorXd mean = centred.rowwise().mean();
+  for (Eigen::Index m = 0; m < centred.cols(); ++m) centred.col(m) -= mean;
   const Eigen::MatrixXd cov = centred * centred.transpose() / std::max(1, count_);
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(cov);
   reduced_ = std::min(options.pca_dimensions, dimension_);
@@ -83,10 +85,12 @@ ExemplarIndex::ExemplarIndex(const Exemplar& exemplar, const ExemplarIndexOption
   for (int j = 0; j < reduced_; ++j)
     for (int i = 0; i < dimension_; ++i)
       basis_[static_cast<size_t>(j) * static_cast<size_t>(dimension_) + static_cast<size_t>(i)] = static_cast<float>(top(i, j));
+  // The reduced vectors, as a query is reduced (nearest()): float basis, float difference.
   const Eigen::Map<const Eigen::MatrixXf> B(basis_.data(), D, reduced_);  // column j = basis row j
   reduced_values_.resize(static_cast<size_t>(count_) * static_cast<size_t>(reduced_));
   Eigen::Map<Eigen::MatrixXf> R(reduced_values_.data(), reduced_, count_);
-  R = B.transpose() * (all.colwise() - mean.cast<float>());
+  const Eigen::MatrixXf centred_f = centred.cast<float>();
+  R.noalias() = B.transpose() * centred_f;
 
   sorted_.resize(static_cast<size_t>(channels_));
   for (int c = 0; c < channels_; ++c) {
