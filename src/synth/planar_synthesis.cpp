@@ -58,6 +58,7 @@ struct PlanarSynthesizer::Impl {
     Neighbourhoods nb;
     std::vector<float> x;
     std::vector<float> target;
+    std::vector<int> match;  // the last matches of the neighbourhoods (search hints)
   };
 
   const TangentBundle& bundle;
@@ -306,7 +307,7 @@ struct PlanarSynthesizer::Impl {
           L.x = upsample(levels[static_cast<size_t>(l) + 1], levels[static_cast<size_t>(l) + 1].x, L);
         update_field(L, values);
         build_neighbourhoods(L);
-        last = optimize_texture(L.nb, *indices[static_cast<size_t>(l)], L.x, {}, opt);
+        last = optimize_texture(L.nb, *indices[static_cast<size_t>(l)], L.x, {}, opt, &L.match);
       }
       report.levels = o.levels;
       started = true;
@@ -336,7 +337,7 @@ struct PlanarSynthesizer::Impl {
         }
         if (l > 0) update_field(L, values);
         build_neighbourhoods(L);
-        last = optimize_texture(L.nb, *indices[static_cast<size_t>(l)], L.x, L.target, opt);
+        last = optimize_texture(L.nb, *indices[static_cast<size_t>(l)], L.x, L.target, opt, &L.match);
       }
       report.levels = F;
     }

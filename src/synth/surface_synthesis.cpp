@@ -43,6 +43,8 @@ struct SurfaceSynthesizer::Impl {
   std::vector<Exemplar> exemplars;
   std::vector<std::unique_ptr<ExemplarIndex>> indices;
   std::vector<Neighbourhoods> nbs;
+  std::vector<std::vector<int>> matches;   // per level: the last match of each vertex (search hints)
+  std::vector<std::vector<cplx>> built;    // per level: the direction each vertex's grid was walked for
   std::vector<SurfacePoint> vertex_point;  // each vertex as a point of its first face
   std::vector<int> vertex_halfedge;        // the halfedge leaving it in that face
   std::vector<float> x, target;
@@ -93,6 +95,8 @@ struct SurfaceSynthesizer::Impl {
       indices.push_back(std::make_unique<ExemplarIndex>(ex, io));
     }
     nbs.resize(static_cast<size_t>(o.levels));
+    matches.resize(static_cast<size_t>(o.levels));
+    built.resize(static_cast<size_t>(o.levels));
 
     const int nv = mesh.num_vertices();
     vertex_point.resize(static_cast<size_t>(nv));
@@ -130,16 +134,24 @@ struct SurfaceSynthesizer::Impl {
     return values;
   }
 
-  // Neighbourhoods of one level: a walked grid around every vertex.
+  // Neighbourhoods of one level: a walked grid around every vertex. A grid is walked again
+  // only where the field's direction turned by more than kRewalk radians since it was last
+  // walked (its corner taps then move by less than R·√2·kRewalk ≈ 0.1 spacing at R = 3):
+  // walking is most of a surface frame's cost, and most directions change slowly.
+  static constexpr double kRewalk = 0.025;
   void build_neighbourhoods(int level, const std::vector<cplx>& values) {
     const Mesh& mesh = bundle.mesh();
     const int w = o.neighbourhood, R = w / 2;
     const double spacing = texel_ * std::ldexp(1.0, level);
     const double floor = 1e-12 * std::max(p90, 1e-300);
     Neighbourhoods& nb = nbs[static_cast<size_t>(level)];
-    nb.size = w;
     const int nv = mesh.num_vertices();
-    nb.taps.resize(static_cast<size_t>(nv) * static_cast<size_t>(w * w));
+    std::vector<cplx>& dirs = built[static_cast<size_t>(level)];
+    if (nb.size != w || dirs.size() != static_cast<size_t>(nv)) {
+      nb.size = w;
+      nb.taps.assign(static_cast<size_t>(nv) * static_cast<size_t>(w * w), Tap{});
+      dirs.assign(static_cast<size_t>(nv), cplx(0, 0));  // not a unit vector: walked on first use
+    }
     tbb::parallel_for(tbb::blocked_range<int>(0, nv, 64), [&](const tbb::blocked_range<int>& range) {
       std::vector<SurfacePoint> column_point(static_cast<size_t>(w));
       std::vector<cplx> column_frame(static_cast<size_t>(w));  // start-frame vectors → that point's face frame
@@ -147,6 +159,8 @@ struct SurfaceSynthesizer::Impl {
         const SurfacePoint& start = vertex_point[static_cast<size_t>(v)];
         const cplx z = values[static_cast<size_t>(v)] * bundle.corner_to_face(vertex_halfedge[static_cast<size_t>(v)]);
         const cplx u = std::abs(z) > floor ? z / std::abs(z) : cplx(1, 0);
+        if (std::abs(u - dirs[static_cast<size_t>(v)]) < kRewalk) continue;
+        dirs[static_cast<size_t>(v)] = u;
         const cplx du = u * spacing;
         const cplx dv = cplx(0, -1) * u * spacing;  // clockwise: the exemplar's y
         // Along the row through the centre, both ways.
@@ -211,7 +225,7 @@ struct SurfaceSynthesizer::Impl {
       opt.iterations = o.iterations_first;
       for (int l = o.levels - 1; l >= 0; --l) {
         build_neighbourhoods(l, values);
-        last = optimize_texture(nbs[static_cast<size_t>(l)], *indices[static_cast<size_t>(l)], x, {}, opt);
+        last = optimize_texture(nbs[static_cast<size_t>(l)], *indices[static_cast<size_t>(l)], x, {}, opt, &matches[static_cast<size_t>(l)]);
       }
       report.levels = o.levels;
       started = true;
@@ -222,7 +236,7 @@ struct SurfaceSynthesizer::Impl {
       opt.temporal_weight = o.temporal_weight;
       for (int l = o.frame_levels - 1; l >= 0; --l) {
         build_neighbourhoods(l, values);
-        last = optimize_texture(nbs[static_cast<size_t>(l)], *indices[static_cast<size_t>(l)], x, target, opt);
+        last = optimize_texture(nbs[static_cast<size_t>(l)], *indices[static_cast<size_t>(l)], x, target, opt, &matches[static_cast<size_t>(l)]);
       }
       report.levels = o.frame_levels;
     }

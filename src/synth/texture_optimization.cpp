@@ -7,9 +7,13 @@
 #include <nanoflann.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <random>
 
 namespace tvf {
@@ -108,11 +112,26 @@ ExemplarIndex::ExemplarIndex(const Exemplar& exemplar, const ExemplarIndexOption
 
 ExemplarIndex::~ExemplarIndex() = default;
 
-int ExemplarIndex::nearest(const float* query, float& distance2) const {
+int ExemplarIndex::nearest(const float* query, float& distance2, int hint) const {
   constexpr int kMaxCandidates = 16;
   float projected[256];
   float diff[1024];
   TVF_CHECK(reduced_ <= 256, "reduced dimension {}", reduced_);
+  auto full_distance = [&](int m) {
+    const float* v = values(m);
+    float d = 0;
+    for (int i = 0; i < dimension_; ++i) {
+      const float e = query[i] - v[i];
+      d += e * e;
+    }
+    return d;
+  };
+  int best = -1;
+  float best_d = std::numeric_limits<float>::max();
+  if (hint >= 0 && hint < count_) {
+    best = hint;
+    best_d = full_distance(hint);
+  }
   // Project (query − mean) onto the basis.
   const bool small = dimension_ <= 1024;
   for (int i = 0; i < dimension_ && small; ++i) diff[i] = query[i] - mean_[static_cast<size_t>(i)];
@@ -131,28 +150,38 @@ int ExemplarIndex::nearest(const float* query, float& distance2) const {
   float dist[kMaxCandidates] = {};
   nanoflann::KNNResultSet<float, std::uint32_t> result(static_cast<size_t>(k));
   result.init(index, dist);
+  // The hint's full distance bounds the search (KNNResultSet prunes by its last slot).
+  if (best >= 0) dist[k - 1] = best_d;
   tree_->tree->findNeighbors(result, projected, nanoflann::SearchParams(32, options_.search_eps));
   const int found = static_cast<int>(result.size());
-  int best = static_cast<int>(index[0]);
-  float best_d = std::numeric_limits<float>::max();
   for (int c = 0; c < found; ++c) {
-    const float* v = values(static_cast<int>(index[c]));
-    float d = 0;
-    for (int i = 0; i < dimension_; ++i) {
-      const float e = query[i] - v[i];
-      d += e * e;
-    }
+    const int m = static_cast<int>(index[c]);
+    if (m == best) continue;
+    const float d = full_distance(m);
     if (d < best_d) {
       best_d = d;
-      best = static_cast<int>(index[c]);
+      best = m;
     }
+  }
+  if (best < 0) {  // nothing found (cannot happen without a bound): the first neighbourhood
+    best = 0;
+    best_d = full_distance(0);
   }
   distance2 = best_d;
   return best;
 }
 
+namespace {
+
+// Output neighbourhoods are split into this many blocks for the M-step's splatting, each
+// into its own accumulator, summed in a fixed order: the same result on any thread count.
+constexpr int kSplatBlocks = 4;
+
+}  // namespace
+
 OptimizeReport optimize_texture(const Neighbourhoods& nb, const ExemplarIndex& index, std::vector<float>& x,
-                                const std::vector<float>& target, const OptimizeOptions& options) {
+                                const std::vector<float>& target, const OptimizeOptions& options,
+                                std::vector<int>* matches) {
   TVF_CHECK(nb.size == index.size(), "neighbourhood size {} vs index {}", nb.size, index.size());
   const int C = index.channels();
   const int K = nb.size * nb.size;
@@ -163,28 +192,31 @@ OptimizeReport optimize_texture(const Neighbourhoods& nb, const ExemplarIndex& i
   const bool temporal = !target.empty() && options.temporal_weight > 0;
   if (temporal) TVF_CHECK(target.size() == x.size(), "target {} vs x {}", target.size(), x.size());
   OptimizeReport report;
-  std::vector<int> match(static_cast<size_t>(count));
+  std::vector<int> match(static_cast<size_t>(count), -1);
+  if (matches && matches->size() == match.size())
+    for (size_t p = 0; p < match.size(); ++p) match[p] = std::clamp((*matches)[p], -1, index.count() - 1);
   std::vector<float> omega(static_cast<size_t>(count)), dist(static_cast<size_t>(count));
-  std::vector<double> acc(x.size()), wsum(samples);
+  const size_t values_per_block = x.size() + samples;  // C accumulators and a weight per sample
+  std::vector<float> blocks(static_cast<size_t>(kSplatBlocks) * values_per_block);
   const double exponent = (options.robust_exponent - 2.0) / 2.0;  // on squared distances
   for (int it = 0; it < options.iterations; ++it) {
-    // E-step.
+    // E-step (the last match of each neighbourhood is the search's hint).
     tbb::parallel_for(tbb::blocked_range<int>(0, count, 256), [&](const tbb::blocked_range<int>& range) {
       std::vector<float> q(static_cast<size_t>(D));
       for (int p = range.begin(); p < range.end(); ++p) {
         const Tap* taps = nb.taps.data() + static_cast<size_t>(p) * static_cast<size_t>(K);
         for (int k = 0; k < K; ++k) {
           const Tap& t = taps[k];
-          for (int c = 0; c < C; ++c) {
-            float s = 0;
-            for (int i = 0; i < 4; ++i)
-              if (t.weight[static_cast<size_t>(i)] != 0.f)
-                s += t.weight[static_cast<size_t>(i)] * x[static_cast<size_t>(t.sample[static_cast<size_t>(i)]) * static_cast<size_t>(C) + static_cast<size_t>(c)];
-            q[static_cast<size_t>(k * C + c)] = s;
-          }
+          // Unused slots have weight 0 and a valid sample: no branch.
+          const float* x0 = x.data() + static_cast<size_t>(t.sample[0]) * static_cast<size_t>(C);
+          const float* x1 = x.data() + static_cast<size_t>(t.sample[1]) * static_cast<size_t>(C);
+          const float* x2 = x.data() + static_cast<size_t>(t.sample[2]) * static_cast<size_t>(C);
+          const float* x3 = x.data() + static_cast<size_t>(t.sample[3]) * static_cast<size_t>(C);
+          for (int c = 0; c < C; ++c)
+            q[static_cast<size_t>(k * C + c)] = t.weight[0] * x0[c] + t.weight[1] * x1[c] + t.weight[2] * x2[c] + t.weight[3] * x3[c];
         }
         float d2 = 0;
-        match[static_cast<size_t>(p)] = index.nearest(q.data(), d2);
+        match[static_cast<size_t>(p)] = index.nearest(q.data(), d2, match[static_cast<size_t>(p)]);
         dist[static_cast<size_t>(p)] = d2;
         // Robust weight of the per-value RMS distance (floored so that exact matches do
         // not take over).
@@ -192,50 +224,65 @@ OptimizeReport optimize_texture(const Neighbourhoods& nb, const ExemplarIndex& i
         omega[static_cast<size_t>(p)] = static_cast<float>(std::pow(rms2, exponent));
       }
     });
-    // M-step: splat the matched exemplar values.
-    std::fill(acc.begin(), acc.end(), 0.0);
-    std::fill(wsum.begin(), wsum.end(), 0.0);
-    for (int p = 0; p < count; ++p) {
-      const Tap* taps = nb.taps.data() + static_cast<size_t>(p) * static_cast<size_t>(K);
-      const float* z = index.values(match[static_cast<size_t>(p)]);
-      const double om = omega[static_cast<size_t>(p)];
-      for (int k = 0; k < K; ++k) {
-        const Tap& t = taps[k];
-        for (int i = 0; i < 4; ++i) {
-          const double w = om * t.weight[static_cast<size_t>(i)];
-          if (w == 0) continue;
-          const auto s = static_cast<size_t>(t.sample[static_cast<size_t>(i)]);
-          wsum[s] += w;
-          for (int c = 0; c < C; ++c) acc[s * static_cast<size_t>(C) + static_cast<size_t>(c)] += w * z[k * C + c];
+    // M-step: splat the matched exemplar values, block by block in parallel.
+    tbb::parallel_for(0, kSplatBlocks, [&](int b) {
+      float* acc = blocks.data() + static_cast<size_t>(b) * values_per_block;
+      float* wsum = acc + x.size();
+      std::fill(acc, acc + values_per_block, 0.f);
+      const int p0 = static_cast<int>(static_cast<long>(count) * b / kSplatBlocks);
+      const int p1 = static_cast<int>(static_cast<long>(count) * (b + 1) / kSplatBlocks);
+      for (int p = p0; p < p1; ++p) {
+        const Tap* taps = nb.taps.data() + static_cast<size_t>(p) * static_cast<size_t>(K);
+        const float* z = index.values(match[static_cast<size_t>(p)]);
+        const float om = omega[static_cast<size_t>(p)];
+        for (int k = 0; k < K; ++k) {
+          const Tap& t = taps[k];
+          for (int i = 0; i < 4; ++i) {
+            const float w = om * t.weight[static_cast<size_t>(i)];
+            if (w == 0) continue;
+            const auto s = static_cast<size_t>(t.sample[static_cast<size_t>(i)]);
+            wsum[s] += w;
+            for (int c = 0; c < C; ++c) acc[s * static_cast<size_t>(C) + static_cast<size_t>(c)] += w * z[k * C + c];
+          }
         }
       }
-    }
-    size_t uncovered = 0;
+    });
     const double lambda = temporal ? options.temporal_weight : 0.0;
-    for (size_t s = 0; s < samples; ++s) {
-      if (wsum[s] <= 0) {
-        ++uncovered;
-        continue;
-      }
-      for (int c = 0; c < C; ++c) {
-        const size_t i = s * static_cast<size_t>(C) + static_cast<size_t>(c);
-        const double m = acc[i] / wsum[s];
-        x[i] = static_cast<float>(temporal ? (m + lambda * target[i]) / (1 + lambda) : m);
-      }
-    }
+    const size_t uncovered = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, samples, 4096), size_t{0},
+        [&](const tbb::blocked_range<size_t>& range, size_t n) {
+          for (size_t s = range.begin(); s < range.end(); ++s) {
+            double w = 0;
+            for (int b = 0; b < kSplatBlocks; ++b) w += blocks[static_cast<size_t>(b) * values_per_block + x.size() + s];
+            if (w <= 0) {
+              ++n;
+              continue;
+            }
+            for (int c = 0; c < C; ++c) {
+              const size_t i = s * static_cast<size_t>(C) + static_cast<size_t>(c);
+              double a = 0;
+              for (int b = 0; b < kSplatBlocks; ++b) a += blocks[static_cast<size_t>(b) * values_per_block + i];
+              const double m = a / w;
+              x[i] = static_cast<float>(temporal ? (m + lambda * target[i]) / (1 + lambda) : m);
+            }
+          }
+          return n;
+        },
+        std::plus<size_t>());
     if (options.histogram_matching && samples > 1) {
-      std::vector<std::uint32_t> order(samples);
-      for (int c = 0; c < C; ++c) {
+      // Each channel by rank onto the exemplar's sorted values (channels in parallel; ties
+      // broken by sample index so that the result is deterministic).
+      tbb::parallel_for(0, C, [&](int c) {
         const auto& ex = index.sorted_channel(c);
-        for (size_t s = 0; s < samples; ++s) order[s] = static_cast<std::uint32_t>(s);
-        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-          return x[a * static_cast<size_t>(C) + static_cast<size_t>(c)] < x[b * static_cast<size_t>(C) + static_cast<size_t>(c)];
-        });
+        std::vector<std::pair<float, std::uint32_t>> order(samples);
+        for (size_t s = 0; s < samples; ++s)
+          order[s] = {x[s * static_cast<size_t>(C) + static_cast<size_t>(c)], static_cast<std::uint32_t>(s)};
+        tbb::parallel_sort(order.begin(), order.end());
         for (size_t k = 0; k < samples; ++k) {
           const size_t e = std::min(ex.size() - 1, (2 * k + 1) * ex.size() / (2 * samples));
-          x[order[k] * static_cast<size_t>(C) + static_cast<size_t>(c)] = ex[e];
+          x[order[k].second * static_cast<size_t>(C) + static_cast<size_t>(c)] = ex[e];
         }
-      }
+      });
     }
     double total = 0;
     for (float d : dist) total += d;
@@ -243,6 +290,7 @@ OptimizeReport optimize_texture(const Neighbourhoods& nb, const ExemplarIndex& i
     report.uncovered = samples > 0 ? static_cast<double>(uncovered) / static_cast<double>(samples) : 0.0;
     report.iterations = it + 1;
   }
+  if (matches) *matches = match;
   return report;
 }
 

@@ -46,9 +46,9 @@ struct SynthesisOptions {
                                 // 0: size / 256 planar, 1 texel on surfaces
   double texel = 0;              // surfaces: world length of one exemplar pixel; 0: the
                                 // mesh's mean edge length
-  int pca_dimensions = 24;
-  int candidates = 4;
-  float search_eps = 0.5f;
+  int pca_dimensions = 16;     // search: PCA dimensions, kd-tree candidates re-ranked in full,
+  int candidates = 4;          // and nanoflann's approximation (synth/texture_optimization.h)
+  float search_eps = 1.0f;
   std::uint64_t seed = 1;
   std::uint32_t background = 0x00FFFFFF;
 };

@@ -48,9 +48,9 @@ struct Neighbourhoods {
 
 struct ExemplarIndexOptions {
   int size = 7;             // neighbourhood size (odd, at least 3)
-  int pca_dimensions = 24;  // dimensions kept by PCA (at most size²·channels)
+  int pca_dimensions = 16;  // dimensions kept by PCA (at most size²·channels)
   int candidates = 4;       // kd-tree candidates ranked in full dimension
-  float search_eps = 0.5f;  // nanoflann's approximate search: distances within (1 + eps)
+  float search_eps = 1.0f;  // nanoflann's approximate search: distances within (1 + eps)
 };
 
 // Every neighbourhood of one exemplar (wrapping around when it is tileable), their PCA
@@ -75,8 +75,11 @@ public:
   const std::vector<float>& sorted_channel(int c) const { return sorted_[static_cast<size_t>(c)]; }
 
   // The exemplar neighbourhood nearest to `query` (dimension() floats); its squared
-  // distance in full dimension in `distance2`.
-  int nearest(const float* query, float& distance2) const;
+  // distance in full dimension in `distance2`. `hint` (≥ 0), a neighbourhood that is
+  // probably close (the last match of this output neighbourhood), is a candidate itself
+  // and bounds the kd-tree search: the reduced distance is at most the full one, so no
+  // point farther than the hint in reduced space can beat it — pruning that loses nothing.
+  int nearest(const float* query, float& distance2, int hint = -1) const;
   // The values of exemplar neighbourhood m (dimension() floats) and its top-left pixel.
   const float* values(int m) const { return values_.data() + static_cast<size_t>(m) * static_cast<size_t>(dimension_); }
   std::array<int, 2> position(int m) const { return positions_[static_cast<size_t>(m)]; }
@@ -113,10 +116,13 @@ struct OptimizeReport {
 };
 
 // Runs `options.iterations` E/M steps on x (num_samples × channels, interleaved).
-// `target` (same layout) is the soft temporal target, or empty. Thread-parallel (TBB).
+// `target` (same layout) is the soft temporal target, or empty. `matches`, when given,
+// holds the exemplar neighbourhood matched to each output neighbourhood: used as search
+// hints when it has one per neighbourhood (the last frame's matches), and set to the last
+// E-step's. Thread-parallel (TBB); the result does not depend on the number of threads.
 OptimizeReport optimize_texture(const Neighbourhoods& neighbourhoods, const ExemplarIndex& index,
                                 std::vector<float>& x, const std::vector<float>& target,
-                                const OptimizeOptions& options);
+                                const OptimizeOptions& options, std::vector<int>* matches = nullptr);
 
 // Fills x (num_samples × channels) with exemplar pixels picked at random: the usual
 // starting point of the coarsest level.
