@@ -61,7 +61,7 @@ SynthCommand::SynthCommand(CLI::App& render) {
       ->check(CLI::IsMember({"obj", "ply"}));
   terrain_->add_option("--mesh-resolution", mesh_resolution_, "Planar: vertices on the long side of each mesh")
       ->capture_default_str();
-  terrain_->add_option("--height-scale", height_scale_,
+  height_scale_option_ = terrain_->add_option("--height-scale", height_scale_,
                        "Height 1 as a fraction of the domain (planar: long side, default 0.1; surfaces: "
                        "bounding-box diagonal, default 0.03)");
   terrain_->add_option("--relief", relief_, "Planar pictures: hillshade exaggeration (default: size/8)");
@@ -122,9 +122,36 @@ Exemplar exemplar_for(const std::string& name, int channels, int size, std::uint
   return load_exemplar(name, channels);
 }
 
+// The library names its options as in SynthesisOptions ("synthesis option frame_levels:
+// …"); on the command line the sentence names the flag the user typed.
+[[noreturn]] void rethrow_with_flag_names(const Error& e) {
+  static const std::pair<const char*, const char*> flags[] = {
+      {"size", "--size"}, {"levels", "--levels"}, {"frame_levels", "--frame-levels"},
+      {"neighbourhood", "--neighbourhood"}, {"stride", "--stride"}, {"iterations_first", "--first-iterations"},
+      {"iterations", "--iterations"}, {"temporal_weight", "--temporal-weight"}, {"pixels_per_frame", "--speed"},
+      {"texel", "--texel"}, {"relief", "--relief"}, {"height_scale", "--height-scale"},
+      {"mesh_resolution", "--mesh-resolution"}};
+  const std::string message = e.what();
+  const std::string prefix = "synthesis option ";
+  if (message.rfind(prefix, 0) == 0)
+    for (const auto& [name, flag] : flags) {
+      const std::string key = prefix + name + ":";
+      if (message.rfind(key, 0) == 0) throw Error(flag + message.substr(key.size() - 1));
+    }
+  throw e;
+}
+
 }  // namespace
 
 int SynthCommand::run() {
+  try {
+    return run_checked();
+  } catch (const Error& e) {
+    rethrow_with_flag_names(e);
+  }
+}
+
+int SynthCommand::run_checked() {
   const bool terrain = terrain_->parsed();
   const char* label = terrain ? "tvf render terrain" : "tvf render synth";
   Progress progress(label, !quiet_ && progress_wanted());
@@ -168,7 +195,7 @@ int SynthCommand::run() {
     options.meshes_dir = meshes_;
     if (!mesh_format_.empty()) options.mesh_format = mesh_format_;
     options.mesh_resolution = mesh_resolution_;
-    if (height_scale_ >= 0) options.height_scale = height_scale_;
+    if (height_scale_option_->count() > 0) options.height_scale = height_scale_;
     options.fps = fps_;
     options.progress = [&](int done, int total) { progress.update(done, total); };
     if (!terrain && !meshes_.empty())
@@ -184,7 +211,7 @@ int SynthCommand::run() {
     options.terrain = terrain;
     options.meshes_dir = meshes_;
     if (!mesh_format_.empty()) options.mesh_format = mesh_format_;
-    if (height_scale_ >= 0) options.height_scale = height_scale_;
+    if (height_scale_option_->count() > 0) options.height_scale = height_scale_;
     options.fps = fps_;
     options.progress = [&](int done, int total) { progress.update(done, total); };
     report = write_surface_synthesis(bundle, in.field, exemplar, options);

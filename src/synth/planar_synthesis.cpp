@@ -420,7 +420,11 @@ SynthesisAnimationReport write_planar_synthesis(const TangentBundle& bundle, con
   if (!options.meshes_dir.empty() && !options.terrain)
     throw Error("meshes per frame are written for terrain (a height-map exemplar) only");
   if (options.terrain && exemplar.channels != 1) throw Error("terrain needs a 1-channel (height) exemplar");
-  check_option(std::isfinite(options.relief) && options.relief >= 0, "relief", "must be at least 0");
+  check_option(std::isfinite(options.relief) && options.relief >= 0, "relief", fmt::format("{} must be at least 0", options.relief));
+  check_option(std::isfinite(options.height_scale) && options.height_scale >= 0 && options.height_scale <= 10,
+               "height_scale", fmt::format("{} is outside [0, 10]", options.height_scale));
+  check_option(options.mesh_resolution >= 2 && options.mesh_resolution <= 4096, "mesh_resolution",
+               fmt::format("{} is outside [2, 4096]", options.mesh_resolution));
   PlanarSynthesizer synth(bundle, field, exemplar, options.synthesis);
   const int frames = options.frames > 0 ? options.frames : field.frames();
   const TimeSampling& ts = field.time();

@@ -289,7 +289,7 @@ SynthesisAnimationReport write_surface_synthesis(const TangentBundle& bundle, co
   if (!options.terrain && options.mesh_format != "ply")
     throw Error(fmt::format("mesh format '{}': coloured surfaces are written as PLY only", options.mesh_format));
   if (!std::isfinite(options.height_scale) || options.height_scale < 0 || options.height_scale > 1)
-    throw Error(fmt::format("height scale {}: must be in [0, 1]", options.height_scale));
+    throw Error(fmt::format("synthesis option height_scale: {} is outside [0, 1]", options.height_scale));
   SurfaceSynthesizer synth(bundle, field, exemplar, options.synthesis);
   const Mesh& mesh = bundle.mesh();
   const int frames = options.frames > 0 ? options.frames : field.frames();
