@@ -12,9 +12,11 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <random>
 
 namespace tvf {
 
@@ -59,6 +61,7 @@ struct PlanarSynthesizer::Impl {
     std::vector<float> x;
     std::vector<float> target;
     std::vector<int> match;  // the last matches of the neighbourhoods (search hints)
+    std::vector<float> target_weight;  // per pixel: factor of the temporal weight
   };
 
   const TangentBundle& bundle;
@@ -259,24 +262,80 @@ struct PlanarSynthesizer::Impl {
     return out;
   }
 
-  std::vector<float> downsample_grid(const Level& fine, const std::vector<float>& g, const Level& coarse) const {
-    std::vector<float> out(static_cast<size_t>(coarse.w) * static_cast<size_t>(coarse.h) * static_cast<size_t>(C));
+  // Area stretch of the carried texture (Kwatra et al. 2007 keep it in check by the
+  // optimization alone; with few iterations per frame a source inflates pebbles into flat
+  // blobs and a sink squeezes them into spokes, which the local neighbourhoods cannot see).
+  // `stretch` is the area factor each pixel's texture has gone through since it was
+  // synthesized: carried with the texture and multiplied by exp(div v · dt). Where it
+  // leaves [1/s_p, s_p] — s_p a fixed random threshold per pixel in [1.6, 2.6], so that a
+  // region is not re-seeded all at once — the carried value is replaced by a random
+  // exemplar pixel and the pixel's temporal weight set to 0 for this frame (the
+  // optimization then synthesizes it afresh), and its stretch starts again at 1.
+  std::vector<float> stretch, stretch_limit, reseeded_weight;
+  std::uint64_t frame_count = 0;
+  double reseeded_fraction = 0;
+
+  void reseed_stretched(const Level& L, std::vector<float>& advected, double dt) {
+    const size_t n = static_cast<size_t>(L.w) * static_cast<size_t>(L.h);
+    if (stretch.size() != n) {
+      stretch.assign(n, 1.f);
+      stretch_limit.resize(n);
+      std::mt19937_64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
+      std::uniform_real_distribution<float> u(1.6f, 2.6f);
+      for (auto& v : stretch_limit) v = u(rng);
+    }
+    std::vector<float> carried = advect(L, stretch, dt, 1);
+    reseeded_weight.assign(n, 1.f);
+    std::vector<float> fresh;
+    random_exemplar_pixels(exemplars[0], static_cast<int>(n), o.seed + ++frame_count, fresh);
+    std::atomic<size_t> reseeded{0};
+    tbb::parallel_for(tbb::blocked_range<int>(0, L.h), [&](const tbb::blocked_range<int>& rows) {
+      size_t local = 0;
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        for (int i = 0; i < L.w; ++i) {
+          const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
+          auto vel = [&](int a, int b, int c) {
+            return L.vel[2 * (static_cast<size_t>(std::clamp(b, 0, L.h - 1)) * static_cast<size_t>(L.w) +
+                              static_cast<size_t>(std::clamp(a, 0, L.w - 1))) + static_cast<size_t>(c)];
+          };
+          const double div = 0.5 * (vel(i + 1, j, 0) - vel(i - 1, j, 0)) + 0.5 * (vel(i, j + 1, 1) - vel(i, j - 1, 1));
+          float s = carried[k] * static_cast<float>(std::exp(std::clamp(div * dt, -1.0, 1.0)));
+          const float limit = stretch_limit[k];
+          if (L.face[k] >= 0 && (s > limit || s < 1.f / limit)) {
+            for (int c = 0; c < C; ++c)
+              advected[k * static_cast<size_t>(C) + static_cast<size_t>(c)] = fresh[k * static_cast<size_t>(C) + static_cast<size_t>(c)];
+            reseeded_weight[k] = 0.f;
+            s = 1.f;
+            ++local;
+          }
+          stretch[k] = s;
+        }
+      reseeded += local;
+    });
+    reseeded_fraction = static_cast<double>(reseeded.load()) / static_cast<double>(n);
+  }
+
+  std::vector<float> downsample_grid(const Level& fine, const std::vector<float>& g, const Level& coarse,
+                                     int channels = 0) const {
+    const int nc = channels > 0 ? channels : C;
+    std::vector<float> out(static_cast<size_t>(coarse.w) * static_cast<size_t>(coarse.h) * static_cast<size_t>(nc));
     for (int j = 0; j < coarse.h; ++j)
       for (int i = 0; i < coarse.w; ++i)
-        for (int c = 0; c < C; ++c) {
+        for (int c = 0; c < nc; ++c) {
           float s = 0;
           for (int dj = 0; dj < 2; ++dj)
             for (int di = 0; di < 2; ++di) {
               const int x = std::min(2 * i + di, fine.w - 1), y = std::min(2 * j + dj, fine.h - 1);
-              s += g[(static_cast<size_t>(y) * static_cast<size_t>(fine.w) + static_cast<size_t>(x)) * static_cast<size_t>(C) + static_cast<size_t>(c)];
+              s += g[(static_cast<size_t>(y) * static_cast<size_t>(fine.w) + static_cast<size_t>(x)) * static_cast<size_t>(nc) + static_cast<size_t>(c)];
             }
-          out[(static_cast<size_t>(j) * static_cast<size_t>(coarse.w) + static_cast<size_t>(i)) * static_cast<size_t>(C) + static_cast<size_t>(c)] = 0.25f * s;
+          out[(static_cast<size_t>(j) * static_cast<size_t>(coarse.w) + static_cast<size_t>(i)) * static_cast<size_t>(nc) + static_cast<size_t>(c)] = 0.25f * s;
         }
     return out;
   }
 
   // The finest level advected from time t0 to t1 (backward semi-Lagrangian, midpoint rule).
-  std::vector<float> advect(const Level& L, const std::vector<float>& g, double dt) const {
+  std::vector<float> advect(const Level& L, const std::vector<float>& g, double dt, int channels = 0) const {
+    const int nc = channels > 0 ? channels : C;
     std::vector<float> out(g.size());
     tbb::parallel_for(tbb::blocked_range<int>(0, L.h), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j)
@@ -286,7 +345,7 @@ struct PlanarSynthesizer::Impl {
           const double mx = i - 0.5 * v1x, my = j - 0.5 * v1y;
           const double v2x = bilinear(L.vel, L.w, L.h, 2, 0, mx, my) * dt;
           const double v2y = bilinear(L.vel, L.w, L.h, 2, 1, mx, my) * dt;
-          for (int c = 0; c < C; ++c) out[k * static_cast<size_t>(C) + static_cast<size_t>(c)] = bilinear(g, L.w, L.h, C, c, i - v2x, j - v2y);
+          for (int c = 0; c < nc; ++c) out[k * static_cast<size_t>(nc) + static_cast<size_t>(c)] = bilinear(g, L.w, L.h, nc, c, i - v2x, j - v2y);
         }
     });
     return out;
@@ -317,15 +376,21 @@ struct PlanarSynthesizer::Impl {
       Level& L0 = levels[0];
       update_field(L0, values);
       std::vector<float> advected = advect(L0, L0.x, tt - t);
+      reseed_stretched(L0, advected, tt - t);
       const int F = o.frame_levels;
       levels[0].target = std::move(advected);
-      for (int l = 1; l < F; ++l)
-        levels[static_cast<size_t>(l)].target =
-            downsample_grid(levels[static_cast<size_t>(l) - 1], levels[static_cast<size_t>(l) - 1].target, levels[static_cast<size_t>(l)]);
+      levels[0].target_weight = reseeded_weight;
+      for (int l = 1; l < F; ++l) {
+        Level& fine = levels[static_cast<size_t>(l) - 1];
+        Level& coarse = levels[static_cast<size_t>(l)];
+        coarse.target = downsample_grid(fine, fine.target, coarse);
+        coarse.target_weight = downsample_grid(fine, fine.target_weight, coarse, 1);
+      }
       opt.iterations = o.iterations;
       opt.temporal_weight = o.temporal_weight;
       for (int l = F - 1; l >= 0; --l) {
         Level& L = levels[static_cast<size_t>(l)];
+        opt.target_weights = L.target_weight;
         if (l == F - 1) {
           L.x = L.target;
         } else {
@@ -340,6 +405,7 @@ struct PlanarSynthesizer::Impl {
         last = optimize_texture(L.nb, *indices[static_cast<size_t>(l)], L.x, L.target, opt, &L.match);
       }
       report.levels = F;
+      report.reseeded = reseeded_fraction;
     }
     t = tt;
     report.patch_distance = last.patch_distance;

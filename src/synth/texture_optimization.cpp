@@ -191,6 +191,8 @@ OptimizeReport optimize_texture(const Neighbourhoods& nb, const ExemplarIndex& i
   const size_t samples = x.size() / static_cast<size_t>(C);
   const bool temporal = !target.empty() && options.temporal_weight > 0;
   if (temporal) TVF_CHECK(target.size() == x.size(), "target {} vs x {}", target.size(), x.size());
+  const bool weighted = temporal && !options.target_weights.empty();
+  if (weighted) TVF_CHECK(options.target_weights.size() == samples, "target weights {} vs samples {}", options.target_weights.size(), samples);
   OptimizeReport report;
   std::vector<int> match(static_cast<size_t>(count), -1);
   if (matches && matches->size() == match.size())
@@ -263,7 +265,8 @@ OptimizeReport optimize_texture(const Neighbourhoods& nb, const ExemplarIndex& i
               double a = 0;
               for (int b = 0; b < kSplatBlocks; ++b) a += blocks[static_cast<size_t>(b) * values_per_block + i];
               const double m = a / w;
-              x[i] = static_cast<float>(temporal ? (m + lambda * target[i]) / (1 + lambda) : m);
+              const double l = weighted ? lambda * options.target_weights[s] : lambda;
+              x[i] = static_cast<float>(temporal ? (m + l * target[i]) / (1 + l) : m);
             }
           }
           return n;

@@ -149,6 +149,30 @@ TEST(PlanarSynthesis, FramesMoveWithASteadyFlowAndChangeLittle) {
   EXPECT_LT(moved, 0.25 * unrelated) << moved << " vs " << unrelated;
 }
 
+// A translation does not stretch the carried texture: nothing is re-seeded. A source
+// spreads it: pixels near the source are re-seeded once their area has about doubled.
+TEST(PlanarSynthesis, StretchedTextureIsReseededOnlyWhereTheFlowSpreadsIt) {
+  const Mesh grid = make_grid(GridSpec{9, 9, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Exemplar e = make_procedural_exemplar(ProceduralExemplar::pebbles, 32, 4);
+  SynthesisOptions o = small_options(64);
+  o.pixels_per_frame = 3;
+  auto run = [&](auto velocity, std::vector<double>& reseeded) {
+    const Field field = test::field_from(grid, TimeSampling{0, 1, 11}, velocity);
+    PlanarSynthesizer synth(bundle, field, e, o);
+    synth.advance(0);
+    for (int k = 1; k <= 10; ++k) reseeded.push_back(synth.advance(0.1 * k).reseeded);
+    return synth.texture();
+  };
+  std::vector<double> uniform, source;
+  run([](const Vec3&, double) { return cplx(1, 0); }, uniform);
+  run([](const Vec3& p, double) { return cplx(p.x(), p.y()); }, source);
+  for (double r : uniform) EXPECT_EQ(r, 0.0);
+  double total = 0;
+  for (double r : source) total += r;
+  EXPECT_GT(total, 0.0);
+}
+
 TEST(PlanarSynthesis, BadOptionsNameTheOption) {
   const Mesh grid = make_grid(GridSpec{5, 5, {-1, -1}, {1, 1}});
   const TangentBundle bundle(grid);

@@ -17,6 +17,10 @@
 // first frame is made coarse to fine from exemplar pixels at random; later frames run
 // only the finest `frame_levels` levels, each started from the advected previous frame
 // plus the change the coarser level made (so fine detail is carried, not blurred).
+//
+// Stretch: where the flow spreads (a source) or squeezes (a sink) the carried texture, its
+// area factor since synthesis is tracked per pixel; beyond about 2× either way the pixel is
+// re-seeded from the exemplar and synthesized afresh (see reseed_stretched in the source).
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
@@ -58,6 +62,7 @@ struct SynthesisFrameReport {
   double seconds = 0;
   double patch_distance = 0;    // finest level's OptimizeReport::patch_distance
   double uncovered = 0;
+  double reseeded = 0;          // planar: fraction of pixels re-seeded (stretched too far)
   int levels = 0;
 };
 

@@ -20,12 +20,13 @@
 // output is mapped monotonically (by rank) onto the exemplar's distribution of that channel.
 // Temporal coherence (Kwatra, Adalsteinsson, Kim, Kwatra, Carlson, Lin 2007): an optional
 // target x̃ (the previous frame advected by the flow) is blended in as a soft constraint,
-// x ← (x_M + λ·x̃)/(1 + λ).
+// x ← (x_M + λ·x̃)/(1 + λ) (λ may vary per sample).
 #include "tvf/synth/exemplar.h"
 
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace tvf {
@@ -103,6 +104,9 @@ struct OptimizeOptions {
   int iterations = 3;
   double robust_exponent = 0.8;   // Kwatra's r (2: plain least squares)
   double temporal_weight = 0.0;   // λ of the soft target (0: none)
+  // Per-sample factors of λ (one per sample, in [0, 1]), or empty: all 1. Samples with 0
+  // follow the exemplar alone (where the target was re-seeded).
+  std::span<const float> target_weights;
   bool histogram_matching = true; // map each channel onto the exemplar's histogram (by rank)
 };
 
