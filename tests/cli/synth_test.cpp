@@ -138,7 +138,7 @@ TEST(CliSynth, BadInputIsOneSentenceAndLeavesNothing) {
   test::write_text(dir / "sphere.json", kSphereScene);
   test::write_text(dir / "not_a_picture.png", "hello");
   // A PNG signature and a header cut short.
-  test::write_text(dir / "cut.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0", 20));
+  test::write_text(dir / "cut.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0", 18));
   const std::string scene = quoted(dir / "scene.json");
   const std::string outputs = " -o " + quoted(dir / "out") + " -o " + quoted(dir / "out.mp4");
   const std::string synth = "render synth " + scene + outputs;
