@@ -21,6 +21,12 @@ pkg_check_modules(CAIRO QUIET IMPORTED_TARGET cairo)
 if(NOT CAIRO_FOUND)
   message(FATAL_ERROR "tvf needs Cairo: install the Debian package 'libcairo2-dev' (or run scripts/install-deps.sh)")
 endif()
+# Texture synthesis: nearest-neighbourhood search (nanoflann) and JPEG exemplars (libjpeg).
+tvf_require(nanoflann libnanoflann-dev)
+pkg_check_modules(JPEG QUIET IMPORTED_TARGET libjpeg)
+if(NOT JPEG_FOUND)
+  message(FATAL_ERROR "tvf needs libjpeg: install the Debian package 'libjpeg62-turbo-dev' (or run scripts/install-deps.sh)")
+endif()
 # Dense products of the temporal-mode solver: OpenBLAS picks its AVX2/AVX-512 kernels at
 # run time, so one portable build runs at the machine's speed.
 pkg_check_modules(OPENBLAS QUIET IMPORTED_TARGET openblas)

@@ -14,6 +14,7 @@ packages=(
   libcgal-dev            # OBJ/PLY/OFF reading (polygon soups) and mesh repair
   libcairo2-dev          # plots and texture frames (SVG, PNG)
   libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri  # offscreen OpenGL ES (EGL surfaceless, llvmpipe): surface pictures
+  libnanoflann-dev libjpeg62-turbo-dev  # texture synthesis: kd-tree search, JPEG exemplars
   ffmpeg                 # MP4 video (tvf render texture -o OUT.mp4) and ffprobe for the tests
   libgmp-dev libmpfr-dev # required by CGAL headers
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -6,6 +6,7 @@
 #include "progress.h"
 #include "render_command.h"
 #include "serve_command.h"
+#include "synth_command.h"
 
 #include "tvf/analysis/topology.h"
 #include "tvf/core/atomic_output.h"
@@ -253,6 +254,7 @@ int main(int argc, char** argv) {
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
   cli::RenderCommand render(app);
   cli::ServeCommand serve(app);
+  cli::SynthCommand synth(*app.get_subcommand("render"));
 
   try {
     app.parse(argc, argv);
@@ -265,6 +267,7 @@ int main(int argc, char** argv) {
     if (*analyze_cmd) return run_analyze(analyze);
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
     if (*edit_cmd) return cli::run_edit(edit);
+    if (synth.selected()) return synth.run();
     if (render.selected()) return render.run();
     if (serve.selected()) return serve.run();
     if (*default_cmd) {

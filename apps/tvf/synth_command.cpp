@@ -1,0 +1,231 @@
+#include "synth_command.h"
+
+#include "progress.h"
+
+#include "tvf/core/error.h"
+#include "tvf/design/design_space.h"
+#include "tvf/design/generate.h"
+#include "tvf/design/scene_json.h"
+#include "tvf/field/field_io.h"
+#include "tvf/synth/planar_synthesis.h"
+#include "tvf/synth/surface_synthesis.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace tvf::cli {
+
+SynthCommand::SynthCommand(CLI::App& render) {
+  auto common = [&](CLI::App* sub, const char* exemplar_help) {
+    sub->add_option("input", input_, "Folder written by `tvf generate` (or its field.tvff), or a scene file")
+        ->required();
+    sub->add_option("-o,--output", outputs_,
+                    "Pictures: a folder of PNG frames, or a file ending in .mp4 (give -o twice for both); "
+                    "planar domains only until the mesh renderer is merged");
+    sub->add_option("--meshes", meshes_, "Folder for one mesh per frame (frame_00000.ply …)");
+    sub->add_option("--exemplar", exemplar_, exemplar_help)->required();
+    sub->add_option("--exemplar-size", exemplar_size_, "Pixels of a procedural exemplar")->capture_default_str();
+    sub->add_option("-s,--size", size_, "Planar: pixels on the long side of the domain")->capture_default_str();
+    sub->add_option("--frames", frames_, "Pictures over the field's time range (default: the field's frames)");
+    sub->add_option("--fps", fps_, "Frames per second of the video")->capture_default_str();
+    sub->add_option("--levels", levels_, "Resolution levels of the first frame")->capture_default_str();
+    sub->add_option("--frame-levels", frame_levels_, "Levels run on each later frame")->capture_default_str();
+    sub->add_option("--neighbourhood", neighbourhood_, "Neighbourhood size in samples (odd)")->capture_default_str();
+    sub->add_option("--iterations", iterations_, "Optimization iterations per level and frame")->capture_default_str();
+    sub->add_option("--first-iterations", iterations_first_, "Iterations per level on the first frame")
+        ->capture_default_str();
+    sub->add_option("--stride", stride_, "Planar: pixels between neighbourhood centres")->capture_default_str();
+    sub->add_option("--temporal-weight", temporal_weight_,
+                    "Weight of the previous frame carried by the field (higher: steadier, slower to adapt)")
+        ->capture_default_str();
+    sub->add_option("--speed", speed_,
+                    "Pixels (surfaces: texels) the texture moves per frame of the field at the field's typical speed "
+                    "(default: size/256 planar, 1 on surfaces)");
+    sub->add_option("--texel", texel_, "Surfaces: world length of one exemplar pixel (default: mean edge length)");
+    sub->add_option("--seed", seed_, "Random seed of the first frame")->capture_default_str();
+    sub->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
+  };
+  synth_ = render.add_subcommand(
+      "synth", "Exemplar-based texture synthesis oriented and carried by the field (Kwatra et al. 2005/2007): "
+               "PNG frames / MP4 on planar domains, per-vertex coloured PLY meshes on surfaces");
+  common(synth_, "Exemplar picture (PNG or JPEG), or a procedural one: stripes, pebbles");
+  terrain_ = render.add_subcommand(
+      "terrain", "Evolving terrain: a height map synthesized from a height exemplar displaces the domain "
+                 "(hillshaded PNG frames / MP4 on planar domains; OBJ/PLY meshes per frame)");
+  common(terrain_, "Height-map exemplar (PNG or JPEG, gray = height), or a procedural one: ridges, dunes");
+  terrain_->add_option("--mesh-format", mesh_format_, "Mesh files: obj or ply (PLY with colours by height)")
+      ->check(CLI::IsMember({"obj", "ply"}));
+  terrain_->add_option("--mesh-resolution", mesh_resolution_, "Planar: vertices on the long side of each mesh")
+      ->capture_default_str();
+  height_scale_option_ = terrain_->add_option("--height-scale", height_scale_,
+                       "Height 1 as a fraction of the domain (planar: long side, default 0.1; surfaces: "
+                       "bounding-box diagonal, default 0.03)");
+  terrain_->add_option("--relief", relief_, "Planar pictures: hillshade exaggeration (default: size/8)");
+}
+
+namespace {
+
+struct Input {
+  Mesh mesh;
+  Field field;
+  std::vector<std::string> warnings;
+};
+
+Input load_input(const std::string& input_name, Progress& progress) {
+  const fs::path input(input_name);
+  std::error_code ec;
+  if (!fs::exists(input, ec))
+    throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
+                            "its field.tvff, or a scene file)", input_name));
+  Input in;
+  if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
+    const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
+    if (!fs::exists(file, ec))
+      throw Error(fmt::format("{}: no field.tvff in this folder (write one with `tvf generate SCENE -o {}`)",
+                              input_name, input_name));
+    progress.note("reading the field");
+    FieldFile ff = load_field_file(file.string());
+    in.mesh = std::move(ff.mesh);
+    in.field = std::move(ff.field);
+  } else {
+    const Scene scene = load_scene(input_name);
+    progress.note("building the domain");
+    const auto space = make_design_space(scene);
+    GenerateOptions gen;
+    gen.progress = [&](int done, int total) { progress.update(done, total); };
+    GenerateReport report;
+    in.field = generate(*space, scene, gen, &report);
+    in.warnings = report.warnings;
+    in.mesh = space->mesh();
+  }
+  return in;
+}
+
+Exemplar exemplar_for(const std::string& name, int channels, int size, std::uint64_t seed) {
+  std::error_code ec;
+  if (!fs::exists(name, ec) && fs::path(name).extension().empty()) {
+    if (name != "stripes" && name != "pebbles" && name != "ridges" && name != "dunes")
+      throw Error(fmt::format("--exemplar {}: no such picture, and not a procedural exemplar "
+                              "(stripes, pebbles, ridges or dunes)", name));
+    const ProceduralExemplar kind = parse_procedural_exemplar(name);
+    Exemplar e = make_procedural_exemplar(kind, size, seed);
+    if (e.channels != channels)
+      throw Error(fmt::format("--exemplar {}: a {} exemplar; this command needs a {}", name,
+                              e.channels == 1 ? "height-map" : "colour", channels == 1 ? "height map (ridges, dunes)"
+                                                                                        : "colour one (stripes, pebbles)"));
+    return e;
+  }
+  return load_exemplar(name, channels);
+}
+
+// The library names its options as in SynthesisOptions ("synthesis option frame_levels:
+// …"); on the command line the sentence names the flag the user typed.
+[[noreturn]] void rethrow_with_flag_names(const Error& e) {
+  static const std::pair<const char*, const char*> flags[] = {
+      {"size", "--size"}, {"levels", "--levels"}, {"frame_levels", "--frame-levels"},
+      {"neighbourhood", "--neighbourhood"}, {"stride", "--stride"}, {"iterations_first", "--first-iterations"},
+      {"iterations", "--iterations"}, {"temporal_weight", "--temporal-weight"}, {"pixels_per_frame", "--speed"},
+      {"texel", "--texel"}, {"relief", "--relief"}, {"height_scale", "--height-scale"},
+      {"mesh_resolution", "--mesh-resolution"}};
+  const std::string message = e.what();
+  const std::string prefix = "synthesis option ";
+  if (message.rfind(prefix, 0) == 0)
+    for (const auto& [name, flag] : flags) {
+      const std::string key = prefix + name + ":";
+      if (message.rfind(key, 0) == 0) throw Error(flag + message.substr(key.size() - 1));
+    }
+  throw e;
+}
+
+}  // namespace
+
+int SynthCommand::run() {
+  try {
+    return run_checked();
+  } catch (const Error& e) {
+    rethrow_with_flag_names(e);
+  }
+}
+
+int SynthCommand::run_checked() {
+  const bool terrain = terrain_->parsed();
+  const char* label = terrain ? "tvf render terrain" : "tvf render synth";
+  Progress progress(label, !quiet_ && progress_wanted());
+  std::string frames_dir, video;
+  for (const auto& out : outputs_) {
+    const bool mp4 = fs::path(out).extension() == ".mp4" || fs::path(out).extension() == ".MP4";
+    std::string& slot = mp4 ? video : frames_dir;
+    if (!slot.empty()) throw Error(fmt::format("{}: give at most one {} output", out, mp4 ? "MP4" : "frames folder"));
+    slot = out;
+  }
+  if (frames_dir.empty() && video.empty() && meshes_.empty())
+    throw Error(fmt::format("{}: give -o (PNG frames folder or .mp4) and/or --meshes FOLDER", label));
+  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
+  const Exemplar exemplar = exemplar_for(exemplar_, terrain ? 1 : 3, exemplar_size_, seed_);
+
+  SynthesisOptions so;
+  so.size = size_;
+  so.levels = levels_;
+  so.frame_levels = frame_levels_;
+  so.neighbourhood = neighbourhood_;
+  so.iterations = iterations_;
+  so.iterations_first = iterations_first_;
+  so.stride = stride_;
+  so.temporal_weight = temporal_weight_;
+  so.pixels_per_frame = speed_;
+  so.texel = texel_;
+  so.seed = seed_;
+
+  Input in = load_input(input_, progress);
+  const TangentBundle bundle(in.mesh);
+  progress.note("synthesizing");
+  SynthesisAnimationReport report;
+  if (in.mesh.is_planar_xy()) {
+    SynthesisAnimationOptions options;
+    options.synthesis = so;
+    options.frames = frames_;
+    options.terrain = terrain;
+    options.relief = relief_;
+    options.frames_dir = frames_dir;
+    options.video = video;
+    options.meshes_dir = meshes_;
+    if (!mesh_format_.empty()) options.mesh_format = mesh_format_;
+    options.mesh_resolution = mesh_resolution_;
+    if (height_scale_option_->count() > 0) options.height_scale = height_scale_;
+    options.fps = fps_;
+    options.progress = [&](int done, int total) { progress.update(done, total); };
+    if (!terrain && !meshes_.empty())
+      throw Error("--meshes: planar texture synthesis writes pictures (-o); meshes per frame are for terrain and surfaces");
+    report = write_planar_synthesis(bundle, in.field, exemplar, options);
+  } else {
+    if (!frames_dir.empty() || !video.empty())
+      throw Error(fmt::format("{}: pictures of surfaces need the mesh renderer, which this build does not have yet; "
+                              "write per-frame meshes with --meshes FOLDER instead", input_));
+    SurfaceSynthesisAnimationOptions options;
+    options.synthesis = so;
+    options.frames = frames_;
+    options.terrain = terrain;
+    options.meshes_dir = meshes_;
+    if (!mesh_format_.empty()) options.mesh_format = mesh_format_;
+    if (height_scale_option_->count() > 0) options.height_scale = height_scale_;
+    options.fps = fps_;
+    options.progress = [&](int done, int total) { progress.update(done, total); };
+    report = write_surface_synthesis(bundle, in.field, exemplar, options);
+  }
+  progress.finish();
+  for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!quiet_) {
+    std::printf("synthesized %d frames in %.2f s (first %.2f s, then %.2f s per frame; patch distance %.3f); wrote",
+                report.frames, report.seconds, report.first_frame_seconds, report.mean_frame_seconds,
+                report.mean_patch_distance);
+    for (const auto& f : report.files) std::printf(" %s", fs::absolute(f).lexically_normal().c_str());
+    std::printf("\n");
+  }
+  return 0;
+}
+
+}  // namespace tvf::cli
