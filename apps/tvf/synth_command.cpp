@@ -7,12 +7,15 @@
 #include "tvf/design/generate.h"
 #include "tvf/design/scene_json.h"
 #include "tvf/field/field_io.h"
+#include "tvf/render/mesh_renderer.h"
 #include "tvf/synth/planar_synthesis.h"
 #include "tvf/synth/surface_synthesis.h"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <filesystem>
 
 namespace fs = std::filesystem;
@@ -25,11 +28,18 @@ SynthCommand::SynthCommand(CLI::App& render) {
         ->required();
     sub->add_option("-o,--output", outputs_,
                     "Pictures: a folder of PNG frames, or a file ending in .mp4 (give -o twice for both); "
-                    "planar domains only until the mesh renderer is merged");
+                    "surfaces are drawn from a camera (--view, --up)");
     sub->add_option("--meshes", meshes_, "Folder for one mesh per frame (frame_00000.ply …)");
     sub->add_option("--exemplar", exemplar_, exemplar_help)->required();
     sub->add_option("--exemplar-size", exemplar_size_, "Pixels of a procedural exemplar")->capture_default_str();
-    sub->add_option("-s,--size", size_, "Planar: pixels on the long side of the domain")->capture_default_str();
+    sub->add_option("-s,--size", size_, "Pixels on the long side of the domain (surfaces: of the square picture)")
+        ->capture_default_str();
+    sub->add_option("--view", view_, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default 1,-0.6,0.5)")
+        ->delimiter(',')
+        ->expected(3);
+    sub->add_option("--up", up_, "Surfaces: the direction that points up in the picture, X,Y,Z (default 0,0,1)")
+        ->delimiter(',')
+        ->expected(3);
     sub->add_option("--frames", frames_, "Pictures over the field's time range (default: the field's frames)");
     sub->add_option("--fps", fps_, "Frames per second of the video")->capture_default_str();
     sub->add_option("--levels", levels_, "Resolution levels of the first frame")->capture_default_str();
@@ -202,14 +212,33 @@ int SynthCommand::run_checked() {
       throw Error("--meshes: planar texture synthesis writes pictures (-o); meshes per frame are for terrain and surfaces");
     report = write_planar_synthesis(bundle, in.field, exemplar, options);
   } else {
-    if (!frames_dir.empty() || !video.empty())
-      throw Error(fmt::format("{}: pictures of surfaces need the mesh renderer, which this build does not have yet; "
-                              "write per-frame meshes with --meshes FOLDER instead", input_));
     SurfaceSynthesisAnimationOptions options;
+    if (!frames_dir.empty() || !video.empty()) {
+      // Pictures through the offscreen mesh renderer, from a camera framed once on the
+      // undisplaced mesh (so terrain does not make the view jump between frames).
+      const Vec3 direction = view_.empty() ? Vec3(1, -0.6, 0.5) : Vec3(view_[0], view_[1], view_[2]);
+      const Vec3 up = up_.empty() ? Vec3(0, 0, 1) : Vec3(up_[0], up_[1], up_[2]);
+      const Camera camera = Camera::framing(in.mesh.positions(), direction, up);
+      auto renderer = std::make_shared<MeshRenderer>();
+      RenderOptions ro;
+      ro.width = ro.height = size_;
+      options.renderer = [renderer, camera, ro](const Mesh& mesh, const std::vector<Vec3>& colours) {
+        std::vector<std::uint32_t> packed(colours.size());
+        for (size_t v = 0; v < colours.size(); ++v) {
+          auto channel = [&](double x) { return static_cast<std::uint32_t>(std::clamp(x, 0.0, 1.0) * 255.0 + 0.5); };
+          packed[v] = (channel(colours[v].x()) << 16) | (channel(colours[v].y()) << 8) | channel(colours[v].z());
+        }
+        renderer->set_mesh(mesh);
+        renderer->set_colors(packed);
+        return renderer->render(camera, ro);
+      };
+    }
     options.synthesis = so;
     options.frames = frames_;
     options.terrain = terrain;
     options.meshes_dir = meshes_;
+    options.frames_dir = frames_dir;
+    options.video = video;
     if (!mesh_format_.empty()) options.mesh_format = mesh_format_;
     if (height_scale_option_->count() > 0) options.height_scale = height_scale_;
     options.fps = fps_;

@@ -25,6 +25,7 @@ private:
   CLI::App* terrain_ = nullptr;
   std::string input_, exemplar_, meshes_, mesh_format_;
   std::vector<std::string> outputs_;
+  std::vector<double> view_, up_;  // surfaces: the camera
   CLI::Option* height_scale_option_ = nullptr;
   int size_ = 512, frames_ = 0, exemplar_size_ = 64;
   int levels_ = 3, frame_levels_ = 2, neighbourhood_ = 7, iterations_ = 2, iterations_first_ = 5, stride_ = 2;

@@ -113,6 +113,12 @@ TEST(CliSynth, SurfaceMeshesWithVertexColours) {
                          quoted(dir / "t") + " --mesh-format ply" + kQuick);
   ASSERT_EQ(t.exit_code, 0) << t.output;
   EXPECT_EQ(count_files(dir / "t", ".ply"), 3);
+  // Pictures of the surface through the offscreen mesh renderer: PNG frames and an MP4.
+  const auto p = run_tvf("render synth " + quoted(dir / "sphere.json") + " --exemplar pebbles -o " +
+                         quoted(dir / "frames") + " -o " + quoted(dir / "sphere.mp4") + kQuick);
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  EXPECT_EQ(count_files(dir / "frames", ".png"), 3);
+  EXPECT_TRUE(fs::is_regular_file(dir / "sphere.mp4"));
 }
 
 std::set<std::string> entries(const fs::path& dir) {
@@ -149,7 +155,8 @@ TEST(CliSynth, BadInputIsOneSentenceAndLeavesNothing) {
   expect_clean_failure(dir, synth + " --exemplar dunes", "colour");
   expect_clean_failure(dir, "render terrain " + scene + outputs + " --exemplar stripes", "height");
   expect_clean_failure(dir, "render synth " + quoted(dir / "nothing.json") + outputs + " --exemplar stripes", "nothing.json");
-  expect_clean_failure(dir, "render synth " + quoted(dir / "sphere.json") + outputs + " --exemplar stripes", "sphere.json");
+  expect_clean_failure(dir, "render synth " + quoted(dir / "sphere.json") + outputs + " --exemplar stripes --view 0,0,0",
+                       "viewing direction");
   // Out-of-range sizes and values name the flag.
   for (const auto& [bad, flag] : std::initializer_list<std::pair<std::string, std::string>>{
            {"-s 8", "--size"}, {"-s 100000", "--size"}, {"--levels 0", "--levels"}, {"--levels 9", "--levels"},
