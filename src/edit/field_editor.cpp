@@ -632,6 +632,8 @@ public:
     // about 100°, short of the cut locus at the antipode).
     inverse_.emplace(space.bundle(), chart_, 0.5 * space.diameter());
   }
+  MoveChart(const MoveChart&) = delete;  // inverse_ refers to chart_
+  MoveChart& operator=(const MoveChart&) = delete;
   bool planar() const { return planar_.has_value(); }
   // Local coordinates of a vertex, or of a surface point.
   cplx vertex(int v) const {
