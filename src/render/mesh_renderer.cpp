@@ -281,7 +281,13 @@ struct MeshRenderer::Impl {
         throw Error(fmt::format("offscreen rendering: cannot make the OpenGL context current (EGL error 0x{:x})",
                                 eglGetError()));
     }
-    ~Current() { eglMakeCurrent(impl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT); }
+    // Also drops EGL's state for this thread: renders run on whichever TBB worker the
+    // frame pipeline picks, and a worker that still held Mesa's per-thread state when the
+    // process exited freed it twice (its thread-exit destructor raced Mesa's teardown).
+    ~Current() {
+      eglMakeCurrent(impl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+      eglReleaseThread();
+    }
   };
 
   void free_framebuffers() {
