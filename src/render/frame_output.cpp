@@ -4,6 +4,7 @@
 #include "tvf/core/error.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_pipeline.h>
 
 #include <cmath>
 
@@ -78,6 +79,42 @@ void FrameOutput::add(const Image& frame) {
   if (folder_) write_png((folder_->stage() / fmt::format("frame_{:05d}.png", count_)).string(), frame);
   if (writer_) writer_->add(frame);
   ++count_;
+}
+
+void FrameOutput::add_in_order(int first, int last, const std::function<Image(int)>& make,
+                               const std::function<void(int)>& done) {
+  struct Item {
+    int k;
+    std::shared_ptr<Image> image;
+  };
+  int next = first, written = 0;
+  tbb::parallel_pipeline(
+      4,
+      tbb::make_filter<void, Item>(tbb::filter_mode::serial_in_order,
+                                   [&](tbb::flow_control& fc) -> Item {
+                                     if (next > last) {
+                                       fc.stop();
+                                       return {};
+                                     }
+                                     const int k = next++;
+                                     auto image = std::make_shared<Image>(make(k));
+                                     if (image->width != width_ || image->height != height_)
+                                       throw Error(fmt::format("frame of {}×{} pixels given to an output of {}×{}",
+                                                               image->width, image->height, width_, height_));
+                                     return {k, std::move(image)};
+                                   }) &
+          tbb::make_filter<Item, Item>(tbb::filter_mode::parallel,
+                                       [&](Item item) {
+                                         if (folder_)
+                                           write_png((folder_->stage() / fmt::format("frame_{:05d}.png", item.k)).string(),
+                                                     *item.image);
+                                         return item;
+                                       }) &
+          tbb::make_filter<Item, void>(tbb::filter_mode::serial_in_order, [&](Item item) {
+            if (writer_) writer_->add(*item.image);
+            ++count_;
+            if (done) done(++written);
+          }));
 }
 
 std::vector<std::string> FrameOutput::finish() {

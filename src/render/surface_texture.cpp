@@ -11,7 +11,6 @@
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_pipeline.h>
 
 #include <algorithm>
 #include <array>
@@ -381,17 +380,7 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
   ro.ambient = 0.5;
   Topology topology;
   if (options.overlay_paths) topology = analyze_topology(bundle, field);
-  std::unique_ptr<StagedFolder> folder;
-  if (!options.frames_dir.empty()) folder = std::make_unique<StagedFolder>(options.frames_dir);
-  std::unique_ptr<VideoWriter> video;
-  if (!options.video.empty()) {
-    const std::filesystem::path parent = std::filesystem::path(options.video).parent_path();
-    std::error_code ec;
-    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-    VideoOptions vo;
-    vo.fps = options.fps;
-    video = std::make_unique<VideoWriter>(options.video, ro.width, ro.height, vo);
-  }
+  FrameOutput out(options.frames_dir, options.video, ro.width, ro.height, options.fps);
 
   const TimeSampling& ts = field.time();
   auto time_of = [&](int k) { return total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0; };
@@ -400,64 +389,37 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
   report.height = ro.height;
   const double line_width = std::max(1.5, animator.width() / 300.0);
   const int count = last - first + 1;
-  int next = first, done = 0;
-  struct Item {
-    int k;
-    std::shared_ptr<Image> image;
-  };
-  // Simulate and render in order, encode PNGs in parallel, feed the video in order.
-  tbb::parallel_pipeline(
-      4,
-      tbb::make_filter<void, Item>(
-          tbb::filter_mode::serial_in_order,
-          [&](tbb::flow_control& fc) -> Item {
-            if (next > last) {
-              fc.stop();
-              return {};
-            }
-            const int k = next++;
-            const double t = time_of(k);
-            const auto t0 = clock::now();
-            animator.advance(t);
-            renderer.set_colors(animator.colors());
-            std::vector<RenderLine> lines;
-            std::vector<RenderMarker> markers;
-            if (options.overlay_streamlines) {
-              auto s = surface_streamline_lines(bundle, field, t, options.streamline_seeds,
-                                                std::max(1.0, animator.width() / 600.0));
-              lines.insert(lines.end(), s.begin(), s.end());
-            }
-            if (options.overlay_paths) {
-              auto p = singularity_path_lines(topology, t, line_width);
-              lines.insert(lines.end(), p.begin(), p.end());
-            }
-            if (options.overlay_singularities)
-              markers = singularity_markers(bundle, field, t, std::max(3.5, animator.width() / 110.0));
-            auto img = std::make_shared<Image>(renderer.render(animator.camera(), ro, lines, markers));
-            (k == first ? report.warmup_seconds : report.texture_seconds) +=
-                std::chrono::duration<double>(clock::now() - t0).count();
-            return {k, img};
-          }) &
-          tbb::make_filter<Item, Item>(tbb::filter_mode::parallel,
-                                       [&](Item item) {
-                                         if (folder)
-                                           write_png((folder->stage() / fmt::format("frame_{:05d}.png", item.k)).string(),
-                                                     *item.image);
-                                         return item;
-                                       }) &
-          tbb::make_filter<Item, void>(tbb::filter_mode::serial_in_order, [&](Item item) {
-            if (video) video->add(*item.image);
-            ++done;
-            if (options.progress) options.progress(done, count);
-          }));
-  if (video) {
-    video->finish();
-    report.files.push_back(options.video);
-  }
-  if (folder) {
-    folder->commit();
-    report.files.push_back(options.frames_dir);
-  }
+  int done = 0;
+  out.add_in_order(
+      first, last,
+      [&](int k) {
+        const double t = time_of(k);
+        const auto t0 = clock::now();
+        animator.advance(t);
+        renderer.set_colors(animator.colors());
+        std::vector<RenderLine> lines;
+        std::vector<RenderMarker> markers;
+        if (options.overlay_streamlines) {
+          auto s = surface_streamline_lines(bundle, field, t, options.streamline_seeds,
+                                            std::max(1.0, animator.width() / 600.0));
+          lines.insert(lines.end(), s.begin(), s.end());
+        }
+        if (options.overlay_paths) {
+          auto p = singularity_path_lines(topology, t, line_width);
+          lines.insert(lines.end(), p.begin(), p.end());
+        }
+        if (options.overlay_singularities)
+          markers = singularity_markers(bundle, field, t, std::max(3.5, animator.width() / 110.0));
+        Image img = renderer.render(animator.camera(), ro, lines, markers);
+        (k == first ? report.warmup_seconds : report.texture_seconds) +=
+            std::chrono::duration<double>(clock::now() - t0).count();
+        return img;
+      },
+      [&](int n) {
+        done = n;
+        if (options.progress) options.progress(n, count);
+      });
+  report.files = out.finish();
   report.frames = done;
   report.seconds = std::chrono::duration<double>(clock::now() - start).count();
   return report;

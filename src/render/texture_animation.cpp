@@ -13,7 +13,6 @@
 #include <cairo.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_pipeline.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -467,17 +466,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
   TextureAnimator animator(bundle, field, options.texture);
   Topology topology;
   if (options.overlay_paths) topology = analyze_topology(bundle, field);
-  std::unique_ptr<StagedFolder> folder;
-  if (!options.frames_dir.empty()) folder = std::make_unique<StagedFolder>(options.frames_dir);
-  std::unique_ptr<VideoWriter> video;
-  if (!options.video.empty()) {
-    const fs::path parent = fs::path(options.video).parent_path();
-    std::error_code ec;
-    if (!parent.empty()) fs::create_directories(parent, ec);
-    VideoOptions vo;
-    vo.fps = options.fps;
-    video = std::make_unique<VideoWriter>(options.video, animator.width(), animator.height(), vo);
-  }
+  FrameOutput out(options.frames_dir, options.video, animator.width(), animator.height(), options.fps);
 
   const TimeSampling& ts = field.time();
   auto time_of = [&](int k) { return total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0; };
@@ -485,54 +474,26 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
   report.width = animator.width();
   report.height = animator.height();
   double texture_seconds = 0, warmup_seconds = 0;
-  int next = first, done = 0;
   const int count = last - first + 1;
-  struct Item {
-    int k;
-    std::shared_ptr<Image> image;
-  };
-  // Simulate in order, encode PNGs in parallel, feed the video in order.
-  tbb::parallel_pipeline(
-      4,
-      tbb::make_filter<void, Item>(tbb::filter_mode::serial_in_order,
-                                   [&](tbb::flow_control& fc) -> Item {
-                                     if (next > last) {
-                                       fc.stop();
-                                       return {};
-                                     }
-                                     const int k = next++;
-                                     const double t = time_of(k);
-                                     const auto t0 = clock::now();
-                                     const bool warm = k == first;  // the first advance warms up
-                                     animator.advance(t);
-                                     auto img = std::make_shared<Image>(animator.picture());
-                                     (warm ? warmup_seconds : texture_seconds) +=
-                                         std::chrono::duration<double>(clock::now() - t0).count();
-                                     if (options.overlay_streamlines) draw_streamlines(*img, animator, bundle, field, t);
-                                     if (options.overlay_paths) draw_singularity_paths(*img, animator, topology, t);
-                                     if (options.overlay_singularities) draw_singularities(*img, animator, bundle, field, t);
-                                     return {k, img};
-                                   }) &
-          tbb::make_filter<Item, Item>(tbb::filter_mode::parallel,
-                                       [&](Item item) {
-                                         if (folder)
-                                           write_png((folder->stage() / fmt::format("frame_{:05d}.png", item.k)).string(),
-                                                     *item.image);
-                                         return item;
-                                       }) &
-          tbb::make_filter<Item, void>(tbb::filter_mode::serial_in_order, [&](Item item) {
-            if (video) video->add(*item.image);
-            ++done;
-            if (options.progress) options.progress(done, count);
-          }));
-  if (video) {
-    video->finish();
-    report.files.push_back(options.video);
-  }
-  if (folder) {
-    folder->commit();
-    report.files.push_back(options.frames_dir);
-  }
+  int done = 0;
+  out.add_in_order(
+      first, last,
+      [&](int k) {
+        const double t = time_of(k);
+        const auto t0 = clock::now();
+        animator.advance(t);
+        Image img = animator.picture();
+        (k == first ? warmup_seconds : texture_seconds) += std::chrono::duration<double>(clock::now() - t0).count();
+        if (options.overlay_streamlines) draw_streamlines(img, animator, bundle, field, t);
+        if (options.overlay_paths) draw_singularity_paths(img, animator, topology, t);
+        if (options.overlay_singularities) draw_singularities(img, animator, bundle, field, t);
+        return img;
+      },
+      [&](int n) {
+        done = n;
+        if (options.progress) options.progress(n, count);
+      });
+  report.files = out.finish();
   report.frames = done;
   report.texture_seconds = texture_seconds;
   report.warmup_seconds = warmup_seconds;

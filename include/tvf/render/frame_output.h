@@ -6,6 +6,7 @@
 #include "tvf/render/video.h"
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,6 +36,11 @@ public:
   // frames_dir or video may be empty (not both). Throws tvf::Error naming the output.
   FrameOutput(const std::string& frames_dir, const std::string& video, int width, int height, double fps);
   void add(const Image& frame);
+  // Frames first … last: make(k) runs in order (one at a time, on whichever thread the
+  // pipeline picks), the PNGs (frame_<k>.png) are encoded in parallel while the next
+  // frames are made, and the video is fed in order; done(n) after each frame written.
+  void add_in_order(int first, int last, const std::function<Image(int)>& make,
+                    const std::function<void(int)>& done = {});
   // Finishes the video and moves the frames into place; returns what was written.
   std::vector<std::string> finish();
   int frames() const { return count_; }
