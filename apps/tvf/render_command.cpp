@@ -1,6 +1,7 @@
 #include "render_command.h"
 
 #include "progress.h"
+#include "render_input.h"
 
 #include "tvf/core/error.h"
 #include "tvf/design/design_space.h"
@@ -147,48 +148,6 @@ void parse_range(const std::string& text, int& first, int& last) {
 
 namespace {
 
-struct Input {
-  Mesh mesh;
-  Field field;
-  std::vector<std::string> warnings;
-};
-
-// Reads a field (folder or .tvff) or generates one from a scene; planar domains only
-// unless `surfaces` (texture animation draws both).
-Input load_input(const std::string& input_name, Progress& progress, const char* kind, bool surfaces = false) {
-  const fs::path input(input_name);
-  std::error_code ec;
-  if (!fs::exists(input, ec))
-    throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
-                            "its field.tvff, or a scene file)", input_name));
-  const std::string surface_note = fmt::format(
-      "the domain is a surface: `tvf render {}` draws planar domains only (`tvf render texture` draws surfaces)", kind);
-  Input in;
-  if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
-    const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
-    if (!fs::exists(file, ec))
-      throw Error(fmt::format("{}: no field.tvff in this folder (write one with `tvf generate SCENE -o {}`)",
-                              input_name, input_name));
-    progress.note("reading the field");
-    FieldFile ff = load_field_file(file.string());
-    in.mesh = std::move(ff.mesh);
-    in.field = std::move(ff.field);
-  } else {
-    const Scene scene = load_scene(input_name);
-    progress.note("building the domain");
-    const auto space = make_design_space(scene);
-    if (!space->planar() && !surfaces) throw Error(fmt::format("{}: {}", input_name, surface_note));
-    GenerateOptions gen;
-    gen.progress = [&](int done, int total) { progress.update(done, total); };
-    GenerateReport report;
-    in.field = generate(*space, scene, gen, &report);
-    in.warnings = report.warnings;
-    in.mesh = space->mesh();
-  }
-  if (!in.mesh.is_planar_xy() && !surfaces) throw Error(fmt::format("{}: {}", input_name, surface_note));
-  return in;
-}
-
 // Splits the -o outputs into a frames folder and an MP4.
 void split_outputs(const std::vector<std::string>& outputs, std::string& frames_dir, std::string& video) {
   for (const auto& out : outputs) {
@@ -239,7 +198,7 @@ int RenderCommand::run_crowd() {
   CrowdSpec spec = load_crowd_spec(crowd_file_);
   if (weight_goal_) spec.weight_goal = *weight_goal_;
   if (weight_field_) spec.weight_field = *weight_field_;
-  Input in = load_input(input_, progress, "crowd");
+  RenderInput in = load_render_input(input_, progress, "crowd", false);
   const TangentBundle bundle(in.mesh);
   progress.note("simulating");
   options.progress = [&](int done, int total) { progress.update(done, total); };
@@ -268,7 +227,7 @@ int RenderCommand::run_particles() {
   options.particles.spin = std::isnan(spin_) ? spin_ : spin_ * kPi / 180.0;
   options.particles.image_size = app_size_;
   options.particles.seed = seed_;
-  Input in = load_input(input_, progress, "particles");
+  RenderInput in = load_render_input(input_, progress, "particles", false);
   const TangentBundle bundle(in.mesh);
   progress.note("rendering");
   options.progress = [&](int done, int total) { progress.update(done, total); };
@@ -296,7 +255,7 @@ int RenderCommand::run_grass() {
   options.grass.seed = seed_;
   options.render.elevation = grass_elevation_;
   options.render.image_size = grass_size_;
-  Input in = load_input(input_, progress, "grass");
+  RenderInput in = load_render_input(input_, progress, "grass", false);
   const TangentBundle bundle(in.mesh);
   progress.note("growing");
   options.progress = [&](int done, int total) { progress.update(done, total); };
@@ -321,7 +280,7 @@ int RenderCommand::run_painterly() {
   options.painterly.seed = seed_;
   const Image image = read_png(image_);
   const Image mask = mask_.empty() ? Image() : read_png(mask_);
-  Input in = load_input(input_, progress, "painterly");
+  RenderInput in = load_render_input(input_, progress, "painterly", false);
   const TangentBundle bundle(in.mesh);
   progress.note("painting");
   options.progress = [&](int done, int total) { progress.update(done, total); };
@@ -360,7 +319,7 @@ int RenderCommand::run_texture() {
   options.surface.fov = fov_;
   options.surface.spacing = spacing_;
 
-  Input in = load_input(input_, progress, "texture", true);
+  RenderInput in = load_render_input(input_, progress, "texture", true);
   const std::vector<std::string>& warnings = in.warnings;
   const Field& field = in.field;
   const TangentBundle bundle(in.mesh);

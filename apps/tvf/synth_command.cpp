@@ -1,6 +1,7 @@
 #include "synth_command.h"
 
 #include "progress.h"
+#include "render_input.h"
 
 #include "tvf/core/error.h"
 #include "tvf/design/design_space.h"
@@ -79,42 +80,6 @@ SynthCommand::SynthCommand(CLI::App& render) {
 
 namespace {
 
-struct Input {
-  Mesh mesh;
-  Field field;
-  std::vector<std::string> warnings;
-};
-
-Input load_input(const std::string& input_name, Progress& progress) {
-  const fs::path input(input_name);
-  std::error_code ec;
-  if (!fs::exists(input, ec))
-    throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
-                            "its field.tvff, or a scene file)", input_name));
-  Input in;
-  if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
-    const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
-    if (!fs::exists(file, ec))
-      throw Error(fmt::format("{}: no field.tvff in this folder (write one with `tvf generate SCENE -o {}`)",
-                              input_name, input_name));
-    progress.note("reading the field");
-    FieldFile ff = load_field_file(file.string());
-    in.mesh = std::move(ff.mesh);
-    in.field = std::move(ff.field);
-  } else {
-    const Scene scene = load_scene(input_name);
-    progress.note("building the domain");
-    const auto space = make_design_space(scene);
-    GenerateOptions gen;
-    gen.progress = [&](int done, int total) { progress.update(done, total); };
-    GenerateReport report;
-    in.field = generate(*space, scene, gen, &report);
-    in.warnings = report.warnings;
-    in.mesh = space->mesh();
-  }
-  return in;
-}
-
 Exemplar exemplar_for(const std::string& name, int channels, int size, std::uint64_t seed) {
   std::error_code ec;
   if (!fs::exists(name, ec) && fs::path(name).extension().empty()) {
@@ -190,7 +155,7 @@ int SynthCommand::run_checked() {
   so.texel = texel_;
   so.seed = seed_;
 
-  Input in = load_input(input_, progress);
+  RenderInput in = load_render_input(input_, progress, "synth", true);
   const TangentBundle bundle(in.mesh);
   progress.note("synthesizing");
   SynthesisAnimationReport report;
