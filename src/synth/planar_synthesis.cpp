@@ -20,6 +20,25 @@
 
 namespace tvf {
 
+void build_exemplar_pyramid(const Exemplar& e, const SynthesisOptions& o, std::vector<Exemplar>& exemplars,
+                            std::vector<std::unique_ptr<ExemplarIndex>>& indices) {
+  exemplars.push_back(e);
+  for (int l = 1; l < o.levels; ++l) exemplars.push_back(downsample(exemplars.back()));
+  ExemplarIndexOptions io;
+  io.size = o.neighbourhood;
+  io.pca_dimensions = o.pca_dimensions;
+  io.candidates = o.candidates;
+  io.search_eps = o.search_eps;
+  for (int l = 0; l < o.levels; ++l) {
+    const Exemplar& ex = exemplars[static_cast<size_t>(l)];
+    if (ex.width < o.neighbourhood || ex.height < o.neighbourhood)
+      throw Error(fmt::format("the exemplar ({}×{} pixels) is too small for {} levels of {}×{} neighbourhoods: "
+                              "level {} would be {}×{}; use fewer levels or a larger exemplar",
+                              e.width, e.height, o.levels, o.neighbourhood, o.neighbourhood, l, ex.width, ex.height));
+    indices.push_back(std::make_unique<ExemplarIndex>(ex, io));
+  }
+}
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -104,22 +123,7 @@ struct PlanarSynthesizer::Impl {
       if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
         throw_input_error(mesh.source(), "", "the field has a value that is not a finite number");
 
-    // Exemplar pyramid and its indices.
-    exemplars.push_back(e);
-    for (int l = 1; l < o.levels; ++l) exemplars.push_back(downsample(exemplars.back()));
-    ExemplarIndexOptions io;
-    io.size = o.neighbourhood;
-    io.pca_dimensions = o.pca_dimensions;
-    io.candidates = o.candidates;
-    io.search_eps = o.search_eps;
-    for (int l = 0; l < o.levels; ++l) {
-      const Exemplar& ex = exemplars[static_cast<size_t>(l)];
-      if (ex.width < o.neighbourhood || ex.height < o.neighbourhood)
-        throw Error(fmt::format("the exemplar ({}×{} pixels) is too small for {} levels of {}×{} neighbourhoods: "
-                                "level {} would be {}×{}; use fewer levels or a larger exemplar",
-                                e.width, e.height, o.levels, o.neighbourhood, o.neighbourhood, l, ex.width, ex.height));
-      indices.push_back(std::make_unique<ExemplarIndex>(ex, io));
-    }
+    build_exemplar_pyramid(e, o, exemplars, indices);
 
     // Grid pyramid.
     lo = mesh.bbox_min().head<2>();

@@ -79,21 +79,7 @@ struct SurfaceSynthesizer::Impl {
               mesh.num_vertices());
     texel_ = o.texel > 0 ? o.texel : mesh.mean_edge_length();
 
-    exemplars.push_back(e);
-    for (int l = 1; l < o.levels; ++l) exemplars.push_back(downsample(exemplars.back()));
-    ExemplarIndexOptions io;
-    io.size = o.neighbourhood;
-    io.pca_dimensions = o.pca_dimensions;
-    io.candidates = o.candidates;
-    io.search_eps = o.search_eps;
-    for (int l = 0; l < o.levels; ++l) {
-      const Exemplar& ex = exemplars[static_cast<size_t>(l)];
-      if (ex.width < o.neighbourhood || ex.height < o.neighbourhood)
-        throw Error(fmt::format("the exemplar ({}×{} pixels) is too small for {} levels of {}×{} neighbourhoods: "
-                                "level {} would be {}×{}; use fewer levels or a larger exemplar",
-                                e.width, e.height, o.levels, o.neighbourhood, o.neighbourhood, l, ex.width, ex.height));
-      indices.push_back(std::make_unique<ExemplarIndex>(ex, io));
-    }
+    build_exemplar_pyramid(e, o, exemplars, indices);
     nbs.resize(static_cast<size_t>(o.levels));
     matches.resize(static_cast<size_t>(o.levels));
     built.resize(static_cast<size_t>(o.levels));

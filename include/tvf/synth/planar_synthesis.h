@@ -57,6 +57,12 @@ struct SynthesisOptions {
   std::uint32_t background = 0x00FFFFFF;
 };
 
+// The exemplar at o.levels resolutions (finest first, each half the last) and a
+// neighbourhood search index per level; throws tvf::Error when a level is smaller than a
+// neighbourhood. Shared by planar and surface synthesis.
+void build_exemplar_pyramid(const Exemplar& e, const SynthesisOptions& o, std::vector<Exemplar>& exemplars,
+                            std::vector<std::unique_ptr<ExemplarIndex>>& indices);
+
 // What one frame cost and how well it matches the exemplar.
 struct SynthesisFrameReport {
   double seconds = 0;
