@@ -26,9 +26,9 @@ namespace tvf {
 // Set-up that generate() keeps between calls when GenerateOptions::cache is set: the
 // designer's session re-generates after every change, mostly on the same domain with the
 // same solver settings (STYLE 4, factor once, solve many). It holds
-// - the connection Laplacian of the domain and solver.weights (all solving generators);
-// - the per-frame Dirichlet solvers with their symbolic factorization (constrained,
-//   deform, key frames), one per thread;
+// - the connection Laplacian of the domain and solver.weights (constrained, spacetime);
+// - the constrained generator's per-frame Dirichlet solvers with their symbolic
+//   factorization, one per thread;
 // - the space-time solver (its operator, temporal eigenbases, the temporal modes of its
 //   last solve and its vectors; tvf/solve/spacetime.h) for time.frames and
 //   solver.temporal_weight;
@@ -36,8 +36,8 @@ namespace tvf {
 //   start: after a small change it is close to the new solution).
 // Each part is kept while what it was made from is unchanged (the domain — its mesh, by
 // content —, the weights, the frame count, the temporal weight) and rebuilt otherwise.
-// A warm-started solve meets the same tolerance as a cold one; the two fields agree to
-// that tolerance, not bit for bit. One generate() at a time per cache.
+// A warm solve meets the same tolerance as a cold one (fields agree to it, not bit for bit).
+// Not used (yet) by basis, deform, and key frames' static solves. One call at a time.
 class GenerateCache {
 public:
   GenerateCache();
