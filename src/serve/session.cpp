@@ -528,10 +528,10 @@ json Session::render_video(const json& request) {
     const json& v = request[key];
     if (!v.is_array() || v.size() != 3 || !std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); }))
       throw RequestError(400, fmt::format("render.{}: expected three numbers [x, y, z]", key));
-    const Vec3 out(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
-    if (!out.allFinite() || out.norm() == 0)
+    const Vec3 d(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    if (!d.allFinite() || d.norm() == 0)
       throw RequestError(400, fmt::format("render.{}: expected a non-zero direction", key));
-    return out;
+    return d;
   };
   TextureAnimationOptions o;
   o.texture.size = integer("size", 512, 16, 4096);
