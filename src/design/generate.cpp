@@ -37,6 +37,78 @@ std::uint64_t physical_memory_bytes() {
 
 }  // namespace
 
+struct GenerateCache::State {
+  std::uint64_t domain = 0;  // content hash of the mesh the Laplacian was made on
+  bool has_domain = false;
+  Weights weights = Weights::cotan;
+  // Declared before what refers to it, so that it is destroyed after them.
+  std::unique_ptr<ConnectionLaplacian> laplacian;
+  std::unique_ptr<DirichletSolver> prototype;
+  std::unique_ptr<tbb::enumerable_thread_specific<DirichletSolver>> dirichlet;
+  int frames = 0;
+  double temporal_weight = 0;
+  std::unique_ptr<SpaceTimeSolver> spacetime;
+  std::vector<cplx> last;  // the last space-time solution (frames × |V|), or empty
+  int warm = 0, reused = 0;
+
+  void clear() {
+    spacetime.reset();
+    dirichlet.reset();
+    prototype.reset();
+    laplacian.reset();
+    last.clear();
+    has_domain = false;
+  }
+};
+
+GenerateCache::GenerateCache() : state_(std::make_unique<State>()) {}
+GenerateCache::~GenerateCache() = default;
+void GenerateCache::clear() { state_->clear(); }
+int GenerateCache::warm_starts() const { return state_->warm; }
+int GenerateCache::reused_laplacians() const { return state_->reused; }
+
+namespace {
+
+// FNV-1a over the mesh's positions and faces: two meshes with the same hash are (with
+// overwhelming probability) the same domain, so their Laplacians are equal.
+std::uint64_t mesh_hash(const Mesh& mesh) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto add = [&](const void* data, size_t bytes) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  };
+  for (const Vec3& p : mesh.positions()) add(p.data(), 3 * sizeof(double));
+  for (const Face& f : mesh.faces()) add(f.data(), sizeof(Face));
+  const int n[2] = {mesh.num_vertices(), mesh.num_faces()};
+  add(n, sizeof n);
+  return h;
+}
+
+// The Laplacian of the space and weights: the cache's when it was made from the same,
+// else a new one (kept in the cache when there is one, else in `local`). A new domain or
+// weights drop everything the cache built on the old Laplacian.
+const ConnectionLaplacian& laplacian_for(const DesignSpace& space, Weights weights, GenerateCache* cache,
+                                         std::unique_ptr<ConnectionLaplacian>& local) {
+  if (!cache) {
+    local = std::make_unique<ConnectionLaplacian>(connection_laplacian(space.bundle(), to_laplacian_weights(weights)));
+    return *local;
+  }
+  GenerateCache::State& c = cache->state();
+  const std::uint64_t h = mesh_hash(space.mesh());
+  if (c.laplacian && c.has_domain && c.domain == h && c.weights == weights) {
+    ++c.reused;
+    return *c.laplacian;
+  }
+  c.clear();
+  c.laplacian = std::make_unique<ConnectionLaplacian>(connection_laplacian(space.bundle(), to_laplacian_weights(weights)));
+  c.domain = h;
+  c.has_domain = true;
+  c.weights = weights;
+  return *c.laplacian;
+}
+
+}  // namespace
+
 void check_field_memory(const Scene& scene, long long vertices) {
   const int frames = scene.time.frames;
   const std::uint64_t need = field_memory_bytes(frames, vertices);
@@ -123,10 +195,25 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   check_field_memory(scene, nv);
   const std::vector<CompiledElement> elements = compile(scene);
   const double d = scene.falloff / (space.diameter() * space.diameter());
-  const ConnectionLaplacian laplacian =
-      connection_laplacian(space.bundle(), to_laplacian_weights(scene.solver.weights));
-  const DirichletSolver prototype(laplacian);
-  tbb::enumerable_thread_specific<DirichletSolver> solvers(prototype);
+  std::unique_ptr<ConnectionLaplacian> own_laplacian;
+  const ConnectionLaplacian& laplacian = laplacian_for(space, scene.solver.weights, options.cache, own_laplacian);
+  // The per-thread solvers (symbolic factorization done): the cache's, or this call's.
+  std::unique_ptr<DirichletSolver> own_prototype;
+  std::unique_ptr<tbb::enumerable_thread_specific<DirichletSolver>> own_solvers;
+  tbb::enumerable_thread_specific<DirichletSolver>* kept = nullptr;
+  if (options.cache) {
+    GenerateCache::State& c = options.cache->state();
+    if (!c.dirichlet) {
+      c.prototype = std::make_unique<DirichletSolver>(laplacian);
+      c.dirichlet = std::make_unique<tbb::enumerable_thread_specific<DirichletSolver>>(*c.prototype);
+    }
+    kept = c.dirichlet.get();
+  } else {
+    own_prototype = std::make_unique<DirichletSolver>(laplacian);
+    own_solvers = std::make_unique<tbb::enumerable_thread_specific<DirichletSolver>>(*own_prototype);
+    kept = own_solvers.get();
+  }
+  tbb::enumerable_thread_specific<DirichletSolver>& solvers = *kept;
 
   Field field(scene.time, nv);
   std::mutex report_mutex;
@@ -156,19 +243,40 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   return field;
 }
 
-SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
-                                   const GenerateOptions& options) {
-  const int nv = space.mesh().num_vertices();
+namespace {
+
+void check_spacetime_scene(const Scene& scene, int nv) {
   check_field_memory(scene, nv);
   if (scene.solver.weights == Weights::mean_value)
     throw_input_error(scene.label(), "solver.weights",
                       "the spacetime generator needs symmetric weights (cotan or uniform): "
                       "mean-value weights make the system non-Hermitian");
+}
+
+// Which entries of the space-time system are fixed, to what (spacetime_problem's work,
+// on a given Laplacian).
+void spacetime_constraints(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
+                           const GenerateOptions& options, std::vector<char>& fixed, std::vector<cplx>& values);
+
+}  // namespace
+
+SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
+                                   const GenerateOptions& options) {
+  check_spacetime_scene(scene, space.mesh().num_vertices());
   SpaceTimeProblem problem{connection_laplacian(space.bundle(), to_laplacian_weights(scene.solver.weights)), {}, {}};
+  spacetime_constraints(space, scene, problem.laplacian, options, problem.fixed, problem.values);
+  return problem;
+}
+
+namespace {
+
+void spacetime_constraints(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
+                           const GenerateOptions& options, std::vector<char>& fixed, std::vector<cplx>& values) {
+  const int nv = space.mesh().num_vertices();
   const auto n = static_cast<size_t>(nv);
   const auto frames = static_cast<size_t>(scene.time.frames);
-  problem.fixed.assign(n * frames, 0);
-  problem.values.assign(n * frames, cplx(0, 0));
+  fixed.assign(n * frames, 0);
+  values.assign(n * frames, cplx(0, 0));
 
   // Key frames: whole frames held fixed.
   std::vector<char> is_key(frames, 0);
@@ -180,9 +288,9 @@ SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
                                     "use more frames or move the key frame",
                                     scene.keyframes[k].t, j));
     is_key[j] = 1;
-    const std::vector<cplx> key = keyframe_field(space, scene, k, problem.laplacian);
-    std::fill_n(problem.fixed.begin() + static_cast<std::ptrdiff_t>(j * n), n, char{1});
-    std::copy(key.begin(), key.end(), problem.values.begin() + static_cast<std::ptrdiff_t>(j * n));
+    const std::vector<cplx> key = keyframe_field(space, scene, k, laplacian);
+    std::fill_n(fixed.begin() + static_cast<std::ptrdiff_t>(j * n), n, char{1});
+    std::copy(key.begin(), key.end(), values.begin() + static_cast<std::ptrdiff_t>(j * n));
   }
 
   // Element regions at every other frame (key frames and elements combine in one solve).
@@ -192,21 +300,54 @@ SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
   quiet.progress = nullptr;
   for_each_frame(scene.time.frames, quiet, [&](int j) {
     if (is_key[static_cast<size_t>(j)]) return;
-    const std::span<char> f(problem.fixed.data() + static_cast<size_t>(j) * n, n);
-    const std::span<cplx> v(problem.values.data() + static_cast<size_t>(j) * n, n);
+    const std::span<char> f(fixed.data() + static_cast<size_t>(j) * n, n);
+    const std::span<cplx> v(values.data() + static_cast<size_t>(j) * n, n);
     constrain_elements(space, scene, elements, scene.time.time(j), d, f, v);
   });
-  return problem;
 }
+
+}  // namespace
 
 Field generate_spacetime(const DesignSpace& space, const Scene& scene,
                          const GenerateOptions& options, GenerateReport* report) {
   const auto start = std::chrono::steady_clock::now();
-  const SpaceTimeProblem problem = spacetime_problem(space, scene, options);
   const int nv = space.mesh().num_vertices();
+  check_spacetime_scene(scene, nv);
+  std::unique_ptr<ConnectionLaplacian> own_laplacian;
+  const ConnectionLaplacian& laplacian = laplacian_for(space, scene.solver.weights, options.cache, own_laplacian);
+  SpaceTimeProblem problem;  // its laplacian stays empty: `laplacian` is used
+  spacetime_constraints(space, scene, laplacian, options, problem.fixed, problem.values);
   Field field(scene.time, nv);
-  SpaceTimeSolver solver(problem.laplacian, scene.time.frames, scene.solver.temporal_weight);
-  solver.interpolate_in_time(problem.fixed, problem.values, field.data());
+  // The solver object: the cache's when it was made for these frames and temporal weight
+  // (it keeps its set-up and the temporal modes of its last solve), else a new one.
+  std::unique_ptr<SpaceTimeSolver> own_solver;
+  const SpaceTimeSolver* solver_ptr = nullptr;
+  bool warm = false;
+  if (options.cache) {
+    GenerateCache::State& c = options.cache->state();
+    if (!c.spacetime || c.frames != scene.time.frames || c.temporal_weight != scene.solver.temporal_weight) {
+      c.spacetime = std::make_unique<SpaceTimeSolver>(laplacian, scene.time.frames, scene.solver.temporal_weight);
+      c.frames = scene.time.frames;
+      c.temporal_weight = scene.solver.temporal_weight;
+      c.last.clear();
+    }
+    solver_ptr = c.spacetime.get();
+    warm = c.last.size() == field.data().size();
+  } else {
+    own_solver = std::make_unique<SpaceTimeSolver>(laplacian, scene.time.frames, scene.solver.temporal_weight);
+    solver_ptr = own_solver.get();
+  }
+  const SpaceTimeSolver& solver = *solver_ptr;
+  if (warm) {
+    // Warm start: the last solution, with this problem's fixed values where it fixes them.
+    GenerateCache::State& c = options.cache->state();
+    std::copy(c.last.begin(), c.last.end(), field.data().begin());
+    for (size_t k = 0; k < problem.fixed.size(); ++k)
+      if (problem.fixed[k]) field.data()[k] = problem.values[k];
+    ++c.warm;
+  } else {
+    solver.interpolate_in_time(problem.fixed, problem.values, field.data());
+  }
   SpaceTimeOptions st;
   st.tolerance = scene.solver.tolerance;
   st.parallel = options.parallel;
@@ -231,8 +372,9 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
                       fmt::format("the space-time solve stopped at relative residual {:.2e} after {} "
                                   "iterations, short of the tolerance {:.1e}",
                                   r.residual, r.iterations, scene.solver.tolerance));
+  if (options.cache) options.cache->state().last.assign(field.data().begin(), field.data().end());
   if (report) {
-    report->method = "spatio-temporal optimization, " + r.method;
+    report->method = "spatio-temporal optimization, " + r.method + (warm ? " (warm start)" : "");
     report->residual = r.residual;
     report->iterations = r.iterations;
   }

@@ -99,10 +99,15 @@ struct Session::State {
   std::shared_ptr<const Result> result;
   std::shared_ptr<const DesignSpace> space;
   std::string space_key;
+  // The solver set-up and last space-time solution, kept between the worker's solves
+  // (GenerateCache: a re-solve after a small change starts from the last result). Only
+  // the worker thread uses it.
+  GenerateCache solver_cache;
   std::thread worker;
 
   // Serialises edits (each one reads the current field and appends to the scene).
   std::mutex edit_mutex;
+  std::mutex render_mutex;  // one video at a time
 
   fs::path scene_path() const { return dir / options.scene; }
 
@@ -213,6 +218,7 @@ struct Session::State {
     GenerateOptions go;
     go.parallel = options.parallel;
     go.cancel = &flag;
+    go.cache = &solver_cache;
     go.progress = [this](int d, int t) {
       std::lock_guard lock(mutex);
       done = d;
@@ -503,27 +509,46 @@ json Session::export_field(const json& request) {
 }
 
 json Session::render_video(const json& request) {
-  check_keys(request, "render", {"name", "size", "singularities", "paths"});
+  check_keys(request, "render", {"name", "size", "singularities", "paths", "frames", "view", "up", "fov"});
   const std::string name = string_or(request, "name", "render", "video.mp4");
   const fs::path out = resolve(name);
-  int size = 512;
-  if (request.contains("size")) {
-    if (!request["size"].is_number_integer() || request["size"].get<long long>() < 16 ||
-        request["size"].get<long long>() > 4096)
-      throw RequestError(400, "render.size: expected an integer in [16, 4096]");
-    size = request["size"].get<int>();
-  }
+  auto integer = [&](const char* key, int fallback, long long lo, long long hi) {
+    if (!request.contains(key)) return fallback;
+    if (!request[key].is_number_integer() || request[key].get<long long>() < lo || request[key].get<long long>() > hi)
+      throw RequestError(400, fmt::format("render.{}: expected an integer in [{}, {}]", key, lo, hi));
+    return request[key].get<int>();
+  };
   auto flag = [&](const char* key, bool fallback) {
     if (!request.contains(key)) return fallback;
     if (!request[key].is_boolean()) throw RequestError(400, fmt::format("render.{}: expected true or false", key));
     return request[key].get<bool>();
   };
-  const auto r = s_->current_result();
-  if (!r->space->planar()) throw RequestError(400, "render: videos are made of planar domains only");
+  auto vector = [&](const char* key, const Vec3& fallback) {
+    if (!request.contains(key)) return fallback;
+    const json& v = request[key];
+    if (!v.is_array() || v.size() != 3 || !std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); }))
+      throw RequestError(400, fmt::format("render.{}: expected three numbers [x, y, z]", key));
+    const Vec3 d(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    if (!d.allFinite() || d.norm() == 0)
+      throw RequestError(400, fmt::format("render.{}: expected a non-zero direction", key));
+    return d;
+  };
   TextureAnimationOptions o;
-  o.texture.size = size;
+  o.texture.size = integer("size", 512, 16, 4096);
+  o.frames = integer("frames", 0, 1, 100000);
   o.overlay_singularities = flag("singularities", true);
   o.overlay_paths = flag("paths", false);
+  // Surfaces: the camera (the designer sends its own view, so the video shows what the
+  // page shows); planar domains ignore it.
+  o.surface.direction = vector("view", o.surface.direction);
+  o.surface.up = vector("up", o.surface.up);
+  if (request.contains("fov")) {
+    if (!request["fov"].is_number() || !(request["fov"].get<double>() > 1) || !(request["fov"].get<double>() < 170))
+      throw RequestError(400, "render.fov: expected a number of degrees in (1, 170)");
+    o.surface.fov = request["fov"].get<double>();
+  }
+  if (o.surface.direction.cross(o.surface.up).norm() < 1e-6 * o.surface.direction.norm() * o.surface.up.norm())
+    throw RequestError(400, "render.up: must not be parallel to render.view");
   const std::string ext = out.extension().string();
   if (ext == ".mp4") {
     if (!ffmpeg_available()) throw RequestError(400, "render: ffmpeg is not installed (scripts/install-deps.sh)");
@@ -533,7 +558,12 @@ json Session::render_video(const json& request) {
   } else {
     throw RequestError(400, fmt::format("render.name \"{}\": give an .mp4 file or a folder for PNG frames", name));
   }
+  const auto r = s_->current_result();
   try {
+    // One texture animation at a time: the offscreen renderer and ffmpeg are not worth
+    // running twice at once, and a second request is refused rather than queued.
+    std::unique_lock lock(s_->render_mutex, std::try_to_lock);
+    if (!lock.owns_lock()) throw RequestError(503, "render: a video is being rendered; try again when it is done");
     const TextureAnimationReport rep = write_texture_animation(r->space->bundle(), r->field, o);
     return {{"revision", r->revision},
             {"file", fs::relative(out, s_->dir).generic_string()},
@@ -541,6 +571,8 @@ json Session::render_video(const json& request) {
             {"width", rep.width},
             {"height", rep.height},
             {"seconds", rep.seconds}};
+  } catch (const RequestError&) {
+    throw;
   } catch (const Error& e) {
     throw RequestError(400, e.what());
   }

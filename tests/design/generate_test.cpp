@@ -526,3 +526,160 @@ TEST(Generate, IncompressibleScenesAreProjectedLastAndReported) {
 
 }  // namespace
 }  // namespace tvf
+
+// Regular elements and key-frame streamlines on surfaces, as the designer draws them:
+// points picked on the surface, [x, y, z] (and t for pathlines).
+#include "tvf/integrate/pathline.h"
+#include "tvf/integrate/streamline.h"
+
+namespace tvf {
+namespace {
+
+// The point at angle a along the great circle from p towards q (unit vectors).
+Vec3 along_great_circle(const Vec3& p, const Vec3& q, double a) {
+  const Vec3 u = (q - p.dot(q) * p).normalized();
+  return std::cos(a) * p + std::sin(a) * u;
+}
+
+// Distance from x to the great circle through p and q (both unit), along the sphere.
+double off_great_circle(const Vec3& p, const Vec3& q, const Vec3& x) {
+  const Vec3 n = p.cross(q).normalized();
+  return std::asin(std::clamp(std::abs(n.dot(x.normalized())), 0.0, 1.0));
+}
+
+}  // namespace
+
+TEST(SurfaceDesign, AParticleReleasedOnAPathlineOnTheSphereFollowsIt) {
+  // A pathline drawn along a great circle over 0.9 rad, picked at 7 points on the sphere.
+  const Vec3 p = Vec3(0.2, -1, 0.1).normalized(), q = Vec3(1, -0.3, 0.3).normalized();
+  const double arc = 0.9;
+  for (Generator g : {Generator::basis, Generator::constrained, Generator::spacetime}) {
+    Scene s;
+    s.domain.sphere = SphereSpec{4, 1.0};
+    s.time.frames = 21;
+    s.generator = g;
+    s.falloff = 12;
+    RegularElement r;
+    for (int k = 0; k <= 6; ++k) r.pathline.push_back({along_great_circle(p, q, arc * k / 6), k / 6.0});
+    s.elements.push_back(r);
+    const auto space = make_design_space(s);
+    const Field field = generate(*space, s);
+    PathlineOptions po;
+    po.t_start = 0;
+    po.t_end = 1;
+    const Pathline line = trace_pathline(space->bundle(), field, r.pathline.front().position, po);
+    ASSERT_GE(line.times.size(), 10u) << to_string(g);
+    EXPECT_NEAR(line.times.back(), 1.0, 1e-9) << to_string(g);
+    for (size_t i = 0; i < line.points.size(); ++i) {
+      // On the sphere, on the great circle, where the pathline is at that time.
+      const Vec3 want = along_great_circle(p, q, arc * line.times[i]);
+      EXPECT_NEAR(line.points[i].norm(), 1.0, 0.01);
+      EXPECT_LT((line.points[i] - want).norm(), 0.06)
+          << to_string(g) << " at t = " << line.times[i] << ": " << line.points[i].transpose() << " instead of "
+          << want.transpose();
+    }
+  }
+}
+
+TEST(SurfaceDesign, AKeyFrameStreamlineOnTheSphereIsAStreamlineOfItsFrame) {
+  const Vec3 p = Vec3(-0.3, -1, 0.4).normalized(), q = Vec3(0.6, -0.6, -0.2).normalized();
+  const double arc = 1.0;
+  Scene s;
+  s.domain.sphere = SphereSpec{4, 1.0};
+  s.time.frames = 11;
+  s.generator = Generator::spacetime;
+  Keyframe k;
+  k.t = 0.5;
+  KeyframeStreamline line;
+  for (int i = 0; i <= 9; ++i) line.points.push_back(along_great_circle(p, q, arc * i / 9));
+  k.streamlines.push_back(line);
+  s.keyframes.push_back(k);
+  const auto space = make_design_space(s);
+  const Field field = generate(*space, s);
+  const int j = keyframe_frame(s, k.t);
+  StreamlineOptions so;
+  so.both_directions = false;
+  so.max_length = 0.9 * arc;
+  const Streamline traced = trace_streamline(space->bundle(), field.frame(j), line.points.front(), so);
+  EXPECT_GT(traced.length(), 0.85 * arc);
+  for (const Vec3& x : traced.points) EXPECT_LT(off_great_circle(p, q, x), 0.03) << x.transpose();
+  // It runs in the drawn direction, with the key frame's speed 1 along it.
+  EXPECT_GT((traced.points.back() - line.points.front()).dot(q - p), 0);
+  for (size_t i = 0; i < traced.speeds.size(); i += 5) EXPECT_NEAR(traced.speeds[i], 1.0, 0.15) << i;
+}
+
+}  // namespace tvf
+
+namespace tvf {
+
+TEST(GenerateCache, WarmReSolvesAgreeWithColdOnesAndRebuildWhatChanged) {
+  Scene s;
+  s.domain.grid = GridSpec{17, 17, {-1, -1}, {1, 1}};
+  s.time.frames = 12;
+  s.generator = Generator::spacetime;
+  s.falloff = 8;
+  auto key = [](double t, SingularType type, Vec3 at) {
+    Keyframe k;
+    k.t = t;
+    KeyframeElement e;
+    e.kind = "singular";
+    e.type = type;
+    e.at = at;
+    k.elements.push_back(e);
+    return k;
+  };
+  s.keyframes = {key(0, SingularType::ccw_center, Vec3(-0.3, 0.1, 0)), key(1, SingularType::source, Vec3(0.3, 0, 0))};
+  const auto space = make_design_space(s);
+  GenerateCache cache;
+  GenerateOptions cached;
+  cached.cache = &cache;
+  auto worst_difference = [](const Field& a, const Field& b) {
+    double worst = 0, largest = 0;
+    for (size_t k = 0; k < a.data().size(); ++k) {
+      worst = std::max(worst, std::abs(a.data()[k] - b.data()[k]));
+      largest = std::max(largest, std::abs(b.data()[k]));
+    }
+    return worst / largest;
+  };
+  // Cold, through the cache: the same as without it.
+  GenerateReport report;
+  const Field first = generate(*space, s, cached, &report);
+  EXPECT_LT(worst_difference(first, generate(*space, s)), 1e-12);
+  EXPECT_EQ(cache.warm_starts(), 0);
+  EXPECT_EQ(report.method.find("warm"), std::string::npos) << report.method;
+  // A nudged key-frame element: warm, and the same field as a cold solve to the tolerance.
+  s.keyframes[0].elements[0].at = Vec3(-0.28, 0.1, 0);
+  const Field warm = generate(*space, s, cached, &report);
+  EXPECT_EQ(cache.warm_starts(), 1);
+  EXPECT_EQ(cache.reused_laplacians(), 1);
+  EXPECT_NE(report.method.find("warm start"), std::string::npos) << report.method;
+  EXPECT_LT(worst_difference(warm, generate(*space, s)), 1e-7);
+  EXPECT_GT(worst_difference(warm, first), 1e-4);  // it did change
+  // Other weights: a new Laplacian, and no warm start from a field of the old one.
+  s.solver.weights = Weights::uniform;
+  const Field uniform = generate(*space, s, cached);
+  EXPECT_EQ(cache.reused_laplacians(), 1);
+  EXPECT_EQ(cache.warm_starts(), 1);
+  EXPECT_LT(worst_difference(uniform, generate(*space, s)), 1e-12);
+  // Another frame count: a new space-time solver, cold again.
+  s.time.frames = 9;
+  EXPECT_LT(worst_difference(generate(*space, s, cached), generate(*space, s)), 1e-12);
+  EXPECT_EQ(cache.warm_starts(), 1);
+  // Another domain: everything rebuilt (a field of the right size, as without the cache).
+  Scene other = s;
+  other.domain.grid = GridSpec{9, 9, {-1, -1}, {1, 1}};
+  const auto small = make_design_space(other);
+  EXPECT_LT(worst_difference(generate(*small, other, cached), generate(*small, other)), 1e-12);
+  // The constrained generator through the cache: the same field, bit for bit, each time.
+  other.generator = Generator::constrained;
+  SingularElement c;
+  c.type = SingularType::ccw_center;
+  c.jacobian = jacobian_of(*c.type);
+  c.path = {{Vec3(-0.2, 0, 0), 0}, {Vec3(0.3, 0.1, 0), 1}};
+  other.elements = {c};
+  const Field plain = generate(*small, other);
+  EXPECT_EQ(generate(*small, other, cached).data(), plain.data());
+  EXPECT_EQ(generate(*small, other, cached).data(), plain.data());
+}
+
+}  // namespace tvf

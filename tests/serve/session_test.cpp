@@ -7,9 +7,11 @@
 #include "test_scene.h"
 
 #include "tvf/design/scene_json.h"
+#include "tvf/render/video.h"
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -212,6 +214,63 @@ TEST(ServeSession, ExportsTheFieldInsideTheWorkingFolder) {
   EXPECT_GE(bytes, 21u * 33u * 33u * 3u * 4u);
   EXPECT_LE(bytes, 21u * 33u * 33u * 3u * 4u + 256u);
   EXPECT_FALSE(fs::exists(dir / "exported" / "field.pvd"));
+}
+
+TEST(ServeSession, SurfacesTakePathlinesAndStreamlinesPickedOnThemAndRenderVideos) {
+  // What the designer sends after drawing on the sphere: a pathline of points picked on
+  // the surface, [x, y, z, t], and a key-frame streamline, [x, y, z] (picked points lie on
+  // the picked triangles, a little inside the unit sphere: the scene snaps them).
+  test::TempDir dir;
+  SessionOptions o;
+  o.dir = dir.path();
+  o.initial_scene = R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 3, "radius": 1}},
+    "time": {"frames": 11, "range": [0, 1]}, "generator": "spacetime", "falloff": 12,
+    "elements": [{"kind": "regular", "pathline": [[0.0, -0.995, 0.0, 0], [0.3, -0.95, 0.0, 0.5], [0.58, -0.81, 0.0, 1]]}],
+    "keyframes": [{"t": 0, "streamlines": [{"points": [[-0.1, -0.6, 0.79], [-0.1, -0.79, 0.6], [-0.1, -0.9, 0.42]]}]}]})";
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(120));
+  ASSERT_EQ(s.status()["state"], "ready") << s.status();
+  const json m = s.mesh();
+  EXPECT_FALSE(m["planar"].get<bool>());
+  // The world vector at the vertex nearest to a point, in a frame.
+  auto vector_near = [&](const json& frame, double x, double y, double z) {
+    size_t best = 0;
+    double best_d = INFINITY;
+    for (size_t v = 0; 3 * v < m["vertices"].size(); ++v) {
+      const double d = std::hypot(m["vertices"][3 * v].get<double>() - x, m["vertices"][3 * v + 1].get<double>() - y,
+                                  m["vertices"][3 * v + 2].get<double>() - z);
+      if (d < best_d) best_d = d, best = v;
+    }
+    return std::array<double, 3>{frame["vectors"][3 * best].get<double>(), frame["vectors"][3 * best + 1].get<double>(),
+                                 frame["vectors"][3 * best + 2].get<double>()};
+  };
+  auto cosine = [](std::array<double, 3> a, std::array<double, 3> b) {
+    return (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (std::hypot(a[0], a[1], a[2]) * std::hypot(b[0], b[1], b[2]));
+  };
+  // Mid-way the field carries particles along the pathline (towards +x) ...
+  EXPECT_GT(cosine(vector_near(s.frame(5), 0.3, -0.95, 0), {1, 0.3, 0}), 0.9);
+  // ... and at the key frame it runs along the streamline (towards −z).
+  EXPECT_GT(cosine(vector_near(s.frame(0), -0.1, -0.79, 0.6), {0, -0.6, -0.8}), 0.9);
+
+  // The video of the surface, seen from the page's camera: PNG frames here (fast), each
+  // `size` pixels square.
+  const json r = s.render_video({{"name", "frames"}, {"size", 64}, {"frames", 3}, {"view", {0, -1, 0.3}}, {"up", {0, 0, 1}}, {"fov", 40}});
+  EXPECT_EQ(r["frames"], 3);
+  EXPECT_EQ(r["width"], 64);
+  EXPECT_TRUE(fs::exists(dir / "frames" / "frame_00000.png")) << r;
+  EXPECT_TRUE(fs::exists(dir / "frames" / "frame_00002.png")) << r;
+  EXPECT_FALSE(fs::exists(dir / "frames" / "frame_00003.png")) << r;
+  EXPECT_EQ(status_of([&] { s.render_video({{"name", "v"}, {"view", {0, 0, 1}}, {"up", {0, 0, 2}}}); }), 400);
+  EXPECT_EQ(status_of([&] { s.render_video({{"name", "v"}, {"view", {0, 0}}}); }), 400);
+  EXPECT_EQ(status_of([&] { s.render_video({{"name", "v"}, {"view", {0, 0, 0}}}); }), 400);
+  EXPECT_EQ(status_of([&] { s.render_video({{"name", "v"}, {"fov", 500}}); }), 400);
+  EXPECT_EQ(status_of([&] { s.render_video({{"name", "v"}, {"frames", 0}}); }), 400);
+  EXPECT_FALSE(fs::exists(dir / "v"));
+  if (ffmpeg_available()) {
+    const json v = s.render_video({{"name", "sphere.mp4"}, {"size", 64}, {"frames", 4}});
+    EXPECT_EQ(v["file"], "sphere.mp4");
+    EXPECT_GT(fs::file_size(dir / "sphere.mp4"), 0u);
+  }
 }
 
 }  // namespace

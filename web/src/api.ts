@@ -90,8 +90,9 @@ export const api = {
   frame: (j: number) => call<Frame>("GET", `api/frame/${j}`),
   analysis: () => call<Analysis>("GET", "api/analysis"),
   exportField: (format: string, dir: string) => call<{ files: string[] }>("POST", "api/export", { format, dir }),
-  render: (name: string, size: number) =>
-    call<{ file: string; frames: number; seconds: number }>("POST", "api/render", { name, size }),
+  // On surfaces `camera` is the view to render from (SurfaceView.cameraView()).
+  render: (name: string, size: number, camera?: { view: number[]; up: number[]; fov: number }, frames?: number) =>
+    call<{ file: string; frames: number; seconds: number }>("POST", "api/render", { name, size, ...(camera ?? {}), ...(frames ? { frames } : {}) }),
   async upload(file: File): Promise<{ file: string }> {
     const res = await fetch(`api/upload?name=${encodeURIComponent(file.name)}`, {
       method: "POST",

@@ -8,6 +8,7 @@ import { CoherencePlot } from "./coherence";
 import { lic, noise, type GridField } from "./lic";
 import * as S from "./scene";
 import { SpaceTimeView } from "./spacetime";
+import { spaceTimePathline } from "./spacetime_draw";
 import { SurfaceView } from "./surface";
 import { resample } from "./stroke";
 import { rounded, View } from "./view";
@@ -104,7 +105,23 @@ function showScene(s: SceneState) {
     tick.title = `key frame t = ${k.t}`;
     ticks.appendChild(tick);
   }
+  showDesignCurves();
   redraw();
+}
+
+// The design's pathlines in the space-time view, and on surfaces its pathlines and the
+// streamlines of the key frame at the current frame.
+function showDesignCurves() {
+  const s = state.scene!.scene;
+  const pathlines = (s.elements ?? []).flatMap((e) => (e.kind === "regular" ? [e.pathline] : []));
+  if (S.isPlanar(s)) spacetime.setDesign(pathlines);
+  if (!S.isPlanar(s) && surface) {
+    const j = state.frame;
+    const lines = pathlines.map((points) => ({ points, color: PATHLINE_COLOR }));
+    for (const k of s.keyframes ?? [])
+      if (S.frameOf(s, k.t) === j) for (const sl of k.streamlines ?? []) lines.push({ points: sl.points, color: STREAMLINE_COLOR });
+    surface.setDesign(lines);
+  }
 }
 
 async function change(next: S.Scene, what: string) {
@@ -174,8 +191,11 @@ function setupDomainView() {
     if (!surface) {
       surface = new SurfaceView(host);
       surface.onPick = surfacePick;
+      surface.onStroke = surfaceStroke;
+      surface.drawing = drawsOnSurface();
     }
     surface.setMesh(state.mesh!);
+    showDesignCurves();
   }
 }
 
@@ -198,7 +218,10 @@ async function showFrame(j: number) {
   try {
     const f = await frameData(j);
     if (f.frame !== state.frame) return;
-    if (!planar() && surface) surface.setFrame(f, markers());
+    if (!planar() && surface) {
+      surface.setFrame(f, markers());
+      showDesignCurves();
+    }
   } catch (e) {
     if (!(e instanceof ApiError && e.status === 409)) say((e as Error).message, true);
   }
@@ -521,10 +544,46 @@ function surfacePick(p: number[]) {
   } else if (state.tool === "select") {
     state.selected = S.pick(scene(), t, at, 0.1);
     say(state.selected ? "selected: Delete removes it" : "nothing here");
+  } else if (state.tool === "pathline" || state.tool === "streamline") {
+    say(`drag on the surface to draw a ${state.tool}`, true);
   } else {
-    say("on surfaces, draw with Singular, Bifurcation and Cancel pair (pathlines and streamlines: in the scene JSON)", true);
+    say("on surfaces, draw with Singular, Pathline, Streamline, Bifurcation and Cancel pair (deformation: in the scene JSON)", true);
   }
 }
+
+function drawsOnSurface() {
+  return state.tool === "pathline" || state.tool === "streamline";
+}
+
+// A stroke drawn on the surface: points picked on it, [x, y, z].
+function surfaceStroke(points: number[][]) {
+  if (!state.scene) return;
+  const t = Number(currentTime().toFixed(4));
+  const [ts, te] = lifeSpan();
+  try {
+    if (points.length < 2) return say(`drag on the surface to draw a ${state.tool}`, true);
+    if (state.tool === "pathline")
+      void change(S.addPathline(scene(), resample(points, 8), ts, te), `pathline on the surface from t = ${ts} to ${te}`);
+    else if (state.tool === "streamline")
+      void change(S.addKeyframeStreamline(scene(), t, resample(points, 10)), `streamline on the surface in the key frame at t = ${t}`);
+  } catch (err) {
+    say((err as Error).message, true);
+  }
+}
+
+// A stroke drawn in the space-time view: [x, y, t] points (spacetime_draw.ts).
+spacetime.onStroke = (points) => {
+  if (!state.scene || !planar()) return;
+  try {
+    const g = scene().domain.grid!;
+    const line = spaceTimePathline(points, { min: [g.min[0], g.min[1]], max: [g.max[0], g.max[1]], range: [scene().time.range[0], scene().time.range[1]] });
+    const t0 = line[0][2];
+    const t1 = line[line.length - 1][2];
+    void change(S.addTimedPathline(scene(), line), `pathline drawn in space-time, from t = ${t0} to ${t1}`);
+  } catch (err) {
+    say((err as Error).message, true);
+  }
+};
 
 function deleteSelected() {
   if (!state.selected) return say("select an element first (Select tool)", true);
@@ -575,6 +634,8 @@ $<HTMLSelectElement>("singular-type").value = "ccw_center";
 document.querySelectorAll<HTMLInputElement>("input[name=tool]").forEach((r) =>
   r.addEventListener("change", () => {
     state.tool = r.value;
+    spacetime.drawing = state.tool === "pathline";
+    if (surface) surface.drawing = drawsOnSurface();
     state.cancelPicks = [];
     state.selected = undefined;
     redraw();
@@ -641,9 +702,11 @@ $("export-vtk").addEventListener("click", async () => {
   }
 });
 $("render-video").addEventListener("click", async () => {
-  say("rendering video.mp4…");
+  const size = Math.round(Number($<HTMLInputElement>("video-size").value));
+  if (!(size >= 16 && size <= 4096)) return say("the video size is a number of pixels in [16, 4096]", true);
+  say(`rendering video.mp4 (${size}²${planar() ? "" : ", the surface from this camera"})…`);
   try {
-    const r = await api.render("video.mp4", 512);
+    const r = await api.render("video.mp4", size, planar() || !surface ? undefined : surface.cameraView());
     const a = $<HTMLAnchorElement>("video-link");
     a.href = `api/files/${r.file}?rev=${state.resultRevision}`;
     a.hidden = false;
@@ -664,7 +727,12 @@ document.addEventListener("keydown", (e) => {
 });
 
 // For the end-to-end test and the curious: the state, read-only.
-(window as unknown as { tvf: unknown }).tvf = { state, view: () => (planar() ? view() : undefined) };
+(window as unknown as { tvf: unknown }).tvf = {
+  state,
+  view: () => (planar() ? view() : undefined),
+  spacetime: (p: number[]) => spacetime.toScreen(p),
+  surface: (p: number[]) => surface?.toScreen(p),
+};
 
 (async () => {
   try {

@@ -138,6 +138,24 @@ export function addPathline(scene: Scene, points: Vec[], ts: number, te: number,
   return s;
 }
 
+// A regular element along a pathline whose points carry their own times ([x, y, t] or
+// [x, y, z, t], e.g. drawn in the space-time view): at least two points, in strictly
+// increasing t inside the time range.
+export function addTimedPathline(scene: Scene, pathline: Vec[], attach = 0): Scene {
+  if (pathline.length < 2) throw new Error("a pathline needs at least two points");
+  const [t0, t1] = scene.time.range;
+  pathline.forEach((p, i) => {
+    const t = p[p.length - 1];
+    if (!(t >= t0 - 1e-9 && t <= t1 + 1e-9)) throw new Error(`pathline point ${i}: t = ${t} is outside the time range [${t0}, ${t1}]`);
+    if (i > 0 && !(t > pathline[i - 1][p.length - 1])) throw new Error(`pathline point ${i}: t = ${t} does not come after the point before it`);
+  });
+  const s = clone(scene);
+  const e: RegularElement = { kind: "regular", pathline: pathline.map((p) => [...p]) };
+  if (attach > 0) e.attach = attach;
+  (s.elements ??= []).push(e);
+  return s;
+}
+
 export function addBifurcation(scene: Scene, type: string, at: Vec, t: number, scale = 0.25, angle = 0, timeScale = 0.25): Scene {
   const s = clone(scene);
   (s.elements ??= []).push({ kind: "bifurcation", type, at: [...at, t], scale, time_scale: timeScale, angle });

@@ -1,10 +1,15 @@
 // The space-time view (paper Fig. 2): the domain's rectangle stretched along a time axis,
-// singularity paths as curves coloured by type, bifurcations as spheres, and the current
-// time as a plane. A click on a bifurcation picks it (for removal or moving).
+// singularity paths as curves coloured by type, bifurcations as spheres, the design's
+// pathlines (regular elements) as thick teal curves, and the current time as a plane. A
+// click on a bifurcation picks it (for removal or moving). With `drawing` on (the
+// Pathline tool), a drag that starts on the time plane inside the domain draws a pathline
+// (spacetime_draw.ts says how the 2-D drag becomes an (x, y, t) curve); any other drag
+// orbits.
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import type { Analysis } from "./api";
-import { BIFURCATION_COLOR, typeColor } from "./colors";
+import { BIFURCATION_COLOR, PATHLINE_COLOR, typeColor } from "./colors";
+import { intersect, timePlane, uprightPlane, type Plane, type Ray, type V3 } from "./spacetime_draw";
 
 export class SpaceTimeView {
   private readonly renderer: THREE.WebGLRenderer;
@@ -18,7 +23,16 @@ export class SpaceTimeView {
   private max: [number, number] = [1, 1];
   private range: [number, number] = [0, 1];
   private selected = -1;
+  private time = 0;
+  private readonly design = new THREE.Group();
+  private readonly strokeLine: THREE.Line;
+  private stroke: { plane: Plane; points: number[][]; id: number } | undefined;
+  private drewAt = -1e9; // when the last drawn stroke ended (performance.now())
+  private pathlines: number[][][] = [];
   onPick: (index: number) => void = () => {};
+  // The Pathline tool: drags from the time plane draw; onStroke gets world [x, y, t] points.
+  drawing = false;
+  onStroke: (points: number[][]) => void = () => {};
 
   constructor(host: HTMLElement) {
     const w = host.clientWidth || 360;
@@ -27,6 +41,13 @@ export class SpaceTimeView {
     this.renderer.setSize(w, h);
     this.renderer.setClearColor(0xffffff);
     host.appendChild(this.renderer.domElement);
+    // Registered before OrbitControls' own listener, so that a drawing drag can switch the
+    // orbit off before it starts.
+    const el = this.renderer.domElement;
+    el.addEventListener("pointerdown", (ev) => this.strokeStart(ev));
+    el.addEventListener("pointermove", (ev) => this.strokeMove(ev));
+    el.addEventListener("pointerup", (ev) => this.strokeEnd(ev));
+    el.addEventListener("pointercancel", () => this.strokeCancel());
     this.camera = new THREE.PerspectiveCamera(35, w / h, 0.01, 100);
     this.camera.up.set(0, 0, 1);
     this.camera.position.set(3.6, -4.4, 3.4);
@@ -40,6 +61,10 @@ export class SpaceTimeView {
       new THREE.MeshBasicMaterial({ color: 0x94a3b8, transparent: true, opacity: 0.25, side: THREE.DoubleSide, depthWrite: false }),
     );
     this.scene.add(this.plane);
+    this.scene.add(this.design);
+    this.strokeLine = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0xf97316, depthTest: false }));
+    this.strokeLine.renderOrder = 2;
+    this.scene.add(this.strokeLine);
     this.renderer.domElement.addEventListener("click", (ev) => this.click(ev));
     this.render();
   }
@@ -51,6 +76,106 @@ export class SpaceTimeView {
     const cy = (this.min[1] + this.max[1]) / 2;
     const tt = this.range[1] > this.range[0] ? (2 * (t - this.range[0])) / (this.range[1] - this.range[0]) : 0;
     return new THREE.Vector3((x - cx) * s, (y - cy) * s, tt);
+  }
+
+  // View coordinates → world (x, y, t): the inverse of map.
+  private unmap(v: V3): number[] {
+    const s = 2 / Math.max(this.max[0] - this.min[0], this.max[1] - this.min[1]);
+    const cx = (this.min[0] + this.max[0]) / 2;
+    const cy = (this.min[1] + this.max[1]) / 2;
+    return [v[0] / s + cx, v[1] / s + cy, this.range[0] + (v[2] / 2) * (this.range[1] - this.range[0])];
+  }
+
+  // Page-independent canvas pixel position of a world (x, y, t) point (for tests).
+  toScreen(p: number[]): [number, number] {
+    const v = this.map(p[0], p[1], p[2]).project(this.camera);
+    const c = this.renderer.domElement;
+    return [((v.x + 1) / 2) * c.clientWidth, ((1 - v.y) / 2) * c.clientHeight];
+  }
+
+  // The design's pathlines (each a list of [x, y, t] points), drawn over the paths.
+  setDesign(pathlines: number[][][]) {
+    this.pathlines = pathlines;
+    this.drawDesign();
+  }
+
+  private drawDesign() {
+    const pathlines = this.pathlines;
+    for (const child of [...this.design.children]) {
+      this.design.remove(child);
+      (child as THREE.Mesh).geometry?.dispose();
+    }
+    for (const line of pathlines) {
+      if (line.length < 2) continue;
+      const pts = line.map((p) => this.map(p[0], p[1], p[p.length - 1]));
+      const curve = new THREE.CatmullRomCurve3(pts, false, "catmullrom", 0.5);
+      const tube = new THREE.Mesh(new THREE.TubeGeometry(curve, 8 * pts.length, 0.018, 6, false), new THREE.MeshBasicMaterial({ color: PATHLINE_COLOR }));
+      this.design.add(tube);
+      for (const p of pts) {
+        const dot = new THREE.Mesh(new THREE.SphereGeometry(0.03, 10, 8), new THREE.MeshBasicMaterial({ color: PATHLINE_COLOR }));
+        dot.position.copy(p);
+        this.design.add(dot);
+      }
+    }
+    this.render();
+  }
+
+  private ray(ev: PointerEvent | MouseEvent): Ray {
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(ndc, this.camera);
+    const o = ray.ray.origin;
+    const d = ray.ray.direction;
+    return { origin: [o.x, o.y, o.z], direction: [d.x, d.y, d.z] };
+  }
+
+  private strokeStart(ev: PointerEvent) {
+    if (!this.drawing || ev.button !== 0) return;
+    const z = this.map(0, 0, this.time).z;
+    const hit = intersect(this.ray(ev), timePlane(z));
+    if (!hit) return;
+    const w = this.unmap(hit);
+    const inside = w[0] >= this.min[0] && w[0] <= this.max[0] && w[1] >= this.min[1] && w[1] <= this.max[1];
+    if (!inside) return; // a drag outside the domain orbits
+    const view = new THREE.Vector3();
+    this.camera.getWorldDirection(view);
+    const plane = uprightPlane(hit, [view.x, view.y, view.z]);
+    if (!plane) return;
+    this.controls.enabled = false;
+    this.renderer.domElement.setPointerCapture(ev.pointerId);
+    this.stroke = { plane, points: [[w[0], w[1], this.time]], id: ev.pointerId };
+    this.showStroke();
+  }
+
+  private strokeMove(ev: PointerEvent) {
+    if (!this.stroke || ev.pointerId !== this.stroke.id) return;
+    const hit = intersect(this.ray(ev), this.stroke.plane);
+    if (!hit) return;
+    this.stroke.points.push(this.unmap(hit));
+    this.showStroke();
+  }
+
+  private strokeEnd(ev: PointerEvent) {
+    if (!this.stroke || ev.pointerId !== this.stroke.id) return;
+    this.strokeMove(ev);
+    const points = this.stroke.points;
+    this.strokeCancel();
+    this.drewAt = performance.now();
+    this.onStroke(points);
+  }
+
+  private strokeCancel() {
+    this.stroke = undefined;
+    this.controls.enabled = true;
+    this.showStroke();
+  }
+
+  private showStroke() {
+    const pts = (this.stroke?.points ?? []).map((p) => this.map(p[0], p[1], p[2]));
+    this.strokeLine.geometry.dispose();
+    this.strokeLine.geometry = new THREE.BufferGeometry().setFromPoints(pts);
+    this.render();
   }
 
   set(analysis: Analysis, min: [number, number], max: [number, number], range: [number, number]) {
@@ -88,10 +213,12 @@ export class SpaceTimeView {
       this.content.add(m);
       return m;
     });
+    this.drawDesign();
     this.highlight(this.selected);
   }
 
   setTime(t: number) {
+    this.time = t;
     const z = this.map(0, 0, t).z;
     const s = 2 / Math.max(this.max[0] - this.min[0], this.max[1] - this.min[1]);
     this.plane.scale.set((this.max[0] - this.min[0]) * s / 2, (this.max[1] - this.min[1]) * s / 2, 1);
@@ -109,6 +236,7 @@ export class SpaceTimeView {
   }
 
   private click(ev: MouseEvent) {
+    if (performance.now() - this.drewAt < 400) return; // the click that ends a drawn stroke picks nothing
     const r = this.renderer.domElement.getBoundingClientRect();
     const ndc = new THREE.Vector2(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
     const ray = new THREE.Raycaster();

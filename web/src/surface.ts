@@ -1,6 +1,10 @@
 // The surface designer's view: the mesh, the current frame's field as short arrows at a
-// subset of vertices, singularities coloured by type, and design elements. A click on the
-// surface reports the picked point [x, y, z] (the server snaps positions to the surface).
+// subset of vertices, singularities coloured by type, and design elements (markers, the
+// pathlines and key-frame streamlines as thick curves). A click on the surface reports
+// the picked point [x, y, z] (the server snaps positions to the surface). With `drawing`
+// on (the Pathline and Streamline tools), a drag that starts on the surface draws on it:
+// every pointer position is picked on the surface, and the stroke's points go to
+// onStroke; a drag that starts off the surface orbits.
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import type { Frame, MeshData } from "./api";
@@ -16,7 +20,12 @@ export class SurfaceView {
   private positions: Float32Array = new Float32Array();
   private radius = 1;
   private down: [number, number] | undefined;
+  private readonly design = new THREE.Group();
+  private readonly strokeLine: THREE.Line;
+  private stroke: { points: number[][]; id: number } | undefined;
   onPick: (p: number[]) => void = () => {};
+  drawing = false;
+  onStroke: (points: number[][]) => void = () => {};
 
   constructor(host: HTMLElement) {
     const w = host.clientWidth || 512;
@@ -25,18 +34,113 @@ export class SurfaceView {
     this.renderer.setSize(w, h);
     this.renderer.setClearColor(0xffffff);
     host.appendChild(this.renderer.domElement);
+    const el = this.renderer.domElement;
+    // Registered before OrbitControls' own listeners, so that a drawing drag can switch
+    // the orbit off before it starts.
+    el.addEventListener("pointerdown", (e) => this.strokeStart(e));
+    el.addEventListener("pointermove", (e) => this.strokeMove(e));
+    el.addEventListener("pointercancel", () => this.strokeCancel());
     this.camera = new THREE.PerspectiveCamera(40, w / h, 0.001, 1000);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.addEventListener("change", () => this.render());
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8899aa, 3.0));
     this.scene.add(this.overlay);
-    const el = this.renderer.domElement;
+    this.scene.add(this.design);
+    this.strokeLine = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0xf97316, depthTest: false }));
+    this.strokeLine.renderOrder = 2;
+    this.scene.add(this.strokeLine);
     // A click (not a drag of the camera) picks a point.
     el.addEventListener("pointerdown", (e) => (this.down = [e.clientX, e.clientY]));
     el.addEventListener("pointerup", (e) => {
-      if (this.down && Math.hypot(e.clientX - this.down[0], e.clientY - this.down[1]) < 4) this.pick(e);
+      const click = this.down && Math.hypot(e.clientX - this.down[0], e.clientY - this.down[1]) < 4;
       this.down = undefined;
+      if (this.stroke && e.pointerId === this.stroke.id) {
+        this.strokeMove(e);
+        const points = this.stroke.points;
+        this.strokeCancel();
+        if (!click) return this.onStroke(points);
+      }
+      if (click) this.pick(e);
     });
+  }
+
+  // The camera as the video should see the mesh: the direction from the mesh's centre
+  // to the camera, the screen's up direction, and the vertical field of view (degrees).
+  cameraView(): { view: number[]; up: number[]; fov: number } {
+    const d = this.camera.position.clone().sub(this.controls.target).normalize();
+    const up = new THREE.Vector3(0, 1, 0).applyQuaternion(this.camera.quaternion);
+    const r = (v: number) => Math.round(v * 1e4) / 1e4;
+    return { view: [r(d.x), r(d.y), r(d.z)], up: [r(up.x), r(up.y), r(up.z)], fov: this.camera.fov };
+  }
+
+  // Canvas pixel position of a world point (for tests).
+  toScreen(p: number[]): [number, number] {
+    const v = new THREE.Vector3(p[0], p[1], p[2]).project(this.camera);
+    const c = this.renderer.domElement;
+    return [((v.x + 1) / 2) * c.clientWidth, ((1 - v.y) / 2) * c.clientHeight];
+  }
+
+  // The design's curves on the surface: pathlines and streamlines, [x, y, z, …] points.
+  setDesign(lines: { points: number[][]; color: string }[]) {
+    for (const c of [...this.design.children]) {
+      this.design.remove(c);
+      (c as THREE.Mesh).geometry?.dispose();
+    }
+    for (const line of lines) {
+      if (line.points.length < 2) continue;
+      const pts = line.points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
+      const curve = new THREE.CatmullRomCurve3(pts, false, "catmullrom", 0.5);
+      const material = new THREE.MeshBasicMaterial({ color: line.color });
+      this.design.add(new THREE.Mesh(new THREE.TubeGeometry(curve, 8 * pts.length, 0.008 * this.radius, 6, false), material));
+      for (const p of pts) {
+        const dot = new THREE.Mesh(new THREE.SphereGeometry(0.014 * this.radius, 10, 8), material);
+        dot.position.copy(p);
+        this.design.add(dot);
+      }
+    }
+    this.render();
+  }
+
+  private hit(e: PointerEvent): THREE.Vector3 | undefined {
+    if (!this.surface) return undefined;
+    const r = this.renderer.domElement.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(ndc, this.camera);
+    return ray.intersectObject(this.surface)[0]?.point;
+  }
+
+  private strokeStart(e: PointerEvent) {
+    if (!this.drawing || e.button !== 0) return;
+    const p = this.hit(e);
+    if (!p) return; // off the surface: orbit
+    this.controls.enabled = false;
+    this.renderer.domElement.setPointerCapture(e.pointerId);
+    this.stroke = { points: [[p.x, p.y, p.z]], id: e.pointerId };
+    this.showStroke();
+  }
+
+  private strokeMove(e: PointerEvent) {
+    if (!this.stroke || e.pointerId !== this.stroke.id) return;
+    const p = this.hit(e);
+    if (!p) return; // off the surface: the stroke waits until the pointer is back on it
+    const last = this.stroke.points[this.stroke.points.length - 1];
+    if (Math.hypot(p.x - last[0], p.y - last[1], p.z - last[2]) < 0.005 * this.radius) return;
+    this.stroke.points.push([p.x, p.y, p.z]);
+    this.showStroke();
+  }
+
+  private strokeCancel() {
+    this.stroke = undefined;
+    this.controls.enabled = true;
+    this.showStroke();
+  }
+
+  private showStroke() {
+    const pts = (this.stroke?.points ?? []).map((p) => new THREE.Vector3(p[0], p[1], p[2]));
+    this.strokeLine.geometry.dispose();
+    this.strokeLine.geometry = new THREE.BufferGeometry().setFromPoints(pts);
+    this.render();
   }
 
   get canvas(): HTMLCanvasElement {
@@ -99,13 +203,8 @@ export class SurfaceView {
   }
 
   private pick(e: PointerEvent) {
-    if (!this.surface) return;
-    const r = this.renderer.domElement.getBoundingClientRect();
-    const ndc = new THREE.Vector2(((e.clientX - r.left) / r.width) * 2 - 1, -((e.clientY - r.top) / r.height) * 2 + 1);
-    const ray = new THREE.Raycaster();
-    ray.setFromCamera(ndc, this.camera);
-    const hit = ray.intersectObject(this.surface)[0];
-    if (hit) this.onPick([hit.point.x, hit.point.y, hit.point.z]);
+    const p = this.hit(e);
+    if (p) this.onPick([p.x, p.y, p.z]);
   }
 
   private pending = false;

@@ -22,6 +22,16 @@ describe("scene changes", () => {
     expect(() => S.addPathline(S.emptyScene(), [[0, 0], [1, 1]], 0.5, 0.5)).toThrow(/end time/);
   });
 
+  it("keep the third coordinate of points picked on a surface", () => {
+    const sphere: S.Scene = { ...S.emptyScene(), domain: { sphere: { subdivisions: 4, radius: 1 } } };
+    const picked = [[0, -1, 0], [0.6, -0.8, 0], [0.8, -0.6, 0]];
+    const p = S.addPathline(sphere, picked, 0, 1).elements![0] as S.RegularElement;
+    expect(p.pathline).toEqual([[0, -1, 0, 0], [0.6, -0.8, 0, 0.5], [0.8, -0.6, 0, 1]]);
+    const k = S.addKeyframeStreamline(sphere, 0.5, picked);
+    expect(k.keyframes![0].streamlines).toEqual([{ points: picked }]);
+    expect(k.generator).toBe("spacetime");
+  });
+
   it("put key-frame elements into one key frame per frame and switch to the spacetime generator", () => {
     let s = S.addKeyframeSingular(S.emptyScene(), 0, "ccw_center", [0.5, -0.5]);
     s = S.addKeyframeSingular(s, 0.001, "ccw_center", [0.5, 0.5]); // same frame of 100

@@ -16,11 +16,46 @@
 
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace tvf {
+
+// Set-up that generate() keeps between calls when GenerateOptions::cache is set: the
+// designer's session re-generates after every change, mostly on the same domain with the
+// same solver settings (STYLE 4, factor once, solve many). It holds
+// - the connection Laplacian of the domain and solver.weights (constrained, spacetime);
+// - the constrained generator's per-frame Dirichlet solvers with their symbolic
+//   factorization, one per thread;
+// - the space-time solver (its operator, temporal eigenbases, the temporal modes of its
+//   last solve and its vectors; tvf/solve/spacetime.h) for time.frames and
+//   solver.temporal_weight;
+// - the last space-time solution, the first guess of the next space-time solve (warm
+//   start: after a small change it is close to the new solution).
+// Each part is kept while what it was made from is unchanged (the domain — its mesh, by
+// content —, the weights, the frame count, the temporal weight) and rebuilt otherwise.
+// A warm solve meets the same tolerance as a cold one (fields agree to it, not bit for bit).
+// Not used (yet) by basis, deform, and key frames' static solves. One call at a time.
+class GenerateCache {
+public:
+  GenerateCache();
+  ~GenerateCache();
+  GenerateCache(const GenerateCache&) = delete;
+  GenerateCache& operator=(const GenerateCache&) = delete;
+  void clear();  // forget everything (the next generate() builds from scratch)
+  // Solves that started from the last solution instead of the linear-in-time guess, and
+  // generations that reused a kept Laplacian, since construction.
+  int warm_starts() const;
+  int reused_laplacians() const;
+
+  struct State;  // private to generate.cpp
+  State& state() const { return *state_; }
+
+private:
+  std::unique_ptr<State> state_;
+};
 
 struct GenerateOptions {
   bool parallel = true;  // frames in parallel (TBB)
@@ -33,6 +68,9 @@ struct GenerateOptions {
   // each edit) and stops with GenerationCancelled once it is true. The designer's server
   // sets it when a newer edit makes the running solve pointless.
   const std::atomic<bool>* cancel = nullptr;
+  // When set, the solver set-up and the last space-time solution are kept here between
+  // calls (see GenerateCache). Null: everything is built for this call alone.
+  GenerateCache* cache = nullptr;
 };
 
 // Thrown by generate*() when GenerateOptions::cancel became true; no field is returned.

@@ -9,7 +9,10 @@
 //   they were.
 // - The field is generated in a background thread. A newer change cancels the older
 //   solve (GenerateOptions::cancel); readers always get the last finished result, tagged
-//   with the revision of the scene that made it.
+//   with the revision of the scene that made it. The solver set-up (Laplacian, symbolic
+//   factorizations, the space-time solver and its temporal modes) and the last
+//   space-time solution are kept between solves (GenerateCache), so a re-solve after a
+//   small change starts warm.
 // - Paths: every file the session reads or writes (the scene, meshes and key-frame field
 //   files named by the scene, exports, videos, uploads) lies inside the working folder;
 //   a path that leaves it is refused.
@@ -94,8 +97,13 @@ public:
   // Returns {"files": [paths relative to the working folder]}.
   nlohmann::json export_field(const nlohmann::json& request);
   // Renders the texture animation of the last result to request["name"] (default
-  // "video.mp4"; .mp4 needs ffmpeg) with request["size"] pixels (default 512) and
-  // singularity markers unless request["singularities"] is false. Planar domains.
+  // "video.mp4"; .mp4 needs ffmpeg; a name without extension is a folder of PNG frames)
+  // with request["size"] pixels (default 512), request["frames"] pictures (default: the
+  // field's frames) and singularity markers unless request["singularities"] is false;
+  // request["paths"] adds the singularity paths. Planar domains and surfaces; on surfaces
+  // request["view"] (direction from the mesh's centre to the camera), ["up"] and ["fov"]
+  // (degrees) place the camera (the designer sends its own). One video at a time: a
+  // second request while one renders is RequestError(503).
   nlohmann::json render_video(const nlohmann::json& request);
   // Stores an uploaded mesh (OBJ, PLY or OFF, by the name's extension) in the working
   // folder under `name` (a plain file name). Returns {"file": name}.
