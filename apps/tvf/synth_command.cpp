@@ -61,8 +61,12 @@ SynthCommand::SynthCommand(CLI::App& render) {
         ->capture_default_str();
     sub->add_option("--speed", speed_,
                     "Pixels (surfaces: texels) the texture moves per frame of the field at the field's typical speed "
-                    "(default: size/256 planar, 1 on surfaces)");
-    sub->add_option("--texel", texel_, "Surfaces: world length of one exemplar pixel (default: mean edge length)");
+                    "(default: size/256 planar; on surfaces one mean edge length of the mesh)");
+    sub->add_option("--texel", texel_, "Surfaces: world length of one exemplar pixel (default: the samples' spacing)");
+    sub->add_option("--density", density_,
+                    "Surfaces: samples per mesh edge, each face split into density² triangles (1: a sample per vertex; "
+                    "default 0: automatic, about 60,000 samples or more)")
+        ->capture_default_str();
     sub->add_option("--seed", seed_, "Random seed of the first frame")->capture_default_str();
     sub->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
   };
@@ -110,7 +114,7 @@ Exemplar exemplar_for(const std::string& name, int channels, int size, std::uint
       {"size", "--size"}, {"levels", "--levels"}, {"frame_levels", "--frame-levels"},
       {"neighbourhood", "--neighbourhood"}, {"stride", "--stride"}, {"iterations_first", "--first-iterations"},
       {"iterations", "--iterations"}, {"temporal_weight", "--temporal-weight"}, {"pixels_per_frame", "--speed"},
-      {"texel", "--texel"}, {"max_distortion", "--max-distortion"}, {"renew_frames", "--renew-frames"}, {"relief", "--relief"}, {"height_scale", "--height-scale"},
+      {"texel", "--texel"}, {"density", "--density"}, {"max_distortion", "--max-distortion"}, {"renew_frames", "--renew-frames"}, {"relief", "--relief"}, {"height_scale", "--height-scale"},
       {"mesh_resolution", "--mesh-resolution"}};
   const std::string message = e.what();
   const std::string prefix = "synthesis option ";
@@ -159,6 +163,7 @@ int SynthCommand::run_checked() {
   so.temporal_weight = temporal_weight_;
   so.pixels_per_frame = speed_;
   so.texel = texel_;
+  so.density = density_;
   so.max_distortion = max_distortion_;
   so.renew_frames = renew_frames_;
   so.seed = seed_;

@@ -50,9 +50,13 @@ struct SynthesisOptions {
   double temporal_weight = 0.6; // λ: weight of the advected previous frame
   double pixels_per_frame = 0;  // motion: the typical (90th-percentile) speed moves this many
                                 // pixels (surfaces: texels) per frame of the field;
-                                // 0: size / 256 planar, 1 texel on surfaces
+                                // 0: size / 256 planar, on surfaces one mean edge length
+                                // of the input mesh (whatever the sample density)
   double texel = 0;              // surfaces: world length of one exemplar pixel; 0: the
-                                // mesh's mean edge length
+                                // samples' mean spacing (the sample mesh's mean edge length)
+  int density = 0;              // surfaces: samples per mesh edge, every face split into
+                                // density² triangles (1: a sample per vertex); 0: automatic,
+                                // the smallest density giving 60,000 samples (at most 8)
   double max_distortion = 1.6;  // planar: renew texture stretched or squeezed along some axis
                                 // by more than this factor since it formed (0: never)
   int renew_frames = 8;         // planar: frames of the cross-fade to fresh texture
