@@ -152,8 +152,13 @@ struct SurfaceSynthesizer::Impl {
       const int face = Mesh::face_of(h);
       SurfacePoint p;
       p.face = face;
-      p.bary = Vec3::Zero();
-      p.bary[h % 3] = 1.0;
+      // A hair inside the face, not on its corner: a walk that starts exactly at a vertex
+      // and runs exactly along an edge (common on a regularly subdivided mesh under a
+      // symmetric field) leaves through the vertex again and again without moving
+      // (walk_surface cannot choose the face round the vertex that holds the direction).
+      constexpr double kInside = 1e-9;
+      p.bary = Vec3::Constant(kInside);
+      p.bary[h % 3] = 1.0 - 2 * kInside;
       vertex_point[static_cast<size_t>(v)] = p;
       vertex_halfedge[static_cast<size_t>(v)] = h;
     }

@@ -61,7 +61,7 @@ TEST(SurfaceSynthesis, WalkedNeighbourhoodsStayOnTheSphereAtTheirDistance) {
   const double h = synth.texel();
   for (int v = 0; v < sphere.num_vertices(); v += 97) {
     const Vec3 c = tap_position(sphere, nb.taps[static_cast<size_t>(v * 49 + 3 * 7 + 3)]);
-    EXPECT_LT((c - sphere.position(v)).norm(), 1e-9);
+    EXPECT_LT((c - sphere.position(v)).norm(), 1e-7);  // walks start a hair inside a face
     // The corner tap is about 3√2 spacings away (geodesic, so a little less in a straight line).
     const Vec3 corner = tap_position(sphere, nb.taps[static_cast<size_t>(v * 49)]);
     EXPECT_NEAR((corner - c).norm(), 3 * std::sqrt(2.0) * h, 0.15 * 3 * std::sqrt(2.0) * h) << v;
