@@ -53,10 +53,20 @@ SynthCommand::SynthCommand(CLI::App& render) {
     sub->add_option("--temporal-weight", temporal_weight_,
                     "Weight of the previous frame carried by the field (higher: steadier, slower to adapt)")
         ->capture_default_str();
+    sub->add_option("--max-distortion", max_distortion_,
+                    "Planar: renew texture that the flow stretched or squeezed along some axis by more than this "
+                    "factor (0: never)")
+        ->capture_default_str();
+    sub->add_option("--renew-frames", renew_frames_, "Planar: frames of the cross-fade to fresh texture")
+        ->capture_default_str();
     sub->add_option("--speed", speed_,
                     "Pixels (surfaces: texels) the texture moves per frame of the field at the field's typical speed "
-                    "(default: size/256 planar, 1 on surfaces)");
-    sub->add_option("--texel", texel_, "Surfaces: world length of one exemplar pixel (default: mean edge length)");
+                    "(default: size/256 planar; on surfaces one mean edge length of the mesh)");
+    sub->add_option("--texel", texel_, "Surfaces: world length of one exemplar pixel (default: the samples' spacing)");
+    sub->add_option("--density", density_,
+                    "Surfaces: samples per mesh edge, each face split into density² triangles (1: a sample per vertex; "
+                    "default 0: automatic, about 60,000 samples or more)")
+        ->capture_default_str();
     sub->add_option("--seed", seed_, "Random seed of the first frame")->capture_default_str();
     sub->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
   };
@@ -104,7 +114,7 @@ Exemplar exemplar_for(const std::string& name, int channels, int size, std::uint
       {"size", "--size"}, {"levels", "--levels"}, {"frame_levels", "--frame-levels"},
       {"neighbourhood", "--neighbourhood"}, {"stride", "--stride"}, {"iterations_first", "--first-iterations"},
       {"iterations", "--iterations"}, {"temporal_weight", "--temporal-weight"}, {"pixels_per_frame", "--speed"},
-      {"texel", "--texel"}, {"relief", "--relief"}, {"height_scale", "--height-scale"},
+      {"texel", "--texel"}, {"density", "--density"}, {"max_distortion", "--max-distortion"}, {"renew_frames", "--renew-frames"}, {"relief", "--relief"}, {"height_scale", "--height-scale"},
       {"mesh_resolution", "--mesh-resolution"}};
   const std::string message = e.what();
   const std::string prefix = "synthesis option ";
@@ -153,6 +163,9 @@ int SynthCommand::run_checked() {
   so.temporal_weight = temporal_weight_;
   so.pixels_per_frame = speed_;
   so.texel = texel_;
+  so.density = density_;
+  so.max_distortion = max_distortion_;
+  so.renew_frames = renew_frames_;
   so.seed = seed_;
 
   RenderInput in = load_render_input(input_, progress, "synth", true);

@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <random>
 
 namespace tvf {
@@ -116,6 +117,10 @@ struct PlanarSynthesizer::Impl {
                  fmt::format("{} is outside [0, 100]", o.temporal_weight));
     check_option(std::isfinite(o.pixels_per_frame) && o.pixels_per_frame >= 0 && o.pixels_per_frame <= 1000,
                  "pixels_per_frame", fmt::format("{} is outside [0, 1000]", o.pixels_per_frame));
+    check_option(o.max_distortion == 0 || (std::isfinite(o.max_distortion) && o.max_distortion > 1 && o.max_distortion <= 100),
+                 "max_distortion", fmt::format("{} must be 0 (never renew) or in (1, 100]", o.max_distortion));
+    check_option(o.renew_frames >= 1 && o.renew_frames <= 1000, "renew_frames",
+                 fmt::format("{} is outside [1, 1000]", o.renew_frames));
     check_option(o.pca_dimensions >= 1 && o.pca_dimensions <= 256, "pca_dimensions",
                  fmt::format("{} is outside [1, 256]", o.pca_dimensions));
     check_option(o.candidates >= 1 && o.candidates <= 16, "candidates", fmt::format("{} is outside [1, 16]", o.candidates));
@@ -266,57 +271,325 @@ struct PlanarSynthesizer::Impl {
     return out;
   }
 
-  // Area stretch of the carried texture (Kwatra et al. 2007 keep it in check by the
-  // optimization alone; with few iterations per frame a source inflates pebbles into flat
-  // blobs and a sink squeezes them into spokes, which the local neighbourhoods cannot see).
-  // `stretch` is the area factor each pixel's texture has gone through since it was
-  // synthesized: carried with the texture and multiplied by exp(div v · dt). Where it
-  // leaves [1/s_p, s_p] — s_p a fixed random threshold per pixel in [1.6, 2.6], so that a
-  // region is not re-seeded all at once — the carried value is replaced by a random
-  // exemplar pixel and the pixel's temporal weight set to 0 for this frame (the
-  // optimization then synthesizes it afresh), and its stretch starts again at 1.
-  std::vector<float> stretch, stretch_limit, reseeded_weight;
+  // Renewal of deformed texture. Kwatra et al. 2007 leave deformation to the optimization;
+  // with 2 iterations per frame a vortex's differential rotation shears pebbles into rings,
+  // a source inflates them and a sink squeezes them into spokes, and 7×7 neighbourhoods
+  // cannot see that a smooth patch is too large or a ring too long. So the deformation of
+  // the carried texture is tracked: per pixel the 2×2 Jacobian F of the map from where the
+  // texture was formed to where it is now, carried with the texture (bilinear) and
+  // multiplied each frame by exp(∇v·dt) (to second order). Its singular values σ1 ≥ σ2 say
+  // how far elements were stretched and squeezed, whatever the rotation (a rigid turn has
+  // σ1 = σ2 = 1). Where, over a cell of `cell` pixels, at least a quarter of the pixels
+  // have σ1 > k or σ2 < 1/k (k = max_distortion), the cell starts renewing: each of its
+  // pixels gets fresh exemplar content — the exemplar laid flat over the cell with its x
+  // axis along the field at the cell's centre, placed where it best continues the texture
+  // round the cell — a coherent piece of real texture, not noise — and the temporal target
+  // moves from the carried texture to the fresh one over renew_frames frames (fewer where
+  // the flow strains fast) while both move with the flow: each pixel fades over about a
+  // third of that, at a time set by a smooth noise, so that only blobs of a cell are half-way
+  // at any time (a cross-fade of two textures is a grey mush), and with a lowered temporal
+  // weight, so that the optimization turns mix and seams into texture. At the end the
+  // pixel's F is the fresh layer's, which started at I. Nothing switches in one frame, so
+  // renewing cells do not flash. Texture that flows in across the picture's edge (a smear
+  // of the edge) counts as deformed.
+  struct Renewal {
+    std::vector<float> F;        // 4 per pixel, row-major: deformation of the carried texture
+    std::vector<float> fresh_F;  // 4 per pixel: deformation of the fresh layer (renewing pixels)
+    std::vector<float> uv;       // 2 per pixel: exemplar position of the fresh layer
+    std::vector<float> map;      // 4 per pixel: image offset → exemplar offset when it started
+    std::vector<int> age;        // frames since renewal started; −1: not renewing
+    std::vector<float> phase;    // frame of the renewal at which the pixel's own fade begins
+    std::vector<int> length;     // frames of the pixel's renewal
+  } renewal;
+  std::vector<float> renew_weight;  // per pixel: factor of the temporal weight this frame
+  static constexpr int kPlacements = 24;
+  static constexpr float kFadeWeight = 0.25f;
   std::uint64_t frame_count = 0;
-  double reseeded_fraction = 0;
+  double started_fraction = 0, renewing_fraction = 0, distortion90 = 1;
 
-  void reseed_stretched(const Level& L, std::vector<float>& advected, double dt) {
+  static void singular_values(const float* F, double& s1, double& s2) {
+    const double e = 0.5 * (F[0] + F[3]), f = 0.5 * (F[0] - F[3]), g = 0.5 * (F[2] + F[1]), h = 0.5 * (F[2] - F[1]);
+    const double q = std::hypot(e, h), r = std::hypot(f, g);
+    s1 = q + r;
+    s2 = std::abs(q - r);
+  }
+
+  // Where each finest pixel's texture was one frame ago (pixel-index coordinates): the
+  // backward semi-Lagrangian trace by the midpoint rule.
+  std::vector<float> backtrace(const Level& L, double dt) const {
+    std::vector<float> q(2 * static_cast<size_t>(L.w) * static_cast<size_t>(L.h));
+    tbb::parallel_for(tbb::blocked_range<int>(0, L.h), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        for (int i = 0; i < L.w; ++i) {
+          const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
+          const double mx = i - 0.5 * L.vel[2 * k] * dt, my = j - 0.5 * L.vel[2 * k + 1] * dt;
+          q[2 * k] = static_cast<float>(i - bilinear(L.vel, L.w, L.h, 2, 0, mx, my) * dt);
+          q[2 * k + 1] = static_cast<float>(j - bilinear(L.vel, L.w, L.h, 2, 1, mx, my) * dt);
+        }
+    });
+    return q;
+  }
+
+  // g (nc values per pixel) read at the traced positions, bilinearly.
+  std::vector<float> resample(const Level& L, const std::vector<float>& g, const std::vector<float>& q, int nc) const {
+    std::vector<float> out(g.size());
+    tbb::parallel_for(tbb::blocked_range<int>(0, L.h), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        for (int i = 0; i < L.w; ++i) {
+          const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
+          for (int c = 0; c < nc; ++c)
+            out[k * static_cast<size_t>(nc) + static_cast<size_t>(c)] = bilinear(g, L.w, L.h, nc, c, q[2 * k], q[2 * k + 1]);
+        }
+    });
+    return out;
+  }
+
+  // The exemplar (finest level) at a real position, wrapping round a tileable one and
+  // mirrored at the edges of another.
+  float exemplar_value(double u, double v, int c) const {
+    const Exemplar& e = exemplars[0];
+    auto index = [&](long a, int n) {
+      if (e.tileable) return static_cast<int>(((a % n) + n) % n);
+      const long period = 2L * n;
+      long m = ((a % period) + period) % period;
+      return static_cast<int>(m < n ? m : period - 1 - m);
+    };
+    const double fu = std::floor(u), fv = std::floor(v);
+    const double au = u - fu, av = v - fv;
+    const long iu = static_cast<long>(fu), iv = static_cast<long>(fv);
+    const int x0 = index(iu, e.width), x1 = index(iu + 1, e.width), y0 = index(iv, e.height), y1 = index(iv + 1, e.height);
+    return static_cast<float>((1 - au) * (1 - av) * e.at(x0, y0, c) + au * (1 - av) * e.at(x1, y0, c) +
+                              (1 - au) * av * e.at(x0, y1, c) + au * av * e.at(x1, y1, c));
+  }
+
+  // Carries the renewal state to the new frame, starts renewing the cells that are too
+  // deformed, and blends the fresh layer into `advected` (the temporal target).
+  void renew_deformed(const Level& L, const std::vector<float>& q, std::vector<float>& advected, double dt) {
     const size_t n = static_cast<size_t>(L.w) * static_cast<size_t>(L.h);
-    if (stretch.size() != n) {
-      stretch.assign(n, 1.f);
-      stretch_limit.resize(n);
-      std::mt19937_64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
-      std::uniform_real_distribution<float> u(1.6f, 2.6f);
-      for (auto& v : stretch_limit) v = u(rng);
+    Renewal& R = renewal;
+    if (R.age.size() != n) {
+      R.F.assign(4 * n, 0.f);
+      for (size_t k = 0; k < n; ++k) R.F[4 * k] = R.F[4 * k + 3] = 1.f;
+      R.fresh_F = R.F;
+      R.uv.assign(2 * n, 0.f);
+      R.map.assign(4 * n, 0.f);
+      R.age.assign(n, -1);
+      R.phase.assign(n, 0.f);
+      R.length.assign(n, 1);
     }
-    std::vector<float> carried = advect(L, stretch, dt, 1);
-    reseeded_weight.assign(n, 1.f);
-    std::vector<float> fresh;
-    random_exemplar_pixels(exemplars[0], static_cast<int>(n), o.seed + ++frame_count, fresh);
-    std::atomic<size_t> reseeded{0};
+    ++frame_count;
+    const bool active = o.max_distortion > 0;
+    // Carry: F and fresh F bilinearly (then times exp(∇v dt)); the fresh layer's exemplar
+    // position, map and age from the nearest pixel (they jump between cells), the position
+    // moved on by the map over the sub-pixel offset.
+    std::vector<float> F = resample(L, R.F, q, 4), fresh_F = resample(L, R.fresh_F, q, 4);
+    std::vector<float> uv(2 * n), map(4 * n);
+    std::vector<int> age(n);
+    std::vector<float> phase(n), strain(n);
+    std::vector<int> length(n);
+    std::vector<char> inflow(n, 0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, L.h), [&](const tbb::blocked_range<int>& rows) {
+      auto vel = [&](int a, int b, int c) {
+        return L.vel[2 * (static_cast<size_t>(std::clamp(b, 0, L.h - 1)) * static_cast<size_t>(L.w) +
+                          static_cast<size_t>(std::clamp(a, 0, L.w - 1))) + static_cast<size_t>(c)];
+      };
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        for (int i = 0; i < L.w; ++i) {
+          const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
+          // Velocity gradient (central differences, one-sided at the edges), times dt.
+          const int il = std::max(i - 1, 0), ir = std::min(i + 1, L.w - 1), jl = std::max(j - 1, 0), jr = std::min(j + 1, L.h - 1);
+          const double di = std::max(1, ir - il), dj = std::max(1, jr - jl);
+          const double g00 = (vel(ir, j, 0) - vel(il, j, 0)) / di * dt, g01 = (vel(i, jr, 0) - vel(i, jl, 0)) / dj * dt;
+          const double g10 = (vel(ir, j, 1) - vel(il, j, 1)) / di * dt, g11 = (vel(i, jr, 1) - vel(i, jl, 1)) / dj * dt;
+          // M = I + G + G²/2.
+          const double m00 = 1 + g00 + 0.5 * (g00 * g00 + g01 * g10), m01 = g01 + 0.5 * (g00 * g01 + g01 * g11);
+          const double m10 = g10 + 0.5 * (g10 * g00 + g11 * g10), m11 = 1 + g11 + 0.5 * (g10 * g01 + g11 * g11);
+          // Strain per frame: the largest |eigenvalue| of G's symmetric part.
+          strain[k] = static_cast<float>(std::hypot(0.5 * (g00 - g11), 0.5 * (g01 + g10)) + std::abs(0.5 * (g00 + g11)));
+          for (std::vector<float>* G : {&F, &fresh_F}) {
+            float* a = G->data() + 4 * k;
+            const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3];
+            a[0] = static_cast<float>(m00 * a0 + m01 * a2);
+            a[1] = static_cast<float>(m00 * a1 + m01 * a3);
+            a[2] = static_cast<float>(m10 * a0 + m11 * a2);
+            a[3] = static_cast<float>(m10 * a1 + m11 * a3);
+          }
+          // Texture that comes in across the edge of the picture is a smear of the edge:
+          // it counts as deformed.
+          inflow[k] = q[2 * k] < -0.5f || q[2 * k] > static_cast<float>(L.w) - 0.5f || q[2 * k + 1] < -0.5f ||
+                      q[2 * k + 1] > static_cast<float>(L.h) - 0.5f;
+          const int ni = std::clamp(static_cast<int>(std::lround(q[2 * k])), 0, L.w - 1);
+          const int nj = std::clamp(static_cast<int>(std::lround(q[2 * k + 1])), 0, L.h - 1);
+          const size_t s = static_cast<size_t>(nj) * static_cast<size_t>(L.w) + static_cast<size_t>(ni);
+          age[k] = R.age[s] >= 0 ? R.age[s] + 1 : -1;
+          phase[k] = R.phase[s];
+          length[k] = R.length[s];
+          const float* A = R.map.data() + 4 * s;
+          const double ox = q[2 * k] - ni, oy = q[2 * k + 1] - nj;
+          uv[2 * k] = static_cast<float>(R.uv[2 * s] + A[0] * ox + A[1] * oy);
+          uv[2 * k + 1] = static_cast<float>(R.uv[2 * s + 1] + A[2] * ox + A[3] * oy);
+          for (size_t c = 0; c < 4; ++c) map[4 * k + c] = A[c];
+        }
+    });
+    // Each pixel of a renewing cell fades over `fade` frames, starting at its phase: a smooth
+    // noise (lattice `blob` pixels, about an element) over [0, frames − fade], so that at any
+    // time only parts of a cell are half-way (a cross-fade of two textures is a grey mush)
+    // and the rest is one texture or the other.
+    // A renewal lasts renew_frames, or less where the flow strains fast: at most half the
+    // frames the flow needs to deform fresh texture past the limit (log k / strain), so
+    // that the fresh layer is not itself worn out by the time it has faded in.
+    auto fade_of = [](int frames) { return std::max(1, static_cast<int>(std::lround(0.35 * frames))); };
+    const double blob = std::max(3, o.neighbourhood);
+    auto lattice = [&](long a, long b) {
+      std::uint64_t h = o.seed * 0x9e3779b97f4a7c15ULL ^ (frame_count * 0xbf58476d1ce4e5b9ULL) ^
+                        (static_cast<std::uint64_t>(a) * 0x94d049bb133111ebULL) ^ (static_cast<std::uint64_t>(b) << 29);
+      h ^= h >> 31;
+      h *= 0xd6e8feb86659fd93ULL;
+      h ^= h >> 32;
+      return static_cast<double>(h >> 11) * 0x1.0p-53;
+    };
+    auto noise = [&](double x, double y) {
+      const double fx = std::floor(x / blob), fy = std::floor(y / blob);
+      double ax = x / blob - fx, ay = y / blob - fy;
+      ax = ax * ax * (3 - 2 * ax), ay = ay * ay * (3 - 2 * ay);
+      const long ix = static_cast<long>(fx), iy = static_cast<long>(fy);
+      const double m = (1 - ax) * (1 - ay) * lattice(ix, iy) + ax * (1 - ay) * lattice(ix + 1, iy) +
+                       (1 - ax) * ay * lattice(ix, iy + 1) + ax * ay * lattice(ix + 1, iy + 1);
+      return std::clamp(0.5 + 1.8 * (m - 0.5), 0.0, 1.0);  // the bilinear mix bunches near ½
+    };
+    // Start renewing the cells that are too deformed.
+    const int cell = std::max(8, 3 * o.neighbourhood);
+    const int cx = (L.w + cell - 1) / cell, cy = (L.h + cell - 1) / cell;
+    const double k_max = o.max_distortion;
+    std::atomic<size_t> started_count{0};
+    tbb::parallel_for(tbb::blocked_range<int>(0, cx * cy), [&](const tbb::blocked_range<int>& cells) {
+      for (int id = cells.begin(); id < cells.end(); ++id) {
+        const int i0 = (id % cx) * cell, j0 = (id / cx) * cell;
+        const int i1 = std::min(L.w, i0 + cell), j1 = std::min(L.h, j0 + cell);
+        int candidates = 0, deformed = 0;
+        for (int j = j0; j < j1; ++j)
+          for (int i = i0; i < i1; ++i) {
+            const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
+            if (L.face[k] < 0 || age[k] >= 0) continue;
+            double s1 = 1, s2 = 1;
+            singular_values(F.data() + 4 * k, s1, s2);
+            ++candidates;
+            if (inflow[k] || s1 > k_max || s2 < 1 / k_max) ++deformed;
+          }
+        if (!active || candidates == 0 || 4 * deformed < candidates) continue;
+        // The exemplar laid over the cell: x along the field at its centre.
+        const int ci = (i0 + i1) / 2, cj = (j0 + j1) / 2;
+        const size_t kc = static_cast<size_t>(cj) * static_cast<size_t>(L.w) + static_cast<size_t>(ci);
+        double ux = L.dir[2 * kc], uy = L.dir[2 * kc + 1];
+        if (ux == 0 && uy == 0) ux = 1;
+        const double vx = -uy, vy = ux;
+        // Of a few random placements, the one that best continues the texture round the
+        // cell (the carried values on its outer two rows and columns): the seam with the
+        // cells that are not renewing is then mostly hidden, as in image quilting.
+        std::mt19937_64 rng(o.seed ^ (0x9e3779b97f4a7c15ULL * (frame_count + 1)) ^ (static_cast<std::uint64_t>(id) << 32));
+        std::uniform_real_distribution<double> offset(0, std::max(exemplars[0].width, exemplars[0].height));
+        double ou = 0, ov = 0, best = std::numeric_limits<double>::max();
+        for (int trial = 0; trial < kPlacements; ++trial) {
+          const double tu = offset(rng), tv = offset(rng);
+          double d = 0;
+          for (int j = j0; j < j1; ++j)
+            for (int i = i0; i < i1; ++i) {
+              if (j >= j0 + 2 && j < j1 - 2 && i >= i0 + 2 && i < i1 - 2) continue;
+              const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
+              if (L.face[k] < 0) continue;
+              const double dx = i - ci, dy = j - cj;
+              for (int c = 0; c < C; ++c) {
+                const double e = exemplar_value(tu + dx * ux + dy * uy, tv + dx * vx + dy * vy, c) -
+                                 advected[k * static_cast<size_t>(C) + static_cast<size_t>(c)];
+                d += e * e;
+              }
+            }
+          if (d < best) best = d, ou = tu, ov = tv;
+        }
+        double cell_strain = 0;
+        int strained = 0;
+        for (int j = j0; j < j1; ++j)
+          for (int i = i0; i < i1; ++i) {
+            const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
+            if (L.face[k] >= 0) cell_strain += strain[k], ++strained;
+          }
+        cell_strain /= std::max(1, strained);
+        const double allowed = 0.5 * std::log(k_max) / std::max(cell_strain, 1e-9);
+        const int frames = static_cast<int>(std::clamp(allowed, 1.0, static_cast<double>(o.renew_frames)));
+        const int fade = fade_of(frames);
+        size_t local = 0;
+        for (int j = j0; j < j1; ++j)
+          for (int i = i0; i < i1; ++i) {
+            const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
+            if (L.face[k] < 0 || age[k] >= 0) continue;
+            age[k] = 0;
+            length[k] = frames;
+            phase[k] = static_cast<float>(noise(i, j) * (frames - fade));
+            const double dx = i - ci, dy = j - cj;
+            uv[2 * k] = static_cast<float>(ou + dx * ux + dy * uy);
+            uv[2 * k + 1] = static_cast<float>(ov + dx * vx + dy * vy);
+            float* A = map.data() + 4 * k;
+            A[0] = static_cast<float>(ux), A[1] = static_cast<float>(uy), A[2] = static_cast<float>(vx), A[3] = static_cast<float>(vy);
+            float* G = fresh_F.data() + 4 * k;
+            G[0] = G[3] = 1.f, G[1] = G[2] = 0.f;
+            ++local;
+          }
+        started_count += local;
+      }
+    });
+    // Cross-fade the renewing pixels' targets; finish those at the end of their fade.
+    renew_weight.assign(n, 1.f);
+    std::atomic<size_t> renewing{0};
     tbb::parallel_for(tbb::blocked_range<int>(0, L.h), [&](const tbb::blocked_range<int>& rows) {
       size_t local = 0;
       for (int j = rows.begin(); j < rows.end(); ++j)
         for (int i = 0; i < L.w; ++i) {
           const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
-          auto vel = [&](int a, int b, int c) {
-            return L.vel[2 * (static_cast<size_t>(std::clamp(b, 0, L.h - 1)) * static_cast<size_t>(L.w) +
-                              static_cast<size_t>(std::clamp(a, 0, L.w - 1))) + static_cast<size_t>(c)];
-          };
-          const double div = 0.5 * (vel(i + 1, j, 0) - vel(i - 1, j, 0)) + 0.5 * (vel(i, j + 1, 1) - vel(i, j - 1, 1));
-          float s = carried[k] * static_cast<float>(std::exp(std::clamp(div * dt, -1.0, 1.0)));
-          const float limit = stretch_limit[k];
-          if (L.face[k] >= 0 && (s > limit || s < 1.f / limit)) {
-            for (int c = 0; c < C; ++c)
-              advected[k * static_cast<size_t>(C) + static_cast<size_t>(c)] = fresh[k * static_cast<size_t>(C) + static_cast<size_t>(c)];
-            reseeded_weight[k] = 0.f;
-            s = 1.f;
-            ++local;
+          if (age[k] < 0) continue;
+          ++local;
+          // The fresh share of the original texture: s(a) after frame a of the renewal; of
+          // what is carried now (fresh share s(a − 1)), (s(a) − s(a − 1))/(1 − s(a − 1)) is
+          // replaced. While a pixel fades its temporal weight is lowered (kFadeWeight), so
+          // that the optimization is freer to turn the mix and the seams into texture.
+          const int frames = length[k], fade = fade_of(frames);
+          auto share = [&](int a) { return std::clamp((a + 1 - phase[k]) / static_cast<float>(fade), 0.f, 1.f); };
+          const float before = share(age[k] - 1), after = share(age[k]);
+          const float beta = before < 1 ? (after - before) / (1 - before) : 0.f;
+          if (after > 0 && before < 1) renew_weight[k] = kFadeWeight;
+          for (int c = 0; c < C; ++c) {
+            float& a = advected[k * static_cast<size_t>(C) + static_cast<size_t>(c)];
+            a = (1 - beta) * a + beta * exemplar_value(uv[2 * k], uv[2 * k + 1], c);
           }
-          stretch[k] = s;
+          if (age[k] + 1 >= frames) {
+            age[k] = -1;
+            for (size_t c = 0; c < 4; ++c) F[4 * k + c] = fresh_F[4 * k + c];
+          }
         }
-      reseeded += local;
+      renewing += local;
     });
-    reseeded_fraction = static_cast<double>(reseeded.load()) / static_cast<double>(n);
+    R.F = std::move(F);
+    R.fresh_F = std::move(fresh_F);
+    R.uv = std::move(uv);
+    R.map = std::move(map);
+    R.age = std::move(age);
+    R.phase = std::move(phase);
+    R.length = std::move(length);
+    started_fraction = static_cast<double>(started_count.load()) / static_cast<double>(n);
+    renewing_fraction = static_cast<double>(renewing.load()) / static_cast<double>(n);
+    // The 90th percentile of the carried texture's distortion max(σ1, 1/σ2).
+    std::vector<float> distortion;
+    distortion.reserve(n);
+    for (size_t k = 0; k < n; ++k) {
+      if (L.face[k] < 0) continue;
+      double s1 = 1, s2 = 1;
+      singular_values(R.F.data() + 4 * k, s1, s2);
+      distortion.push_back(static_cast<float>(std::max(s1, 1 / std::max(s2, 1e-9))));
+    }
+    if (!distortion.empty()) {
+      auto mid = distortion.begin() + static_cast<long>(0.9 * static_cast<double>(distortion.size() - 1));
+      std::nth_element(distortion.begin(), mid, distortion.end());
+      distortion90 = *mid;
+    }
   }
 
   std::vector<float> downsample_grid(const Level& fine, const std::vector<float>& g, const Level& coarse,
@@ -334,24 +607,6 @@ struct PlanarSynthesizer::Impl {
             }
           out[(static_cast<size_t>(j) * static_cast<size_t>(coarse.w) + static_cast<size_t>(i)) * static_cast<size_t>(nc) + static_cast<size_t>(c)] = 0.25f * s;
         }
-    return out;
-  }
-
-  // The finest level advected from time t0 to t1 (backward semi-Lagrangian, midpoint rule).
-  std::vector<float> advect(const Level& L, const std::vector<float>& g, double dt, int channels = 0) const {
-    const int nc = channels > 0 ? channels : C;
-    std::vector<float> out(g.size());
-    tbb::parallel_for(tbb::blocked_range<int>(0, L.h), [&](const tbb::blocked_range<int>& rows) {
-      for (int j = rows.begin(); j < rows.end(); ++j)
-        for (int i = 0; i < L.w; ++i) {
-          const size_t k = static_cast<size_t>(j) * static_cast<size_t>(L.w) + static_cast<size_t>(i);
-          const double v1x = L.vel[2 * k] * dt, v1y = L.vel[2 * k + 1] * dt;
-          const double mx = i - 0.5 * v1x, my = j - 0.5 * v1y;
-          const double v2x = bilinear(L.vel, L.w, L.h, 2, 0, mx, my) * dt;
-          const double v2y = bilinear(L.vel, L.w, L.h, 2, 1, mx, my) * dt;
-          for (int c = 0; c < nc; ++c) out[k * static_cast<size_t>(nc) + static_cast<size_t>(c)] = bilinear(g, L.w, L.h, nc, c, i - v2x, j - v2y);
-        }
-    });
     return out;
   }
 
@@ -379,11 +634,12 @@ struct PlanarSynthesizer::Impl {
       // the finest levels against it.
       Level& L0 = levels[0];
       update_field(L0, values);
-      std::vector<float> advected = advect(L0, L0.x, tt - t);
-      reseed_stretched(L0, advected, tt - t);
+      const std::vector<float> q = backtrace(L0, tt - t);
+      std::vector<float> advected = resample(L0, L0.x, q, C);
+      renew_deformed(L0, q, advected, tt - t);
       const int F = o.frame_levels;
       levels[0].target = std::move(advected);
-      levels[0].target_weight = reseeded_weight;
+      levels[0].target_weight = renew_weight;
       for (int l = 1; l < F; ++l) {
         Level& fine = levels[static_cast<size_t>(l) - 1];
         Level& coarse = levels[static_cast<size_t>(l)];
@@ -409,7 +665,9 @@ struct PlanarSynthesizer::Impl {
         last = optimize_texture(L.nb, *indices[static_cast<size_t>(l)], L.x, L.target, opt, &L.match);
       }
       report.levels = F;
-      report.reseeded = reseeded_fraction;
+      report.reseeded = started_fraction;
+      report.renewing = renewing_fraction;
+      report.distortion = distortion90;
     }
     t = tt;
     report.patch_distance = last.patch_distance;

@@ -3,6 +3,7 @@
 #include "tvf/core/error.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/integrate/surface_walk.h"
+#include "tvf/mesh/face_subdivision.h"
 #include "tvf/render/frame_output.h"
 #include "tvf/synth/terrain.h"
 
@@ -34,9 +35,64 @@ inline void point_tap(const Mesh& mesh, const SurfacePoint& p, Tap& tap) {
 
 }  // namespace
 
+Field resample_field(const TangentBundle& bundle, const Field& field, const TangentBundle& samples,
+                     const FaceSubdivision& subdivision) {
+  const int ns = samples.mesh().num_vertices();
+  TVF_CHECK(static_cast<size_t>(ns) == subdivision.face.size(), "{} samples, {} subdivision vertices", ns,
+            subdivision.face.size());
+  Field out(field.time(), ns);
+  const FieldSampler sampler(bundle, field);
+  const TimeSampling& ts = field.time();
+  tbb::parallel_for(tbb::blocked_range<int>(0, ns, 1024), [&](const tbb::blocked_range<int>& range) {
+    for (int v = range.begin(); v < range.end(); ++v) {
+      const SurfacePoint p{subdivision.face[static_cast<size_t>(v)], subdivision.bary[static_cast<size_t>(v)]};
+      for (int j = 0; j < ts.frames; ++j) {
+        const Vec3 w = sampler.world(p, ts.time(j));
+        cplx z = samples.world_to_vertex(v, w);
+        const double m = std::abs(z);
+        if (m > 0) z *= w.norm() / m;
+        out.at(j, v) = z;
+      }
+    }
+  });
+  return out;
+}
+
+namespace {
+
+// The samples: the mesh's vertices (density 1) or those of its faces subdivided, with the
+// field resampled there (FieldSampler in the original face, projected onto the new vertex's
+// tangent plane, its length kept).
+struct SampleSurface {
+  int density = 1;
+  std::unique_ptr<FaceSubdivision> subdivision;
+  std::unique_ptr<TangentBundle> bundle;
+  std::unique_ptr<Field> field;
+};
+
+int automatic_density(const Mesh& mesh) {
+  // The smallest subdivision with at least 60,000 samples, at most 8 per edge.
+  int n = 1;
+  while (n < 8 && subdivision_vertex_count(mesh, n) < 60'000) ++n;
+  return n;
+}
+
+SampleSurface make_samples(const TangentBundle& bundle, const Field& field, int density) {
+  SampleSurface s;
+  s.density = density > 0 ? density : automatic_density(bundle.mesh());
+  if (s.density == 1) return s;
+  s.subdivision = std::make_unique<FaceSubdivision>(subdivide_faces(bundle.mesh(), s.density));
+  s.bundle = std::make_unique<TangentBundle>(s.subdivision->mesh);
+  s.field = std::make_unique<Field>(resample_field(bundle, field, *s.bundle, *s.subdivision));
+  return s;
+}
+
+}  // namespace
+
 struct SurfaceSynthesizer::Impl {
-  const TangentBundle& bundle;
-  const Field& field;
+  SampleSurface samples;
+  const TangentBundle& bundle;  // of the samples
+  const Field& field;           // at the samples
   SynthesisOptions o;
   int C = 3;
   double texel_ = 0;
@@ -54,7 +110,11 @@ struct SurfaceSynthesizer::Impl {
   SynthesisFrameReport report;
 
   Impl(const TangentBundle& b, const Field& f, const Exemplar& e, const SynthesisOptions& options)
-      : bundle(b), field(f), o(options), C(e.channels) {
+      : samples(make_samples(b, f, checked_density(options.density))),
+        bundle(samples.bundle ? *samples.bundle : b),
+        field(samples.field ? *samples.field : f),
+        o(options),
+        C(e.channels) {
     const Mesh& mesh = bundle.mesh();
     check_option(o.levels >= 1 && o.levels <= 8, "levels", fmt::format("{} is outside [1, 8]", o.levels));
     check_option(o.frame_levels >= 1 && o.frame_levels <= o.levels, "frame_levels",
@@ -92,8 +152,13 @@ struct SurfaceSynthesizer::Impl {
       const int face = Mesh::face_of(h);
       SurfacePoint p;
       p.face = face;
-      p.bary = Vec3::Zero();
-      p.bary[h % 3] = 1.0;
+      // A hair inside the face, not on its corner: a walk that starts exactly at a vertex
+      // and runs exactly along an edge (common on a regularly subdivided mesh under a
+      // symmetric field) leaves through the vertex again and again without moving
+      // (walk_surface cannot choose the face round the vertex that holds the direction).
+      constexpr double kInside = 1e-9;
+      p.bary = Vec3::Constant(kInside);
+      p.bary[h % 3] = 1.0 - 2 * kInside;
       vertex_point[static_cast<size_t>(v)] = p;
       vertex_halfedge[static_cast<size_t>(v)] = h;
     }
@@ -109,8 +174,14 @@ struct SurfaceSynthesizer::Impl {
     }
     const TimeSampling& ts = field.time();
     const double frame_dt = ts.frames > 1 ? std::abs(ts.t1 - ts.t0) / (ts.frames - 1) : 1.0;
-    const double texels_per_frame = o.pixels_per_frame > 0 ? o.pixels_per_frame : 1.0;
-    time_scale = p90 > 0 && frame_dt > 0 ? texels_per_frame * texel_ / (p90 * frame_dt) : 0.0;
+    // Default motion: one edge of the input mesh per frame, whatever the sample density.
+    const double per_frame = o.pixels_per_frame > 0 ? o.pixels_per_frame * texel_ : b.mesh().mean_edge_length();
+    time_scale = p90 > 0 && frame_dt > 0 ? per_frame / (p90 * frame_dt) : 0.0;
+  }
+
+  static int checked_density(int density) {
+    check_option(density >= 0 && density <= 8, "density", fmt::format("{} is outside [0, 8] (0: automatic)", density));
+    return density;
   }
 
   std::vector<cplx> vertex_values(double tt) const {
@@ -240,6 +311,9 @@ SurfaceSynthesizer::SurfaceSynthesizer(const TangentBundle& bundle, const Field&
 SurfaceSynthesizer::~SurfaceSynthesizer() = default;
 int SurfaceSynthesizer::channels() const { return impl_->C; }
 double SurfaceSynthesizer::texel() const { return impl_->texel_; }
+int SurfaceSynthesizer::density() const { return impl_->samples.density; }
+const TangentBundle& SurfaceSynthesizer::sample_bundle() const { return impl_->bundle; }
+const Mesh& SurfaceSynthesizer::sample_mesh() const { return impl_->bundle.mesh(); }
 const SynthesisFrameReport& SurfaceSynthesizer::advance(double t) { return impl_->advance(t); }
 double SurfaceSynthesizer::time() const { return impl_->t; }
 const std::vector<float>& SurfaceSynthesizer::values() const { return impl_->x; }
@@ -277,7 +351,8 @@ SynthesisAnimationReport write_surface_synthesis(const TangentBundle& bundle, co
   if (!std::isfinite(options.height_scale) || options.height_scale < 0 || options.height_scale > 1)
     throw Error(fmt::format("synthesis option height_scale: {} is outside [0, 1]", options.height_scale));
   SurfaceSynthesizer synth(bundle, field, exemplar, options.synthesis);
-  const Mesh& mesh = bundle.mesh();
+  const TangentBundle& samples = synth.sample_bundle();
+  const Mesh& mesh = samples.mesh();
   const int frames = options.frames > 0 ? options.frames : field.frames();
   const TimeSampling& ts = field.time();
 
@@ -305,10 +380,10 @@ SynthesisAnimationReport write_surface_synthesis(const TangentBundle& bundle, co
     std::vector<Vec3> colours = synth.colours();
     if (options.terrain)
       for (auto& c : colours) c = terrain_colour(c.x());
-    if (terrain_meshes) terrain_meshes->add_surface(bundle, synth.values());
+    if (terrain_meshes) terrain_meshes->add_surface(samples, synth.values());
     if (colour_meshes) write_colored_ply(colour_meshes->file(fmt::format("frame_{:05d}.ply", k)).string(), mesh, colours);
     if (pictures) {
-      const Image image = options.terrain ? options.renderer(displace_along_normals(bundle, synth.values(), amount), colours)
+      const Image image = options.terrain ? options.renderer(displace_along_normals(samples, synth.values(), amount), colours)
                                           : options.renderer(mesh, colours);
       if (!out) {
         out = std::make_unique<FrameOutput>(options.frames_dir, options.video, image.width, image.height, options.fps);

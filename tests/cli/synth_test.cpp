@@ -107,7 +107,18 @@ TEST(CliSynth, SurfaceMeshesWithVertexColours) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(count_files(dir / "m", ".ply"), 3);
   const std::string ply = test::read_text(dir / "m" / "frame_00002.ply");
-  EXPECT_NE(ply.find("element vertex 162"), std::string::npos);  // icosphere, 2 subdivisions
+  // The icosphere of 2 subdivisions (162 vertices) at the automatic density, 8 per edge
+  // (the cap): 162 + 480·7 + 320·21 samples.
+  EXPECT_NE(ply.find("element vertex 10242"), std::string::npos);
+  const auto one = run_tvf("render synth " + quoted(dir / "sphere.json") + " --exemplar pebbles --density 1 --meshes " +
+                           quoted(dir / "m1") + kQuick);
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  EXPECT_NE(test::read_text(dir / "m1" / "frame_00002.ply").find("element vertex 162"), std::string::npos);
+  const auto bad = run_tvf("render synth " + quoted(dir / "sphere.json") + " --exemplar pebbles --density 9 --meshes " +
+                           quoted(dir / "m9") + kQuick);
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--density: 9 is outside [0, 8]"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(dir / "m9"));
   EXPECT_NE(ply.find("property uchar red"), std::string::npos);
   const auto t = run_tvf("render terrain " + quoted(dir / "sphere.json") + " --exemplar ridges --meshes " +
                          quoted(dir / "t") + " --mesh-format ply" + kQuick);

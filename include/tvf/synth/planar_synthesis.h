@@ -18,9 +18,12 @@
 // only the finest `frame_levels` levels, each started from the advected previous frame
 // plus the change the coarser level made (so fine detail is carried, not blurred).
 //
-// Stretch: where the flow spreads (a source) or squeezes (a sink) the carried texture, its
-// area factor since synthesis is tracked per pixel; beyond about 2× either way the pixel is
-// re-seeded from the exemplar and synthesized afresh (see reseed_stretched in the source).
+// Renewal: the deformation of the carried texture since it was formed (the Jacobian of the
+// advection map, composed frame to frame) is tracked per pixel; where its singular values
+// say that elements were stretched or squeezed by more than max_distortion along some axis
+// (the shear of a vortex's rim, the spreading of a source, the squeeze of a sink), cells of
+// the picture cross-fade to fresh exemplar texture over renew_frames frames while it moves
+// on with the flow (see renew_deformed in the source).
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
@@ -47,9 +50,16 @@ struct SynthesisOptions {
   double temporal_weight = 0.6; // λ: weight of the advected previous frame
   double pixels_per_frame = 0;  // motion: the typical (90th-percentile) speed moves this many
                                 // pixels (surfaces: texels) per frame of the field;
-                                // 0: size / 256 planar, 1 texel on surfaces
+                                // 0: size / 256 planar, on surfaces one mean edge length
+                                // of the input mesh (whatever the sample density)
   double texel = 0;              // surfaces: world length of one exemplar pixel; 0: the
-                                // mesh's mean edge length
+                                // samples' mean spacing (the sample mesh's mean edge length)
+  int density = 0;              // surfaces: samples per mesh edge, every face split into
+                                // density² triangles (1: a sample per vertex); 0: automatic,
+                                // the smallest density giving 60,000 samples (at most 8)
+  double max_distortion = 1.6;  // planar: renew texture stretched or squeezed along some axis
+                                // by more than this factor since it formed (0: never)
+  int renew_frames = 8;         // planar: frames of the cross-fade to fresh texture
   int pca_dimensions = 16;     // search: PCA dimensions, kd-tree candidates re-ranked in full,
   int candidates = 4;          // and nanoflann's approximation (synth/texture_optimization.h)
   float search_eps = 1.0f;
@@ -68,7 +78,10 @@ struct SynthesisFrameReport {
   double seconds = 0;
   double patch_distance = 0;    // finest level's OptimizeReport::patch_distance
   double uncovered = 0;
-  double reseeded = 0;          // planar: fraction of pixels re-seeded (stretched too far)
+  double reseeded = 0;          // planar: fraction of pixels that started renewing this frame
+  double renewing = 0;          // planar: fraction of pixels cross-fading to fresh texture
+  double distortion = 1;        // planar: 90th percentile over the domain of the carried
+                                // texture's distortion max(σ1, 1/σ2) since it formed
   int levels = 0;
 };
 

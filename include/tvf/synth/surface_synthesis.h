@@ -1,7 +1,12 @@
 #pragma once
 // Field-guided texture synthesis on a mesh surface (paper §9, Figs. 3 and 9): the same
 // texture optimization as the plane (synth/texture_optimization.h, options in
-// synth/planar_synthesis.h), with one sample per vertex.
+// synth/planar_synthesis.h), on samples of the surface: the vertices of its faces
+// subdivided `density` times per edge (mesh/face_subdivision.h; density 1: the mesh's own
+// vertices), so that the texture can be finer than the mesh. The field is resampled at the
+// samples through FieldSampler (in the original face, then in the sample's tangent basis);
+// the synthesis, its meshes and pictures then use the sample mesh, and "vertex" below means
+// a vertex of it. Cost grows with the samples (about 20 µs of CPU per sample and frame).
 //
 // Neighbourhoods: around every vertex, a size × size grid of taps `spacing` apart in the
 // tangent plane, its rows along the field's direction at the vertex (the exemplar's x
@@ -19,10 +24,11 @@
 // advected along the field (a backward walk by the midpoint rule, barycentric read) and
 // run the finest `frame_levels` levels with it as a soft target.
 //
-// The samples are per-vertex colours (or heights): meshes with colours go to PLY files
+// The samples are per-vertex colours (or heights) of the sample mesh: meshes with colours go to PLY files
 // (synth/terrain.h's write_colored_ply); pictures come from a SurfaceRenderer, a function
 // (mesh, per-vertex colours) → Image that the caller supplies (the mesh renderer).
 #include "tvf/field/field.h"
+#include "tvf/mesh/face_subdivision.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
 #include "tvf/synth/exemplar.h"
@@ -36,6 +42,12 @@
 
 namespace tvf {
 
+// The field at the vertices of a subdivision of its mesh (`samples` the subdivided mesh's
+// bundle): FieldSampler in the original face at each frame, projected onto the new vertex's
+// tangent plane with its length kept. Used by SurfaceSynthesizer for density > 1.
+Field resample_field(const TangentBundle& bundle, const Field& field, const TangentBundle& samples,
+                     const FaceSubdivision& subdivision);
+
 class SurfaceSynthesizer {
 public:
   // Throws tvf::Error on options out of range or an exemplar too small for the levels.
@@ -45,11 +57,15 @@ public:
 
   int channels() const;
   double texel() const;  // world length of one exemplar pixel at the finest level
+  int density() const;   // samples per original edge (options.density, or the automatic one)
+  // The mesh of the samples (the input mesh when density is 1) and its tangent bundle.
+  const Mesh& sample_mesh() const;
+  const TangentBundle& sample_bundle() const;
   const SynthesisFrameReport& advance(double t);
   double time() const;
-  // |V| × channels floats, vertex-major.
+  // samples × channels floats, sample-major (the sample mesh's vertex order).
   const std::vector<float>& values() const;
-  // Per-vertex RGB colours (gray for one channel).
+  // RGB colours per sample (gray for one channel).
   std::vector<Vec3> colours() const;
   // The neighbourhoods of the finest level at the current time (for tests and tools).
   const Neighbourhoods& neighbourhoods() const;
@@ -77,7 +93,8 @@ struct SurfaceSynthesisAnimationOptions {
   std::function<void(int done, int total)> progress;
 };
 
-// Writes per-frame meshes and, with a renderer, PNG frames and/or an MP4. Every output
+// Writes per-frame meshes (the sample mesh) and, with a renderer, PNG frames and/or an MP4
+// (the renderer is handed the sample mesh and its colours). Every output
 // appears complete or not at all. Throws tvf::Error on bad options or a failed write.
 SynthesisAnimationReport write_surface_synthesis(const TangentBundle& bundle, const Field& field,
                                                  const Exemplar& exemplar,
