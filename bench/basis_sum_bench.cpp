@@ -2,6 +2,7 @@
 // results into the table in docs/benchmarks.md.
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
+#include "tvf/mesh/primitives.h"
 
 #include "bench_scenes.h"
 
@@ -51,6 +52,15 @@ void BM_ConstrainedSphere(benchmark::State& state) {
   bench::time_generation(state, s);
 }
 BENCHMARK(BM_ConstrainedSphere)->Arg(5)->Unit(benchmark::kMillisecond);
+
+// The same design on the 20,252-vertex geodesic sphere of the space-time benchmarks.
+void BM_ConstrainedSphere20k(benchmark::State& state) {
+  Scene s = bench::sphere_scene(5);
+  s.generator = Generator::constrained;
+  const DesignSpace space(make_geodesic_sphere(45));
+  bench::time_generation(state, space, s);
+}
+BENCHMARK(BM_ConstrainedSphere20k)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace tvf

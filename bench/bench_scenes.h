@@ -6,6 +6,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include <ctime>
+
 namespace tvf::bench {
 
 // A moving center, a source, a bifurcation and a regular element with attachment (the
@@ -50,12 +52,29 @@ inline Scene sphere_scene(int subdivisions) {
   return s;
 }
 
+// CPU time of all threads of the process, in ms.
+inline double process_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+// Times generating the scene's field on a domain built once (cpu_ms: CPU of all threads
+// per generation; on a loaded machine, cpu_ms / cores is what idle cores would take).
+inline void time_generation(benchmark::State& state, const DesignSpace& space, const Scene& s) {
+  GenerateReport report;
+  const double cpu0 = process_cpu_ms();
+  for (auto _ : state) benchmark::DoNotOptimize(generate(space, s, {}, &report).data().data());
+  state.counters["cpu_ms"] = (process_cpu_ms() - cpu0) / static_cast<double>(state.iterations());
+  state.counters["vertices"] = space.mesh().num_vertices();
+  state.counters["frames"] = s.time.frames;
+  state.SetLabel(report.method);
+}
+
 // Builds the scene's domain once, then times generating its field.
 inline void time_generation(benchmark::State& state, const Scene& s) {
   const auto space = make_design_space(s);
-  for (auto _ : state) benchmark::DoNotOptimize(generate(*space, s).data().data());
-  state.counters["vertices"] = space->mesh().num_vertices();
-  state.counters["frames"] = s.time.frames;
+  time_generation(state, *space, s);
 }
 
 // The combined design on an n × n grid over [-1, 1]².

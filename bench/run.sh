@@ -33,6 +33,7 @@ print(f"Machine: {sys.argv[3]}, {ctx['num_cpus']} cores; tvf built {sys.argv[2]}
 print()
 print("| case | vertices | frames | median time | per frame | CPU, all threads | iterations | residual | peak memory | method |")
 print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+shown = {"vertices", "frames", "cg_iterations", "residual", "peak_mb", "cpu_ms"}
 for d in runs:
     rows = [b for b in d["benchmarks"] if b.get("aggregate_name") == "median"]
     if not rows:  # a single repetition reports the run itself
@@ -47,6 +48,10 @@ for d in runs:
         ress = f"{res:.1e}" if res else ""
         mems = (f"{mem / 1024:.1f} GiB" if mem >= 1024 else f"{mem:.0f} MiB") if mem else ""
         label = b.get("label", "").replace("|", "/")
+        # Counters of a case's own (e.g. BM_SparseFactor's CPU times of its phases).
+        extra = [f"{k} {b[k]:.1f}" for k in sorted(b) if k.endswith("_ms") and k not in shown]
+        if extra:
+            label = "; ".join(([label] if label else []) + extra)
         cpu = b.get("cpu_ms"); cpus = f"{cpu:.1f} ms" if cpu else ""
         print(f"| {name} | {v or ''} | {f or ''} | {t:.1f} {unit} | {per} | {cpus} | {its} | {ress} | {mems} | {label} |")
 PY

@@ -33,6 +33,20 @@ pkg_check_modules(OPENBLAS QUIET IMPORTED_TARGET openblas)
 if(NOT OPENBLAS_FOUND)
   message(FATAL_ERROR "tvf needs OpenBLAS: install the Debian package 'libopenblas-dev' (or run scripts/install-deps.sh)")
 endif()
+# Sparse Cholesky: CHOLMOD (SuiteSparse), supernodal LLᴴ with BLAS kernels, for the
+# per-frame constrained solves (solve/connection_laplacian.h). Debian 12's SuiteSparse 5.12
+# installs neither a CMake config nor a pkg-config file, so the header and the libraries
+# are looked up directly (libcholmod links AMD, COLAMD, METIS and the BLAS itself).
+find_path(TVF_CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
+find_library(TVF_CHOLMOD_LIBRARY cholmod)
+find_library(TVF_SUITESPARSECONFIG_LIBRARY suitesparseconfig)
+if(NOT TVF_CHOLMOD_INCLUDE_DIR OR NOT TVF_CHOLMOD_LIBRARY OR NOT TVF_SUITESPARSECONFIG_LIBRARY)
+  message(FATAL_ERROR "tvf needs CHOLMOD: install the Debian package 'libsuitesparse-dev' (or run scripts/install-deps.sh)")
+endif()
+# The libraries as a target; the headers (TVF_CHOLMOD_INCLUDE_DIR) are added to the few
+# sources that include them (src/CMakeLists.txt, bench/CMakeLists.txt).
+add_library(tvf_cholmod INTERFACE IMPORTED)
+target_link_libraries(tvf_cholmod INTERFACE ${TVF_CHOLMOD_LIBRARY} ${TVF_SUITESPARSECONFIG_LIBRARY})
 # Offscreen OpenGL for surface pictures (render/mesh_renderer.h): OpenGL ES 3 through
 # EGL's surfaceless platform on Mesa (llvmpipe on machines without a GPU).
 pkg_check_modules(EGL QUIET IMPORTED_TARGET egl glesv2)

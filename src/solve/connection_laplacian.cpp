@@ -2,10 +2,20 @@
 
 #include "tvf/core/error.h"
 
+// GCC 12 sees a null outer-index pointer in the Ref that Eigen's CholmodSupport makes of a
+// compressed matrix (viewAsCholmod), which cannot occur: DirichletSolver's matrix is L's
+// compressed copy. The warning points into Eigen's headers, so it is silenced from here
+// to the end of the file.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+#include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
 
+#include <cblas.h>
+
 #include <cmath>
+#include <mutex>
 
 namespace tvf {
 
@@ -87,27 +97,85 @@ struct DirichletSolver::Impl {
   Eigen::SparseMatrix<cplx> a;  // L's pattern; values rewritten per solve
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<cplx>> ldlt;
   Eigen::SparseLU<Eigen::SparseMatrix<cplx>> lu;
+  // Constructed only when used: each holds a cholmod_common (CHOLMOD's workspace).
+  std::unique_ptr<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<cplx>, Eigen::Lower>> cholmod;
 };
 
-DirichletSolver::DirichletSolver(const ConnectionLaplacian& laplacian)
-    : laplacian_(laplacian), impl_(std::make_unique<Impl>()) {
-  impl_->a = laplacian.matrix;
-  if (laplacian.hermitian)
-    impl_->ldlt.analyzePattern(impl_->a);
-  else
-    impl_->lu.analyzePattern(impl_->a);
+namespace {
+
+// From this many vertices automatic takes CHOLMOD (measured: docs/benchmarks.md, "Sparse
+// factorizations": at 4,225 vertices the simplicial LDLᴴ is as fast or faster, from
+// 10,242 on CHOLMOD is faster, by 1.3× to 2.7× at 20,000).
+constexpr Eigen::Index kCholmodVertices = 8000;
+
+DirichletFactorization resolve(const ConnectionLaplacian& laplacian, DirichletFactorization f) {
+  if (f == DirichletFactorization::automatic)
+    return laplacian.hermitian && laplacian.matrix.rows() >= kCholmodVertices ? DirichletFactorization::cholmod
+                                                                               : DirichletFactorization::simplicial;
+  TVF_CHECK(f != DirichletFactorization::cholmod || laplacian.hermitian,
+            "CHOLMOD's LLᴴ needs Hermitian (cotan or uniform) weights");
+  return f;
+}
+
+// OpenBLAS (the pthreads build) runs a large BLAS call on its own threads, which spin
+// while they wait for work. The generators factor frames in parallel, a solver per TBB
+// worker, and CHOLMOD's supernodal kernels called from both workers at once then had
+// OpenBLAS's threads fight the workers for the two cores: 3× the CPU time of the same
+// factorizations with OpenBLAS on one thread (measured, docs/benchmarks.md). So while any
+// CHOLMOD factorization or solve runs, OpenBLAS is held to one thread, and the last one to
+// finish gives it back its threads (the space-time solver's dense products use them). A
+// BLAS call made elsewhere meanwhile runs on one thread: slower, never wrong.
+class OneBlasThread {
+public:
+  OneBlasThread() {
+    std::lock_guard lock(mutex_);
+    if (users_++ == 0) {
+      saved_ = openblas_get_num_threads();
+      if (saved_ != 1) openblas_set_num_threads(1);
+    }
+  }
+  ~OneBlasThread() {
+    std::lock_guard lock(mutex_);
+    if (--users_ == 0 && saved_ != 1) openblas_set_num_threads(saved_);
+  }
+  OneBlasThread(const OneBlasThread&) = delete;
+  OneBlasThread& operator=(const OneBlasThread&) = delete;
+
+private:
+  static inline std::mutex mutex_;
+  static inline int users_ = 0;
+  static inline int saved_ = 1;
+};
+
+}  // namespace
+
+DirichletSolver::DirichletSolver(const ConnectionLaplacian& laplacian, DirichletFactorization factorization)
+    : laplacian_(laplacian), factorization_(resolve(laplacian, factorization)), impl_(std::make_unique<Impl>()) {
+  analyze();
 }
 
 DirichletSolver::DirichletSolver(const DirichletSolver& other)
-    : laplacian_(other.laplacian_), impl_(std::make_unique<Impl>()) {
-  impl_->a = laplacian_.matrix;
-  if (laplacian_.hermitian)
-    impl_->ldlt.analyzePattern(impl_->a);
-  else
-    impl_->lu.analyzePattern(impl_->a);
+    : laplacian_(other.laplacian_), factorization_(other.factorization_), impl_(std::make_unique<Impl>()) {
+  analyze();
 }
 
 DirichletSolver::~DirichletSolver() = default;
+
+void DirichletSolver::analyze() {
+  impl_->a = laplacian_.matrix;
+  if (factorization_ == DirichletFactorization::cholmod) {
+    impl_->cholmod = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<cplx>, Eigen::Lower>>();
+    // Failures come back through info() and the report; CHOLMOD prints nothing.
+    impl_->cholmod->cholmod().print = 0;
+    impl_->cholmod->analyzePattern(impl_->a);
+    TVF_CHECK(impl_->cholmod->info() == Eigen::Success, "CHOLMOD's symbolic analysis failed (status {})",
+              impl_->cholmod->cholmod().status);
+  } else if (laplacian_.hermitian) {
+    impl_->ldlt.analyzePattern(impl_->a);
+  } else {
+    impl_->lu.analyzePattern(impl_->a);
+  }
+}
 
 SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<const cplx> values,
                                    std::span<cplx> out) {
@@ -116,7 +184,9 @@ SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<
                 static_cast<Eigen::Index>(out.size()) == n,
             "sizes {} {} {} for {} vertices", constrained.size(), values.size(), out.size(), n);
   SolveReport report;
-  report.method = laplacian_.hermitian ? "sparse Cholesky (LDLᴴ)" : "sparse LU";
+  report.method = factorization_ == DirichletFactorization::cholmod ? "sparse Cholesky (CHOLMOD supernodal LLᴴ)"
+                   : laplacian_.hermitian                               ? "sparse Cholesky (LDLᴴ)"
+                                                                        : "sparse LU";
   bool any = false;
   for (char c : constrained) any = any || c;
   if (!any) {
@@ -148,7 +218,12 @@ SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<
   }
 
   Eigen::VectorXcd z;
-  if (laplacian_.hermitian) {
+  if (factorization_ == DirichletFactorization::cholmod) {
+    const OneBlasThread one_thread;
+    impl_->cholmod->factorize(a);
+    if (impl_->cholmod->info() != Eigen::Success) return report;
+    z = impl_->cholmod->solve(b);
+  } else if (laplacian_.hermitian) {
     impl_->ldlt.factorize(a);
     if (impl_->ldlt.info() != Eigen::Success) return report;
     z = impl_->ldlt.solve(b);
@@ -163,5 +238,7 @@ SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<
   for (Eigen::Index v = 0; v < n; ++v) out[static_cast<size_t>(v)] = z[v];
   return report;
 }
+
+#pragma GCC diagnostic pop
 
 }  // namespace tvf

@@ -15,6 +15,7 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <vector>
 
 namespace tvf {
@@ -41,15 +42,26 @@ struct SpaceTimeSolver::Operator {
 struct SpaceTimeSolver::Workspace {
   std::vector<cplx> rhs, x, r, p, ap, zp;
   std::vector<double> lower, pivot, upper;
-  // What the temporal-mode method leaves for the next solve (a warm re-solve after an
-  // edit): per segment, the modes of the right-hand side and of the result. They stay
-  // valid while the fixed set is the same; the next solve then transforms only the rows
-  // whose right-hand side changed, and skips the transform of its first guess when that
-  // guess is this result.
-  std::vector<char> fixed;                         // the fixed set they belong to
-  std::vector<cplx> previous_rhs;
-  std::vector<std::vector<double>> r_hat, x_hat;   // per segment, 2|V| × frames
-  bool modes_kept = false;                         // r_hat, x_hat belong to previous_rhs, x
+  // What a solve leaves for the next one (a warm re-solve after an edit). The fixed set,
+  // its values and the right-hand side: when the next solve has the same fixed set, it
+  // compares the fixed values only and updates the right-hand side where they changed
+  // (rhs_change lists what changed; an edit changes a key frame's region: a few hundred
+  // entries instead of all of them).
+  std::vector<char> fixed;                         // the fixed set of the last solve
+  std::vector<size_t> fixed_at;                    // its entries,
+  std::vector<cplx> fixed_value;                   // and their values
+  bool last_kept = false;                          // fixed, fixed_at, fixed_value and rhs are the last solve's
+  std::vector<std::pair<size_t, cplx>> rhs_change; // this solve's rhs − the last one's, where they differ
+  bool rhs_incremental = false;                    // rhs_change lists every change
+  std::vector<char> mark;                          // scratch: n × frames, all zero between uses
+  // The temporal-mode method's, per segment (2|V| × frames, re and im interleaved): the
+  // modes of the right-hand side, of the result, and the modes' residuals
+  // r_hat − A_k x_hat (the last CG residual of each mode). They stay valid while the fixed
+  // set is the same: the next solve then transforms only the rows whose right-hand side
+  // changed, skips the transform of its first guess when that guess is this result, and
+  // starts every mode from its kept residual instead of a sweep.
+  std::vector<std::vector<double>> r_hat, x_hat, res_hat;
+  bool modes_kept = false;                         // r_hat, x_hat, res_hat belong to rhs, x
   bool same_fixed = false, same_guess = false;     // set by solve() for solve_modes()
 };
 
@@ -179,102 +191,163 @@ struct SpaceTime {
     return sweep(x, [&](size_t k, cplx, cplx yi) { return std::norm(rhs[k] - yi); }, [](size_t) {});
   }
 
-  // rhs_F = −A_FC v_C: what the fixed values ask of the free entries.
+  // (rhs_F)_k = (−A_FC v_C)_k for a free entry k = j·n + i: what the fixed values ask of it.
+  cplx rhs_entry(std::span<const cplx> values, size_t j, size_t i) const {
+    const cplx* vj = values.data() + j * n;
+    const char* fj = fixed.data() + j * n;
+    cplx acc(0, 0);
+    for (int k = op.row_start[i]; k < op.row_start[i + 1]; ++k) {
+      const auto c = static_cast<size_t>(op.column[static_cast<size_t>(k)]);
+      if (fj[c]) acc -= op.value[static_cast<size_t>(k)] * vj[c];
+    }
+    const double c = b * op.weight_sum[i];
+    if (j > 0 && fj[i - n]) acc += c * vj[i - n];
+    if (j + 1 < nf && fj[i + n]) acc += c * vj[i + n];
+    return acc;
+  }
+
+  // rhs_F = −A_FC v_C (fixed entries of rhs zero).
   void right_hand_side(std::span<const cplx> values, Vec& rhs) const {
     auto body = [&](size_t j) {
-      const cplx* vj = values.data() + j * n;
       const char* fj = fixed.data() + j * n;
       cplx* rj = rhs.data() + j * n;
-      for (size_t i = 0; i < n; ++i) {
-        if (fj[i]) {
-          rj[i] = 0;
-          continue;
-        }
-        cplx acc(0, 0);
-        for (int k = op.row_start[i]; k < op.row_start[i + 1]; ++k) {
-          const auto c = static_cast<size_t>(op.column[static_cast<size_t>(k)]);
-          if (fj[c]) acc -= op.value[static_cast<size_t>(k)] * vj[c];
-        }
-        const double c = b * op.weight_sum[i];
-        if (j > 0 && fj[i - n]) acc += c * vj[i - n];
-        if (j + 1 < nf && fj[i + n]) acc += c * vj[i + n];
-        rj[i] = acc;
-      }
+      for (size_t i = 0; i < n; ++i) rj[i] = fj[i] ? cplx(0, 0) : rhs_entry(values, j, i);
     };
     if (parallel)
       tbb::parallel_for(size_t{0}, nf, body);
     else
       for (size_t j = 0; j < nf; ++j) body(j);
   }
+
+  // Where the fixed values changed (the entries `changed` of fixed_at), updates rhs in
+  // place at the free entries they reach (their spatial neighbours in the frame, the
+  // entry itself in the frames before and after) and lists rhs's changes. `mark` is
+  // n × frames scratch, zero on entry and exit.
+  void update_right_hand_side(std::span<const cplx> values, std::span<const size_t> fixed_at,
+                              std::span<const size_t> changed, Vec& rhs, std::vector<char>& mark,
+                              std::vector<std::pair<size_t, cplx>>& change) const {
+    std::vector<size_t> reached;
+    auto reach = [&](size_t k) {
+      if (!fixed[k] && !mark[k]) {
+        mark[k] = 1;
+        reached.push_back(k);
+      }
+    };
+    for (const size_t m : changed) {
+      const size_t k = fixed_at[m], j = k / n, i = k % n;
+      for (int e = op.row_start[i]; e < op.row_start[i + 1]; ++e)
+        reach(j * n + static_cast<size_t>(op.column[static_cast<size_t>(e)]));
+      if (j > 0) reach(k - n);
+      if (j + 1 < nf) reach(k + n);
+    }
+    std::sort(reached.begin(), reached.end());
+    change.clear();
+    for (const size_t k : reached) {
+      mark[k] = 0;
+      const cplx v = rhs_entry(values, k / n, k % n);
+      if (v != rhs[k]) change.emplace_back(k, v - rhs[k]);
+      rhs[k] = v;
+    }
+  }
 };
 
 // Scratch vectors of one thread's mode solves, kept between modes (fresh |V|-sized
 // vectors per mode cost more in page faults than the sweeps of a high mode).
 struct ModeScratch {
-  Vec r, p, ap;
+  Vec p, ap;
   std::vector<double> diagonal, inverse;
   void resize(size_t n) {
-    if (r.size() == n) return;
-    r.resize(n), p.resize(n), ap.resize(n), diagonal.resize(n), inverse.resize(n);
+    if (p.size() == n) return;
+    p.resize(n), ap.resize(n), diagonal.resize(n), inverse.resize(n);
   }
 };
 
-// Jacobi-preconditioned CG on one temporal mode: (L_F + s·D_F) y = r over the free
-// vertices (fixed[i] == 0), to an absolute residual `tau`. y holds the first guess.
-// Returns the iterations, or −1 if it did not converge; residual2 gets ‖r‖² at the end
-// (the recurrence's).
-int solve_mode(const SpaceTimeSolver::Operator& op, const char* fixed, double s, const cplx* rhs,
-               cplx* y, double tau, int max_iterations, ModeScratch& w, double& residual2) {
-  const auto n = static_cast<size_t>(op.rows);
-  w.resize(n);
-  cplx *r = w.r.data(), *p = w.p.data(), *ap = w.ap.data();
-  double *diagonal = w.diagonal.data(), *inverse = w.inverse.data();
-  for (size_t i = 0; i < n; ++i) {
-    diagonal[i] = fixed[i] ? 0.0 : op.diagonal[i] + s * op.weight_sum[i];
-    inverse[i] = fixed[i] ? 0.0 : 1.0 / diagonal[i];
-  }
-  // out = A x on the free rows (fixed rows: 0; fixed entries of x are 0); returns Re <x, Ax>.
-  auto apply = [&](const cplx* x, cplx* out) {
-    double dot = 0;
-    for (size_t i = 0; i < n; ++i) {
-      const cplx v = fixed[i] ? cplx(0, 0) : diagonal[i] * x[i] + op.off(static_cast<int>(i), x);
-      out[i] = v;
-      dot += x[i].real() * v.real() + x[i].imag() * v.imag();
+// One temporal mode's spatial system (L_F + s·D_F) y = rhs over the free vertices
+// (fixed[i] == 0); fixed entries of y, rhs and the residual are zero.
+struct ModeSystem {
+  const SpaceTimeSolver::Operator& op;
+  const char* fixed;
+  double s;
+
+  // res = rhs − A y on the free rows; returns ‖res‖².
+  double residual(const cplx* rhs, const cplx* y, cplx* res) const {
+    double rr = 0;
+    for (size_t i = 0; i < static_cast<size_t>(op.rows); ++i) {
+      if (fixed[i]) {
+        res[i] = 0;
+        continue;
+      }
+      const double d = op.diagonal[i] + s * op.weight_sum[i];
+      res[i] = rhs[i] - (d * y[i] + op.off(static_cast<int>(i), y));
+      rr += std::norm(res[i]);
     }
-    return dot;
-  };
-  apply(y, ap);
-  double rr = 0, rz = 0;
-  for (size_t i = 0; i < n; ++i) {
-    r[i] = fixed[i] ? cplx(0, 0) : rhs[i] - ap[i];
-    p[i] = inverse[i] * r[i];
-    const double q = std::norm(r[i]);
-    rr += q;
-    rz += inverse[i] * q;
+    return rr;
   }
-  const double tau2 = tau * tau;
-  int it = 0;
-  while (rr > tau2) {
-    if (it == max_iterations) return -1;
-    const double pap = apply(p, ap);
-    if (!(pap > 0)) return -1;
-    const double alpha = rz / pap;
-    double rz_new = 0;
-    rr = 0;
+
+  // Jacobi-preconditioned CG from y, whose residual res and ‖res‖² = rr are given, until
+  // ‖res‖² ≤ tau2; y, res and rr are updated. Returns the iterations, or −1 if it did not
+  // converge within max_iterations.
+  int iterate(cplx* y, cplx* res, double& rr, double tau2, int max_iterations, ModeScratch& w) const {
+    if (rr <= tau2) return 0;
+    const auto n = static_cast<size_t>(op.rows);
+    w.resize(n);
+    cplx *p = w.p.data(), *ap = w.ap.data();
+    double *diagonal = w.diagonal.data(), *inverse = w.inverse.data();
+    double rz = 0;
     for (size_t i = 0; i < n; ++i) {
-      y[i] += alpha * p[i];
-      r[i] -= alpha * ap[i];
-      const double q = std::norm(r[i]);
-      rr += q;
-      rz_new += inverse[i] * q;
+      diagonal[i] = fixed[i] ? 0.0 : op.diagonal[i] + s * op.weight_sum[i];
+      inverse[i] = fixed[i] ? 0.0 : 1.0 / diagonal[i];
+      p[i] = inverse[i] * res[i];
+      rz += inverse[i] * std::norm(res[i]);
     }
-    ++it;
-    const double beta = rz_new / rz;
-    rz = rz_new;
-    for (size_t i = 0; i < n; ++i) p[i] = inverse[i] * r[i] + beta * p[i];
+    // ap = A p on the free rows (fixed rows: 0; fixed entries of p are 0); returns Re <p, Ap>.
+    auto apply = [&]() {
+      double dot = 0;
+      for (size_t i = 0; i < n; ++i) {
+        const cplx v = fixed[i] ? cplx(0, 0) : diagonal[i] * p[i] + op.off(static_cast<int>(i), p);
+        ap[i] = v;
+        dot += p[i].real() * v.real() + p[i].imag() * v.imag();
+      }
+      return dot;
+    };
+    int it = 0;
+    while (rr > tau2) {
+      if (it == max_iterations) return -1;
+      const double pap = apply();
+      if (!(pap > 0)) return -1;
+      const double alpha = rz / pap;
+      double rz_new = 0;
+      rr = 0;
+      for (size_t i = 0; i < n; ++i) {
+        y[i] += alpha * p[i];
+        res[i] -= alpha * ap[i];
+        const double q = std::norm(res[i]);
+        rr += q;
+        rz_new += inverse[i] * q;
+      }
+      ++it;
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (size_t i = 0; i < n; ++i) p[i] = inverse[i] * res[i] + beta * p[i];
+    }
+    return it;
   }
-  residual2 = rr;
-  return it;
+};
+
+// How a budget of squared residual is shared among modes whose squared residuals are
+// rr0 now: modes already below an equal share of what is left keep theirs, and give the
+// rest to the others (water filling). Returns the level each remaining mode must reach
+// (infinity when every mode is already within its share).
+double share_level(std::vector<double> rr0, double budget) {
+  std::sort(rr0.begin(), rr0.end());
+  double left = budget;
+  size_t count = rr0.size();
+  for (const double r : rr0) {
+    if (r > left / static_cast<double>(count)) return left / static_cast<double>(count);
+    left -= r;
+    --count;
+  }
+  return std::numeric_limits<double>::infinity();
 }
 
 // out = in · m (or in · mᵀ) for a tall frame-major block: rows = 2·|V| real numbers
@@ -374,39 +447,6 @@ Segments find_segments(std::span<const char> fixed, size_t n, size_t nf) {
 
 }  // namespace
 
-namespace {
-
-// r_hat += Qᵀ (rhs − previous) over the frames of a segment, for the vertices whose
-// right-hand side changed there (an edit's are few: a key frame's region). Returns false,
-// doing nothing, when too many changed for this to beat the whole transform.
-bool update_modes_of_changed_rows(std::span<const cplx> rhs, const Vec& previous, size_t first, size_t count, size_t n,
-                                  const Eigen::MatrixXd& q, Eigen::Map<Eigen::MatrixXd>& r_hat, bool parallel) {
-  if (previous.size() != rhs.size()) return false;
-  std::vector<char> row_changed(n, 0);
-  blocks(n, parallel, [&](size_t i0, size_t i1) {
-    for (size_t j = first; j < first + count; ++j)
-      for (size_t i = i0; i < i1; ++i)
-        if (rhs[j * n + i] != previous[j * n + i]) row_changed[i] = 1;
-  });
-  std::vector<size_t> rows;
-  for (size_t i = 0; i < n; ++i)
-    if (row_changed[i]) rows.push_back(i);
-  if (rows.size() > n / 8) return false;
-  Eigen::VectorXd delta_re(static_cast<Eigen::Index>(count)), delta_im(static_cast<Eigen::Index>(count));
-  for (const size_t i : rows) {
-    for (size_t j = 0; j < count; ++j) {
-      const cplx d = rhs[(first + j) * n + i] - previous[(first + j) * n + i];
-      delta_re[static_cast<Eigen::Index>(j)] = d.real();
-      delta_im[static_cast<Eigen::Index>(j)] = d.imag();
-    }
-    r_hat.row(static_cast<Eigen::Index>(2 * i)) += (q.transpose() * delta_re).transpose();
-    r_hat.row(static_cast<Eigen::Index>(2 * i + 1)) += (q.transpose() * delta_im).transpose();
-  }
-  return true;
-}
-
-}  // namespace
-
 // The transforms cost 6·m flops per entry for a segment of m frames (three products with
 // the m × m basis), a CG iteration about 40: past this length CG is cheaper.
 constexpr size_t kMostModeFrames = 1024;
@@ -414,6 +454,11 @@ constexpr size_t kMostModeFrames = 1024;
 // Tolerances from which the temporal-mode method reports the residual its modes add up
 // to instead of measuring it with another sweep over all frames.
 constexpr double kModeResidualTolerance = 1e-8;
+
+// Temporal modes whose shift b·λ_k is below this are the slow ones of the Jacobi-PCG (the
+// spatial Laplacian dominates their matrix): they are solved last, with what the others
+// left of the residual budget.
+constexpr double kSlowShift = 1.0;
 
 size_t SpaceTimeSolver::longest_segment(std::span<const char> fixed) const {
   size_t most = 0;
@@ -491,14 +536,37 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   std::lock_guard lock(work_mutex_);
   if (!work_) work_ = std::make_shared<Workspace>();
   Workspace& w = *work_;
-  w.same_fixed = w.modes_kept && std::equal(fixed.begin(), fixed.end(), w.fixed.begin(), w.fixed.end());
-  if (!w.same_fixed) {
-    w.modes_kept = false;
-    w.fixed.assign(fixed.begin(), fixed.end());
-  }
-  std::swap(w.rhs, w.previous_rhs);  // the last solve's right-hand side, for solve_modes
+  const bool same_fixed = w.last_kept && std::equal(fixed.begin(), fixed.end(), w.fixed.begin(), w.fixed.end());
+  w.same_fixed = same_fixed && w.modes_kept;
+  if (!w.same_fixed) w.modes_kept = false;
   Vec& rhs = sized(w.rhs, total);
-  a.right_hand_side(values, rhs);
+  // The right-hand side: updated where the fixed values changed when the fixed set is the
+  // last solve's and few of them did, else computed whole.
+  w.rhs_incremental = false;
+  if (same_fixed) {
+    std::vector<size_t> changed;
+    for (size_t m = 0; m < w.fixed_at.size(); ++m)
+      if (values[w.fixed_at[m]] != w.fixed_value[m]) changed.push_back(m);
+    if (changed.size() <= total / 64) {
+      sized(w.mark, total);  // zero from its last use (or new)
+      a.update_right_hand_side(values, w.fixed_at, changed, rhs, w.mark, w.rhs_change);
+      for (const size_t m : changed) w.fixed_value[m] = values[w.fixed_at[m]];
+      w.rhs_incremental = true;
+    }
+  }
+  if (!w.rhs_incremental) {
+    w.last_kept = false;
+    a.right_hand_side(values, rhs);
+    if (!same_fixed) {
+      w.fixed.assign(fixed.begin(), fixed.end());
+      w.fixed_at.clear();
+      for (size_t k = 0; k < total; ++k)
+        if (fixed[k]) w.fixed_at.push_back(k);
+    }
+    w.fixed_value.resize(w.fixed_at.size());
+    for (size_t m = 0; m < w.fixed_at.size(); ++m) w.fixed_value[m] = values[w.fixed_at[m]];
+    w.last_kept = true;
+  }
   const double bnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(rhs[k]); }));
 
   // The unknown: the free part of z (its first guess), fixed entries zero; noting
@@ -506,14 +574,17 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   Vec& x = sized(w.x, total);
   std::atomic<bool> changed{false};
   blocks(total, par, [&](size_t s, size_t e) {
-    bool differs = false;
-    for (size_t k = s; k < e; ++k) {
-      const cplx v = fixed[k] ? cplx(0, 0) : z[k];
-      differs = differs || v != x[k];
-      x[k] = v;
-    }
-    if (differs) changed = true;
+    if (changed) return;
+    for (size_t k = s; k < e; ++k)
+      if ((fixed[k] ? cplx(0, 0) : z[k]) != x[k]) {
+        changed = true;
+        return;
+      }
   });
+  if (changed)
+    blocks(total, par, [&](size_t s, size_t e) {
+      for (size_t k = s; k < e; ++k) x[k] = fixed[k] ? cplx(0, 0) : z[k];
+    });
   w.same_guess = w.same_fixed && !changed;
 
   SolveReport report;
@@ -548,80 +619,168 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   const auto nf = static_cast<size_t>(frames_);
   const bool par = options.parallel;
   const Segments segs = find_segments(fixed, n, nf);
-  size_t modes = 0;
-  for (const auto& s : segs.segments) modes += s.second;
-  // Q is orthogonal, so the squared residuals of the modes add up to the whole one's.
-  // Each mode gets an equal share of the tolerance, with room for the transforms'
-  // rounding where the residual is then measured (see kModeResidualTolerance).
-  const double share = options.tolerance >= kModeResidualTolerance ? 0.95 : 0.5;
-  const double tau = share * options.tolerance * bnorm / std::sqrt(static_cast<double>(std::max<size_t>(modes, 1)));
-
-  std::atomic<int> most{0};
-  std::atomic<long> all{0};
-  tbb::combinable<double> modes_rr([] { return 0.0; });
-  std::atomic<bool> failed{false};
+  const size_t nseg = segs.segments.size();
   Workspace& w = *work_;
-  const bool kept = w.modes_kept && w.r_hat.size() == segs.segments.size();
+  const bool kept = w.modes_kept && w.r_hat.size() == nseg;
+  // The kept residuals of the modes are theirs when the first guess is the last result
+  // and every change of the right-hand side is known.
+  const bool residuals_kept = kept && w.same_guess && w.rhs_incremental;
   w.modes_kept = false;  // until this solve has left its own modes
-  w.r_hat.resize(segs.segments.size());
-  w.x_hat.resize(segs.segments.size());
-  for (size_t si = 0; si < segs.segments.size(); ++si) {
+  w.r_hat.resize(nseg);
+  w.x_hat.resize(nseg);
+  w.res_hat.resize(nseg);
+
+  // Into the modes: per segment r_hat = rhs·Q, x_hat = x·Q (complex |V| × count blocks seen
+  // as real 2|V| × count ones, re and im interleaved), or updates of the kept ones.
+  struct Mode {
+    size_t segment, k;
+    double shift;
+    double rr = 0;  // ‖residual‖²
+    int iterations = 0;
+  };
+  std::vector<Mode> modes;
+  std::vector<const TemporalBasis*> bases(nseg);
+  auto column = [&](std::vector<std::vector<double>>& m, const Mode& mode) {
+    return reinterpret_cast<cplx*>(m[mode.segment].data() + 2 * n * mode.k);
+  };
+  for (size_t si = 0; si < nseg; ++si) {
     const auto [first, count] = segs.segments[si];
     const TemporalBasis& basis = temporal_basis(static_cast<int>(first), static_cast<int>(count));
+    bases[si] = &basis;
     const auto rows = static_cast<Eigen::Index>(2 * n), cols = static_cast<Eigen::Index>(count);
-    // Complex |V| × count blocks seen as real 2|V| × count ones (re, im interleaved).
     auto* x_seg = reinterpret_cast<double*>(x.data() + first * n);
     Eigen::Map<Eigen::MatrixXd> r_hat(sized(w.r_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
     Eigen::Map<Eigen::MatrixXd> x_hat(sized(w.x_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
-    if (!kept || !update_modes_of_changed_rows(rhs, w.previous_rhs, first, count, n, basis.q, r_hat, par))
+    Eigen::Map<Eigen::MatrixXd> res_hat(sized(w.res_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
+    if (kept && w.rhs_incremental) {
+      // r_hat (and the kept residuals) += Qᵀ Δ on the rows whose right-hand side changed
+      // in this segment: Δ per vertex over the segment's frames.
+      std::map<size_t, std::pair<Eigen::VectorXd, Eigen::VectorXd>> delta;  // vertex → (re, im)
+      for (const auto& [k, d] : w.rhs_change) {
+        const size_t j = k / n, i = k % n;
+        if (j < first || j >= first + count) continue;
+        auto [it, fresh] = delta.try_emplace(i);
+        if (fresh) it->second = {Eigen::VectorXd::Zero(cols), Eigen::VectorXd::Zero(cols)};
+        it->second.first[static_cast<Eigen::Index>(j - first)] = d.real();
+        it->second.second[static_cast<Eigen::Index>(j - first)] = d.imag();
+      }
+      for (const auto& [i, d] : delta) {
+        const Eigen::RowVectorXd re = (basis.q.transpose() * d.first).transpose();
+        const Eigen::RowVectorXd im = (basis.q.transpose() * d.second).transpose();
+        const auto row = static_cast<Eigen::Index>(2 * i);
+        r_hat.row(row) += re;
+        r_hat.row(row + 1) += im;
+        if (residuals_kept) {
+          res_hat.row(row) += re;
+          res_hat.row(row + 1) += im;
+        }
+      }
+    } else {
       multiply_rows(reinterpret_cast<const double*>(rhs.data() + first * n), basis.q, false, r_hat.data(), rows);
+    }
     if (!kept || !w.same_guess) multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
-    const char* f = fixed.data() + first * n;
-    tbb::enumerable_thread_specific<ModeScratch> scratch;
-    auto mode = [&](size_t k) {
-      const auto* rk = reinterpret_cast<const cplx*>(r_hat.col(static_cast<Eigen::Index>(k)).data());
-      auto* yk = reinterpret_cast<cplx*>(x_hat.col(static_cast<Eigen::Index>(k)).data());
-      double rr = 0;
-      const int it = solve_mode(*op_, f, b_ * basis.lambda[static_cast<Eigen::Index>(k)], rk, yk, tau,
-                                options.max_iterations, scratch.local(), rr);
-      modes_rr.local() += rr;
-      if (it < 0) {
-        failed = true;
-        return;
-      }
-      all += it;
-      int seen = most.load();
-      while (it > seen && !most.compare_exchange_weak(seen, it)) {
-      }
-    };
+    for (size_t k = 0; k < count; ++k)
+      modes.push_back({si, k, b_ * basis.lambda[static_cast<Eigen::Index>(k)]});
+  }
+  auto each_mode = [&](const std::vector<size_t>& which, auto&& body) {
     if (par)
-      tbb::parallel_for(size_t{0}, count, mode, tbb::simple_partitioner());
+      tbb::parallel_for(size_t{0}, which.size(), [&](size_t m) { body(modes[which[m]]); }, tbb::simple_partitioner());
     else
-      for (size_t k = 0; k < count; ++k) mode(k);
-    multiply_rows(x_hat.data(), basis.q, true, x_seg, rows);
+      for (const size_t m : which) body(modes[m]);
+  };
+  std::vector<size_t> every(modes.size());
+  for (size_t m = 0; m < modes.size(); ++m) every[m] = m;
+  auto system = [&](const Mode& mode) {
+    return ModeSystem{*op_, fixed.data() + segs.segments[mode.segment].first * n, mode.shift};
+  };
+
+  // Every mode's residual now: kept (updated above), or one sweep.
+  each_mode(every, [&](Mode& mode) {
+    cplx* res = column(w.res_hat, mode);
+    if (residuals_kept) {
+      double rr = 0;
+      for (size_t i = 0; i < n; ++i) rr += std::norm(res[i]);
+      mode.rr = rr;
+    } else {
+      mode.rr = system(mode).residual(column(w.r_hat, mode), column(w.x_hat, mode), res);
+    }
+  });
+
+  // Q is orthogonal, so the squared residuals of the modes add up to the whole one's: the
+  // budget (tolerance · ‖b‖)² is theirs to share, with room for the transforms' rounding
+  // where the residual is then measured (see kModeResidualTolerance). Modes already within
+  // an equal share keep their residual and leave the rest to the others. The lowest modes
+  // (shift under kSlowShift: the spatial Laplacian dominates, Jacobi-PCG converges slowly)
+  // go last and share what the others left: a fast mode usually stops well below its
+  // share, and every factor the slow ones are spared saves them several iterations.
+  const double share = options.tolerance >= kModeResidualTolerance ? 0.95 : 0.5;
+  const double budget = std::pow(share * options.tolerance * bnorm, 2);
+  std::vector<double> rr0;
+  for (const Mode& m : modes) rr0.push_back(m.rr);
+  const double level = share_level(rr0, budget);
+  std::vector<size_t> fast, slow;
+  for (size_t m = 0; m < modes.size(); ++m)
+    if (modes[m].rr > level) (modes[m].shift < kSlowShift ? slow : fast).push_back(m);
+  std::atomic<bool> failed{false};
+  tbb::enumerable_thread_specific<ModeScratch> scratch;
+  auto converge = [&](Mode& mode, double tau2) {
+    const int it = system(mode).iterate(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
+                                        options.max_iterations, scratch.local());
+    if (it < 0) failed = true;
+    mode.iterations = std::max(it, 0);
+  };
+  each_mode(fast, [&](Mode& mode) { converge(mode, level); });
+  if (!slow.empty()) {
+    double left = budget;
+    std::vector<double> slow_rr;
+    for (size_t m = 0; m < modes.size(); ++m) {
+      if (std::find(slow.begin(), slow.end(), m) == slow.end())
+        left -= modes[m].rr;
+      else
+        slow_rr.push_back(modes[m].rr);
+    }
+    // left ≥ |slow| · level: the fast modes ended at or below it.
+    const double slow_level = share_level(slow_rr, std::max(left, 0.0));
+    each_mode(slow, [&](Mode& mode) { converge(mode, slow_level); });
   }
 
+  // Back from the modes.
+  for (size_t si = 0; si < nseg; ++si) {
+    const auto [first, count] = segs.segments[si];
+    const auto rows = static_cast<Eigen::Index>(2 * n);
+    multiply_rows(w.x_hat[si].data(), bases[si]->q, true, reinterpret_cast<double*>(x.data() + first * n), rows);
+  }
+
+  int most = 0;
+  long all = 0;
+  double modes_rr = 0;
+  for (const Mode& m : modes) {
+    most = std::max(most, m.iterations);
+    all += m.iterations;
+    modes_rr += m.rr;
+  }
   SolveReport report;
   report.method = fmt::format("temporal eigenmodes (direct in time) with Jacobi-PCG per mode, {} modes, "
                               "{} spatial iterations in all",
-                              modes, all.load());
-  report.iterations = most.load();
+                              modes.size(), all);
+  report.iterations = most;
   // Q is orthogonal, so the modes' residuals add up to the whole one's, up to the
   // rounding of the transforms (~1e-14 relative). Where the tolerance leaves room for
   // that (a warm re-solve to 1e-6), that sum is the residual; tighter, it is measured
   // as it is (and CG finishes the solve if rounding left it short).
   double rnorm = 0;
   if (options.tolerance >= kModeResidualTolerance) {
-    rnorm = std::sqrt(modes_rr.combine(std::plus<>()));
+    rnorm = std::sqrt(modes_rr);
   } else {
     const SpaceTime a{*op_, fixed, n, nf, b_, par};
     rnorm = std::sqrt(a.residual_norm2(x, rhs));
   }
   report.residual = rnorm / bnorm;
   report.success = !failed && report.residual <= options.tolerance;
-  w.modes_kept = report.success;  // x_hat holds the modes of x, r_hat those of rhs
+  w.modes_kept = !failed;  // x_hat holds the modes of x, r_hat those of rhs, res_hat their residuals
   if (!report.success && options.method != SpaceTimeMethod::modes) {
     // Rounding (or a mode that would not converge): finish with CG from here.
+    w.modes_kept = false;
     SolveReport polish = solve_cg(fixed, rhs, x, bnorm, options);
     polish.method = report.method + ", finished by " + polish.method;
     polish.iterations += report.iterations;

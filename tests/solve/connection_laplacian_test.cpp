@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <tbb/parallel_for.h>
+
 #include <random>
 
 namespace tvf {
@@ -118,6 +120,97 @@ TEST(DirichletSolver, NoConstraintGivesTheZeroField) {
   std::vector<cplx> values(n, cplx(1, 1)), out(n, cplx(5, 5));
   EXPECT_TRUE(solver.solve(fixed, values, out).success);
   for (const cplx& z : out) EXPECT_EQ(z, cplx(0, 0));
+}
+
+
+// CHOLMOD's supernodal LLᴴ (the default for Hermitian weights) against Eigen's simplicial
+// LDLᴴ: the same solution to rounding on every test mesh, frame after frame with one
+// symbolic analysis, in the solver and in its copies (one per thread in the generators).
+TEST(DirichletSolver, CholmodAgreesWithTheSimplicialFactorization) {
+  for (const auto& [name, mesh] : test::all_meshes()) {
+    const TangentBundle bundle(*mesh);
+    for (auto w : {LaplacianWeights::cotan, LaplacianWeights::uniform}) {
+      const ConnectionLaplacian l = connection_laplacian(bundle, w);
+      DirichletSolver simplicial(l, DirichletFactorization::simplicial);
+      DirichletSolver cholmod(l, DirichletFactorization::cholmod);
+      DirichletSolver copy(cholmod);
+      EXPECT_EQ(copy.factorization(), DirichletFactorization::cholmod) << name;
+      std::mt19937 rng(7);
+      std::uniform_real_distribution<double> u(-1, 1);
+      const auto n = static_cast<size_t>(mesh->num_vertices());
+      for (int frame = 0; frame < 3; ++frame) {
+        std::vector<char> fixed(n);
+        std::vector<cplx> values(n), a(n), b(n), c(n);
+        for (size_t v = 0; v < n; ++v) {
+          fixed[v] = u(rng) > 0.7 - 0.2 * frame;
+          values[v] = cplx(u(rng), u(rng));
+        }
+        const SolveReport ra = simplicial.solve(fixed, values, a);
+        const SolveReport rb = cholmod.solve(fixed, values, b);
+        const SolveReport rc = copy.solve(fixed, values, c);
+        ASSERT_TRUE(ra.success && rb.success && rc.success) << name;
+        EXPECT_NE(ra.method, rb.method);
+        EXPECT_LT(rb.residual, 1e-12) << name;
+        // The residual the solver reports is the one measured here.
+        Eigen::VectorXcd z = Eigen::Map<const Eigen::VectorXcd>(b.data(), static_cast<Eigen::Index>(n));
+        const Eigen::VectorXcd lz = l.matrix * z;
+        double free2 = 0, rhs2 = 0;
+        for (size_t v = 0; v < n; ++v) {
+          if (fixed[v]) {
+            EXPECT_EQ(b[v], values[v]) << name;
+            rhs2 += std::norm(values[v]);
+          } else {
+            free2 += std::norm(lz[static_cast<Eigen::Index>(v)]);
+          }
+        }
+        EXPECT_LT(std::sqrt(free2), 1e-11 * std::sqrt(rhs2) * l.weight_sum.maxCoeff()) << name;
+        double scale = 0, diff = 0;
+        for (size_t v = 0; v < n; ++v) {
+          scale = std::max(scale, std::abs(a[v]));
+          diff = std::max(diff, std::abs(a[v] - b[v]));
+          EXPECT_EQ(b[v], c[v]) << name << ": a copy factors exactly as the original";
+        }
+        EXPECT_LT(diff, 1e-11 * scale) << name << " frame " << frame;
+      }
+    }
+  }
+}
+
+// automatic: CHOLMOD for Hermitian weights on large meshes (where it was measured faster),
+// the simplicial LDLᴴ on small ones, sparse LU for mean-value weights (CHOLMOD refused).
+TEST(DirichletSolver, AutomaticTakesCholmodForLargeHermitianProblems) {
+  const TangentBundle small(test::grid_mesh());
+  EXPECT_EQ(DirichletSolver(connection_laplacian(small)).factorization(), DirichletFactorization::simplicial);
+  const Mesh large_grid = make_grid(GridSpec{100, 100, {-1, -1}, {1, 1}});
+  const TangentBundle large(large_grid);
+  const ConnectionLaplacian cotan = connection_laplacian(large);
+  DirichletSolver solver(cotan);
+  EXPECT_EQ(solver.factorization(), DirichletFactorization::cholmod);
+  const ConnectionLaplacian mean_value = connection_laplacian(large, LaplacianWeights::mean_value);
+  EXPECT_EQ(DirichletSolver(mean_value).factorization(), DirichletFactorization::simplicial);
+  EXPECT_THROW(DirichletSolver(mean_value, DirichletFactorization::cholmod), std::exception);
+  // A large solve, frames in parallel as the generators run them: each thread's copy
+  // reproduces the boundary's linear field.
+  const auto n = static_cast<size_t>(large_grid.num_vertices());
+  std::vector<char> fixed(n);
+  std::vector<cplx> values(n), exact(n);
+  for (int v = 0; v < large_grid.num_vertices(); ++v) {
+    const Vec3& x = large_grid.position(v);
+    exact[static_cast<size_t>(v)] = cplx(0.5, 1) + cplx(2, -1) * x.x() + cplx(-0.3, 0.7) * x.y();
+    fixed[static_cast<size_t>(v)] = large_grid.is_boundary_vertex(v);
+    values[static_cast<size_t>(v)] = fixed[static_cast<size_t>(v)] ? exact[static_cast<size_t>(v)] : cplx(0, 0);
+  }
+  std::vector<std::vector<cplx>> out(4, std::vector<cplx>(n));
+  std::vector<SolveReport> reports(4);
+  tbb::parallel_for(0, 4, [&](int k) {
+    DirichletSolver copy(solver);
+    reports[static_cast<size_t>(k)] = copy.solve(fixed, values, out[static_cast<size_t>(k)]);
+  });
+  for (int k = 0; k < 4; ++k) {
+    ASSERT_TRUE(reports[static_cast<size_t>(k)].success);
+    EXPECT_LT(reports[static_cast<size_t>(k)].residual, 1e-12);
+    for (size_t v = 0; v < n; ++v) EXPECT_LT(std::abs(out[static_cast<size_t>(k)][v] - exact[v]), 1e-9) << v;
+  }
 }
 
 }  // namespace

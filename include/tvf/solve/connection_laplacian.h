@@ -39,14 +39,24 @@ struct SolveReport {
   bool success = false;
 };
 
+// How DirichletSolver factors its matrix (measured: docs/benchmarks.md, "Sparse
+// factorizations"; why: docs/architecture.md, "Constrained solves keep one pattern").
+enum class DirichletFactorization {
+  automatic,   // Hermitian weights: CHOLMOD from 8,000 vertices, simplicial below; mean-value: LU
+  simplicial,  // Eigen's SimplicialLDLᴴ (Hermitian) or SparseLU (mean-value)
+  cholmod,     // CHOLMOD's supernodal LLᴴ (its own AMD/METIS ordering); Hermitian weights only
+};
+
 // Solves the Dirichlet problem L z = 0 at free vertices with z fixed at constrained ones
 // (DESIGN §5.2). Factor once, solve many (STYLE 4): the matrix keeps L's sparsity pattern
 // for every constraint set (constrained rows and columns become identity), so the
 // symbolic analysis is done once at construction and each solve() pays one numeric
-// factorization. Not thread-safe; copy it for each thread.
+// factorization. Not thread-safe; copy it for each thread (a copy keeps the
+// factorization choice and redoes the symbolic analysis).
 class DirichletSolver {
 public:
-  explicit DirichletSolver(const ConnectionLaplacian& laplacian);
+  explicit DirichletSolver(const ConnectionLaplacian& laplacian,
+                           DirichletFactorization factorization = DirichletFactorization::automatic);
   DirichletSolver(const DirichletSolver&);
   DirichletSolver& operator=(const DirichletSolver&) = delete;
   ~DirichletSolver();
@@ -57,9 +67,15 @@ public:
   SolveReport solve(std::span<const char> constrained, std::span<const cplx> values,
                     std::span<cplx> out);
 
+  // The factorization in use (automatic resolved).
+  DirichletFactorization factorization() const { return factorization_; }
+
 private:
   struct Impl;
+  void analyze();
+
   const ConnectionLaplacian& laplacian_;
+  DirichletFactorization factorization_;
   std::unique_ptr<Impl> impl_;
 };
 
