@@ -294,9 +294,12 @@ function texture(f: Frame): HTMLCanvasElement {
   return c;
 }
 
-// Boxes on the surface: the elements' handles and the deformed streamlines' seeds.
+// Boxes on the surface: the elements' handles, and with the deform generator its base
+// field's singular elements and the deformed streamlines' seeds.
 function markers(): number[][] {
-  return [...S.handles(scene(), currentTime()).map((h) => h.position), ...S.deformSeeds(scene())];
+  const deform = scene().generator === "deform" ? (scene().deform as S.DeformBlock | undefined) : undefined;
+  const base = (deform?.base?.elements ?? []).flatMap((e) => (e.kind === "singular" ? [e.path[0].slice(0, -1)] : []));
+  return [...S.handles(scene(), currentTime()).map((h) => h.position), ...base, ...S.deformSeeds(scene())];
 }
 
 function redraw() {
