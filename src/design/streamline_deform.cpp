@@ -45,6 +45,26 @@ Similarity similarity_at(const nlohmann::json& keys, double t0, double t) {
 
 }  // namespace
 
+Vec3 seed_translation(const DesignSpace& space, const Vec3& seed, const Vec3& to) {
+  if (space.planar()) return {to.x() - seed.x(), to.y() - seed.y(), 0.0};
+  const SurfacePoint p = space.locate(seed);
+  LocalChart chart;
+  space.log_map().compute(p, chart);
+  const ChartInverse inverse(space.bundle(), chart, 0.5 * space.diameter());
+  const SurfacePoint q = space.locate(to);
+  const cplx w = inverse.coords(q);
+  // Beyond the inverted faces (far from the seed, or past the cut locus) the chart's
+  // coordinates do not lead back to the point.
+  const auto back = inverse.locate(w);
+  if (!back || (surface_position(space.mesh(), *back) - surface_position(space.mesh(), q)).norm() >
+                   1e-3 * space.diameter())
+    throw Error(fmt::format("the point ({:.4g}, {:.4g}, {:.4g}) is too far from the seed ({:.4g}, {:.4g}, {:.4g}): a "
+                            "streamline's seed moves within {:.3g} of it (half the domain's diameter), where its "
+                            "log-map chart is used",
+                            to.x(), to.y(), to.z(), seed.x(), seed.y(), seed.z(), inverse.radius()));
+  return space.bundle().face_to_world(p.face, w - inverse.coords(p));
+}
+
 struct StreamlineDeformation::Line {
   Streamline traced;
   // Surfaces: the chart around the seed, its inverse and the traced points' log coordinates.

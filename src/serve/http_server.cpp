@@ -116,6 +116,9 @@ struct HttpServer::Impl {
     server.Post("/api/render", wrap([&s](const auto& req, auto& res) {
                   send_json(res, s.render_video(parse_body(req)));
                 }));
+    server.Post("/api/seed_translation", wrap([&s](const auto& req, auto& res) {
+                  send_json(res, s.seed_translation(parse_body(req)));
+                }));
     server.Post("/api/upload", wrap([&s](const auto& req, auto& res) {
                   if (!req.has_param("name")) throw RequestError(400, "upload: say the file name (?name=mesh.obj)");
                   send_json(res, s.upload_mesh(req.get_param_value("name"), req.body));

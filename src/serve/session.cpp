@@ -6,6 +6,7 @@
 #include "tvf/design/generate.h"
 #include "tvf/design/outputs.h"
 #include "tvf/design/scene_json.h"
+#include "tvf/design/streamline_deform.h"
 #include "tvf/edit/edits.h"
 #include "tvf/edit/field_editor.h"
 #include "tvf/field/world_vectors.h"
@@ -457,6 +458,32 @@ json Session::analysis() const {
   json j = topology_to_json(r->topology);
   j["revision"] = r->revision;
   return j;
+}
+
+json Session::seed_translation(const json& request) const {
+  if (!request.is_object())
+    throw RequestError(400, "seed_translation: expected {\"seed\": position, \"to\": position}");
+  const auto r = s_->current_result();
+  const bool planar = r->scene.domain.is_planar();
+  auto position = [&](const char* key) {
+    const size_t n = planar ? 2 : 3;
+    const auto it = request.find(key);
+    if (it == request.end() || !it->is_array() || it->size() != n ||
+        !std::all_of(it->begin(), it->end(), [](const json& v) { return v.is_number(); }))
+      throw RequestError(400, fmt::format("seed_translation: \"{}\" must be a position of {} numbers on this {}", key,
+                                          n, planar ? "grid" : "surface"));
+    Vec3 x = Vec3::Zero();
+    for (size_t k = 0; k < n; ++k) x[static_cast<int>(k)] = (*it)[k].get<double>();
+    if (!x.allFinite()) throw RequestError(400, fmt::format("seed_translation: \"{}\" is not finite", key));
+    return x;
+  };
+  const Vec3 seed = position("seed");
+  const Vec3 to = position("to");
+  try {
+    return {{"translate", vec3(tvf::seed_translation(*r->space, seed, to), planar)}};
+  } catch (const Error& e) {
+    throw RequestError(422, e.what());
+  }
 }
 
 fs::path Session::resolve(const std::string& relative) const {

@@ -8,6 +8,7 @@
 #include "tvf/design/scene_json.h"
 #include "tvf/field/field_sampler.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -83,6 +84,30 @@ TEST(StreamlineDeformation, TranslationOnTheSphereMovesTheSeedAlongAGeodesic) {
   EXPECT_NEAR(angle_between(seed, half.points[half.seed]), 0.2, h);
   const Vec3 great = (moved - seed.dot(moved) * seed).normalized();  // its direction at the seed
   EXPECT_LT(angle_between(great, Vec3(0, 1, 0)), 0.05);
+}
+
+TEST(StreamlineDeformation, SeedTranslationGivesTheKeyThatCarriesTheSeedToAPoint) {
+  // The designer's drag on the sphere: from the seed to a point 0.35 rad away towards the
+  // south-east; the key with the translate it gets puts the moved seed there.
+  const Scene plain = sphere_scene(kStreamline + R"([{"t": 1}]}])");
+  const auto space = make_design_space(plain);
+  const Vec3 seed(0.29552020666133955, 0, 0.955336489125606);
+  const Vec3 to = Vec3(0.55, 0.2, 0.8).normalized();
+  const Vec3 translate = seed_translation(*space, seed, to);
+  EXPECT_NEAR(translate.dot(seed), 0.0, 0.05);  // a tangent vector at the seed ...
+  EXPECT_NEAR(translate.norm(), angle_between(seed, to), space->mesh().mean_edge_length());  // ... as long as the geodesic
+  const Scene s = sphere_scene(kStreamline + fmt::format(R"([{{"t": 1, "translate": [{}, {}, {}]}}]}}])", translate.x(),
+                                                         translate.y(), translate.z()));
+  const StreamlineDeformation deformation(*space, s, base_field(*space, s));
+  const MovedStreamline b = deformation.at(1.0)[0];
+  EXPECT_LT((b.points[b.seed] - to).norm(), 0.25 * space->mesh().mean_edge_length()) << b.points[b.seed].transpose();
+  // The antipode is beyond the chart.
+  EXPECT_THROW(seed_translation(*space, seed, -seed), Error);
+  // Planar domains: the difference.
+  const Scene grid = parse_scene(R"({"tvf": 1, "domain": {"grid": {"size": [9, 9], "min": [-1, -1], "max": [1, 1]}}})",
+                                 "grid.json");
+  const auto flat = make_design_space(grid);
+  EXPECT_LT((seed_translation(*flat, Vec3(0.1, 0.2, 0), Vec3(-0.3, 0.5, 0)) - Vec3(-0.4, 0.3, 0)).norm(), 1e-12);
 }
 
 TEST(StreamlineDeformation, TheFieldFollowsTheMovedStreamlineAndStartsFromTheBase) {

@@ -69,6 +69,13 @@ TEST(ServeHttp, SceneFrameAnalysisAndEditsOverHttp) {
   EXPECT_EQ(body(f.client->Get("/api/scene"), 200)["scene"]["edits"].size(), 1u);
   EXPECT_EQ(body(f.client->Post("/api/undo", "", "application/json"), 200)["scene"]["edits"].size(), 0u);
   EXPECT_EQ(body(f.client->Post("/api/redo", "", "application/json"), 200)["scene"]["edits"].size(), 1u);
+  // The Deform streamline drag's key: on a grid the difference of the two points.
+  json tr = body(f.client->Post("/api/seed_translation", R"({"seed": [0.1, 0.2], "to": [-0.3, 0.5]})", "application/json"), 200);
+  ASSERT_EQ(tr["translate"].size(), 2u) << tr;
+  EXPECT_NEAR(tr["translate"][0].get<double>(), -0.4, 1e-12);
+  EXPECT_NEAR(tr["translate"][1].get<double>(), 0.3, 1e-12);
+  EXPECT_EQ(f.client->Post("/api/seed_translation", R"({"seed": [0.1, 0.2, 0], "to": [0, 0]})", "application/json")->status,
+            400);
 
   json exported = body(f.client->Post("/api/export", R"({"dir": "x", "format": "npy"})", "application/json"), 200);
   ASSERT_FALSE(exported["files"].empty());

@@ -252,6 +252,18 @@ TEST(ServeSession, SurfacesTakePathlinesAndStreamlinesPickedOnThemAndRenderVideo
   // ... and at the key frame it runs along the streamline (towards −z).
   EXPECT_GT(cosine(vector_near(s.frame(0), -0.1, -0.79, 0.6), {0, -0.6, -0.8}), 0.9);
 
+  // The Deform streamline tool's drag: the key's translate that carries a seed to a point,
+  // a tangent vector at the seed as long as the geodesic between them (log-map chart).
+  const json tr = s.seed_translation({{"seed", {0, -0.6, 0.8}}, {"to", {0.28, -0.55, 0.79}}});
+  ASSERT_EQ(tr["translate"].size(), 3u) << tr;
+  const std::array<double, 3> t3{tr["translate"][0].get<double>(), tr["translate"][1].get<double>(),
+                                 tr["translate"][2].get<double>()};
+  EXPECT_NEAR(std::hypot(t3[0], t3[1], t3[2]), 0.285, 0.05) << tr;
+  EXPECT_GT(cosine(t3, {1, 0.08, 0}), 0.95) << tr;
+  EXPECT_EQ(status_of([&] { s.seed_translation({{"seed", {0, -0.6}}, {"to", {0.3, -0.55, 0.78}}}); }), 400);
+  EXPECT_EQ(status_of([&] { s.seed_translation({{"seed", {0, -0.6, 0.8}}}); }), 400);
+  EXPECT_EQ(status_of([&] { s.seed_translation({{"seed", {0, -0.6, 0.8}}, {"to", {0, 0.6, -0.8}}}); }), 422);
+
   // The video of the surface, seen from the page's camera: PNG frames here (fast), each
   // `size` pixels square.
   const json r = s.render_video({{"name", "frames"}, {"size", 64}, {"frames", 3}, {"view", {0, -1, 0.3}}, {"up", {0, 0, 1}}, {"fov", 40}});

@@ -89,6 +89,9 @@ export const api = {
   mesh: () => call<MeshData>("GET", "api/mesh"),
   frame: (j: number) => call<Frame>("GET", `api/frame/${j}`),
   analysis: () => call<Analysis>("GET", "api/analysis"),
+  // The deformation key's translate that moves a streamline's seed to `to` (on surfaces in
+  // the log-map chart around the seed, computed by the library).
+  seedTranslation: (seed: number[], to: number[]) => call<{ translate: number[] }>("POST", "api/seed_translation", { seed, to }),
   exportField: (format: string, dir: string) => call<{ files: string[] }>("POST", "api/export", { format, dir }),
   // On surfaces `camera` is the view to render from (SurfaceView.cameraView()).
   render: (name: string, size: number, camera?: { view: number[]; up: number[]; fov: number }, frames?: number) =>

@@ -249,13 +249,12 @@ function listBifurcations() {
     remove.onclick = () => void edit(S.removeBifurcationEdit(b.position.slice(0, planar() ? 2 : 3), b.t));
     const move = document.createElement("button");
     move.textContent = "move to current t";
-    move.title = "Move this bifurcation to the current time (same place); planar domains";
+    move.title = "Move this bifurcation to the current time (same place)";
     move.onclick = () => {
-      const p = b.position.slice(0, 2);
-      void edit(S.moveBifurcationEdit(p, b.t, p, currentTime()));
+      const p = rounded(b.position.slice(0, planar() ? 2 : 3));
+      void edit(S.moveBifurcationEdit(p, b.t, p, Number(currentTime().toFixed(4))));
     };
-    row.append(go, remove);
-    if (planar()) row.append(move);
+    row.append(go, remove, move);
     host.appendChild(row);
   });
   if (a.bifurcations.length === 0) host.textContent = "no bifurcations";
@@ -295,8 +294,12 @@ function texture(f: Frame): HTMLCanvasElement {
   return c;
 }
 
+// Boxes on the surface: the elements' handles, and with the deform generator its base
+// field's singular elements and the deformed streamlines' seeds.
 function markers(): number[][] {
-  return S.handles(scene(), currentTime()).map((h) => h.position);
+  const deform = scene().generator === "deform" ? (scene().deform as S.DeformBlock | undefined) : undefined;
+  const base = (deform?.base?.elements ?? []).flatMap((e) => (e.kind === "singular" ? [e.path[0].slice(0, -1)] : []));
+  return [...S.handles(scene(), currentTime()).map((h) => h.position), ...base, ...S.deformSeeds(scene())];
 }
 
 function redraw() {
@@ -544,15 +547,36 @@ function surfacePick(p: number[]) {
   } else if (state.tool === "select") {
     state.selected = S.pick(scene(), t, at, 0.1);
     say(state.selected ? "selected: Delete removes it" : "nothing here");
+  } else if (state.tool === "move-bifurcation") {
+    const b = state.analysis?.bifurcations[state.selectedBifurcation];
+    if (!b) return say("pick a bifurcation first: press go to in the list", true);
+    void edit(S.moveBifurcationEdit(rounded(b.position.slice(0, 3)), b.t, at, t));
   } else if (state.tool === "pathline" || state.tool === "streamline") {
     say(`drag on the surface to draw a ${state.tool}`, true);
-  } else {
-    say("on surfaces, draw with Singular, Pathline, Streamline, Bifurcation and Cancel pair (deformation: in the scene JSON)", true);
+  } else if (state.tool === "deform") {
+    say("drag on the surface from the streamline's seed to where it should be at the current time", true);
   }
 }
 
 function drawsOnSurface() {
-  return state.tool === "pathline" || state.tool === "streamline";
+  return state.tool === "pathline" || state.tool === "streamline" || state.tool === "deform";
+}
+
+// The Deform streamline tool on a surface: the drag's first point is the seed, its last
+// where the seed should be at the current time. The key's translate is defined in the
+// log-map chart around the seed (docs/scene_reference.md, deform), which the server
+// computes: the browser has no exact log map.
+async function surfaceDeform(points: number[][], t: number) {
+  const seed = rounded(points[0]);
+  const to = rounded(points[points.length - 1]);
+  const turn = Number($<HTMLInputElement>("deform-turn").value) || 0;
+  try {
+    const { translate } = await api.seedTranslation(seed, to);
+    const d = rounded(translate);
+    await change(S.addDeformStreamline(scene(), seed, d, t, turn), `streamline from (${seed.join(", ")}) moved to (${to.join(", ")}) at t = ${t}`);
+  } catch (err) {
+    say((err as Error).message, true);
+  }
 }
 
 // A stroke drawn on the surface: points picked on it, [x, y, z].
@@ -566,6 +590,7 @@ function surfaceStroke(points: number[][]) {
       void change(S.addPathline(scene(), resample(points, 8), ts, te), `pathline on the surface from t = ${ts} to ${te}`);
     else if (state.tool === "streamline")
       void change(S.addKeyframeStreamline(scene(), t, resample(points, 10)), `streamline on the surface in the key frame at t = ${t}`);
+    else if (state.tool === "deform") void surfaceDeform(points, t);
   } catch (err) {
     say((err as Error).message, true);
   }

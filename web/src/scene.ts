@@ -339,6 +339,14 @@ export function addDeformStreamline(scene: Scene, seed: Vec, translate: Vec, t: 
   return s;
 }
 
+// Where the deformation's representative streamlines start (their seeds) and, on planar
+// domains, where each key puts the seed (seed + translate; on surfaces the translate is a
+// tangent vector of the seed's log-map chart, so its end is not a point of the surface).
+export function deformSeeds(scene: Scene): Vec[] {
+  const d = scene.generator === "deform" ? (scene.deform as DeformBlock | undefined) : undefined;
+  return (d?.streamlines ?? []).map((sl) => [...sl.seed]);
+}
+
 // The whole field turned by theta radians (and scaled by sx, sy) from the first time to
 // the last: M(t) keys of the deform generator (sx, sy, θ interpolated linearly).
 export function setDeformTransform(scene: Scene, theta: number, sx = 1, sy = 1): Scene {

@@ -88,6 +88,23 @@ describe("deformation", () => {
     expect(() => S.addDeformStreamline(s, [0, 0], [0, 0], 0)).toThrow(/after the first frame/);
   });
 
+  it("keys a streamline on a surface with [x, y, z] seeds and translations", () => {
+    const sphere: S.Scene = { ...S.emptyScene(), domain: { sphere: { subdivisions: 4, radius: 1 } } };
+    let s = S.addSingular(sphere, "ccw_center", [0, 0, 1], undefined, 0);
+    expect(S.deformSeeds(s)).toEqual([]);
+    s = S.addDeformStreamline(s, [0.3, 0, 0.95], [0, 0.2, 0], 1, 0.5);
+    s = S.addDeformStreamline(s, [0.3, 0, 0.95], [0, 0.3, -0.01], 1); // same frame: replaced
+    s = S.addDeformStreamline(s, [0, 0.3, 0.95], [0.1, 0, 0], 1); // another seed: another streamline
+    const d = s.deform as S.DeformBlock;
+    expect(d.base.elements).toEqual([{ kind: "singular", type: "ccw_center", path: [[0, 0, 1, 0]] }]);
+    expect(d.streamlines![0]).toEqual({ seed: [0.3, 0, 0.95], keys: [{ t: 1, translate: [0, 0.3, -0.01], rotate: 0, scale: 1 }] });
+    expect(S.deformSeeds(s)).toEqual([
+      [0.3, 0, 0.95],
+      [0, 0.3, 0.95],
+    ]);
+    expect(S.moveBifurcationEdit([0.6, 0, 0.8], 0.4, [0, 0.6, 0.8], 0.45)).toEqual({ op: "move_bifurcation", at: [0.6, 0, 0.8, 0.4], to: [0, 0.6, 0.8, 0.45] });
+  });
+
   it("keys a rotation of the whole field from the first time to the last", () => {
     const s = S.setDeformTransform(S.addSingular(S.emptyScene(), "source", [0, 0], undefined, 0), Math.PI);
     expect((s.deform as S.DeformBlock).transform).toEqual([

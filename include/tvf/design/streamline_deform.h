@@ -30,6 +30,15 @@ struct MovedStreamline {
   size_t seed = 0;             // index of the (moved) seed in points
 };
 
+// The `translate` of a deform.streamlines key that moves the streamline's seed to `to`
+// (the designer's drag): on planar domains to − seed (z = 0); on surfaces the log
+// coordinates of `to` in the chart around the seed that at() moves the curve in, minus
+// the seed's own, as a world vector in the tangent plane of the seed's face, so that the
+// key carries the seed onto `to` (both snapped to the surface first). Throws tvf::Error
+// (one sentence) when `to` lies outside the disc of half the domain's diameter around the
+// seed in which the chart is inverted.
+Vec3 seed_translation(const DesignSpace& space, const Vec3& seed, const Vec3& to);
+
 class StreamlineDeformation {
 public:
   // `base`: V(t0), |V| values in vertex bases. `space` and `scene` must outlive the object.

@@ -105,6 +105,12 @@ public:
   // (degrees) place the camera (the designer sends its own). One video at a time: a
   // second request while one renders is RequestError(503).
   nlohmann::json render_video(const nlohmann::json& request);
+  // The `translate` of a deform.streamlines key that moves the seed request["seed"] to
+  // request["to"] (positions as the domain writes them), in the domain of the last
+  // result (seed_translation, streamline_deform.h): {"translate": [x, y] or [x, y, z]}.
+  // RequestError(400) for a malformed position, 422 for a point too far from the seed on
+  // a surface, 409 before the first result.
+  nlohmann::json seed_translation(const nlohmann::json& request) const;
   // Stores an uploaded mesh (OBJ, PLY or OFF, by the name's extension) in the working
   // folder under `name` (a plain file name). Returns {"file": name}.
   nlohmann::json upload_mesh(const std::string& name, const std::string& bytes);
