@@ -26,8 +26,7 @@ FaceSubdivision subdivide_faces(const Mesh& mesh, int n) {
   const long nv = mesh.num_vertices();
   const long edge_base = nv, face_base = nv + static_cast<long>(mesh.num_edges()) * (n - 1);
   const int per_face = (n + 1) * (n + 2) / 2;
-  std::vector<int> local(static_cast<size_t>(per_face));
-  auto local_index = [n](int i, int j) { return j * (n + 1) - j * (j - 1) / 2 + i; };
+  out.grid.assign(static_cast<size_t>(mesh.num_faces()) * static_cast<size_t>(per_face), -1);
   std::vector<Face> triangles;
   triangles.reserve(static_cast<size_t>(mesh.num_faces()) * static_cast<size_t>(n) * static_cast<size_t>(n));
   for (int f = 0; f < mesh.num_faces(); ++f) {
@@ -57,7 +56,8 @@ FaceSubdivision subdivide_faces(const Mesh& mesh, int n) {
           id = face_base + static_cast<long>(f) * (n - 1) * (n - 2) / 2 + (j - 1) * (n - 2) - (j - 1) * (j - 2) / 2 + (i - 1);
         }
         const auto s = static_cast<size_t>(id);
-        local[static_cast<size_t>(local_index(i, j))] = static_cast<int>(id);
+        out.grid[static_cast<size_t>(f) * static_cast<size_t>(per_face) +
+                 static_cast<size_t>(FaceSubdivision::local_index(n, i, j))] = static_cast<int>(id);
         if (out.face[s] < 0) {
           const Vec3 b(static_cast<double>(n - i - j) / n, static_cast<double>(i) / n, static_cast<double>(j) / n);
           out.face[s] = f;
@@ -65,7 +65,7 @@ FaceSubdivision subdivide_faces(const Mesh& mesh, int n) {
           positions[s] = b[0] * mesh.position(c[0]) + b[1] * mesh.position(c[1]) + b[2] * mesh.position(c[2]);
         }
       }
-    auto at = [&](int i, int j) { return local[static_cast<size_t>(local_index(i, j))]; };
+    auto at = [&](int i, int j) { return out.vertex(f, i, j); };
     for (int j = 0; j < n; ++j)
       for (int i = 0; i + j < n; ++i) {
         triangles.push_back({at(i, j), at(i + 1, j), at(i, j + 1)});

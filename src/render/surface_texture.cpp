@@ -85,63 +85,21 @@ SurfaceTextureAnimator::SurfaceTextureAnimator(const TangentBundle& bundle, cons
   // Subdivision: small edges about `spacing` pixels long, within the sample budget.
   const double want = view_.spacing / ppu_;
   n_ = std::clamp(static_cast<int>(std::ceil(mesh.mean_edge_length() / want)), 1, 64);
-  auto count = [&](long n) {
-    return static_cast<long>(mesh.num_vertices()) + static_cast<long>(mesh.num_edges()) * (n - 1) +
-           static_cast<long>(mesh.num_faces()) * (n - 1) * (n - 2) / 2;
-  };
+  auto count = [&](int n) { return subdivision_vertex_count(mesh, n); };
   while (n_ > 1 && count(n_) > view_.max_samples) --n_;
   if (count(n_) > view_.max_samples)
     throw Error(fmt::format("texture option max_samples: {} is fewer than the mesh's {} vertices", view_.max_samples,
                             count(1)));
-  const int n = n_;
-  per_face_ = (n + 1) * (n + 2) / 2;
-  const size_t ns = static_cast<size_t>(count(n));
-  positions_.resize(ns);
+  // The samples: the vertices of the faces subdivided n_ times (mesh/face_subdivision.h),
+  // each with its place on the mesh; the lattice of each face for barycentric reads.
+  FaceSubdivision sub = subdivide_faces(mesh, n_);
+  const size_t ns = sub.face.size();
+  per_face_ = (n_ + 1) * (n_ + 2) / 2;
+  grid_ = std::move(sub.grid);
   points_.resize(ns);
-  std::vector<char> placed(ns, 0);
-  grid_.assign(static_cast<size_t>(mesh.num_faces()) * static_cast<size_t>(per_face_), -1);
-  const int nv = mesh.num_vertices();
-  const long edge_base = nv, face_base = nv + static_cast<long>(mesh.num_edges()) * (n - 1);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Face& c = mesh.face(f);
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i + j <= n; ++i) {
-        const Vec3 b(static_cast<double>(n - i - j) / n, static_cast<double>(i) / n, static_cast<double>(j) / n);
-        long id;
-        if (i == 0 && j == 0) id = c[0];
-        else if (i == n) id = c[1];
-        else if (j == n) id = c[2];
-        else if (j == 0 || i + j == n || i == 0) {
-          // On an edge: halfedge k of the face runs from corner k to corner k+1.
-          int k;
-          double s;  // from corner k
-          if (j == 0) k = 0, s = static_cast<double>(i) / n;
-          else if (i + j == n) k = 1, s = static_cast<double>(j) / n;
-          else k = 2, s = static_cast<double>(n - j) / n;
-          const int h = 3 * f + k;
-          const auto& e = mesh.edge(mesh.edge_of(h));
-          const double along = mesh.tail(h) == e[0] ? s : 1 - s;
-          const long q = std::lround(along * n);
-          id = edge_base + static_cast<long>(mesh.edge_of(h)) * (n - 1) + (q - 1);
-        } else {
-          id = face_base + static_cast<long>(f) * (n - 1) * (n - 2) / 2 + (j - 1) * (n - 2) - (j - 1) * (j - 2) / 2 + (i - 1);
-        }
-        const size_t sid = static_cast<size_t>(id);
-        grid_[static_cast<size_t>(f) * static_cast<size_t>(per_face_) + static_cast<size_t>(local_index(i, j))] =
-            static_cast<int>(id);
-        if (!placed[sid]) {
-          placed[sid] = 1;
-          points_[sid] = SurfacePoint{f, b};
-          positions_[sid] = surface_position(mesh, points_[sid]);
-        }
-      }
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i + j < n; ++i) {
-        triangles_.push_back({sample_of(f, i, j), sample_of(f, i + 1, j), sample_of(f, i, j + 1)});
-        if (i + j < n - 1) triangles_.push_back({sample_of(f, i + 1, j), sample_of(f, i + 1, j + 1), sample_of(f, i, j + 1)});
-      }
-  }
-  TVF_CHECK(std::all_of(placed.begin(), placed.end(), [](char c) { return c != 0; }), "a texture sample was not placed");
+  for (size_t q = 0; q < ns; ++q) points_[q] = SurfacePoint{sub.face[q], sub.bary[q]};
+  positions_ = sub.mesh.positions();
+  triangles_ = sub.mesh.faces();
 
   // Speed scale as on the plane: the typical (90th-percentile) speed moves
   // pixels_per_frame pixels in one frame of the field.

@@ -20,6 +20,7 @@
 #include "tvf/analysis/topology.h"
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
+#include "tvf/mesh/face_subdivision.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/mesh_renderer.h"
 #include "tvf/render/texture_animation.h"
@@ -63,9 +64,10 @@ public:
   std::vector<std::uint32_t> colors() const;
 
 private:
-  int local_index(int i, int j) const { return j * (n_ + 1) - j * (j - 1) / 2 + i; }  // (i, j) of a face's grid
+  // The sample at lattice point (i, j) of face f (FaceSubdivision's grid).
   int sample_of(int f, int i, int j) const {
-    return grid_[static_cast<size_t>(f) * static_cast<size_t>(per_face_) + static_cast<size_t>(local_index(i, j))];
+    return grid_[static_cast<size_t>(f) * static_cast<size_t>(per_face_) +
+                 static_cast<size_t>(FaceSubdivision::local_index(n_, i, j))];
   }
   float noise(const Vec3& a, const Vec3& b, long step) const;
   float lattice(long ix, long iy, long iz, long step) const;
