@@ -46,6 +46,29 @@ TEST(FaceSubdivision, KeepsTheSurfaceAndPlacesEveryVertex) {
     }
 }
 
+// The lattice of every face: point (i, j) is the vertex at barycentric (n − i − j, i, j)/n
+// of that face, shared with the neighbouring face along an edge, and the corners are the
+// face's own vertices.
+TEST(FaceSubdivision, EachFacesLatticeNamesTheVertexAtItsPoint) {
+  const Mesh sphere = make_icosphere(1);
+  for (int n : {1, 2, 4}) {
+    const FaceSubdivision s = subdivide_faces(sphere, n);
+    ASSERT_EQ(s.grid.size(), static_cast<size_t>(sphere.num_faces() * (n + 1) * (n + 2) / 2));
+    for (int f = 0; f < sphere.num_faces(); ++f) {
+      const Face& c = sphere.face(f);
+      EXPECT_EQ(s.vertex(f, 0, 0), c[0]);
+      EXPECT_EQ(s.vertex(f, n, 0), c[1]);
+      EXPECT_EQ(s.vertex(f, 0, n), c[2]);
+      for (int j = 0; j <= n; ++j)
+        for (int i = 0; i + j <= n; ++i) {
+          const Vec3 p = (static_cast<double>(n - i - j) * sphere.position(c[0]) + static_cast<double>(i) * sphere.position(c[1]) +
+                          static_cast<double>(j) * sphere.position(c[2])) / n;
+          EXPECT_LT((s.mesh.position(s.vertex(f, i, j)) - p).norm(), 1e-12) << f << " " << i << " " << j;
+        }
+    }
+  }
+}
+
 TEST(FaceSubdivision, RejectsAnOutOfRangeCount) {
   const Mesh grid = make_grid(GridSpec{3, 3, {0, 0}, {1, 1}});
   EXPECT_NE(test::error_of([&] { subdivide_faces(grid, 0); }).find("face subdivision 0"), std::string::npos);
