@@ -2,8 +2,7 @@
 // design dragged to a new place by the last frame (Fig. 12), and the whole field of a
 // source turned by π over time (Fig. 10: source → center → sink).
 // Usage: node e2e/deform.e2e.mjs --tvf PATH/TO/tvf [--out DIR]
-import fs from "node:fs";
-import { args, check, Designer, launch, startServer, stopServer, tempDir } from "./harness.mjs";
+import { args, check, Designer, finish, launch, startServer, tempDir } from "./harness.mjs";
 
 const a = args();
 const dir = tempDir("tvf-deform-");
@@ -54,8 +53,6 @@ try {
   if (page) await page.screenshot({ path: `${a.out}/failure.png` }).catch(() => {});
   console.error(server.output());
 } finally {
-  await browser.close();
-  await stopServer(server);
-  fs.rmSync(dir, { recursive: true, force: true });
+  await finish(browser, server, dir);
 }
 process.exit(failed ? 1 : 0);

@@ -4,7 +4,7 @@
 // intact. Screenshots go to --out (looked at by people, not compared by the test).
 // Usage: node e2e/designer.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
 import fs from "node:fs";
-import { args, check, Designer, launch, nearest, startServer, stopServer, tempDir } from "./harness.mjs";
+import { args, check, Designer, finish, launch, nearest, startServer, tempDir } from "./harness.mjs";
 
 const a = args();
 const dir = tempDir("tvf-e2e-");
@@ -184,8 +184,6 @@ try {
     );
   console.error(server.output());
 } finally {
-  await browser.close();
-  await stopServer(server);
-  fs.rmSync(dir, { recursive: true, force: true });
+  await finish(browser, server, dir);
 }
 process.exit(failed ? 1 : 0);

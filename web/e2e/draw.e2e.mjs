@@ -6,7 +6,7 @@
 import { execFileSync } from "node:child_process";
 import fs from "node:fs";
 import path from "node:path";
-import { args, check, Designer, launch, startServer, stopServer, tempDir } from "./harness.mjs";
+import { args, check, Designer, finish, launch, reportFailure, startServer, tempDir } from "./harness.mjs";
 
 const a = args();
 const dir = tempDir("tvf-e2e-draw-");
@@ -181,13 +181,8 @@ try {
   check(errors.length === 0, `no errors in the page${errors.length ? ": " + errors.join("; ") : ""}`);
 } catch (e) {
   failed = true;
-  console.error(e.message);
-  if (page) await page.screenshot({ path: `${a.out}/draw_failure.png` }).catch(() => {});
-  if (page) console.error(await page.textContent("#message").catch(() => ""));
-  console.error(server.output());
+  await reportFailure(e, page, server, `${a.out}/draw_failure.png`);
 } finally {
-  await browser.close();
-  await stopServer(server);
-  fs.rmSync(dir, { recursive: true, force: true });
+  await finish(browser, server, dir);
 }
 process.exit(failed ? 1 : 0);

@@ -58,6 +58,22 @@ export function stopServer(server) {
   });
 }
 
+// The end of a failed run: what went wrong, a screenshot of the page and its message line,
+// then the server's output.
+export async function reportFailure(error, page, server, shot) {
+  console.error(error.message);
+  if (page) await page.screenshot({ path: shot }).catch(() => {});
+  if (page) console.error(await page.textContent("#message").catch(() => ""));
+  console.error(server.output());
+}
+
+// The end of every run: the browser closed, the server stopped, its folder removed.
+export async function finish(browser, server, dir) {
+  await browser.close();
+  await stopServer(server);
+  fs.rmSync(dir, { recursive: true, force: true });
+}
+
 export async function launch(chromiumPath) {
   if (!fs.existsSync(chromiumPath)) {
     console.log(`SKIP: no Chromium at ${chromiumPath} (Debian package chromium)`);

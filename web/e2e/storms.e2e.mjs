@@ -4,7 +4,7 @@
 // optimization moves them together and merges them. Then the video is rendered.
 // Usage: node e2e/storms.e2e.mjs --tvf PATH/TO/tvf [--out DIR]
 import fs from "node:fs";
-import { args, check, Designer, launch, startServer, stopServer, tempDir } from "./harness.mjs";
+import { args, check, Designer, finish, launch, startServer, tempDir } from "./harness.mjs";
 
 const a = args();
 const dir = tempDir("tvf-storms-");
@@ -62,8 +62,6 @@ try {
     );
   console.error(server.output());
 } finally {
-  await browser.close();
-  await stopServer(server);
-  fs.rmSync(dir, { recursive: true, force: true });
+  await finish(browser, server, dir);
 }
 process.exit(failed ? 1 : 0);

@@ -11,7 +11,7 @@
 // Screenshots go to --out (looked at by people, not compared by the test).
 // Usage: node e2e/surface_tools.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
 import fs from "node:fs";
-import { args, check, Designer, launch, startServer, stopServer, tempDir } from "./harness.mjs";
+import { args, check, Designer, finish, launch, reportFailure, startServer, tempDir } from "./harness.mjs";
 
 const a = args();
 const dir = tempDir("tvf-e2e-surface-tools-");
@@ -200,13 +200,8 @@ try {
   check(errors.length === 0, `no errors in the page${errors.length ? ": " + errors.join("; ") : ""}`);
 } catch (e) {
   failed = true;
-  console.error(e.message);
-  if (page) await page.screenshot({ path: `${a.out}/surface_tools_failure.png` }).catch(() => {});
-  if (page) console.error(await page.textContent("#message").catch(() => ""));
-  console.error(server.output());
+  await reportFailure(e, page, server, `${a.out}/surface_tools_failure.png`);
 } finally {
-  await browser.close();
-  await stopServer(server);
-  fs.rmSync(dir, { recursive: true, force: true });
+  await finish(browser, server, dir);
 }
 process.exit(failed ? 1 : 0);
