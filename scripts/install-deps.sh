@@ -4,6 +4,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
+  ccache                 # cheap rebuilds of unchanged files
   libeigen3-dev          # dense/sparse linear algebra
   libsuitesparse-dev     # CHOLMOD sparse Cholesky
   libtbb-dev             # parallel frames
