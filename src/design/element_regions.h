@@ -105,6 +105,74 @@ inline void constrain_elements(const DesignSpace& space, const Scene& scene,
   }
 }
 
+// Constraints that move continuously with their elements (issue 15): a vertex within an
+// element's region radius r is fixed to the element's field, as constrain_region fixes it;
+// one in a ramp of width w beyond r is pulled toward that field with a weight
+// ψ = smoothstep((r + w − ρ)/w) of its distance ρ, as the penalty μ = d_v ψ/(1 − ψ) (d_v
+// the Laplacian's diagonal: at ψ = ½ the pull equals the vertex's ties to its neighbours;
+// μ → ∞, the fixed value, as ρ → r). Hard regions switch discretely as an element moves
+// across vertices, and the far field, a harmonic fill, jumps with them (direction turns of
+// 70° per frame at 65² for a steadily moving vortex); the ramp makes every frame's
+// constraints, and so its field, a continuous function of the element's position.
+// Overlaps add as in constrain_region: where ramps meet, the values are averaged by ψ.
+struct SmoothConstraints {
+  std::vector<char> fixed;
+  std::vector<cplx> values;
+  std::vector<double> penalty;
+};
+
+inline void constrain_elements_smoothly(const DesignSpace& space, const Scene& scene,
+                                        const std::vector<CompiledElement>& elements, double t, double d,
+                                        const Eigen::VectorXd& diagonal, double ramp, SmoothConstraints& out) {
+  const Mesh& mesh = space.mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  std::vector<double> psi(nv, 0.0);
+  std::vector<cplx> sum(nv, cplx(0, 0));
+  std::vector<char> core(nv, 0);
+  LocalChart chart;
+  ElementOnDomain placed;
+  std::vector<char> near(nv, 0);
+  for (const CompiledElement& el : elements) {
+    if (!el.active(t)) continue;
+    place_element(space, el, t, d, chart, placed);
+    const double radius = region_radius(scene, el);
+    // However small the radius, the element's face's corners and their neighbours are in
+    // its core, so that the constraints enclose its singularity (as constrain_region).
+    std::fill(near.begin(), near.end(), 0);
+    for (int c : mesh.face(placed.at.face)) {
+      near[static_cast<size_t>(c)] = 1;
+      for (int h : mesh.outgoing(c)) near[static_cast<size_t>(mesh.head(h))] = 1;
+    }
+    for (size_t v = 0; v < nv; ++v) {
+      const double rho = placed.distance[v];
+      double w = 0;
+      if (rho <= radius || near[v]) {
+        w = 1;
+        core[v] = 1;
+      } else if (rho < radius + ramp) {
+        const double x = (radius + ramp - rho) / ramp;
+        w = x * x * (3 - 2 * x);
+      }
+      if (w <= 0) continue;
+      psi[v] += w;
+      sum[v] += w * placed.value[v];
+    }
+  }
+  out.fixed.assign(nv, 0);
+  out.values.assign(nv, cplx(0, 0));
+  out.penalty.assign(nv, 0.0);
+  for (size_t v = 0; v < nv; ++v) {
+    if (psi[v] <= 0) continue;
+    const double p = std::min(1.0, psi[v]);
+    out.values[v] = sum[v] / p;
+    if (core[v] || p >= 1) {
+      out.fixed[v] = 1;
+    } else {
+      out.penalty[v] = diagonal[static_cast<Eigen::Index>(v)] * p / (1 - p);
+    }
+  }
+}
+
 // Runs solve_frame(j) for every frame, in parallel or not, reporting progress.
 template <class F>
 void for_each_frame(int frames, const GenerateOptions& options, F&& solve_frame) {

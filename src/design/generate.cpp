@@ -187,6 +187,10 @@ Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
   return field;
 }
 
+// The width of the constrained generator's constraint ramps, in mean edge lengths: wide
+// enough that a vertex fades in over more than one frame's step of a steadily moving element.
+constexpr double constraint_ramp_edges = 2.0;
+
 Field generate_constrained(const DesignSpace& space, const Scene& scene,
                            const GenerateOptions& options, GenerateReport* report) {
   const auto start = std::chrono::steady_clock::now();
@@ -220,12 +224,12 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   double worst_residual = 0;
   bool all_ok = true;
   std::string method;
+  const double ramp = constraint_ramp_edges * mesh.mean_edge_length();
   for_each_frame(scene.time.frames, options, [&](int j) {
     const double t = scene.time.time(j);
-    std::vector<char> fixed(static_cast<size_t>(nv), 0);
-    std::vector<cplx> values(static_cast<size_t>(nv), cplx(0, 0));
-    constrain_elements(space, scene, elements, t, d, fixed, values);
-    const SolveReport r = solvers.local().solve(fixed, values, field.frame(j));
+    SmoothConstraints c;
+    constrain_elements_smoothly(space, scene, elements, t, d, laplacian.weight_sum, ramp, c);
+    const SolveReport r = solvers.local().solve(c.fixed, c.values, field.frame(j), c.penalty);
     std::lock_guard lock(report_mutex);
     worst_residual = std::max(worst_residual, r.residual);
     all_ok = all_ok && r.success;

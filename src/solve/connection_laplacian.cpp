@@ -179,7 +179,14 @@ void DirichletSolver::analyze() {
 
 SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<const cplx> values,
                                    std::span<cplx> out) {
+  return solve(constrained, values, out, {});
+}
+
+SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<const cplx> values,
+                                   std::span<cplx> out, std::span<const double> penalty) {
   const Eigen::Index n = laplacian_.matrix.rows();
+  TVF_CHECK(penalty.empty() || static_cast<Eigen::Index>(penalty.size()) == n, "penalty of size {} for {} vertices",
+            penalty.size(), n);
   TVF_CHECK(static_cast<Eigen::Index>(constrained.size()) == n && static_cast<Eigen::Index>(values.size()) == n &&
                 static_cast<Eigen::Index>(out.size()) == n,
             "sizes {} {} {} for {} vertices", constrained.size(), values.size(), out.size(), n);
@@ -189,6 +196,7 @@ SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<
                                                                         : "sparse LU";
   bool any = false;
   for (char c : constrained) any = any || c;
+  for (double mu : penalty) any = any || mu > 0;
   if (!any) {
     // No constraint: the zero field is the minimiser.
     std::fill(out.begin(), out.end(), cplx(0, 0));
@@ -215,6 +223,16 @@ SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<
       }
     }
     if (col_fixed) b[col] = values[static_cast<size_t>(col)];
+  }
+  if (!penalty.empty()) {
+    // Soft constraints at free vertices: μ on the diagonal (the pattern holds it), μ·c on
+    // the right-hand side.
+    for (Eigen::Index v = 0; v < n; ++v) {
+      const double mu = penalty[static_cast<size_t>(v)];
+      if (mu <= 0 || constrained[static_cast<size_t>(v)]) continue;
+      a.coeffRef(v, v) += mu;
+      b[v] += mu * values[static_cast<size_t>(v)];
+    }
   }
 
   Eigen::VectorXcd z;

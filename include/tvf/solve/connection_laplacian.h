@@ -66,6 +66,12 @@ public:
   // A connected component without constraints gets zero there.
   SolveReport solve(std::span<const char> constrained, std::span<const cplx> values,
                     std::span<cplx> out);
+  // As above, with soft constraints too: a free vertex v with penalty[v] = μ_v > 0 adds
+  // μ_v |z_v − values[v]|² to the energy (μ_v on the diagonal, μ_v·values[v] on the right),
+  // so a constraint can fade in and out continuously (the constrained generator's moving
+  // elements). An empty span means no penalty.
+  SolveReport solve(std::span<const char> constrained, std::span<const cplx> values,
+                    std::span<cplx> out, std::span<const double> penalty);
 
   // The factorization in use (automatic resolved).
   DirichletFactorization factorization() const { return factorization_; }
