@@ -62,9 +62,12 @@ json parse_json(const std::string& text) {
   std::vector<Level> stack;
   auto path = [&] {
     std::string out;
-    for (const Level& l : stack) {
+    for (size_t k = 0; k < stack.size(); ++k) {
+      const Level& l = stack[k];
       if (l.array) {
-        out += fmt::format("[{}]", l.index + 1 > 0 ? l.index + 1 : 0);
+        // An open container is counted when it starts; the innermost level's value
+        // (the one being read) is not counted yet.
+        out += fmt::format("[{}]", std::max(0LL, k + 1 == stack.size() ? l.index + 1 : l.index));
       } else if (!l.key.empty()) {
         if (!out.empty()) out += '.';
         out += shown_key(l.key);

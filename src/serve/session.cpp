@@ -272,23 +272,31 @@ struct Session::State {
     return r;
   }
 
-  // The field of revision `want` (kAnyRevision: the current one), waiting for a running
-  // solve up to field_wait_seconds without holding a lock. 412 as soon as the scene moves
-  // past `want`; 409 when the solve failed or is not done in time; 503 when interrupted.
-  std::shared_ptr<const Result> result_of(long long want, const char* what) const {
+  // The field of revision `want`, waiting for a running solve until `deadline` without
+  // holding a lock: 412 as soon as the scene moves past `want`. kAnyRevision: the field of
+  // whatever revision is current (following newer changes while it waits). 409 when the
+  // solve failed or is not done in time; 503 when interrupted.
+  std::shared_ptr<const Result> result_of(long long want, const char* what,
+                                          std::chrono::steady_clock::time_point deadline) const {
     std::unique_lock lock(mutex);
-    if (want == kAnyRevision) want = revision;
+    const bool any = want == kAnyRevision;
     check_revision(want, revision, what);
-    changed.wait_for(lock, std::chrono::duration<double>(options.field_wait_seconds), [&] {
-      return interrupted || revision != want || (result && result->revision == want) || state == "failed";
+    auto target = [&] { return any ? revision : want; };
+    changed.wait_until(lock, deadline, [&] {
+      return interrupted || revision != target() || (result && result->revision == target()) || state == "failed";
     });
     if (interrupted) throw RequestError(503, fmt::format("{}: the server is stopping", what));
     check_revision(want, revision, what);
-    if (result && result->revision == want) return result;
+    if (result && result->revision == revision) return result;
     if (state == "failed") throw RequestError(409, fmt::format("{}: the scene has no field: {}", what, error));
     throw RequestError(409, fmt::format("{}: the field of revision {} is still being generated ({}/{} frames); try "
                                         "again when /api/status says ready",
-                                        what, want, done, total));
+                                        what, revision, done, total));
+  }
+  std::chrono::steady_clock::time_point wait_deadline() const {
+    return std::chrono::steady_clock::now() +
+           std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+               std::chrono::duration<double>(std::max(0.0, std::min(options.field_wait_seconds, 1e6))));
   }
 
   std::shared_ptr<const Result> current_result() const {
@@ -387,16 +395,17 @@ json Session::edit(const json& entry, long long on_revision) {
   if (!entry.is_object()) throw RequestError(400, "edit: expected a JSON object such as {\"op\": \"cancel\", ...}");
   // Without a revision, an edit overtaken by another change is applied again to the newer
   // field (a few times at most: each attempt is one edit's work).
+  const auto deadline = s_->wait_deadline();  // for all attempts together
   for (int attempt = 0;; ++attempt) {
     try {
-      return edit_on(entry, on_revision);
+      return edit_on(entry, on_revision, deadline);
     } catch (const RequestError& e) {
       if (on_revision != kAnyRevision || e.status() != 412 || attempt == 3) throw;
     }
   }
 }
 
-json Session::edit_on(const json& entry, long long on_revision) {
+json Session::edit_on(const json& entry, long long on_revision, std::chrono::steady_clock::time_point deadline) {
   Scene base;
   long long base_revision = 0;
   {
@@ -412,7 +421,7 @@ json Session::edit_on(const json& entry, long long on_revision) {
   const Edit e = edits_from_scene(edited).back();
 
   // The field of the revision the edit was made on (no lock held while waiting).
-  const std::shared_ptr<const Result> r = s_->result_of(base_revision, "edit");
+  const std::shared_ptr<const Result> r = s_->result_of(base_revision, "edit", deadline);
   auto made = std::make_shared<Result>();
   made->scene = edited;
   made->space = r->space;
@@ -600,7 +609,7 @@ json Session::export_field(const json& request, long long on_revision) {
   if (format != "all" && format != "npy" && format != "vtk")
     throw RequestError(400, fmt::format("export.format: \"{}\" is not one of all, npy, vtk", format));
   const fs::path out = resolve(string_or(request, "dir", "export", "export"));
-  const auto r = s_->result_of(on_revision, "export");
+  const auto r = s_->result_of(on_revision, "export", s_->wait_deadline());
   OutputOptions o;
   o.vtk = format != "npy";
   json files = json::array();
@@ -663,7 +672,7 @@ json Session::render_video(const json& request, long long on_revision) {
   } else {
     throw RequestError(400, fmt::format("render.name \"{}\": give an .mp4 file or a folder for PNG frames", name));
   }
-  const auto r = s_->result_of(on_revision, "render");
+  const auto r = s_->result_of(on_revision, "render", s_->wait_deadline());
   try {
     // One texture animation at a time: the offscreen renderer and ffmpeg are not worth
     // running twice at once, and a second request is refused rather than queued.

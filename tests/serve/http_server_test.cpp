@@ -243,7 +243,7 @@ TEST(ServeHttp, AChunkedBodyIsReadOnlyUpToTheLimit) {
   EXPECT_TRUE(closed) << "the connection stays open with the rest of the body unread";
   // Other methods and paths too.
   RawClient d(f.server->port(), 4);
-  d.send("DELETE /anything HTTP/1.1\r\nHost: 127.0.0.1\r\nTransfer-Encoding: chunked\r\n\r\n");
+  d.send("PATCH /anything HTTP/1.1\r\nHost: 127.0.0.1\r\nTransfer-Encoding: chunked\r\n\r\n");
   for (int k = 0; k < 8; ++k) d.send(chunk);
   EXPECT_EQ(d.receive().substr(0, 12), "HTTP/1.1 413");
   EXPECT_EQ(body(f.client->Get("/api/scene"), 200)["revision"], 1);

@@ -44,6 +44,7 @@ struct Tally {
   std::mutex mutex;
   std::map<std::string, std::map<int, int>> statuses;  // kind → status → count
   std::vector<double> latencies;                      // seconds
+  std::map<std::string, double> worst;                // kind → seconds
   int unanswered = 0;
   // The last acknowledged change: its revision, and the scene (a PUT) or the edit entry.
   long long last_revision = 0;
@@ -52,6 +53,7 @@ struct Tally {
   void record(const std::string& kind, const httplib::Result& r, double seconds) {
     std::lock_guard lock(mutex);
     latencies.push_back(seconds);
+    worst[kind] = std::max(worst[kind], seconds);
     if (!r) {
       ++unanswered;
       ++statuses[kind][-1];
@@ -165,7 +167,7 @@ TEST(ServeLoad, ConcurrentReadersChangesEditsAndRendersAreAllAnsweredAndNothingI
   for (const auto& [kind, by_status] : tally.statuses) {
     figures += "  " + kind + ":";
     for (const auto& [st, count] : by_status) figures += fmt::format(" {}×{}", count, st);
-    figures += "\n";
+    figures += fmt::format(" (worst {:.3f} s)\n", tally.worst[kind]);
   }
   std::cout << figures;
   EXPECT_EQ(tally.unanswered, 0) << figures;

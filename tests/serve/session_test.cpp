@@ -375,6 +375,8 @@ TEST(ServeSession, ExportsAndEditsDoNotWaitLongerThanAskedAndEndWhenTheSceneMove
   }
   // An edit waiting for the field of its revision ends (412) as soon as another change
   // comes, holding nothing: status answers meanwhile and a second edit is not blocked.
+  test::TempDir dir2;  // the first folder's scene is the slow one now
+  o.dir = dir2.path();
   o.field_wait_seconds = 600;
   Session s(o);
   ASSERT_TRUE(s.wait_idle(60));

@@ -24,6 +24,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -89,7 +90,8 @@ public:
   // field_wait_seconds, holding no lock: 409 when it is not ready by then, 412 as soon as
   // the scene moves on); a refused edit is RequestError(422) and changes nothing. The
   // edited field becomes the current result at once, without regenerating. With
-  // kAnyRevision an edit overtaken by another change is applied again to the newer field.
+  // kAnyRevision an edit overtaken by another change is applied again to the newer field
+  // (up to four tries within field_wait_seconds).
   // Returns {"revision", "summary"}.
   nlohmann::json edit(const nlohmann::json& edit, long long on_revision = kAnyRevision);
   nlohmann::json undo(long long on_revision = kAnyRevision);  // RequestError(409): nothing to undo
@@ -114,10 +116,11 @@ public:
   // The analysis JSON of DESIGN §9 of the last result, plus "revision".
   nlohmann::json analysis() const;
 
-  // Export and render write the field of the current revision (or of `on_revision`, 412
-  // when that is no longer current): they wait for it up to field_wait_seconds while a
-  // solve runs, and answer RequestError(409) naming the revision when it is not ready by
-  // then, never the field of an older design. Their answers carry "revision".
+  // Export and render write the field of the current revision (following newer changes
+  // while they wait), or of `on_revision` (412 when that is no longer current): they wait
+  // for it up to field_wait_seconds while a solve runs, and answer RequestError(409)
+  // naming the revision when it is not ready by then, never the field of an older
+  // design. Their answers carry "revision".
   //
   // Writes the field outputs of `tvf generate` (npy, native, and VTK unless format is
   // "npy") into the folder request["dir"] (default "export") inside the working folder.
@@ -152,7 +155,8 @@ public:
   void interrupt();
 
 private:
-  nlohmann::json edit_on(const nlohmann::json& edit, long long on_revision);
+  nlohmann::json edit_on(const nlohmann::json& edit, long long on_revision,
+                         std::chrono::steady_clock::time_point deadline);
   struct State;
   std::unique_ptr<State> s_;
 };
