@@ -9,8 +9,10 @@
 // transfer encoding: reading stops at the limit and the connection is closed after the
 // 413); slow clients are cut off (a request's headers and body must arrive within
 // request_timeout of the connection or the last answer, and each answer is written
-// within answer_timeout); the worker pool is larger than any burst of waiting requests,
-// so status answers while edits and renders wait; API writes need Content-Type application/json (a page of
+// within answer_timeout); one request per connection (no keep-alive: an unread body is
+// never read as a next request); the worker pool (threads) is larger than the bursts of
+// waiting requests, and waits for a field are bounded and hold no lock, so status
+// answers while edits and renders wait; API writes need Content-Type application/json (a page of
 // another site cannot send that without a CORS preflight, which is never granted); on a
 // loopback address, requests whose Host header is not a loopback name are refused (DNS
 // rebinding); every error is a JSON body {"error": "..."} with a 4xx status, and an
