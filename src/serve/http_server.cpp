@@ -218,7 +218,7 @@ public:
         found = static_cast<int>(fd);
         const int copy = ::dup(found);
         if (copy >= 0) {
-          entries_[copy] = {{}, false, st.st_ino};
+          entries_[copy] = {{}, false, true, st.st_ino};
           inodes_.insert(st.st_ino);
           if (closing_) ::shutdown(copy, SHUT_RDWR);
         }
@@ -238,27 +238,33 @@ public:
     entries_.erase(it);
     ::close(copy);
   }
-  void arm(int copy, Clock::time_point deadline) { set(copy, deadline, true); }
-  void disarm(int copy) { set(copy, {}, false); }
-  // Stop: every open connection is cut, and new ones at once.
+  // A deadline for reading the request (`reading`) or for writing the answer.
+  void arm(int copy, Clock::time_point deadline, bool reading) { set(copy, deadline, true, reading); }
+  void disarm(int copy) { set(copy, {}, false, false); }
+  // Stop: every connection still sending its request is cut, and new ones at once;
+  // requests being handled (woken by Session::interrupt) still send their answer.
   void cut_all() {
     std::lock_guard lock(mutex_);
     closing_ = true;
-    for (auto& [fd, e] : entries_) ::shutdown(fd, SHUT_RDWR);
+    for (auto& [fd, e] : entries_)
+      if (e.reading) ::shutdown(fd, SHUT_RDWR);
   }
 
 private:
   struct Entry {
     Clock::time_point deadline;
     bool armed = false;
+    bool reading = false;
     ino_t inode = 0;
   };
-  void set(int copy, Clock::time_point deadline, bool armed) {
+  void set(int copy, Clock::time_point deadline, bool armed, bool reading) {
     std::lock_guard lock(mutex_);
     const auto it = entries_.find(copy);
     if (it != entries_.end()) {
       it->second.deadline = deadline;
       it->second.armed = armed;
+      it->second.reading = reading;
+      if (closing_ && reading) ::shutdown(copy, SHUT_RDWR);
     }
   }
   void watch() {
@@ -301,7 +307,7 @@ public:
     const int copy = connections_.adopt(port_);  // the listener accepted it just now
     pool_.enqueue([this, copy, fn = std::move(fn)] {
       t_connection = {&connections_, copy};
-      connections_.arm(copy, after(request_timeout_));
+      connections_.arm(copy, after(request_timeout_), true);
       fn();
       connections_.remove(copy);
       t_connection = {};
@@ -462,7 +468,7 @@ struct HttpServer::Impl {
       const bool has_body = req.has_header("Transfer-Encoding") ||
                             (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
       if (has_body) {
-        conns.arm(t_connection.copy, after(o.request_timeout));
+        conns.arm(t_connection.copy, after(o.request_timeout), true);
       } else {
         conns.disarm(t_connection.copy);
       }
@@ -503,7 +509,7 @@ struct HttpServer::Impl {
     server.set_payload_max_length(options.max_body);
     // The answer is being written: the client has answer_timeout to take it.
     server.set_post_routing_handler([&conns, &o](const httplib::Request&, httplib::Response&) {
-      conns.arm(t_connection.copy, after(o.answer_timeout));
+      conns.arm(t_connection.copy, after(o.answer_timeout), false);
     });
     // One request per connection: a body left unread (refused before reading it, or cut
     // at the limit) is never read as a next request, and no idle connection holds a
