@@ -13,7 +13,7 @@ import { intersect, timePlane, uprightPlane, type Plane, type Ray, type V3 } fro
 import { formatTicks, niceTicks } from "./ticks";
 
 // A label that always faces the camera: text drawn on a canvas texture.
-function textSprite(text: string, height = 0.11): THREE.Sprite {
+function textSprite(text: string, height = 0.14): THREE.Sprite {
   const c = document.createElement("canvas");
   const px = 40;
   const ctx = c.getContext("2d")!;
@@ -21,7 +21,7 @@ function textSprite(text: string, height = 0.11): THREE.Sprite {
   c.width = Math.ceil(ctx.measureText(text).width) + 8;
   c.height = px + 12;
   ctx.font = `${px}px sans-serif`;
-  ctx.fillStyle = "#334155";
+  ctx.fillStyle = "#0f172a";
   ctx.textBaseline = "middle";
   ctx.fillText(text, 4, c.height / 2);
   const texture = new THREE.CanvasTexture(c);
@@ -249,7 +249,7 @@ export class SpaceTimeView {
       this.content.add(label);
     });
     this.content.add(new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(marks), new THREE.LineBasicMaterial({ color: 0x334155 })));
-    const name = textSprite("t", 0.14);
+    const name = textSprite("t", 0.18);
     name.position.copy(this.map(edge[0], edge[1], range[1]).add(out.clone().multiplyScalar(3.2)).add(new THREE.Vector3(0, 0, 0.22)));
     this.content.add(name);
     for (const path of analysis.paths) {
