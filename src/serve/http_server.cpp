@@ -3,10 +3,22 @@
 #include <fmt/format.h>
 #include <httplib.h>
 
+#include <algorithm>
 #include <chrono>
+#include <condition_variable>
 #include <fstream>
+#include <map>
+#include <mutex>
+#include <new>
+#include <set>
 #include <sstream>
 #include <thread>
+
+#include <dirent.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -28,13 +40,103 @@ void send_error(httplib::Response& res, int status, const std::string& message) 
   send_json(res, {{"error", message}}, status);
 }
 
-json parse_body(const httplib::Request& req) {
-  if (req.body.empty()) return json::object();
+// JSON bodies nest at most this deep (as simdjson's default): deeper is refused while
+// parsing, before anything recurses over the value.
+constexpr int kMaxJsonDepth = 1000;
+
+// A key as an error message shows it: at most 40 characters.
+std::string shown_key(const std::string& key) {
+  return key.size() <= 40 ? key : key.substr(0, 37) + "...";
+}
+
+// Parses a request body, tracking the JSON path of the value being read so that an error
+// names it ("time.frames: the number 1e400 is out of range"), and refusing nesting deeper
+// than kMaxJsonDepth. Never shows a library's exception text.
+json parse_json(const std::string& text) {
+  if (text.empty()) return json::object();
+  struct Level {
+    bool array;
+    long long index;
+    std::string key;
+  };
+  std::vector<Level> stack;
+  auto path = [&] {
+    std::string out;
+    for (size_t k = 0; k < stack.size(); ++k) {
+      const Level& l = stack[k];
+      if (l.array) {
+        // An open container is counted when it starts; the innermost level's value
+        // (the one being read) is not counted yet.
+        out += fmt::format("[{}]", std::max(0LL, k + 1 == stack.size() ? l.index + 1 : l.index));
+      } else if (!l.key.empty()) {
+        if (!out.empty()) out += '.';
+        out += shown_key(l.key);
+      }
+      if (out.size() > 200) return out.substr(0, 197) + "...";
+    }
+    return out;
+  };
+  using Event = json::parse_event_t;
+  const json::parser_callback_t track = [&](int, Event event, json& parsed) {
+    switch (event) {
+      case Event::object_start:
+      case Event::array_start:
+        if (!stack.empty() && stack.back().array) ++stack.back().index;
+        if (stack.size() >= static_cast<size_t>(kMaxJsonDepth))
+          throw RequestError(400, fmt::format("request body: {}: nested deeper than {} levels", path(), kMaxJsonDepth));
+        stack.push_back({event == Event::array_start, -1, {}});
+        break;
+      case Event::key:
+        stack.back().key = parsed.get<std::string>();
+        break;
+      case Event::value:
+        if (!stack.empty() && stack.back().array) ++stack.back().index;
+        break;
+      case Event::object_end:
+      case Event::array_end:
+        stack.pop_back();
+        break;
+    }
+    return true;
+  };
   try {
-    return json::parse(req.body);
+    return json::parse(text, track);
   } catch (const json::parse_error& e) {
-    throw RequestError(400, fmt::format("request body: not valid JSON (at byte {})", e.byte));
+    const std::string where = path();
+    throw RequestError(400, fmt::format("request body: not valid JSON (at byte {}{})", e.byte,
+                                        where.empty() ? "" : ", in " + where));
+  } catch (const json::out_of_range&) {
+    const std::string where = path();
+    throw RequestError(400, fmt::format("request body: {}: a number is out of range (beyond ±1.8e308)",
+                                        where.empty() ? "the value" : where));
+  } catch (const json::exception&) {
+    throw RequestError(400, "request body: not valid JSON");
   }
+}
+
+// The revision a change names in its If-Match header (the ETag of GET /api/scene,
+// "12"); none or "*": any revision.
+long long if_match(const httplib::Request& req) {
+  if (!req.has_header("If-Match")) return kAnyRevision;
+  std::string v = req.get_header_value("If-Match");
+  if (v == "*") return kAnyRevision;
+  if (v.rfind("W/", 0) == 0) v = v.substr(2);
+  if (v.size() >= 2 && v.front() == '"' && v.back() == '"') v = v.substr(1, v.size() - 2);
+  if (!v.empty() && v.size() <= 18 && std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; }))
+    return std::stoll(v);
+  throw RequestError(400, "If-Match: expected the ETag of GET /api/scene, such as \"12\"");
+}
+
+std::string etag(long long revision) { return fmt::format("\"{}\"", revision); }
+
+// A library's exception text without its "[json.exception.type_error.302] " prefix.
+std::string plain_message(const char* what) {
+  std::string m(what);
+  if (m.rfind("[json.exception.", 0) == 0) {
+    const auto end = m.find("] ");
+    if (end != std::string::npos) m = m.substr(end + 2);
+  }
+  return m.size() <= 300 ? m : m.substr(0, 297) + "...";
 }
 
 bool loopback_host(const std::string& host) {
@@ -68,9 +170,192 @@ const char* kNoFrontEnd =
 
 }  // namespace
 
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The open connections and their deadlines: a watchdog thread shuts down the socket of a
+// connection past its deadline (a client dripping its headers, or not reading its
+// answer), so that no client holds a worker for long. Each connection is registered with
+// a duplicate of its socket, closed only when the connection has ended, so the watchdog
+// never touches a socket number that was reused.
+class Connections {
+public:
+  Connections() : thread_([this] { watch(); }) {}
+  ~Connections() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  // Registers the connection the server has just accepted on `port` (the one socket of
+  // this process on that port that is neither listening nor registered yet), through a
+  // duplicate of it; -1 when none is found. httplib 0.11 does not tell its task queue the
+  // socket (the listener calls enqueue right after accept), hence the search.
+  int adopt(int port) {
+    std::lock_guard lock(mutex_);
+    int found = -1;
+    if (DIR* d = ::opendir("/proc/self/fd")) {
+      while (const dirent* e = ::readdir(d)) {
+        char* end = nullptr;
+        const long fd = std::strtol(e->d_name, &end, 10);
+        if (end == e->d_name || *end != '\0' || fd == ::dirfd(d)) continue;
+        struct stat st {};
+        if (::fstat(static_cast<int>(fd), &st) != 0 || !S_ISSOCK(st.st_mode) || inodes_.count(st.st_ino)) continue;
+        sockaddr_storage a{};
+        socklen_t len = sizeof a;
+        if (::getsockname(static_cast<int>(fd), reinterpret_cast<sockaddr*>(&a), &len) != 0) continue;
+        const int local = a.ss_family == AF_INET    ? ntohs(reinterpret_cast<sockaddr_in*>(&a)->sin_port)
+                          : a.ss_family == AF_INET6 ? ntohs(reinterpret_cast<sockaddr_in6*>(&a)->sin6_port)
+                                                    : -1;
+        int listening = 1;
+        socklen_t optlen = sizeof listening;
+        if (local != port || ::getsockopt(static_cast<int>(fd), SOL_SOCKET, SO_ACCEPTCONN, &listening, &optlen) != 0 ||
+            listening)
+          continue;
+        found = static_cast<int>(fd);
+        const int copy = ::dup(found);
+        if (copy >= 0) {
+          entries_[copy] = {{}, false, true, st.st_ino};
+          inodes_.insert(st.st_ino);
+          if (closing_) ::shutdown(copy, SHUT_RDWR);
+        }
+        found = copy;
+        break;
+      }
+      ::closedir(d);
+    }
+    return found;
+  }
+  void remove(int copy) {
+    if (copy < 0) return;
+    std::lock_guard lock(mutex_);
+    const auto it = entries_.find(copy);
+    if (it == entries_.end()) return;
+    inodes_.erase(it->second.inode);
+    entries_.erase(it);
+    ::close(copy);
+  }
+  // A deadline for reading the request (`reading`) or for writing the answer.
+  void arm(int copy, Clock::time_point deadline, bool reading) { set(copy, deadline, true, reading); }
+  void disarm(int copy) { set(copy, {}, false, false); }
+  // Stop: every connection still sending its request is cut, and new ones at once;
+  // requests being handled (woken by Session::interrupt) still send their answer.
+  void cut_all() {
+    std::lock_guard lock(mutex_);
+    closing_ = true;
+    for (auto& [fd, e] : entries_)
+      if (e.reading) ::shutdown(fd, SHUT_RDWR);
+  }
+
+private:
+  struct Entry {
+    Clock::time_point deadline;
+    bool armed = false;
+    bool reading = false;
+    ino_t inode = 0;
+  };
+  void set(int copy, Clock::time_point deadline, bool armed, bool reading) {
+    std::lock_guard lock(mutex_);
+    const auto it = entries_.find(copy);
+    if (it != entries_.end()) {
+      it->second.deadline = deadline;
+      it->second.armed = armed;
+      it->second.reading = reading;
+      if (closing_ && reading) ::shutdown(copy, SHUT_RDWR);
+    }
+  }
+  void watch() {
+    std::unique_lock lock(mutex_);
+    while (!stop_) {
+      wake_.wait_for(lock, std::chrono::milliseconds(250));
+      const auto now = Clock::now();
+      for (auto& [fd, e] : entries_)
+        if (e.armed && e.deadline < now) {
+          ::shutdown(fd, SHUT_RDWR);
+          e.armed = false;
+        }
+    }
+  }
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::map<int, Entry> entries_;
+  std::set<ino_t> inodes_;
+  bool stop_ = false;
+  bool closing_ = false;
+  std::thread thread_;
+};
+
+// The connection a worker thread is serving.
+struct CurrentConnection {
+  Connections* connections = nullptr;
+  int copy = -1;  // Connections' duplicate of the socket
+};
+thread_local CurrentConnection t_connection;
+
+Clock::time_point after(double seconds);
+
+// The server's task queue: a pool of `threads` workers, each connection registered with
+// the watchdog while a worker serves it, with request_timeout to send its request.
+class WatchedPool : public httplib::TaskQueue {
+public:
+  WatchedPool(size_t threads, Connections& connections, int port, double request_timeout)
+      : pool_(threads), connections_(connections), port_(port), request_timeout_(request_timeout) {}
+  void enqueue(std::function<void()> fn) override {
+    const int copy = connections_.adopt(port_);  // the listener accepted it just now
+    pool_.enqueue([this, copy, fn = std::move(fn)] {
+      t_connection = {&connections_, copy};
+      connections_.arm(copy, after(request_timeout_), true);
+      fn();
+      connections_.remove(copy);
+      t_connection = {};
+    });
+  }
+  void shutdown() override { pool_.shutdown(); }
+
+private:
+  httplib::ThreadPool pool_;
+  Connections& connections_;
+  int port_;
+  double request_timeout_;
+};
+
+Clock::time_point after(double seconds) {
+  return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+// Reads a request's body through the content reader, counting the bytes as they arrive
+// (after decompression): at `limit` reading stops and the request is refused (413),
+// whatever the body's transfer or content encoding.
+std::string read_body(const httplib::ContentReader& reader, httplib::Response& res, std::size_t limit) {
+  std::string body;
+  bool over = false;
+  const bool ok = reader([&](const char* data, size_t n) {
+    if (n > limit - body.size()) {
+      over = true;
+      return false;
+    }
+    body.append(data, n);
+    return true;
+  });
+  if (over || res.status == 413)
+    throw RequestError(413, fmt::format("request body too large (the limit is {}, after decompression)",
+                                        limit >= (1u << 20) ? fmt::format("{} MiB", limit >> 20)
+                                                            : fmt::format("{} bytes", limit)));
+  if (res.status == 415) throw RequestError(415, "request body: unsupported Content-Encoding (send it as it is, or gzip)");
+  if (!ok) throw RequestError(400, "request body: could not be read whole (cut off, badly chunked or badly compressed)");
+  if (t_connection.connections) t_connection.connections->disarm(t_connection.copy);  // the handler may take a while
+  return body;
+}
+
+}  // namespace
+
 struct HttpServer::Impl {
   Session& session;
   ServerOptions options;
+  Connections connections;
   httplib::Server server;
   int port = 0;
   std::thread thread;
@@ -80,49 +365,89 @@ struct HttpServer::Impl {
   // Runs a handler, turning every exception into a JSON error (never a crash).
   template <class F>
   httplib::Server::Handler wrap(F f) {
-    return [f](const httplib::Request& req, httplib::Response& res) {
-      try {
-        f(req, res);
-      } catch (const RequestError& e) {
-        send_error(res, e.status(), e.what());
-      } catch (const Error& e) {
-        send_error(res, 400, e.what());
-      } catch (const std::exception& e) {
-        send_error(res, 500, fmt::format("internal error: {}", e.what()));
-      }
+    return [f](const httplib::Request& req, httplib::Response& res) { guarded(res, [&] { f(req, res); }); };
+  }
+  // The same for handlers of requests with a body: the body is read first, within
+  // max_body, and handed to the handler as a string.
+  template <class F>
+  httplib::Server::HandlerWithContentReader wrap_body(F f) {
+    const std::size_t limit = options.max_body;
+    return [f, limit](const httplib::Request& req, httplib::Response& res, const httplib::ContentReader& reader) {
+      guarded(res, [&] {
+        const std::string body = read_body(reader, res, limit);
+        f(req, res, body);
+      });
     };
+  }
+  template <class F>
+  static void guarded(httplib::Response& res, F&& f) {
+    try {
+      f();
+    } catch (const RequestError& e) {
+      send_error(res, e.status(), e.what());
+    } catch (const Error& e) {
+      send_error(res, 400, e.what());
+    } catch (const std::bad_alloc&) {
+      send_error(res, 503, "the server has not enough memory for this request");
+    } catch (const json::exception& e) {
+      send_error(res, 400, fmt::format("request: {}", plain_message(e.what())));
+    } catch (const std::exception& e) {
+      send_error(res, 500, fmt::format("internal error: {}", plain_message(e.what())));
+    }
   }
 
   void routes() {
     Session& s = session;
-    server.Get("/api/scene", wrap([&s](const auto&, auto& res) { send_json(res, s.scene()); }));
-    server.Put("/api/scene", wrap([&s](const auto& req, auto& res) {
-                 json body = parse_body(req);
+    // The scene's revision is its ETag; a change sends it back in If-Match (412 when the
+    // scene has moved on since).
+    auto with_etag = [](httplib::Response& res, const json& answer) {
+      res.set_header("ETag", etag(answer.at("revision").get<long long>()));
+      send_json(res, answer);
+    };
+    server.Get("/api/scene", wrap([&s, with_etag](const auto&, auto& res) { with_etag(res, s.scene()); }));
+    server.Put("/api/scene", wrap_body([&s, with_etag](const auto& req, auto& res, const std::string& text) {
+                 json body = parse_json(text);
                  if (!body.is_object()) throw RequestError(400, "request body: expected a scene object");
-                 send_json(res, s.put_scene(body));
+                 with_etag(res, s.put_scene(body, if_match(req)));
                }));
-    server.Post("/api/edit", wrap([&s](const auto& req, auto& res) { send_json(res, s.edit(parse_body(req))); }));
-    server.Post("/api/undo", wrap([&s](const auto&, auto& res) { send_json(res, s.undo()); }));
-    server.Post("/api/redo", wrap([&s](const auto&, auto& res) { send_json(res, s.redo()); }));
+    server.Post("/api/edit", wrap_body([&s, with_etag](const auto& req, auto& res, const std::string& text) {
+                  with_etag(res, s.edit(parse_json(text), if_match(req)));
+                }));
+    server.Post("/api/undo", wrap_body([&s, with_etag](const auto& req, auto& res, const std::string&) {
+                  with_etag(res, s.undo(if_match(req)));
+                }));
+    server.Post("/api/redo", wrap_body([&s, with_etag](const auto& req, auto& res, const std::string&) {
+                  with_etag(res, s.redo(if_match(req)));
+                }));
     server.Get("/api/status", wrap([&s](const auto&, auto& res) { send_json(res, s.status()); }));
     server.Get("/api/mesh", wrap([&s](const auto&, auto& res) { send_json(res, s.mesh()); }));
     server.Get(R"(/api/frame/(-?\d{1,9}))", wrap([&s](const auto& req, auto& res) {
                  send_json(res, s.frame(std::stoi(req.matches[1].str())));
                }));
     server.Get("/api/analysis", wrap([&s](const auto&, auto& res) { send_json(res, s.analysis()); }));
-    server.Post("/api/export", wrap([&s](const auto& req, auto& res) {
-                  send_json(res, s.export_field(parse_body(req)));
+    server.Post("/api/export", wrap_body([&s](const auto& req, auto& res, const std::string& text) {
+                  send_json(res, s.export_field(parse_json(text), if_match(req)));
                 }));
-    server.Post("/api/render", wrap([&s](const auto& req, auto& res) {
-                  send_json(res, s.render_video(parse_body(req)));
+    server.Post("/api/render", wrap_body([&s](const auto& req, auto& res, const std::string& text) {
+                  send_json(res, s.render_video(parse_json(text), if_match(req)));
                 }));
-    server.Post("/api/seed_translation", wrap([&s](const auto& req, auto& res) {
-                  send_json(res, s.seed_translation(parse_body(req)));
+    server.Post("/api/seed_translation", wrap_body([&s](const auto&, auto& res, const std::string& text) {
+                  send_json(res, s.seed_translation(parse_json(text)));
                 }));
-    server.Post("/api/upload", wrap([&s](const auto& req, auto& res) {
+    server.Post("/api/upload", wrap_body([&s](const auto& req, auto& res, const std::string& bytes) {
                   if (!req.has_param("name")) throw RequestError(400, "upload: say the file name (?name=mesh.obj)");
-                  send_json(res, s.upload_mesh(req.get_param_value("name"), req.body));
+                  send_json(res, s.upload_mesh(req.get_param_value("name"), bytes));
                 }));
+    // Every other request with a body: read within the limit too (httplib would read it
+    // whole into memory), then 404.
+    const auto no_such = wrap_body([](const auto& req, auto& res, const std::string&) {
+      throw RequestError(404, fmt::format("{} {}: no such resource", req.method, req.path.substr(0, 200)));
+      (void)res;
+    });
+    server.Post(".*", no_such);
+    server.Put(".*", no_such);
+    server.Patch(".*", no_such);
+    server.Delete(".*", no_such);
     server.Get(R"(/api/files/(.+))", wrap([&s](const auto& req, auto& res) {
                  const fs::path p = s.resolve(req.matches[1].str());
                  if (!fs::is_regular_file(p))
@@ -134,7 +459,19 @@ struct HttpServer::Impl {
                }));
 
     const bool loopback = loopback_host(options.host);
-    server.set_pre_routing_handler([loopback](const httplib::Request& req, httplib::Response& res) {
+    Connections& conns = connections;
+    const ServerOptions& o = options;
+    server.set_pre_routing_handler([loopback, &conns, &o](const httplib::Request& req, httplib::Response& res) {
+      // The headers are in. A body must follow within request_timeout (read_body disarms
+      // the deadline once it is read); a request without one is answered without a
+      // deadline (edits and renders may take a while).
+      const bool has_body = req.has_header("Transfer-Encoding") ||
+                            (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
+      if (has_body) {
+        conns.arm(t_connection.copy, after(o.request_timeout), true);
+      } else {
+        conns.disarm(t_connection.copy);
+      }
       if (loopback && !loopback_host(host_name(req.get_header_value("Host")))) {
         send_error(res, 403, "this server answers requests for localhost only");
         return httplib::Server::HandlerResponse::Handled;
@@ -170,6 +507,23 @@ struct HttpServer::Impl {
       send_error(res, 500, "internal error: " + what);
     });
     server.set_payload_max_length(options.max_body);
+    // The answer is being written: the client has answer_timeout to take it.
+    server.set_post_routing_handler([&conns, &o](const httplib::Request&, httplib::Response&) {
+      conns.arm(t_connection.copy, after(o.answer_timeout), false);
+    });
+    // One request per connection: a body left unread (refused before reading it, or cut
+    // at the limit) is never read as a next request, and no idle connection holds a
+    // worker. (On loopback a new connection costs tens of microseconds.)
+    server.set_keep_alive_max_count(1);
+    const auto microseconds = [](double x) {
+      return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::duration<double>(x));
+    };
+    server.set_read_timeout(microseconds(std::min(5.0, o.request_timeout)));
+    server.set_write_timeout(microseconds(std::min(5.0, o.answer_timeout)));
+    const size_t threads = static_cast<size_t>(std::max(2, o.threads));
+    server.new_task_queue = [this, threads] {
+      return new WatchedPool(threads, connections, port, options.request_timeout);
+    };
 
     std::error_code ec;
     if (!options.web_root.empty() && fs::is_regular_file(options.web_root / "index.html", ec)) {
@@ -216,6 +570,8 @@ void HttpServer::start() {
 }
 
 void HttpServer::stop() {
+  impl_->session.interrupt();
+  impl_->connections.cut_all();
   impl_->server.stop();
   if (impl_->thread.joinable()) impl_->thread.join();
 }

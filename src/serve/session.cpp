@@ -23,7 +23,13 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <new>
+#include <regex>
 #include <thread>
+
+#include <cerrno>
+#include <csignal>
+#include <sys/types.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -70,6 +76,30 @@ std::vector<double> compact(const std::vector<float>& values) {
   return out;
 }
 
+// A change made on `on_revision` while the scene is at `current`: refused (412).
+void check_revision(long long on_revision, long long current, const char* what) {
+  if (on_revision != kAnyRevision && on_revision != current)
+    throw RequestError(412, fmt::format("{}: made on revision {}, but the scene is at revision {} (another tab or "
+                                        "client changed it): reload the scene and make the change again",
+                                        what, on_revision, current));
+}
+
+// Temporary files of a crashed session: ".NAME.tmp-PID-N" (temporary_sibling) of a
+// process that no longer runs. Removed at start; files of a running process are kept.
+void remove_stale_temporaries(const fs::path& folder) {
+  static const std::regex pattern(R"(\..+\.tmp-([0-9]{1,9})-[0-9]+)");
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    std::smatch m;
+    if (!std::regex_match(name, m, pattern) || !it->is_regular_file(ec)) continue;
+    const long pid = std::stol(m[1].str());
+    const bool alive = pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
+    if (!alive || pid == static_cast<long>(::getpid())) fs::remove(it->path(), ec);
+    ec.clear();
+  }
+}
+
 // The key a design space is cached under: the domain as the scene writes it.
 std::string domain_key(const Scene& scene) {
   return scene_to_json(scene)["domain"].dump() + "|" + scene.resolved_mesh_path();
@@ -106,8 +136,7 @@ struct Session::State {
   GenerateCache solver_cache;
   std::thread worker;
 
-  // Serialises edits (each one reads the current field and appends to the scene).
-  std::mutex edit_mutex;
+  bool interrupted = false;  // interrupt(): waits end at once
   std::mutex render_mutex;  // one video at a time
 
   fs::path scene_path() const { return dir / options.scene; }
@@ -180,6 +209,12 @@ struct Session::State {
         made = generate_result(job, job_revision, *flag);
       } catch (const GenerationCancelled&) {
         stopped = true;
+      } catch (const std::bad_alloc&) {
+        failure = fmt::format("the scene needs more memory than this machine has ({} frames of {}): make the "
+                              "grid, the mesh or time.frames smaller",
+                              job.time.frames, job.domain.is_planar() && job.domain.grid
+                                                   ? fmt::format("a {}×{} grid", job.domain.grid->nx, job.domain.grid->ny)
+                                                   : std::string("the surface"));
       } catch (const std::exception& e) {
         failure = e.what();
       }
@@ -237,6 +272,33 @@ struct Session::State {
     return r;
   }
 
+  // The field of revision `want`, waiting for a running solve until `deadline` without
+  // holding a lock: 412 as soon as the scene moves past `want`. kAnyRevision: the field of
+  // whatever revision is current (following newer changes while it waits). 409 when the
+  // solve failed or is not done in time; 503 when interrupted.
+  std::shared_ptr<const Result> result_of(long long want, const char* what,
+                                          std::chrono::steady_clock::time_point deadline) const {
+    std::unique_lock lock(mutex);
+    const bool any = want == kAnyRevision;
+    check_revision(want, revision, what);
+    auto target = [&] { return any ? revision : want; };
+    changed.wait_until(lock, deadline, [&] {
+      return interrupted || revision != target() || (result && result->revision == target()) || state == "failed";
+    });
+    if (interrupted) throw RequestError(503, fmt::format("{}: the server is stopping", what));
+    check_revision(want, revision, what);
+    if (result && result->revision == revision) return result;
+    if (state == "failed") throw RequestError(409, fmt::format("{}: the scene has no field: {}", what, error));
+    throw RequestError(409, fmt::format("{}: the field of revision {} is still being generated ({}/{} frames); try "
+                                        "again when /api/status says ready",
+                                        what, revision, done, total));
+  }
+  std::chrono::steady_clock::time_point wait_deadline() const {
+    return std::chrono::steady_clock::now() +
+           std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+               std::chrono::duration<double>(std::max(0.0, std::min(options.field_wait_seconds, 1e6))));
+  }
+
   std::shared_ptr<const Result> current_result() const {
     std::lock_guard lock(mutex);
     if (!result)
@@ -278,6 +340,8 @@ Session::Session(SessionOptions options) : s_(std::make_unique<State>()) {
     save_scene(s_->scene, path.string());
   }
   s_->check_scene_paths(s_->scene);
+  remove_stale_temporaries(s_->dir);
+  if (path.parent_path() != s_->dir) remove_stale_temporaries(path.parent_path());
   s_->worker = std::thread([this] { s_->run_worker(); });
   std::lock_guard lock(s_->mutex);
   s_->schedule();
@@ -287,8 +351,10 @@ Session::~Session() {
   {
     std::lock_guard lock(s_->mutex);
     s_->stop = true;
+    s_->interrupted = true;
     if (s_->cancel) s_->cancel->store(true);
     s_->work.notify_all();
+    s_->changed.notify_all();
   }
   if (s_->worker.joinable()) s_->worker.join();
 }
@@ -301,20 +367,50 @@ json Session::scene() const {
   return s_->scene_json();
 }
 
-json Session::put_scene(const json& j) {
+long long Session::revision() const {
+  std::lock_guard lock(s_->mutex);
+  return s_->revision;
+}
+
+void Session::interrupt() {
+  std::lock_guard lock(s_->mutex);
+  s_->interrupted = true;
+  if (s_->cancel) s_->cancel->store(true);
+  s_->changed.notify_all();
+}
+
+json Session::put_scene(const json& j, long long on_revision) {
+  {
+    std::lock_guard lock(s_->mutex);  // refuse a stale change before the work of parsing it
+    check_revision(on_revision, s_->revision, "scene");
+  }
   Scene next = s_->parse(j);
   std::lock_guard lock(s_->mutex);
+  check_revision(on_revision, s_->revision, "scene");
   s_->commit(std::move(next), true, true);
   return s_->scene_json();
 }
 
-json Session::edit(const json& entry) {
+json Session::edit(const json& entry, long long on_revision) {
   if (!entry.is_object()) throw RequestError(400, "edit: expected a JSON object such as {\"op\": \"cancel\", ...}");
-  std::lock_guard edit_lock(s_->edit_mutex);
+  // Without a revision, an edit overtaken by another change is applied again to the newer
+  // field (a few times at most: each attempt is one edit's work).
+  const auto deadline = s_->wait_deadline();  // for all attempts together
+  for (int attempt = 0;; ++attempt) {
+    try {
+      return edit_on(entry, on_revision, deadline);
+    } catch (const RequestError& e) {
+      if (on_revision != kAnyRevision || e.status() != 412 || attempt == 3) throw;
+    }
+  }
+}
+
+json Session::edit_on(const json& entry, long long on_revision, std::chrono::steady_clock::time_point deadline) {
   Scene base;
   long long base_revision = 0;
   {
     std::lock_guard lock(s_->mutex);
+    check_revision(on_revision, s_->revision, "edit");
     base = s_->scene;
     base_revision = s_->revision;
   }
@@ -324,18 +420,8 @@ json Session::edit(const json& entry) {
   const Scene edited = s_->parse(j);
   const Edit e = edits_from_scene(edited).back();
 
-  // The field of the scene as it is now.
-  std::shared_ptr<const Result> r;
-  {
-    std::unique_lock lock(s_->mutex);
-    const bool ready = s_->changed.wait_for(
-        lock, std::chrono::duration<double>(s_->options.edit_wait_seconds),
-        [&] { return (s_->result && s_->result->revision == base_revision) || s_->state == "failed"; });
-    if (s_->state == "failed" && !(s_->result && s_->result->revision == base_revision))
-      throw RequestError(409, "the scene has no field to edit: " + s_->error);
-    if (!ready) throw RequestError(503, "the field is still being generated; try the edit again");
-    r = s_->result;
-  }
+  // The field of the revision the edit was made on (no lock held while waiting).
+  const std::shared_ptr<const Result> r = s_->result_of(base_revision, "edit", deadline);
   auto made = std::make_shared<Result>();
   made->scene = edited;
   made->space = r->space;
@@ -358,8 +444,7 @@ json Session::edit(const json& entry) {
   made->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::lock_guard lock(s_->mutex);
-  if (s_->revision != base_revision)
-    throw RequestError(409, "the scene changed while the edit was applied; the edit was not recorded");
+  check_revision(base_revision, s_->revision, "edit");
   s_->commit(edited, true, false);
   made->revision = s_->revision;
   if (s_->cancel) s_->cancel->store(true);
@@ -370,8 +455,9 @@ json Session::edit(const json& entry) {
   return {{"revision", s_->revision}, {"summary", report.summary}};
 }
 
-json Session::undo() {
+json Session::undo(long long on_revision) {
   std::lock_guard lock(s_->mutex);
+  check_revision(on_revision, s_->revision, "undo");
   if (s_->undo.empty()) throw RequestError(409, "nothing to undo");
   Scene previous = s_->parse(s_->undo.back());
   s_->redo.push_back(scene_to_json(s_->scene));
@@ -380,8 +466,9 @@ json Session::undo() {
   return s_->scene_json();
 }
 
-json Session::redo() {
+json Session::redo(long long on_revision) {
   std::lock_guard lock(s_->mutex);
+  check_revision(on_revision, s_->revision, "redo");
   if (s_->redo.empty()) throw RequestError(409, "nothing to redo");
   Scene next = s_->parse(s_->redo.back());
   s_->undo.push_back(scene_to_json(s_->scene));
@@ -516,13 +603,13 @@ std::string string_or(const json& request, const char* key, const char* what, co
 
 }  // namespace
 
-json Session::export_field(const json& request) {
+json Session::export_field(const json& request, long long on_revision) {
   check_keys(request, "export", {"dir", "format"});
   const std::string format = string_or(request, "format", "export", "all");
   if (format != "all" && format != "npy" && format != "vtk")
     throw RequestError(400, fmt::format("export.format: \"{}\" is not one of all, npy, vtk", format));
   const fs::path out = resolve(string_or(request, "dir", "export", "export"));
-  const auto r = s_->current_result();
+  const auto r = s_->result_of(on_revision, "export", s_->wait_deadline());
   OutputOptions o;
   o.vtk = format != "npy";
   json files = json::array();
@@ -535,7 +622,7 @@ json Session::export_field(const json& request) {
   return {{"revision", r->revision}, {"files", files}};
 }
 
-json Session::render_video(const json& request) {
+json Session::render_video(const json& request, long long on_revision) {
   check_keys(request, "render", {"name", "size", "singularities", "paths", "frames", "view", "up", "fov"});
   const std::string name = string_or(request, "name", "render", "video.mp4");
   const fs::path out = resolve(name);
@@ -585,7 +672,7 @@ json Session::render_video(const json& request) {
   } else {
     throw RequestError(400, fmt::format("render.name \"{}\": give an .mp4 file or a folder for PNG frames", name));
   }
-  const auto r = s_->current_result();
+  const auto r = s_->result_of(on_revision, "render", s_->wait_deadline());
   try {
     // One texture animation at a time: the offscreen renderer and ffmpeg are not worth
     // running twice at once, and a second request is refused rather than queued.

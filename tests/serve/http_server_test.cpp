@@ -8,6 +8,16 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <chrono>
+#include <future>
+#include <thread>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
 namespace tvf::serve {
 namespace {
 
@@ -20,15 +30,17 @@ struct Fixture {
   std::unique_ptr<HttpServer> server;
   std::unique_ptr<httplib::Client> client;
 
-  explicit Fixture(fs::path web_root = {}, std::size_t max_body = 64u << 20) {
+  explicit Fixture(fs::path web_root = {}, std::size_t max_body = 64u << 20,
+                   const std::function<void(SessionOptions&, ServerOptions&)>& tune = {}) {
     SessionOptions so;
     so.dir = dir.path();
     so.initial_scene = test::kServeScene;
-    session = std::make_unique<Session>(so);
     ServerOptions ho;
     ho.port = 0;
     ho.web_root = std::move(web_root);
     ho.max_body = max_body;
+    if (tune) tune(so, ho);
+    session = std::make_unique<Session>(so);
     server = std::make_unique<HttpServer>(*session, ho);
     server->start();
     client = std::make_unique<httplib::Client>("127.0.0.1", server->port());
@@ -104,8 +116,24 @@ TEST(ServeHttp, MalformedRequestsGetAClearJsonError) {
   EXPECT_NE(error_of(f.client->Get("/api/frame/1000000"), 400).find("frame"), std::string::npos);
   EXPECT_NE(error_of(f.client->Post("/api/undo", "", "application/json"), 409).find("nothing to undo"),
             std::string::npos);
-  EXPECT_EQ(error_of(f.client->Put("/api/scene", std::string(10000, ' '), "application/json"), 413),
-            "request body too large");
+  EXPECT_NE(error_of(f.client->Put("/api/scene", std::string(10000, ' '), "application/json"), 413)
+                .find("request body too large"),
+            std::string::npos);
+  // A number beyond double: one sentence naming the key, not the JSON library's text.
+  const std::string huge = error_of(
+      f.client->Put("/api/scene", R"({"tvf": 1, "time": {"frames": 1e400, "range": [0, 1]}})", "application/json"), 400);
+  EXPECT_NE(huge.find("time.frames"), std::string::npos) << huge;
+  EXPECT_EQ(huge.find("json.exception"), std::string::npos) << huge;
+  const std::string deep = error_of(f.client->Post("/api/edit", R"({"op": "smooth", "strength": [1, [2, 1e999]]})",
+                                                   "application/json"),
+                                    400);
+  EXPECT_NE(deep.find("strength[1][1]"), std::string::npos) << deep;
+  // Nesting deeper than 1,000 levels is refused while parsing.
+  const std::string nested = error_of(
+      f.client->Post("/api/edit", "{\"strength\": " + std::string(1500, '[') + std::string(1500, ']') + "}",
+                     "application/json"),
+      400);
+  EXPECT_NE(nested.find("deeper than 1000"), std::string::npos) << nested;
   EXPECT_NE(error_of(f.client->Get("/api/files/..%2f..%2fetc%2fpasswd"), 403).find("leaves the working folder"),
             std::string::npos);
   EXPECT_NE(error_of(f.client->Get("/api/files/missing.npy"), 404).find("no such file"), std::string::npos);
@@ -134,6 +162,158 @@ TEST(ServeHttp, ServesTheFrontEndOrSaysItIsMissing) {
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200);
   EXPECT_NE(r->body.find("<title>designer</title>"), std::string::npos);
+}
+
+// A raw connection to the server (to send what httplib::Client would not: chunked bodies
+// that never end, headers one byte at a time). Reads time out after `timeout` seconds.
+struct RawClient {
+  int fd = -1;
+  RawClient(int port, double timeout) {
+    fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    EXPECT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    timeval tv{static_cast<time_t>(timeout), static_cast<suseconds_t>((timeout - static_cast<time_t>(timeout)) * 1e6)};
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    timeval ts{2, 0};
+    ::setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &ts, sizeof ts);
+  }
+  ~RawClient() { ::close(fd); }
+  bool send(const std::string& s) { return ::send(fd, s.data(), s.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(s.size()); }
+  // What the server sent until it closed the connection or the read timed out; `closed`
+  // says which.
+  std::string receive(bool* closed = nullptr) {
+    std::string out;
+    char buf[4096];
+    for (;;) {
+      const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+      if (n <= 0) {
+        if (closed) *closed = n == 0 || errno == ECONNRESET;
+        return out;
+      }
+      out.append(buf, static_cast<size_t>(n));
+    }
+  }
+};
+
+TEST(ServeHttp, ChangesNameTheirRevisionAndAStaleOneIsRefused) {
+  Fixture f;
+  auto got = f.client->Get("/api/scene");
+  ASSERT_TRUE(got);
+  const json seen = json::parse(got->body);
+  const std::string tag = got->get_header_value("ETag");
+  EXPECT_EQ(tag, "\"" + std::to_string(seen["revision"].get<long long>()) + "\"");
+  json a = seen["scene"], b = seen["scene"];
+  a["falloff"] = 11;
+  b["falloff"] = 9;
+  auto put = f.client->Put("/api/scene", httplib::Headers{{"If-Match", tag}}, a.dump(), "application/json");
+  json after = body(put, 200);
+  EXPECT_EQ(put->get_header_value("ETag"), "\"" + std::to_string(after["revision"].get<long long>()) + "\"");
+  // The second tab, still on the first revision: refused, and the first tab's change kept.
+  const json refused = body(f.client->Put("/api/scene", httplib::Headers{{"If-Match", tag}}, b.dump(), "application/json"), 412);
+  EXPECT_NE(refused["error"].get<std::string>().find("another tab"), std::string::npos) << refused;
+  EXPECT_EQ(body(f.client->Get("/api/scene"), 200)["scene"]["falloff"], 11);
+  EXPECT_EQ(body(f.client->Post("/api/edit", httplib::Headers{{"If-Match", tag}}, R"({"op": "smooth", "strength": 0.3})",
+                                "application/json"),
+                 412)["error"].get<std::string>().substr(0, 5),
+            "edit:");
+  EXPECT_EQ(f.client->Post("/api/undo", httplib::Headers{{"If-Match", tag}}, "", "application/json")->status, 412);
+  EXPECT_EQ(f.client->Post("/api/undo", httplib::Headers{{"If-Match", "yesterday"}}, "", "application/json")->status, 400);
+  // With the current tag the undo goes through.
+  EXPECT_EQ(body(f.client->Post("/api/undo", httplib::Headers{{"If-Match", put->get_header_value("ETag")}}, "",
+                                "application/json"),
+                 200)["scene"]["falloff"],
+            20);
+}
+
+TEST(ServeHttp, AChunkedBodyIsReadOnlyUpToTheLimit) {
+  Fixture f({}, 4096);
+  RawClient c(f.server->port(), 4);
+  ASSERT_TRUE(c.send("PUT /api/scene HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+                     "Transfer-Encoding: chunked\r\n\r\n"));
+  // 8 KiB in chunks, and the body never ends: the answer must come at the limit.
+  const std::string chunk = "400\r\n" + std::string(1024, ' ') + "\r\n";
+  for (int k = 0; k < 8; ++k) c.send(chunk);
+  bool closed = false;
+  const std::string answer = c.receive(&closed);
+  EXPECT_EQ(answer.substr(0, 12), "HTTP/1.1 413") << answer.substr(0, 200);
+  EXPECT_NE(answer.find("request body too large"), std::string::npos) << answer.substr(0, 300);
+  EXPECT_TRUE(closed) << "the connection stays open with the rest of the body unread";
+  // Other methods and paths too.
+  RawClient d(f.server->port(), 4);
+  d.send("PATCH /anything HTTP/1.1\r\nHost: 127.0.0.1\r\nTransfer-Encoding: chunked\r\n\r\n");
+  for (int k = 0; k < 8; ++k) d.send(chunk);
+  EXPECT_EQ(d.receive().substr(0, 12), "HTTP/1.1 413");
+  EXPECT_EQ(body(f.client->Get("/api/scene"), 200)["revision"], 1);
+}
+
+TEST(ServeHttp, ACompressedBodyIsLimitedOnItsDecodedSize) {
+  Fixture f({}, 4096);
+  httplib::Client gz("127.0.0.1", f.server->port());
+  gz.set_compress(true);  // Content-Encoding: gzip; 100 kB of spaces are ~150 bytes
+  const json r = body(gz.Put("/api/scene", std::string(100000, ' '), "application/json"), 413);
+  EXPECT_NE(r["error"].get<std::string>().find("after decompression"), std::string::npos) << r;
+  // Under the limit, a compressed body is fine.
+  json scene = body(f.client->Get("/api/scene"), 200)["scene"];
+  scene["falloff"] = 14;
+  EXPECT_EQ(body(gz.Put("/api/scene", scene.dump(), "application/json"), 200)["scene"]["falloff"], 14);
+}
+
+TEST(ServeHttp, SlowClientsAreCutOffAndStatusAnswersMeanwhile) {
+  Fixture f({}, 64u << 20, [](SessionOptions&, ServerOptions& o) {
+    o.request_timeout = 1;
+    o.threads = 4;
+  });
+  ASSERT_TRUE(f.session->wait_idle(60));
+  // Twice as many clients as workers, each dripping its headers a byte at a time.
+  std::atomic<bool> stop{false};
+  std::vector<std::future<bool>> drips;
+  for (int k = 0; k < 8; ++k)
+    drips.push_back(std::async(std::launch::async, [&] {
+      RawClient c(f.server->port(), 0.2);
+      c.send("GET /api/status HTTP/1.1\r\n");
+      for (int i = 0; i < 100 && !stop; ++i) {
+        if (!c.send("X")) return true;  // cut off
+        bool closed = false;
+        c.receive(&closed);
+        if (closed) return true;
+      }
+      return false;  // still connected after 20 s
+    }));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  httplib::Client status("127.0.0.1", f.server->port());
+  status.set_read_timeout(8, 0);
+  status.set_connection_timeout(8, 0);
+  EXPECT_EQ(body(status.Get("/api/status"), 200)["state"], "ready");
+  for (auto& d : drips) EXPECT_TRUE(d.get());
+  stop = true;
+}
+
+TEST(ServeHttp, StopIsPromptWhileRequestsWaitForAField) {
+  Fixture f({}, 64u << 20, [](SessionOptions& s, ServerOptions&) {
+    s.parallel = false;
+    s.field_wait_seconds = 600;
+  });
+  ASSERT_TRUE(f.session->wait_idle(60));
+  json big = body(f.client->Get("/api/scene"), 200)["scene"];
+  big["domain"]["grid"]["size"] = {129, 129};
+  big["time"]["frames"] = 400;
+  body(f.client->Put("/api/scene", big.dump(), "application/json"), 200);
+  // An export waiting for the big field, and an idle keep-alive connection.
+  auto waiting = std::async(std::launch::async, [&] {
+    httplib::Client c("127.0.0.1", f.server->port());
+    c.set_read_timeout(600, 0);
+    auto r = c.Post("/api/export", R"({"dir": "x"})", "application/json");
+    return r ? r->status : -1;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  auto stopped = std::async(std::launch::async, [&] { f.server->stop(); });
+  ASSERT_EQ(stopped.wait_for(std::chrono::seconds(30)), std::future_status::ready) << "stop() hangs";
+  ASSERT_EQ(waiting.wait_for(std::chrono::seconds(5)), std::future_status::ready);
+  const int st = waiting.get();
+  EXPECT_EQ(st, 503);  // answered, not cut
 }
 
 }  // namespace

@@ -14,8 +14,11 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <thread>
 #include <fstream>
+
+#include <unistd.h>
 
 namespace tvf::serve {
 namespace {
@@ -283,6 +286,149 @@ TEST(ServeSession, SurfacesTakePathlinesAndStreamlinesPickedOnThemAndRenderVideo
     EXPECT_EQ(v["file"], "sphere.mp4");
     EXPECT_GT(fs::file_size(dir / "sphere.mp4"), 0u);
   }
+}
+
+// A design whose solve takes a while (frame by frame, 129², 400 frames), started and
+// under way when this returns.
+long long start_slow_solve(Session& s) {
+  json big = s.scene()["scene"];
+  big["domain"]["grid"]["size"] = {129, 129};
+  big["time"]["frames"] = 400;
+  const long long rev = s.put_scene(big)["revision"];
+  const auto start = std::chrono::steady_clock::now();
+  while (s.status()["progress"][0].get<int>() < 1) {
+    if (std::chrono::steady_clock::now() - start > std::chrono::seconds(60)) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return rev;
+}
+
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const RequestError& e) {
+    return std::to_string(e.status()) + " " + e.what();
+  }
+  return "no error";
+}
+
+TEST(ServeSession, AChangeMadeOnAStaleRevisionIsRefusedAndNothingIsLost) {
+  // Two tabs read revision r. Tab A places a sink; tab B, still on r, places a saddle:
+  // B's change is refused (412) instead of replacing A's scene, and B, reloading,
+  // makes it again on A's revision.
+  test::TempDir dir;
+  Session s(options_in(dir));
+  const json seen = s.scene();
+  const long long r = seen["revision"];
+  json a = seen["scene"];
+  a["elements"].push_back({{"kind", "singular"}, {"type", "sink"}, {"path", {{0.5, 0.5, 0}}}});
+  json b = seen["scene"];
+  b["elements"].push_back({{"kind", "singular"}, {"type", "saddle"}, {"path", {{-0.5, 0.5, 0}}}});
+  EXPECT_EQ(s.put_scene(a, r)["revision"], r + 1);
+  const std::string refused = message_of([&] { s.put_scene(b, r); });
+  EXPECT_EQ(refused.substr(0, 4), "412 ") << refused;
+  EXPECT_NE(refused.find("revision " + std::to_string(r + 1)), std::string::npos) << refused;
+  EXPECT_EQ(load_scene((dir / "scene.json").string()).elements.size(), 5u);  // A's sink kept
+  EXPECT_EQ(s.revision(), r + 1);
+  // Undo, redo and edits name their revision too.
+  EXPECT_EQ(status_of([&] { s.undo(r); }), 412);
+  EXPECT_EQ(status_of([&] { s.redo(r); }), 412);
+  EXPECT_EQ(status_of([&] { s.edit({{"op", "smooth"}, {"strength", 0.3}}, r); }), 412);
+  EXPECT_EQ(status_of([&] { s.export_field({{"dir", "x"}, {"format", "npy"}}, r); }), 412);
+  EXPECT_EQ(s.revision(), r + 1);
+  // B reloads and makes its change on A's scene: both elements are kept.
+  json b2 = s.scene()["scene"];
+  b2["elements"].push_back(b["elements"].back());
+  EXPECT_EQ(s.put_scene(b2, r + 1)["revision"], r + 2);
+  EXPECT_EQ(load_scene((dir / "scene.json").string()).elements.size(), 6u);
+}
+
+TEST(ServeSession, ExportRightAfterAChangeWritesTheNewDesignAndNamesItsRevision) {
+  test::TempDir dir;
+  Session s(options_in(dir));
+  ASSERT_TRUE(s.wait_idle(60));
+  json next = s.scene()["scene"];
+  next["falloff"] = 13.0;
+  const long long rev = s.put_scene(next)["revision"];
+  // At once, while the new field is being solved: the export waits for it.
+  const json r = s.export_field({{"dir", "x"}, {"format", "npy"}});
+  EXPECT_EQ(r["revision"], rev);
+  EXPECT_EQ(load_scene((dir / "x" / "scene.json").string()).falloff, 13.0);
+}
+
+TEST(ServeSession, ExportsAndEditsDoNotWaitLongerThanAskedAndEndWhenTheSceneMovesOn) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.parallel = false;
+  o.field_wait_seconds = 0.05;
+  {
+    Session s(o);
+    ASSERT_TRUE(s.wait_idle(60));
+    const long long rev = start_slow_solve(s);
+    ASSERT_EQ(s.status()["state"], "running");
+    // Not ready within field_wait_seconds: 409 naming the revision, not the old field.
+    const std::string m = message_of([&] { s.export_field({{"dir", "x"}}); });
+    EXPECT_EQ(m.substr(0, 4), "409 ") << m;
+    EXPECT_NE(m.find("revision " + std::to_string(rev)), std::string::npos) << m;
+    EXPECT_FALSE(fs::exists(dir / "x"));
+    EXPECT_EQ(status_of([&] { s.edit({{"op", "smooth"}, {"strength", 0.3}}); }), 409);
+  }
+  // An edit waiting for the field of its revision ends (412) as soon as another change
+  // comes, holding nothing: status answers meanwhile and a second edit is not blocked.
+  test::TempDir dir2;  // the first folder's scene is the slow one now
+  o.dir = dir2.path();
+  o.field_wait_seconds = 600;
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(60));
+  const long long rev = start_slow_solve(s);
+  auto waiting = std::async(std::launch::async, [&] {
+    return message_of([&] { s.edit({{"op", "smooth"}, {"strength", 0.3}}, rev); });
+  });
+  auto second = std::async(std::launch::async, [&] {
+    return message_of([&] { s.edit({{"op", "smooth"}, {"strength", 0.2}}, rev); });
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(s.status()["state"], "running");
+  json small = s.scene()["scene"];
+  small["domain"]["grid"]["size"] = {17, 17};
+  small["time"]["frames"] = 11;
+  s.put_scene(small);
+  ASSERT_EQ(waiting.wait_for(std::chrono::seconds(30)), std::future_status::ready);
+  ASSERT_EQ(second.wait_for(std::chrono::seconds(30)), std::future_status::ready);
+  EXPECT_EQ(waiting.get().substr(0, 4), "412 ");
+  EXPECT_EQ(second.get().substr(0, 4), "412 ");
+  // Without a revision, the edit is applied to the newest field.
+  ASSERT_TRUE(s.wait_idle(60));
+  EXPECT_EQ(s.edit({{"op", "smooth"}, {"strength", 0.3}})["revision"], rev + 2);
+}
+
+TEST(ServeSession, InterruptEndsTheWaits) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.parallel = false;
+  o.field_wait_seconds = 600;
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(60));
+  start_slow_solve(s);
+  auto waiting = std::async(std::launch::async, [&] { return message_of([&] { s.export_field({{"dir", "x"}}); }); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  s.interrupt();
+  ASSERT_EQ(waiting.wait_for(std::chrono::seconds(30)), std::future_status::ready);
+  EXPECT_EQ(waiting.get().substr(0, 4), "503 ");
+}
+
+TEST(ServeSession, StaleTemporariesOfACrashedSessionAreRemovedAtStart) {
+  test::TempDir dir;
+  // A process id above Linux's pid_max runs nowhere; the parent of this test runs.
+  const std::string stale = ".scene.json.tmp-999999999-0";
+  const std::string live = ".scene.json.tmp-" + std::to_string(::getppid()) + "-3";
+  test::write_text(dir / stale, "{");
+  test::write_text(dir / live, "{");
+  test::write_text(dir / ".notes.tmp-x", "kept: not a temporary of ours");
+  Session s(options_in(dir));
+  EXPECT_FALSE(fs::exists(dir / stale));
+  EXPECT_TRUE(fs::exists(dir / live));
+  EXPECT_TRUE(fs::exists(dir / ".notes.tmp-x"));
 }
 
 }  // namespace

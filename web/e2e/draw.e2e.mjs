@@ -167,9 +167,9 @@ try {
   // ---- the video of the surface design, from the page's camera --------------------------
   await page.fill("#video-size", "160"); // small: the surface texture costs about a second a frame at 512²
   await page.click("#render-video");
-  await page.waitForFunction(() => !document.getElementById("message").textContent.startsWith("rendering"), null, { timeout: 240000 });
+  await page.waitForFunction(() => !/^(rendering|waiting)/.test(document.getElementById("message").textContent), null, { timeout: 240000 });
   const msg = (await page.textContent("#message")).trim();
-  check(/^rendered video\.mp4: 24 frames/.test(msg) && !(await page.locator("#message.error").count()), `the surface video is rendered: "${msg}"`);
+  check(/^rendered video\.mp4 of revision \d+: 24 frames/.test(msg) && !(await page.locator("#message.error").count()), `the surface video is rendered: "${msg}"`);
   check(fs.existsSync(`${dir}/video.mp4`) && fs.statSync(`${dir}/video.mp4`).size > 1000, "video.mp4 is in the working folder");
   check(await page.locator("#video-link").isVisible(), "the page links the video");
   try {

@@ -11,14 +11,15 @@ export class ApiError extends Error {
   }
 }
 
-async function call<T>(method: string, path: string, body?: unknown): Promise<T> {
+// `revision`: the scene revision a change was made on, sent as If-Match (the server
+// answers 412 when the scene has moved on since: another tab or client changed it).
+async function call<T>(method: string, path: string, body?: unknown, revision?: number): Promise<T> {
   const init: RequestInit = { method };
-  if (body !== undefined) {
-    init.body = JSON.stringify(body);
-    init.headers = { "Content-Type": "application/json" };
-  } else if (method !== "GET") {
-    init.headers = { "Content-Type": "application/json" };
-  }
+  const headers: Record<string, string> = {};
+  if (body !== undefined) init.body = JSON.stringify(body);
+  if (method !== "GET") headers["Content-Type"] = "application/json";
+  if (revision !== undefined) headers["If-Match"] = `"${revision}"`;
+  init.headers = headers;
   const res = await fetch(path, init);
   const text = await res.text();
   let json: unknown;
@@ -81,10 +82,10 @@ export interface Analysis {
 
 export const api = {
   scene: () => call<SceneState>("GET", "api/scene"),
-  putScene: (scene: Scene) => call<SceneState>("PUT", "api/scene", scene),
-  edit: (edit: unknown) => call<{ revision: number; summary: string }>("POST", "api/edit", edit),
-  undo: () => call<SceneState>("POST", "api/undo"),
-  redo: () => call<SceneState>("POST", "api/redo"),
+  putScene: (scene: Scene, revision?: number) => call<SceneState>("PUT", "api/scene", scene, revision),
+  edit: (edit: unknown, revision?: number) => call<{ revision: number; summary: string }>("POST", "api/edit", edit, revision),
+  undo: (revision?: number) => call<SceneState>("POST", "api/undo", undefined, revision),
+  redo: (revision?: number) => call<SceneState>("POST", "api/redo", undefined, revision),
   status: () => call<Status>("GET", "api/status"),
   mesh: () => call<MeshData>("GET", "api/mesh"),
   frame: (j: number) => call<Frame>("GET", `api/frame/${j}`),
@@ -92,10 +93,10 @@ export const api = {
   // The deformation key's translate that moves a streamline's seed to `to` (on surfaces in
   // the log-map chart around the seed, computed by the library).
   seedTranslation: (seed: number[], to: number[]) => call<{ translate: number[] }>("POST", "api/seed_translation", { seed, to }),
-  exportField: (format: string, dir: string) => call<{ files: string[] }>("POST", "api/export", { format, dir }),
+  exportField: (format: string, dir: string) => call<{ revision: number; files: string[] }>("POST", "api/export", { format, dir }),
   // On surfaces `camera` is the view to render from (SurfaceView.cameraView()).
   render: (name: string, size: number, camera?: { view: number[]; up: number[]; fov: number }, frames?: number) =>
-    call<{ file: string; frames: number; seconds: number }>("POST", "api/render", { name, size, ...(camera ?? {}), ...(frames ? { frames } : {}) }),
+    call<{ revision: number; file: string; frames: number; seconds: number }>("POST", "api/render", { name, size, ...(camera ?? {}), ...(frames ? { frames } : {}) }),
   async upload(file: File): Promise<{ file: string }> {
     const res = await fetch(`api/upload?name=${encodeURIComponent(file.name)}`, {
       method: "POST",

@@ -2,6 +2,7 @@
 // with a marker at the current time. uPlot draws it.
 import uPlot from "uplot";
 import "uplot/dist/uPlot.min.css";
+import { formatTicks } from "./ticks";
 
 export class CoherencePlot {
   private plot: uPlot | undefined;
@@ -23,7 +24,11 @@ export class CoherencePlot {
         legend: { show: false },
         cursor: { show: false },
         scales: { x: { time: false } },
-        axes: [{ label: "t" }, { label: "coherence", size: 60 }],
+        // Labels by magnitude: small coherences are not all "0".
+        axes: [
+          { label: "t", values: (_u, splits) => formatTicks(splits) },
+          { label: "coherence", size: 60, values: (_u, splits) => formatTicks(splits) },
+        ],
         series: [{}, { stroke: "#334155", width: 1.5 }],
         hooks: {
           draw: [

@@ -1,8 +1,12 @@
 // The tvf designer: the page that `tvf serve` serves. Every change is a new scene (or an
 // edit entry) sent to the server, which validates it, saves it, and re-solves in the
-// background; the page polls the status and shows the newest finished field.
+// background; the page polls the status and shows the newest finished field. Changes go
+// one at a time, each naming the revision it was made on (changes.ts): a quick burst of
+// clicks builds on itself, and a change refused because another tab changed the scene is
+// applied again on top of that change (or, when it cannot be, reported).
 import "./style.css";
 import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneState } from "./api";
+import { ChangeQueue } from "./changes";
 import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
 import { CoherencePlot } from "./coherence";
 import { lic, noise, type GridField } from "./lic";
@@ -124,22 +128,71 @@ function showDesignCurves() {
   }
 }
 
-async function change(next: S.Scene, what: string) {
+const queue = new ChangeQueue({
+  current: () => state.scene,
+  put: (s, revision) => api.putScene(s, revision),
+  reload: () => api.scene(),
+  show: showScene,
+});
+
+function otherClient(revision: number) {
+  return `another tab or client changed the design (now revision ${revision})`;
+}
+
+// A change of the scene: `mutate` is applied to the newest scene when the change's turn
+// comes. `rebase` false: a change that replaces the design (new, another domain, typed
+// JSON) is not applied over another tab's change but reported.
+async function change(mutate: (s: S.Scene) => S.Scene, what: string, rebase = true) {
   try {
-    showScene(await api.putScene(next));
-    say(what);
+    const r = await queue.change(mutate, rebase);
+    if (!r.applied) say(`${otherClient(r.state.revision)}: the page shows it, and "${what}" was not applied; do it again if you still want it`, true);
+    else if (r.rebased) say(`${what} (${otherClient(r.state.revision - 1)} meanwhile: applied on top of that change)`);
+    else say(what);
   } catch (e) {
     say((e as Error).message, true);
     redraw();
   }
 }
 
+// Export, render and edits use the field of the current revision: while it is being
+// solved the server answers 409 after a while, and the page waits and asks again.
+async function withField<T>(task: () => Promise<T>): Promise<T> {
+  for (let k = 0; ; ++k) {
+    try {
+      return await task();
+    } catch (e) {
+      if (!(e instanceof ApiError && e.status === 409 && /still being generated/.test(e.message)) || k >= 60) throw e;
+      say(`waiting for the field of revision ${state.scene?.revision}…`);
+      await new Promise((r) => setTimeout(r, 1000));
+    }
+  }
+}
+
+// Runs a request that names the current revision after the queued changes; a 412 (the
+// scene changed elsewhere) reloads the scene and says that `what` was not done.
+async function onCurrentRevision<T>(what: string, task: (revision: number) => Promise<T>): Promise<T | undefined> {
+  return queue.run(async () => {
+    try {
+      return await task(state.scene!.revision);
+    } catch (e) {
+      if (!(e instanceof ApiError && e.status === 412)) throw e;
+      const fresh = await api.scene();
+      showScene(fresh);
+      say(`${otherClient(fresh.revision)} before the ${what}: the ${what} was not applied; the page shows the new design`, true);
+      return undefined;
+    }
+  });
+}
+
 async function edit(entry: unknown) {
   say("applying the edit…");
   try {
-    const r = await api.edit(entry);
-    say(r.summary);
-    showScene(await api.scene());
+    const r = await onCurrentRevision("edit", async (revision) => {
+      const done = await withField(() => api.edit(entry, revision));
+      showScene(await api.scene());
+      return done;
+    });
+    if (r) say(r.summary);
   } catch (e) {
     say((e as Error).message, true);
   }
@@ -153,6 +206,15 @@ async function poll() {
     if (st.state === "running") label.textContent = `rev ${st.revision} · solving ${st.progress[0]}/${st.progress[1]}…`;
     else if (st.state === "failed") label.textContent = `rev ${st.revision} · failed: ${st.error}`;
     else label.textContent = `rev ${st.revision} · ready in ${(st.seconds ?? 0).toFixed(2)} s`;
+    // Another tab or client changed the scene: show it (not while changes of ours are
+    // under way or an element is dragged).
+    if (state.scene && st.revision !== state.scene.revision && !queue.busy && !state.drag) {
+      const fresh = await api.scene();
+      if (!queue.busy && !state.drag && fresh.revision !== state.scene.revision) {
+        showScene(fresh);
+        say(`${otherClient(fresh.revision)}: the page shows it`);
+      }
+    }
     if (st.result_revision !== state.resultRevision && st.result_revision > 0) await loadResult(st.result_revision);
   } catch (e) {
     $("status").textContent = `server unreachable (${(e as Error).message})`;
@@ -493,7 +555,7 @@ canvas.addEventListener("pointerup", (e) => {
   if (state.drag) {
     const d = state.drag;
     state.drag = undefined;
-    if (JSON.stringify(d.scene) !== JSON.stringify(scene())) void change(d.scene, "moved");
+    if (JSON.stringify(d.scene) !== JSON.stringify(scene())) void change((s) => S.moveHandle(s, d.handle, p), "moved");
     return;
   }
   const stroke = state.stroke;
@@ -504,28 +566,30 @@ canvas.addEventListener("pointerup", (e) => {
   const t = Number(currentTime().toFixed(4));
   const [ts, te] = lifeSpan();
   try {
+    const type = selectedType();
     if (state.tool === "singular") {
-      if (keyframeMode()) void change(S.addKeyframeSingular(scene(), t, selectedType(), stroke[0]), `${selectedType()} in the key frame at t = ${t}`);
-      else if (isClick) void change(S.addSingular(scene(), selectedType(), stroke[0], undefined, ts), `fixed ${selectedType()} placed`);
-      else void change(S.addSingular(scene(), selectedType(), stroke[0], p, ts, te), `${selectedType()} moving from t = ${ts} to ${te}`);
+      if (keyframeMode()) void change((s) => S.addKeyframeSingular(s, t, type, stroke[0]), `${type} in the key frame at t = ${t}`);
+      else if (isClick) void change((s) => S.addSingular(s, type, stroke[0], undefined, ts), `fixed ${type} placed`);
+      // A drag: the element moves along the dragged curve (a few of its points).
+      else void change((s) => S.addSingularPath(s, type, resample(stroke, 6), ts, te), `${type} moving along the drawn curve from t = ${ts} to ${te}`);
     } else if (state.tool === "pathline") {
       if (isClick) return say("drag to draw a pathline", true);
-      void change(S.addPathline(scene(), resample(stroke, 6), ts, te), `pathline from t = ${ts} to ${te}`);
+      void change((s) => S.addPathline(s, resample(stroke, 6), ts, te), `pathline from t = ${ts} to ${te}`);
     } else if (state.tool === "streamline") {
       if (isClick) return say("drag to draw a streamline", true);
-      void change(S.addKeyframeStreamline(scene(), t, resample(stroke, 8)), `streamline in the key frame at t = ${t}`);
+      void change((s) => S.addKeyframeStreamline(s, t, resample(stroke, 8)), `streamline in the key frame at t = ${t}`);
     } else if (state.tool === "deform") {
       if (isClick) return say("drag from the streamline's seed to where it should be at the current time", true);
       const turn = Number($<HTMLInputElement>("deform-turn").value) || 0;
       const d = rounded([p[0] - stroke[0][0], p[1] - stroke[0][1]]);
-      void change(S.addDeformStreamline(scene(), stroke[0], d, t, turn), `streamline from (${stroke[0].join(", ")}) moved by (${d.join(", ")}) at t = ${t}`);
+      void change((s) => S.addDeformStreamline(s, stroke[0], d, t, turn), `streamline from (${stroke[0].join(", ")}) moved by (${d.join(", ")}) at t = ${t}`);
     } else if (state.tool === "bifurcation") {
-      const type = $<HTMLSelectElement>("bifurcation-type").value;
+      const kind = $<HTMLSelectElement>("bifurcation-type").value;
       const dx = p[0] - stroke[0][0];
       const dy = p[1] - stroke[0][1];
       const scale = isClick ? 0.25 : Math.max(0.05, Math.round(Math.hypot(dx, dy) * 1000) / 1000);
       const angle = isClick ? 0 : Math.round(Math.atan2(dy, dx) * 1000) / 1000;
-      void change(S.addBifurcation(scene(), type, stroke[0], t, scale, angle), `${type} at t = ${t}`);
+      void change((s) => S.addBifurcation(s, kind, stroke[0], t, scale, angle), `${kind} at t = ${t}`);
     }
   } catch (err) {
     say((err as Error).message, true);
@@ -537,11 +601,14 @@ function surfacePick(p: number[]) {
   if (!state.scene) return;
   const at = rounded(p);
   const t = Number(currentTime().toFixed(4));
+  const type = selectedType();
   if (state.tool === "singular") {
-    if (keyframeMode()) void change(S.addKeyframeSingular(scene(), t, selectedType(), at), `${selectedType()} in the key frame at t = ${t}`);
-    else void change(S.addSingular(scene(), selectedType(), at, undefined, lifeSpan()[0]), `fixed ${selectedType()} placed`);
+    const t0 = lifeSpan()[0];
+    if (keyframeMode()) void change((s) => S.addKeyframeSingular(s, t, type, at), `${type} in the key frame at t = ${t}`);
+    else void change((s) => S.addSingular(s, type, at, undefined, t0), `fixed ${type} placed`);
   } else if (state.tool === "bifurcation") {
-    void change(S.addBifurcation(scene(), $<HTMLSelectElement>("bifurcation-type").value, at, t), "bifurcation placed");
+    const kind = $<HTMLSelectElement>("bifurcation-type").value;
+    void change((s) => S.addBifurcation(s, kind, at, t), "bifurcation placed");
   } else if (state.tool === "cancel") {
     pickForCancel(at, 0.2);
   } else if (state.tool === "select") {
@@ -573,7 +640,7 @@ async function surfaceDeform(points: number[][], t: number) {
   try {
     const { translate } = await api.seedTranslation(seed, to);
     const d = rounded(translate);
-    await change(S.addDeformStreamline(scene(), seed, d, t, turn), `streamline from (${seed.join(", ")}) moved to (${to.join(", ")}) at t = ${t}`);
+    await change((s) => S.addDeformStreamline(s, seed, d, t, turn), `streamline from (${seed.join(", ")}) moved to (${to.join(", ")}) at t = ${t}`);
   } catch (err) {
     say((err as Error).message, true);
   }
@@ -587,9 +654,9 @@ function surfaceStroke(points: number[][]) {
   try {
     if (points.length < 2) return say(`drag on the surface to draw a ${state.tool}`, true);
     if (state.tool === "pathline")
-      void change(S.addPathline(scene(), resample(points, 8), ts, te), `pathline on the surface from t = ${ts} to ${te}`);
+      void change((s) => S.addPathline(s, resample(points, 8), ts, te), `pathline on the surface from t = ${ts} to ${te}`);
     else if (state.tool === "streamline")
-      void change(S.addKeyframeStreamline(scene(), t, resample(points, 10)), `streamline on the surface in the key frame at t = ${t}`);
+      void change((s) => S.addKeyframeStreamline(s, t, resample(points, 10)), `streamline on the surface in the key frame at t = ${t}`);
     else if (state.tool === "deform") void surfaceDeform(points, t);
   } catch (err) {
     say((err as Error).message, true);
@@ -604,7 +671,8 @@ spacetime.onStroke = (points) => {
     const line = spaceTimePathline(points, { min: [g.min[0], g.min[1]], max: [g.max[0], g.max[1]], range: [scene().time.range[0], scene().time.range[1]] });
     const t0 = line[0][2];
     const t1 = line[line.length - 1][2];
-    void change(S.addTimedPathline(scene(), line), `pathline drawn in space-time, from t = ${t0} to ${t1}`);
+    S.addTimedPathline(scene(), line); // checks the points now (throws)
+    void change((s) => S.addTimedPathline(s, line), `pathline drawn in space-time, from t = ${t0} to ${t1}`);
   } catch (err) {
     say((err as Error).message, true);
   }
@@ -614,21 +682,27 @@ function deleteSelected() {
   if (!state.selected) return say("select an element first (Select tool)", true);
   const h = state.selected;
   state.selected = undefined;
-  void change(S.removeHandle(scene(), h), "deleted");
+  void change((s) => S.removeHandle(s, h), "deleted");
 }
 
 async function undo() {
   try {
-    showScene(await api.undo());
-    say("undone");
+    const r = await onCurrentRevision("undo", (revision) => api.undo(revision));
+    if (r) {
+      showScene(r);
+      say("undone");
+    }
   } catch (e) {
     say((e as Error).message, true);
   }
 }
 async function redo() {
   try {
-    showScene(await api.redo());
-    say("redone");
+    const r = await onCurrentRevision("redo", (revision) => api.redo(revision));
+    if (r) {
+      showScene(r);
+      say("redone");
+    }
   } catch (e) {
     say((e as Error).message, true);
   }
@@ -674,23 +748,24 @@ $("redo").addEventListener("click", () => void redo());
 $("rotate-field").addEventListener("click", () => {
   const theta = Number($<HTMLInputElement>("field-turn").value);
   if (!Number.isFinite(theta)) return say("give the turn in radians", true);
-  void change(S.setDeformTransform(scene(), theta), `the field turns by ${theta} rad over the time range (deform generator)`);
+  void change((s) => S.setDeformTransform(s, theta), `the field turns by ${theta} rad over the time range (deform generator)`);
 });
-$("new").addEventListener("click", () => void change(S.emptyScene(), "new empty design on the 65² grid"));
-$<HTMLSelectElement>("generator").addEventListener("change", (e) =>
-  void change({ ...scene(), generator: (e.target as HTMLSelectElement).value }, "generator changed"),
-);
+$("new").addEventListener("click", () => void change(() => S.emptyScene(), "new empty design on the 65² grid", false));
+$<HTMLSelectElement>("generator").addEventListener("change", (e) => {
+  const generator = (e.target as HTMLSelectElement).value;
+  void change((s) => ({ ...s, generator }), "generator changed");
+});
 $<HTMLSelectElement>("domain").addEventListener("change", (e) => {
   const d = (e.target as HTMLSelectElement).value;
   const domain = d === "grid" ? S.emptyScene().domain : d === "sphere" ? { sphere: { subdivisions: 4, radius: 1 } } : { torus: {} };
-  void change({ ...scene(), domain, elements: [], keyframes: [], edits: [], deform: undefined }, `new design on the ${d}`);
+  void change((s) => ({ ...s, domain, elements: [], keyframes: [], edits: [], deform: undefined }), `new design on the ${d}`, false);
 });
 $<HTMLInputElement>("upload").addEventListener("change", async (e) => {
   const file = (e.target as HTMLInputElement).files?.[0];
   if (!file) return;
   try {
     const r = await api.upload(file);
-    await change({ ...scene(), domain: { mesh: r.file }, elements: [], keyframes: [], edits: [], deform: undefined }, `designing on ${r.file}`);
+    await change((s) => ({ ...s, domain: { mesh: r.file }, elements: [], keyframes: [], edits: [], deform: undefined }), `designing on ${r.file}`, false);
   } catch (err) {
     say((err as Error).message, true);
   }
@@ -708,20 +783,20 @@ $("apply-json").addEventListener("click", async () => {
   }
   state.jsonDirty = false;
   $("scene-dirty").textContent = "";
-  await change(parsed, "scene applied");
+  await change(() => parsed, "scene applied", false);
 });
 $("export-npy").addEventListener("click", async () => {
   try {
-    const r = await api.exportField("npy", "export");
-    say(`exported ${r.files.length} files into export/: ${r.files.join(", ")}`);
+    const r = await queue.run(() => withField(() => api.exportField("npy", "export")));
+    say(`exported revision ${r.revision}: ${r.files.length} files into export/: ${r.files.join(", ")}`);
   } catch (e) {
     say((e as Error).message, true);
   }
 });
 $("export-vtk").addEventListener("click", async () => {
   try {
-    const r = await api.exportField("vtk", "export");
-    say(`exported ${r.files.length} files into export/ (field.pvd opens in ParaView)`);
+    const r = await queue.run(() => withField(() => api.exportField("vtk", "export")));
+    say(`exported revision ${r.revision}: ${r.files.length} files into export/ (field.pvd opens in ParaView)`);
   } catch (e) {
     say((e as Error).message, true);
   }
@@ -731,11 +806,12 @@ $("render-video").addEventListener("click", async () => {
   if (!(size >= 16 && size <= 4096)) return say("the video size is a number of pixels in [16, 4096]", true);
   say(`rendering video.mp4 (${size}²${planar() ? "" : ", the surface from this camera"})…`);
   try {
-    const r = await api.render("video.mp4", size, planar() || !surface ? undefined : surface.cameraView());
+    const camera = planar() || !surface ? undefined : surface.cameraView();
+    const r = await queue.run(() => withField(() => api.render("video.mp4", size, camera)));
     const a = $<HTMLAnchorElement>("video-link");
-    a.href = `api/files/${r.file}?rev=${state.resultRevision}`;
+    a.href = `api/files/${r.file}?rev=${r.revision}`;
     a.hidden = false;
-    say(`rendered ${r.file}: ${r.frames} frames in ${r.seconds.toFixed(1)} s`);
+    say(`rendered ${r.file} of revision ${r.revision}: ${r.frames} frames in ${r.seconds.toFixed(1)} s`);
   } catch (e) {
     say((e as Error).message, true);
   }
@@ -756,6 +832,7 @@ document.addEventListener("keydown", (e) => {
   state,
   view: () => (planar() ? view() : undefined),
   spacetime: (p: number[]) => spacetime.toScreen(p),
+  spacetimeLabels: () => spacetime.timeLabels(),
   surface: (p: number[]) => surface?.toScreen(p),
 };
 

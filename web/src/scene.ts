@@ -124,6 +124,18 @@ export function addSingular(scene: Scene, type: string, from: Vec, to?: Vec, ts?
   return s;
 }
 
+// A singular element moving along a dragged curve: its points (a few, thinned from the
+// drag: stroke.ts's resample), spread evenly in time from ts to te. One point, or
+// te <= ts: fixed at the first point.
+export function addSingularPath(scene: Scene, type: string, points: Vec[], ts: number, te: number): Scene {
+  if (points.length < 2 || !(te > ts)) return addSingular(scene, type, points[0], undefined, ts);
+  const s = clone(scene);
+  const n = points.length;
+  const path = points.map((p, i) => [...p, Math.round((ts + ((te - ts) * i) / (n - 1)) * 1e6) / 1e6]);
+  (s.elements ??= []).push({ kind: "singular", type, path });
+  return s;
+}
+
 // A regular element along a drawn pathline: the drawn points, spread evenly in time from
 // ts to te (needs te > ts and at least two points).
 export function addPathline(scene: Scene, points: Vec[], ts: number, te: number, attach = 0): Scene {
@@ -195,23 +207,48 @@ export type Handle =
   | { kind: "element"; index: number; point: number } // elements[index], its path/pathline point or `at`
   | { kind: "keyframe"; key: number; index: number }; // keyframes[key].elements[index]
 
-// Position of a singular element at time t: its path interpolated linearly between
-// control points (for drawing; the generator's Hermite spline passes through the same
-// points), or undefined outside its life span.
+// Position on a path of control points [x, y, t] (or [x, y, z, t]) at time t, as the
+// engine moves elements (src/design/hermite_path.cpp): piecewise cubic Hermite in t with
+// Catmull–Rom tangents m_i = (p_{i+1} − p_{i−1}) / (t_{i+1} − t_{i−1}), one-sided at the
+// ends; t is clamped to the path's time span.
+export function hermitePosition(path: Vec[], t: number): Vec {
+  const n = path.length;
+  const d = path[0].length - 1;
+  const tt = (i: number) => path[i][d];
+  const pos = (i: number) => path[i].slice(0, d);
+  if (n === 1) return pos(0);
+  t = Math.min(Math.max(t, tt(0)), tt(n - 1));
+  const tangent = (i: number) => {
+    const a = i === 0 ? 0 : i - 1;
+    const b = i + 1 === n ? n - 1 : i + 1;
+    const dt = tt(b) - tt(a);
+    return pos(b).map((v, k) => (v - path[a][k]) / dt);
+  };
+  // Last point with t_i <= t, limited to the last segment's start.
+  let i = 0;
+  while (i + 1 < n && tt(i + 1) <= t) ++i;
+  i = Math.min(i, n - 2);
+  const h = tt(i + 1) - tt(i);
+  const s = (t - tt(i)) / h;
+  const s2 = s * s;
+  const s3 = s2 * s;
+  const h00 = 2 * s3 - 3 * s2 + 1;
+  const h10 = s3 - 2 * s2 + s;
+  const h01 = -2 * s3 + 3 * s2;
+  const h11 = s3 - s2;
+  const ma = tangent(i);
+  const mb = tangent(i + 1);
+  return pos(i).map((v, k) => h00 * v + h10 * h * ma[k] + h01 * path[i + 1][k] + h11 * h * mb[k]);
+}
+
+// Position of a singular element at time t, on the engine's path (hermitePosition), or
+// undefined outside its life span.
 export function singularPosition(e: SingularElement, t: number): Vec | undefined {
   const p = e.path;
   if (p.length === 1) return p[0].slice(0, -1);
   const tt = (q: Vec) => q[q.length - 1];
   if (t < tt(p[0]) - 1e-9 || t > tt(p[p.length - 1]) + 1e-9) return undefined;
-  for (let i = 0; i + 1 < p.length; ++i) {
-    const a = p[i];
-    const b = p[i + 1];
-    if (t <= tt(b) + 1e-9) {
-      const w = tt(b) > tt(a) ? (t - tt(a)) / (tt(b) - tt(a)) : 0;
-      return a.slice(0, -1).map((v, k) => v + w * (b[k] - v));
-    }
-  }
-  return p[p.length - 1].slice(0, -1);
+  return hermitePosition(p, t);
 }
 
 // Handles visible at time t with their positions.

@@ -10,6 +10,27 @@ import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import type { Analysis } from "./api";
 import { BIFURCATION_COLOR, PATHLINE_COLOR, typeColor } from "./colors";
 import { intersect, timePlane, uprightPlane, type Plane, type Ray, type V3 } from "./spacetime_draw";
+import { formatTicks, niceTicks } from "./ticks";
+
+// A label that always faces the camera: text drawn on a canvas texture.
+function textSprite(text: string, height = 0.14): THREE.Sprite {
+  const c = document.createElement("canvas");
+  const px = 40;
+  const ctx = c.getContext("2d")!;
+  ctx.font = `${px}px sans-serif`;
+  c.width = Math.ceil(ctx.measureText(text).width) + 8;
+  c.height = px + 12;
+  ctx.font = `${px}px sans-serif`;
+  ctx.fillStyle = "#0f172a";
+  ctx.textBaseline = "middle";
+  ctx.fillText(text, 4, c.height / 2);
+  const texture = new THREE.CanvasTexture(c);
+  texture.minFilter = THREE.LinearFilter;
+  const sprite = new THREE.Sprite(new THREE.SpriteMaterial({ map: texture, depthTest: false, transparent: true }));
+  sprite.scale.set((height * c.width) / c.height, height, 1);
+  sprite.renderOrder = 3;
+  return sprite;
+}
 
 export class SpaceTimeView {
   private readonly renderer: THREE.WebGLRenderer;
@@ -91,6 +112,17 @@ export class SpaceTimeView {
     const v = this.map(p[0], p[1], p[2]).project(this.camera);
     const c = this.renderer.domElement;
     return [((v.x + 1) / 2) * c.clientWidth, ((1 - v.y) / 2) * c.clientHeight];
+  }
+
+  // The time axis' labels: [text, screen position] (for tests).
+  timeLabels(): { t: number; at: [number, number] }[] {
+    return this.content.children
+      .filter((c) => c.userData.tick !== undefined)
+      .map((c) => {
+        const v = c.position.clone().project(this.camera);
+        const el = this.renderer.domElement;
+        return { t: c.userData.tick as number, at: [((v.x + 1) / 2) * el.clientWidth, ((1 - v.y) / 2) * el.clientHeight] as [number, number] };
+      });
   }
 
   // The design's pathlines (each a list of [x, y, t] points), drawn over the paths.
@@ -186,7 +218,9 @@ export class SpaceTimeView {
       this.content.remove(child);
       const m = child as THREE.Mesh;
       m.geometry?.dispose();
-      (m.material as THREE.Material | undefined)?.dispose?.();
+      const material = m.material as THREE.Material & { map?: THREE.Texture };
+      material?.map?.dispose();
+      material?.dispose?.();
     }
     // The domain's rectangle at the first and last time, and its corners' edges.
     const corners = [
@@ -200,6 +234,24 @@ export class SpaceTimeView {
       for (let k = 0; k < 4; ++k) box.push(this.map(corners[k][0], corners[k][1], t), this.map(corners[(k + 1) % 4][0], corners[(k + 1) % 4][1], t));
     for (const c of corners) box.push(this.map(c[0], c[1], range[0]), this.map(c[0], c[1], range[1]));
     this.content.add(new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(box), new THREE.LineBasicMaterial({ color: 0x94a3b8 })));
+    // The time axis: ticks and labels along the edge nearest the camera, and its name.
+    const ticks = niceTicks(range[0], range[1], 5);
+    const labels = formatTicks(ticks);
+    const edge = [max[0], min[1]];
+    const out = this.map(edge[0], edge[1], range[0]).clone().normalize().setZ(0).multiplyScalar(0.06);
+    const marks: THREE.Vector3[] = [];
+    ticks.forEach((t, k) => {
+      const at = this.map(edge[0], edge[1], t);
+      marks.push(at, at.clone().add(out));
+      const label = textSprite(labels[k]);
+      label.position.copy(at.clone().add(out.clone().multiplyScalar(3.2)));
+      label.userData.tick = t;
+      this.content.add(label);
+    });
+    this.content.add(new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(marks), new THREE.LineBasicMaterial({ color: 0x334155 })));
+    const name = textSprite("t", 0.18);
+    name.position.copy(this.map(edge[0], edge[1], range[1]).add(out.clone().multiplyScalar(3.2)).add(new THREE.Vector3(0, 0, 0.22)));
+    this.content.add(name);
     for (const path of analysis.paths) {
       const pts = path.points.map((p) => this.map(p[0], p[1], p[3]));
       if (pts.length < 2) continue;

@@ -113,3 +113,26 @@ describe("deformation", () => {
     ]);
   });
 });
+
+describe("moving elements", () => {
+  it("are drawn on the engine's Hermite path (Catmull–Rom tangents), not on straight segments", () => {
+    // (0, 0) at t = 0, (1, 0) at 0.5, (1, 1) at 1: tangents (2, 0) and (1, 1) at the first
+    // two points; at t = 0.25 the Hermite basis (½, ⅛, ½, −⅛) gives (0.5625, −0.0625).
+    const e: S.SingularElement = { kind: "singular", type: "source", path: [[0, 0, 0], [1, 0, 0.5], [1, 1, 1]] };
+    const p = S.singularPosition(e, 0.25)!;
+    expect(p[0]).toBeCloseTo(0.5625, 12);
+    expect(p[1]).toBeCloseTo(-0.0625, 12);
+    // Through the control points, clamped to the life span, and 3-D points on surfaces.
+    expect(S.singularPosition(e, 0.5)).toEqual([1, 0]);
+    expect(S.singularPosition(e, 1.5)).toBeUndefined();
+    expect(S.hermitePosition([[0, 0, 1, 0], [0, 1, 0, 1]], 0.5)).toEqual([0, 0.5, 0.5]);
+    // Two points: a straight path at constant speed, as before.
+    expect(S.hermitePosition([[0, 0, 0], [1, 2, 1]], 0.25)).toEqual([0.25, 0.5]);
+  });
+
+  it("keep the dragged curve's points, thinned, over their life span", () => {
+    const s = S.addSingularPath(S.emptyScene(), "sink", [[0, 0], [0.5, 0.2], [1, 0]], 0.2, 0.6);
+    expect((s.elements![0] as S.SingularElement).path).toEqual([[0, 0, 0.2], [0.5, 0.2, 0.4], [1, 0, 0.6]]);
+    expect((S.addSingularPath(S.emptyScene(), "sink", [[0, 0]], 0.2, 0.6).elements![0] as S.SingularElement).path).toEqual([[0, 0, 0.2]]);
+  });
+});

@@ -5,7 +5,14 @@
 // socket).
 //
 // Safety: binds to 127.0.0.1 unless told otherwise; request bodies are limited
-// (ServerOptions::max_body); API writes need Content-Type application/json (a page of
+// (ServerOptions::max_body, counted as they are read, after decompression, whatever the
+// transfer encoding: reading stops at the limit and the connection is closed after the
+// 413); slow clients are cut off (a request's headers and body must arrive within
+// request_timeout of the connection or the last answer, and each answer is written
+// within answer_timeout); one request per connection (no keep-alive: an unread body is
+// never read as a next request); the worker pool (threads) is larger than the bursts of
+// waiting requests, and waits for a field are bounded and hold no lock, so status
+// answers while edits and renders wait; API writes need Content-Type application/json (a page of
 // another site cannot send that without a CORS preflight, which is never granted); on a
 // loopback address, requests whose Host header is not a loopback name are refused (DNS
 // rebinding); every error is a JSON body {"error": "..."} with a 4xx status, and an
@@ -22,7 +29,10 @@ struct ServerOptions {
   std::string host = "127.0.0.1";
   int port = 8080;                       // 0: any free port (see HttpServer::port())
   std::filesystem::path web_root;        // the built front end; empty or missing: a note page
-  std::size_t max_body = 64u << 20;      // bytes (uploaded meshes are the large requests)
+  std::size_t max_body = 64u << 20;      // bytes, after decoding (uploaded meshes are the large requests)
+  double request_timeout = 10;           // seconds to send a request (headers and body)
+  double answer_timeout = 60;            // seconds for a client to take an answer
+  int threads = 32;                      // requests served at once
 };
 
 class HttpServer {
@@ -39,6 +49,8 @@ public:
   void run();
   // Serves in a background thread (tests).
   void start();
+  // Stops listening, cuts open connections, wakes requests waiting for a field (they
+  // answer 503) and joins the workers: prompt (a video being rendered is finished first).
   void stop();
 
 private:

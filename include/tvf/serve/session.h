@@ -13,6 +13,10 @@
 //   factorizations, the space-time solver and its temporal modes) and the last
 //   space-time solution are kept between solves (GenerateCache), so a re-solve after a
 //   small change starts warm.
+// - Revisions: every change names the revision it was made on (see put_scene); a change
+//   on a stale revision is refused (412), so two clients never overwrite each other.
+// - Start: stale temporary files of a crashed session (".scene.json.tmp-PID-N" of a
+//   process that no longer runs) are removed from the working folder.
 // - Paths: every file the session reads or writes (the scene, meshes and key-frame field
 //   files named by the scene, exports, videos, uploads) lies inside the working folder;
 //   a path that leaves it is refused.
@@ -20,6 +24,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -27,8 +32,8 @@
 namespace tvf::serve {
 
 // A request that cannot be served: an HTTP status (400 bad input, 403 path outside the
-// working folder, 404 missing, 409 conflict/no field yet, 422 refused edit, 503 busy) and
-// one sentence saying why.
+// working folder, 404 missing, 409 conflict/no field yet, 412 made on a revision that is
+// no longer current, 422 refused edit, 503 busy or stopping) and one sentence saying why.
 class RequestError : public Error {
 public:
   RequestError(int status, const std::string& message) : Error(message), status_(status) {}
@@ -45,8 +50,15 @@ struct SessionOptions {
   std::string initial_scene;
   bool parallel = true;                // frames in parallel while generating
   int history = 200;                   // undo steps kept (in memory)
-  double edit_wait_seconds = 120;      // how long an edit waits for the running solve
+  // How long an edit, an export or a render waits for the field of the revision it was
+  // asked for (the running solve) before answering 409 "still being generated". The
+  // wait holds no lock: status, reads and other changes go on meanwhile.
+  double field_wait_seconds = 20;
 };
+
+// The revision a change was made on (HTTP If-Match): kAnyRevision accepts the change on
+// whatever revision is current (scripts that do not send If-Match).
+inline constexpr long long kAnyRevision = 0;
 
 class Session {
 public:
@@ -63,17 +75,29 @@ public:
   // {"revision", "scene", "text" (the file's text, scene_to_text), "path", "can_undo",
   //  "can_redo"}
   nlohmann::json scene() const;
+  // Every change below takes `on_revision`, the revision the client made it on (HTTP
+  // If-Match). When that is no longer the current revision (another tab or client
+  // changed the scene since), the change is refused with RequestError(412) naming both
+  // revisions, and nothing changes: no change is lost silently. kAnyRevision: applied to
+  // the current scene, whatever it is.
+  //
   // Replaces the whole scene (validated; its edits are checked when it generates).
   // Returns scene(). Throws RequestError(400) naming the JSON path of a problem.
-  nlohmann::json put_scene(const nlohmann::json& scene);
+  nlohmann::json put_scene(const nlohmann::json& scene, long long on_revision = kAnyRevision);
   // Appends one entry to the scene's `edits` (DESIGN §7: {"op": "cancel", "frame": 40,
   // "pair": [[x, y], [x, y]]}, remove_bifurcation, move_bifurcation, smooth). It is
-  // applied to the current field first (waiting for a running solve); a refused edit is
-  // RequestError(422) and changes nothing. The edited field becomes the current result at
-  // once, without regenerating. Returns {"revision", "summary"}.
-  nlohmann::json edit(const nlohmann::json& edit);
-  nlohmann::json undo();  // RequestError(409) when there is nothing to undo
-  nlohmann::json redo();
+  // applied to the field of the revision it was made on (waiting for that field up to
+  // field_wait_seconds, holding no lock: 409 when it is not ready by then, 412 as soon as
+  // the scene moves on); a refused edit is RequestError(422) and changes nothing. The
+  // edited field becomes the current result at once, without regenerating. With
+  // kAnyRevision an edit overtaken by another change is applied again to the newer field
+  // (up to four tries within field_wait_seconds).
+  // Returns {"revision", "summary"}.
+  nlohmann::json edit(const nlohmann::json& edit, long long on_revision = kAnyRevision);
+  nlohmann::json undo(long long on_revision = kAnyRevision);  // RequestError(409): nothing to undo
+  nlohmann::json redo(long long on_revision = kAnyRevision);
+  // The current revision (the scene's ETag).
+  long long revision() const;
 
   // {"revision", "result_revision", "state": "running" | "ready" | "failed",
   //  "progress": [done, total], "error", "cancelled" (solves stopped by newer changes so
@@ -92,10 +116,16 @@ public:
   // The analysis JSON of DESIGN §9 of the last result, plus "revision".
   nlohmann::json analysis() const;
 
+  // Export and render write the field of the current revision (following newer changes
+  // while they wait), or of `on_revision` (412 when that is no longer current): they wait
+  // for it up to field_wait_seconds while a solve runs, and answer RequestError(409)
+  // naming the revision when it is not ready by then, never the field of an older
+  // design. Their answers carry "revision".
+  //
   // Writes the field outputs of `tvf generate` (npy, native, and VTK unless format is
   // "npy") into the folder request["dir"] (default "export") inside the working folder.
-  // Returns {"files": [paths relative to the working folder]}.
-  nlohmann::json export_field(const nlohmann::json& request);
+  // Returns {"revision", "files": [paths relative to the working folder]}.
+  nlohmann::json export_field(const nlohmann::json& request, long long on_revision = kAnyRevision);
   // Renders the texture animation of the last result to request["name"] (default
   // "video.mp4"; .mp4 needs ffmpeg; a name without extension is a folder of PNG frames)
   // with request["size"] pixels (default 512), request["frames"] pictures (default: the
@@ -104,7 +134,7 @@ public:
   // request["view"] (direction from the mesh's centre to the camera), ["up"] and ["fov"]
   // (degrees) place the camera (the designer sends its own). One video at a time: a
   // second request while one renders is RequestError(503).
-  nlohmann::json render_video(const nlohmann::json& request);
+  nlohmann::json render_video(const nlohmann::json& request, long long on_revision = kAnyRevision);
   // The `translate` of a deform.streamlines key that moves the seed request["seed"] to
   // request["to"] (positions as the domain writes them), in the domain of the last
   // result (seed_translation, streamline_deform.h): {"translate": [x, y] or [x, y, z]}.
@@ -120,7 +150,13 @@ public:
   // leaves the folder (through "..", or a link).
   std::filesystem::path resolve(const std::string& relative) const;
 
+  // Wakes every request waiting for a field (they answer 503 "the server is stopping")
+  // and cancels the running solve; later waits end at once. For a prompt shutdown.
+  void interrupt();
+
 private:
+  nlohmann::json edit_on(const nlohmann::json& edit, long long on_revision,
+                         std::chrono::steady_clock::time_point deadline);
   struct State;
   std::unique_ptr<State> s_;
 };
