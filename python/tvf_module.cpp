@@ -61,6 +61,8 @@ void run_interruptible(const py::object& progress, const py::object& cancel, Wor
     done.store(d);
     total.store(t);
   };
+  // A `cancel` already set stops the work before it starts.
+  if (!cancel.is_none() && cancel.attr("is_set")().cast<bool>()) flag.store(true);
   std::thread worker([&] {
     try {
       work(options);
