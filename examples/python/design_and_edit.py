@@ -13,9 +13,11 @@ scene = {
     "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
     "time": {"frames": 21, "range": [0, 1]},
     "generator": "constrained",
+    "solver": {"region_radius": 0.15},
+    "falloff": 20,
     "elements": [
         {"kind": "regular", "pathline": [[-0.9, -0.3, 0], [-0.8, -0.3, 1]]},
-        {"kind": "singular", "type": "saddle", "path": [[-0.3, -0.3, 0], [-0.25, -0.3, 1]]},
+        {"kind": "singular", "jacobian": [[-1, 0], [0, 1]], "path": [[-0.3, -0.3, 0], [-0.25, -0.3, 1]]},
         {"kind": "singular", "type": "source", "path": [[0.2, -0.3, 0]]},
         {"kind": "singular", "type": "ccw_center", "path": [[0.1, 0.6, 0]]},
     ],
