@@ -72,3 +72,36 @@ endif()
 if(TVF_BUILD_BENCH)
   tvf_require(benchmark libbenchmark-dev)
 endif()
+
+# OpenVDB export of planar fields (field/animation_export.h, `tvf export --vdb`): Debian's
+# libopenvdb-dev, installed by scripts/install-deps.sh. Optional: without it tvf builds and
+# `tvf export --vdb` says which package to install. Its own FindOpenVDB.cmake would bring
+# a FindTBB that fights TBB's config, so the header and libraries are looked up directly
+# (libopenvdb needs Imath's half tables at link time).
+find_path(TVF_OPENVDB_INCLUDE_DIR openvdb/openvdb.h)
+find_library(TVF_OPENVDB_LIBRARY openvdb)
+pkg_check_modules(IMATH QUIET IMPORTED_TARGET Imath)
+if(TVF_OPENVDB_INCLUDE_DIR AND TVF_OPENVDB_LIBRARY AND IMATH_FOUND)
+  set(TVF_HAVE_OPENVDB ON)
+  add_library(tvf_openvdb INTERFACE IMPORTED)
+  target_link_libraries(tvf_openvdb INTERFACE ${TVF_OPENVDB_LIBRARY} PkgConfig::IMATH TBB::tbb)
+else()
+  set(TVF_HAVE_OPENVDB OFF)
+  message(WARNING "OpenVDB not found: `tvf export --vdb` is disabled (install the Debian package 'libopenvdb-dev', "
+                  "or run scripts/install-deps.sh)")
+endif()
+
+# The Python module (python/, DESIGN §12): pybind11 and NumPy from Debian. Not built with
+# the sanitizers (an ASan extension cannot be imported by a Python without ASan preloaded).
+if(TVF_BUILD_PYTHON)
+  # Debian's python3 (where python3-numpy is), not whatever python3 comes first on PATH.
+  if(NOT Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
+    set(Python3_EXECUTABLE /usr/bin/python3)
+  endif()
+  find_package(Python3 COMPONENTS Interpreter Development.Module QUIET)
+  if(NOT Python3_FOUND)
+    message(FATAL_ERROR "tvf's Python module needs Python 3 headers: install the Debian package 'python3-dev' "
+                        "(or run scripts/install-deps.sh; -DTVF_BUILD_PYTHON=OFF skips the module)")
+  endif()
+  tvf_require(pybind11 pybind11-dev CONFIG)
+endif()

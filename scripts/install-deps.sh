@@ -22,6 +22,9 @@ packages=(
   python3 python3-numpy python3-vtk9 python3-jsonschema  # tests read our outputs with NumPy, VTK and jsonschema
   libcgal-demo           # CGAL's sample meshes: the real surfaces of examples/04 (no meshes in git)
   libcpp-httplib-dev     # tvf serve: the designer's HTTP server
+  python3-dev pybind11-dev python3-pytest  # the Python module `tvf` (python/) and its tests
+  libopenvdb-dev         # tvf export --vdb: OpenVDB velocity grids for Houdini and Blender
+  python3-openvdb        # the tests read the VDB files back with OpenVDB's own reader
   chromium               # the designer's end-to-end test (web/e2e, playwright-core drives it)
 )
 # The designer's front end (web/) is built with npm; a Node.js that brings its own npm

@@ -3,12 +3,14 @@
 #include "default_scene.h"
 #include "design_check_output.h"
 #include "edit_command.h"
+#include "export_command.h"
 #include "progress.h"
 #include "render_command.h"
 #include "serve_command.h"
 #include "synth_command.h"
 
 #include "tvf/analysis/topology.h"
+#include "tvf/api/design.h"
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
 #include "tvf/design/design_check.h"
@@ -43,29 +45,29 @@ struct GenerateArgs {
   bool quiet = false;
 };
 
-int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
+int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
   const bool show = !args.quiet && cli::progress_wanted();
   cli::Progress progress(demo ? "tvf demo" : "tvf generate", show);
+  Design design(std::move(scene));
   progress.note("building the domain");
-  const auto space = make_design_space(scene);
-  if (space->repairs.changed() && !args.quiet)
+  const DesignSpace& space = design.space();
+  if (space.repairs.changed() && !args.quiet)
     std::fprintf(stderr, "%s: repaired the mesh: removed %d duplicate faces and %d unreferenced vertices\n",
-                 scene.resolved_mesh_path().c_str(), space->repairs.duplicate_faces_removed,
-                 space->repairs.unreferenced_vertices_removed);
+                 design.scene().resolved_mesh_path().c_str(), space.repairs.duplicate_faces_removed,
+                 space.repairs.unreferenced_vertices_removed);
 
   GenerateOptions options;
   options.progress = [&](int done, int total) { progress.update(done, total); };
-  GenerateReport report;
-  const Field field = generate(*space, scene, options, &report);
+  const Field& field = design.generate(options);
+  const GenerateReport& report = design.report();
 
   OutputOptions out_options;
   out_options.vtk = !args.no_vtk;
-  if (report.incompressible) out_options.incompressible = &*report.incompressible;
   out_options.on_step = [&](const std::string& what) { progress.note("writing " + what); };
-  auto files = write_field_outputs(args.out, *space, field, scene, out_options);
+  auto files = design.write_outputs(args.out, out_options);
   // The demo ends with what the field is for: a texture animation of it (planar scenes).
   std::string demo_video;
-  if (demo && space->planar()) {
+  if (demo && space.planar()) {
     if (ffmpeg_available()) {
       TextureAnimationOptions video;
       video.texture.size = 512;
@@ -73,7 +75,7 @@ int run_generate(const Scene& scene, const GenerateArgs& args, bool demo) {
       video.video = (fs::path(args.out) / "demo.mp4").string();
       progress.note("rendering demo.mp4");
       video.progress = [&](int done, int total) { progress.update(done, total); };
-      for (const auto& f : write_texture_animation(space->bundle(), field, video).files) files.push_back(f);
+      for (const auto& f : write_texture_animation(space.bundle(), field, video).files) files.push_back(f);
       demo_video = video.video;
     } else {
       std::fprintf(stderr, "note: ffmpeg is not installed, so the demo video was skipped "
@@ -120,44 +122,22 @@ struct AnalyzeArgs {
 int run_analyze(const AnalyzeArgs& args) {
   const bool show = !args.quiet && cli::progress_wanted();
   cli::Progress progress("tvf analyze", show);
-  const fs::path input(args.input);
-  std::error_code ec;
-  if (!fs::exists(input, ec))
-    throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
-                            "its field.tvff, or a scene file)", args.input));
-  Topology topology;
-  int vertices = 0;
-  Mesh mesh;
-  std::vector<std::string> warnings;
-  std::optional<DesignCheck> check;  // the field against its scene's design, when known
-  if (fs::is_directory(input, ec) || input.extension() == ".tvff") {
-    const fs::path file = fs::is_directory(input, ec) ? input / "field.tvff" : input;
-    if (!fs::exists(file, ec))
-      throw Error(fmt::format("{}: no field.tvff in this folder (write one with `tvf generate SCENE -o {}`)",
-                              args.input, args.input));
-    progress.note("reading the field");
-    const FieldFile ff = load_field_file(file.string());
-    const TangentBundle bundle(ff.mesh);
-    progress.note("analysing");
-    topology = analyze_topology(bundle, ff.field);
-    vertices = ff.mesh.num_vertices();
-    mesh = ff.mesh;
-    if (const auto scene = cli::scene_of_field(input, ff)) check = check_design(*scene, DesignSpace(ff.mesh), ff.field, topology);
-  } else {
-    const Scene scene = load_scene(args.input);
+  // A folder written by `tvf generate` (or its field.tvff) is read; a scene is generated.
+  Design design = Design::open(args.input);
+  if (!design.has_field()) {
     progress.note("building the domain");
-    const auto space = make_design_space(scene);
+    design.space();
     GenerateOptions options;
     options.progress = [&](int done, int total) { progress.update(done, total); };
-    GenerateReport report;
-    const Field field = generate(*space, scene, options, &report);
-    warnings = report.warnings;
-    progress.note("analysing");
-    topology = analyze_topology(space->bundle(), field);
-    vertices = space->mesh().num_vertices();
-    mesh = space->mesh();
-    check = check_design(scene, *space, field, topology);
+    design.generate(options);
   }
+  const std::vector<std::string>& warnings = design.report().warnings;
+  progress.note("analysing");
+  const Topology& topology = design.analyze();
+  const int vertices = design.field().num_vertices();
+  const Mesh& mesh = design.field_space()->mesh();
+  // The field against its scene's design, when the scene is known.
+  const std::optional<DesignCheck> check = design.check();
   progress.note("writing " + args.out);
   write_file_atomically(args.out, topology_to_json(topology).dump() + "\n");
   if (check) write_file_atomically(cli::design_check_path(args.out), design_check_to_json(*check).dump(2) + "\n");
@@ -251,6 +231,9 @@ int main(int argc, char** argv) {
   cli::EditArgs edit;
   auto* edit_cmd = cli::add_edit_command(app, edit);
 
+  cli::ExportArgs export_args;
+  auto* export_cmd = cli::add_export_command(app, export_args);
+
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
   cli::RenderCommand render(app);
   cli::ServeCommand serve(app);
@@ -267,6 +250,7 @@ int main(int argc, char** argv) {
     if (*analyze_cmd) return run_analyze(analyze);
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
     if (*edit_cmd) return cli::run_edit(edit);
+    if (*export_cmd) return cli::run_export(export_args);
     if (synth.selected()) return synth.run();
     if (render.selected()) return render.run();
     if (serve.selected()) return serve.run();

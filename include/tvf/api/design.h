@@ -1,0 +1,143 @@
+#pragma once
+// The library's entry point (issue 18, STYLE 15): one object for a whole design, which
+// the command line and the Python module call instead of assembling
+// load → domain → generate → analyze by hand, and one-shot functions for scripts
+// (generate_scene, analyze_field). geometry-central's HeatMethodDistanceSolver beside
+// computeHeatDistance is the model: a stateful object that keeps what it built, and a
+// plain function.
+//
+// A Design holds
+// - the scene (the whole design, edits included; DESIGN §10), with an undo/redo history;
+// - the domain built from it (DesignSpace: mesh, tangent bundle, log map), kept while the
+//   scene's domain is unchanged;
+// - the solver set-up kept between generations (GenerateCache: Laplacian, factorizations,
+//   the space-time solver and its last solution, so a re-solve after a small change
+//   starts warm);
+// - the field the current scene makes, its generation report and, once asked for, its
+//   topology (analysis/topology.h).
+// Everything is computed when first asked for and kept until the scene changes. A
+// Design is used from one thread at a time; GenerateOptions::cancel (set from another
+// thread) stops a running generation, which then leaves the Design as it was.
+//
+// Bad input throws tvf::Error with the sentence the command line prints (the file and
+// the JSON path); a refused edit or a cancelled generation changes nothing.
+#include "tvf/analysis/topology.h"
+#include "tvf/design/design_check.h"
+#include "tvf/design/design_space.h"
+#include "tvf/design/generate.h"
+#include "tvf/design/outputs.h"
+#include "tvf/design/scene.h"
+#include "tvf/edit/edits.h"
+#include "tvf/edit/field_editor.h"
+#include "tvf/field/field.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tvf {
+
+struct DesignOptions {
+  bool parallel = true;  // frames in parallel (generation, analysis, projection)
+  int history = 200;     // undo steps kept
+  // Undo steps that keep their field too (undo/redo then need no regeneration); older
+  // steps keep only their scene. A field costs 16 bytes per vertex and frame.
+  int kept_fields = 4;
+};
+
+class Design {
+public:
+  // A scene built in code or read by scene_json.h. Nothing is built yet.
+  explicit Design(Scene scene, DesignOptions options = {});
+  // A scene file, or a folder written by `tvf generate` (or its field.tvff). A folder's
+  // field is read, not regenerated, and its scene (DIR/scene.json, else the copy inside
+  // the field file) becomes the design's scene; a field file without any scene gives a
+  // Design that can analyze and export but not generate or edit. Throws tvf::Error
+  // naming `path` for a missing or invalid input.
+  static Design open(const std::string& path, DesignOptions options = {});
+  ~Design();
+  Design(Design&&) noexcept;
+  Design& operator=(Design&&) noexcept;
+
+  bool has_scene() const;
+  // The current scene. Throws tvf::Error when the Design was opened from a field file
+  // without a scene.
+  const Scene& scene() const;
+  // Replaces the scene (recorded in the history; the field is made again when next asked
+  // for; the domain is kept when the new scene's domain is the same).
+  void set_scene(Scene scene);
+  // The same from scene JSON, validated as a file would be (errors name `label` and the
+  // JSON path). Mesh paths resolve against the current scene's file.
+  void set_scene(const nlohmann::json& scene, const std::string& label = "scene");
+  // Writes the scene (atomically, scene_json.h's save_scene) to `path`, or to the file it
+  // was read from when `path` is empty.
+  void save(const std::string& path = "") const;
+
+  // The domain of the scene, built on first use (make_design_space).
+  const DesignSpace& space();
+
+  // The field of the current scene: generated (generator, edits, projection; generate.h)
+  // unless it is already there. options.cache is the Design's own; options.parallel is
+  // taken from DesignOptions. Throws GenerationCancelled when options.cancel became true
+  // (the Design is then as it was).
+  const Field& generate(GenerateOptions options = {});
+  bool has_field() const;  // the current scene's field is there (generate() returns at once)
+  // The field made last; throws tvf::Error when there is none.
+  const Field& field() const;
+  // The same field and the domain it lives on, shared: they stay valid, unchanged, after
+  // the Design moves on (how the Python module hands out numpy views without copies).
+  std::shared_ptr<const Field> field_ptr() const;
+  std::shared_ptr<const DesignSpace> field_space() const;
+  // What the last generation reported (empty for a field read from a file).
+  const GenerateReport& report() const;
+
+  // The topology of the field (singularities, paths, bifurcations, coherence), generating
+  // the field first if needed.
+  const Topology& analyze();
+  // The analysis JSON of DESIGN §9 (topology_to_json of analyze()).
+  nlohmann::json analysis_json();
+  // The design check (design_check.h) of the field against the scene; none without a scene.
+  std::optional<DesignCheck> check();
+
+  // Appends an edit to the scene's `edits` (DESIGN §7) after applying it to the current
+  // field (generated first if needed), exactly as `tvf edit` does: the edit acts on the
+  // field before the scene's "incompressible" projection, which is then applied again. A
+  // refused edit throws tvf::Error ("scene.json: refused to cancel …: why; the scene is
+  // unchanged") and changes nothing. The edited field is the current field at once.
+  EditReport edit(const Edit& edit);
+  // The same from one JSON entry ({"op": "cancel", "frame": 40, "pair": [[x, y], [x, y]]},
+  // …): validated with the scene, errors naming "edits[k]".
+  EditReport edit(const nlohmann::json& entry);
+  bool can_undo() const;
+  bool can_redo() const;
+  // Steps back to the scene before the last change (set_scene or edit), and its field when
+  // kept. Throws tvf::Error when there is nothing to undo / redo.
+  void undo();
+  void redo();
+
+  // Writes the outputs of `tvf generate` (outputs.h) into `dir`, generating first if needed.
+  std::vector<std::filesystem::path> write_outputs(const std::filesystem::path& dir, OutputOptions options = {});
+
+private:
+  struct State;
+  std::unique_ptr<State> s_;
+  explicit Design(std::unique_ptr<State> state);
+};
+
+// A field with the domain it lives on: what the one-shot functions return.
+struct GeneratedField {
+  std::shared_ptr<const DesignSpace> space;
+  Field field;
+  GenerateReport report;
+};
+
+// One-shot: the field of a scene (make_design_space, then generate()).
+GeneratedField generate_scene(const Scene& scene, const GenerateOptions& options = {});
+// One-shot: the topology of a field on its domain.
+Topology analyze_field(const DesignSpace& space, const Field& field, const TopologyOptions& options = {});
+
+}  // namespace tvf

@@ -1,0 +1,511 @@
+// The Python module `tvf` (DESIGN §12; docs/user_guide.md, "Python"): a thin client of
+// the library's facade (tvf/api/design.h). Scenes come in as dicts or paths, results go
+// out as numpy arrays and plain Python objects (the JSON of DESIGN §9 through `json`).
+// Long calls run on a worker thread while the calling thread keeps the GIL free, shows
+// progress and watches for Ctrl-C: a KeyboardInterrupt cancels the solve
+// (GenerateOptions::cancel) and is raised once the worker has stopped.
+#include "tvf/api/design.h"
+#include "tvf/core/error.h"
+#include "tvf/design/scene_json.h"
+#include "tvf/field/animation_export.h"
+#include "tvf/field/world_vectors.h"
+#include "tvf/integrate/pathline.h"
+#include "tvf/integrate/streamline.h"
+
+#include <pybind11/complex.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+namespace py = pybind11;
+using namespace tvf;
+
+namespace {
+
+// Raised when a `cancel` object asked a solve to stop (tvf.Cancelled).
+PyObject* cancelled_type = nullptr;
+
+// ---- JSON <-> Python (through the json module: exact and short) ----
+nlohmann::json to_json(const py::handle& obj) {
+  const std::string text = py::module_::import("json").attr("dumps")(obj).cast<std::string>();
+  return nlohmann::json::parse(text);
+}
+py::object to_python(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
+
+// ---- a long call off the Python thread ----
+// Runs `work(options)` on a worker thread. The calling thread waits with the GIL released,
+// every 50 ms takes it back to call `progress(done, total)` when it changed, to check
+// `cancel.is_set()` (any object with that method, e.g. threading.Event) and to let Python
+// handle signals. Ctrl-C (KeyboardInterrupt) or an exception from `progress` cancels the
+// work and is raised once it stopped; a set `cancel` raises tvf.Cancelled.
+template <class Work>
+void run_interruptible(const py::object& progress, const py::object& cancel, Work&& work) {
+  std::atomic<bool> flag{false};
+  std::atomic<int> done{0}, total{0};
+  std::mutex m;
+  std::condition_variable cv;
+  bool finished = false;
+  std::exception_ptr failure;
+  GenerateOptions options;
+  options.cancel = &flag;
+  options.progress = [&](int d, int t) {
+    done.store(d);
+    total.store(t);
+  };
+  // A `cancel` already set stops the work before it starts.
+  if (!cancel.is_none() && cancel.attr("is_set")().cast<bool>()) flag.store(true);
+  std::thread worker([&] {
+    try {
+      work(options);
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    std::lock_guard lock(m);
+    finished = true;
+    cv.notify_all();
+  });
+  std::optional<py::error_already_set> raised;
+  int shown_done = -1, shown_total = -1;
+  for (;;) {
+    bool over = false;
+    {
+      py::gil_scoped_release release;
+      std::unique_lock lock(m);
+      over = cv.wait_for(lock, std::chrono::milliseconds(50), [&] { return finished; });
+    }
+    if (!raised) {
+      try {
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        if (!progress.is_none() && (done.load() != shown_done || total.load() != shown_total)) {
+          shown_done = done.load();
+          shown_total = total.load();
+          progress(shown_done, shown_total);
+        }
+        if (!cancel.is_none() && cancel.attr("is_set")().cast<bool>()) flag.store(true);
+      } catch (py::error_already_set& e) {
+        raised.emplace(std::move(e));
+        flag.store(true);
+      }
+    }
+    if (over) break;
+  }
+  {
+    py::gil_scoped_release release;
+    worker.join();
+  }
+  if (raised) throw std::move(*raised);
+  if (failure) {
+    try {
+      std::rethrow_exception(failure);
+    } catch (const GenerationCancelled&) {
+      PyErr_SetString(cancelled_type, "generation cancelled");
+      throw py::error_already_set();
+    }
+  }
+}
+
+// ---- arrays ----
+// A read-only numpy view of `data`, kept alive by `owner`.
+template <class T>
+py::array view(const T* data, std::vector<py::ssize_t> shape, const py::object& owner) {
+  py::array a(py::dtype::of<T>(), std::move(shape), {}, data, owner);
+  a.attr("setflags")(py::arg("write") = false);
+  return a;
+}
+
+Scene scene_of(const py::object& scene) {
+  if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__"))
+    return load_scene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>());
+  if (py::isinstance<py::dict>(scene)) return scene_from_json(to_json(scene), "scene");
+  throw py::type_error("a scene is a dict (the scene JSON) or the path of a scene file");
+}
+
+py::dict report_dict(const GenerateReport& r) {
+  py::dict d;
+  d["method"] = r.method;
+  d["seconds"] = r.seconds;
+  d["residual"] = r.residual;
+  d["iterations"] = r.iterations;
+  d["frames"] = r.frames;
+  d["vertices"] = r.vertices;
+  d["warnings"] = r.warnings;
+  d["edits"] = r.edits;
+  return d;
+}
+
+// A generated field with its domain: what tvf.generate returns (tvf.Field).
+struct PyField {
+  std::shared_ptr<const DesignSpace> space;
+  std::shared_ptr<const Field> field;
+  GenerateReport report;
+  py::object vectors_cache;
+
+  const TangentBundle& bundle() const { return space->bundle(); }
+};
+
+Vec3 vec3_of(const std::vector<double>& p, const char* what) {
+  if (p.size() != 2 && p.size() != 3) throw py::value_error(std::string(what) + ": give [x, y] or [x, y, z]");
+  return {p[0], p[1], p.size() == 3 ? p[2] : 0.0};
+}
+
+py::dict curve_dict(const std::vector<Vec3>& points, const std::vector<double>* times) {
+  py::array_t<double> pts({static_cast<py::ssize_t>(points.size()), py::ssize_t{3}});
+  auto w = pts.mutable_unchecked<2>();
+  for (size_t i = 0; i < points.size(); ++i)
+    for (int k = 0; k < 3; ++k) w(static_cast<py::ssize_t>(i), k) = points[i][k];
+  py::dict d;
+  d["points"] = pts;
+  if (times) d["times"] = py::array_t<double>(static_cast<py::ssize_t>(times->size()), times->data());
+  return d;
+}
+
+std::vector<std::string> strings(const std::vector<std::filesystem::path>& paths) {
+  std::vector<std::string> out;
+  for (const auto& p : paths) out.push_back(p.string());
+  return out;
+}
+
+// A Design with its Python-side helpers (tvf.Design).
+struct PyDesign {
+  Design design;
+  explicit PyDesign(Design d) : design(std::move(d)) {}
+
+  std::shared_ptr<PyField> field() const {
+    auto f = std::make_shared<PyField>();
+    f->space = design.field_space();
+    f->field = design.field_ptr();
+    f->report = design.report();
+    return f;
+  }
+};
+
+py::dict edit_report_dict(const EditReport& r) {
+  py::dict d;
+  d["summary"] = r.summary;
+  d["key_frames"] = r.key_frames;
+  d["window"] = py::make_tuple(r.window_first, r.window_last);
+  d["region_faces"] = r.region_faces;
+  d["iterations"] = r.iterations;
+  d["residual"] = r.residual;
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_tvf, m) {
+  m.doc() = "tvf: design of time-varying vector fields on planar grids and surfaces (Chen et al., TVCG 2012).";
+
+  static py::exception<GenerationCancelled> cancelled(m, "Cancelled", PyExc_RuntimeError);
+  cancelled_type = cancelled.ptr();
+  cancelled.doc() = "Raised when a `cancel` object stopped a solve; the design is unchanged.";
+  // Bad input (tvf::Error) is a ValueError with the command line's sentence.
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const GenerationCancelled& e) {
+      PyErr_SetString(cancelled_type, e.what());
+    } catch (const Error& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    }
+  });
+
+  py::class_<PyField, std::shared_ptr<PyField>>(m, "Field", R"(A generated time-varying field and the domain it lives on.
+
+Arrays are read-only numpy views where the data allows (values, vertices, faces):
+  vectors   (N, |V|, 3) float32  world vectors, the values of field.npy
+  values    (N, |V|) complex128  the same vectors in each vertex's tangent basis
+            (vectors[j, v] = values[j, v].real * e1[v] + values[j, v].imag * e2[v])
+  e1, e2    (|V|, 3) float64     the tangent basis of every vertex
+  vertices  (|V|, 3) float64, faces (|F|, 3) int32, times (N,) float64)")
+      .def_property_readonly(
+          "vectors",
+          [](py::object self) {
+            auto& f = self.cast<PyField&>();
+            if (!f.vectors_cache) {
+              std::vector<float> w = world_vectors_f32(f.bundle(), *f.field);
+              py::array_t<float> a({static_cast<py::ssize_t>(f.field->frames()),
+                                    static_cast<py::ssize_t>(f.field->num_vertices()), py::ssize_t{3}});
+              std::copy(w.begin(), w.end(), a.mutable_data());
+              a.attr("setflags")(py::arg("write") = false);
+              f.vectors_cache = a;
+            }
+            return f.vectors_cache;
+          },
+          "(N, |V|, 3) float32 world vectors, frame-major: exactly the values `tvf generate` writes to field.npy.")
+      .def_property_readonly(
+          "values",
+          [](py::object self) {
+            auto& f = self.cast<PyField&>();
+            return view(f.field->data().data(),
+                        {static_cast<py::ssize_t>(f.field->frames()), static_cast<py::ssize_t>(f.field->num_vertices())},
+                        self);
+          },
+          "(N, |V|) complex128: the field in each vertex's tangent basis (e1, e2), the library's own form (no copy).")
+      .def_property_readonly(
+          "vertices",
+          [](py::object self) {
+            const auto& pos = self.cast<PyField&>().space->mesh().positions();
+            return view(pos.empty() ? nullptr : pos.front().data(), {static_cast<py::ssize_t>(pos.size()), 3}, self);
+          },
+          "(|V|, 3) float64 vertex positions (z = 0 on planar grids).")
+      .def_property_readonly(
+          "faces",
+          [](py::object self) {
+            const auto& faces = self.cast<PyField&>().space->mesh().faces();
+            return view(faces.empty() ? nullptr : faces.front().data(), {static_cast<py::ssize_t>(faces.size()), 3},
+                        self);
+          },
+          "(|F|, 3) int32 triangles (counter-clockwise).")
+      .def_property_readonly(
+          "times",
+          [](const PyField& f) {
+            py::array_t<double> t(f.field->frames());
+            for (int j = 0; j < f.field->frames(); ++j) t.mutable_at(j) = f.field->time().time(j);
+            return t;
+          },
+          "(N,) float64 design time of every frame.")
+      .def_property_readonly(
+          "e1",
+          [](const PyField& f) {
+            const int nv = f.field->num_vertices();
+            py::array_t<double> a({static_cast<py::ssize_t>(nv), py::ssize_t{3}});
+            for (int v = 0; v < nv; ++v)
+              for (int k = 0; k < 3; ++k) a.mutable_at(v, k) = f.bundle().vertex_e1(v)[k];
+            return a;
+          },
+          "(|V|, 3) float64 first tangent basis vector of every vertex.")
+      .def_property_readonly(
+          "e2",
+          [](const PyField& f) {
+            const int nv = f.field->num_vertices();
+            py::array_t<double> a({static_cast<py::ssize_t>(nv), py::ssize_t{3}});
+            for (int v = 0; v < nv; ++v)
+              for (int k = 0; k < 3; ++k) a.mutable_at(v, k) = f.bundle().vertex_e2(v)[k];
+            return a;
+          },
+          "(|V|, 3) float64 second tangent basis vector of every vertex.")
+      .def_property_readonly("frames", [](const PyField& f) { return f.field->frames(); }, "Number of frames N.")
+      .def_property_readonly("planar", [](const PyField& f) { return f.space->planar(); },
+                             "True on planar domains (z = 0 everywhere).")
+      .def_property_readonly("report", [](const PyField& f) { return report_dict(f.report); },
+                             "What generation reported: method, seconds, residual, iterations, warnings, edits.")
+      .def(
+          "streamline",
+          [](const PyField& f, const std::vector<double>& seed, double t, double step, double max_length) {
+            StreamlineOptions o;
+            o.step = step;
+            o.max_length = max_length;
+            const std::vector<cplx> values = values_at(*f.field, t);
+            const Streamline s = trace_streamline(f.bundle(), values, vec3_of(seed, "seed"), o);
+            py::dict d = curve_dict(s.points, nullptr);
+            d["seed"] = s.seed;
+            d["stop_backward"] = to_string(s.stop_backward);
+            d["stop_forward"] = to_string(s.stop_forward);
+            return d;
+          },
+          py::arg("seed"), py::arg("t") = 0.0, py::kw_only(), py::arg("step") = 0.0, py::arg("max_length") = 0.0,
+          R"(The streamline through `seed` ([x, y] or [x, y, z]) of the field at time t, both ways
+(RK4, arc length; step 0: half the mean edge length; max_length 0: the domain's diagonal).
+Returns {"points": (K, 3) array ordered along the flow, "seed": index of the seed,
+"stop_backward", "stop_forward": why each end stopped}.)")
+      .def(
+          "pathline",
+          [](const PyField& f, const std::vector<double>& seed, double t_start, std::optional<double> t_end,
+             double dt) {
+            PathlineOptions o;
+            o.t_start = t_start;
+            o.t_end = t_end ? *t_end : f.field->time().t1;
+            o.dt = dt;
+            const Pathline p = trace_pathline(f.bundle(), *f.field, vec3_of(seed, "seed"), o);
+            py::dict d = curve_dict(p.points, &p.times);
+            d["stop"] = to_string(p.stop);
+            return d;
+          },
+          py::arg("seed"), py::arg("t_start") = 0.0, py::arg("t_end") = py::none(), py::kw_only(),
+          py::arg("dt") = 0.0,
+          R"(The pathline (dx/dt = V(x, t)) released at `seed` at t_start, to t_end (default: the
+end of the time range; earlier integrates backwards). Returns {"points": (K, 3),
+"times": (K,), "stop": why it ended}.)")
+      .def(
+          "export_vdb",
+          [](const PyField& f, const std::string& dir) {
+            return strings(write_vdb_sequence(dir, f.bundle(), *f.field, "field"));
+          },
+          py::arg("dir"),
+          "Writes DIR/velocity_NNNN.vdb (one Vec3f grid `v` per frame; planar grids only), as `tvf export --vdb`.")
+      .def(
+          "export_ply",
+          [](const PyField& f, const std::string& dir) { return strings(write_ply_sequence(dir, f.bundle(), *f.field)); },
+          py::arg("dir"),
+          "Writes DIR/velocity_NNNN.ply (vertices with vx, vy, vz, and faces) per frame, as `tvf export --ply`.")
+      .def("__repr__", [](const PyField& f) {
+        return "<tvf.Field " + std::to_string(f.field->frames()) + " frames x " +
+               std::to_string(f.field->num_vertices()) + " vertices" + (f.space->planar() ? ", planar>" : ", surface>");
+      });
+
+  m.def(
+      "generate",
+      [](const py::object& scene, const py::object& progress, const py::object& cancel, bool parallel) {
+        const Scene s = scene_of(scene);
+        auto out = std::make_shared<PyField>();
+        run_interruptible(progress, cancel, [&](GenerateOptions& o) {
+          o.parallel = parallel;
+          GeneratedField g = generate_scene(s, o);
+          out->space = g.space;
+          out->field = std::make_shared<const Field>(std::move(g.field));
+          out->report = std::move(g.report);
+        });
+        return out;
+      },
+      py::arg("scene"), py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+      py::arg("parallel") = true,
+      R"(Generates the field of a scene (a dict of the scene JSON, or a scene file's path).
+
+progress(done, total) is called as frames complete; `cancel` is any object with
+is_set() (threading.Event): once set, the solve stops and tvf.Cancelled is raised.
+Ctrl-C stops it too (KeyboardInterrupt). Bad input raises ValueError with the command
+line's sentence ("scene: elements[0].type: ...").)");
+
+  m.def(
+      "analyze",
+      [](const PyField& f) { return to_python(topology_to_json(analyze_field(*f.space, *f.field))); },
+      py::arg("field"),
+      R"(The analysis of a field (DESIGN §9) as Python objects: {"frames", "times",
+"singularities", "paths", "bifurcations", "coherence", ...}, the JSON `tvf analyze` writes.)");
+
+  m.def(
+      "load",
+      [](const std::string& path) {
+        const Design d = Design::open(path);
+        auto f = std::make_shared<PyField>();
+        f->space = d.field_space();
+        f->field = d.field_ptr();
+        f->report = d.report();
+        return f;
+      },
+      py::arg("path"), "Reads a field written by `tvf generate` (its folder or field.tvff).");
+
+  m.def(
+      "export_vdb", [](const PyField& f, const std::string& dir) {
+        return strings(write_vdb_sequence(dir, f.bundle(), *f.field, "field"));
+      },
+      py::arg("field"), py::arg("dir"), "Field.export_vdb as a function: DIR/velocity_NNNN.vdb per frame.");
+  m.def(
+      "export_ply", [](const PyField& f, const std::string& dir) {
+        return strings(write_ply_sequence(dir, f.bundle(), *f.field));
+      },
+      py::arg("field"), py::arg("dir"), "Field.export_ply as a function: DIR/velocity_NNNN.ply per frame.");
+  m.attr("vdb_available") = vdb_export_available();
+
+  py::class_<PyDesign>(m, "Design", R"(A design you change step by step: the scene, its domain, the solver
+set-up kept between solves (so re-solves after small changes start warm), the field
+and its analysis, with undo and redo (tvf/api/design.h).
+
+Design(scene): a dict, a scene file, or a folder written by `tvf generate` (its field is
+read, not regenerated).)")
+      .def(py::init([](const py::object& scene, bool parallel) {
+             DesignOptions o;
+             o.parallel = parallel;
+             if (py::isinstance<py::dict>(scene)) return PyDesign(Design(scene_of(scene), o));
+             if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__"))
+               return PyDesign(Design::open(py::str(py::module_::import("os").attr("fspath")(scene)), o));
+             throw py::type_error("a scene is a dict (the scene JSON) or a path");
+           }),
+           py::arg("scene"), py::kw_only(), py::arg("parallel") = true)
+      .def_property(
+          "scene", [](const PyDesign& d) { return to_python(scene_to_json(d.design.scene())); },
+          [](PyDesign& d, const py::dict& scene) { d.design.set_scene(to_json(scene), "scene"); },
+          "The scene as a dict (canonical JSON: every key). Assign a dict to change it (validated; undoable).")
+      .def(
+          "generate",
+          [](PyDesign& d, const py::object& progress, const py::object& cancel) {
+            run_interruptible(progress, cancel, [&](GenerateOptions& o) { d.design.generate(o); });
+            return d.field();
+          },
+          py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+          "The field of the current scene (generated unless already there). progress/cancel as tvf.generate.")
+      .def_property_readonly("field", &PyDesign::field, "The field made last (ValueError when there is none).")
+      .def_property_readonly("has_field", [](const PyDesign& d) { return d.design.has_field(); },
+                             "Whether the current scene's field is there.")
+      .def(
+          "analyze",
+          [](PyDesign& d, const py::object& progress, const py::object& cancel) {
+            nlohmann::json j;
+            run_interruptible(progress, cancel, [&](GenerateOptions& o) {
+              d.design.generate(o);
+              j = d.design.analysis_json();
+            });
+            return to_python(j);
+          },
+          py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
+          "The analysis JSON of DESIGN §9 of the current field (generated first if needed).")
+      .def(
+          "check",
+          [](PyDesign& d) -> py::object {
+            std::optional<DesignCheck> c;
+            run_interruptible(py::none(), py::none(), [&](GenerateOptions& o) {
+              d.design.generate(o);
+              c = d.design.check();
+            });
+            if (!c) return py::none();
+            return to_python(design_check_to_json(*c));
+          },
+          "The design check (which designed features the field holds), as `tvf analyze` writes it.")
+      .def(
+          "edit",
+          [](PyDesign& d, const py::object& entry, const py::kwargs& kwargs) {
+            py::dict e;
+            if (!entry.is_none()) {
+              if (!py::isinstance<py::dict>(entry)) throw py::type_error("an edit is a dict such as {\"op\": \"smooth\", \"strength\": 0.5}");
+              e = py::dict(entry);
+            }
+            for (auto item : kwargs) e[item.first] = item.second;
+            const nlohmann::json j = to_json(e);
+            EditReport r;
+            run_interruptible(py::none(), py::none(), [&](GenerateOptions& o) {
+              d.design.generate(o);
+              r = d.design.edit(j);
+            });
+            return edit_report_dict(r);
+          },
+          py::arg("entry") = py::none(),
+          R"(Applies a topological edit and appends it to the scene's edits (as `tvf edit`):
+design.edit({"op": "cancel", "frame": 40, "pair": [[x1, y1], [x2, y2]]}) or
+design.edit(op="smooth", strength=0.5). Ops: cancel, remove_bifurcation, move_bifurcation,
+smooth (docs/scene_reference.md). A refused edit raises ValueError and changes nothing.
+Returns {"summary", "key_frames", "window", "region_faces", "iterations", "residual"}.)")
+      .def("undo", [](PyDesign& d) { d.design.undo(); }, "Back to the scene before the last change.")
+      .def("redo", [](PyDesign& d) { d.design.redo(); }, "Forward again after undo().")
+      .def_property_readonly("can_undo", [](const PyDesign& d) { return d.design.can_undo(); })
+      .def_property_readonly("can_redo", [](const PyDesign& d) { return d.design.can_redo(); })
+      .def(
+          "save", [](const PyDesign& d, const std::optional<std::string>& path) { d.design.save(path.value_or("")); },
+          py::arg("path") = py::none(), "Writes the scene file (atomically); default: the file it was read from.")
+      .def(
+          "write_outputs",
+          [](PyDesign& d, const std::string& dir, bool vtk) {
+            std::vector<std::filesystem::path> files;
+            run_interruptible(py::none(), py::none(), [&](GenerateOptions& o) {
+              d.design.generate(o);
+              OutputOptions oo;
+              oo.vtk = vtk;
+              files = d.design.write_outputs(dir, oo);
+            });
+            return strings(files);
+          },
+          py::arg("dir"), py::kw_only(), py::arg("vtk") = true,
+          "Writes what `tvf generate` writes (field.npy, vertices.npy, ..., field.tvff, VTK) into dir.")
+      .def("__repr__", [](const PyDesign& d) {
+        return std::string("<tvf.Design ") + (d.design.has_scene() ? d.design.scene().label() : "without scene") +
+               (d.design.has_field() ? ", generated>" : ">");
+      });
+}

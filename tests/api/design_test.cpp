@@ -1,0 +1,142 @@
+// The library facade (api/design.h): the same field as the pipeline by hand, kept until the
+// scene changes, edits appended as `tvf edit` appends them, undo/redo, refusals and
+// cancellation that change nothing, and a generated folder read back.
+#include "tvf/api/design.h"
+
+#include "tvf/design/scene_json.h"
+
+#include "support/test_paths.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstring>
+
+namespace tvf {
+namespace {
+
+using json = nlohmann::json;
+
+// 17×17 grid, 5 frames: a source drifting right and a centre (basis fields: exact,
+// deterministic sums).
+json small_scene(const std::string& generator = "basis") {
+  return json::parse(R"({"tvf": 1,
+    "domain": {"grid": {"size": [17, 17], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 5, "range": [0, 1]},
+    "generator": ")" + generator + R"(",
+    "elements": [
+      {"kind": "singular", "type": "source", "path": [[-0.4, -0.3, 0], [-0.2, -0.3, 1]]},
+      {"kind": "singular", "type": "ccw_center", "path": [[0.4, 0.4, 0]]}]})");
+}
+
+Scene scene_of(const json& j) { return scene_from_json(j, "test.json", "test.json"); }
+
+bool bitwise_equal(const Field& a, const Field& b) {
+  return a.data().size() == b.data().size() &&
+         std::memcmp(a.data().data(), b.data().data(), a.data().size() * sizeof(cplx)) == 0;
+}
+
+TEST(Design, GeneratesWhatThePipelineGenerates) {
+  const Scene scene = scene_of(small_scene());
+  const auto space = make_design_space(scene);
+  const Field by_hand = generate(*space, scene);
+  Design design(scene);
+  EXPECT_FALSE(design.has_field());
+  EXPECT_TRUE(bitwise_equal(design.generate(), by_hand));
+  EXPECT_TRUE(bitwise_equal(generate_scene(scene).field, by_hand));
+  EXPECT_EQ(design.report().frames, 5);
+  EXPECT_EQ(design.report().vertices, 17 * 17);
+  // The analysis is the one of the field.
+  EXPECT_EQ(design.analysis_json(), topology_to_json(analyze_topology(space->bundle(), by_hand)));
+}
+
+TEST(Design, KeepsTheFieldUntilTheSceneChangesAndUndoBringsItBack) {
+  Design design(scene_of(small_scene()));
+  const Field* first = &design.generate();
+  const Field copy = *first;
+  EXPECT_EQ(&design.generate(), first);  // not made again
+  const DesignSpace* domain = &design.space();
+
+  json moved = small_scene();
+  moved["elements"][1]["path"][0] = {0.2, 0.4, 0};
+  design.set_scene(scene_of(moved));
+  EXPECT_FALSE(design.has_field());
+  EXPECT_EQ(&design.space(), domain);  // same grid: the domain is kept
+  EXPECT_FALSE(bitwise_equal(design.generate(), copy));
+  EXPECT_TRUE(design.can_undo());
+
+  design.undo();
+  EXPECT_TRUE(design.has_field());  // the field of the scene before was kept
+  EXPECT_TRUE(bitwise_equal(design.field(), copy));
+  EXPECT_EQ(scene_to_json(design.scene()), scene_to_json(scene_of(small_scene())));
+  design.redo();
+  EXPECT_EQ(scene_to_json(design.scene())["elements"][1]["path"][0], json({0.2, 0.4, 0.0}));
+
+  json finer = small_scene();
+  finer["domain"]["grid"]["size"] = {9, 9};
+  design.set_scene(scene_of(finer));
+  EXPECT_EQ(design.space().mesh().num_vertices(), 81);  // a new domain
+  EXPECT_FALSE(design.can_redo());
+  EXPECT_EQ(test::error_of([&] { design.redo(); }), "test.json: nothing to redo");
+}
+
+TEST(Design, EditIsAppendedToTheSceneAndReplaysFromIt) {
+  Design design(scene_of(small_scene("constrained")));
+  const Field before = design.generate();
+  const EditReport report = design.edit(json{{"op", "smooth"}, {"strength", 0.5}});
+  EXPECT_FALSE(report.summary.empty());
+  ASSERT_EQ(design.scene().edits.size(), 1u);
+  EXPECT_EQ(design.scene().edits[0]["op"], "smooth");
+  EXPECT_TRUE(design.has_field());
+  EXPECT_FALSE(bitwise_equal(design.field(), before));
+  // The edited field is the one the edited scene makes (edits replay bit for bit).
+  const Field replayed = generate_scene(design.scene()).field;
+  EXPECT_TRUE(bitwise_equal(design.field(), replayed));
+  design.undo();
+  EXPECT_TRUE(design.scene().edits.empty());
+  EXPECT_TRUE(bitwise_equal(design.field(), before));
+}
+
+TEST(Design, RefusedAndInvalidEditsChangeNothing) {
+  Design design(scene_of(small_scene("constrained")));
+  const Field before = design.generate();
+  // No saddle anywhere: there is no pair to cancel.
+  const std::string refused = test::error_of([&] {
+    design.edit(json::parse(R"({"op": "cancel", "frame": 2, "pair": [[-0.3, -0.3], [0.4, 0.4]]})"));
+  });
+  EXPECT_NE(refused.find("test.json: refused to cancel"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("the scene is unchanged"), std::string::npos) << refused;
+  EXPECT_EQ(test::error_of([&] { design.edit(json{{"op", "smooth"}, {"strength", 7}}); }).rfind("test.json: edits[0]", 0),
+            0u);
+  EXPECT_TRUE(design.scene().edits.empty());
+  EXPECT_FALSE(design.can_undo());
+  EXPECT_TRUE(bitwise_equal(design.field(), before));
+}
+
+TEST(Design, CancelledGenerationLeavesTheDesignAsItWas) {
+  Design design(scene_of(small_scene("spacetime")));
+  std::atomic<bool> stop{true};
+  GenerateOptions options;
+  options.cancel = &stop;
+  EXPECT_THROW(design.generate(options), GenerationCancelled);
+  EXPECT_FALSE(design.has_field());
+  EXPECT_EQ(design.generate().frames(), 5);
+}
+
+TEST(Design, OpensAGeneratedFolderWithoutRegenerating) {
+  test::TempDir dir;
+  Scene scene = scene_of(small_scene());
+  Design design(scene);
+  design.write_outputs(dir.path(), {});
+  Design read = Design::open(dir.path().string());
+  ASSERT_TRUE(read.has_field());
+  EXPECT_TRUE(bitwise_equal(read.field(), design.field()));  // field.tvff keeps doubles
+  EXPECT_EQ(scene_to_json(read.scene()), scene_to_json(scene));
+  EXPECT_EQ(read.analysis_json(), design.analysis_json());
+  ASSERT_TRUE(read.check().has_value());
+  EXPECT_NE(test::error_of([&] { Design::open((dir / "missing").string()); }).find("no such file or folder"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace tvf

@@ -1,0 +1,229 @@
+"""The Python module tvf (DESIGN §12): the same numbers as the command line's files,
+errors as ValueError with the command line's sentence, the stateful Design, progress and
+cancellation, integral curves, and the animation exports read back by their own readers.
+
+Run by ctest (tests/CMakeLists.txt sets PYTHONPATH to BUILD/python and TVF_CLI to the
+tvf program); small scenes (17x17 grids, 5 frames) keep it to seconds."""
+import copy
+import json
+import os
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import tvf
+
+TVF = os.environ.get("TVF_CLI", "tvf")
+
+SCENE = {
+    "tvf": 1,
+    "domain": {"grid": {"size": [17, 17], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 5, "range": [0, 1]},
+    "generator": "constrained",
+    "elements": [
+        {"kind": "singular", "type": "source", "path": [[-0.4, -0.3, 0], [-0.2, -0.3, 1]]},
+        {"kind": "singular", "type": "ccw_center", "path": [[0.4, 0.4, 0]]},
+    ],
+}
+
+
+def cli(*args):
+    run = subprocess.run([TVF, *map(str, args)], capture_output=True, text=True)
+    return run.returncode, run.stdout + run.stderr
+
+
+@pytest.fixture()
+def scene_file(tmp_path):
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(SCENE))
+    return path
+
+
+@pytest.fixture()
+def generated(tmp_path, scene_file):
+    out = tmp_path / "out"
+    code, text = cli("generate", scene_file, "-o", out, "-q", "--no-vtk")
+    assert code == 0, text
+    return out
+
+
+def test_generate_gives_the_numbers_of_field_npy(scene_file, generated):
+    f = tvf.generate(str(scene_file))
+    assert f.vectors.shape == (5, 17 * 17, 3)
+    assert f.vectors.dtype == np.float32
+    assert np.array_equal(f.vectors, np.load(generated / "field.npy"))
+    assert np.array_equal(f.vertices, np.load(generated / "vertices.npy"))
+    assert np.array_equal(f.faces, np.load(generated / "faces.npy"))
+    assert np.array_equal(f.times, np.load(generated / "times.npy"))
+    # A dict gives the same field as the file.
+    assert np.array_equal(tvf.generate(SCENE).vectors, f.vectors)
+    # The complex local form: vectors = Re z e1 + Im z e2 (rounded to float32).
+    world = f.values.real[..., None] * f.e1[None] + f.values.imag[..., None] * f.e2[None]
+    assert np.array_equal(world.astype(np.float32), f.vectors)
+    assert not f.values.flags.writeable and f.values.base is not None  # a view, not a copy
+    # A generated folder reads back exactly.
+    assert np.array_equal(tvf.load(str(generated)).values, f.values)
+
+
+def test_analyze_gives_the_json_of_tvf_analyze(tmp_path, generated):
+    code, text = cli("analyze", generated, "-o", tmp_path / "a.json", "-q", "--no-plots")
+    assert code == 0, text
+    expected = json.loads((tmp_path / "a.json").read_text())
+    got = tvf.analyze(tvf.load(str(generated)))
+    assert got == expected
+    assert got["frames"] == 5
+    assert {s["type"] for s in got["singularities"]} >= {"source"}
+
+
+def test_bad_input_raises_value_error_with_the_cli_sentence(tmp_path):
+    bad = copy.deepcopy(SCENE)
+    bad["elements"][0]["type"] = "sourse"
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(bad))
+    code, text = cli("generate", path, "-o", tmp_path / "x")
+    assert code == 1
+    with pytest.raises(ValueError) as e:
+        tvf.generate(str(path))
+    assert text.strip() == "tvf: error: " + str(e.value)
+    assert "elements[0].type" in str(e.value)
+    with pytest.raises(ValueError, match=r"^scene: elements\[0\]\.type"):
+        tvf.generate(bad)
+    with pytest.raises(TypeError):
+        tvf.generate(42)
+
+
+def test_design_edits_undoes_and_redoes():
+    d = tvf.Design(SCENE)
+    before = d.generate().vectors.copy()
+    assert d.scene["edits"] == []
+    report = d.edit(op="smooth", strength=0.5)
+    assert report["summary"]
+    assert [e["op"] for e in d.scene["edits"]] == ["smooth"]
+    edited = d.field.vectors
+    assert not np.array_equal(edited, before)
+    # The edited scene regenerates the edited field (edits replay from the scene).
+    assert np.array_equal(tvf.generate(d.scene).vectors, edited)
+    d.undo()
+    assert d.scene["edits"] == [] and d.can_redo
+    assert np.array_equal(d.field.vectors, before)
+    d.redo()
+    assert len(d.scene["edits"]) == 1
+    # A refused edit changes nothing and says why.
+    with pytest.raises(ValueError, match="refused to cancel.*the scene is unchanged"):
+        d.edit({"op": "cancel", "frame": 2, "pair": [[-0.3, -0.3], [0.4, 0.4]]})
+    assert len(d.scene["edits"]) == 1
+    # Assigning a scene is validated and undoable.
+    moved = d.scene
+    moved["elements"][1]["path"] = [[0.2, 0.5, 0]]
+    d.scene = moved
+    assert not d.has_field
+    assert d.analyze()["frames"] == 5
+    d.undo()
+    assert d.scene["elements"][1]["path"] == [[0.4, 0.4, 0.0]]
+    with pytest.raises(ValueError, match=r"elements\[1\]\.path"):
+        d.scene = {**moved, "elements": [moved["elements"][0], {**moved["elements"][1], "path": []}]}
+
+
+def test_progress_and_cancellation():
+    calls = []
+    f = tvf.generate(SCENE, progress=lambda done, total: calls.append((done, total)))
+    assert f.frames == 5
+    assert calls and calls[-1] == (5, 5)
+    stop = threading.Event()
+    stop.set()
+    d = tvf.Design({**SCENE, "generator": "spacetime"})
+    with pytest.raises(tvf.Cancelled):
+        d.generate(cancel=stop)
+    assert not d.has_field
+
+    def interrupt(done, total):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        d.generate(progress=interrupt)
+    assert d.generate().frames == 5  # still usable
+
+
+def test_streamline_and_pathline_of_a_radial_field():
+    one_source = {**SCENE, "generator": "basis",
+                  "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 0]]}]}
+    f = tvf.generate(one_source)
+    s = f.streamline([0.5, 0.0], 0.0)
+    assert s["points"].shape[1] == 3 and len(s["points"]) > 3
+    assert np.abs(s["points"][:, 1]).max() < 1e-9  # a source's streamlines are rays
+    assert s["stop_forward"] == "boundary"
+    p = f.pathline([0.25, 0.0], 0.0, 0.5)
+    assert np.all(np.diff(p["times"]) > 0) and p["times"][0] == 0.0
+    assert np.all(np.diff(p["points"][:, 0]) > 0)  # moving away from the source
+
+
+def read_ply(path):
+    data = path.read_bytes()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode().splitlines()
+    nv = int(next(l for l in header if l.startswith("element vertex")).split()[-1])
+    nf = int(next(l for l in header if l.startswith("element face")).split()[-1])
+    vertex = np.dtype([(n, "<f4") for n in ("x", "y", "z", "vx", "vy", "vz")])
+    v = np.frombuffer(data, vertex, nv, end)
+    face = np.dtype([("n", "u1"), ("i", "<i4", 3)])
+    f = np.frombuffer(data, face, nf, end + nv * vertex.itemsize)
+    assert np.all(f["n"] == 3)
+    return header, v, f["i"]
+
+
+def test_ply_export_holds_the_vectors(tmp_path, generated):
+    vectors = np.load(generated / "field.npy")
+    code, text = cli("export", generated, "--ply", "-o", tmp_path / "ply", "-q")
+    assert code == 0, text
+    files = sorted((tmp_path / "ply").iterdir())
+    assert [p.name for p in files] == [f"velocity_{j:04d}.ply" for j in range(5)]
+    header, v, faces = read_ply(files[3])
+    assert "comment t 0.75" in header
+    assert np.array_equal(np.stack([v["vx"], v["vy"], v["vz"]], axis=1), vectors[3])
+    assert np.array_equal(faces, np.load(generated / "faces.npy"))
+    # Python writes the same files.
+    written = tvf.load(str(generated)).export_ply(str(tmp_path / "ply2"))
+    assert len(written) == 5
+    assert (tmp_path / "ply2" / "velocity_0003.ply").read_bytes() == files[3].read_bytes()
+
+
+def test_vdb_export_reads_back_with_openvdb(tmp_path, generated):
+    if not tvf.vdb_available:
+        pytest.skip("this tvf was built without OpenVDB (libopenvdb-dev)")
+    vdb = pytest.importorskip("pyopenvdb", reason="Debian's python3-openvdb reads the files back")
+    vectors = np.load(generated / "field.npy")
+    code, text = cli("export", generated, "--vdb", "-o", tmp_path / "vdb", "-q")
+    assert code == 0, text
+    files = sorted((tmp_path / "vdb").iterdir())
+    assert [p.name for p in files] == [f"velocity_{j:04d}.vdb" for j in range(5)]
+    h = 2.0 / 16
+    for j, path in enumerate(files):
+        grid = vdb.read(str(path), "v")
+        assert grid.name == "v"
+        assert grid.activeVoxelCount() == 17 * 17
+        assert grid.transform.voxelSize()[0] == pytest.approx(h)
+        assert grid.transform.indexToWorld((3, 5, 0)) == pytest.approx((-1 + 3 * h, -1 + 5 * h, 0))
+        assert grid["time"] == pytest.approx(j / 4)
+        a = np.zeros((17, 17, 1, 3), np.float32)
+        grid.copyToArray(a, ijk=(0, 0, 0))
+        # voxel (ix, iy, 0) holds vertex iy*17 + ix
+        expected = vectors[j].reshape(17, 17, 3).transpose(1, 0, 2)
+        assert np.array_equal(a[:, :, 0, :], expected)
+    # Python writes the same grids.
+    tvf.export_vdb(tvf.load(str(generated)), str(tmp_path / "vdb2"))
+    again = np.zeros((17, 17, 1, 3), np.float32)
+    vdb.read(str(tmp_path / "vdb2" / "velocity_0002.vdb"), "v").copyToArray(again, ijk=(0, 0, 0))
+    assert np.array_equal(again[:, :, 0, :], vectors[2].reshape(17, 17, 3).transpose(1, 0, 2))
+
+
+def test_vdb_export_refuses_surfaces(tmp_path):
+    sphere = {"tvf": 1, "domain": {"sphere": {"subdivisions": 1}}, "time": {"frames": 2},
+              "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 1, 0]]}]}
+    f = tvf.generate(sphere)
+    assert not f.planar
+    with pytest.raises(ValueError, match="not a planar grid"):
+        f.export_vdb(str(tmp_path / "v"))
+    assert not (tmp_path / "v").exists() or not any((tmp_path / "v").iterdir())
+    assert len(f.export_ply(str(tmp_path / "p"))) == 2
