@@ -20,6 +20,7 @@
 #include "tvf/render/texture_animation.h"
 #include "tvf/render/video.h"
 #include "tvf/field/field_io.h"
+#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/mesh/tangent_bundle.h"
 
 #include <CLI/CLI.hpp>
@@ -126,6 +127,7 @@ int run_analyze(const AnalyzeArgs& args) {
     throw Error(fmt::format("{}: no such file or folder (give a folder written by `tvf generate`, "
                             "its field.tvff, or a scene file)", args.input));
   Topology topology;
+  PeriodicOrbits orbits;  // cycles and Hopf events (DESIGN §12)
   int vertices = 0;
   Mesh mesh;
   std::vector<std::string> warnings;
@@ -140,9 +142,13 @@ int run_analyze(const AnalyzeArgs& args) {
     const TangentBundle bundle(ff.mesh);
     progress.note("analysing");
     topology = analyze_topology(bundle, ff.field);
+    orbits = find_periodic_orbits(bundle, ff.field, topology);
     vertices = ff.mesh.num_vertices();
     mesh = ff.mesh;
-    if (const auto scene = cli::scene_of_field(input, ff)) check = check_design(*scene, DesignSpace(ff.mesh), ff.field, topology);
+    DesignCheckOptions dco;
+    dco.orbits = &orbits;
+    if (const auto scene = cli::scene_of_field(input, ff))
+      check = check_design(*scene, DesignSpace(ff.mesh), ff.field, topology, dco);
   } else {
     const Scene scene = load_scene(args.input);
     progress.note("building the domain");
@@ -154,12 +160,17 @@ int run_analyze(const AnalyzeArgs& args) {
     warnings = report.warnings;
     progress.note("analysing");
     topology = analyze_topology(space->bundle(), field);
+    orbits = find_periodic_orbits(space->bundle(), field, topology);
     vertices = space->mesh().num_vertices();
     mesh = space->mesh();
-    check = check_design(scene, *space, field, topology);
+    DesignCheckOptions dco;
+    dco.orbits = &orbits;
+    check = check_design(scene, *space, field, topology, dco);
   }
   progress.note("writing " + args.out);
-  write_file_atomically(args.out, topology_to_json(topology).dump() + "\n");
+  nlohmann::json analysis = topology_to_json(topology);
+  add_periodic_orbits_to_json(analysis, orbits);
+  write_file_atomically(args.out, analysis.dump() + "\n");
   if (check) write_file_atomically(cli::design_check_path(args.out), design_check_to_json(*check).dump(2) + "\n");
   // The pictures beside the JSON: STEM_coherence.{svg,png} and STEM_paths.{svg,png}.
   std::vector<std::string> pictures;
@@ -171,6 +182,7 @@ int run_analyze(const AnalyzeArgs& args) {
       pictures.push_back(f);
     PlotOptions paths_plot;
     if (check) paths_plot.extra_paths = check->extra_paths;  // drawn dashed
+    paths_plot.orbits = &orbits;
     for (const auto& f : write_paths_plot(stem + "_paths", mesh, topology, paths_plot)) pictures.push_back(f);
   }
   progress.finish();
@@ -189,6 +201,12 @@ int run_analyze(const AnalyzeArgs& args) {
                 topology.times.size(), vertices, topology.paths.size(), topology.bifurcations.size(), creations,
                 topology.bifurcations.size() - static_cast<size_t>(creations), topology.times.empty() ? 0 : fewest,
                 most, fs::absolute(args.out).lexically_normal().c_str());
+    if (!orbits.orbits.empty()) {
+      int tracks = 0;
+      for (const auto& o : orbits.orbits) tracks = std::max(tracks, o.id + 1);
+      std::printf("periodic orbits: %zu in %d tracks, %zu Hopf events\n", orbits.orbits.size(), tracks,
+                  orbits.hopf.size());
+    }
     for (const auto& f : pictures) std::printf("  %s\n", f.c_str());
     if (check)
       std::printf("%s\n  %s\n", check->summary().c_str(), cli::design_check_path(args.out).c_str());

@@ -21,6 +21,7 @@ namespace {
 
 constexpr double kTwoPi = 6.283185307179586;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr size_t kMaxPoints = 96;  // points kept per orbit (the JSON stays small)
 
 bool searched(SingularityType type, bool include_nodes) {
   switch (type) {
@@ -251,7 +252,9 @@ std::vector<PeriodicOrbit> find_frame_orbits(const TangentBundle& bundle, std::s
       for (const Vec3& x : turn.points) sum += (x - focus.position).norm();
       orbit.radius = sum / static_cast<double>(turn.points.size());
       orbit.period = period_of(turn.points, turn.speeds);
-      orbit.points = std::move(turn.points);
+      // At most kMaxPoints points in the result (every k-th of the traced ones).
+      const size_t stride = (turn.points.size() + kMaxPoints - 1) / kMaxPoints;
+      for (size_t q = 0; q < turn.points.size(); q += stride) orbit.points.push_back(turn.points[q]);
       out.push_back(std::move(orbit));
     }
   }

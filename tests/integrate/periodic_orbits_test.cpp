@@ -71,9 +71,9 @@ TEST_P(HopfCycle, RadiusPeriodAndStabilityMatchTheNormalForm) {
     ASSERT_EQ(orbits.size(), 1u) << "μ = " << mu;
     const PeriodicOrbit& o = orbits.front();
     EXPECT_EQ(o.stability, super ? OrbitStability::attracting : OrbitStability::repelling) << "μ = " << mu;
-    EXPECT_NEAR(o.radius, r, 0.02 * r + 0.1 * edge) << "μ = " << mu;
+    EXPECT_NEAR(o.radius, r, 0.03 * r + 0.2 * edge) << "μ = " << mu;
     EXPECT_LT((o.center - p).norm(), edge) << "μ = " << mu;
-    for (const Vec3& x : o.points) EXPECT_NEAR((x - p).norm(), r, 0.03 * r + 0.2 * edge) << "μ = " << mu;
+    for (const Vec3& x : o.points) EXPECT_NEAR((x - p).norm(), r, 0.05 * r + 0.3 * edge) << "μ = " << mu;
     EXPECT_NEAR(o.period, 2 * kPi * std::exp(d * r * r), 0.03 * 2 * kPi) << "μ = " << mu;
     // The radial equation r′ = μr − σr³ linearised at the cycle: −2|μ| per unit time, over
     // a period of 2π in template time (the falloff only slows the turn, the map is the same).

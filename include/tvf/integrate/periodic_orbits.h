@@ -57,6 +57,7 @@ struct PeriodicOrbit {
   double multiplier = 0.0;     // P′(r*): < 1 attracting, > 1 repelling (forward map)
   OrbitStability stability = OrbitStability::attracting;
   std::vector<Vec3> points;    // one turn, world positions, in the direction of the flow
+                               // (at most 96: every k-th point of the traced curve)
 };
 
 struct HopfEvent {
