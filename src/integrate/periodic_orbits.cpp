@@ -238,7 +238,11 @@ std::vector<PeriodicOrbit> find_frame_orbits(const TangentBundle& bundle, std::s
       const double lo = section.turn(r - delta, sign, false).value, hi = section.turn(r + delta, sign, false).value;
       if (!std::isfinite(lo) || !std::isfinite(hi)) continue;
       const double contraction = 1 + (hi - lo) / (2 * delta);  // P′ of the contracting map
-      if (!(contraction < 1 - options.min_multiplier_gap)) continue;  // neutral (a center) or not a cycle
+      // Hyperbolic on both sides: the edge of a center's ring of closed orbits (neutral
+      // inside, spiralling outside) contracts on one side only.
+      const double inner = 1 + (turn.value - lo) / delta, outer = 1 + (hi - turn.value) / delta;
+      const double most = 1 - options.min_multiplier_gap;
+      if (!(contraction < most && inner < most && outer < most)) continue;  // neutral or not a cycle
       orbit.multiplier = sign > 0 ? contraction : (contraction > 0 ? 1 / contraction : kInf);
       if (sign < 0) {
         std::reverse(turn.points.begin(), turn.points.end());
@@ -343,7 +347,7 @@ std::vector<HopfEvent> find_hopf_events(const Topology& topo, const std::vector<
       double best_gap = kInf;
       for (size_t id = 0; id < tracks.size(); ++id) {
         const Track& tr = tracks[id];
-        if (tr.first < 0 || used[id]) continue;
+        if (tr.first < 0 || used[id] || tr.last == tr.first) continue;  // one frame: too weak a sign
         // Born after t* (first frame ≥ j + 1) or ended before it (last frame ≤ j).
         const bool born = tr.first >= static_cast<int>(j) + 1 && tr.first <= static_cast<int>(j) + hopf_frames &&
                           (tr.first_center - e.position).norm() <= distance;

@@ -2,6 +2,7 @@
 
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
+#include "tvf/integrate/periodic_orbits.h"
 
 #include <cairo-svg.h>
 #include <cairo.h>

@@ -14,7 +14,6 @@
 //    black diamonds.
 // Files are written under temporary names and renamed when complete.
 #include "tvf/analysis/topology.h"
-#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/mesh/mesh.h"
 
 #include <array>
@@ -22,6 +21,8 @@
 #include <vector>
 
 namespace tvf {
+
+struct PeriodicOrbits;  // integrate/periodic_orbits.h
 
 struct PlotOptions {
   int width = 900;

@@ -24,7 +24,6 @@
 // the even streaks of the paper's figures (docs/architecture.md, "Texture animation").
 #include "tvf/analysis/topology.h"
 #include "tvf/field/field.h"
-#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
 
@@ -35,6 +34,8 @@
 #include <vector>
 
 namespace tvf {
+
+struct PeriodicOrbits;  // integrate/periodic_orbits.h
 
 // How far the texture moves where the field is fast or slow.
 enum class TextureSpeed {
