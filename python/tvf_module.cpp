@@ -377,7 +377,7 @@ line's sentence ("scene: elements[0].type: ...").)");
 
   m.def(
       "analyze",
-      [](const PyField& f) { return to_python(topology_to_json(analyze_field(*f.space, *f.field))); },
+      [](const PyField& f) { return to_python(analysis_json_of(*f.space, *f.field)); },
       py::arg("field"),
       R"(The analysis of a field (DESIGN §9) as Python objects: {"frames", "times",
 "singularities", "paths", "bifurcations", "coherence", ...}, the JSON `tvf analyze` writes.)");

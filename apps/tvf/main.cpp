@@ -22,6 +22,7 @@
 #include "tvf/render/texture_animation.h"
 #include "tvf/render/video.h"
 #include "tvf/field/field_io.h"
+#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/mesh/tangent_bundle.h"
 
 #include <CLI/CLI.hpp>
@@ -134,12 +135,13 @@ int run_analyze(const AnalyzeArgs& args) {
   const std::vector<std::string>& warnings = design.report().warnings;
   progress.note("analysing");
   const Topology& topology = design.analyze();
+  const PeriodicOrbits& orbits = design.periodic_orbits();  // cycles and Hopf events (DESIGN §12)
   const int vertices = design.field().num_vertices();
   const Mesh& mesh = design.field_space()->mesh();
   // The field against its scene's design, when the scene is known.
   const std::optional<DesignCheck> check = design.check();
   progress.note("writing " + args.out);
-  write_file_atomically(args.out, topology_to_json(topology).dump() + "\n");
+  write_file_atomically(args.out, design.analysis_json().dump() + "\n");
   if (check) write_file_atomically(cli::design_check_path(args.out), design_check_to_json(*check).dump(2) + "\n");
   // The pictures beside the JSON: STEM_coherence.{svg,png} and STEM_paths.{svg,png}.
   std::vector<std::string> pictures;
@@ -151,6 +153,7 @@ int run_analyze(const AnalyzeArgs& args) {
       pictures.push_back(f);
     PlotOptions paths_plot;
     if (check) paths_plot.extra_paths = check->extra_paths;  // drawn dashed
+    paths_plot.orbits = &orbits;
     for (const auto& f : write_paths_plot(stem + "_paths", mesh, topology, paths_plot)) pictures.push_back(f);
   }
   progress.finish();
@@ -169,6 +172,12 @@ int run_analyze(const AnalyzeArgs& args) {
                 topology.times.size(), vertices, topology.paths.size(), topology.bifurcations.size(), creations,
                 topology.bifurcations.size() - static_cast<size_t>(creations), topology.times.empty() ? 0 : fewest,
                 most, fs::absolute(args.out).lexically_normal().c_str());
+    if (!orbits.orbits.empty()) {
+      int tracks = 0;
+      for (const auto& o : orbits.orbits) tracks = std::max(tracks, o.id + 1);
+      std::printf("periodic orbits: %zu in %d tracks, %zu Hopf events\n", orbits.orbits.size(), tracks,
+                  orbits.hopf.size());
+    }
     for (const auto& f : pictures) std::printf("  %s\n", f.c_str());
     if (check)
       std::printf("%s\n  %s\n", check->summary().c_str(), cli::design_check_path(args.out).c_str());

@@ -43,9 +43,10 @@ RenderCommand::RenderCommand(CLI::App& app) {
   texture_->add_option("--range", range_, "Only pictures A to B of them (A:B, inclusive, from 0)");
   texture_->add_option("--overlay", overlay_,
                        "Draw over the texture: singularities (the frame's, as dots), paths (the singularity paths "
-                       "so far, as trails), streamlines (evenly spaced, placed anew each frame: for stills); "
+                       "so far, as trails), streamlines (evenly spaced, placed anew each frame: for stills), orbits "
+                       "(periodic orbits and Hopf events, planar domains); "
                        "several at once as --overlay singularities paths")
-      ->check(CLI::IsMember({"singularities", "paths", "streamlines"}));
+      ->check(CLI::IsMember({"singularities", "paths", "streamlines", "orbits"}));
   texture_->add_option("--alpha", alpha_, "Weight of the fresh noise per frame (shorter streaks when larger)")
       ->capture_default_str();
   texture_->add_option("--noise-scale", noise_scale_, "Noise cell size in pixels (default: size/256)");
@@ -304,6 +305,7 @@ int RenderCommand::run_texture() {
     options.overlay_singularities |= what == "singularities";
     options.overlay_paths |= what == "paths";
     options.overlay_streamlines |= what == "streamlines";
+    options.overlay_orbits |= what == "orbits";
   }
   options.texture.size = size_;
   options.texture.alpha = alpha_;

@@ -1,5 +1,7 @@
 #include "tvf/api/design.h"
 
+#include "tvf/integrate/periodic_orbits.h"
+
 #include "tvf/core/error.h"
 #include "tvf/design/scene_json.h"
 #include "tvf/field/field_io.h"
@@ -32,6 +34,7 @@ struct DesignResult {
   std::optional<Field> unprojected;
   GenerateReport report;
   std::optional<Topology> topology;
+  std::optional<PeriodicOrbits> orbits;
 };
 
 struct Design::State {
@@ -134,6 +137,13 @@ struct Design::State {
     }
     return *r.topology;
   }
+
+  PeriodicOrbits& orbits() {
+    Topology& topo = topology();
+    DesignResult& r = current();
+    if (!r.orbits) r.orbits = find_periodic_orbits(r.space->bundle(), r.field, topo);
+    return *r.orbits;
+  }
 };
 
 Design::Design(std::unique_ptr<State> state) : s_(std::move(state)) {}
@@ -234,13 +244,21 @@ const GenerateReport& Design::report() const {
 
 const Topology& Design::analyze() { return s_->topology(); }
 
-nlohmann::json Design::analysis_json() { return topology_to_json(analyze()); }
+const PeriodicOrbits& Design::periodic_orbits() { return s_->orbits(); }
+
+nlohmann::json Design::analysis_json() {
+  nlohmann::json analysis = topology_to_json(analyze());
+  add_periodic_orbits_to_json(analysis, periodic_orbits());
+  return analysis;
+}
 
 std::optional<DesignCheck> Design::check() {
   if (!s_->scene) return std::nullopt;
   const Topology& topology = analyze();
+  DesignCheckOptions options;
+  options.orbits = &periodic_orbits();
   const DesignResult& r = *s_->result;
-  return check_design(*s_->scene, *r.space, r.field, topology);
+  return check_design(*s_->scene, *r.space, r.field, topology, options);
 }
 
 EditReport Design::edit(const nlohmann::json& entry) {
@@ -329,6 +347,13 @@ GeneratedField generate_scene(const Scene& scene, const GenerateOptions& options
 
 Topology analyze_field(const DesignSpace& space, const Field& field, const TopologyOptions& options) {
   return analyze_topology(space.bundle(), field, options);
+}
+
+nlohmann::json analysis_json_of(const DesignSpace& space, const Field& field) {
+  const Topology topology = analyze_field(space, field);
+  nlohmann::json analysis = topology_to_json(topology);
+  add_periodic_orbits_to_json(analysis, find_periodic_orbits(space.bundle(), field, topology));
+  return analysis;
 }
 
 }  // namespace tvf

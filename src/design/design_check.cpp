@@ -6,6 +6,7 @@
 #include "tvf/design/keyframes.h"
 #include "tvf/edit/edits.h"
 #include "tvf/field/field_sampler.h"
+#include "tvf/integrate/periodic_orbits.h"
 
 #include <fmt/format.h>
 
@@ -211,6 +212,11 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     bool typed;      // false: an edit's own feature, either kind and any pair
   };
   std::vector<BifurcationFeature> bifurcation_features;
+  struct HopfFeature {
+    size_t feature;      // index into out.designed
+    bool supercritical;
+  };
+  std::vector<HopfFeature> hopf_features;
   for (size_t k = 0; k < scene.elements.size(); ++k) {
     const Element& e = scene.elements[k];
     const std::string source = fmt::format("elements[{}]", k);
@@ -225,6 +231,26 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
       }
       add_singularity(source, s->type ? to_string(*s->type) : "jacobian", expected, el.index(),
                       on_domain(s->path.front().position));
+    } else if (const auto* h = std::get_if<BifurcationElement>(&e); h && is_hopf(h->type)) {
+      // The focus, at every frame, with the normal form's Jacobian (scale-free at p).
+      const CompiledElement el(e);
+      std::vector<Expected> expected;
+      for (int j = 0; j < N; ++j) {
+        const double mu = el.at(topo.times[static_cast<size_t>(j)]).field.local_time;
+        Mat2 J;
+        J << mu, -1, 1, mu;
+        expected.push_back(expect(j, h->at.position, J));
+      }
+      add_singularity(source, to_string(h->type), expected, 1, on_domain(h->at.position));
+      if (N < 2 || h->at.t <= topo.times.front() || h->at.t >= topo.times.back()) continue;
+      hopf_features.push_back({out.designed.size(), h->type == BifurcationType::hopf_supercritical});
+      DesignedFeature f;
+      f.kind = FeatureKind::bifurcation;
+      f.source = source;
+      f.type = to_string(h->type);
+      f.t_begin = f.t_end = h->at.t;
+      f.position = on_domain(h->at.position);
+      out.designed.push_back(std::move(f));
     } else if (const auto* b = std::get_if<BifurcationElement>(&e)) {
       // Only a bifurcation strictly inside the time range is an event of the field.
       if (N < 2 || b->at.t <= topo.times.front() || b->at.t >= topo.times.back()) continue;
@@ -365,6 +391,46 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     if (!f.found)
       f.note = fmt::format("the {} at t = {:.3f} joins a {} and a {}, not a saddle and a {}", to_string(bf.kind), fb.t,
                            to_string(p.type), to_string(q.type), bf.sink ? "sink" : "source");
+  }
+
+  // Hopf events: the nearest of the field's within the tolerances, of the designed criticality.
+  if (!hopf_features.empty()) {
+    PeriodicOrbits own;
+    const PeriodicOrbits* orbits = options.orbits;
+    if (!orbits) {
+      own = find_periodic_orbits(space.bundle(), field, topo);
+      orbits = &own;
+    }
+    for (const HopfFeature& hf : hopf_features) {
+      DesignedFeature& f = out.designed[hf.feature];
+      double best_score = 1e300;
+      int best = -1;
+      for (size_t i = 0; i < orbits->hopf.size(); ++i) {
+        const HopfEvent& ev = orbits->hopf[i];
+        const double d = (ev.position - f.position).norm();
+        const double dtime = std::abs(ev.t - f.t_begin);
+        if (d > tol || dtime > out.time_tolerance) continue;
+        const double score = d / tol + (out.time_tolerance > 0 ? dtime / out.time_tolerance : 0.0);
+        if (score < best_score) best_score = score, best = static_cast<int>(i);
+      }
+      if (best < 0) {
+        f.note = fmt::format("no Hopf event within {:.3g} and {:.3g} in time of ({}, t = {:.3f})", tol,
+                             out.time_tolerance, position_text(f.position, space.planar()), f.t_begin);
+        continue;
+      }
+      const HopfEvent& ev = orbits->hopf[static_cast<size_t>(best)];
+      f.bifurcation = static_cast<int>(topo.bifurcations.size()) + best;
+      f.distance = (ev.position - f.position).norm();
+      f.time_offset = ev.t - f.t_begin;
+      f.paths = ev.paths;
+      claimed.insert(f.paths.begin(), f.paths.end());
+      f.found = ev.supercritical == hf.supercritical;
+      if (!f.found)
+        f.note = fmt::format("the Hopf event at t = {:.3f} is {} (its cycle is {}), not {}", ev.t,
+                             ev.supercritical ? "supercritical" : "subcritical",
+                             ev.supercritical ? "attracting" : "repelling",
+                             hf.supercritical ? "supercritical" : "subcritical");
+    }
   }
 
   // Cancelled pairs: absent at their frames.

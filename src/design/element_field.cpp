@@ -12,6 +12,12 @@ Vec2 bifurcation_normal_form(BifurcationType type, double x, double y, double t)
     case BifurcationType::saddle_sink_creation: return {t - x * x, -y};
     case BifurcationType::saddle_source_creation: return {-t + x * x, y};
     case BifurcationType::saddle_sink_cancellation: return {-t - x * x, -y};
+    case BifurcationType::hopf_supercritical:
+    case BifurcationType::hopf_subcritical: {
+      const double sigma = type == BifurcationType::hopf_supercritical ? 1.0 : -1.0;
+      const double r2 = x * x + y * y;
+      return {t * x - y - sigma * x * r2, x + t * y - sigma * y * r2};
+    }
   }
   TVF_CHECK(false, "unknown bifurcation type");
 }

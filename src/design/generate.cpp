@@ -139,7 +139,8 @@ std::vector<std::string> design_warnings(const Scene& scene) {
       for (size_t k = 0; k < scene.elements.size() && !provided; ++k) {
         if (k == i) continue;
         if (const auto* b = std::get_if<BifurcationElement>(&scene.elements[k])) {
-          provided = std::abs(b->at.t - end->t) <= 2 * dt + b->time_scale &&
+          // A Hopf template creates no singularity: its focus is there at all times.
+          provided = !is_hopf(b->type) && std::abs(b->at.t - end->t) <= 2 * dt + b->time_scale &&
                      (b->at.position - end->position).norm() <= 3 * b->scale;
         } else if (const auto* o = std::get_if<SingularElement>(&scene.elements[k])) {
           const int oi = o->jacobian.determinant() > 0 ? 1 : -1;

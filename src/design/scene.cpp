@@ -21,6 +21,8 @@ constexpr std::pair<BifurcationType, const char*> kBifurcationNames[] = {
     {BifurcationType::saddle_sink_creation, "saddle_sink_creation"},
     {BifurcationType::saddle_source_creation, "saddle_source_creation"},
     {BifurcationType::saddle_sink_cancellation, "saddle_sink_cancellation"},
+    {BifurcationType::hopf_supercritical, "hopf_supercritical"},
+    {BifurcationType::hopf_subcritical, "hopf_subcritical"},
 };
 constexpr std::pair<Generator, const char*> kGeneratorNames[] = {
     {Generator::basis, "basis"},

@@ -33,7 +33,8 @@ constexpr SingularType kSingularTypes[] = {
     SingularType::attracting_focus};
 constexpr BifurcationType kBifurcationTypes[] = {
     BifurcationType::saddle_source_cancellation, BifurcationType::saddle_sink_creation,
-    BifurcationType::saddle_source_creation, BifurcationType::saddle_sink_cancellation};
+    BifurcationType::saddle_source_creation, BifurcationType::saddle_sink_cancellation,
+    BifurcationType::hopf_supercritical, BifurcationType::hopf_subcritical};
 constexpr Generator kGenerators[] = {Generator::basis, Generator::constrained,
                                      Generator::spacetime, Generator::deform};
 constexpr Weights kWeights[] = {Weights::cotan, Weights::uniform, Weights::mean_value};

@@ -85,7 +85,7 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
   const int ndir = options.both_directions ? 2 : 1;
   const long max_steps = static_cast<long>(std::ceil(max_len / h)) + 1;
   for (int dir = 0; dir < ndir; ++dir) {
-    const double sign = dir == 0 ? 1.0 : -1.0;
+    const double sign = dir == 0 && !(options.backward_only && !options.both_directions) ? 1.0 : -1.0;
     SurfacePoint p = seed;
     why[dir] = StopReason::length;
     if (singular(p.face)) {
@@ -126,7 +126,7 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
       // (The last segment passes within half a step of the seed.)
       const Vec3 seg = xq - xp;
       const double u = seg.squaredNorm() > 0 ? std::clamp((x0 - xp).dot(seg) / seg.squaredNorm(), 0.0, 1.0) : 0.0;
-      if (len > 4 * h && (xp + u * seg - x0).norm() < 0.5 * h) {
+      if (options.stop_when_closed && len > 4 * h && (xp + u * seg - x0).norm() < 0.5 * h) {
         why[dir] = StopReason::closed;
         break;
       }

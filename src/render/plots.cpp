@@ -2,6 +2,7 @@
 
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
+#include "tvf/integrate/periodic_orbits.h"
 
 #include <cairo-svg.h>
 #include <cairo.h>
@@ -10,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <map>
 
 namespace tvf {
 
@@ -261,6 +263,39 @@ std::vector<std::string> write_paths_plot(const std::string& stem, const Mesh& m
       cairo_set_dash(cr, nullptr, 0, 0);
       text(cr, lx + 30, ly - 4, "extra (not designed)", 13, 0, 0.5);
     }
+    const bool any_orbits = options.orbits && !options.orbits->orbits.empty();
+    constexpr double kAttracting[3] = {0.93, 0.5, 0.05}, kRepelling[3] = {0.0, 0.6, 0.6};
+    auto diamond = [&](double cx, double cy, double r) {
+      cairo_move_to(cr, cx, cy - r);
+      cairo_line_to(cr, cx + r, cy);
+      cairo_line_to(cr, cx, cy + r);
+      cairo_line_to(cr, cx - r, cy);
+      cairo_close_path(cr);
+    };
+    if (any_orbits) {
+      for (int s = 0; s < 2; ++s) {
+        ly += 20;
+        const double* c = s == 0 ? kAttracting : kRepelling;
+        cairo_set_source_rgb(cr, c[0], c[1], c[2]);
+        cairo_set_line_width(cr, 1.6);
+        cairo_new_sub_path(cr);
+        cairo_save(cr);
+        cairo_translate(cr, lx + 11, ly - 4);
+        cairo_scale(cr, 1, 0.45);
+        cairo_arc(cr, 0, 0, 10, 0, 2 * kPi);
+        cairo_restore(cr);
+        cairo_stroke(cr);
+        cairo_set_source_rgb(cr, 0.15, 0.15, 0.15);
+        text(cr, lx + 30, ly - 4, s == 0 ? "attracting cycle" : "repelling cycle", 13, 0, 0.5);
+      }
+    }
+    if (options.orbits && !options.orbits->hopf.empty()) {
+      ly += 20;
+      cairo_set_source_rgb(cr, 0, 0, 0);
+      diamond(lx + 11, ly - 4, 6);
+      cairo_fill(cr);
+      text(cr, lx + 30, ly - 4, "Hopf", 13, 0, 0.5);
+    }
     // Paths.
     cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
     for (const SingularityPath& p : topology.paths) {
@@ -282,6 +317,27 @@ std::vector<std::string> write_paths_plot(const std::string& stem, const Mesh& m
       cairo_stroke(cr);
     }
     cairo_set_dash(cr, nullptr, 0, 0);
+    // Periodic orbits: each track at about twelve evenly spaced frames of its life.
+    if (any_orbits) {
+      std::map<int, std::vector<const PeriodicOrbit*>> tracks;
+      for (const PeriodicOrbit& o : options.orbits->orbits) tracks[o.id].push_back(&o);
+      cairo_set_line_width(cr, 1.3);
+      for (const auto& [id, list] : tracks) {
+        const size_t stride = std::max<size_t>(1, (list.size() + 11) / 12);
+        for (size_t k = 0; k < list.size(); k += stride) {
+          const PeriodicOrbit& o = *list[k];
+          const double* c = o.stability == OrbitStability::attracting ? kAttracting : kRepelling;
+          cairo_set_source_rgb(cr, c[0], c[1], c[2]);
+          for (size_t i = 0; i < o.points.size(); ++i) {
+            P(o.points[i][ua], o.points[i][va], o.t, x, y);
+            if (i == 0) cairo_move_to(cr, x, y);
+            else cairo_line_to(cr, x, y);
+          }
+          cairo_close_path(cr);
+          cairo_stroke(cr);
+        }
+      }
+    }
     // Bifurcations: creations filled, cancellations as rings (white inside).
     cairo_set_line_width(cr, 1.8);
     for (const Bifurcation& b : topology.bifurcations) {
@@ -298,6 +354,13 @@ std::vector<std::string> write_paths_plot(const std::string& stem, const Mesh& m
         cairo_stroke(cr);
       }
     }
+    if (options.orbits)
+      for (const HopfEvent& e : options.orbits->hopf) {
+        P(e.position[ua], e.position[va], e.t, x, y);
+        cairo_set_source_rgb(cr, 0, 0, 0);
+        diamond(x, y, 7);
+        cairo_fill(cr);
+      }
   });
 }
 

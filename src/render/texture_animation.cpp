@@ -4,6 +4,7 @@
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
 #include "tvf/integrate/evenly_spaced.h"
+#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/integrate/streamline.h"
 #include "tvf/render/frame_output.h"
 #include "tvf/render/plots.h"
@@ -420,6 +421,58 @@ void draw_singularity_paths(Image& image, const TextureAnimator& animator, const
   cairo_surface_destroy(surface);
 }
 
+void draw_orbits(Image& image, const TextureAnimator& animator, const PeriodicOrbits& orbits, const Field& field,
+                 double t) {
+  const TimeSampling& ts = field.time();
+  int j = 0;
+  double w = 0;
+  ts.locate(t, j, w);
+  if (w > 0.5) ++j;
+  const double dt = ts.frames > 1 ? (ts.t1 - ts.t0) / (ts.frames - 1) : 1.0;
+  cairo_surface_t* surface = cairo_image_surface_create_for_data(
+      reinterpret_cast<unsigned char*>(image.pixels.data()), CAIRO_FORMAT_RGB24, image.width, image.height,
+      image.width * 4);
+  cairo_t* cr = cairo_create(surface);
+  const double width = std::max(1.5, std::max(image.width, image.height) / 300.0);
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  for (const PeriodicOrbit& o : orbits.orbits) {
+    if (o.frame != j) continue;
+    cairo_new_path(cr);
+    for (size_t k = 0; k < o.points.size(); ++k) {
+      const Vec2 p = animator.to_pixel(o.points[k].head<2>());
+      if (k == 0) cairo_move_to(cr, p.x(), p.y());
+      else cairo_line_to(cr, p.x(), p.y());
+    }
+    cairo_close_path(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_line_width(cr, 2.2 * width);
+    cairo_stroke_preserve(cr);
+    if (o.stability == OrbitStability::attracting) cairo_set_source_rgb(cr, 0.93, 0.5, 0.05);
+    else cairo_set_source_rgb(cr, 0.0, 0.6, 0.6);
+    cairo_set_line_width(cr, width);
+    cairo_stroke(cr);
+  }
+  const double r = std::max(8.0, std::max(image.width, image.height) / 40.0);
+  for (const HopfEvent& e : orbits.hopf) {
+    if (std::abs(e.t - t) > 2 * dt) continue;
+    const Vec2 p = animator.to_pixel(e.position.head<2>());
+    cairo_move_to(cr, p.x(), p.y() - r);
+    cairo_line_to(cr, p.x() + r, p.y());
+    cairo_line_to(cr, p.x(), p.y() + r);
+    cairo_line_to(cr, p.x() - r, p.y());
+    cairo_close_path(cr);
+    cairo_set_source_rgb(cr, 1, 1, 1);  // a white casing under the black outline
+    cairo_set_line_width(cr, 2.6 * width);
+    cairo_stroke_preserve(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_line_width(cr, 1.2 * width);
+    cairo_stroke(cr);
+  }
+  cairo_destroy(cr);
+  cairo_surface_flush(surface);
+  cairo_surface_destroy(surface);
+}
+
 void draw_streamlines(Image& image, const TextureAnimator& animator, const TangentBundle& bundle,
                       const Field& field, double t, double separation) {
   const double sep_px = separation > 0 ? separation : 0.03 * std::max(image.width, image.height);
@@ -462,10 +515,14 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
   check_option(std::isfinite(options.fps) && options.fps > 0 && options.fps <= 1000, "fps",
                fmt::format("{} is outside (0, 1000]", options.fps));
 
+  check_option(!options.overlay_orbits || bundle.is_flat(), "overlay",
+               "orbits are drawn on planar domains only (their points are in tvf analyze's JSON on surfaces)");
   if (!bundle.is_flat()) return write_surface_texture_animation(bundle, field, options, first, last, total);
   TextureAnimator animator(bundle, field, options.texture);
   Topology topology;
-  if (options.overlay_paths) topology = analyze_topology(bundle, field);
+  if (options.overlay_paths || options.overlay_orbits) topology = analyze_topology(bundle, field);
+  PeriodicOrbits orbits;
+  if (options.overlay_orbits) orbits = find_periodic_orbits(bundle, field, topology);
   FrameOutput out(options.frames_dir, options.video, animator.width(), animator.height(), options.fps);
 
   const TimeSampling& ts = field.time();
@@ -487,6 +544,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
         if (options.overlay_streamlines) draw_streamlines(img, animator, bundle, field, t);
         if (options.overlay_paths) draw_singularity_paths(img, animator, topology, t);
         if (options.overlay_singularities) draw_singularities(img, animator, bundle, field, t);
+        if (options.overlay_orbits) draw_orbits(img, animator, orbits, field, t);  // rings round the dots
         return img;
       },
       [&](int n) {

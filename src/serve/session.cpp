@@ -10,6 +10,7 @@
 #include "tvf/edit/edits.h"
 #include "tvf/edit/field_editor.h"
 #include "tvf/field/world_vectors.h"
+#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/render/texture_animation.h"
 #include "tvf/render/video.h"
 
@@ -45,6 +46,7 @@ struct Result {
   std::shared_ptr<const DesignSpace> space;
   Field field;
   Topology topology;
+  PeriodicOrbits orbits;  // cycles and Hopf events (DESIGN §12)
   std::vector<std::string> warnings;
   std::string method;
   double seconds = 0;
@@ -266,6 +268,9 @@ struct Session::State {
     TopologyOptions to;
     to.parallel = options.parallel;
     r->topology = analyze_topology(r->space->bundle(), r->field, to);
+    PeriodicOrbitOptions po;
+    po.parallel = options.parallel;
+    r->orbits = find_periodic_orbits(r->space->bundle(), r->field, r->topology, po);
     r->warnings = report.warnings;
     r->method = report.method;
     r->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -441,6 +446,9 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   TopologyOptions to;
   to.parallel = s_->options.parallel;
   made->topology = analyze_topology(r->space->bundle(), made->field, to);
+  PeriodicOrbitOptions po;
+  po.parallel = s_->options.parallel;
+  made->orbits = find_periodic_orbits(r->space->bundle(), made->field, made->topology, po);
   made->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::lock_guard lock(s_->mutex);
@@ -543,6 +551,7 @@ json Session::frame(int j) const {
 json Session::analysis() const {
   const auto r = s_->current_result();
   json j = topology_to_json(r->topology);
+  add_periodic_orbits_to_json(j, r->orbits);
   j["revision"] = r->revision;
   return j;
 }

@@ -55,7 +55,10 @@ TEST(CliAnalyze, GeneratedFolderHasTheDesignedBifurcations) {
     EXPECT_TRUE(std::filesystem::exists(dir / picture)) << picture;
 
   const nlohmann::json j = read_json(dir / "analysis.json");
-  EXPECT_EQ(keys(j), (std::set<std::string>{"frames", "times", "singularities", "paths", "bifurcations", "coherence"}));
+  // DESIGN §9's keys and §12's "periodic_orbits" (none here: the example has no focus).
+  EXPECT_EQ(keys(j), (std::set<std::string>{"frames", "times", "singularities", "paths", "bifurcations", "coherence",
+                                            "periodic_orbits"}));
+  EXPECT_TRUE(j["periodic_orbits"].empty());
   EXPECT_EQ(j["frames"], 100);
   EXPECT_EQ(j["times"].size(), 100u);
   EXPECT_EQ(j["coherence"].size(), 99u);
@@ -144,6 +147,43 @@ TEST(CliAnalyze, SceneFileIsGeneratedThenAnalysedLikeItsFolder) {
   EXPECT_NE(b.output.find("scene.json"), std::string::npos) << b.output;
   EXPECT_FALSE(fs::exists(dir / "broken.json"));
   EXPECT_FALSE(fs::exists(dir / "broken_design.json"));
+}
+
+TEST(CliAnalyze, HopfScenesCyclesAndEventsAreInTheJsonAndTheDesignCheck) {
+  // Example 23's two templates on a coarser grid and fewer frames: the cycles of every frame
+  // in "periodic_orbits", both Hopf events appended to "bifurcations", both found by the
+  // design check.
+  TempDir dir;
+  auto scene = nlohmann::json::parse(test::read_text(test::source_dir() + "/examples/23_hopf_bifurcation/scene.json"));
+  scene["domain"]["grid"]["size"] = {33, 33};
+  scene["time"]["frames"] = 41;
+  test::write_text(dir / "scene.json", scene.dump());
+  const auto r = run_tvf("analyze " + quoted(dir / "scene.json") + " -o " + quoted(dir / "analysis.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2 Hopf events"), std::string::npos) << r.output;
+  const nlohmann::json j = read_json(dir / "analysis.json");
+  ASSERT_FALSE(j["periodic_orbits"].empty());
+  std::set<std::string> stabilities;
+  for (const auto& o : j["periodic_orbits"]) {
+    stabilities.insert(o["stability"].get<std::string>());
+    EXPECT_EQ(o["center"].size(), 3u);
+    EXPECT_GE(o["points"].size(), 8u);
+    EXPECT_GT(o["radius"].get<double>(), 0.0);
+  }
+  EXPECT_EQ(stabilities, (std::set<std::string>{"attracting", "repelling"}));
+  std::vector<nlohmann::json> hopf;
+  for (const auto& b : j["bifurcations"])
+    if (b["kind"] == "hopf") hopf.push_back(b);
+  ASSERT_EQ(hopf.size(), 2u) << j["bifurcations"].dump();
+  EXPECT_NEAR(hopf[0]["t"].get<double>(), 0.35, 0.05);
+  EXPECT_EQ(hopf[0]["criticality"], "supercritical");
+  EXPECT_NEAR(hopf[0]["position"][0].get<double>(), -0.5, 0.07);
+  EXPECT_NEAR(hopf[1]["t"].get<double>(), 0.65, 0.05);
+  EXPECT_EQ(hopf[1]["criticality"], "subcritical");
+  EXPECT_NEAR(hopf[1]["position"][0].get<double>(), 0.5, 0.07);
+  const nlohmann::json d = read_json(dir / "analysis_design.json");
+  EXPECT_TRUE(d["all_found"].get<bool>()) << d["summary"];
+  EXPECT_TRUE(fs::exists(dir / "analysis_paths.png"));
 }
 
 TEST(CliAnalyze, BadInputIsOneSentenceNonZeroExitAndNoOutput) {

@@ -110,6 +110,33 @@ TEST(DesignCheck, FindsEveryDesignedFeatureAndNothingElse) {
   EXPECT_TRUE(j.at("extra").at("paths").empty());
 }
 
+TEST(DesignCheck, AHopfElementIsItsFocusAndItsHopfEvent) {
+  // One supercritical Hopf template: its focus at every frame and the Hopf event at t0 are
+  // found, the focus's paths (attracting, center, repelling) are designed, nothing extra;
+  // checked as subcritical, the event is found with the wrong criticality.
+  Scene scene = grid_scene(33, 21, 8);
+  BifurcationElement b = bifurcation(BifurcationType::hopf_supercritical, Vec3(0.1, 0, 0), 0.5);
+  b.scale = 0.3;
+  scene.elements.push_back(b);
+  const Generated g = generate_and_analyze(scene);
+  const DesignCheck check = check_design(scene, *g.space, g.field, g.topology);
+  ASSERT_EQ(check.designed.size(), 2u);
+  EXPECT_TRUE(check.all_found()) << check.summary();
+  EXPECT_EQ(check.designed[0].kind, FeatureKind::singularity);
+  EXPECT_EQ(check.designed[0].frames_matched, 21);
+  EXPECT_EQ(check.designed[1].kind, FeatureKind::bifurcation);
+  EXPECT_EQ(check.designed[1].type, "hopf_supercritical");
+  EXPECT_EQ(check.designed[1].bifurcation, static_cast<int>(g.topology.bifurcations.size()));
+  EXPECT_LE(std::abs(check.designed[1].time_offset), check.time_tolerance);
+  EXPECT_TRUE(check.extra_paths.empty()) << check.summary();
+
+  Scene wrong = scene;
+  std::get<BifurcationElement>(wrong.elements[0]).type = BifurcationType::hopf_subcritical;
+  const DesignCheck other = check_design(wrong, *g.space, g.field, g.topology);
+  EXPECT_FALSE(other.designed[1].found);
+  EXPECT_NE(other.designed[1].note.find("supercritical"), std::string::npos) << other.designed[1].note;
+}
+
 TEST(DesignCheck, ReportsAnUndesignedPairAsOneExtraGroup) {
   // The field holds a saddle–source cancellation that the checked design does not have.
   Scene generated = designed_scene();

@@ -46,6 +46,46 @@ TEST(BifurcationNormalForms, ZerosAtPlusMinusSqrtWithTheRightTypes) {
   }
 }
 
+TEST(BifurcationNormalForms, HopfCycleOfRadiusSqrtMuAroundAFocusOfTraceTwoMu) {
+  // On the circle r = √|μ| the Hopf forms are tangent to it at speed r (angular velocity 1):
+  // the cycle; the focus at 0 has the Jacobian [[μ, −1], [1, μ]].
+  for (const auto& [type, mu] : {std::pair{BifurcationType::hopf_supercritical, 0.49},
+                                 std::pair{BifurcationType::hopf_subcritical, -0.49}}) {
+    SCOPED_TRACE(to_string(type));
+    const double r = std::sqrt(std::abs(mu));
+    for (double a = 0; a < 6.28; a += 0.1) {
+      const Vec2 x(r * std::cos(a), r * std::sin(a));
+      const Vec2 v = bifurcation_normal_form(type, x.x(), x.y(), mu);
+      EXPECT_NEAR(v.dot(x), 0.0, 1e-15);
+      EXPECT_NEAR(x.x() * v.y() - x.y() * v.x(), r * r, 1e-15);  // counter-clockwise, |v| = r
+    }
+    EXPECT_LT(bifurcation_normal_form(type, 0, 0, mu).norm(), 1e-300);
+    Mat2 expected;
+    expected << mu, -1, 1, mu;
+    EXPECT_LT((numeric_jacobian(type, 0, 0, mu) - expected).norm(), 1e-8);
+    // Inside the cycle the flow moves toward it (supercritical: outward, from the repelling
+    // focus) or away from it (subcritical: inward, to the attracting focus).
+    const double sigma = type == BifurcationType::hopf_supercritical ? 1.0 : -1.0;
+    EXPECT_GT(sigma * bifurcation_normal_form(type, 0.5 * r, 0, mu).x(), 0);
+    EXPECT_LT(sigma * bifurcation_normal_form(type, 1.5 * r, 0, mu).x(), 0);
+  }
+}
+
+TEST(BifurcationElement, HopfCycleRadiusIsScaleTimesSqrtMu) {
+  BifurcationElement b;
+  b.type = BifurcationType::hopf_supercritical;
+  b.at = {Vec3(0.3, -0.2, 0), 0.6};
+  b.scale = 0.2;
+  b.time_scale = 0.5;
+  b.angle = 0.9;
+  const ElementState st = CompiledElement{Element{b}}.at(1.1);  // μ = 1
+  for (double a = 0; a < 6.28; a += 0.3) {
+    const cplx w = 0.2 * std::polar(1.0, a);
+    EXPECT_NEAR((st.field(w) * std::conj(w)).real(), 0.0, 1e-15);  // tangent to the circle
+    EXPECT_NEAR(std::abs(st.field(w)), 0.2, 1e-15);                // angular velocity 1
+  }
+}
+
 TEST(BifurcationElement, RotatedAndScaledTemplateMovesAlongItsAxis) {
   // Element at p, scale s, time scale τ, axis θ: zeros at p ± s·√(−t′)·(cos θ, sin θ)
   // with t′ = (t − t0)/τ for a saddle–source cancellation.

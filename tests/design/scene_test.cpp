@@ -26,6 +26,8 @@ TEST(SceneNames, AreTheExactStringsOfTheFormat) {
   EXPECT_STREQ(to_string(BifurcationType::saddle_sink_creation), "saddle_sink_creation");
   EXPECT_STREQ(to_string(BifurcationType::saddle_source_creation), "saddle_source_creation");
   EXPECT_STREQ(to_string(BifurcationType::saddle_sink_cancellation), "saddle_sink_cancellation");
+  EXPECT_STREQ(to_string(BifurcationType::hopf_supercritical), "hopf_supercritical");
+  EXPECT_STREQ(to_string(BifurcationType::hopf_subcritical), "hopf_subcritical");
   EXPECT_STREQ(to_string(Generator::basis), "basis");
   EXPECT_STREQ(to_string(Generator::constrained), "constrained");
   EXPECT_STREQ(to_string(Generator::spacetime), "spacetime");
@@ -39,7 +41,8 @@ TEST(SceneNames, FromStringInvertsToString) {
   for (SingularType t : kAllSingular) EXPECT_EQ(singular_type_from_string(to_string(t)), t);
   for (BifurcationType t :
        {BifurcationType::saddle_source_cancellation, BifurcationType::saddle_sink_creation,
-        BifurcationType::saddle_source_creation, BifurcationType::saddle_sink_cancellation})
+        BifurcationType::saddle_source_creation, BifurcationType::saddle_sink_cancellation,
+        BifurcationType::hopf_supercritical, BifurcationType::hopf_subcritical})
     EXPECT_EQ(bifurcation_type_from_string(to_string(t)), t);
   for (Generator g : {Generator::basis, Generator::constrained, Generator::spacetime, Generator::deform})
     EXPECT_EQ(generator_from_string(to_string(g)), g);

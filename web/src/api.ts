@@ -76,8 +76,11 @@ export interface Analysis {
   frames: number;
   times: number[];
   paths: { id: number; type: string; birth: number; death: number; points: number[][] }[];
-  bifurcations: { t: number; position: number[]; kind: string; paths: number[] }[];
+  // kind "creation" | "cancellation", then the Hopf events (kind "hopf", DESIGN §12)
+  bifurcations: { t: number; position: number[]; kind: string; paths: number[]; criticality?: string }[];
   coherence: number[];
+  // Closed streamlines per frame (DESIGN §12); absent from servers older than them.
+  periodic_orbits?: { frame: number; t: number; center: number[]; radius: number; stability: string; points: number[][]; id: number }[];
 }
 
 export const api = {

@@ -297,7 +297,7 @@ function listBifurcations() {
   a.bifurcations.forEach((b, i) => {
     const row = document.createElement("div");
     row.className = "bifurcation" + (i === state.selectedBifurcation ? " selected" : "");
-    row.textContent = `${b.kind} at t = ${b.t.toFixed(3)} (${b.position.slice(0, planar() ? 2 : 3).map((v) => v.toFixed(2)).join(", ")})`;
+    row.textContent = `${b.kind}${b.criticality ? ` (${b.criticality})` : ""} at t = ${b.t.toFixed(3)} (${b.position.slice(0, planar() ? 2 : 3).map((v) => v.toFixed(2)).join(", ")})`;
     const go = document.createElement("button");
     go.textContent = "go to";
     go.onclick = () => {
@@ -316,7 +316,9 @@ function listBifurcations() {
       const p = rounded(b.position.slice(0, planar() ? 2 : 3));
       void edit(S.moveBifurcationEdit(p, b.t, p, Number(currentTime().toFixed(4))));
     };
-    row.append(go, remove, move);
+    // A Hopf event is reported, not edited: the edits remove and move saddle–node bifurcations.
+    if (b.kind === "hopf") row.append(go);
+    else row.append(go, remove, move);
     host.appendChild(row);
   });
   if (a.bifurcations.length === 0) host.textContent = "no bifurcations";

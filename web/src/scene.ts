@@ -72,6 +72,8 @@ export const BIFURCATION_TYPES = [
   "saddle_sink_creation",
   "saddle_source_creation",
   "saddle_sink_cancellation",
+  "hopf_supercritical",
+  "hopf_subcritical",
 ] as const;
 
 function clone<T>(x: T): T {

@@ -1,5 +1,6 @@
 // The space-time view (paper Fig. 2): the domain's rectangle stretched along a time axis,
-// singularity paths as curves coloured by type, bifurcations as spheres, the design's
+// singularity paths as curves coloured by type, bifurcations as spheres (Hopf events too),
+// periodic orbits as loops at their times (attracting orange, repelling teal), the design's
 // pathlines (regular elements) as thick teal curves, and the current time as a plane. A
 // click on a bifurcation picks it (for removal or moving). With `drawing` on (the
 // Pathline tool), a drag that starts on the time plane inside the domain draws a pathline
@@ -257,6 +258,21 @@ export class SpaceTimeView {
       if (pts.length < 2) continue;
       const line = new THREE.Line(new THREE.BufferGeometry().setFromPoints(pts), new THREE.LineBasicMaterial({ color: typeColor(path.type) }));
       this.content.add(line);
+    }
+    // Periodic orbits: each track at about twelve evenly spaced frames, as loops at their t.
+    const tracks = new Map<number, NonNullable<Analysis["periodic_orbits"]>>();
+    for (const o of analysis.periodic_orbits ?? []) {
+      if (!tracks.has(o.id)) tracks.set(o.id, []);
+      tracks.get(o.id)!.push(o);
+    }
+    for (const list of tracks.values()) {
+      const stride = Math.max(1, Math.ceil(list.length / 12));
+      for (let k = 0; k < list.length; k += stride) {
+        const o = list[k];
+        const pts = o.points.map((p) => this.map(p[0], p[1], o.t));
+        const color = o.stability === "attracting" ? 0xee800d : 0x009999;
+        this.content.add(new THREE.LineLoop(new THREE.BufferGeometry().setFromPoints(pts), new THREE.LineBasicMaterial({ color })));
+      }
     }
     this.bifurcationMeshes = analysis.bifurcations.map((b, i) => {
       const m = new THREE.Mesh(new THREE.SphereGeometry(0.05, 16, 12), new THREE.MeshBasicMaterial({ color: BIFURCATION_COLOR }));

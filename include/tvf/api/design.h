@@ -23,6 +23,7 @@
 // the JSON path); a refused edit or a cancelled generation changes nothing.
 #include "tvf/analysis/topology.h"
 #include "tvf/design/design_check.h"
+#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/design/design_space.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/outputs.h"
@@ -98,7 +99,10 @@ public:
   // The topology of the field (singularities, paths, bifurcations, coherence), generating
   // the field first if needed.
   const Topology& analyze();
-  // The analysis JSON of DESIGN §9 (topology_to_json of analyze()).
+  // The periodic orbits and Hopf events of the field (integrate/periodic_orbits.h, DESIGN §12).
+  const PeriodicOrbits& periodic_orbits();
+  // The analysis JSON of DESIGN §9 (topology_to_json of analyze()) with the periodic
+  // orbits and Hopf events of DESIGN §12.
   nlohmann::json analysis_json();
   // The design check (design_check.h) of the field against the scene; none without a scene.
   std::optional<DesignCheck> check();
@@ -139,5 +143,8 @@ struct GeneratedField {
 GeneratedField generate_scene(const Scene& scene, const GenerateOptions& options = {});
 // One-shot: the topology of a field on its domain.
 Topology analyze_field(const DesignSpace& space, const Field& field, const TopologyOptions& options = {});
+// One-shot: the whole analysis JSON of a field (DESIGN §9, with §12's periodic orbits and
+// Hopf events), as `tvf analyze` writes it.
+nlohmann::json analysis_json_of(const DesignSpace& space, const Field& field);
 
 }  // namespace tvf

@@ -9,6 +9,13 @@
 // - a bifurcation element: a found bifurcation of its kind (creation or cancellation)
 //   at its point and time, joining a saddle and a node of its stability (sink for
 //   saddle_sink_*, source for saddle_source_*);
+// - a Hopf element (hopf_supercritical, hopf_subcritical): its focus at its point at every
+//   frame, with the normal form's Jacobian [[μ, −1], [1, μ]] (attracting before t0 and
+//   repelling after for the supercritical form, the reverse for the subcritical one), and,
+//   when t0 lies strictly inside the time range, a Hopf event of its criticality
+//   (integrate/periodic_orbits.h) within the tolerances of its point and time. Its
+//   `bifurcation` is the event's index in the analysis JSON's "bifurcations", which lists
+//   the Hopf events after Topology::bifurcations;
 // - a singular element of a key frame (keyframes[k].elements[i]): a singularity of its
 //   index at its point in that key frame's frame;
 // - deform generator: each singular element of deform.base, fixed, at every frame, with
@@ -57,6 +64,8 @@
 
 namespace tvf {
 
+struct PeriodicOrbits;  // integrate/periodic_orbits.h
+
 struct DesignCheckOptions {
   // How far a found singularity or bifurcation may lie from the designed point, in mean
   // edge lengths of the domain: the zero of a sampled field moves by O(h), and the
@@ -64,6 +73,9 @@ struct DesignCheckOptions {
   double position_tolerance = 2.5;
   // How far a found bifurcation's time may lie from the designed one, in frame steps.
   double time_tolerance = 2.0;
+  // The field's periodic orbits and Hopf events, when the caller has them; else they are
+  // found here when the scene has a Hopf element.
+  const PeriodicOrbits* orbits = nullptr;
 };
 
 enum class FeatureKind { singularity, bifurcation };

@@ -57,7 +57,11 @@ private:
 };
 
 // The bifurcation normal form V_b(x, y; t) of DESIGN §4 (eq. 1, eq. 2 and their time
-// reverses), in template coordinates.
+// reverses) and §12 (the Hopf normal forms, μ = t), in template coordinates. With the
+// template's v = s·R V_b(Rᵀw/s; t′) a Hopf cycle has world radius s·√|t′| and, since the
+// normal form turns at angular velocity 1 in template and world coordinates alike, period
+// 2π in the streamline parameter (the generators' falloff exp(−d‖w‖²) scales the vector,
+// not its direction: the cycle keeps its place and its period becomes 2π·exp(d·s²|t′|)).
 Vec2 bifurcation_normal_form(BifurcationType type, double x, double y, double t);
 
 }  // namespace tvf

@@ -61,7 +61,19 @@ enum class BifurcationType {
   saddle_sink_creation,        // eq. 2: (t − x², −y)
   saddle_source_creation,      // (−t + x², y)
   saddle_sink_cancellation,    // (−t − x², −y)
+  // Hopf (DESIGN §12): (μx − y − σx(x²+y²), x + μy − σy(x²+y²)), μ = t. Supercritical
+  // (σ = +1): an attracting focus for μ < 0; for μ > 0 a repelling focus inside an
+  // attracting cycle of radius √μ. Subcritical (σ = −1): a repelling focus for μ > 0; for
+  // μ < 0 an attracting focus inside a repelling cycle of radius √(−μ).
+  hopf_supercritical,
+  hopf_subcritical,
 };
+
+// True for the two Hopf types (a focus that changes stability while a cycle is born
+// around it), false for the four saddle–node templates.
+inline bool is_hopf(BifurcationType t) {
+  return t == BifurcationType::hopf_supercritical || t == BifurcationType::hopf_subcritical;
+}
 
 struct BifurcationElement {
   BifurcationType type = BifurcationType::saddle_sink_creation;

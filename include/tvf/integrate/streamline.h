@@ -36,6 +36,10 @@ struct StreamlineOptions {
   double stop_speed = 1e-9; // stop where |V| < stop_speed · (largest |V| of the frame)
   bool stop_at_singular_faces = true;  // stop on entering a face of non-zero index
   bool both_directions = true;         // false: forward only
+  // With both_directions false: trace against the flow only; the points after the seed
+  // (and stop_forward) are then that way's, in the order traced.
+  bool backward_only = false;
+  bool stop_when_closed = true;        // stop when the curve comes back to its seed
   // Called with each new point (world position); returning false ends that direction
   // (StopReason::rejected) without keeping the point. Used by evenly spaced placement.
   std::function<bool(const Vec3&)> accept;

@@ -8,7 +8,10 @@
 //    center or focus — with the ranges of u, v and t on the box's edges, and bifurcations
 //    marked: creations as filled black discs, cancellations as black rings. Paths that a
 //    design check reports as extra (PlotOptions::extra_paths) are drawn dashed and thinner,
-//    so the designed ones stand out.
+//    so the designed ones stand out. With PlotOptions::orbits, periodic orbits are drawn at
+//    their times as closed curves (attracting orange, repelling teal; at most about twelve
+//    frames of each track, evenly spaced, so the view stays readable) and Hopf events as
+//    black diamonds.
 // Files are written under temporary names and renamed when complete.
 #include "tvf/analysis/topology.h"
 #include "tvf/mesh/mesh.h"
@@ -19,12 +22,16 @@
 
 namespace tvf {
 
+struct PeriodicOrbits;  // integrate/periodic_orbits.h
+
 struct PlotOptions {
   int width = 900;
   int height = 600;
   std::string title;
   // Paths plot: ids of the paths the design did not ask for (design_check.h), drawn dashed.
   std::vector<int> extra_paths;
+  // Paths plot: periodic orbits and Hopf events to draw (not owned; may be null).
+  const PeriodicOrbits* orbits = nullptr;
 };
 
 // Writes `stem`.svg and `stem`.png; returns their paths.

@@ -35,6 +35,8 @@
 
 namespace tvf {
 
+struct PeriodicOrbits;  // integrate/periodic_orbits.h
+
 // How far the texture moves where the field is fast or slow.
 enum class TextureSpeed {
   uniform,   // every pixel moves pixels_per_frame along the field's direction, however
@@ -124,6 +126,13 @@ void draw_singularities(Image& image, const TextureAnimator& animator, const Tan
 // in the colour of their type: where every singularity has been so far (paper Fig. 8).
 void draw_singularity_paths(Image& image, const TextureAnimator& animator, const Topology& topology, double t);
 
+// The periodic orbits of the field frame nearest to t as closed curves (attracting orange,
+// repelling teal, on a dark casing) and the Hopf events within two frame steps of t as
+// black diamond outlines round the focus (integrate/periodic_orbits.h). Drawn after the
+// singularity dots.
+void draw_orbits(Image& image, const TextureAnimator& animator, const PeriodicOrbits& orbits, const Field& field,
+                 double t);
+
 // Evenly spaced streamlines of the field at time t (integrate/evenly_spaced.h), drawn as
 // thin dark lines, `separation` apart in pixels (0: 3 % of the picture's long side).
 // Placed anew for each picture, so in an animation they do not move with the texture:
@@ -151,6 +160,10 @@ struct TextureAnimationOptions {
   bool overlay_singularities = false;
   bool overlay_paths = false;     // the singularity paths so far (analysis/topology.h)
   bool overlay_streamlines = false;  // evenly spaced streamlines of each frame
+  // Planar domains: the periodic orbits of the field frame nearest to each picture's t
+  // (integrate/periodic_orbits.h; attracting orange, repelling teal) and each Hopf event
+  // as a black diamond outline within two frame steps of its time.
+  bool overlay_orbits = false;
   std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
   std::string video;              // MP4 file (empty: none)
   SurfaceView surface;            // surfaces only (render/surface_texture.h): the camera, samples

@@ -1,0 +1,432 @@
+#include "tvf/integrate/periodic_orbits.h"
+
+#include "tvf/core/error.h"
+#include "tvf/integrate/streamline.h"
+#include "tvf/integrate/surface_walk.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+namespace tvf {
+
+const char* to_string(OrbitStability s) {
+  return s == OrbitStability::attracting ? "attracting" : "repelling";
+}
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr size_t kMaxPoints = 96;  // points kept per orbit (the JSON stays small)
+
+bool searched(SingularityType type, bool include_nodes) {
+  switch (type) {
+    case SingularityType::center:
+    case SingularityType::attracting_focus:
+    case SingularityType::repelling_focus: return true;
+    case SingularityType::source:
+    case SingularityType::sink: return include_nodes;
+    case SingularityType::saddle: return false;
+  }
+  return false;
+}
+
+// The Poincaré section of one focus: a ray in the plane of its face.
+class Section {
+public:
+  Section(const TangentBundle& bundle, std::span<const cplx> values, const Singularity& focus,
+          const std::vector<Singularity>& others, const PeriodicOrbitOptions& options)
+      : bundle_(bundle), values_(values), focus_(focus) {
+    const Mesh& mesh = bundle.mesh();
+    edge_ = mesh.mean_edge_length();
+    const int f = focus.where.face;
+    const Vec3 n = bundle.face_normal(f);
+    // The ray points away from the nearest other singularity (the most room), else along e1.
+    Vec3 dir = bundle.face_e1(f);
+    double nearest = kInf;
+    for (const Singularity& s : others) {
+      if (&s == &focus) continue;
+      const Vec3 d = s.position - focus.position;
+      const double dist = d.norm();
+      if (dist < nearest) {
+        nearest = dist;
+        const Vec3 away = -(d - d.dot(n) * n);
+        if (away.norm() > 1e-12 * dist) dir = away.normalized();
+      }
+    }
+    u_ = dir;
+    v_ = n.cross(u_);
+    ray_ = bundle.world_to_face(f, u_);
+    ray_ /= std::abs(ray_);
+    r_min_ = options.min_radius * edge_;
+    r_max_ = std::min(0.9 * nearest, options.max_radius * mesh.diameter());
+    // The domain boundary along the ray.
+    if (std::isfinite(r_max_) && r_max_ > r_min_) {
+      const SurfaceWalk w = walk_surface(bundle, focus.where, r_max_ * ray_);
+      if (w.hit_boundary) r_max_ = 0.9 * w.travelled * r_max_;
+    }
+    r_out_ = std::isfinite(nearest) ? std::min(1.5 * r_max_, 0.95 * nearest) : 1.5 * r_max_;
+  }
+
+  double r_min() const { return r_min_; }
+  double r_max() const { return r_max_; }
+
+  // Radius and winding angle of a point in the focus's tangent plane.
+  double radius(const Vec3& x) const {
+    const Vec3 d = x - focus_.position;
+    return std::hypot(d.dot(u_), d.dot(v_));
+  }
+  double angle(const Vec3& x) const {
+    const Vec3 d = x - focus_.position;
+    return std::atan2(d.dot(v_), d.dot(u_));
+  }
+
+  SurfacePoint seed(double r) const { return walk_surface(bundle_, focus_.where, r * ray_).end; }
+
+  struct Turn {
+    double value = kInf;  // P(r) − r; +inf: went out; −r: went into the focus; NaN: lost
+    std::vector<Vec3> points;
+    std::vector<double> speeds;
+  };
+
+  // One turn from the seed at radius r, with (sign +1) or against the flow.
+  Turn turn(double r, double sign, bool keep) const {
+    const SurfacePoint s = seed(r);
+    const Vec3 x0 = surface_position(bundle_.mesh(), s);
+    const double r0 = radius(x0);
+    double winding = 0, last_angle = angle(x0);
+    Vec3 last = x0;
+    std::optional<double> crossing;  // P(r)
+    enum class End { none, in, out } end = End::none;
+    Vec3 cross_point = x0;
+    StreamlineOptions o;
+    o.both_directions = false;
+    o.backward_only = sign < 0;
+    o.stop_when_closed = false;
+    o.stop_at_singular_faces = false;
+    o.step = std::min(0.5 * edge_, kTwoPi * std::max(r, r_min_) / 48);
+    o.max_length = 3 * kTwoPi * r_out_;
+    o.accept = [&](const Vec3& x) {
+      const double rx = radius(x);
+      if (rx < 0.3 * r_min_) {
+        end = End::in;
+        return false;
+      }
+      if (rx > r_out_) {
+        end = End::out;
+        return false;
+      }
+      const double a = angle(x);
+      double da = a - last_angle;
+      if (da > kTwoPi / 2) da -= kTwoPi;
+      if (da < -kTwoPi / 2) da += kTwoPi;
+      const double w = winding + da;
+      if (std::abs(w) >= kTwoPi) {
+        // Crossed the ray: interpolate linearly in the winding angle.
+        const double s_frac = (kTwoPi - std::abs(winding)) / std::abs(da);
+        cross_point = last + s_frac * (x - last);
+        crossing = radius(cross_point);
+        return false;
+      }
+      winding = w;
+      last_angle = a;
+      last = x;
+      return true;
+    };
+    const Streamline line = trace_streamline(bundle_, values_, s, o);
+    Turn t;
+    if (crossing) {
+      t.value = *crossing - r0;
+      if (keep) {
+        t.points.assign(line.points.begin() + static_cast<std::ptrdiff_t>(line.seed), line.points.end());
+        t.speeds.assign(line.speeds.begin() + static_cast<std::ptrdiff_t>(line.seed), line.speeds.end());
+        // The crossing closes the loop: the seed's point is its start.
+      }
+    } else if (end == End::in || line.stop_forward == StopReason::singularity) {
+      t.value = radius(line.points.back()) < r0 ? -r0 : kInf;
+    } else if (end == End::out || line.stop_forward == StopReason::boundary) {
+      t.value = kInf;
+    } else {
+      t.value = std::numeric_limits<double>::quiet_NaN();
+    }
+    return t;
+  }
+
+  double edge() const { return edge_; }
+
+private:
+  const TangentBundle& bundle_;
+  std::span<const cplx> values_;
+  const Singularity& focus_;
+  double edge_ = 0;
+  Vec3 u_, v_;
+  cplx ray_{1, 0};
+  double r_min_ = 0, r_max_ = 0, r_out_ = 0;
+};
+
+// ∮ ds/|V| over a closed polyline with speeds at its points (trapezoid rule).
+double period_of(const std::vector<Vec3>& pts, const std::vector<double>& speeds) {
+  double T = 0;
+  for (size_t k = 0; k < pts.size(); ++k) {
+    const size_t l = (k + 1) % pts.size();
+    const double ds = (pts[l] - pts[k]).norm();
+    const double a = speeds[k], b = speeds[l];
+    if (a > 0 && b > 0) T += 0.5 * ds * (1 / a + 1 / b);
+  }
+  return T;
+}
+
+}  // namespace
+
+std::vector<PeriodicOrbit> find_frame_orbits(const TangentBundle& bundle, std::span<const cplx> values,
+                                             const std::vector<Singularity>& singularities,
+                                             const PeriodicOrbitOptions& options) {
+  std::vector<PeriodicOrbit> out;
+  for (size_t k = 0; k < singularities.size(); ++k) {
+    const Singularity& focus = singularities[k];
+    if (focus.index != 1 || !searched(focus.type, options.include_nodes)) continue;
+    const Section section(bundle, values, focus, singularities, options);
+    const double r0 = section.r_min(), r1 = section.r_max();
+    if (!(r1 > r0)) continue;
+    const int n = std::clamp(static_cast<int>(std::ceil((r1 - r0) / section.edge())) + 1, 4,
+                             std::max(4, options.radius_samples));
+    std::vector<double> rs(static_cast<size_t>(n)), ds(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      rs[static_cast<size_t>(i)] = r0 + (r1 - r0) * i / (n - 1);
+      ds[static_cast<size_t>(i)] = section.turn(rs[static_cast<size_t>(i)], 1.0, false).value;
+    }
+    for (int i = 0; i + 1 < n; ++i) {
+      double a = rs[static_cast<size_t>(i)], b = rs[static_cast<size_t>(i) + 1];
+      double da = ds[static_cast<size_t>(i)], db = ds[static_cast<size_t>(i) + 1];
+      if (std::isnan(da) || std::isnan(db) || !((da > 0 && db < 0) || (da < 0 && db > 0))) continue;
+      // Illinois regula falsi on D (bisection while an end is infinite: went out).
+      int side = 0;
+      for (int it = 0; it < 60 && b - a > 1e-6 * section.edge(); ++it) {
+        double r = std::isfinite(da) && std::isfinite(db) ? (a * db - b * da) / (db - da) : 0.5 * (a + b);
+        if (!(r > a && r < b)) r = 0.5 * (a + b);
+        const double dr = section.turn(r, 1.0, false).value;
+        if (std::isnan(dr)) break;
+        if (dr == 0) {
+          a = b = r;
+          break;
+        }
+        if ((dr > 0) == (da > 0)) {
+          a = r, da = dr;
+          if (side == -1) db *= 0.5;
+          side = -1;
+        } else {
+          b = r, db = dr;
+          if (side == 1) da *= 0.5;
+          side = 1;
+        }
+      }
+      const double r = 0.5 * (a + b);
+      PeriodicOrbit orbit;
+      // D falls through zero (the forward map contracts onto r*): attracting.
+      orbit.stability = ds[static_cast<size_t>(i)] > 0 ? OrbitStability::attracting : OrbitStability::repelling;
+      // The orbit itself and its multiplier, traced the way it attracts (the map that
+      // contracts; a repelling cycle's forward multiplier is the inverse of its backward one).
+      const double sign = orbit.stability == OrbitStability::attracting ? 1.0 : -1.0;
+      Section::Turn turn = section.turn(r, sign, true);
+      if (!std::isfinite(turn.value) || turn.points.size() < 8 || std::abs(turn.value) > 0.25 * section.edge())
+        continue;
+      const double delta = std::min(0.25 * section.edge(), 0.25 * r);
+      const double lo = section.turn(r - delta, sign, false).value, hi = section.turn(r + delta, sign, false).value;
+      if (!std::isfinite(lo) || !std::isfinite(hi)) continue;
+      const double contraction = 1 + (hi - lo) / (2 * delta);  // P′ of the contracting map
+      // Hyperbolic on both sides: the edge of a center's ring of closed orbits (neutral
+      // inside, spiralling outside) contracts on one side only.
+      const double inner = 1 + (turn.value - lo) / delta, outer = 1 + (hi - turn.value) / delta;
+      const double most = 1 - options.min_multiplier_gap;
+      if (!(contraction < most && inner < most && outer < most)) continue;  // neutral or not a cycle
+      orbit.multiplier = sign > 0 ? contraction : (contraction > 0 ? 1 / contraction : kInf);
+      if (sign < 0) {
+        std::reverse(turn.points.begin(), turn.points.end());
+        std::reverse(turn.speeds.begin(), turn.speeds.end());
+      }
+      orbit.frame = focus.frame;
+      orbit.t = focus.t;
+      orbit.center = focus.position;
+      orbit.singularity = static_cast<int>(k);
+      double sum = 0;
+      for (const Vec3& x : turn.points) sum += (x - focus.position).norm();
+      orbit.radius = sum / static_cast<double>(turn.points.size());
+      orbit.period = period_of(turn.points, turn.speeds);
+      // At most kMaxPoints points in the result (every k-th of the traced ones).
+      const size_t stride = (turn.points.size() + kMaxPoints - 1) / kMaxPoints;
+      for (size_t q = 0; q < turn.points.size(); q += stride) orbit.points.push_back(turn.points[q]);
+      out.push_back(std::move(orbit));
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// Orbit tracks: ids by nearest continuation from frame to frame.
+void track_orbits(std::vector<std::vector<PeriodicOrbit>>& frames, double distance) {
+  int next = 0;
+  for (size_t j = 0; j < frames.size(); ++j) {
+    std::vector<char> taken(j > 0 ? frames[j - 1].size() : 0, 0);
+    for (PeriodicOrbit& o : frames[j]) {
+      int best = -1;
+      double best_score = kInf;
+      if (j > 0)
+        for (size_t k = 0; k < frames[j - 1].size(); ++k) {
+          const PeriodicOrbit& p = frames[j - 1][k];
+          if (taken[k] || p.stability != o.stability) continue;
+          const double dc = (p.center - o.center).norm();
+          const double dr = std::abs(p.radius - o.radius);
+          if (dc > distance || dr > std::max(distance, 0.3 * std::max(p.radius, o.radius))) continue;
+          const double score = dc + dr;
+          if (score < best_score) best_score = score, best = static_cast<int>(k);
+        }
+      if (best >= 0) {
+        taken[static_cast<size_t>(best)] = 1;
+        o.id = frames[j - 1][static_cast<size_t>(best)].id;
+      } else {
+        o.id = next++;
+      }
+    }
+  }
+}
+
+// Hopf events: trace sign changes of a focus, confirmed by an orbit track ending there.
+std::vector<HopfEvent> find_hopf_events(const Topology& topo, const std::vector<std::vector<PeriodicOrbit>>& frames,
+                                        double distance, int hopf_frames) {
+  std::vector<HopfEvent> out;
+  const size_t N = topo.singularities.size();
+  // First and last frame of each orbit track.
+  struct Track {
+    int first = -1, last = -1;
+    Vec3 first_center, last_center;
+    OrbitStability stability = OrbitStability::attracting;
+  };
+  std::vector<Track> tracks;
+  for (const auto& f : frames)
+    for (const PeriodicOrbit& o : f) {
+      if (o.id >= static_cast<int>(tracks.size())) tracks.resize(static_cast<size_t>(o.id) + 1);
+      Track& tr = tracks[static_cast<size_t>(o.id)];
+      if (tr.first < 0) tr.first = o.frame, tr.first_center = o.center;
+      tr.last = o.frame, tr.last_center = o.center;
+      tr.stability = o.stability;
+    }
+  auto complex_eigen = [](const Mat2& J) {
+    const double tr = J.trace(), det = J.determinant();
+    return det > 0.25 * tr * tr;
+  };
+  std::vector<char> used(tracks.size(), 0);
+  for (size_t j = 0; j + 1 < N; ++j) {
+    const auto& a = topo.singularities[j];
+    const auto& b = topo.singularities[j + 1];
+    for (size_t k = 0; k < a.size(); ++k) {
+      if (a[k].index != 1 || !complex_eigen(a[k].jacobian)) continue;
+      int m = -1;
+      double dm = distance;
+      for (size_t l = 0; l < b.size(); ++l) {
+        if (b[l].index != 1) continue;
+        const double d = (b[l].position - a[k].position).norm();
+        if (d <= dm) dm = d, m = static_cast<int>(l);
+      }
+      if (m < 0) continue;
+      const Singularity& s = b[static_cast<size_t>(m)];
+      if (!complex_eigen(s.jacobian)) continue;
+      const double ta = a[k].jacobian.trace(), tb = s.jacobian.trace();
+      if (!((ta < 0 && tb >= 0) || (ta > 0 && tb <= 0))) continue;
+      const double w = ta / (ta - tb);
+      HopfEvent e;
+      e.t = (1 - w) * topo.times[j] + w * topo.times[j + 1];
+      e.position = (1 - w) * a[k].position + w * s.position;
+      // The cycle surrounds the focus on the side where the focus repels (supercritical,
+      // an attracting cycle) or attracts (subcritical, a repelling cycle).
+      int best = -1;
+      double best_gap = kInf;
+      for (size_t id = 0; id < tracks.size(); ++id) {
+        const Track& tr = tracks[id];
+        if (tr.first < 0 || used[id] || tr.last == tr.first) continue;  // one frame: too weak a sign
+        // Born after t* (first frame ≥ j + 1) or ended before it (last frame ≤ j).
+        const bool born = tr.first >= static_cast<int>(j) + 1 && tr.first <= static_cast<int>(j) + hopf_frames &&
+                          (tr.first_center - e.position).norm() <= distance;
+        const bool ended = tr.last <= static_cast<int>(j) && tr.last + hopf_frames > static_cast<int>(j) &&
+                           (tr.last_center - e.position).norm() <= distance;
+        if (!born && !ended) continue;
+        // The focus inside an attracting cycle repels, inside a repelling one attracts.
+        const double inside_trace = born ? tb : ta;
+        if ((tr.stability == OrbitStability::attracting) != (inside_trace > 0)) continue;
+        const double gap = born ? tr.first - static_cast<double>(j) : static_cast<double>(j) - tr.last;
+        if (gap < best_gap) best_gap = gap, best = static_cast<int>(id);
+      }
+      if (best < 0) continue;
+      used[static_cast<size_t>(best)] = 1;
+      e.orbit = best;
+      e.supercritical = tracks[static_cast<size_t>(best)].stability == OrbitStability::attracting;
+      const int pa = topo.singularity_path.size() > j ? topo.singularity_path[j][k] : -1;
+      const int pb = topo.singularity_path.size() > j + 1 ? topo.singularity_path[j + 1][static_cast<size_t>(m)] : -1;
+      if (pa >= 0) e.paths.push_back(pa);
+      if (pb >= 0 && pb != pa) e.paths.push_back(pb);
+      out.push_back(std::move(e));
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const HopfEvent& x, const HopfEvent& y) { return x.t < y.t; });
+  return out;
+}
+
+}  // namespace
+
+PeriodicOrbits find_periodic_orbits(const TangentBundle& bundle, const Field& field, const Topology& topology,
+                                    const PeriodicOrbitOptions& options) {
+  const int N = field.frames();
+  TVF_CHECK(static_cast<int>(topology.singularities.size()) == N, "topology of {} frames for a field of {}",
+            topology.singularities.size(), N);
+  std::vector<std::vector<PeriodicOrbit>> frames(static_cast<size_t>(N));
+  auto one = [&](int j) {
+    frames[static_cast<size_t>(j)] =
+        find_frame_orbits(bundle, field.frame(j), topology.singularities[static_cast<size_t>(j)], options);
+  };
+  if (options.parallel)
+    tbb::parallel_for(0, N, one);
+  else
+    for (int j = 0; j < N; ++j) one(j);
+  const double distance = options.track_distance * bundle.mesh().mean_edge_length();
+  track_orbits(frames, distance);
+  PeriodicOrbits out;
+  out.hopf = find_hopf_events(topology, frames, distance, options.hopf_frames);
+  for (auto& f : frames)
+    for (auto& o : f) out.orbits.push_back(std::move(o));
+  return out;
+}
+
+void add_periodic_orbits_to_json(nlohmann::json& analysis, const PeriodicOrbits& orbits) {
+  using json = nlohmann::json;
+  auto vec = [](const Vec3& x) { return json::array({x.x(), x.y(), x.z()}); };
+  json list = json::array();
+  for (const PeriodicOrbit& o : orbits.orbits) {
+    json pts = json::array();
+    for (const Vec3& x : o.points) pts.push_back(vec(x));
+    list.push_back({{"frame", o.frame},
+                    {"t", o.t},
+                    {"center", vec(o.center)},
+                    {"radius", o.radius},
+                    {"stability", to_string(o.stability)},
+                    {"points", std::move(pts)},
+                    {"id", o.id},
+                    {"period", o.period},
+                    {"multiplier", o.multiplier}});
+  }
+  analysis["periodic_orbits"] = std::move(list);
+  json& bifs = analysis["bifurcations"];
+  if (!bifs.is_array()) bifs = json::array();
+  for (const HopfEvent& e : orbits.hopf)
+    bifs.push_back({{"t", e.t},
+                    {"position", vec(e.position)},
+                    {"kind", "hopf"},
+                    {"paths", e.paths},
+                    {"orbit", e.orbit},
+                    {"criticality", e.supercritical ? "supercritical" : "subcritical"}});
+}
+
+}  // namespace tvf
