@@ -150,6 +150,24 @@ TEST(DirichletSolver, ComponentWithoutConstraintsGetsZero) {
   }
 }
 
+// A factorization that fails says which matrix, by which method, and why.
+TEST(DirichletSolver, AFailedFactorizationNamesTheMatrixAndWhy) {
+  const Mesh& grid = test::grid_mesh();
+  const TangentBundle bundle(grid);
+  ConnectionLaplacian l = connection_laplacian(bundle);
+  for (int v = 0; v < grid.num_vertices(); ++v) l.matrix.coeffRef(v, v) -= 10.0;  // indefinite
+  DirichletSolver solver(l, DirichletFactorization::cholmod);
+  const auto n = static_cast<size_t>(grid.num_vertices());
+  std::vector<char> fixed(n, 0);
+  std::vector<cplx> values(n, cplx(1, 0)), out(n);
+  fixed[0] = 1;
+  const SolveReport r = solver.solve(fixed, values, out);
+  EXPECT_FALSE(r.success);
+  EXPECT_NE(r.failure.find("connection Laplacian (cotan weights"), std::string::npos) << r.failure;
+  EXPECT_NE(r.failure.find("CHOLMOD"), std::string::npos) << r.failure;
+  EXPECT_NE(r.failure.find("not positive definite"), std::string::npos) << r.failure;
+}
+
 // On meshes that are already Delaunay the cotan connection Laplacian is the input
 // triangles' own, bit for bit: ½(cot α + cot β) from the 3D corners and
 // TangentBundle::transport.
