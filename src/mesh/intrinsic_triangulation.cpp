@@ -115,8 +115,11 @@ IntrinsicTriangulation::IntrinsicTriangulation(const TangentBundle& bundle, Intr
       for (int c = 0; c < 2; ++c) push(3 * f + c);  // the quad's four outer edges
   }
 
+  // Weights still negative beyond the tolerance (boundary edges with an obtuse opposite
+  // angle; an interior edge only if it could not be flipped). Those within it (cocircular
+  // neighbours: −1e-17) are set to 0 as well, but not counted.
   for (int h = 0; h < num_halfedges(); ++h)
-    if ((twin(h) < 0 || twin(h) > h) && raw_weight(h) < 0) ++clamped_;
+    if ((twin(h) < 0 || twin(h) > h) && raw_weight(h) < -options.delaunay_tolerance) ++clamped_;
 
   // Transports: the bundle's for input edges (exactly 1 on planar domains), from the
   // two ends' directions for flipped ones; twins get the conjugate.

@@ -176,7 +176,7 @@ TEST(MeshCatalogue, EveryFileLoadsOrIsRefusedAndItsLaplacianIsPositiveSemidefini
           << p.filename() << ": " << l.intrinsic_flips << " flips, δ = " << l.mollification;
     if (l.intrinsic_flips > 0 || l.mollification > 0)
       std::cout << fmt::format("{}: {} vertices, smallest input cotan weight {:.3g}, {} intrinsic flips, δ = {:.2g}, "
-                               "{} boundary weights clamped\n",
+                               "{} negative weights clamped\n",
                                p.filename().string(), m.mesh.num_vertices(), l.min_input_weight, l.intrinsic_flips,
                                l.mollification, l.clamped_edges);
   }

@@ -80,7 +80,10 @@ public:
   // What was done (STYLE 5).
   int flips() const { return flips_; }
   double mollification() const { return delta_; }  // δ added to every edge length
-  int clamped_edges() const { return clamped_; }   // edges whose weight edge_weight() clamps
+  // Edges whose weight was below −delaunay_tolerance after the flips (edge_weight() gives 0):
+  // boundary edges with an obtuse opposite angle. Tiny negatives within the tolerance
+  // (cocircular neighbours) are set to 0 too, uncounted.
+  int clamped_edges() const { return clamped_; }
   double min_input_weight() const { return min_input_weight_; }  // smallest input cotan weight
   // True when nothing changed: the triangulation, its lengths and cotangents are the
   // input's exactly (the cotangents computed from the 3D positions as before).

@@ -40,7 +40,8 @@ struct ConnectionLaplacian {
   // Cotan weights: what the intrinsic Delaunay triangulation did (0 when nothing).
   int intrinsic_flips = 0;        // edges flipped
   double mollification = 0.0;     // δ added to every edge length
-  int clamped_edges = 0;          // boundary edges with an obtuse opposite angle, weight set to 0
+  int clamped_edges = 0;          // edges still negative after the flips (boundary edges
+                                  // with an obtuse opposite angle), weight set to 0
   double min_input_weight = 0.0;  // the smallest cotan weight of the input mesh (negative: not Delaunay)
 };
 
