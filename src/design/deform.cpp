@@ -94,8 +94,8 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
   DirichletSolver prototype(laplacian);
   {
     DirichletSolver s(prototype);
-    if (!s.solve(base_fixed, base_values, v0).success)
-      throw_input_error(scene.label(), "deform.base", "the base field could not be solved");
+    if (const SolveReport r = s.solve(base_fixed, base_values, v0); !r.success)
+      throw_input_error(scene.label(), "deform.base", "the base field could not be solved: " + r.failure);
   }
 
   // M(t): matrix keys, or (sx, sy, θ) keys interpolated linearly.
@@ -109,6 +109,7 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
   std::mutex report_mutex;
   double worst = 0;
   bool ok = true;
+  std::string failure;
   for_each_frame(scene.time.frames, options, [&](int j) {
     const double t = scene.time.time(j);
     const Mat2 m = m_at(t);
@@ -127,9 +128,10 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
     const SolveReport r = solvers.local().solve(fixed, values, out);
     std::lock_guard lock(report_mutex);
     worst = std::max(worst, r.residual);
+    if (!r.success && failure.empty()) failure = r.failure;
     ok = ok && r.success;
   });
-  if (!ok) throw_input_error(scene.label(), "deform", "a frame's constrained solve failed");
+  if (!ok) throw_input_error(scene.label(), "deform", "a frame's constrained solve failed: " + failure);
   if (report) {
     report->method = deformation.size() == 0 ? "time-varying transformation V(t) = M(t) V(t0)"
                                     : "streamline deformation, constrained solve per frame";

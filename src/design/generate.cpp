@@ -224,7 +224,8 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   std::mutex report_mutex;
   double worst_residual = 0;
   bool all_ok = true;
-  std::string method;
+  std::string method, failure;
+  int failed_frame = -1;
   const double ramp = constraint_ramp_edges * mesh.mean_edge_length();
   for_each_frame(scene.time.frames, options, [&](int j) {
     const double t = scene.time.time(j);
@@ -233,13 +234,16 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
     const SolveReport r = solvers.local().solve(c.fixed, c.values, field.frame(j), c.penalty);
     std::lock_guard lock(report_mutex);
     worst_residual = std::max(worst_residual, r.residual);
+    if (!r.success && (failed_frame < 0 || j < failed_frame)) {
+      failed_frame = j;
+      failure = r.failure;
+    }
     all_ok = all_ok && r.success;
     method = r.method;
   });
   if (!all_ok)
     throw_input_error(scene.label(), "generator",
-                      "the constrained solve failed (a part of the domain without constraints "
-                      "whose Laplacian is singular?)");
+                      fmt::format("the constrained solve of frame {} failed: {}", failed_frame, failure));
   if (report) {
     report->method = "constrained optimization per frame, " + method;
     report->residual = worst_residual;

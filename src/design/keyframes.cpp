@@ -89,7 +89,7 @@ std::vector<cplx> keyframe_field(const DesignSpace& space, const Scene& scene, s
   const SolveReport r = solver.solve(fixed, values, out);
   if (!r.success)
     throw_input_error(scene.label(), fmt::format("keyframes[{}]", k),
-                      "the key frame's constrained design could not be solved");
+                      "the key frame's constrained design could not be solved: " + r.failure);
   return out;
 }
 

@@ -1,10 +1,12 @@
 #include "tvf/mesh/log_map.h"
 
 #include "tvf/core/error.h"
+#include "tvf/mesh/intrinsic_triangulation.h"
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include <array>
 #include <cmath>
 
 namespace tvf {
@@ -13,14 +15,6 @@ namespace {
 using SpMat = Eigen::SparseMatrix<double>;
 using SpCMat = Eigen::SparseMatrix<cplx>;
 
-double cot_at(const Mesh& mesh, int h) {
-  // Cotangent of the corner angle opposite halfedge h (at the third vertex of its face).
-  const int o = Mesh::prev(h);  // halfedge leaving the opposite vertex
-  const Vec3& a = mesh.position(mesh.tail(o));
-  const Vec3 u = mesh.position(mesh.head(o)) - a;
-  const Vec3 w = mesh.position(mesh.tail(Mesh::prev(o))) - a;
-  return u.dot(w) / u.cross(w).norm();
-}
 // Gradient of the linear interpolant of vertex values u in face f, up to the positive
 // factor 1/(2·area): Σ_c u_c · n × e_c, e_c the edge opposite corner c (counter-clockwise).
 // Only its direction is used.
@@ -41,11 +35,21 @@ Vec3 face_gradient(const TangentBundle& bundle, int f, const Eigen::VectorXd& u)
 
 struct LogMap::Solvers {
   Eigen::VectorXd mass;                              // lumped (barycentric) areas
-  std::vector<double> cot;                           // per halfedge: cot of opposite angle
+  // The heat flows, the heat method's gradient and divergence and the Poisson solve run on
+  // the intrinsic Delaunay triangulation (non-negative cotan weights on any mesh): its
+  // faces' corners (the input's positions and normals where it is the input, else each
+  // face laid out in the plane), and per intrinsic halfedge the cot of the opposite angle.
+  std::vector<Face> faces;
+  std::vector<std::array<Vec3, 3>> corners;
+  std::vector<Vec3> normals;
+  std::vector<double> cot;
   Eigen::SimplicialLDLT<SpCMat> vector_heat;         // M + t L∇
   Eigen::SimplicialLDLT<SpMat> scalar_heat;          // M + t L
   Eigen::SimplicialLDLT<SpMat> poisson;              // L with vertex 0 pinned
   double h = 0;                                      // mean edge length
+  std::vector<int> component;                        // per vertex: its connected component
+  int num_components = 0;
+  double far = 0;  // the distance given to vertices of other components than p's
 };
 
 LogMap::~LogMap() = default;
@@ -63,8 +67,25 @@ LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int v : mesh.face(f)) s->mass[v] += mesh.face_area(f) / 3.0;
 
-  s->cot.resize(static_cast<size_t>(mesh.num_halfedges()));
-  for (int h = 0; h < mesh.num_halfedges(); ++h) s->cot[static_cast<size_t>(h)] = cot_at(mesh, h);
+  const IntrinsicTriangulation idt(bundle);
+  const int nf = idt.num_faces();
+  s->faces.resize(static_cast<size_t>(nf));
+  s->corners.resize(static_cast<size_t>(nf));
+  s->normals.resize(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f) {
+    const Face& face = idt.face(f);
+    s->faces[static_cast<size_t>(f)] = face;
+    if (idt.is_input()) {
+      for (int c = 0; c < 3; ++c)
+        s->corners[static_cast<size_t>(f)][static_cast<size_t>(c)] = mesh.position(face[static_cast<size_t>(c)]);
+      s->normals[static_cast<size_t>(f)] = bundle.face_normal(f);
+    } else {
+      s->corners[static_cast<size_t>(f)] = idt.layout(f);
+      s->normals[static_cast<size_t>(f)] = Vec3::UnitZ();
+    }
+  }
+  s->cot.resize(static_cast<size_t>(idt.num_halfedges()));
+  for (int h = 0; h < idt.num_halfedges(); ++h) s->cot[static_cast<size_t>(h)] = idt.cot_opposite(h);
 
   std::vector<Eigen::Triplet<cplx>> ct;
   std::vector<Eigen::Triplet<double>> rt, ht;
@@ -74,13 +95,12 @@ LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
     ct.emplace_back(v, v, s->mass[v]);
     ht.emplace_back(v, v, s->mass[v]);
   }
-  for (int h = 0; h < mesh.num_halfedges(); ++h) {
-    const int tw = mesh.twin(h);
+  for (int h = 0; h < idt.num_halfedges(); ++h) {
+    const int tw = idt.twin(h);
     if (tw >= 0 && tw < h) continue;  // each edge once
-    double w = 0.5 * s->cot[static_cast<size_t>(h)];
-    if (tw >= 0) w += 0.5 * s->cot[static_cast<size_t>(tw)];
-    const int i = mesh.tail(h), j = mesh.head(h);
-    const cplx rij = bundle.transport(h);  // T_i → T_j
+    const double w = idt.edge_weight(h);
+    const int i = idt.tail(h), j = idt.head(h);
+    const cplx rij = idt.transport(h);  // T_i → T_j
     // (L∇ z)_j ∋ −w·r_ij·z_i and (L∇ z)_i ∋ −w·conj(r_ij)·z_j: Hermitian.
     ct.emplace_back(i, i, t * w);
     ct.emplace_back(j, j, t * w);
@@ -95,9 +115,31 @@ LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
     rt.emplace_back(i, j, -w);
     rt.emplace_back(j, i, -w);
   }
-  // Pin vertex 0 so that the Neumann Laplacian becomes definite; with a compatible
-  // right-hand side the solution is the one with φ_0 = 0.
-  rt.emplace_back(0, 0, 1.0);
+  // Pin one vertex per connected component so that the Neumann Laplacian becomes
+  // definite; with a compatible right-hand side the solution is the one with φ = 0 there.
+  s->component.assign(static_cast<size_t>(nv), -1);
+  {
+    std::vector<int> stack;
+    for (int v0 = 0; v0 < nv; ++v0) {
+      if (s->component[static_cast<size_t>(v0)] >= 0) continue;
+      const int id = s->num_components++;
+      s->component[static_cast<size_t>(v0)] = id;
+      rt.emplace_back(v0, v0, 1.0);
+      stack.assign(1, v0);
+      while (!stack.empty()) {
+        const int v = stack.back();
+        stack.pop_back();
+        for (int h : mesh.outgoing(v)) {
+          for (int w : {mesh.head(h), mesh.tail(Mesh::prev(h))}) {
+            if (s->component[static_cast<size_t>(w)] >= 0) continue;
+            s->component[static_cast<size_t>(w)] = id;
+            stack.push_back(w);
+          }
+        }
+      }
+    }
+  }
+  s->far = 1e3 * mesh.diameter();
 
   SpCMat a(nv, nv);
   a.setFromTriplets(ct.begin(), ct.end());
@@ -149,23 +191,31 @@ void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
   Eigen::VectorXd u0 = Eigen::VectorXd::Zero(nv);
   for (int c = 0; c < 3; ++c) u0[pf[static_cast<size_t>(c)]] += p.bary[c];
   const Eigen::VectorXd u = s.scalar_heat.solve(u0);
-  std::vector<Vec3> xf(static_cast<size_t>(mesh.num_faces()));
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Vec3 grad = face_gradient(bundle_, f, u);
+  const int nf = static_cast<int>(s.faces.size());
+  std::vector<Vec3> xf(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f) {
+    const Face& t = s.faces[static_cast<size_t>(f)];
+    const auto& q = s.corners[static_cast<size_t>(f)];
+    Vec3 grad = Vec3::Zero();
+    for (int c = 0; c < 3; ++c)
+      grad += u[t[static_cast<size_t>(c)]] *
+              s.normals[static_cast<size_t>(f)].cross(q[static_cast<size_t>((c + 2) % 3)] - q[static_cast<size_t>((c + 1) % 3)]);
     const double g = grad.norm();
     xf[static_cast<size_t>(f)] = g > 0 ? Vec3(-grad / g) : Vec3::Zero();
   }
 
   // 3. Distance: L φ = −div X (φ grows away from p), as in the heat method.
   Eigen::VectorXd div = Eigen::VectorXd::Zero(nv);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
+  for (int f = 0; f < nf; ++f) {
     const Vec3& xw = xf[static_cast<size_t>(f)];
+    const Face& t = s.faces[static_cast<size_t>(f)];
+    const auto& q = s.corners[static_cast<size_t>(f)];
     for (int c = 0; c < 3; ++c) {
-      const int h = 3 * f + c;      // i → j
-      const int hp = Mesh::prev(h);  // k → i
-      const int i = mesh.tail(h);
-      const Vec3 e1 = mesh.position(mesh.head(h)) - mesh.position(i);
-      const Vec3 e2 = mesh.position(mesh.tail(hp)) - mesh.position(i);
+      const int h = 3 * f + c;                 // i → j
+      const int hp = IntrinsicTriangulation::prev(h);  // k → i
+      const int i = t[static_cast<size_t>(c)];
+      const Vec3 e1 = q[static_cast<size_t>((c + 1) % 3)] - q[static_cast<size_t>(c)];
+      const Vec3 e2 = q[static_cast<size_t>((c + 2) % 3)] - q[static_cast<size_t>(c)];
       // cot of the angle opposite e1 (at k) and opposite e2 (at j).
       div[i] += 0.5 * (s.cot[static_cast<size_t>(h)] * e1.dot(xw) +
                        s.cot[static_cast<size_t>(hp)] * e2.dot(xw));
@@ -173,7 +223,18 @@ void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
   }
   // Make the right-hand side compatible with the Neumann Laplacian (zero sum), spreading
   // the boundary flux by area.
-  div -= (div.sum() / s.mass.sum()) * s.mass;
+  // (per component: each has its own Neumann problem).
+  {
+    std::vector<double> sum(static_cast<size_t>(s.num_components), 0.0), area(sum.size(), 0.0);
+    for (int v = 0; v < nv; ++v) {
+      sum[static_cast<size_t>(s.component[static_cast<size_t>(v)])] += div[v];
+      area[static_cast<size_t>(s.component[static_cast<size_t>(v)])] += s.mass[v];
+    }
+    for (int v = 0; v < nv; ++v) {
+      const auto c = static_cast<size_t>(s.component[static_cast<size_t>(v)]);
+      div[v] -= sum[c] / area[c] * s.mass[v];
+    }
+  }
   const Eigen::VectorXd phi = s.poisson.solve(-div);
   // Geodesic direction at the vertices: ∇φ (the gradient field closest to X, smoother
   // than X itself), area-weighted over the faces around each vertex and carried into T_v.
@@ -203,7 +264,10 @@ void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
   for (int v = 0; v < nv; ++v) {
     const cplx fr = normalized(y[v]);
     const cplx dir = normalized(radial[v] * std::conj(fr));
-    const double dist = std::max(0.0, phi[v] - offset);
+    // Another component is out of reach: far beyond any element's falloff.
+    const double dist = s.component[static_cast<size_t>(v)] == s.component[static_cast<size_t>(pf[0])]
+                            ? std::max(0.0, phi[v] - offset)
+                            : s.far;
     chart.coords[static_cast<size_t>(v)] = dist * dir;
     chart.frame[static_cast<size_t>(v)] = fr;
   }

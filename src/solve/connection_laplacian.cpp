@@ -1,6 +1,7 @@
 #include "tvf/solve/connection_laplacian.h"
 
 #include "tvf/core/error.h"
+#include "tvf/mesh/intrinsic_triangulation.h"
 
 // GCC 12 sees a null outer-index pointer in the Ref that Eigen's CholmodSupport makes of a
 // compressed matrix (viewAsCholmod), which cannot occur: DirichletSolver's matrix is L's
@@ -14,6 +15,7 @@
 
 #include <cblas.h>
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
 
@@ -21,23 +23,11 @@ namespace tvf {
 
 namespace {
 
-// Cotangent of the corner angle opposite halfedge h (at the third vertex of its face).
-double cot_opposite(const Mesh& mesh, int h) {
-  const int o = Mesh::prev(h);
-  const Vec3& a = mesh.position(mesh.tail(o));
-  const Vec3 u = mesh.position(mesh.head(o)) - a;
-  const Vec3 w = mesh.position(mesh.tail(Mesh::prev(o))) - a;
-  return u.dot(w) / u.cross(w).norm();
-}
-
-// Weight of halfedge h = i→j seen from i (both halves for symmetric weights).
+// Weight of halfedge h = i→j seen from i (both halves for symmetric weights); cotan
+// weights come from the intrinsic triangulation instead.
 double halfedge_weight(const Mesh& mesh, int h, LaplacianWeights weights) {
   switch (weights) {
-    case LaplacianWeights::cotan: {
-      double w = 0.5 * cot_opposite(mesh, h);
-      if (const int t = mesh.twin(h); t >= 0) w += 0.5 * cot_opposite(mesh, t);
-      return w;
-    }
+    case LaplacianWeights::cotan: break;  // the intrinsic triangulation's (connection_laplacian)
     case LaplacianWeights::uniform: return 1.0;
     case LaplacianWeights::mean_value: {
       // Angles at i on either side of edge ij: in h's face (between h and i→k) and in the
@@ -67,7 +57,23 @@ ConnectionLaplacian connection_laplacian(const TangentBundle& bundle, LaplacianW
     lap.weight_sum[i] += w;
     t.emplace_back(i, j, -w * r_ji);
   };
-  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+  if (weights == LaplacianWeights::cotan) {
+    // On the intrinsic Delaunay triangulation (same vertices): w_ij ≥ 0 on every edge.
+    const IntrinsicTriangulation idt(bundle);
+    lap.intrinsic_flips = idt.flips();
+    lap.mollification = idt.mollification();
+    lap.clamped_edges = idt.clamped_edges();
+    lap.min_input_weight = idt.min_input_weight();
+    for (int h = 0; h < idt.num_halfedges(); ++h) {
+      const int tw = idt.twin(h);
+      if (tw >= 0 && tw < h) continue;  // each edge once
+      const double w = idt.edge_weight(h);
+      const cplx r_ij = idt.transport(h);
+      add(idt.tail(h), idt.head(h), w, std::conj(r_ij));
+      add(idt.head(h), idt.tail(h), w, r_ij);
+    }
+  }
+  for (int h = 0; weights != LaplacianWeights::cotan && h < mesh.num_halfedges(); ++h) {
     const int i = mesh.tail(h), j = mesh.head(h);
     const int tw = mesh.twin(h);
     const cplx r_ij = bundle.transport(h);  // T_i → T_j
@@ -163,6 +169,26 @@ DirichletSolver::~DirichletSolver() = default;
 
 void DirichletSolver::analyze() {
   impl_->a = laplacian_.matrix;
+  // Connected components of L's graph (breadth first over its pattern).
+  const Eigen::Index n = laplacian_.matrix.rows();
+  component_.assign(static_cast<size_t>(n), -1);
+  num_components_ = 0;
+  std::vector<Eigen::Index> queue;
+  for (Eigen::Index s = 0; s < n; ++s) {
+    if (component_[static_cast<size_t>(s)] >= 0) continue;
+    component_[static_cast<size_t>(s)] = num_components_;
+    queue.assign(1, s);
+    while (!queue.empty()) {
+      const Eigen::Index c = queue.back();
+      queue.pop_back();
+      for (Eigen::SparseMatrix<cplx>::InnerIterator it(laplacian_.matrix, c); it; ++it) {
+        if (component_[static_cast<size_t>(it.row())] >= 0) continue;
+        component_[static_cast<size_t>(it.row())] = num_components_;
+        queue.push_back(it.row());
+      }
+    }
+    ++num_components_;
+  }
   if (factorization_ == DirichletFactorization::cholmod) {
     impl_->cholmod = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<cplx>, Eigen::Lower>>();
     // Failures come back through info() and the report; CHOLMOD prints nothing.
@@ -194,15 +220,51 @@ SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<
   report.method = factorization_ == DirichletFactorization::cholmod ? "sparse Cholesky (CHOLMOD supernodal LLᴴ)"
                    : laplacian_.hermitian                               ? "sparse Cholesky (LDLᴴ)"
                                                                         : "sparse LU";
+  // Components without a constraint (hard or soft) are held at zero (their minimiser;
+  // where their connection is flat, L is singular there and the factorization would fail).
+  std::vector<char> component_fixed(static_cast<size_t>(num_components_), 0);
+  int fixed_count = 0;
   bool any = false;
-  for (char c : constrained) any = any || c;
-  for (double mu : penalty) any = any || mu > 0;
+  for (Eigen::Index v = 0; v < n; ++v) {
+    const bool soft = !penalty.empty() && penalty[static_cast<size_t>(v)] > 0;
+    if (constrained[static_cast<size_t>(v)] || soft) {
+      component_fixed[static_cast<size_t>(component_[static_cast<size_t>(v)])] = 1;
+      any = true;
+    }
+    if (constrained[static_cast<size_t>(v)]) ++fixed_count;
+  }
   if (!any) {
     // No constraint: the zero field is the minimiser.
     std::fill(out.begin(), out.end(), cplx(0, 0));
     report.success = true;
     return report;
   }
+  std::vector<char> fixed_here;
+  std::vector<cplx> values_here;
+  if (std::find(component_fixed.begin(), component_fixed.end(), char{0}) != component_fixed.end()) {
+    fixed_here.assign(constrained.begin(), constrained.end());
+    values_here.assign(values.begin(), values.end());
+    for (Eigen::Index v = 0; v < n; ++v)
+      if (!component_fixed[static_cast<size_t>(component_[static_cast<size_t>(v)])]) {
+        fixed_here[static_cast<size_t>(v)] = 1;
+        values_here[static_cast<size_t>(v)] = cplx(0, 0);
+      }
+    constrained = fixed_here;
+    values = values_here;
+  }
+  auto failed = [&](const std::string& why) {
+    report.failure = fmt::format(
+        "factoring the connection Laplacian ({} weights; {} vertices, {} of them fixed) by {} failed: {}",
+        laplacian_.weights == LaplacianWeights::cotan     ? "cotan"
+        : laplacian_.weights == LaplacianWeights::uniform ? "uniform"
+                                                          : "mean-value",
+        n, fixed_count, report.method, why);
+    return report;
+  };
+  const char* not_pd = laplacian_.weights == LaplacianWeights::cotan
+                           ? "the matrix is not positive definite (it should be by construction on the intrinsic "
+                             "Delaunay triangulation: please report the mesh)"
+                           : "the matrix is not positive definite";
 
   // A = L with constrained rows and columns replaced by identity (same pattern);
   // b_F = −L_FC z_C, b_C = z_C.
@@ -239,20 +301,24 @@ SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<
   if (factorization_ == DirichletFactorization::cholmod) {
     const OneBlasThread one_thread;
     impl_->cholmod->factorize(a);
-    if (impl_->cholmod->info() != Eigen::Success) return report;
+    if (impl_->cholmod->info() != Eigen::Success)
+      return failed(impl_->cholmod->cholmod().status == CHOLMOD_NOT_POSDEF
+                        ? std::string(not_pd)
+                        : fmt::format("CHOLMOD status {}", impl_->cholmod->cholmod().status));
     z = impl_->cholmod->solve(b);
   } else if (laplacian_.hermitian) {
     impl_->ldlt.factorize(a);
-    if (impl_->ldlt.info() != Eigen::Success) return report;
+    if (impl_->ldlt.info() != Eigen::Success) return failed("a zero pivot (the matrix is singular)");
     z = impl_->ldlt.solve(b);
   } else {
     impl_->lu.factorize(a);
-    if (impl_->lu.info() != Eigen::Success) return report;
+    if (impl_->lu.info() != Eigen::Success) return failed("the matrix is singular (" + impl_->lu.lastErrorMessage() + ")");
     z = impl_->lu.solve(b);
   }
   const double bn = b.norm();
   report.residual = bn > 0 ? (a * z - b).norm() / bn : 0.0;
   report.success = std::isfinite(report.residual);
+  if (!report.success) return failed("the solution is not finite");
   for (Eigen::Index v = 0; v < n; ++v) out[static_cast<size_t>(v)] = z[v];
   return report;
 }

@@ -15,8 +15,13 @@
 // order in r). (A diffused ring of radial vectors, the other option of the vector heat paper,
 // was measured to be biased by up to 0.5 rad towards the ring's seeds when p lies inside
 // a face; the point delta has no preferred direction.) The three systems (M + tL∇,
-// complex Hermitian; M + tL and L + pin, real) are factored once per mesh with sparse
-// Cholesky; each point then costs three back-substitutions and two passes over the faces.
+// complex Hermitian; M + tL and L + a pin per connected component, real) are factored once
+// per mesh with sparse Cholesky; each point then costs three back-substitutions and two
+// passes over the faces. L∇ and L (and the heat method's gradient and divergence) are
+// taken on the intrinsic Delaunay triangulation (intrinsic_triangulation.h), so their cotan
+// weights are non-negative on any mesh; M stays the input's lumped areas. Vertices of
+// another connected component than p's get a distance far beyond any element's falloff
+// (10³ times the mesh's diameter).
 #include "tvf/field/field_sampler.h"
 #include "tvf/mesh/tangent_bundle.h"
 

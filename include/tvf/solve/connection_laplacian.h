@@ -1,10 +1,20 @@
 #pragma once
 // The connection (vector) Laplacian of DESIGN §5:
 //   (L z)_i = Σ_j w_ij (z_i − r_ji z_j),
-// z_i a tangent vector at vertex i in its basis, r_ji = TangentBundle::transport(j→i).
-// L is positive semidefinite where the weights are positive. Cotan and uniform weights are
-// symmetric (w_ij = w_ji), which makes L Hermitian, so sparse Cholesky and CG apply;
-// mean-value weights (the paper's) are not, and need LU or BiCGStab.
+// z_i a tangent vector at vertex i in its basis, r_ji the transport j → i.
+// L is positive semidefinite where the weights are non-negative: zᴴLz = Σ_edges w_ij
+// |z_i − r_ji z_j|². Cotan and uniform weights are symmetric (w_ij = w_ji), which makes L
+// Hermitian, so sparse Cholesky and CG apply; mean-value weights (the paper's) are not,
+// and need LU or BiCGStab.
+//
+// Cotan weights are taken on the intrinsic Delaunay triangulation of the mesh
+// (intrinsic_triangulation.h), whose cotan weights are non-negative whatever the input's
+// triangle quality, so L is positive semidefinite by construction (and definite once a
+// vertex of every component is fixed, or where the connection has holonomy). Its edges j
+// may be geodesics across input faces: r_ji comes from the edge's direction at both
+// ends. On a mesh that is already Delaunay nothing is flipped and L is the input's cotan
+// Laplacian with TangentBundle::transport, exactly as before. Uniform and mean-value
+// weights stay on the input's edges.
 #include "tvf/mesh/tangent_bundle.h"
 
 #include <Eigen/SparseCore>
@@ -12,6 +22,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace tvf {
 
@@ -26,6 +37,12 @@ struct ConnectionLaplacian {
   Eigen::VectorXd weight_sum;        // d_i = Σ_j w_ij (the diagonal)
   LaplacianWeights weights = LaplacianWeights::cotan;
   bool hermitian = true;
+  // Cotan weights: what the intrinsic Delaunay triangulation did (0 when nothing).
+  int intrinsic_flips = 0;        // edges flipped
+  double mollification = 0.0;     // δ added to every edge length
+  int clamped_edges = 0;          // edges still negative after the flips (boundary edges
+                                  // with an obtuse opposite angle), weight set to 0
+  double min_input_weight = 0.0;  // the smallest cotan weight of the input mesh (negative: not Delaunay)
 };
 
 ConnectionLaplacian connection_laplacian(const TangentBundle& bundle,
@@ -37,6 +54,7 @@ struct SolveReport {
   int iterations = 0;      // 0 for direct methods
   double residual = 0.0;   // ‖A z − b‖ / ‖b‖ over the free vertices (0 when b = 0)
   bool success = false;
+  std::string failure;     // when !success: one sentence naming the matrix and why it failed
 };
 
 // How DirichletSolver factors its matrix (measured: docs/benchmarks.md, "Sparse
@@ -63,7 +81,8 @@ public:
 
   // constrained[v] != 0 marks fixed vertices, whose values are taken from `values`
   // (entries of free vertices are ignored). `out` receives the whole field (|V|).
-  // A connected component without constraints gets zero there.
+  // A connected component (of L's graph) without constraints gets zero there: its
+  // energy's minimiser (or one of them, where its connection is flat and L singular).
   SolveReport solve(std::span<const char> constrained, std::span<const cplx> values,
                     std::span<cplx> out);
   // As above, with soft constraints too: a free vertex v with penalty[v] = μ_v > 0 adds
@@ -83,6 +102,8 @@ private:
   const ConnectionLaplacian& laplacian_;
   DirichletFactorization factorization_;
   std::unique_ptr<Impl> impl_;
+  std::vector<int> component_;  // per vertex: its connected component in L's graph
+  int num_components_ = 0;
 };
 
 }  // namespace tvf
