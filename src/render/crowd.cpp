@@ -140,6 +140,35 @@ Vec2 CrowdShape::push_out(const Vec2& x, double margin) const {
   return p;
 }
 
+double CrowdShape::entry(const Vec2& a, const Vec2& b) const {
+  constexpr double never = std::numeric_limits<double>::infinity();
+  if (contains(a)) return never;
+  const Vec2 d = b - a;
+  if (kind == Kind::circle) {
+    // |a + s·d − c|² = r²: the smaller root, when the chord has positive length.
+    const Vec2 f = a - center;
+    const double qa = d.squaredNorm(), qb = 2 * f.dot(d), qc = f.squaredNorm() - radius * radius;
+    const double disc = qb * qb - 4 * qa * qc;
+    if (qa == 0 || disc <= 0) return never;
+    const double root = std::sqrt(disc);
+    const double s1 = (-qb - root) / (2 * qa), s2 = (-qb + root) / (2 * qa);
+    return s1 < 1 && s2 > 0 ? std::max(0.0, s1) : never;
+  }
+  // Slabs: the open box is entered where every coordinate is strictly inside.
+  double enter = -never, leave = never;
+  for (int k = 0; k < 2; ++k) {
+    if (d[k] == 0) {
+      if (!(a[k] > min[k] && a[k] < max[k])) return never;
+      continue;
+    }
+    double s0 = (min[k] - a[k]) / d[k], s1 = (max[k] - a[k]) / d[k];
+    if (s0 > s1) std::swap(s0, s1);
+    enter = std::max(enter, s0);
+    leave = std::min(leave, s1);
+  }
+  return enter < leave && enter < 1 && leave > 0 ? std::max(0.0, enter) : never;
+}
+
 CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
   const Reader r{file};
   r.keys(j, "", {"agents", "speed", "weights", "grid", "agent_radius", "steps_per_frame", "avoidance", "start",
@@ -376,10 +405,12 @@ private:
 // Agent–agent separation after a step: pairs of active agents closer than `sep` are
 // pushed apart along the line joining them, half the overlap each (Jacobi iterations of
 // position-based dynamics), each position kept in the box and out of obstacles by
-// `fix`. Pairs still too close after the iterations go back to their positions `old`,
-// which kept the distance: so no two active agents are ever closer than sep.
+// `fix` and refused (back to `old`) when the step from `old` to it is not `free` (it would
+// pass through an obstacle). Pairs still too close after the iterations go back to their
+// positions `old`, which kept the distance: so no two active agents are ever closer than sep.
 void separate(std::vector<Vec2>& x, const std::vector<Vec2>& old, const std::vector<char>& active, double sep,
-              const std::function<Vec2(const Vec2&)>& fix, const std::function<bool(const Vec2&)>& free) {
+              const std::function<Vec2(const Vec2&)>& fix,
+              const std::function<bool(const Vec2& from, const Vec2& to)>& free) {
   const size_t n = x.size();
   const double tolerance = sep * (1 - 1e-9);
   std::vector<Vec2> correction(n, Vec2(0, 0));
@@ -406,7 +437,7 @@ void separate(std::vector<Vec2>& x, const std::vector<Vec2>& old, const std::vec
     for (size_t a = 0; a < n; ++a)
       if (active[a] && correction[a].squaredNorm() > 0) {
         const Vec2 p = fix(x[a] + correction[a]);
-        x[a] = free(p) ? p : old[a];
+        x[a] = free(old[a], p) ? p : old[a];  // the whole step from old[a] stays clear of obstacles
       }
   }
   // The guarantee: revert both agents of any pair still too close, until none is.
@@ -547,6 +578,26 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
     }
   }
   const double range = 2.0 * sep;  // the separation term acts within this distance
+  // Whether the straight step from → to stays out of every obstacle.
+  auto passable = [&](const Vec2& from, const Vec2& to) {
+    for (const auto& o : spec.obstacles)
+      if (o.entry(from, to) <= 1) return false;
+    return true;
+  };
+  // The step from → to cut where it first enters an obstacle, pushed back out on the side it
+  // came from (from itself when even that is not free).
+  auto stop_at_obstacles = [&](const Vec2& from, const Vec2& to) -> Vec2 {
+    double first = std::numeric_limits<double>::infinity();
+    const CrowdShape* hit = nullptr;
+    for (const auto& o : spec.obstacles)
+      if (const double e = o.entry(from, to); e <= 1 && e < first) {
+        first = e;
+        hit = &o;
+      }
+    if (!hit) return to;
+    const Vec2 p = hit->push_out(from + first * (to - from), 1e-9 * diag);
+    return passable(from, p) && !blocked(p) ? p : from;
+  };
   for (int k = 1; k < total; ++k) {
     for (int s = 0; s < spec.steps_per_frame; ++s) {
       const double t0 = time_of(k - 1) + (time_of(k) - time_of(k - 1)) * s / spec.steps_per_frame;
@@ -587,11 +638,19 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         const Vec2 mid = (x[a] + 0.5 * dt * (velocity(x[a], t0) + push)).cwiseMax(lo).cwiseMin(hi);
         Vec2 next = x[a] + dt * (velocity(mid, t0 + 0.5 * dir * dt) + push);
         next = next.cwiseMax(lo).cwiseMin(hi);
+        // The whole step is checked, not only where it ends: a long step (the separation
+        // push adds to it) could otherwise jump a thin wall. It stops where it would enter
+        // the first obstacle, on the side it came from.
+        if (const Vec2 stopped = stop_at_obstacles(x[a], next); stopped != next) {
+          next = stopped;
+          ++contacts[a];
+        }
         for (const auto& o : spec.obstacles)
           if (o.contains(next)) {
             next = o.push_out(next, 1e-9 * diag);
             ++contacts[a];
           }
+        if (!passable(x[a], next)) next = x[a];
         if (!locator.locate(next)) next = x[a];  // a step off a non-rectangular domain is refused
         moved[a] = next;
       });
@@ -600,7 +659,7 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         for (const auto& o : spec.obstacles)
           if (o.contains(q)) q = o.push_out(q, 1e-9 * diag);
         return q;
-      }, [&](const Vec2& p) { return !blocked(p); });
+      }, [&](const Vec2& from, const Vec2& p) { return !blocked(p) && passable(from, p); });
       x.swap(moved);
       for (size_t a = 0; a < na; ++a)
         if (active[a] && at_goal(x[a])) {

@@ -6,10 +6,8 @@
 #include <cblas.h>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
-#include <tbb/combinable.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -97,21 +95,41 @@ void blocks(size_t n, bool parallel, F&& body) {
                     [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
 }
 
-// Σ over [0, n) of term(k), in parallel blocks or not.
+// Σ of partial(task) over tasks [0, count), run in parallel or not, added in task order: the
+// tasks are fixed pieces of the work (never the partitioner's or the threads' choice), so a
+// sum has the same bits with one thread, two, or none (replay from a scene is bit for bit
+// on any machine; a per-thread accumulator or parallel_reduce would add in an order that
+// depends on the thread count).
+template <class F>
+double ordered_sum(size_t count, bool parallel, F&& partial) {
+  if (count == 0) return 0.0;
+  if (count == 1) return partial(size_t{0});
+  std::vector<double> parts(count);
+  if (parallel)
+    tbb::parallel_for(size_t{0}, count, [&](size_t t) { parts[t] = partial(t); });
+  else
+    for (size_t t = 0; t < count; ++t) parts[t] = partial(t);
+  double s = 0;
+  for (const double x : parts) s += x;
+  return s;
+}
+
+// Σ over [0, n) of body(begin, end)'s partial sums over fixed chunks of 4096 entries.
+constexpr size_t kSumChunk = 4096;
+template <class F>
+double chunked_sum(size_t n, bool parallel, F&& body) {
+  return ordered_sum((n + kSumChunk - 1) / kSumChunk, parallel,
+                     [&](size_t c) { return body(c * kSumChunk, std::min(n, (c + 1) * kSumChunk)); });
+}
+
+// Σ over [0, n) of term(k), in fixed chunks (see ordered_sum).
 template <class F>
 double sum(size_t n, bool parallel, F&& term) {
-  if (!parallel || n < 4096) {
+  return chunked_sum(n, parallel, [&](size_t b, size_t e) {
     double s = 0;
-    for (size_t k = 0; k < n; ++k) s += term(k);
+    for (size_t k = b; k < e; ++k) s += term(k);
     return s;
-  }
-  return tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, n, 4096), 0.0,
-      [&](const tbb::blocked_range<size_t>& r, double s) {
-        for (size_t k = r.begin(); k < r.end(); ++k) s += term(k);
-        return s;
-      },
-      std::plus<>());
+  });
 }
 
 // The space-time operator on one fixed set, frame-major vectors of frames × n.
@@ -133,7 +151,6 @@ struct SpaceTime {
     const size_t block = 512;
     const size_t row_blocks = (n + block - 1) / block;
     const size_t frame_blocks = (nf + kFrames - 1) / kFrames;
-    tbb::combinable<double> dot([] { return 0.0; });
     auto body = [&](size_t task) {
       const size_t j0 = (task / row_blocks) * kFrames, nj = std::min(kFrames, nf - j0);
       const size_t i0 = (task % row_blocks) * block, i1 = std::min(n, i0 + block);
@@ -164,14 +181,9 @@ struct SpaceTime {
           partial += emit(k, xi, op.diagonal[i] * xi + cplx(re[f], im[f]) + c * t);
         }
       }
-      dot.local() += partial;
+      return partial;
     };
-    const size_t tasks = frame_blocks * row_blocks;
-    if (parallel)
-      tbb::parallel_for(size_t{0}, tasks, body);
-    else
-      for (size_t t = 0; t < tasks; ++t) body(t);
-    return dot.combine(std::plus<>());
+    return ordered_sum(frame_blocks * row_blocks, parallel, body);
   }
 
   // y_F = A_FF x_F (y's fixed entries zero); returns Re <x, y>, fused so an iteration
@@ -896,7 +908,6 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
   auto precondition = [&](const Vec& r, Vec& out) {
     constexpr size_t kBlock = 256;
     const size_t nblocks = (n + kBlock - 1) / kBlock;
-    tbb::combinable<double> dot([] { return 0.0; });
     auto body = [&](size_t blk) {
       const size_t i0 = blk * kBlock, i1 = std::min(n, i0 + kBlock);
       for (size_t i = i0; i < i1; ++i) out[i] = r[i] * pivot[i];
@@ -912,13 +923,9 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
           if (j + 1 < nf) out[k] -= upper[k] * out[k + n];
           partial += r[k].real() * out[k].real() + r[k].imag() * out[k].imag();
         }
-      dot.local() += partial;
+      return partial;
     };
-    if (par)
-      tbb::parallel_for(size_t{0}, nblocks, body);
-    else
-      for (size_t b = 0; b < nblocks; ++b) body(b);
-    return dot.combine(std::plus<>());
+    return ordered_sum(nblocks, par, body);
   };
 
   Vec& r = sized(work_->r, total);
@@ -938,17 +945,15 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
     if (!(pap > 0)) break;  // not positive definite on this subspace
     const double alpha = rz / pap;
     // x += αp, r −= αAp and ‖r‖² in one pass.
-    tbb::combinable<double> rr([] { return 0.0; });
-    blocks(total, par, [&](size_t s, size_t e) {
+    rnorm = std::sqrt(chunked_sum(total, par, [&](size_t s, size_t e) {
       double partial = 0;
       for (size_t k = s; k < e; ++k) {
         x[k] += alpha * p[k];
         r[k] -= alpha * ap[k];
         partial += std::norm(r[k]);
       }
-      rr.local() += partial;
-    });
-    rnorm = std::sqrt(rr.combine(std::plus<>()));
+      return partial;
+    }));
     ++it;
     if (rnorm <= options.tolerance * bnorm) break;
     const double rz_new = precondition(r, zp);
