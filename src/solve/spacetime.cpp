@@ -84,15 +84,21 @@ std::vector<T>& sized(std::vector<T>& v, size_t n) {
   return v;
 }
 
-// Runs body(begin, end) over [0, n), in parallel blocks or not.
+// Runs body(begin, end) over [0, n) in fixed blocks of 2048 entries, in parallel or not.
+// The blocks never depend on the thread count or the partitioner: an entry is computed by
+// the same code (vectorised loop body or scalar remainder, with the same fused
+// multiply-adds) whoever runs it, so elementwise updates have the same bits on any number
+// of threads (a partitioner's split moved entries between the vector body and the scalar
+// remainder, and with FMA contraction those round differently).
+constexpr size_t kBlockEntries = 2048;
 template <class F>
 void blocks(size_t n, bool parallel, F&& body) {
-  if (!parallel || n < 4096) {
-    body(size_t{0}, n);
-    return;
-  }
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2048),
-                    [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
+  const size_t count = (n + kBlockEntries - 1) / kBlockEntries;
+  auto run = [&](size_t c) { body(c * kBlockEntries, std::min(n, (c + 1) * kBlockEntries)); };
+  if (parallel && count > 1)
+    tbb::parallel_for(size_t{0}, count, run);
+  else
+    for (size_t c = 0; c < count; ++c) run(c);
 }
 
 // Σ of partial(task) over tasks [0, count), run in parallel or not, added in task order: the
@@ -105,10 +111,11 @@ double ordered_sum(size_t count, bool parallel, F&& partial) {
   if (count == 0) return 0.0;
   if (count == 1) return partial(size_t{0});
   std::vector<double> parts(count);
+  auto run = [&](size_t t) { parts[t] = partial(t); };
   if (parallel)
-    tbb::parallel_for(size_t{0}, count, [&](size_t t) { parts[t] = partial(t); });
+    tbb::parallel_for(size_t{0}, count, run);
   else
-    for (size_t t = 0; t < count; ++t) parts[t] = partial(t);
+    for (size_t t = 0; t < count; ++t) run(t);
   double s = 0;
   for (const double x : parts) s += x;
   return s;
