@@ -638,18 +638,20 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         const Vec2 mid = (x[a] + 0.5 * dt * (velocity(x[a], t0) + push)).cwiseMax(lo).cwiseMin(hi);
         Vec2 next = x[a] + dt * (velocity(mid, t0 + 0.5 * dir * dt) + push);
         next = next.cwiseMax(lo).cwiseMin(hi);
-        // The whole step is checked, not only where it ends: a long step (the separation
-        // push adds to it) could otherwise jump a thin wall. It stops where it would enter
-        // the first obstacle, on the side it came from.
-        if (const Vec2 stopped = stop_at_obstacles(x[a], next); stopped != next) {
-          next = stopped;
-          ++contacts[a];
-        }
+        const Vec2 aimed = next;
         for (const auto& o : spec.obstacles)
           if (o.contains(next)) {
-            next = o.push_out(next, 1e-9 * diag);
+            next = o.push_out(next, 1e-9 * diag);  // slides along the obstacle
             ++contacts[a];
           }
+        // The whole step is checked, not only where it ends: a long step (the separation
+        // push adds to it) could otherwise jump a thin wall, or be pushed out on its far
+        // side. Such a step stops where it would enter the first obstacle, on the side it
+        // came from.
+        if (!passable(x[a], next)) {
+          next = stop_at_obstacles(x[a], aimed);
+          ++contacts[a];
+        }
         if (!passable(x[a], next)) next = x[a];
         if (!locator.locate(next)) next = x[a];  // a step off a non-rectangular domain is refused
         moved[a] = next;

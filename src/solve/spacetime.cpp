@@ -3,7 +3,6 @@
 #include "tvf/core/error.h"
 
 #include <Eigen/IterativeLinearSolvers>
-#include <cblas.h>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -85,11 +84,10 @@ std::vector<T>& sized(std::vector<T>& v, size_t n) {
 }
 
 // Runs body(begin, end) over [0, n) in fixed blocks of 2048 entries, in parallel or not.
-// The blocks never depend on the thread count or the partitioner: an entry is computed by
-// the same code (vectorised loop body or scalar remainder, with the same fused
-// multiply-adds) whoever runs it, so elementwise updates have the same bits on any number
-// of threads (a partitioner's split moved entries between the vector body and the scalar
-// remainder, and with FMA contraction those round differently).
+// The blocks never depend on the thread count or the partitioner, and the serial and
+// parallel paths run the same block function: with the partitioner's blocks two runs of
+// the CG on two CPUs differed in the last bits (a 41² × 24 spacetime scene); with fixed
+// blocks they agree with each other and with the serial solve.
 constexpr size_t kBlockEntries = 2048;
 template <class F>
 void blocks(size_t n, bool parallel, F&& body) {
@@ -370,11 +368,25 @@ double share_level(std::vector<double> rr0, double budget) {
 }
 
 // out = in · m (or in · mᵀ) for a tall frame-major block: rows = 2·|V| real numbers
-// (re, im interleaved), one column per frame. OpenBLAS threads it itself.
+// (re, im interleaved), one column per frame.
 void multiply_rows(const double* in, const Eigen::MatrixXd& m, bool transpose, double* out, Eigen::Index rows) {
-  const auto r = static_cast<blasint>(rows), c = static_cast<blasint>(m.rows());
-  cblas_dgemm(CblasColMajor, CblasNoTrans, transpose ? CblasTrans : CblasNoTrans, r, c, c, 1.0, in, r, m.data(), c,
-              0.0, out, r);
+  // Fixed blocks of rows, each an Eigen product on one thread, the blocks in parallel: every
+  // row is computed by the same kernel whatever the thread count. (OpenBLAS's dgemm split
+  // the rows by its own thread count, and as it runs on one thread while a CHOLMOD
+  // factorization runs elsewhere, by timing too: example 06 came out with other bits on one
+  // CPU than on two.)
+  const Eigen::Index c = m.rows();
+  constexpr Eigen::Index kRows = 2048;
+  const Eigen::Index blocks = (rows + kRows - 1) / kRows;
+  const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> a(in, rows, c, Eigen::OuterStride<>(rows));
+  Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>> y(out, rows, c, Eigen::OuterStride<>(rows));
+  tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index b) {
+    const Eigen::Index r0 = b * kRows, nr = std::min(kRows, rows - r0);
+    if (transpose)
+      y.middleRows(r0, nr).noalias() = a.middleRows(r0, nr) * m.transpose();
+    else
+      y.middleRows(r0, nr).noalias() = a.middleRows(r0, nr) * m;
+  });
 }
 
 }  // namespace
