@@ -140,35 +140,6 @@ Vec2 CrowdShape::push_out(const Vec2& x, double margin) const {
   return p;
 }
 
-double CrowdShape::entry(const Vec2& a, const Vec2& b) const {
-  constexpr double never = std::numeric_limits<double>::infinity();
-  if (contains(a)) return never;
-  const Vec2 d = b - a;
-  if (kind == Kind::circle) {
-    // |a + s·d − c|² = r²: the smaller root, when the chord has positive length.
-    const Vec2 f = a - center;
-    const double qa = d.squaredNorm(), qb = 2 * f.dot(d), qc = f.squaredNorm() - radius * radius;
-    const double disc = qb * qb - 4 * qa * qc;
-    if (qa == 0 || disc <= 0) return never;
-    const double root = std::sqrt(disc);
-    const double s1 = (-qb - root) / (2 * qa), s2 = (-qb + root) / (2 * qa);
-    return s1 < 1 && s2 > 0 ? std::max(0.0, s1) : never;
-  }
-  // Slabs: the open box is entered where every coordinate is strictly inside.
-  double enter = -never, leave = never;
-  for (int k = 0; k < 2; ++k) {
-    if (d[k] == 0) {
-      if (!(a[k] > min[k] && a[k] < max[k])) return never;
-      continue;
-    }
-    double s0 = (min[k] - a[k]) / d[k], s1 = (max[k] - a[k]) / d[k];
-    if (s0 > s1) std::swap(s0, s1);
-    enter = std::max(enter, s0);
-    leave = std::min(leave, s1);
-  }
-  return enter < leave && enter < 1 && leave > 0 ? std::max(0.0, enter) : never;
-}
-
 CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
   const Reader r{file};
   r.keys(j, "", {"agents", "speed", "weights", "grid", "agent_radius", "steps_per_frame", "avoidance", "start",
@@ -578,26 +549,12 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
     }
   }
   const double range = 2.0 * sep;  // the separation term acts within this distance
-  // Whether the straight step from → to stays out of every obstacle.
-  auto passable = [&](const Vec2& from, const Vec2& to) {
-    for (const auto& o : spec.obstacles)
-      if (o.entry(from, to) <= 1) return false;
-    return true;
-  };
-  // The step from → to cut where it first enters an obstacle, pushed back out on the side it
-  // came from (from itself when even that is not free).
-  auto stop_at_obstacles = [&](const Vec2& from, const Vec2& to) -> Vec2 {
-    double first = std::numeric_limits<double>::infinity();
-    const CrowdShape* hit = nullptr;
-    for (const auto& o : spec.obstacles)
-      if (const double e = o.entry(from, to); e <= 1 && e < first) {
-        first = e;
-        hit = &o;
-      }
-    if (!hit) return to;
-    const Vec2 p = hit->push_out(from + first * (to - from), 1e-9 * diag);
-    return passable(from, p) && !blocked(p) ? p : from;
-  };
+  // Substep length: under half the thinnest obstacle (a rectangle's shorter side, a
+  // circle's diameter), so a substep cannot cross one.
+  double substep = std::numeric_limits<double>::infinity();
+  for (const auto& o : spec.obstacles)
+    substep = std::min(substep, 0.45 * (o.kind == CrowdShape::Kind::circle ? 2 * o.radius
+                                                                           : (o.max - o.min).minCoeff()));
   for (int k = 1; k < total; ++k) {
     for (int s = 0; s < spec.steps_per_frame; ++s) {
       const double t0 = time_of(k - 1) + (time_of(k) - time_of(k - 1)) * s / spec.steps_per_frame;
@@ -638,21 +595,38 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         const Vec2 mid = (x[a] + 0.5 * dt * (velocity(x[a], t0) + push)).cwiseMax(lo).cwiseMin(hi);
         Vec2 next = x[a] + dt * (velocity(mid, t0 + 0.5 * dir * dt) + push);
         next = next.cwiseMax(lo).cwiseMin(hi);
-        const Vec2 aimed = next;
-        for (const auto& o : spec.obstacles)
-          if (o.contains(next)) {
-            next = o.push_out(next, 1e-9 * diag);  // slides along the obstacle
-            ++contacts[a];
-          }
         // The whole step is checked, not only where it ends: a long step (the separation
         // push adds to it) could otherwise jump a thin wall, or be pushed out on its far
-        // side. Such a step stops where it would enter the first obstacle, on the side it
-        // came from.
-        if (!passable(x[a], next)) {
-          next = stop_at_obstacles(x[a], aimed);
-          ++contacts[a];
+        // side. It is walked in substeps shorter than half the thinnest obstacle, each
+        // pushed out of an obstacle it enters: a substep cannot reach past an obstacle's
+        // middle, so it is pushed back to the side it came from, and the agent slides along
+        // walls and round corners instead of passing through them.
+        {
+          const Vec2 move = next - x[a];
+          const int substeps = std::clamp(static_cast<int>(std::ceil(move.norm() / substep)), 1, 4096);
+          Vec2 p = x[a];
+          bool touched = false;
+          for (int step = 0; step < substeps; ++step) {
+            const Vec2 before = p;
+            p = (p + move / substeps).cwiseMax(lo).cwiseMin(hi);
+            bool on = false;
+            for (const auto& o : spec.obstacles)
+              if (o.distance(p) <= 0) {
+                p = o.push_out(p, 1e-9 * diag).cwiseMax(lo).cwiseMin(hi);
+                touched = true;
+                on = on || o.distance(p) <= 0;
+              }
+            // Still on an obstacle after the push (a wall that meets the domain's edge: the
+            // box put it back): the step ends before it, so no agent walks along the edge
+            // under a wall.
+            if (on) {
+              p = before;
+              break;
+            }
+          }
+          next = p;
+          if (touched) ++contacts[a];
         }
-        if (!passable(x[a], next)) next = x[a];
         if (!locator.locate(next)) next = x[a];  // a step off a non-rectangular domain is refused
         moved[a] = next;
       });
@@ -661,7 +635,14 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         for (const auto& o : spec.obstacles)
           if (o.contains(q)) q = o.push_out(q, 1e-9 * diag);
         return q;
-      }, [&](const Vec2& from, const Vec2& p) { return !blocked(p) && passable(from, p); });
+      }, [&](const Vec2&, const Vec2& p) {
+        // A correction moves an agent by at most half the separation: when that is under
+        // half the thinnest obstacle, `fix` pushes it back to the side it came from. One
+        // left on an obstacle's boundary (where a wall meets the domain's edge) is refused.
+        for (const auto& o : spec.obstacles)
+          if (o.distance(p) <= 0) return false;
+        return !blocked(p);
+      });
       x.swap(moved);
       for (size_t a = 0; a < na; ++a)
         if (active[a] && at_goal(x[a])) {

@@ -40,9 +40,6 @@ struct CrowdShape {
   bool contains(const Vec2& x) const { return distance(x) < 0; }
   // The point closest to x on the boundary grown by `margin`.
   Vec2 push_out(const Vec2& x, double margin) const;
-  // Where the segment a → b first enters the shape's interior, as s in [0, 1] (the point
-  // a + s·(b − a)); +∞ when it never does, or when a is inside already (it is leaving).
-  double entry(const Vec2& a, const Vec2& b) const;
 };
 
 struct CrowdSpec {
