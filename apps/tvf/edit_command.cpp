@@ -58,7 +58,7 @@ nlohmann::json requested_edit(const EditArgs& args, const Scene& scene) {
   const std::string form = planar ? "X Y" : "X Y Z";
   nlohmann::json e;
   auto window = [&] {
-    if (args.window >= 0) e["window"] = args.window;
+    if (!std::isnan(args.window)) e["window"] = args.window;
   };
   if (!args.cancel.empty()) {
     if (args.cancel.size() != 1 + 2 * n)
@@ -105,6 +105,17 @@ int run_edit(const EditArgs& args) {
   if (!given)
     throw Error(fmt::format("{}: say which edit: --cancel, --remove-bifurcation, --move-bifurcation, --smooth or --undo",
                             args.scene));
+  // --window belongs to the edits that re-solve a time window; it is never dropped or
+  // replaced silently.
+  if (!std::isnan(args.window)) {
+    if (!std::isnan(args.smooth) || args.undo)
+      throw Error(fmt::format("{}: --window applies to --cancel, --remove-bifurcation and --move-bifurcation; {} "
+                              "has no time window",
+                              args.scene, args.undo ? "--undo" : "--smooth (which smooths every frame)"));
+    if (!(args.window >= 0 && args.window <= 1))
+      throw Error(fmt::format("{}: --window {}: must be in [0, 1] (a fraction of the time range)", args.scene,
+                              args.window));
+  }
   Scene scene = load_scene(args.scene);
   if (args.undo) {
     if (scene.edits.empty()) throw Error(fmt::format("{}: the scene has no edits to undo", args.scene));

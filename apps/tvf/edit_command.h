@@ -17,7 +17,7 @@ struct EditArgs {
   std::vector<double> remove_bifurcation;  // T X Y [Z]
   std::vector<double> move_bifurcation;    // T X Y [Z] T2 X2 Y2 [Z2]
   double smooth = std::numeric_limits<double>::quiet_NaN();  // NaN: not given
-  double window = -1.0;                    // < 0: the default
+  double window = std::numeric_limits<double>::quiet_NaN();  // NaN: not given (the default)
   bool undo = false;
   bool quiet = false;
 };

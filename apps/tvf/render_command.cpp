@@ -17,6 +17,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cstdio>
 #include <filesystem>
@@ -81,6 +82,13 @@ RenderCommand::RenderCommand(CLI::App& app) {
     sub->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
   };
   const char* frames_or_video = "Output: a folder of PNG frames, or a file ending in .mp4 (give -o twice for both)";
+  auto time_scale = [&](CLI::App* sub, const char* what) {
+    sub->add_option("--time-scale", time_scale_,
+                    fmt::format("How far the field carries the {}: they travel as the field would carry them over "
+                                "this many times its time range while the field itself changes at its own pace",
+                                what))
+        ->capture_default_str();
+  };
   painterly_ = render_->add_subcommand(
       "painterly", "Painterly animation: brush strokes over a picture, oriented and carried by the field (planar domains)");
   common(painterly_, frames_or_video, true);
@@ -91,6 +99,7 @@ RenderCommand::RenderCommand(CLI::App& app) {
   painterly_->add_option("--stroke-width", stroke_width_, "Stroke width in pixels")->capture_default_str();
   painterly_->add_option("--stroke-length", stroke_length_, "Stroke length in pixels")->capture_default_str();
   painterly_->add_option("--density", density_, "Strokes covering a pixel on average")->capture_default_str();
+  time_scale(painterly_, "strokes");
 
   crowd_ = render_->add_subcommand(
       "crowd", "Crowd steering: agents moving by w_goal*G + w_field*F around obstacles to goals (planar domains)");
@@ -111,6 +120,7 @@ RenderCommand::RenderCommand(CLI::App& app) {
                          "Angle in degrees from the advection direction to each leaf's up direction "
                          "(default: random per leaf)");
   particles_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
+  time_scale(particles_, "leaves");
 
   grass_ = render_->add_subcommand(
       "grass", "Grass: strands rooted on the ground whose tips an IK solve pulls toward the field (planar domains)");
@@ -149,10 +159,24 @@ void parse_range(const std::string& text, int& first, int& last) {
 
 namespace {
 
-// Splits the -o outputs into a frames folder and an MP4.
-void split_outputs(const std::vector<std::string>& outputs, std::string& frames_dir, std::string& video) {
+bool has_extension(const std::string& out, const char* lower) {
+  std::string e = fs::path(out).extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return e == lower;
+}
+
+// Splits the -o outputs into a frames folder and an MP4. A name with any other extension
+// (out.avi, c.txt) is refused rather than made a folder of PNGs under that name; an
+// existing folder may have any name.
+void split_outputs(const std::vector<std::string>& outputs, std::string& frames_dir, std::string& video,
+                   const char* kinds = "a folder of PNG frames (a name without an extension) or a file ending in "
+                                       ".mp4") {
   for (const auto& out : outputs) {
-    const bool mp4 = fs::path(out).extension() == ".mp4" || fs::path(out).extension() == ".MP4";
+    const bool mp4 = has_extension(out, ".mp4");
+    std::error_code ec;
+    if (!mp4 && fs::path(out).has_extension() && !fs::is_directory(out, ec))
+      throw Error(fmt::format("-o {}: cannot write {} output; an output is {}", out,
+                              fs::path(out).extension().string(), kinds));
     std::string& slot = mp4 ? video : frames_dir;
     if (!slot.empty())
       throw Error(fmt::format("{}: give at most one {} output", out, mp4 ? "MP4" : "frames folder"));
@@ -169,7 +193,17 @@ void print_report(const char* what, int frames, int width, int height, double se
 
 }  // namespace
 
+// --frames as given (refused below 1), or 0 for the field's own frames.
+int RenderCommand::frames_or_default() const {
+  if (!frames_) return 0;
+  if (*frames_ < 1) throw Error(fmt::format("--frames {}: must be at least 1 (leave it out for the field's frames)", *frames_));
+  return *frames_;
+}
+
 int RenderCommand::run() {
+  if (!(std::isfinite(fps_) && fps_ > 0)) throw Error(fmt::format("--fps {}: must be a positive number", fps_));
+  if (!(std::isfinite(time_scale_) && time_scale_ > 0))
+    throw Error(fmt::format("--time-scale {}: must be a positive number", time_scale_));
   if (texture_->parsed()) return run_texture();
   if (painterly_->parsed()) return run_painterly();
   if (crowd_->parsed()) return run_crowd();
@@ -184,16 +218,17 @@ int RenderCommand::run_crowd() {
   CrowdAnimationOptions options;
   std::vector<std::string> pictures;
   for (const auto& out : outputs_) {
-    if (fs::path(out).extension() == ".csv" || fs::path(out).extension() == ".CSV") {
+    if (has_extension(out, ".csv")) {
       if (!options.csv.empty()) throw Error(fmt::format("{}: give at most one CSV output", out));
       options.csv = out;
     } else {
       pictures.push_back(out);
     }
   }
-  split_outputs(pictures, options.frames_dir, options.video);
-  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
-  options.frames = frames_;
+  split_outputs(pictures, options.frames_dir, options.video,
+                "a folder of PNG frames (a name without an extension), a file ending in .mp4 or a file ending in "
+                ".csv");
+  options.frames = frames_or_default();
   options.fps = fps_;
   options.size = app_size_;
   CrowdSpec spec = load_crowd_spec(crowd_file_);
@@ -210,7 +245,14 @@ int RenderCommand::run_crowd() {
   if (!quiet_) {
     const long arrived = std::count_if(result.arrived.begin(), result.arrived.end(), [](int k) { return k >= 0; });
     std::printf("%ld of %zu agents reached a goal\n", arrived, result.arrived.size());
-    print_report("crowd", report.frames, report.width, report.height, report.seconds, report.files);
+    if (options.frames_dir.empty() && options.video.empty()) {
+      // Trajectories only: no pictures were drawn.
+      std::printf("simulated %d crowd frames in %.2f s; wrote", report.frames, report.seconds);
+      for (const auto& f : report.files) std::printf(" %s", fs::absolute(f).lexically_normal().c_str());
+      std::printf("\n");
+    } else {
+      print_report("crowd", report.frames, report.width, report.height, report.seconds, report.files);
+    }
   }
   return 0;
 }
@@ -220,14 +262,14 @@ int RenderCommand::run_particles() {
   Progress progress("tvf render particles", show);
   ParticleAnimationOptions options;
   split_outputs(outputs_, options.frames_dir, options.video);
-  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
-  options.frames = frames_;
+  options.frames = frames_or_default();
   options.fps = fps_;
   options.particles.count = count_;
   options.particles.size = particle_size_;
   options.particles.spin = std::isnan(spin_) ? spin_ : spin_ * kPi / 180.0;
   options.particles.image_size = app_size_;
   options.particles.seed = seed_;
+  options.time_scale = time_scale_;
   RenderInput in = load_render_input(input_, progress, "particles", false);
   const TangentBundle bundle(in.mesh);
   progress.note("rendering");
@@ -244,8 +286,7 @@ int RenderCommand::run_grass() {
   Progress progress("tvf render grass", show);
   GrassAnimationOptions options;
   split_outputs(outputs_, options.frames_dir, options.video);
-  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
-  options.frames = frames_;
+  options.frames = frames_or_default();
   options.fps = fps_;
   options.grass.count = grass_count_;
   options.grass.segments = grass_segments_;
@@ -272,13 +313,13 @@ int RenderCommand::run_painterly() {
   Progress progress("tvf render painterly", show);
   PainterlyAnimationOptions options;
   split_outputs(outputs_, options.frames_dir, options.video);
-  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
-  options.frames = frames_;
+  options.frames = frames_or_default();
   options.fps = fps_;
   options.painterly.stroke_width = stroke_width_;
   options.painterly.stroke_length = stroke_length_;
   options.painterly.density = density_;
   options.painterly.seed = seed_;
+  options.time_scale = time_scale_;
   const Image image = read_png(image_);
   const Image mask = mask_.empty() ? Image() : read_png(mask_);
   RenderInput in = load_render_input(input_, progress, "painterly", false);
@@ -299,7 +340,7 @@ int RenderCommand::run_texture() {
   TextureAnimationOptions options;
   split_outputs(outputs_, options.frames_dir, options.video);
   if (!range_.empty()) parse_range(range_, options.first, options.last);
-  options.frames = frames_;
+  options.frames = frames_or_default();
   options.fps = fps_;
   for (const auto& what : overlay_) {
     options.overlay_singularities |= what == "singularities";
@@ -315,7 +356,6 @@ int RenderCommand::run_texture() {
   options.texture.speed = physical_ ? TextureSpeed::physical : TextureSpeed::uniform;
   options.texture.contrast = contrast_;
   options.texture.seed = seed_;
-  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
   if (!view_.empty()) options.surface.direction = Vec3(view_[0], view_[1], view_[2]);
   if (!up_.empty()) options.surface.up = Vec3(up_[0], up_[1], up_[2]);
   options.surface.fov = fov_;

@@ -33,11 +33,13 @@ private:
   int run_crowd();
   int run_particles();
   int run_grass();
+  int frames_or_default() const;
   std::string input_;
   std::vector<std::string> outputs_;
   int size_ = 1024;
   double fps_ = 25;
-  int frames_ = 0;
+  std::optional<int> frames_;  // not given: the field's frames
+  double time_scale_ = 1;      // particles, painterly
   std::string range_;
   std::vector<std::string> overlay_;
   double alpha_ = 0.1;

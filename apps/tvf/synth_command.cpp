@@ -143,13 +143,20 @@ int SynthCommand::run_checked() {
   std::string frames_dir, video;
   for (const auto& out : outputs_) {
     const bool mp4 = fs::path(out).extension() == ".mp4" || fs::path(out).extension() == ".MP4";
+    std::error_code ec;
+    if (!mp4 && fs::path(out).has_extension() && !fs::is_directory(out, ec))
+      throw Error(fmt::format("-o {}: cannot write {} output; an output is a folder of PNG frames (a name without an "
+                              "extension) or a file ending in .mp4",
+                              out, fs::path(out).extension().string()));
     std::string& slot = mp4 ? video : frames_dir;
     if (!slot.empty()) throw Error(fmt::format("{}: give at most one {} output", out, mp4 ? "MP4" : "frames folder"));
     slot = out;
   }
   if (frames_dir.empty() && video.empty() && meshes_.empty())
     throw Error(fmt::format("{}: give -o (PNG frames folder or .mp4) and/or --meshes FOLDER", label));
-  if (frames_ < 0) throw Error(fmt::format("--frames {}: must be at least 1", frames_));
+  if (frames_ != kFramesNotGiven && frames_ < 1)
+    throw Error(fmt::format("--frames {}: must be at least 1 (leave it out for the field's frames)", frames_));
+  const int frames = frames_ == kFramesNotGiven ? 0 : frames_;
   const Exemplar exemplar = exemplar_for(exemplar_, terrain ? 1 : 3, exemplar_size_, seed_);
 
   SynthesisOptions so;
@@ -175,7 +182,7 @@ int SynthCommand::run_checked() {
   if (in.mesh.is_planar_xy()) {
     SynthesisAnimationOptions options;
     options.synthesis = so;
-    options.frames = frames_;
+    options.frames = frames;
     options.terrain = terrain;
     options.relief = relief_;
     options.frames_dir = frames_dir;
@@ -212,7 +219,7 @@ int SynthCommand::run_checked() {
       };
     }
     options.synthesis = so;
-    options.frames = frames_;
+    options.frames = frames;
     options.terrain = terrain;
     options.meshes_dir = meshes_;
     options.frames_dir = frames_dir;

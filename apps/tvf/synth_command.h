@@ -27,7 +27,8 @@ private:
   std::vector<std::string> outputs_;
   std::vector<double> view_, up_;  // surfaces: the camera
   CLI::Option* height_scale_option_ = nullptr;
-  int size_ = 512, frames_ = 0, exemplar_size_ = 64;
+  int size_ = 512, frames_ = kFramesNotGiven, exemplar_size_ = 64;
+  static constexpr int kFramesNotGiven = -2147483647;  // --frames left out: the field's frames
   int levels_ = 3, frame_levels_ = 2, neighbourhood_ = 7, iterations_ = 2, iterations_first_ = 5, stride_ = 2;
   int mesh_resolution_ = 128, renew_frames_ = 8, density_ = 0;
   double fps_ = 25, temporal_weight_ = 0.6, max_distortion_ = 1.6, speed_ = 0, texel_ = 0, height_scale_ = 0, relief_ = 0;

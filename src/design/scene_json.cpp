@@ -172,7 +172,19 @@ public:
 private:
   std::string label_;
   bool planar_ = true;
+  std::optional<GridSpec> grid_;  // a grid domain's extent (edit positions must lie in it)
   TimeSampling time_;
+
+  // An edit's position on a grid domain must lie on the grid: an edit names a feature of
+  // the field there, and a move's target is where a bifurcation goes (issue 16).
+  void check_on_domain(const Vec3& p, const std::string& where) const {
+    if (!grid_) return;
+    const double eps = 1e-9 * (grid_->max - grid_->min).norm();
+    if (p.x() < grid_->min.x() - eps || p.x() > grid_->max.x() + eps || p.y() < grid_->min.y() - eps ||
+        p.y() > grid_->max.y() + eps)
+      fail(where, fmt::format("({}, {}) is outside the domain [{}, {}] × [{}, {}]", p.x(), p.y(), grid_->min.x(),
+                              grid_->max.x(), grid_->min.y(), grid_->max.y()));
+  }
 
   [[noreturn]] void fail(const std::string& where, const std::string& message) const {
     throw_input_error(label_, where, message);
@@ -832,6 +844,8 @@ json Reader::edit(const json& j, const std::string& path) const {
       fail(p, fmt::format("must be two positions [{0}, {0}], got {1}", point_form(), describe(pair)));
     const Vec3 a = position(pair[0], join_index(p, 0));
     const Vec3 b = position(pair[1], join_index(p, 1));
+    check_on_domain(a, join_index(p, 0));
+    check_on_domain(b, join_index(p, 1));
     if (a == b) fail(p, "names the same position twice (a pair is two different singularities)");
     out["pair"] = json::array({point_json(a, planar_), point_json(b, planar_)});
   } else if (op == "smooth") {
@@ -842,14 +856,19 @@ json Reader::edit(const json& j, const std::string& path) const {
     out["strength"] = s;
   } else if (op == "remove_bifurcation") {
     check_keys(j, path, "a remove_bifurcation edit", {"op", "at", "window"});
-    out["at"] = path_point_json(path_point(need(j, path, "at", at_hint), join_key(path, "at")), planar_);
+    const PathPoint at = path_point(need(j, path, "at", at_hint), join_key(path, "at"));
+    check_on_domain(at.position, join_key(path, "at"));
+    out["at"] = path_point_json(at, planar_);
   } else if (op == "move_bifurcation") {
     check_keys(j, path, "a move_bifurcation edit", {"op", "at", "to", "window"});
-    out["at"] = path_point_json(path_point(need(j, path, "at", at_hint), join_key(path, "at")), planar_);
-    out["to"] = path_point_json(
+    const PathPoint at = path_point(need(j, path, "at", at_hint), join_key(path, "at"));
+    const PathPoint to =
         path_point(need(j, path, "to", fmt::format("where the bifurcation goes, {}", path_point_form())),
-                   join_key(path, "to")),
-        planar_);
+                   join_key(path, "to"));
+    check_on_domain(at.position, join_key(path, "at"));
+    check_on_domain(to.position, join_key(path, "to"));
+    out["at"] = path_point_json(at, planar_);
+    out["to"] = path_point_json(to, planar_);
   } else {
     fail(join_key(path, "op"),
          fmt::format("unknown edit \"{}\" (expected one of cancel, smooth, remove_bifurcation, "
@@ -908,6 +927,7 @@ Scene Reader::scene(const json& j, const std::string& source_path) {
   if (const json* d = get(j, "description")) s.description = string(*d, "description");
   s.domain = domain(need(j, "", "domain", "grid, mesh, sphere or torus"));
   planar_ = s.domain.is_planar();
+  grid_ = s.domain.grid;
   if (const json* t = get(j, "time")) s.time = time(*t);
   time_ = s.time;
   if (const json* g = get(j, "generator")) s.generator = enumeration(*g, "generator", kGenerators, "generator");

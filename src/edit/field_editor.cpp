@@ -2,6 +2,7 @@
 
 #include "tvf/analysis/singularities.h"
 #include "tvf/analysis/topology.h"
+#include "tvf/design/design_check.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/mesh/chart_inverse.h"
 #include "tvf/solve/spacetime.h"
@@ -121,11 +122,26 @@ std::optional<std::array<size_t, 2>> pair_at(const Topology& topo, int j, const 
   return std::array<size_t, 2>{*ia, *ib};
 }
 
-size_t nearest_bifurcation(const Topology& topo, const PathPoint& at, double diameter, double span) {
-  size_t best = 0;
+// How far the position (and time) an edit names may lie from the feature it names: a few
+// cells and a few frames. Beyond that the edit names nothing, and picking the nearest
+// feature anyway would edit something the user did not point at (issue 16).
+constexpr double kReachEdges = 4.0;   // mean edge lengths
+constexpr double kReachFrames = 4.0;  // frame steps
+
+double reach_in_space(const Mesh& mesh) { return kReachEdges * mesh.mean_edge_length(); }
+double reach_in_time(const TimeSampling& time) {
+  return kReachFrames * (time.frames > 1 ? std::abs(time.t1 - time.t0) / (time.frames - 1) : 0.0);
+}
+
+// The nearest bifurcation (space in domain diameters and time in time ranges) among those
+// within reach of `at`; nullopt when none is.
+std::optional<size_t> nearest_bifurcation(const Topology& topo, const PathPoint& at, double diameter, double span,
+                                          double reach_x, double reach_t) {
+  std::optional<size_t> best;
   double best_d = std::numeric_limits<double>::infinity();
   for (size_t b = 0; b < topo.bifurcations.size(); ++b) {
     const auto& bf = topo.bifurcations[b];
+    if ((bf.position - at.position).norm() > reach_x || std::abs(bf.t - at.t) > reach_t + 1e-12) continue;
     const double dx = (bf.position - at.position).norm() / diameter;
     const double dt = (bf.t - at.t) / span;
     const double d = dx * dx + dt * dt;
@@ -144,14 +160,25 @@ Topology analyze_for_edit(const TangentBundle& bundle, const Field& field) {
   return analyze_topology(bundle, field, options);
 }
 
-// The bifurcation an edit names by its space-time point `at` (the nearest, space in
-// domain diameters and time in time ranges); refused when the field has none.
-size_t named_bifurcation(const Topology& topo, const Field& field, const PathPoint& at, double diameter,
-                         const char* what) {
+std::string bifurcation_name(const Bifurcation& b);
+
+// The bifurcation an edit names by its space-time point `at` (the nearest within a few
+// cells and frames, space in domain diameters and time in time ranges); refused when the
+// field has none there.
+size_t named_bifurcation(const Topology& topo, const Field& field, const Mesh& mesh, const PathPoint& at,
+                         double diameter, const char* what) {
   if (topo.bifurcations.empty()) throw EditRefused(fmt::format("the field has no bifurcation to {}", what));
   const TimeSampling& time = field.time();
   const double span = time.t1 > time.t0 ? time.t1 - time.t0 : 1.0;
-  return nearest_bifurcation(topo, at, diameter, span);
+  const double rx = reach_in_space(mesh), rt = reach_in_time(time);
+  if (const auto b = nearest_bifurcation(topo, at, diameter, span, rx, rt)) return *b;
+  const size_t any = *nearest_bifurcation(topo, at, diameter, span, std::numeric_limits<double>::infinity(),
+                                          std::numeric_limits<double>::infinity());
+  const Bifurcation& n = topo.bifurcations[any];
+  throw EditRefused(fmt::format("there is no bifurcation within {:.3g} ({} edge lengths) and {:.3g} in time ({} "
+                                "frames) of {} at t = {:.3g}; the nearest is {}, {:.3g} away at a time {:.3g} apart",
+                                rx, kReachEdges, rt, kReachFrames, where(at.position), at.t, bifurcation_name(n),
+                                (n.position - at.position).norm(), std::abs(n.t - at.t)));
 }
 
 // Point location on a planar mesh: faces bucketed on a uniform grid of about one face per
@@ -212,6 +239,42 @@ private:
 
 std::string bifurcation_name(const Bifurcation& b) {
   return fmt::format("the {} bifurcation at {} at t = {:.3g}", to_string(b.kind), where(b.position), b.t);
+}
+
+// How close an edited field must put a bifurcation to count as the one asked for: the
+// design check's tolerances (design_check.h), so an edit accepted here is one the design
+// check finds as edited.
+struct Faithful {
+  double x = 0, t = 0;  // world units, time units
+  Faithful(const Mesh& mesh, const TimeSampling& time) {
+    const DesignCheckOptions d;
+    x = d.position_tolerance * mesh.mean_edge_length();
+    t = d.time_tolerance * (time.frames > 1 ? std::abs(time.t1 - time.t0) / (time.frames - 1) : 0.0);
+  }
+  bool near(const Vec3& p, double tp, const Vec3& q, double tq) const {
+    return (p - q).norm() <= x && std::abs(tp - tq) <= t + 1e-12;
+  }
+};
+
+// Refuses a removal whose result is not what was asked: a removed bifurcation still there,
+// or a bifurcation the field did not have before (the fill made new pairs).
+void verify_removal(const Topology& before, const Topology& after, const std::vector<const Bifurcation*>& removed,
+                    const Faithful& tol, const Bifurcation& named) {
+  for (const Bifurcation* r : removed)
+    for (const Bifurcation& b : after.bifurcations)
+      if (tol.near(b.position, b.t, r->position, r->t))
+        throw EditRefused(fmt::format("cannot remove {} faithfully: after the edit {} is still there",
+                                      bifurcation_name(named), bifurcation_name(b)));
+  for (const Bifurcation& b : after.bifurcations) {
+    const bool old = std::any_of(before.bifurcations.begin(), before.bifurcations.end(), [&](const Bifurcation& a) {
+      return a.kind == b.kind && tol.near(a.position, a.t, b.position, b.t);
+    });
+    if (!old)
+      throw EditRefused(fmt::format("cannot remove {} faithfully: the edit would make a new bifurcation, {} "
+                                    "({} bifurcations after it, {} before)",
+                                    bifurcation_name(named), bifurcation_name(b), after.bifurcations.size(),
+                                    before.bifurcations.size()));
+  }
 }
 
 }  // namespace
@@ -373,6 +436,14 @@ EditReport FieldEditor::cancel(Field& field, const CancelEdit& edit) {
                                   sings.size() == 1 ? "y" : "ies"));
   const size_t ia = nearest(sings, edit.pair[0]);
   const size_t ib = nearest(sings, edit.pair[1]);
+  const double reach = reach_in_space(space_.mesh());
+  for (const auto& [k, given] : {std::pair{ia, edit.pair[0]}, std::pair{ib, edit.pair[1]}}) {
+    const double d = (sings[k].position - given).norm();
+    if (d > reach)
+      throw EditRefused(fmt::format("there is no singularity within {:.3g} ({} edge lengths) of {} at frame {}; the "
+                                    "nearest is the {}, {:.3g} away",
+                                    reach, kReachEdges, where(given), j, name(sings[k]), d));
+  }
   if (ia == ib)
     throw EditRefused(fmt::format("both positions name the same singularity, the {} at frame {}", name(sings[ia]), j));
   if (sings[ia].index + sings[ib].index != 0)
@@ -413,7 +484,7 @@ EditReport FieldEditor::cancel(Field& field, const CancelEdit& edit) {
 EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcationEdit& edit) {
   const TangentBundle& bundle = space_.bundle();
   const Topology topo = analyze_for_edit(bundle, field);
-  const Bifurcation& bif = topo.bifurcations[named_bifurcation(topo, field, edit.at, space_.diameter(), "remove")];
+  const Bifurcation& bif = topo.bifurcations[named_bifurcation(topo, field, space_.mesh(), edit.at, space_.diameter(), "remove")];
   const TimeSampling& time = field.time();
   const Tracks tracks(topo);
   const int sigma = bif.kind == BifurcationKind::creation ? 1 : -1;
@@ -435,6 +506,7 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
   // Three-path case: per cut frame, the tracks of the singularity that survives there.
   std::map<int, const std::vector<char>*> survivor;
   std::vector<char> in_1, in_2;
+  std::vector<const Bifurcation*> removed{&bif};  // what must be gone afterwards
   if (loop || (ea < 0 && eb < 0)) {
     for (int j = 0; j < field.frames(); ++j) {
       if (sigma * (time.time(j) - bif.t) <= 0) continue;
@@ -443,6 +515,7 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
                         topo.singularities[static_cast<size_t>(j)][(*p)[1]].where.face});
     }
     what = loop ? "an isolated loop" : "an isolated pair";
+    if (loop) removed.push_back(&topo.bifurcations[static_cast<size_t>(ea)]);
   } else {
     // The three-path case (paper §8.2): exactly one of the two tracks (the middle one) ends
     // in a second bifurcation, with a third singularity whose track runs on to the other
@@ -495,6 +568,7 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
       }
     }
     what = fmt::format("the three-path configuration with {}", bifurcation_name(other));
+    removed.push_back(&other);
   }
   if (cuts.empty())
     throw EditRefused(fmt::format("the pair of {} exists at no frame (it lives between two frames), so there is "
@@ -554,6 +628,7 @@ EditReport FieldEditor::remove_bifurcation(Field& field, const RemoveBifurcation
   }
   if (!survivor.empty() && space_.planar()) move_survivor(out, topo, survivor, interiors, report);
   smooth_around(out, interiors, interiors, window_frames(field, edit.window), report);
+  verify_removal(topo, analyze_for_edit(bundle, out), removed, Faithful(space_.mesh(), time), bif);
   report.summary = fmt::format("removed {} ({}) by cancelling the pair at frames {}–{}", bifurcation_name(bif), what,
                                cuts.front().frame, cuts.back().frame);
   field = std::move(out);
@@ -670,13 +745,46 @@ private:
   std::optional<ChartInverse> inverse_;
 };
 
+// Refuses a move whose result is not what was asked: no bifurcation of the kind moved
+// within the design check's tolerances of the target (issue 16: a creation moved to
+// (0.301, 0.299, 0.60) appeared 4.4 cells away), or one left at the old place.
+void verify_move(const Topology& after, const Bifurcation& bif, const PathPoint& to, const Faithful& tol) {
+  const Bifurcation* best = nullptr;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (const Bifurcation& b : after.bifurcations) {
+    if (b.kind != bif.kind) continue;
+    const double d = (b.position - to.position).norm() / std::max(tol.x, 1e-300) +
+                     std::abs(b.t - to.t) / std::max(tol.t, 1e-300);
+    if (d < best_d) {
+      best_d = d;
+      best = &b;
+    }
+  }
+  if (!best)
+    throw EditRefused(fmt::format("cannot move {} faithfully to {} at t = {:.3g}: after the edit the field has no {} "
+                                  "bifurcation",
+                                  bifurcation_name(bif), where(to.position), to.t, to_string(bif.kind)));
+  if (!tol.near(best->position, best->t, to.position, to.t))
+    throw EditRefused(fmt::format("cannot move {} faithfully to {} at t = {:.3g}: the edit would put it at {} at t = "
+                                  "{:.3g}, {:.3g} away and {:+.3g} in time (at most {:.3g} and {:.3g} are accepted); "
+                                  "try a longer window, or a target nearer in time",
+                                  bifurcation_name(bif), where(to.position), to.t, where(best->position), best->t,
+                                  (best->position - to.position).norm(), best->t - to.t, tol.x, tol.t));
+  if (!tol.near(bif.position, bif.t, to.position, to.t))
+    for (const Bifurcation& b : after.bifurcations)
+      if (b.kind == bif.kind && tol.near(b.position, b.t, bif.position, bif.t))
+        throw EditRefused(fmt::format("cannot move {} faithfully: after the edit a {} bifurcation is still at its old "
+                                      "place",
+                                      bifurcation_name(bif), to_string(bif.kind)));
+}
+
 }  // namespace
 
 EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit& edit) {
   const TangentBundle& bundle = space_.bundle();
   const Mesh& mesh = space_.mesh();
   const Topology topo = analyze_for_edit(bundle, field);
-  const Bifurcation& bif = topo.bifurcations[named_bifurcation(topo, field, edit.at, space_.diameter(), "move")];
+  const Bifurcation& bif = topo.bifurcations[named_bifurcation(topo, field, space_.mesh(), edit.at, space_.diameter(), "move")];
   const TimeSampling& time = field.time();
   const double span = time.t1 > time.t0 ? time.t1 - time.t0 : 1.0;
   const Tracks tracks(topo);
@@ -689,6 +797,10 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
   const MoveChart chart(space_, bif.position);
   // The move in local coordinates: on a surface the log map of the new place.
   const SurfacePoint to_point = space_.locate(edit.to.position);
+  if (chart.planar() ? !chart.locate(cplx(edit.to.position.x(), edit.to.position.y()))
+                     : (surface_position(mesh, to_point) - edit.to.position).norm() > reach_in_space(mesh))
+    throw EditRefused(fmt::format("cannot move {} to {}: that is outside the domain", bifurcation_name(bif),
+                                  where(edit.to.position)));
   const cplx shift = chart.point(to_point, edit.to.position) - chart.point(space_.locate(bif.position), bif.position);
   if (!chart.planar() && !chart.locate(shift + chart.point(space_.locate(bif.position), bif.position)))
     throw EditRefused(fmt::format("cannot move {} to {}: it lies beyond the disc of radius {:.3g} around the "
@@ -710,7 +822,15 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
     throw EditRefused(fmt::format("the pair of {} no longer exists at t = {:.3g}, where the moved pair would "
                                   "rejoin it; use a smaller window",
                                   bifurcation_name(bif), te));
-  const double begin = sigma > 0 ? std::min(tb, tn) : std::max(tb, tn);
+  // The frames just before the new time (after it, for a cancellation) get the pair's
+  // approach: the original's neighbourhood as it was just before the bifurcation (no pair
+  // yet, a nearly vanishing field), moved to the new place. Without it the last frame
+  // without the pair kept the old place's field there, and the fold that the analysis
+  // finds between it and the first frame with the pair (linear in time) lay wherever that
+  // interpolation put it: 0.17 away from the target at 65² (issue 16).
+  const double step = span / std::max(1, field.frames() - 1);
+  const double lead = 2 * step;
+  const double begin = sigma > 0 ? std::min({tb, tn, tn - lead}) : std::max({tb, tn, tn + lead});
   const double h = mesh.mean_edge_length();
   const FieldSampler original(bundle, field);
 
@@ -724,12 +844,12 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
     std::vector<cplx> values(field.frame(j).begin(), field.frame(j).end());
     std::vector<char> interior(values.size(), 0);
     std::vector<int> pinned;
-    auto refuse = [&](const RegionResult& r, const char* step) {
+    auto refuse = [&](const RegionResult& r, const char* what) {
       std::string why = fmt::format("a region grown by {} rings still holds {} unwanted singular faces", r.growths,
                                     r.remaining);
       for (const auto& s : topo.singularities[static_cast<size_t>(j)])
         if (s.where.face == r.blocked_by) why = fmt::format("the region would swallow the {}", name(s));
-      throw EditRefused(fmt::format("cannot move {}: {} at frame {}: {}", bifurcation_name(bif), step, j, why));
+      throw EditRefused(fmt::format("cannot move {}: {} at frame {}: {}", bifurcation_name(bif), what, j, why));
     };
     // Cancel the original pair where it exists.
     if (sigma * (t - tb) > 0) {
@@ -742,10 +862,12 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
         report.growths = std::max(report.growths, r.growths);
       }
     }
-    // Paste the moved pair.
-    if (sigma * (t - tn) > 0) {
-      const double lambda = (t - tn) / (te - tn);
-      const double source_t = tb + lambda * (te - tb);
+    // Paste the moved pair (or its approach, up to `lead` before the new time).
+    if (sigma * (t - tn) > -lead) {
+      const bool approach = sigma * (t - tn) <= 0;
+      const double lambda = approach ? 0.0 : (t - tn) / (te - tn);
+      const double source_t = std::clamp(approach ? tb + (t - tn) : tb + lambda * (te - tb),
+                                         std::min(time.t0, time.t1), std::max(time.t0, time.t1));
       const cplx offset = (1 - lambda) * shift;
       const int js = frame_of(source_t);
       const SurfacePoint bp = space_.locate(bif.position);
@@ -758,11 +880,15 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
       }
       const cplx centre = (pa + pb) / 2.0 + offset;
       const double radius = std::abs(pa - pb) / 2 + 3 * h;
+      const double core = std::abs(pa - pb) / 2 + h;  // the pair itself
       std::vector<cplx> pinned_values;
       for (int v = 0; v < mesh.num_vertices(); ++v) {
         if (!chart.charted(v) || std::abs(chart.vertex(v) - centre) > radius) continue;
         const cplx from = chart.vertex(v) - offset;
         const auto sp = chart.locate(from);
+        // A vertex of the disc's rim whose source lies outside the domain is left to the
+        // region solve; only the pair's own neighbourhood must come from inside.
+        if (!sp && std::abs(chart.vertex(v) - centre) > core) continue;
         if (!sp) {
           const std::string place =
               chart.planar() ? fmt::format("{}, outside the domain", where(Vec3(from.real(), from.imag(), 0.0)))
@@ -776,6 +902,10 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
         pinned.push_back(v);
         pinned_values.push_back(chart.carry(original.in_face(*sp, source_t), *sp, v));
       }
+      if (pinned.empty())
+        throw EditRefused(fmt::format("cannot move {}: at frame {} the moved pair's neighbourhood lies outside the "
+                                      "domain",
+                                      bifurcation_name(bif), j));
       const RegionResult r = region_.paste(values, pinned, pinned_values);
       if (!r.success) refuse(r, "placing the moved pair");
       values = r.values;
@@ -794,6 +924,7 @@ EditReport FieldEditor::move_bifurcation(Field& field, const MoveBifurcationEdit
   if (report.key_frames.empty())
     throw EditRefused(fmt::format("moving {} to t = {:.3g} changes no frame", bifurcation_name(bif), tn));
   smooth_around(out, solved, interiors, window_frames(field, edit.window), report);
+  verify_move(analyze_for_edit(bundle, out), bif, edit.to, Faithful(mesh, time));
   report.summary = fmt::format("moved {} to {} at t = {:.3g} (frames {}–{} edited)", bifurcation_name(bif),
                                where(edit.to.position), tn, report.key_frames.front(), report.key_frames.back());
   field = std::move(out);

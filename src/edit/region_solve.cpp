@@ -430,6 +430,22 @@ RegionResult RegionSolver::paste(std::span<const cplx> values, const std::vector
       r.remaining = 1;
       return r;
     }
+  // The singularities being replaced must be inside the region, or the paste would add a
+  // copy and leave the original where it was (issue 16: at 65² the survivor of a three-path
+  // removal was pasted a few cells away and the old one stayed, with new pairs around them):
+  // a chain of faces from the pasted disc to each of them joins the seed.
+  const int disc_face = vertex_faces_[static_cast<size_t>(pinned.front())].front();
+  for (int f : ignore) {
+    if (in.region[static_cast<size_t>(f)]) continue;
+    const std::vector<int> chain = face_chain(mesh, disc_face, f, in.blocked);
+    if (chain.empty()) {
+      RegionResult r;
+      r.values.assign(values.begin(), values.end());
+      r.remaining = 1;
+      return r;
+    }
+    for (int g : chain) in.region[static_cast<size_t>(g)] = 1;
+  }
   dilate(mesh, vertex_faces_, in.region, in.blocked);
   if (const int e = enclosed_blocked_face(mesh, in.region, in.blocked); e >= 0) {
     RegionResult r;
@@ -439,11 +455,13 @@ RegionResult RegionSolver::paste(std::span<const cplx> values, const std::vector
     return r;
   }
   const std::vector<char> pinned_mask = in.pinned;
+  // Only a face whose three corners are pinned holds a pasted singularity; a singular face
+  // on the rim of the pasted disc (some corners solved) is one the fill made, and unwanted.
   return grow_and_solve(bundle_, laplacian_, vertex_faces_, options_.max_growth, std::move(in),
                         [&](const std::vector<int>&, int f) {
                           for (int v : mesh.face(f))
-                            if (pinned_mask[static_cast<size_t>(v)]) return 0;
-                          return 1;
+                            if (!pinned_mask[static_cast<size_t>(v)]) return 1;
+                          return 0;
                         });
 }
 

@@ -376,10 +376,12 @@ private:
 // Agent–agent separation after a step: pairs of active agents closer than `sep` are
 // pushed apart along the line joining them, half the overlap each (Jacobi iterations of
 // position-based dynamics), each position kept in the box and out of obstacles by
-// `fix`. Pairs still too close after the iterations go back to their positions `old`,
-// which kept the distance: so no two active agents are ever closer than sep.
+// `fix` and refused (back to `old`) when the step from `old` to it is not `free` (it would
+// pass through an obstacle). Pairs still too close after the iterations go back to their
+// positions `old`, which kept the distance: so no two active agents are ever closer than sep.
 void separate(std::vector<Vec2>& x, const std::vector<Vec2>& old, const std::vector<char>& active, double sep,
-              const std::function<Vec2(const Vec2&)>& fix, const std::function<bool(const Vec2&)>& free) {
+              const std::function<Vec2(const Vec2&)>& fix,
+              const std::function<bool(const Vec2& from, const Vec2& to)>& free) {
   const size_t n = x.size();
   const double tolerance = sep * (1 - 1e-9);
   std::vector<Vec2> correction(n, Vec2(0, 0));
@@ -406,7 +408,7 @@ void separate(std::vector<Vec2>& x, const std::vector<Vec2>& old, const std::vec
     for (size_t a = 0; a < n; ++a)
       if (active[a] && correction[a].squaredNorm() > 0) {
         const Vec2 p = fix(x[a] + correction[a]);
-        x[a] = free(p) ? p : old[a];
+        x[a] = free(old[a], p) ? p : old[a];  // the whole step from old[a] stays clear of obstacles
       }
   }
   // The guarantee: revert both agents of any pair still too close, until none is.
@@ -547,6 +549,12 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
     }
   }
   const double range = 2.0 * sep;  // the separation term acts within this distance
+  // Substep length: under half the thinnest obstacle (a rectangle's shorter side, a
+  // circle's diameter), so a substep cannot cross one.
+  double substep = std::numeric_limits<double>::infinity();
+  for (const auto& o : spec.obstacles)
+    substep = std::min(substep, 0.45 * (o.kind == CrowdShape::Kind::circle ? 2 * o.radius
+                                                                           : (o.max - o.min).minCoeff()));
   for (int k = 1; k < total; ++k) {
     for (int s = 0; s < spec.steps_per_frame; ++s) {
       const double t0 = time_of(k - 1) + (time_of(k) - time_of(k - 1)) * s / spec.steps_per_frame;
@@ -587,11 +595,38 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         const Vec2 mid = (x[a] + 0.5 * dt * (velocity(x[a], t0) + push)).cwiseMax(lo).cwiseMin(hi);
         Vec2 next = x[a] + dt * (velocity(mid, t0 + 0.5 * dir * dt) + push);
         next = next.cwiseMax(lo).cwiseMin(hi);
-        for (const auto& o : spec.obstacles)
-          if (o.contains(next)) {
-            next = o.push_out(next, 1e-9 * diag);
-            ++contacts[a];
+        // The whole step is checked, not only where it ends: a long step (the separation
+        // push adds to it) could otherwise jump a thin wall, or be pushed out on its far
+        // side. It is walked in substeps shorter than half the thinnest obstacle, each
+        // pushed out of an obstacle it enters: a substep cannot reach past an obstacle's
+        // middle, so it is pushed back to the side it came from, and the agent slides along
+        // walls and round corners instead of passing through them.
+        {
+          const Vec2 move = next - x[a];
+          const int substeps = std::clamp(static_cast<int>(std::ceil(move.norm() / substep)), 1, 4096);
+          Vec2 p = x[a];
+          bool touched = false;
+          for (int step = 0; step < substeps; ++step) {
+            const Vec2 before = p;
+            p = (p + move / substeps).cwiseMax(lo).cwiseMin(hi);
+            bool on = false;
+            for (const auto& o : spec.obstacles)
+              if (o.distance(p) <= 0) {
+                p = o.push_out(p, 1e-9 * diag).cwiseMax(lo).cwiseMin(hi);
+                touched = true;
+                on = on || o.distance(p) <= 0;
+              }
+            // Still on an obstacle after the push (a wall that meets the domain's edge: the
+            // box put it back): the step ends before it, so no agent walks along the edge
+            // under a wall.
+            if (on) {
+              p = before;
+              break;
+            }
           }
+          next = p;
+          if (touched) ++contacts[a];
+        }
         if (!locator.locate(next)) next = x[a];  // a step off a non-rectangular domain is refused
         moved[a] = next;
       });
@@ -600,7 +635,14 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         for (const auto& o : spec.obstacles)
           if (o.contains(q)) q = o.push_out(q, 1e-9 * diag);
         return q;
-      }, [&](const Vec2& p) { return !blocked(p); });
+      }, [&](const Vec2&, const Vec2& p) {
+        // A correction moves an agent by at most half the separation: when that is under
+        // half the thinnest obstacle, `fix` pushes it back to the side it came from. One
+        // left on an obstacle's boundary (where a wall meets the domain's edge) is refused.
+        for (const auto& o : spec.obstacles)
+          if (o.distance(p) <= 0) return false;
+        return !blocked(p);
+      });
       x.swap(moved);
       for (size_t a = 0; a < na; ++a)
         if (active[a] && at_goal(x[a])) {

@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <optional>
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -208,7 +209,16 @@ AnimationReport write_particle_animation(const TangentBundle& bundle, const Fiel
   const auto start = std::chrono::steady_clock::now();
   const int total = options.frames > 0 ? options.frames : field.frames();
   check_option(total >= 1 && total <= 1'000'000, "frames", fmt::format("{} is outside [1, 1000000]", total));
-  ParticleSystem system(bundle, field, options.particles);
+  check_option(std::isfinite(options.time_scale) && options.time_scale > 0, "time scale",
+               fmt::format("{} is not a positive number", options.time_scale));
+  // The time scale multiplies the velocities: pathlines of s·V over the time range are those
+  // of V over s times it, with the field changing at its own pace.
+  std::optional<Field> scaled;
+  if (options.time_scale != 1.0) {
+    scaled.emplace(field);
+    for (cplx& z : scaled->data()) z *= options.time_scale;
+  }
+  ParticleSystem system(bundle, scaled ? *scaled : field, options.particles);
   FrameOutput out(options.frames_dir, options.video, system.width(), system.height(), options.fps);
   const TimeSampling& ts = field.time();
   for (int k = 0; k < total; ++k) {

@@ -3,13 +3,10 @@
 #include "tvf/core/error.h"
 
 #include <Eigen/IterativeLinearSolvers>
-#include <cblas.h>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
-#include <tbb/combinable.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -86,32 +83,58 @@ std::vector<T>& sized(std::vector<T>& v, size_t n) {
   return v;
 }
 
-// Runs body(begin, end) over [0, n), in parallel blocks or not.
+// Runs body(begin, end) over [0, n) in fixed blocks of 2048 entries, in parallel or not.
+// The blocks never depend on the thread count or the partitioner, and the serial and
+// parallel paths run the same block function: with the partitioner's blocks two runs of
+// the CG on two CPUs differed in the last bits (a 41² × 24 spacetime scene); with fixed
+// blocks they agree with each other and with the serial solve.
+constexpr size_t kBlockEntries = 2048;
 template <class F>
 void blocks(size_t n, bool parallel, F&& body) {
-  if (!parallel || n < 4096) {
-    body(size_t{0}, n);
-    return;
-  }
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 2048),
-                    [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
+  const size_t count = (n + kBlockEntries - 1) / kBlockEntries;
+  auto run = [&](size_t c) { body(c * kBlockEntries, std::min(n, (c + 1) * kBlockEntries)); };
+  if (parallel && count > 1)
+    tbb::parallel_for(size_t{0}, count, run);
+  else
+    for (size_t c = 0; c < count; ++c) run(c);
 }
 
-// Σ over [0, n) of term(k), in parallel blocks or not.
+// Σ of partial(task) over tasks [0, count), run in parallel or not, added in task order: the
+// tasks are fixed pieces of the work (never the partitioner's or the threads' choice), so a
+// sum has the same bits with one thread, two, or none (replay from a scene is bit for bit
+// on any machine; a per-thread accumulator or parallel_reduce would add in an order that
+// depends on the thread count).
+template <class F>
+double ordered_sum(size_t count, bool parallel, F&& partial) {
+  if (count == 0) return 0.0;
+  if (count == 1) return partial(size_t{0});
+  std::vector<double> parts(count);
+  auto run = [&](size_t t) { parts[t] = partial(t); };
+  if (parallel)
+    tbb::parallel_for(size_t{0}, count, run);
+  else
+    for (size_t t = 0; t < count; ++t) run(t);
+  double s = 0;
+  for (const double x : parts) s += x;
+  return s;
+}
+
+// Σ over [0, n) of body(begin, end)'s partial sums over fixed chunks of 4096 entries.
+constexpr size_t kSumChunk = 4096;
+template <class F>
+double chunked_sum(size_t n, bool parallel, F&& body) {
+  return ordered_sum((n + kSumChunk - 1) / kSumChunk, parallel,
+                     [&](size_t c) { return body(c * kSumChunk, std::min(n, (c + 1) * kSumChunk)); });
+}
+
+// Σ over [0, n) of term(k), in fixed chunks (see ordered_sum).
 template <class F>
 double sum(size_t n, bool parallel, F&& term) {
-  if (!parallel || n < 4096) {
+  return chunked_sum(n, parallel, [&](size_t b, size_t e) {
     double s = 0;
-    for (size_t k = 0; k < n; ++k) s += term(k);
+    for (size_t k = b; k < e; ++k) s += term(k);
     return s;
-  }
-  return tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, n, 4096), 0.0,
-      [&](const tbb::blocked_range<size_t>& r, double s) {
-        for (size_t k = r.begin(); k < r.end(); ++k) s += term(k);
-        return s;
-      },
-      std::plus<>());
+  });
 }
 
 // The space-time operator on one fixed set, frame-major vectors of frames × n.
@@ -133,7 +156,6 @@ struct SpaceTime {
     const size_t block = 512;
     const size_t row_blocks = (n + block - 1) / block;
     const size_t frame_blocks = (nf + kFrames - 1) / kFrames;
-    tbb::combinable<double> dot([] { return 0.0; });
     auto body = [&](size_t task) {
       const size_t j0 = (task / row_blocks) * kFrames, nj = std::min(kFrames, nf - j0);
       const size_t i0 = (task % row_blocks) * block, i1 = std::min(n, i0 + block);
@@ -164,14 +186,9 @@ struct SpaceTime {
           partial += emit(k, xi, op.diagonal[i] * xi + cplx(re[f], im[f]) + c * t);
         }
       }
-      dot.local() += partial;
+      return partial;
     };
-    const size_t tasks = frame_blocks * row_blocks;
-    if (parallel)
-      tbb::parallel_for(size_t{0}, tasks, body);
-    else
-      for (size_t t = 0; t < tasks; ++t) body(t);
-    return dot.combine(std::plus<>());
+    return ordered_sum(frame_blocks * row_blocks, parallel, body);
   }
 
   // y_F = A_FF x_F (y's fixed entries zero); returns Re <x, y>, fused so an iteration
@@ -351,11 +368,25 @@ double share_level(std::vector<double> rr0, double budget) {
 }
 
 // out = in · m (or in · mᵀ) for a tall frame-major block: rows = 2·|V| real numbers
-// (re, im interleaved), one column per frame. OpenBLAS threads it itself.
+// (re, im interleaved), one column per frame.
 void multiply_rows(const double* in, const Eigen::MatrixXd& m, bool transpose, double* out, Eigen::Index rows) {
-  const auto r = static_cast<blasint>(rows), c = static_cast<blasint>(m.rows());
-  cblas_dgemm(CblasColMajor, CblasNoTrans, transpose ? CblasTrans : CblasNoTrans, r, c, c, 1.0, in, r, m.data(), c,
-              0.0, out, r);
+  // Fixed blocks of rows, each an Eigen product on one thread, the blocks in parallel: every
+  // row is computed by the same kernel whatever the thread count. (OpenBLAS's dgemm split
+  // the rows by its own thread count, and as it runs on one thread while a CHOLMOD
+  // factorization runs elsewhere, by timing too: example 06 came out with other bits on one
+  // CPU than on two.)
+  const Eigen::Index c = m.rows();
+  constexpr Eigen::Index kRows = 2048;
+  const Eigen::Index blocks = (rows + kRows - 1) / kRows;
+  const Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> a(in, rows, c, Eigen::OuterStride<>(rows));
+  Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>> y(out, rows, c, Eigen::OuterStride<>(rows));
+  tbb::parallel_for(Eigen::Index{0}, blocks, [&](Eigen::Index b) {
+    const Eigen::Index r0 = b * kRows, nr = std::min(kRows, rows - r0);
+    if (transpose)
+      y.middleRows(r0, nr).noalias() = a.middleRows(r0, nr) * m.transpose();
+    else
+      y.middleRows(r0, nr).noalias() = a.middleRows(r0, nr) * m;
+  });
 }
 
 }  // namespace
@@ -896,7 +927,6 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
   auto precondition = [&](const Vec& r, Vec& out) {
     constexpr size_t kBlock = 256;
     const size_t nblocks = (n + kBlock - 1) / kBlock;
-    tbb::combinable<double> dot([] { return 0.0; });
     auto body = [&](size_t blk) {
       const size_t i0 = blk * kBlock, i1 = std::min(n, i0 + kBlock);
       for (size_t i = i0; i < i1; ++i) out[i] = r[i] * pivot[i];
@@ -912,13 +942,9 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
           if (j + 1 < nf) out[k] -= upper[k] * out[k + n];
           partial += r[k].real() * out[k].real() + r[k].imag() * out[k].imag();
         }
-      dot.local() += partial;
+      return partial;
     };
-    if (par)
-      tbb::parallel_for(size_t{0}, nblocks, body);
-    else
-      for (size_t b = 0; b < nblocks; ++b) body(b);
-    return dot.combine(std::plus<>());
+    return ordered_sum(nblocks, par, body);
   };
 
   Vec& r = sized(work_->r, total);
@@ -938,17 +964,15 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
     if (!(pap > 0)) break;  // not positive definite on this subspace
     const double alpha = rz / pap;
     // x += αp, r −= αAp and ‖r‖² in one pass.
-    tbb::combinable<double> rr([] { return 0.0; });
-    blocks(total, par, [&](size_t s, size_t e) {
+    rnorm = std::sqrt(chunked_sum(total, par, [&](size_t s, size_t e) {
       double partial = 0;
       for (size_t k = s; k < e; ++k) {
         x[k] += alpha * p[k];
         r[k] -= alpha * ap[k];
         partial += std::norm(r[k]);
       }
-      rr.local() += partial;
-    });
-    rnorm = std::sqrt(rr.combine(std::plus<>()));
+      return partial;
+    }));
     ++it;
     if (rnorm <= options.tolerance * bnorm) break;
     const double rz_new = precondition(r, zp);

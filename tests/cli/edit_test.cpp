@@ -84,6 +84,13 @@ TEST(CliEdit, RefusalsLeaveTheSceneUnchanged) {
       {"--smooth 2", "edits[0].strength: must be in (0, 1]"},
       {"--undo", "no edits to undo"},
       {"", "say which edit"},
+      // Issue 16: a bad window is not replaced by the default, nor dropped with --smooth.
+      {"--cancel 10 0.2 -0.3 -0.27 -0.3 --window -0.5", "--window -0.5: must be in [0, 1]"},
+      {"--smooth 0.3 --window 0.2", "--window applies to --cancel"},
+      // Issue 16: a position far from every singularity names none of them.
+      {"--cancel 10 0.9 0.9 -0.9 0.9", "no singularity within"},
+      // Issue 16: positions outside the domain are refused before anything is solved.
+      {"--cancel 10 0.2 -0.3 -0.27 -1.5", "outside the domain"},
   };
   for (const Case& c : cases) {
     const auto r = run_tvf("edit " + q(scene) + " " + c.args);
@@ -120,6 +127,48 @@ TEST(CliEdit, MovesABifurcationOnASphere) {
   ASSERT_EQ(j["edits"].size(), 1u);
   EXPECT_EQ(j["edits"][0]["op"], "move_bifurcation");
   EXPECT_EQ(j["edits"][0]["to"], nlohmann::json::parse("[0, 0.6, 0.8, 0.49]"));
+}
+
+}  // namespace
+}  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// Issue 16 on example 01 (four bifurcation templates): a move out of the domain ended in an
+// internal error (and `tvf validate` called the scene valid), and a removal named by a point
+// far from every bifurcation removed one anyway. Both are refused in one sentence.
+TEST(CliEdit, EditsThatNameNothingOrLeaveTheDomainAreRefused) {
+  TempDir dir;
+  const auto scene = dir / "scene.json";
+  const std::string text = test::read_text(test::source_dir() + "/examples/01_bifurcation_templates/scene.json");
+  test::write_text(scene, text);
+  struct Case {
+    std::string args, says;
+  };
+  const Case cases[] = {
+      {"--move-bifurcation 0.3 -0.5 0.5 0.35 1.5 0.5", "edits[0].to: (1.5, 0.5) is outside the domain"},
+      {"--remove-bifurcation 0.01 0.95 0.95", "no bifurcation within"},
+      {"--move-bifurcation 0.9 0.95 0.95 0.35 0.2 0.2", "no bifurcation within"},
+  };
+  for (const Case& c : cases) {
+    const auto r = run_tvf("edit " + q(scene) + " " + c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_EQ(r.output.find("internal error"), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_EQ(test::count_lines(r.output), 1) << c.args << ": " << r.output;
+    EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_EQ(test::read_text(scene), text) << c.args;
+  }
+  // A scene file holding such an edit is not valid.
+  auto j = nlohmann::json::parse(text);
+  j["edits"] = nlohmann::json::parse(R"([{"op": "move_bifurcation", "at": [-0.5, 0.5, 0.3], "to": [0.35, 1.5, 0.5]}])");
+  test::write_text(dir / "bad.json", j.dump());
+  for (const char* command : {"validate ", "generate "}) {
+    const auto r = run_tvf(std::string(command) + q(dir / "bad.json") + (command[0] == 'g' ? " -o " + q(dir / "out") : ""));
+    EXPECT_NE(r.exit_code, 0) << command << r.output;
+    EXPECT_NE(r.output.find("edits[0].to: (0.35, 1.5) is outside the domain"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  }
 }
 
 }  // namespace

@@ -135,3 +135,59 @@ TEST(CliRenderApps, GrassFramesAndOneSentenceForBadOptions) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+namespace fs = std::filesystem;
+using test::count_lines;
+using test::quoted;
+using test::run_tvf;
+using test::TempDir;
+
+// Issue 16: `--frames 0` rendered the field's frames, `-o out.avi` (or `-o c.txt` for a
+// crowd) quietly became a folder of PNGs, and a CSV-only crowd reported "frames of 0×0
+// pixels". Each is refused in one sentence with nothing written, or does what was asked.
+TEST(CliRenderApps, OutputsAndFrameCountsAreWhatWasAsked) {
+  TempDir dir;
+  test::write_text(dir / "scene.json", kScene);
+  test::write_text(dir / "crowd.json", R"({"agents": 4, "speed": 4, "weights": {"goal": 1, "field": 0},
+    "start": [{"rectangle": {"min": [-0.9, -0.2], "max": [-0.7, 0.2]}}],
+    "goals": [{"circle": {"center": [0.8, 0], "radius": 0.15}}]})");
+  const std::string scene = quoted(dir / "scene.json"), crowd = " --crowd " + quoted(dir / "crowd.json");
+  struct Case {
+    std::string args, says, output;
+  };
+  const Case cases[] = {
+      {"particles " + scene + " -o " + quoted(dir / "a") + " --frames 0", "--frames 0: must be at least 1", "a"},
+      {"texture " + scene + " -o " + quoted(dir / "b") + " --frames 0", "--frames 0: must be at least 1", "b"},
+      {"painterly " + scene + " -o " + quoted(dir / "c") + " --image x.png --frames -3", "--frames -3", "c"},
+      {"particles " + scene + " -o " + quoted(dir / "out.avi"), "cannot write .avi output", "out.avi"},
+      {"texture " + scene + " -o " + quoted(dir / "out.gif"), "cannot write .gif output", "out.gif"},
+      {"crowd " + scene + crowd + " -o " + quoted(dir / "c.txt"), "cannot write .txt output", "c.txt"},
+      {"particles " + scene + " -o " + quoted(dir / "d") + " --time-scale 0", "--time-scale 0", "d"},
+      {"grass " + scene + " -o " + quoted(dir / "e") + " --fps 0", "--fps 0", "e"},
+  };
+  for (const Case& c : cases) {
+    const auto r = run_tvf("render " + c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_EQ(count_lines(r.output), 1) << c.args << ": " << r.output;
+    EXPECT_NE(r.output.find(c.says), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_FALSE(fs::exists(dir / c.output)) << c.args;
+  }
+  // --frames 3 gives three pictures.
+  auto r = run_tvf("render particles " + scene + " -o " + quoted(dir / "three") + " --frames 3 --count 20 --size 64");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  int pngs = 0;
+  for (const auto& e : fs::directory_iterator(dir / "three")) pngs += e.path().extension() == ".png";
+  EXPECT_EQ(pngs, 3);
+  // A crowd with trajectories only says what it wrote, not pictures of 0×0 pixels.
+  r = run_tvf("render crowd " + scene + crowd + " -o " + quoted(dir / "paths.csv") + " --frames 10");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("0×0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("simulated 10 crowd frames"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "paths.csv"));
+}
+
+}  // namespace
+}  // namespace tvf

@@ -323,9 +323,13 @@ Field fold_field(const Mesh& mesh, int frames) {
   return f;
 }
 
-TEST(FieldEditor, TheThreePathCaseCollapsesToOneSingularity) {
+// At every resolution (issue 16: it worked at 33² and failed at 49² and 65², leaving five
+// paths and four new bifurcations while reporting success).
+class ThreePathCase : public testing::TestWithParam<int> {};
+
+TEST_P(ThreePathCase, CollapsesToOneSingularity) {
   GridSpec g;
-  g.nx = g.ny = 33;
+  g.nx = g.ny = GetParam();
   const DesignSpace space(make_grid(g));
   Field field = fold_field(space.mesh(), 21);
   const Topology before = analyze_topology(space.bundle(), field);
@@ -360,6 +364,8 @@ TEST(FieldEditor, TheThreePathCaseCollapsesToOneSingularity) {
     EXPECT_EQ(after.singularities[j][0].index, -1) << "frame " << j;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(FieldEditor, ThreePathCase, testing::Values(33, 49, 65, 129));
 
 }  // namespace
 }  // namespace tvf
@@ -495,6 +501,52 @@ TEST(FieldEditor, MovingABifurcationOnTheSphereBeyondItsChartIsRefused) {
   EXPECT_NE(message.find("beyond the disc"), std::string::npos) << message;
   EXPECT_TRUE(bitwise_equal(field, d.field));
 }
+
+}  // namespace
+}  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// Issue 16: a creation at (0.5, 0, t ≈ 0.5) moved to (0.3, 0.3) at t = 0.6 with a window of
+// 0.3 appeared 0.17 away from the target at 65² and 129² (and the edit was accepted); at
+// 33² it was refused. At every resolution the moved creation is where it was asked, within
+// the design check's tolerances (2.5 mean edge lengths, 2 frame steps), and none is left at
+// the old place.
+class LateMove : public testing::TestWithParam<int> {};
+
+TEST_P(LateMove, LandsOnTheTarget) {
+  json j = json::parse(R"({"tvf": 1,
+    "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 41, "range": [0, 1]},
+    "falloff": 30,
+    "elements": [
+      {"kind": "bifurcation", "type": "saddle_sink_creation", "at": [0.5, 0, 0.5],
+       "scale": 0.3, "time_scale": 0.3, "angle": 0},
+      {"kind": "singular", "type": "ccw_center", "path": [[-0.5, -0.6, 0]]}]})");
+  j["domain"]["grid"]["size"] = {GetParam(), GetParam()};
+  Design d(j);
+  FieldEditor editor(*d.space, edit_settings(d.scene));
+  MoveBifurcationEdit m;
+  m.at = {Vec3(0.5, 0, 0), 0.5};
+  m.to = {Vec3(0.3, 0.3, 0), 0.6};
+  m.window = 0.3;
+  Field edited = d.field;
+  ASSERT_NO_THROW(editor.move_bifurcation(edited, m));
+  const Topology after = analyze_topology(d.space->bundle(), edited);
+  const double h = d.space->mesh().mean_edge_length(), dt = 1.0 / 40;
+  const Bifurcation* best = nullptr;
+  for (const auto& b : after.bifurcations)
+    if (b.kind == BifurcationKind::creation &&
+        (!best || (b.position - m.to.position).norm() < (best->position - m.to.position).norm()))
+      best = &b;
+  ASSERT_TRUE(best);
+  EXPECT_LE((best->position - m.to.position).norm(), 2.5 * h) << best->position.transpose();
+  EXPECT_LE(std::abs(best->t - m.to.t), 2 * dt) << best->t;
+  for (const auto& b : after.bifurcations) EXPECT_GT((b.position - Vec3(0.5, 0, 0)).norm(), 2.5 * h);
+}
+
+INSTANTIATE_TEST_SUITE_P(FieldEditor, LateMove, testing::Values(33, 65, 129));
 
 }  // namespace
 }  // namespace tvf

@@ -59,10 +59,11 @@ public:
   RegionResult cancel_in(std::span<const cplx> values, int face_a, int face_b, const std::vector<int>& region);
 
   // Re-solves the neighbourhood of `pinned` vertices, which take `pinned_values` (one per
-  // pinned vertex) and are held fixed: the seed is the faces around them plus one ring;
-  // success when every singular face left in the region touches a pinned vertex.
-  // `ignore` lists singular faces of `values` that may be taken into the region (the
-  // singularities being replaced).
+  // pinned vertex) and are held fixed: the seed is the faces around them, a chain of faces
+  // from them to each face of `ignore`, plus one ring; success when every singular face
+  // left in the region has its three corners pinned (the pasted singularities themselves).
+  // `ignore` lists singular faces of `values` that are being replaced: they are taken into
+  // the region, so that the paste moves them rather than adding a copy.
   RegionResult paste(std::span<const cplx> values, const std::vector<int>& pinned,
                      std::span<const cplx> pinned_values, const std::vector<int>& ignore = {});
 

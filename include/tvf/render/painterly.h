@@ -86,6 +86,10 @@ struct PainterlyAnimationOptions {
   std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
   std::string video;              // MP4 file (empty: none)
   double fps = 25.0;
+  // How far the field carries things per picture: the velocities are multiplied by this, so
+  // over the clip they travel as the field would carry them over time_scale × its time range,
+  // while the field itself still changes at its own pace. > 0.
+  double time_scale = 1.0;
   std::function<void(int done, int total)> progress;
 };
 

@@ -67,6 +67,10 @@ struct ParticleAnimationOptions {
   int frames = 0;                 // pictures over the field's time range; 0: the field's frames
   std::string frames_dir, video;
   double fps = 25.0;
+  // How far the field carries things per picture: the velocities are multiplied by this, so
+  // over the clip they travel as the field would carry them over time_scale × its time range,
+  // while the field itself still changes at its own pace. > 0.
+  double time_scale = 1.0;
   std::function<void(int done, int total)> progress;
 };
 
