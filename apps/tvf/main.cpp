@@ -3,6 +3,7 @@
 #include "default_scene.h"
 #include "design_check_output.h"
 #include "edit_command.h"
+#include "lcs_command.h"
 #include "progress.h"
 #include "render_command.h"
 #include "serve_command.h"
@@ -253,6 +254,7 @@ int main(int argc, char** argv) {
 
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
   cli::RenderCommand render(app);
+  cli::LcsCommand lcs(app);
   cli::ServeCommand serve(app);
   cli::SynthCommand synth(*app.get_subcommand("render"));
 
@@ -268,6 +270,7 @@ int main(int argc, char** argv) {
     if (*validate_cmd) return run_validate(validate_path, validate_domain);
     if (*edit_cmd) return cli::run_edit(edit);
     if (synth.selected()) return synth.run();
+    if (lcs.selected()) return lcs.run();
     if (render.selected()) return render.run();
     if (serve.selected()) return serve.run();
     if (*default_cmd) {
