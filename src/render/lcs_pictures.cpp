@@ -200,7 +200,6 @@ Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
   check_size(o.size);
   const Mesh& mesh = bundle.mesh();
   const double width = o.line_width > 0 ? o.line_width : std::max(1.5, o.size / 300.0);
-  const double cr_ = ((o.color >> 16) & 0xFF) / 255.0, cg = ((o.color >> 8) & 0xFF) / 255.0, cb = (o.color & 0xFF) / 255.0;
   if (!bundle.is_flat()) {
     MeshRenderer renderer;
     renderer.set_mesh(mesh);
@@ -223,6 +222,13 @@ Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
   TextureAnimator animator(bundle, field, texture);
   animator.advance(t);
   Image img = animator.picture();
+  draw_curves(img, animator, curves, seeds, o.color, width, o.dots);
+  return img;
+}
+
+void draw_curves(Image& img, const TextureAnimator& animator, const std::vector<std::vector<Vec3>>& curves,
+                 std::span<const Vec3> seeds, std::uint32_t color, double width, bool dots) {
+  const double cr_ = ((color >> 16) & 0xFF) / 255.0, cg = ((color >> 8) & 0xFF) / 255.0, cb = (color & 0xFF) / 255.0;
   cairo_surface_t* surface = nullptr;
   cairo_t* cr = cairo_on(img, surface);
   cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
@@ -241,7 +247,7 @@ Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
     cairo_set_source_rgb(cr, cr_, cg, cb);
     cairo_set_line_width(cr, width);
     cairo_stroke(cr);
-    if (o.dots) {
+    if (dots) {
       for (const Vec3& x : c) {
         const Vec2 p = animator.to_pixel(x.head<2>());
         cairo_new_sub_path(cr);
@@ -262,7 +268,6 @@ Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
     cairo_stroke(cr);
   }
   cairo_done(cr, surface);
-  return img;
 }
 
 }  // namespace tvf

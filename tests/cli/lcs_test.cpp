@@ -6,6 +6,7 @@
 #include "tvf/field/field_io.h"
 #include "tvf/field/npy.h"
 #include "tvf/mesh/grid.h"
+#include "tvf/render/image.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -115,6 +116,31 @@ TEST(CliLcs, TakesASceneAsAnalyzeDoes) {
   EXPECT_EQ(j["t"], 1.0);
   EXPECT_GT(j["points"].size(), 10u);
   EXPECT_FALSE(fs::exists(dir / "s.png"));
+}
+
+TEST(CliLcs, TextureAnimationInjectsDye) {
+  // `tvf render texture --streakline X,Y`: the streakline since the first picture drawn in
+  // red over the gray texture; without it no picture has a red pixel.
+  TempDir dir;
+  write_field(dir / "rot", GridSpec{17, 17, {-1, -1}, {1, 1}}, TimeSampling{0, 2, 9},
+              [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  auto reds = [](const Image& img) {
+    int n = 0;
+    for (const std::uint32_t c : img.pixels) n += (c & 0xFFFFFFu) == 0xE8402Au;
+    return n;
+  };
+  const auto r = run_tvf("render texture " + quoted(dir / "rot") + " --streakline 0.5,0 --range 8:8 -s 128 -q -o " +
+                         quoted(dir / "dye"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_GT(reds(read_png((dir / "dye" / "frame_00008.png").string())), 50);
+  const auto plain = run_tvf("render texture " + quoted(dir / "rot") + " --range 8:8 -s 128 -q -o " + quoted(dir / "plain"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_EQ(reds(read_png((dir / "plain" / "frame_00008.png").string())), 0);
+  const auto bad = run_tvf("render texture " + quoted(dir / "rot") + " --streakline 0.5 -q -o " + quoted(dir / "bad"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_EQ(count_lines(bad.output), 1) << bad.output;
+  EXPECT_NE(bad.output.find("--streakline 0.5: expected X,Y"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
 TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {

@@ -52,6 +52,13 @@ struct CurvePictureOptions {
   SurfaceView surface;             // surfaces: the camera
 };
 
+// Draws curves (planar world positions; consecutive points joined, a dark casing under the
+// coloured line, dots at the points when `dots`) and seeds (white discs) onto a picture of
+// `animator` (texture_animation.h). Used by curve_picture and by the texture animation's
+// streakline overlay.
+void draw_curves(Image& image, const TextureAnimator& animator, const std::vector<std::vector<Vec3>>& curves,
+                 std::span<const Vec3> seeds, std::uint32_t color, double line_width, bool dots);
+
 // Curves (world positions; consecutive points joined) and seeds over the field at time t.
 Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
                     const std::vector<std::vector<Vec3>>& curves, std::span<const Vec3> seeds,
