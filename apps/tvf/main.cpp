@@ -4,6 +4,7 @@
 #include "design_check_output.h"
 #include "edit_command.h"
 #include "export_command.h"
+#include "lcs_command.h"
 #include "progress.h"
 #include "render_command.h"
 #include "serve_command.h"
@@ -245,6 +246,7 @@ int main(int argc, char** argv) {
 
   auto* default_cmd = app.add_subcommand("default-scene", "Print the built-in demo scene (JSON)");
   cli::RenderCommand render(app);
+  cli::LcsCommand lcs(app);
   cli::ServeCommand serve(app);
   cli::SynthCommand synth(*app.get_subcommand("render"));
 
@@ -261,6 +263,7 @@ int main(int argc, char** argv) {
     if (*edit_cmd) return cli::run_edit(edit);
     if (*export_cmd) return cli::run_export(export_args);
     if (synth.selected()) return synth.run();
+    if (lcs.selected()) return lcs.run();
     if (render.selected()) return render.run();
     if (serve.selected()) return serve.run();
     if (*default_cmd) {

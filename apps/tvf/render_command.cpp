@@ -48,6 +48,9 @@ RenderCommand::RenderCommand(CLI::App& app) {
                        "(periodic orbits and Hopf events, planar domains); "
                        "several at once as --overlay singularities paths")
       ->check(CLI::IsMember({"singularities", "paths", "streamlines", "orbits"}));
+  texture_->add_option("--streakline", streaklines_,
+                       "Planar domains: inject dye at X,Y from the start of the animation and draw its streakline in "
+                       "every picture (give it again for more seeds)");
   texture_->add_option("--alpha", alpha_, "Weight of the fresh noise per frame (shorter streaks when larger)")
       ->capture_default_str();
   texture_->add_option("--noise-scale", noise_scale_, "Noise cell size in pixels (default: size/256)");
@@ -362,6 +365,16 @@ int RenderCommand::run_texture() {
   options.surface.spacing = spacing_;
 
   RenderInput in = load_render_input(input_, progress, "texture", true);
+  for (const auto& text : streaklines_) {
+    double x = 0, y = 0;
+    char comma = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%lf %c %lf %c", &x, &comma, &y, &extra) != 3 || comma != ',')
+      throw Error(fmt::format("--streakline {}: expected X,Y (a point of the planar domain)", text));
+    if (!in.mesh.is_planar_xy())
+      throw Error(fmt::format("--streakline {}: streaklines in the texture are drawn on planar domains only "
+                              "(`tvf streaklines` traces them on surfaces)", text));
+    options.streakline_seeds.push_back(Vec3(x, y, 0));
+  }
   const std::vector<std::string>& warnings = in.warnings;
   const Field& field = in.field;
   const TangentBundle bundle(in.mesh);

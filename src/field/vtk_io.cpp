@@ -146,7 +146,74 @@ std::string frame_name(const std::string& stem, int frame, int digits) {
   return fmt::format("{}_{:0{}}.vtu", stem, frame, digits);
 }
 
+void write_collection(const fs::path& folder, const std::string& stem, const std::vector<double>& times, int digits) {
+  std::string pvd =
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+      "  <Collection>\n";
+  for (size_t j = 0; j < times.size(); ++j)
+    pvd += fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", times[j],
+                       xml_escape(frame_name(stem, static_cast<int>(j), digits)));
+  pvd += "  </Collection>\n</VTKFile>\n";
+  write_whole_file(folder / (stem + ".pvd"), pvd, {}, {});
+}
+
 }  // namespace
+
+void write_vtk_scalar_series(const std::string& dir, const std::string& stem, const Mesh& mesh,
+                             const std::vector<double>& times, const std::vector<VtkScalarArray>& arrays) {
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  for (const auto& array : arrays)
+    TVF_CHECK(array.values.size() == times.size() * nv, "array {} has {} values for {} frames × {} vertices",
+              array.name, array.values.size(), times.size(), nv);
+  const fs::path folder(dir);
+  int digits = 4;
+  for (auto n = static_cast<long>(times.size()) - 1; n >= 10000; n /= 10) ++digits;
+  const Geometry g = make_geometry(mesh);
+  tbb::parallel_for(0, static_cast<int>(times.size()), [&](int j) {
+    Appended a;
+    const std::uint64_t base = g.appended.size();
+    std::string data_arrays;
+    for (const auto& array : arrays) {
+      const std::uint64_t offset = base + a.begin(nv * sizeof(float));
+      for (size_t v = 0; v < nv; ++v) a.put(array.values[static_cast<size_t>(j) * nv + v]);
+      data_arrays += fmt::format(
+          "        <DataArray type=\"Float32\" Name=\"{}\" format=\"appended\" offset=\"{}\"/>\n",
+          xml_escape(array.name), offset);
+    }
+    const std::string head = fmt::format(
+        "<?xml version=\"1.0\"?>\n"
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+        "header_type=\"UInt64\">\n"
+        "  <UnstructuredGrid>\n"
+        "    <FieldData>\n"
+        "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+        "format=\"ascii\">{:.17g}</DataArray>\n"
+        "    </FieldData>\n"
+        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n"
+        "      <PointData Scalars=\"{}\">\n"
+        "{}"
+        "      </PointData>\n"
+        "      <Points>\n"
+        "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" "
+        "offset=\"{}\"/>\n"
+        "      </Points>\n"
+        "      <Cells>\n"
+        "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"{}\"/>\n"
+        "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\"{}\"/>\n"
+        "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{}\"/>\n"
+        "      </Cells>\n"
+        "    </Piece>\n"
+        "  </UnstructuredGrid>\n"
+        "  <AppendedData encoding=\"raw\">\n"
+        "   _",
+        times[static_cast<size_t>(j)], nv, mesh.num_faces(), arrays.empty() ? "" : xml_escape(arrays.front().name),
+        data_arrays, g.points, g.connectivity, g.offsets, g.types);
+    a.data().append("\n  </AppendedData>\n</VTKFile>\n");
+    write_whole_file(folder / frame_name(stem, j, digits), head, g.appended, a.data());
+  });
+  write_collection(folder, stem, times, digits);
+}
 
 void write_vtk_series(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
                       const Field& field) {
@@ -162,15 +229,7 @@ void write_vtk_series(const std::string& dir, const std::string& stem, const Tan
     write_frame(folder / frame_name(stem, j, digits), bundle, field, j, geometry);
   });
 
-  std::string pvd =
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
-      "  <Collection>\n";
-  for (int j = 0; j < field.frames(); ++j)
-    pvd += fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n",
-                       field.time().time(j), xml_escape(frame_name(stem, j, digits)));
-  pvd += "  </Collection>\n</VTKFile>\n";
-  write_whole_file(folder / (stem + ".pvd"), pvd, {}, {});
+  write_collection(folder, stem, field.time().times(), digits);
 }
 
 }  // namespace tvf

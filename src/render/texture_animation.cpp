@@ -5,7 +5,9 @@
 #include "tvf/core/error.h"
 #include "tvf/integrate/evenly_spaced.h"
 #include "tvf/integrate/periodic_orbits.h"
+#include "tvf/integrate/streakline.h"
 #include "tvf/integrate/streamline.h"
+#include "tvf/render/lcs_pictures.h"
 #include "tvf/render/frame_output.h"
 #include "tvf/render/plots.h"
 #include "tvf/render/surface_texture.h"
@@ -543,6 +545,19 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
         (k == first ? warmup_seconds : texture_seconds) += std::chrono::duration<double>(clock::now() - t0).count();
         if (options.overlay_streamlines) draw_streamlines(img, animator, bundle, field, t);
         if (options.overlay_paths) draw_singularity_paths(img, animator, topology, t);
+        if (!options.streakline_seeds.empty()) {
+          std::vector<std::vector<Vec3>> streaks;
+          StreaklineOptions so;
+          so.t0 = std::min(time_of(0), t);
+          so.t1 = std::max(time_of(0), t);
+          for (const Vec3& seed : options.streakline_seeds) {
+            std::vector<Vec3> line;
+            for (const StreakPoint& p : trace_streakline(bundle, field, seed, so).points) line.push_back(p.position);
+            streaks.push_back(std::move(line));
+          }
+          draw_curves(img, animator, streaks, options.streakline_seeds, 0xE8402A,
+                      std::max(1.5, std::max(img.width, img.height) / 300.0), false);
+        }
         if (options.overlay_singularities) draw_singularities(img, animator, bundle, field, t);
         if (options.overlay_orbits) draw_orbits(img, animator, orbits, field, t);  // rings round the dots
         return img;

@@ -96,5 +96,41 @@ TEST(VtkSeries, VtkReadsTheIcosphereSeries) {
   check_with_vtk(test::icosphere_mesh(), TimeSampling{0.0, 1.0, 3});
 }
 
+TEST(VtkSeries, VtkReadsScalarSeries) {
+  // Two per-vertex arrays (FTLE-like, one with a NaN) read back by VTK's reader: the
+  // values of the last time and the time of each file.
+  const std::string py = test::python();
+  if (py.empty() ||
+      test::run_command("'" + py + "' -c 'import numpy, vtkmodules.vtkIOXML'").exit_code != 0)
+    GTEST_SKIP() << "Debian python3 with numpy and vtk not available";
+  const Mesh& mesh = test::grid_mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  const std::vector<double> times{0.5, 1.5};
+  std::vector<float> a(2 * nv), b(2 * nv);
+  for (size_t k = 0; k < a.size(); ++k) {
+    a[k] = static_cast<float>(k);
+    b[k] = -static_cast<float>(k) / 4;
+  }
+  b[nv + 3] = std::nanf("");
+  TempDir dir;
+  write_vtk_scalar_series(dir.path().string(), "ftle", mesh, times, {{"ftle_forward", a}, {"ftle_backward", b}});
+  EXPECT_EQ(listing(dir.path()), (std::vector<std::string>{"ftle.pvd", "ftle_0000.vtu", "ftle_0001.vtu"}));
+  const std::string script =
+      "import numpy as np\n"
+      "from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader\n"
+      "from vtkmodules.util.numpy_support import vtk_to_numpy\n"
+      "r = vtkXMLUnstructuredGridReader(); r.SetFileName('" + (dir / "ftle_0001.vtu").string() + "'); r.Update()\n"
+      "g = r.GetOutput(); pd = g.GetPointData()\n"
+      "f = vtk_to_numpy(pd.GetArray('ftle_forward')); b = vtk_to_numpy(pd.GetArray('ftle_backward'))\n"
+      "t = vtk_to_numpy(g.GetFieldData().GetArray('TimeValue'))[0]\n"
+      "n = g.GetNumberOfPoints()\n"
+      "ok = (f == np.arange(n, 2 * n)).all() and np.isnan(b[3]) and b[4] == -(n + 4) / 4 and t == 1.5\n"
+      "print('ok' if ok else 'bad %s %s %s' % (f[:3], b[:5], t))\n";
+  test::write_text(dir / "check.py", script);
+  const auto r = test::run_command("'" + py + "' '" + (dir / "check.py").string() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "ok\n");
+}
+
 }  // namespace
 }  // namespace tvf

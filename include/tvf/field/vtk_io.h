@@ -7,7 +7,9 @@
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
 
+#include <span>
 #include <string>
+#include <vector>
 
 namespace tvf {
 
@@ -15,5 +17,15 @@ namespace tvf {
 // more digits). Raw binary appended data, UInt64 headers.
 void write_vtk_series(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
                       const Field& field);
+
+// A per-vertex scalar of every frame: frames × |V| values, frame-major (e.g. FTLE).
+struct VtkScalarArray {
+  std::string name;
+  std::span<const float> values;
+};
+// Writes DIR/<stem>.pvd and DIR/<stem>_NNNN.vtu with the arrays as point data (Float32;
+// NaN kept as NaN), one .vtu per time.
+void write_vtk_scalar_series(const std::string& dir, const std::string& stem, const Mesh& mesh,
+                             const std::vector<double>& times, const std::vector<VtkScalarArray>& arrays);
 
 }  // namespace tvf

@@ -164,6 +164,10 @@ struct TextureAnimationOptions {
   // (integrate/periodic_orbits.h; attracting orange, repelling teal) and each Hopf event
   // as a black diamond outline within two frame steps of its time.
   bool overlay_orbits = false;
+  // Planar domains: dye released continuously from each seed since the start of the
+  // animation (picture 0, whatever first is), drawn in each picture as its streakline (integrate/streakline.h; a red line with
+  // the seed as a white disc): smoke injected into the flow.
+  std::vector<Vec3> streakline_seeds;
   std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
   std::string video;              // MP4 file (empty: none)
   SurfaceView surface;            // surfaces only (render/surface_texture.h): the camera, samples

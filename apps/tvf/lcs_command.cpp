@@ -1,0 +1,349 @@
+#include "lcs_command.h"
+
+#include "progress.h"
+#include "render_input.h"
+
+#include "tvf/core/atomic_output.h"
+#include "tvf/core/error.h"
+#include "tvf/field/npy.h"
+#include "tvf/field/vtk_io.h"
+#include "tvf/integrate/ftle.h"
+#include "tvf/integrate/streakline.h"
+#include "tvf/render/lcs_pictures.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <tuple>
+
+namespace fs = std::filesystem;
+
+namespace tvf::cli {
+
+namespace {
+
+const char* kInputHelp = "Folder written by `tvf generate` (or its field.tvff), or a scene file";
+
+// A time option inside the field's range, or the range's end when not given.
+double time_option(const std::vector<double>& given, const char* name, const TimeSampling& time, bool start) {
+  const double lo = std::min(time.t0, time.t1), hi = std::max(time.t0, time.t1);
+  if (given.empty()) return start ? lo : hi;
+  const double t = given.front();
+  const double slack = 1e-12 * std::max(1.0, hi - lo);
+  if (!std::isfinite(t) || t < lo - slack || t > hi + slack)
+    throw Error(fmt::format("{} {} is outside the field's time range [{}, {}]", name, t, lo, hi));
+  return std::clamp(t, lo, hi);
+}
+
+Vec3 point_option(const std::vector<double>& v, size_t first, size_t dims) {
+  return {v[first], v[first + 1], dims == 3 ? v[first + 2] : 0.0};
+}
+
+// A point of the user's on the domain: planar domains take X Y (Z ignored if 0), surfaces X Y Z.
+void check_point_dims(const std::vector<double>& v, size_t per_point, bool planar, const char* option) {
+  if (!planar && per_point != 3)
+    throw Error(fmt::format("{}: the domain is a surface: give X Y Z for each point", option));
+  for (const double x : v)
+    if (!std::isfinite(x)) throw Error(fmt::format("{}: {} is not a number", option, x));
+}
+
+nlohmann::json points_json(const Streakline& s) {
+  nlohmann::json points = nlohmann::json::array();
+  for (const StreakPoint& p : s.points)
+    points.push_back({p.position.x(), p.position.y(), p.position.z(), p.release});
+  return points;
+}
+
+std::vector<Vec3> positions(const Streakline& s) {
+  std::vector<Vec3> out;
+  for (const StreakPoint& p : s.points) out.push_back(p.position);
+  return out;
+}
+
+}  // namespace
+
+LcsCommand::LcsCommand(CLI::App& app) {
+  ftle_ = app.add_subcommand(
+      "ftle", "Finite-time Lyapunov exponents (forward and backward) of a field: Lagrangian coherent structures as "
+              "arrays (.npy), pictures and a VTK series");
+  ftle_->add_option("input", input_, kInputHelp)->required();
+  ftle_->add_option("--horizon", horizon_, "Integration time T (> 0): each frame's flow map runs over [t, t ± T]")
+      ->required();
+  ftle_->add_option("-o,--output", out_, "Output folder (created if missing)")->required();
+  ftle_->add_option("--direction", direction_, "Which FTLE: both, forward (repelling LCS) or backward (attracting LCS)")
+      ->check(CLI::IsMember({"both", "forward", "backward"}))
+      ->capture_default_str();
+  ftle_->add_option("--beyond-range", beyond_,
+                    "Frames whose window [t, t ± T] reaches past the field's time range: clamp (integrate to the "
+                    "range's end and divide by the time integrated) or nan")
+      ->check(CLI::IsMember({"clamp", "nan"}))
+      ->capture_default_str();
+  ftle_->add_option("--dt", dt_, "Largest RK4 time step (default: half the frame spacing)");
+  ftle_->add_option("--every", every_,
+                    "Compute every K-th frame only (frames 0, K, 2K, …; the others are NaN): a faster look")
+      ->capture_default_str();
+  ftle_->add_option("--pictures", pictures_, "Colour-mapped pictures per direction, frames evenly spaced (0: none)")
+      ->capture_default_str();
+  ftle_->add_option("-s,--size", size_, "Pixels on the long side of the pictures")->capture_default_str();
+  ftle_->add_flag("--no-vtk", no_vtk_, "Skip the VTK series (ftle.pvd)");
+  ftle_->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
+
+  auto common = [&](CLI::App* sub) {
+    sub->add_option("input", input_, kInputHelp)->required();
+    sub->add_option("--from", from_, "First time (default: the start of the field's time range)")->expected(1);
+    sub->add_option("--to", to_, "The time shown (default: the end of the field's time range)")->expected(1);
+    sub->add_option("-o,--output", out_, "The JSON file to write (the picture goes beside it, .png)")->required();
+    sub->add_option("--dt", dt_, "Largest RK4 time step (default: half the frame spacing)");
+    sub->add_option("-s,--size", size_, "Pixels on the long side of the picture")->capture_default_str();
+    sub->add_flag("--no-picture", no_picture_, "Skip the picture");
+    sub->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
+  };
+  streak_ = app.add_subcommand(
+      "streaklines", "A streakline: where dye released continuously from a seed over [--from, --to] is at --to (JSON "
+                     "and a picture over the field)");
+  common(streak_);
+  streak_->add_option("--seed", seed_, "The seed: X Y on a planar domain, X Y Z on a surface")
+      ->required()
+      ->expected(2, 3);
+  streak_->add_option("--release-spacing", spacing_, "Time between releases (default: a quarter of the frame spacing)");
+
+  timeline_ = app.add_subcommand(
+      "timelines", "A timeline: the segment --line drawn at --from, carried by the flow to --to (JSON and a picture)");
+  common(timeline_);
+  timeline_->add_option("--line", line_, "The segment's ends: X0 Y0 X1 Y1 on a planar domain, X0 Y0 Z0 X1 Y1 Z1 on a surface")
+      ->required()
+      ->expected(4, 6);
+  timeline_->add_option("--count", count_, "Particles on the segment at --from")->capture_default_str();
+  timeline_->add_option("--max-gap", max_gap_,
+                        "Distance between neighbours at --to above which a particle is added between them "
+                        "(default: the mean edge length)");
+}
+
+int LcsCommand::run() {
+  if (ftle_->parsed()) return run_ftle();
+  if (streak_->parsed()) return run_streaklines();
+  if (timeline_->parsed()) return run_timelines();
+  return 1;
+}
+
+int LcsCommand::run_ftle() {
+  if (!(horizon_ > 0) || !std::isfinite(horizon_))
+    throw Error(fmt::format("--horizon {}: must be a positive time", horizon_));
+  if (!(dt_ >= 0) || !std::isfinite(dt_)) throw Error(fmt::format("--dt {}: must be a positive time", dt_));
+  if (pictures_ < 0) throw Error(fmt::format("--pictures {}: must be 0 or more", pictures_));
+  if (every_ < 1) throw Error(fmt::format("--every {}: must be at least 1", every_));
+  if (size_ < 16 || size_ > 16384) throw Error(fmt::format("--size {}: must be in [16, 16384] pixels", size_));
+  const bool show = !quiet_ && progress_wanted();
+  Progress progress("tvf ftle", show);
+  RenderInput in = load_render_input(input_, progress, "ftle", true);
+  const TangentBundle bundle(in.mesh);
+  FtleOptions o;
+  o.horizon = horizon_;
+  o.forward = direction_ != "backward";
+  o.backward = direction_ != "forward";
+  o.beyond_range = beyond_ == "nan" ? HorizonPolicy::nan : HorizonPolicy::clamp;
+  o.flow.dt = dt_;
+  for (int j = 0; j < in.field.frames(); j += every_) o.frames.push_back(j);
+  o.progress = [&](int done, int total) { progress.update(done, total); };
+  progress.note("flow maps");
+  const FtleResult r = compute_ftle(bundle, in.field, o);
+
+  progress.note("writing");
+  OutputStage stage(out_);
+  const auto n = static_cast<size_t>(r.frames), nv = static_cast<size_t>(r.vertices);
+  const std::vector<double> times = in.field.time().times();
+  std::vector<VtkScalarArray> arrays;
+  nlohmann::json meta = {{"horizon", horizon_},
+                         {"beyond_range", to_string(o.beyond_range)},
+                         {"frames", r.frames},
+                         {"vertices", r.vertices},
+                         {"times", times}};
+  for (const int dir : {1, -1}) {
+    const std::vector<float>& values = dir > 0 ? r.forward : r.backward;
+    if (values.empty()) continue;
+    const std::string name = dir > 0 ? "ftle_forward" : "ftle_backward";
+    write_npy(stage.file(name + ".npy").string(), {n, nv}, values.data());
+    arrays.push_back({name, values});
+    const std::vector<double>& spans = dir > 0 ? r.forward_span : r.backward_span;
+    // One colour range for the series, from the frames integrated over the whole horizon
+    // (a cut window divides by a shorter time and can reach far higher values).
+    std::vector<float> full;
+    for (size_t j = 0; j < n; ++j)
+      if (std::abs(spans[j] - horizon_) <= 1e-9 * horizon_)
+        full.insert(full.end(), values.begin() + static_cast<long>(j * nv), values.begin() + static_cast<long>((j + 1) * nv));
+    const auto range = colour_range(full.empty() ? values : full);
+    meta[dir > 0 ? "forward" : "backward"] = {{"span", spans},
+                                              {"cut_frames", dir > 0 ? r.forward_cut : r.backward_cut},
+                                              {"left_domain", dir > 0 ? r.forward_left : r.backward_left},
+                                              {"colour_range", {range.first, range.second}}};
+    if (pictures_ == 0) continue;
+    // Frames with values, evenly spaced; one colour range for all of them.
+    std::vector<int> have;
+    for (int j = 0; j < r.frames; ++j)
+      if (spans[static_cast<size_t>(j)] > 0) have.push_back(j);
+    ScalarPictureOptions po;
+    po.size = size_;
+    std::tie(po.lo, po.hi) = range;
+    const int k_max = std::min(pictures_, static_cast<int>(have.size()));
+    for (int k = 0; k < k_max; ++k) {
+      const int j = have[static_cast<size_t>(k_max == 1 ? 0 : k * (static_cast<int>(have.size()) - 1) / (k_max - 1))];
+      po.label = fmt::format("{} FTLE, t = {:.4g}, T = {:.4g}", dir > 0 ? "forward" : "backward",
+                             times[static_cast<size_t>(j)], spans[static_cast<size_t>(j)]);
+      const Image img = scalar_picture(bundle, std::span<const float>(values).subspan(static_cast<size_t>(j) * nv, nv), po);
+      write_png(stage.file(fmt::format("{}_{:04}.png", name, j)).string(), img);
+    }
+  }
+  if (!no_vtk_) {
+    // The frames computed (all, unless --every).
+    std::vector<double> vtk_times;
+    std::vector<std::vector<float>> kept(arrays.size());
+    for (const int j : o.frames) {
+      vtk_times.push_back(times[static_cast<size_t>(j)]);
+      for (size_t a = 0; a < arrays.size(); ++a)
+        kept[a].insert(kept[a].end(), arrays[a].values.begin() + static_cast<long>(static_cast<size_t>(j) * nv),
+                       arrays[a].values.begin() + static_cast<long>(static_cast<size_t>(j + 1) * nv));
+    }
+    std::vector<VtkScalarArray> vtk;
+    for (size_t a = 0; a < arrays.size(); ++a) vtk.push_back({arrays[a].name, kept[a]});
+    write_vtk_scalar_series(stage.stage().string(), "ftle", in.mesh, vtk_times, vtk);
+  }
+  write_file_atomically(stage.file("ftle.json"), meta.dump(2) + "\n");
+  const auto files = stage.commit();
+  progress.finish();
+  for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!quiet_) {
+    std::printf("FTLE of %zu of %d frames × %d vertices, T = %g", o.frames.size(), r.frames, r.vertices, horizon_);
+    for (const int dir : {1, -1}) {
+      const std::vector<float>& values = dir > 0 ? r.forward : r.backward;
+      if (values.empty()) continue;
+      float hi = -std::numeric_limits<float>::infinity();
+      for (const float v : values)
+        if (!std::isnan(v)) hi = std::max(hi, v);
+      std::printf("; %s: max %.3g, %ld vertex-frames left the domain", dir > 0 ? "forward" : "backward",
+                  static_cast<double>(hi), dir > 0 ? r.forward_left : r.backward_left);
+    }
+    std::printf("\nwrote %zu files to %s\n", files.size(), fs::absolute(out_).lexically_normal().c_str());
+    std::fflush(stdout);
+  }
+  const int cut = r.forward_cut + r.backward_cut;
+  if (cut > 0 && !quiet_)
+    std::fprintf(stderr,
+                 "note: %d forward and %d backward frames reach past the time range [%g, %g] with T = %g: %s\n",
+                 r.forward_cut, r.backward_cut, in.field.time().t0, in.field.time().t1, horizon_,
+                 o.beyond_range == HorizonPolicy::clamp
+                     ? "their windows were cut at its ends (ftle.json has each frame's span; --beyond-range nan "
+                       "gives them NaN)"
+                     : "they are NaN");
+  return 0;
+}
+
+int LcsCommand::run_streaklines() {
+  if (!(spacing_ >= 0) || !std::isfinite(spacing_))
+    throw Error(fmt::format("--release-spacing {}: must be a positive time", spacing_));
+  if (!(dt_ >= 0) || !std::isfinite(dt_)) throw Error(fmt::format("--dt {}: must be a positive time", dt_));
+  const bool show = !quiet_ && progress_wanted();
+  Progress progress("tvf streaklines", show);
+  RenderInput in = load_render_input(input_, progress, "streaklines", true);
+  const TangentBundle bundle(in.mesh);
+  check_point_dims(seed_, seed_.size(), bundle.is_flat(), "--seed");
+  StreaklineOptions o;
+  o.t0 = time_option(from_, "--from", in.field.time(), true);
+  o.t1 = time_option(to_, "--to", in.field.time(), false);
+  if (o.t0 > o.t1)
+    throw Error(fmt::format("--from {} is after --to {}: dye is released over [--from, --to]", o.t0, o.t1));
+  o.release_spacing = spacing_;
+  o.flow.dt = dt_;
+  const Vec3 seed = point_option(seed_, 0, seed_.size());
+  progress.note("releasing");
+  const Streakline s = trace_streakline(bundle, in.field, seed, o);
+  const nlohmann::json j = {{"t", s.t},
+                            {"from", o.t0},
+                            {"seed", {seed.x(), seed.y(), seed.z()}},
+                            {"released", s.released},
+                            {"left", s.left},
+                            {"points", points_json(s)}};
+  std::string picture;
+  if (!no_picture_) {
+    progress.note("drawing");
+    CurvePictureOptions po;
+    po.size = size_;
+    const Image img = curve_picture(bundle, in.field, s.t, {positions(s)}, std::vector<Vec3>{seed}, po);
+    const fs::path out(out_);
+    picture = (out.parent_path() / out.stem()).string() + ".png";
+    write_png(picture, img);
+  }
+  write_file_atomically(out_, j.dump() + "\n");
+  progress.finish();
+  for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!quiet_) {
+    std::printf("streakline at t = %g: %d particles released from t = %g", s.t, s.released, o.t0);
+    if (s.left > 0) std::printf(", %d of them left the domain", s.left);
+    std::printf("; wrote %s", fs::absolute(out_).lexically_normal().c_str());
+    if (!picture.empty()) std::printf(" and %s", fs::absolute(picture).lexically_normal().c_str());
+    std::printf("\n");
+  }
+  return 0;
+}
+
+int LcsCommand::run_timelines() {
+  if (line_.size() == 5) throw Error("--line: give X0 Y0 X1 Y1 (planar) or X0 Y0 Z0 X1 Y1 Z1 (surfaces)");
+  if (count_ < 2) throw Error(fmt::format("--count {}: a timeline needs at least 2 particles", count_));
+  if (!(max_gap_ >= 0) || !std::isfinite(max_gap_)) throw Error(fmt::format("--max-gap {}: must be positive", max_gap_));
+  if (!(dt_ >= 0) || !std::isfinite(dt_)) throw Error(fmt::format("--dt {}: must be a positive time", dt_));
+  const bool show = !quiet_ && progress_wanted();
+  Progress progress("tvf timelines", show);
+  RenderInput in = load_render_input(input_, progress, "timelines", true);
+  const TangentBundle bundle(in.mesh);
+  const size_t dims = line_.size() / 2;
+  check_point_dims(line_, dims, bundle.is_flat(), "--line");
+  TimelineOptions o;
+  o.t0 = time_option(from_, "--from", in.field.time(), true);
+  o.t1 = time_option(to_, "--to", in.field.time(), false);
+  o.count = count_;
+  o.max_gap = max_gap_;
+  o.flow.dt = dt_;
+  const Vec3 a = point_option(line_, 0, dims), b = point_option(line_, dims, dims);
+  progress.note("carrying");
+  const Streakline s = trace_timeline(bundle, in.field, a, b, o);
+  const nlohmann::json j = {{"t", s.t},
+                            {"from", o.t0},
+                            {"line", {{a.x(), a.y(), a.z()}, {b.x(), b.y(), b.z()}}},
+                            {"released", s.released},
+                            {"left", s.left},
+                            {"points", points_json(s)}};
+  std::string picture;
+  if (!no_picture_) {
+    progress.note("drawing");
+    CurvePictureOptions po;
+    po.size = size_;
+    po.dots = false;
+    // The line breaks where particles left the domain: draw the pieces.
+    std::vector<std::vector<Vec3>> pieces(1);
+    for (const StreakPoint& p : s.points) {
+      if (p.gap_before && !pieces.back().empty()) pieces.emplace_back();
+      pieces.back().push_back(p.position);
+    }
+    const Image img = curve_picture(bundle, in.field, s.t, pieces, std::vector<Vec3>{}, po);
+    const fs::path out(out_);
+    picture = (out.parent_path() / out.stem()).string() + ".png";
+    write_png(picture, img);
+  }
+  write_file_atomically(out_, j.dump() + "\n");
+  progress.finish();
+  for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (!quiet_) {
+    std::printf("timeline at t = %g: %zu particles from the line at t = %g", s.t, s.points.size(), o.t0);
+    if (s.left > 0) std::printf(" (%d more left the domain)", s.left);
+    std::printf("; wrote %s", fs::absolute(out_).lexically_normal().c_str());
+    if (!picture.empty()) std::printf(" and %s", fs::absolute(picture).lexically_normal().c_str());
+    std::printf("\n");
+  }
+  return 0;
+}
+
+}  // namespace tvf::cli

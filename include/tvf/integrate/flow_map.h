@@ -1,0 +1,60 @@
+#pragma once
+// Flow maps of a time-varying field (beyond the paper, its §10): where the particle at p
+// at time t0 is at time t1, the solution of dx/dt = V(x, t) by RK4 in t with the field
+// interpolated linearly in time between frames and barycentrically in space
+// (field_sampler.h). Used by the Lagrangian descriptors: FTLE (ftle.h), streaklines and
+// timelines (streakline.h).
+//
+// Unlike a pathline (pathline.h) a flow map does not stop at singularities (particles
+// keep moving towards a sink or around a centre) and keeps no trail. The interval
+// [t0, t1] is split at the frame times (where the field's time derivative jumps) and each
+// piece is walked in equal RK4 steps of at most `dt`; every stage walks along the surface
+// (surface_walk.h), so planar domains and surfaces share one integrator. A step that
+// meets the domain's boundary slides along it when the remaining displacement is
+// tangential there (rounding); one whose displacement points out of the domain leaves
+// it: the particle is then reported as gone (FlowMapResult::left).
+#include "tvf/field/field.h"
+#include "tvf/field/field_sampler.h"
+#include "tvf/mesh/tangent_bundle.h"
+
+#include <span>
+#include <vector>
+
+namespace tvf {
+
+struct FlowMapOptions {
+  double dt = 0.0;  // largest RK4 time step; 0: half the frame spacing
+};
+
+struct FlowMapResult {
+  SurfacePoint where;     // the particle at t1 (or where it left the domain)
+  bool left = false;      // it left the domain before t1
+  double t_left = 0.0;    // the start of the RK4 step in which it left (t1 when it did not)
+};
+
+class FlowMap {
+public:
+  // Throws tvf::Error on a non-positive dt or a field that does not fit the mesh.
+  FlowMap(const TangentBundle& bundle, const Field& field, const FlowMapOptions& options = {});
+
+  // The particle at p at time t0, carried to t1 (t1 < t0: backwards in time). t0 and t1
+  // must lie in the field's time range (tvf::Error otherwise).
+  FlowMapResult advect(const SurfacePoint& p, double t0, double t1) const;
+  // Many particles, in parallel (TBB).
+  std::vector<FlowMapResult> advect(std::span<const SurfacePoint> points, double t0, double t1) const;
+
+  const TangentBundle& bundle() const { return bundle_; }
+  const Field& field() const { return field_; }
+  double dt() const { return dt_; }
+
+private:
+  void check_time(double t) const;
+  std::vector<double> knots(double t0, double t1) const;
+  FlowMapResult advect_through(const SurfacePoint& p, const std::vector<double>& knots) const;
+  const TangentBundle& bundle_;
+  const Field& field_;
+  FieldSampler sampler_;
+  double dt_ = 0.0;
+};
+
+}  // namespace tvf

@@ -1,0 +1,64 @@
+#pragma once
+// Streaklines and timelines (the paper's §10 flow descriptors; DESIGN §12, "Streaklines"):
+//  - a streakline at time t1 is where the dye released continuously from a seed over
+//    [t0, t1] is at t1: particles released every `release_spacing` (release times
+//    t0, t0 + Δ, …, and t1 itself, the particle at the seed) carried by the flow map
+//    (flow_map.h) to t1. Ordered by release time, oldest first, so consecutive points are
+//    neighbours along the streak.
+//  - a timeline at time t1 is a material line: the points of a curve at t0 (a segment
+//    between two points, straight in the plane; on a surface its points are snapped to
+//    the surface) carried to t1, refined where neighbours drift apart.
+// Particles that leave the domain before t1 are dropped and counted. In a steady field a
+// streakline is the streamline through the seed (the tests check both closed forms).
+#include "tvf/field/field.h"
+#include "tvf/integrate/flow_map.h"
+#include "tvf/mesh/tangent_bundle.h"
+
+#include <vector>
+
+namespace tvf {
+
+struct StreaklineOptions {
+  double t0 = 0.0;               // first release
+  double t1 = 1.0;               // the streakline's time; t0 ≤ t1
+  double release_spacing = 0.0;  // time between releases; 0: a quarter of the frame spacing
+  FlowMapOptions flow;
+};
+
+struct StreakPoint {
+  Vec3 position;           // world position at t1
+  SurfacePoint where;      // the same on the mesh
+  double release = 0.0;    // when it was released (streaklines) or its parameter along
+                           // the initial curve in [0, 1] (timelines)
+  bool gap_before = false; // a particle between this point and the previous one left the
+                           // domain: the curve is broken here
+};
+
+struct Streakline {
+  double t = 0.0;                  // t1
+  std::vector<StreakPoint> points; // oldest release first (timelines: by parameter)
+  int released = 0;                // particles released
+  int left = 0;                    // of which left the domain before t1
+};
+
+// Throws tvf::Error on t0 > t1, times outside the field's range, a non-positive release
+// spacing, or (planar domains) a seed outside the domain; all name the value.
+Streakline trace_streakline(const TangentBundle& bundle, const Field& field, const Vec3& seed,
+                            const StreaklineOptions& options);
+
+struct TimelineOptions {
+  double t0 = 0.0;         // when the line is drawn
+  double t1 = 1.0;         // when it is shown (t1 < t0: backwards)
+  int count = 100;         // particles on the initial segment (at least 2)
+  double max_gap = 0.0;    // world distance between neighbours at t1 above which a midpoint
+                           // is added (and carried); 0: a mean edge length. At most
+                           // max_points in all.
+  int max_points = 20000;
+  FlowMapOptions flow;
+};
+
+// The segment from a to b at t0, carried to t1; release = the parameter along the segment.
+Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const Vec3& a, const Vec3& b,
+                          const TimelineOptions& options);
+
+}  // namespace tvf

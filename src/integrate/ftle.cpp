@@ -1,0 +1,152 @@
+#include "tvf/integrate/ftle.h"
+
+#include "tvf/core/error.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tvf {
+
+const char* to_string(HorizonPolicy p) {
+  switch (p) {
+    case HorizonPolicy::clamp: return "clamp";
+    case HorizonPolicy::nan: return "nan";
+  }
+  return "?";
+}
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Vertex v as a point of one of its faces.
+SurfacePoint vertex_point(const Mesh& mesh, int v) {
+  const int h = mesh.outgoing(v).front();
+  SurfacePoint p;
+  p.face = Mesh::face_of(h);
+  p.bary = Vec3::Zero();
+  p.bary[h % 3] = 1.0;
+  return p;
+}
+
+// The one-ring neighbours of v (heads of its outgoing halfedges, and on the boundary the
+// last neighbour, reached through the previous halfedge of the last face).
+void one_ring(const Mesh& mesh, int v, std::vector<int>& out) {
+  out.clear();
+  for (const int h : mesh.outgoing(v)) {
+    out.push_back(mesh.head(h));
+    out.push_back(mesh.tail(Mesh::prev(h)));
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+}  // namespace
+
+std::vector<float> ftle_from_flow_map(const TangentBundle& bundle, const std::vector<FlowMapResult>& mapped,
+                                      double span) {
+  const Mesh& mesh = bundle.mesh();
+  TVF_CHECK(mapped.size() == static_cast<size_t>(mesh.num_vertices()), "{} mapped points for {} vertices",
+            mapped.size(), mesh.num_vertices());
+  std::vector<float> out(mapped.size(), kNaN);
+  if (!(span > 0)) return out;
+  std::vector<Vec3> end(mapped.size());
+  for (size_t v = 0; v < mapped.size(); ++v)
+    if (!mapped[v].left) end[v] = surface_position(mesh, mapped[v].where);
+  tbb::parallel_for(tbb::blocked_range<int>(0, mesh.num_vertices(), 256), [&](const tbb::blocked_range<int>& r) {
+    std::vector<int> ring;
+    for (int v = r.begin(); v != r.end(); ++v) {
+      const FlowMapResult& m = mapped[static_cast<size_t>(v)];
+      if (m.left) continue;
+      one_ring(mesh, v, ring);
+      const Vec3& e1 = bundle.vertex_e1(v);
+      const Vec3& e2 = bundle.vertex_e2(v);
+      const int f = m.where.face;
+      const Vec3& g1 = bundle.face_e1(f);
+      const Vec3& g2 = bundle.face_e2(f);
+      Eigen::Matrix2d xx = Eigen::Matrix2d::Zero(), yx = Eigen::Matrix2d::Zero();
+      int used = 0;
+      for (const int u : ring) {
+        if (mapped[static_cast<size_t>(u)].left) continue;
+        const Vec3 dx = mesh.position(u) - mesh.position(v);
+        const Vec3 dy = end[static_cast<size_t>(u)] - end[static_cast<size_t>(v)];
+        const Eigen::Vector2d x(dx.dot(e1), dx.dot(e2));
+        const Eigen::Vector2d y(dy.dot(g1), dy.dot(g2));
+        xx += x * x.transpose();
+        yx += y * x.transpose();
+        ++used;
+      }
+      const double scale = xx.trace();
+      if (used < 2 || !(xx.determinant() > 1e-10 * scale * scale)) continue;
+      const Eigen::Matrix2d F = yx * xx.inverse();
+      // Largest singular value: the square root of FᵀF's larger eigenvalue.
+      const Eigen::Matrix2d C = F.transpose() * F;
+      const double half_trace = 0.5 * (C(0, 0) + C(1, 1));
+      const double d = 0.5 * (C(0, 0) - C(1, 1));
+      const double lambda = half_trace + std::sqrt(d * d + C(0, 1) * C(0, 1));
+      if (!(lambda > 0)) continue;
+      out[static_cast<size_t>(v)] = static_cast<float>(0.5 * std::log(lambda) / span);
+    }
+  });
+  return out;
+}
+
+FtleResult compute_ftle(const TangentBundle& bundle, const Field& field, const FtleOptions& options) {
+  const Mesh& mesh = bundle.mesh();
+  if (!(options.horizon > 0) || !std::isfinite(options.horizon))
+    throw Error(fmt::format("FTLE horizon {} must be a positive time", options.horizon));
+  const int n = field.frames();
+  std::vector<int> frames = options.frames;
+  if (frames.empty())
+    for (int j = 0; j < n; ++j) frames.push_back(j);
+  for (const int j : frames)
+    if (j < 0 || j >= n) throw Error(fmt::format("FTLE frame {} is outside the field's frames 0–{}", j, n - 1));
+  const FlowMap flow(bundle, field, options.flow);
+
+  FtleResult r;
+  r.frames = n;
+  r.vertices = mesh.num_vertices();
+  r.horizon = options.horizon;
+  const size_t size = static_cast<size_t>(n) * static_cast<size_t>(r.vertices);
+  std::vector<SurfacePoint> starts(static_cast<size_t>(r.vertices));
+  for (int v = 0; v < r.vertices; ++v) starts[static_cast<size_t>(v)] = vertex_point(mesh, v);
+
+  const TimeSampling& time = field.time();
+  const double lo = std::min(time.t0, time.t1), hi = std::max(time.t0, time.t1);
+  const int total = static_cast<int>(frames.size()) * (options.forward + options.backward);
+  int done = 0;
+  for (const int dir : {1, -1}) {
+    if ((dir > 0 && !options.forward) || (dir < 0 && !options.backward)) continue;
+    std::vector<float>& values = dir > 0 ? r.forward : r.backward;
+    std::vector<double>& spans = dir > 0 ? r.forward_span : r.backward_span;
+    int& cut = dir > 0 ? r.forward_cut : r.backward_cut;
+    long& left = dir > 0 ? r.forward_left : r.backward_left;
+    values.assign(size, kNaN);
+    spans.assign(static_cast<size_t>(n), 0.0);
+    for (const int j : frames) {
+      const double t0 = time.time(j);
+      double t1 = t0 + dir * options.horizon;
+      const bool outside = t1 > hi + 1e-12 * (hi - lo) || t1 < lo - 1e-12 * (hi - lo);
+      if (outside) {
+        ++cut;
+        t1 = std::clamp(t1, lo, hi);
+      }
+      if (!(outside && options.beyond_range == HorizonPolicy::nan) && t1 != t0) {
+        const std::vector<FlowMapResult> mapped = flow.advect(starts, t0, t1);
+        for (const auto& m : mapped) left += m.left;
+        const double span = std::abs(t1 - t0);
+        spans[static_cast<size_t>(j)] = span;
+        const std::vector<float> sigma = ftle_from_flow_map(bundle, mapped, span);
+        std::copy(sigma.begin(), sigma.end(), values.begin() + static_cast<long>(j) * r.vertices);
+      }
+      ++done;
+      if (options.progress) options.progress(done, total);
+    }
+  }
+  return r;
+}
+
+}  // namespace tvf

@@ -1,0 +1,178 @@
+// `tvf ftle`, `tvf streaklines` and `tvf timelines` as a user meets them (DESIGN §12): the
+// files and their shapes, the closed form of a rotation's streakline, a scene as input, and
+// bad options refused with one sentence, a non-zero exit and nothing written.
+#include "support/test_fields.h"
+#include "support/test_paths.h"
+#include "tvf/field/field_io.h"
+#include "tvf/field/npy.h"
+#include "tvf/mesh/grid.h"
+#include "tvf/render/image.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+namespace tvf {
+namespace {
+
+namespace fs = std::filesystem;
+using test::count_lines;
+using test::quoted;
+using test::run_tvf;
+using test::TempDir;
+
+// A field file of V(x, t) on a grid, in `dir`.
+void write_field(const fs::path& dir, const GridSpec& spec, TimeSampling time,
+                 const std::function<Vec3(const Vec3&, double)>& v) {
+  fs::create_directories(dir);
+  const Mesh grid = make_grid(spec);
+  const TangentBundle bundle(grid);
+  save_field_file((dir / "field.tvff").string(), grid, test::field_from(bundle, time, v), nullptr);
+}
+
+TEST(CliLcs, FtleOfTheDoubleGyreWritesArraysPicturesAndVtk) {
+  TempDir dir;
+  write_field(dir / "gyre", GridSpec{41, 21, {0, 0}, {2, 1}}, TimeSampling{0, 10, 41}, test::double_gyre);
+  const auto r = run_tvf("ftle " + quoted(dir / "gyre") + " --horizon 5 -o " + quoted(dir / "ftle") +
+                         " --pictures 2 -s 200 --dt 0.25");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // The note on the 20 + 20 frames whose window was cut, the summary, the folder.
+  EXPECT_EQ(count_lines(r.output), 3) << r.output;
+  EXPECT_NE(r.output.find("20 forward and 20 backward frames reach past the time range"), std::string::npos)
+      << r.output;
+  for (const char* name : {"ftle_forward", "ftle_backward"}) {
+    const NpyArray a = read_npy((dir / "ftle" / (std::string(name) + ".npy")).string());
+    EXPECT_EQ(a.dtype, "<f4");
+    ASSERT_EQ(a.shape, (std::vector<size_t>{41, 861}));
+    // The walls hold the flow: every frame with a window has a value everywhere.
+    const size_t first = std::string(name) == "ftle_forward" ? 0 : 40;
+    for (size_t v = 0; v < 861; ++v) EXPECT_FALSE(std::isnan(a.values[first * 861 + v])) << name << " " << v;
+  }
+  const nlohmann::json meta = nlohmann::json::parse(test::read_text(dir / "ftle" / "ftle.json"));
+  EXPECT_EQ(meta["horizon"], 5.0);
+  EXPECT_EQ(meta["forward"]["cut_frames"], 20);
+  EXPECT_EQ(meta["forward"]["span"][39], 0.25);  // t = 9.75: cut to the range's end
+  EXPECT_EQ(meta["forward"]["span"][40], 0.0);
+  for (const char* f : {"ftle_forward_0000.png", "ftle_forward_0039.png", "ftle_backward_0001.png",
+                        "ftle_backward_0040.png", "ftle.pvd", "ftle_0040.vtu"})
+    EXPECT_TRUE(fs::exists(dir / "ftle" / f)) << f;
+  // NaN for the frames that do not fit.
+  const auto n = run_tvf("ftle " + quoted(dir / "gyre") + " --horizon 5 -o " + quoted(dir / "nan") +
+                         " --beyond-range nan --direction forward --pictures 0 --no-vtk -q --dt 0.25");
+  ASSERT_EQ(n.exit_code, 0) << n.output;
+  EXPECT_FALSE(fs::exists(dir / "nan" / "ftle_backward.npy"));
+  const NpyArray f = read_npy((dir / "nan" / "ftle_forward.npy").string());
+  EXPECT_FALSE(std::isnan(f.values[20 * 861 + 400]));
+  EXPECT_TRUE(std::isnan(f.values[21 * 861 + 400]));
+}
+
+TEST(CliLcs, StreaklineOfARotationIsTheCircleThroughTheSeed) {
+  TempDir dir;
+  write_field(dir / "rot", GridSpec{33, 33, {-1, -1}, {1, 1}}, TimeSampling{0, 2, 9},
+              [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  const auto r = run_tvf("streaklines " + quoted(dir / "rot") + " --seed 0.5 0 --from 0.5 --to 2 " +
+                         "--release-spacing 0.1 -s 200 -o " + quoted(dir / "streak.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(count_lines(r.output), 1) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "streak.png"));
+  const nlohmann::json j = nlohmann::json::parse(test::read_text(dir / "streak.json"));
+  EXPECT_EQ(j["t"], 2.0);
+  ASSERT_EQ(j["points"].size(), 16u);
+  for (const auto& p : j["points"]) {
+    const double angle = 2.0 - p[3].get<double>();
+    EXPECT_NEAR(p[0].get<double>(), 0.5 * std::cos(angle), 1e-4);
+    EXPECT_NEAR(p[1].get<double>(), 0.5 * std::sin(angle), 1e-4);
+    EXPECT_EQ(p[2], 0.0);
+  }
+  // A timeline across the centre turns with it: by 2 radians from t = 0.
+  const auto t = run_tvf("timelines " + quoted(dir / "rot") + " --line -0.5 0 0.5 0 --count 11 --max-gap 1 --to 2 -s 200 -o " +
+                         quoted(dir / "time.json"));
+  ASSERT_EQ(t.exit_code, 0) << t.output;
+  const nlohmann::json tl = nlohmann::json::parse(test::read_text(dir / "time.json"));
+  EXPECT_EQ(tl["from"], 0.0);
+  ASSERT_EQ(tl["points"].size(), 11u);
+  for (const auto& p : tl["points"]) {
+    const double s = -0.5 + p[3].get<double>();
+    EXPECT_NEAR(p[0].get<double>(), s * std::cos(2.0), 1e-4);
+    EXPECT_NEAR(p[1].get<double>(), s * std::sin(2.0), 1e-4);
+  }
+  EXPECT_TRUE(fs::exists(dir / "time.png"));
+}
+
+TEST(CliLcs, TakesASceneAsAnalyzeDoes) {
+  TempDir dir;
+  test::write_text(dir / "scene.json", R"({"tvf": 1,
+    "domain": {"grid": {"size": [17, 17], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 5, "range": [0, 1]},
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[0, 0, 0]]}]})");
+  const auto r = run_tvf("streaklines " + quoted(dir / "scene.json") + " --seed 0.3 0.2 -q --no-picture -o " +
+                         quoted(dir / "s.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "");
+  const nlohmann::json j = nlohmann::json::parse(test::read_text(dir / "s.json"));
+  EXPECT_EQ(j["t"], 1.0);
+  EXPECT_GT(j["points"].size(), 10u);
+  EXPECT_FALSE(fs::exists(dir / "s.png"));
+}
+
+TEST(CliLcs, TextureAnimationInjectsDye) {
+  // `tvf render texture --streakline X,Y`: the streakline since the first picture drawn in
+  // red over the gray texture (gray has red = green); without it no pixel is red.
+  TempDir dir;
+  write_field(dir / "rot", GridSpec{17, 17, {-1, -1}, {1, 1}}, TimeSampling{0, 2, 9},
+              [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  auto reds = [](const Image& img) {
+    int n = 0;
+    for (const std::uint32_t c : img.pixels) n += static_cast<int>((c >> 16) & 0xFF) > static_cast<int>((c >> 8) & 0xFF) + 80;
+    return n;
+  };
+  const auto r = run_tvf("render texture " + quoted(dir / "rot") + " --streakline 0.5,0 --range 8:8 -s 128 -q -o " +
+                         quoted(dir / "dye"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_GT(reds(read_png((dir / "dye" / "frame_00008.png").string())), 50);
+  const auto plain = run_tvf("render texture " + quoted(dir / "rot") + " --range 8:8 -s 128 -q -o " + quoted(dir / "plain"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_EQ(reds(read_png((dir / "plain" / "frame_00008.png").string())), 0);
+  const auto bad = run_tvf("render texture " + quoted(dir / "rot") + " --streakline 0.5 -q -o " + quoted(dir / "bad"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_EQ(count_lines(bad.output), 1) << bad.output;
+  EXPECT_NE(bad.output.find("--streakline 0.5: expected X,Y"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+}
+
+TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {
+  TempDir dir;
+  write_field(dir / "f", GridSpec{9, 9, {-1, -1}, {1, 1}}, TimeSampling{0, 1, 5},
+              [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  const std::string in = quoted(dir / "f");
+  const std::pair<std::string, std::string> cases[] = {
+      {"ftle " + in + " --horizon 0 -o " + quoted(dir / "out"), "--horizon 0: must be a positive time"},
+      {"ftle " + in + " --horizon -2 -o " + quoted(dir / "out"), "--horizon -2: must be a positive time"},
+      {"ftle " + quoted(dir / "nothing") + " --horizon 1 -o " + quoted(dir / "out"), "no such file or folder"},
+      {"streaklines " + in + " --seed 3 0 -o " + quoted(dir / "out.json"), "seed (3, 0) is outside the domain"},
+      {"streaklines " + in + " --seed 0 0 --from 0.8 --to 0.2 -o " + quoted(dir / "out.json"),
+       "--from 0.8 is after --to 0.2"},
+      {"streaklines " + in + " --seed 0 0 --to 1.5 -o " + quoted(dir / "out.json"),
+       "--to 1.5 is outside the field's time range [0, 1]"},
+      {"streaklines " + in + " --seed 0 0 --release-spacing -1 -o " + quoted(dir / "out.json"),
+       "--release-spacing -1: must be a positive time"},
+      {"timelines " + in + " --line 0 0 5 0 -o " + quoted(dir / "out.json"), "is outside the domain"},
+      {"timelines " + in + " --line 0 0 0.5 0 --from -1 -o " + quoted(dir / "out.json"),
+       "--from -1 is outside the field's time range"},
+  };
+  for (const auto& [args, message] : cases) {
+    const auto r = run_tvf(args);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_EQ(count_lines(r.output), 1) << args << ": " << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << args << ": " << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  EXPECT_FALSE(fs::exists(dir / "out.json"));
+  EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+}  // namespace
+}  // namespace tvf

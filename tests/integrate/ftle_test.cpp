@@ -1,0 +1,214 @@
+#include "tvf/integrate/ftle.h"
+
+#include "support/test_fields.h"
+#include "support/test_meshes.h"
+#include "tvf/core/error.h"
+#include "tvf/mesh/grid.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace tvf {
+namespace {
+
+using test::field_from;
+
+TEST(Ftle, OfALinearSaddleIsItsRateExactly) {
+  // V = (a x, −a y): φ(x) = (x e^{aT}, y e^{−aT}), so σ = a forward and backward, where the
+  // particle stays in the domain; NaN where it leaves.
+  constexpr double a = 0.8, T = 0.5;
+  const GridSpec spec{41, 41, {-1, -1}, {1, 1}};
+  const Mesh grid = make_grid(spec);
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 11},
+                                 [](const Vec3& x, double) { return Vec3(a * x.x(), -a * x.y(), 0); });
+  FtleOptions o;
+  o.horizon = T;
+  o.frames = {5};  // t = 0.5: the window fits both ways
+  const FtleResult r = compute_ftle(bundle, field, o);
+  ASSERT_EQ(r.forward.size(), static_cast<size_t>(11 * grid.num_vertices()));
+  EXPECT_EQ(r.forward_cut, 0);
+  EXPECT_DOUBLE_EQ(r.forward_span[5], T);
+  const double grow = std::exp(a * T), h = 0.05;
+  int checked_f = 0, checked_b = 0;
+  for (int v = 0; v < grid.num_vertices(); ++v) {
+    const Vec3& x = grid.position(v);
+    const float f = r.at(r.forward, 5, v), b = r.at(r.backward, 5, v);
+    if (std::abs(x.x()) * grow < 1 - h) {
+      EXPECT_NEAR(f, a, 1e-6) << x.transpose();
+      ++checked_f;
+    } else if (std::abs(x.x()) * grow > 1 + h) {
+      EXPECT_TRUE(std::isnan(f)) << x.transpose();
+    }
+    if (std::abs(x.y()) * grow < 1 - h) {
+      EXPECT_NEAR(b, a, 1e-6) << x.transpose();
+      ++checked_b;
+    } else if (std::abs(x.y()) * grow > 1 + h) {
+      EXPECT_TRUE(std::isnan(b)) << x.transpose();
+    }
+    EXPECT_TRUE(std::isnan(r.at(r.forward, 4, v)));  // not asked for
+  }
+  EXPECT_GT(checked_f, 600);
+  EXPECT_GT(checked_b, 600);
+  EXPECT_GT(r.forward_left, 0);
+}
+
+TEST(Ftle, OfASteadyRotationIsZero) {
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 2, 9}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  FtleOptions o;
+  o.horizon = 1.0;
+  o.frames = {4};
+  const FtleResult r = compute_ftle(bundle, field, o);
+  int checked = 0;
+  for (int v = 0; v < grid.num_vertices(); ++v) {
+    if (grid.position(v).norm() > 0.9) continue;
+    EXPECT_NEAR(r.at(r.forward, 4, v), 0.0, 1e-6);
+    EXPECT_NEAR(r.at(r.backward, 4, v), 0.0, 1e-6);
+    ++checked;
+  }
+  EXPECT_GT(checked, 900);
+}
+
+TEST(Ftle, OfARotationOfTheSphereIsNearZero) {
+  // A rigid rotation is an isometry: σ = 0 up to the fit's projection onto the tangent
+  // planes (O(h)). Every vertex has a value on a closed surface.
+  const Mesh& sphere = test::icosphere_mesh();
+  const TangentBundle bundle(sphere);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 5}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  FtleOptions o;
+  o.horizon = 1.0;
+  o.frames = {0};
+  o.backward = false;
+  const FtleResult r = compute_ftle(bundle, field, o);
+  EXPECT_TRUE(r.backward.empty());
+  for (int v = 0; v < sphere.num_vertices(); ++v) {
+    const float s = r.at(r.forward, 0, v);
+    ASSERT_FALSE(std::isnan(s)) << v;
+    EXPECT_NEAR(s, 0.0, 0.05) << v;
+  }
+}
+
+TEST(Ftle, OfASaddleOnTheSphereIsPositive) {
+  // The flow of V = (x, −y, 0) projected onto the unit sphere stretches along x near the
+  // poles' great circle x = 0 (there it is the plane's saddle to first order): σ ≈ 1 at the
+  // north pole for a short horizon.
+  const Mesh& sphere = test::icosphere_mesh();
+  const TangentBundle bundle(sphere);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 11}, [](const Vec3& x, double) {
+    const Vec3 w(x.x(), -x.y(), 0);
+    const Vec3 n = x.normalized();
+    return Vec3(w - w.dot(n) * n);
+  });
+  FtleOptions o;
+  o.horizon = 0.2;
+  o.frames = {0};
+  o.backward = false;
+  const FtleResult r = compute_ftle(bundle, field, o);
+  int pole = 0;
+  for (int v = 1; v < sphere.num_vertices(); ++v)
+    if (sphere.position(v).z() > sphere.position(pole).z()) pole = v;
+  EXPECT_NEAR(r.at(r.forward, 0, pole), 1.0, 0.1);
+}
+
+TEST(Ftle, HorizonPastTheRangeIsCutOrNaN) {
+  const Mesh grid = make_grid(GridSpec{11, 11, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 5},
+                                 [](const Vec3& x, double) { return Vec3(0.5 * x.x(), -0.5 * x.y(), 0); });
+  FtleOptions o;
+  o.horizon = 0.5;
+  const FtleResult clamp = compute_ftle(bundle, field, o);
+  // Frames at t = 0, .25, .5, .75, 1: forward windows past 1 are cut for t = .75 and 1.
+  EXPECT_EQ(clamp.forward_cut, 2);
+  EXPECT_EQ(clamp.backward_cut, 2);
+  EXPECT_DOUBLE_EQ(clamp.forward_span[3], 0.25);
+  EXPECT_DOUBLE_EQ(clamp.forward_span[4], 0.0);
+  const int centre = 60;  // (0, 0)
+  EXPECT_NEAR(clamp.at(clamp.forward, 3, centre), 0.5, 1e-6);  // still the rate, over the shorter time
+  EXPECT_TRUE(std::isnan(clamp.at(clamp.forward, 4, centre)));
+  EXPECT_TRUE(std::isnan(clamp.at(clamp.backward, 0, centre)));
+  o.beyond_range = HorizonPolicy::nan;
+  const FtleResult nan = compute_ftle(bundle, field, o);
+  EXPECT_TRUE(std::isnan(nan.at(nan.forward, 3, centre)));
+  EXPECT_NEAR(nan.at(nan.forward, 2, centre), 0.5, 1e-6);
+  EXPECT_TRUE(std::isnan(nan.at(nan.backward, 1, centre)));
+  EXPECT_NEAR(nan.at(nan.backward, 2, centre), 0.5, 1e-6);
+
+  o.horizon = 0;
+  EXPECT_THROW(compute_ftle(bundle, field, o), Error);
+  o.horizon = -1;
+  EXPECT_THROW(compute_ftle(bundle, field, o), Error);
+  o.horizon = 0.5;
+  o.frames = {5};
+  EXPECT_THROW(compute_ftle(bundle, field, o), Error);
+}
+
+// The double gyre (Shadden, Lekien & Marsden 2005) at t = 0, T = 10, on a 101 × 51 grid.
+class DoubleGyre : public ::testing::Test {
+protected:
+  static void SetUpTestSuite() {
+    grid_ = new Mesh(make_grid(GridSpec{101, 51, {0, 0}, {2, 1}}));
+    bundle_ = new TangentBundle(*grid_);
+    // Frames every 0.25 on [−10, 10]: frame 40 is t = 0.
+    const Field field = test::field_from(*bundle_, TimeSampling{-10, 10, 81}, test::double_gyre);
+    FtleOptions o;
+    o.horizon = 10;
+    o.frames = {40};
+    result_ = new FtleResult(compute_ftle(*bundle_, field, o));
+  }
+  static void TearDownTestSuite() {
+    delete result_;
+    delete bundle_;
+    delete grid_;
+  }
+  static float sigma(const std::vector<float>& values, int ix, int iy) { return result_->at(values, 40, iy * 101 + ix); }
+  static Mesh* grid_;
+  static TangentBundle* bundle_;
+  static FtleResult* result_;
+};
+Mesh* DoubleGyre::grid_ = nullptr;
+TangentBundle* DoubleGyre::bundle_ = nullptr;
+FtleResult* DoubleGyre::result_ = nullptr;
+
+TEST_F(DoubleGyre, TheForwardRidgeIsTheRepellingLcsNearXEquals1) {
+  // The walls are invariant: no particle leaves, every vertex has a value.
+  EXPECT_EQ(result_->forward_left, 0);
+  EXPECT_EQ(result_->backward_left, 0);
+  // The repelling LCS at t = 0 runs from the bottom wall near x = 1.1 to x ≈ 1.3 at
+  // y = 0.8 (the hyperbolic trajectory on the bottom wall oscillates about x = 1 with the
+  // gyres, by ε/2π-ish amplitude; at t = 0 it sits right of 1). In every row the largest σ
+  // within 0.4 of x = 1 is on it, well above the row's median.
+  for (int iy = 5; iy <= 40; iy += 5) {
+    int best = 30;
+    std::vector<float> row;
+    for (int ix = 0; ix < 101; ++ix) {
+      row.push_back(sigma(result_->forward, ix, iy));
+      if (ix >= 30 && ix <= 70 && row.back() > sigma(result_->forward, best, iy)) best = ix;
+    }
+    std::nth_element(row.begin(), row.begin() + 50, row.end());
+    const double x = 0.02 * best;
+    EXPECT_GE(x, 1.04) << "y = " << 0.02 * iy;
+    EXPECT_LE(x, 1.36) << "y = " << 0.02 * iy;
+    EXPECT_GT(sigma(result_->forward, best, iy), 1.5 * row[50]) << "y = " << 0.02 * iy;
+  }
+}
+
+TEST_F(DoubleGyre, TheBackwardFieldIsTheForwardOneTurnedHalfway) {
+  // u(2 − x, 1 − y, −t) = u(x, y, t) and likewise v, so x ↦ (2 − x, 1 − y) maps forward
+  // trajectories from t = 0 to backward ones: σ_backward(2 − x, 1 − y) = σ_forward(x, y).
+  // The grid, its triangles and the frames are symmetric the same way.
+  double worst = 0;
+  for (int iy = 0; iy < 51; ++iy)
+    for (int ix = 0; ix < 101; ++ix)
+      worst = std::max(worst, std::abs(static_cast<double>(sigma(result_->backward, 100 - ix, 50 - iy)) -
+                                       sigma(result_->forward, ix, iy)));
+  EXPECT_LT(worst, 1e-3);
+}
+
+}  // namespace
+}  // namespace tvf

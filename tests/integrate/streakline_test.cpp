@@ -1,0 +1,151 @@
+#include "tvf/integrate/streakline.h"
+
+#include "support/test_fields.h"
+#include "support/test_meshes.h"
+#include "tvf/core/error.h"
+#include "tvf/mesh/grid.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace tvf {
+namespace {
+
+using test::field_from;
+
+TEST(Streakline, OfASteadyRotationIsTheCircleThroughTheSeed) {
+  // A steady field's streakline is its streamline: here the circle of radius 0.5, and the
+  // particle released at τ has turned by t1 − τ.
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 4, 17}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  StreaklineOptions o;
+  o.t0 = 0.5;
+  o.t1 = 3.5;
+  o.release_spacing = 0.1;
+  const Streakline s = trace_streakline(bundle, field, Vec3(0.5, 0, 0), o);
+  EXPECT_DOUBLE_EQ(s.t, 3.5);
+  EXPECT_EQ(s.released, 31);
+  EXPECT_EQ(s.left, 0);
+  ASSERT_EQ(s.points.size(), 31u);
+  EXPECT_DOUBLE_EQ(s.points.front().release, 0.5);
+  EXPECT_DOUBLE_EQ(s.points.back().release, 3.5);
+  for (const StreakPoint& p : s.points) {
+    const double angle = o.t1 - p.release;
+    EXPECT_NEAR(p.position.norm(), 0.5, 1e-6);
+    EXPECT_NEAR((p.position - Vec3(0.5 * std::cos(angle), 0.5 * std::sin(angle), 0)).norm(), 0.0, 1e-5) << p.release;
+  }
+}
+
+TEST(Streakline, OfAUniformTranslationIsAnEvenlySpacedSegment) {
+  const Mesh grid = make_grid(GridSpec{21, 21, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Vec3 v(0.3, 0.1, 0);
+  const Field field = field_from(bundle, TimeSampling{0, 2, 9}, [&](const Vec3&, double) { return v; });
+  StreaklineOptions o;
+  o.t0 = 0;
+  o.t1 = 2;
+  o.release_spacing = 0.125;
+  const Vec3 seed(-0.5, -0.2, 0);
+  const Streakline s = trace_streakline(bundle, field, seed, o);
+  ASSERT_EQ(s.points.size(), 17u);
+  for (size_t k = 0; k < s.points.size(); ++k) {
+    const StreakPoint& p = s.points[k];
+    EXPECT_NEAR((p.position - (seed + (o.t1 - p.release) * v)).norm(), 0.0, 1e-9) << k;
+    if (k > 0) {
+      EXPECT_NEAR((p.position - s.points[k - 1].position).norm(), v.norm() * 0.125, 1e-9);
+    }
+  }
+  // The default spacing: a quarter of the frame spacing (0.25 / 4); the first release not
+  // on the grid of releases still ends with the one at t1.
+  o.release_spacing = 0;
+  o.t0 = 0.01;
+  const Streakline d = trace_streakline(bundle, field, seed, o);
+  EXPECT_EQ(d.released, 33);
+  EXPECT_DOUBLE_EQ(d.points.back().release, 2.0);
+}
+
+TEST(Streakline, DropsWhatLeavesTheDomain) {
+  const Mesh grid = make_grid(GridSpec{21, 21, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 2, 9}, [](const Vec3&, double) { return Vec3(1, 0, 0); });
+  StreaklineOptions o;
+  o.t0 = 0;
+  o.t1 = 2;
+  o.release_spacing = 0.25;
+  const Streakline s = trace_streakline(bundle, field, Vec3(0, 0, 0), o);
+  // Released at τ, at x = 2 − τ at t1: inside for τ ≥ 1 (x = 1 is on the boundary: in).
+  EXPECT_EQ(s.released, 9);
+  EXPECT_EQ(s.left, 4);
+  EXPECT_EQ(s.points.size(), 5u);
+}
+
+TEST(Streakline, RefusesBadTimesAndSeeds) {
+  const Mesh grid = make_grid(GridSpec{11, 11, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 5}, [](const Vec3&, double) { return Vec3(1, 0, 0); });
+  StreaklineOptions o;
+  o.t0 = 0.8;
+  o.t1 = 0.2;
+  EXPECT_THROW(trace_streakline(bundle, field, Vec3(0, 0, 0), o), Error);
+  o.t0 = 0;
+  o.t1 = 1.5;
+  EXPECT_THROW(trace_streakline(bundle, field, Vec3(0, 0, 0), o), Error);
+  o.t1 = 1;
+  EXPECT_THROW(trace_streakline(bundle, field, Vec3(2, 0, 0), o), Error);
+  o.release_spacing = -0.1;
+  EXPECT_THROW(trace_streakline(bundle, field, Vec3(0, 0, 0), o), Error);
+}
+
+TEST(Streakline, OnTheSphereStaysOnTheSeedsLatitude) {
+  const Mesh& sphere = test::icosphere_mesh();
+  const TangentBundle bundle(sphere);
+  const Field field = field_from(bundle, TimeSampling{0, 2, 9}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  StreaklineOptions o;
+  o.t0 = 0;
+  o.t1 = 2;
+  const Streakline s = trace_streakline(bundle, field, Vec3(0.6, 0, 0.8), o);
+  EXPECT_EQ(s.left, 0);
+  for (const StreakPoint& p : s.points) EXPECT_NEAR(p.position.z(), 0.8, 0.03);
+  EXPECT_NEAR(std::atan2(s.points.front().position.y(), s.points.front().position.x()), 2.0, 0.06);
+}
+
+TEST(Timeline, IsTheSegmentCarriedAndRefinedWhereItStretches) {
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  // Uniform translation: the segment moves by (t1 − t0)·v.
+  const Vec3 v(0.2, 0.3, 0);
+  const Field uniform = field_from(bundle, TimeSampling{0, 1, 5}, [&](const Vec3&, double) { return v; });
+  TimelineOptions o;
+  o.t0 = 0.25;
+  o.t1 = 1;
+  o.count = 11;
+  o.max_gap = 1;  // no refinement
+  const Vec3 a(-0.6, -0.6, 0), b(0.2, -0.4, 0);
+  const Streakline line = trace_timeline(bundle, uniform, a, b, o);
+  ASSERT_EQ(line.points.size(), 11u);
+  for (const StreakPoint& p : line.points)
+    EXPECT_NEAR((p.position - ((1 - p.release) * a + p.release * b + 0.75 * v)).norm(), 0.0, 1e-9);
+  // A saddle V = (x, −y) stretches a segment along x by e^{t1 − t0}: points are added until
+  // neighbours are at most max_gap apart, and each sits at its parameter's image.
+  const Field saddle = field_from(bundle, TimeSampling{0, 1, 11}, [](const Vec3& x, double) { return Vec3(x.x(), -x.y(), 0); });
+  o.t0 = 0;
+  o.t1 = 1;
+  o.count = 5;
+  o.max_gap = 0.05;
+  const Streakline s = trace_timeline(bundle, saddle, Vec3(-0.3, 0.5, 0), Vec3(0.3, 0.5, 0), o);
+  ASSERT_GT(s.points.size(), 5u);
+  EXPECT_EQ(s.left, 0);
+  for (size_t k = 0; k < s.points.size(); ++k) {
+    const double x0 = -0.3 + 0.6 * s.points[k].release;
+    EXPECT_NEAR((s.points[k].position - Vec3(x0 * std::exp(1.0), 0.5 * std::exp(-1.0), 0)).norm(), 0.0, 1e-6);
+    if (k > 0) {
+      EXPECT_LE((s.points[k].position - s.points[k - 1].position).norm(), 0.05 + 1e-9);
+    }
+  }
+  EXPECT_THROW(trace_timeline(bundle, saddle, Vec3(-3, 0, 0), Vec3(0, 0, 0), o), Error);
+}
+
+}  // namespace
+}  // namespace tvf

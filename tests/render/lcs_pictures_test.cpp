@@ -1,0 +1,98 @@
+#include "tvf/render/lcs_pictures.h"
+
+#include "support/test_fields.h"
+#include "support/test_meshes.h"
+#include "tvf/mesh/grid.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace tvf {
+namespace {
+
+int red(std::uint32_t c) { return static_cast<int>((c >> 16) & 0xFF); }
+int green(std::uint32_t c) { return static_cast<int>((c >> 8) & 0xFF); }
+
+TEST(LcsPictures, MagmaRunsFromBlackToPaleYellow) {
+  EXPECT_EQ(magma(0), 0x000004u);
+  EXPECT_EQ(magma(1), 0xFCFDBFu);
+  EXPECT_EQ(magma(-3), magma(0));
+  EXPECT_EQ(magma(std::nan("")), magma(0));
+  // Brighter along the map (sum of channels).
+  auto sum = [](std::uint32_t c) { return ((c >> 16) & 0xFF) + ((c >> 8) & 0xFF) + (c & 0xFF); };
+  for (int k = 1; k <= 10; ++k) EXPECT_GT(sum(magma(k / 10.0)), sum(magma((k - 1) / 10.0))) << k;
+}
+
+TEST(LcsPictures, ColourRangeIsThePercentilesOfTheFiniteValues) {
+  std::vector<float> v;
+  for (int k = 0; k <= 100; ++k) v.push_back(static_cast<float>(k));
+  v.push_back(std::numeric_limits<float>::quiet_NaN());
+  const auto [lo, hi] = colour_range(v);
+  EXPECT_DOUBLE_EQ(lo, 1.0);
+  EXPECT_DOUBLE_EQ(hi, 99.0);
+}
+
+TEST(LcsPictures, PlanarScalarIsInterpolatedAndNaNIsGray) {
+  // Values x on [0, 2] × [0, 1]; the right half of the top row NaN.
+  const Mesh grid = make_grid(GridSpec{21, 11, {0, 0}, {2, 1}});
+  const TangentBundle bundle(grid);
+  std::vector<float> values(static_cast<size_t>(grid.num_vertices()));
+  for (int v = 0; v < grid.num_vertices(); ++v) values[static_cast<size_t>(v)] = static_cast<float>(grid.position(v).x());
+  for (int ix = 15; ix < 21; ++ix) values[static_cast<size_t>(10 * 21 + ix)] = std::numeric_limits<float>::quiet_NaN();
+  ScalarPictureOptions o;
+  o.size = 200;
+  o.lo = 0;
+  o.hi = 2;
+  o.legend = false;
+  const Image img = scalar_picture(bundle, values, o);
+  ASSERT_EQ(img.width, 200);
+  ASSERT_EQ(img.height, 100);
+  // Pixel i shows x = (i + ½)/100: magma((i + ½)/200), exactly up to rounding.
+  for (const int i : {0, 50, 120, 199}) {
+    const std::uint32_t expect = magma((i + 0.5) / 200.0);
+    const std::uint32_t got = img.at(i, 60);
+    EXPECT_NEAR(red(got), red(expect), 2) << i;
+    EXPECT_NEAR(green(got), green(expect), 2) << i;
+  }
+  EXPECT_EQ(img.at(190, 1), o.nan_color);
+  EXPECT_NE(img.at(20, 1), o.nan_color);
+  o.legend = true;
+  EXPECT_GT(scalar_picture(bundle, values, o).height, 100);
+}
+
+TEST(LcsPictures, CurvesAreDrawnOverTheTexture) {
+  const Mesh grid = make_grid(GridSpec{17, 17, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = test::field_from(bundle, TimeSampling{0, 1, 3}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  CurvePictureOptions o;
+  o.size = 128;
+  o.dots = false;
+  o.line_width = 4;
+  const std::vector<std::vector<Vec3>> curves{{Vec3(-0.8, 0, 0), Vec3(0.8, 0, 0)}};
+  const Image img = curve_picture(bundle, field, 0.5, curves, std::vector<Vec3>{}, o);
+  ASSERT_EQ(img.width, 128);
+  // The middle row is the curve's colour; rows far from it are the gray texture.
+  EXPECT_EQ(img.at(64, 64) & 0xFFFFFFu, o.color);
+  const std::uint32_t far = img.at(64, 10);
+  EXPECT_EQ(red(far), green(far));
+}
+
+TEST(LcsPictures, SurfacesAreDrawnByTheMeshRenderer) {
+  const Mesh& sphere = test::icosphere_mesh();
+  const TangentBundle bundle(sphere);
+  std::vector<float> values(static_cast<size_t>(sphere.num_vertices()));
+  for (int v = 0; v < sphere.num_vertices(); ++v) values[static_cast<size_t>(v)] = static_cast<float>(sphere.position(v).z());
+  ScalarPictureOptions o;
+  o.size = 96;
+  o.legend = false;
+  const Image img = scalar_picture(bundle, values, o);
+  ASSERT_EQ(img.width, 96);
+  // The centre shows the sphere (not the white background), the corner the background.
+  EXPECT_NE(img.at(48, 48), 0xFFFFFFu);
+  EXPECT_EQ(img.at(0, 0), 0xFFFFFFu);
+}
+
+}  // namespace
+}  // namespace tvf
