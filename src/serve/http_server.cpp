@@ -3,6 +3,10 @@
 #include <fmt/format.h>
 #include <httplib.h>
 
+#include "tvf/core/json_text.h"
+
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <fstream>
 #include <sstream>
@@ -28,16 +32,21 @@ void send_error(httplib::Response& res, int status, const std::string& message) 
   send_json(res, {{"error", message}}, status);
 }
 
+// The shared JSON reader (tvf/core/json_text.h): nesting, NUL bytes and repeated keys
+// are refused with their line and column.
 json parse_body(const httplib::Request& req) {
   if (req.body.empty()) return json::object();
   try {
-    return json::parse(req.body);
-  } catch (const json::parse_error& e) {
-    throw RequestError(400, fmt::format("request body: not valid JSON (at byte {})", e.byte));
+    return parse_json_text(req.body, "");
+  } catch (const Error& e) {
+    throw RequestError(400, fmt::format("request body: not valid JSON at {}", e.what()));
   }
 }
 
-bool loopback_host(const std::string& host) {
+// Host names compare case-insensitively (RFC 9110 §4.2.3): "LOCALHOST" is "localhost".
+bool loopback_host(std::string host) {
+  std::transform(host.begin(), host.end(), host.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return host == "127.0.0.1" || host == "localhost" || host == "::1" || host == "[::1]";
 }
 
