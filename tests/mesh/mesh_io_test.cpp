@@ -396,6 +396,58 @@ TEST(MeshIo, CorruptHeadersCannotTriggerHugeAllocations) {
   expect_error(dir / "no-format.ply", "not a readable PLY");
 }
 
+// Issue 17 item 4: in a truncated big-endian PLY whose lists are counted by uint, CGAL's
+// reader used a count it never read (valgrind: uninitialised) and allocated by it. The body
+// is now checked list by list before CGAL reads it.
+TEST(MeshIo, TruncatedPlyListsAreRefusedAtTheirCount) {
+  TempDir dir;
+  std::string head =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 2\nproperty list uint uint vertex_indices\nend_header\n";
+  for (const Vec3& x : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)})
+    for (int k = 0; k < 3; ++k) put(head, static_cast<float>(x[k]), true);
+  std::string one_face = head;
+  put(one_face, std::uint32_t{3}, true);
+  for (std::uint32_t v : {0u, 1u, 2u}) put(one_face, v, true);
+  // The second face's count is missing altogether, or announces more than is left.
+  const fs::path no_count = dir / "no_count.ply";
+  write_text(no_count, one_face);
+  expect_error(no_count, "PLY 'face' item 1 of 2: the file ends inside it (truncated or corrupt file)");
+  std::string huge = one_face;
+  put(huge, std::uint32_t{0xF0000000u}, true);
+  put(huge, std::uint32_t{1}, true);
+  const fs::path huge_count = dir / "huge_count.ply";
+  write_text(huge_count, huge);
+  expect_error(huge_count, "PLY 'face' item 1 of 2: a list of 4026531840 entries does not fit in the 4 bytes left");
+  // Cut inside the first list.
+  const fs::path cut = dir / "cut.ply";
+  write_text(cut, one_face.substr(0, one_face.size() - 2));
+  expect_error(cut, "PLY 'face' item 0 of 2: a list of 3 entries does not fit in the 10 bytes left");
+  // The same in ASCII: a list count with its entries missing.
+  const fs::path ascii = dir / "ascii.ply";
+  write_text(ascii,
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n");
+  expect_error(ascii, "PLY 'face' item 0 of 1: the file ends inside a list");
+  // And whole, it loads.
+  std::string whole = one_face;
+  put(whole, std::uint32_t{3}, true);
+  for (std::uint32_t v : {0u, 1u, 2u}) put(whole, v, true);
+  const fs::path good = dir / "good.ply";
+  write_text(good, whole);
+  EXPECT_EQ(load_mesh(good.string()).mesh.num_faces(), 1);  // the repeated face is repaired away
+}
+
+// Issue 17 item 10: CGAL stops reading a face at an index it cannot read as an int; the
+// message named a "polygon with 2 corners" instead of the index.
+TEST(MeshIo, ObjFaceIndexOutOfRangeIsNamedOnItsLine) {
+  TempDir dir;
+  const fs::path obj = dir / "big_index.obj";
+  write_text(obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2147483648\n");
+  expect_error(obj, "line 4: the face corner '2147483648' is not a vertex number in 1 to 3 (or -1 to -3) of the "
+                    "vertices read before it");
+}
+
 TEST(MeshIo, TruncatedFilesNeverCrash) {
   // Every prefix of a saved mesh: OBJ and OFF may happen to stop at a valid mesh, binary
   // PLY never does (its data has fixed sizes); all others are tvf::Errors naming the file.
