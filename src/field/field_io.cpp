@@ -127,7 +127,12 @@ FieldFile load_field_file(const std::string& path) {
   std::string header_text(static_cast<size_t>(header_len), '\0');
   if (!in.read(header_text.data(), static_cast<std::streamsize>(header_len)))
     fail(path, "cannot read the field file header");
-  const nlohmann::json header = parse_json_text(header_text, path + " (its header)", "expected a JSON object");
+  nlohmann::json header;
+  try {
+    header = parse_json_text(header_text, "", "expected a JSON object");
+  } catch (const Error& e) {
+    fail(path, std::string("bad field file header (") + e.what() + ")");
+  }
   if (!header.is_object()) fail(path, "bad field file header (not a JSON object)");
   const int nv = header_count(path, header, "vertices", 0);
   const int nf = header_count(path, header, "faces", 0);

@@ -20,7 +20,7 @@ TEST(JsonText, ReadsOneThousandLevelsAndRefusesTheNext) {
     j = nlohmann::json(j[0]);
   }
   EXPECT_EQ(j, nlohmann::json::array());
-  const std::string deep = "\n  {\"a\": [" + std::string(kMaxJsonDepth, '{') + "}";
+  const std::string deep = "\n  {\"a\": [" + std::string(kMaxJsonDepth, '[');
   EXPECT_EQ(error_of([&] { parse_json_text(deep, "t"); }),
             "t: line 2, column 1008: arrays and objects nest more than 1000 deep, more than tvf reads");
   // Brackets inside strings do not count.
