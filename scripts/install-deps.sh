@@ -23,6 +23,7 @@ packages=(
   libcgal-demo           # CGAL's sample meshes: the real surfaces of examples/04 (no meshes in git)
   libcpp-httplib-dev     # tvf serve: the designer's HTTP server
   chromium               # the designer's end-to-end test (web/e2e, playwright-core drives it)
+  clang libclang-rt-14-dev valgrind  # the fuzz targets (libFuzzer, preset "fuzz", scripts/fuzz.sh) and memory checks
 )
 # The designer's front end (web/) is built with npm; a Node.js that brings its own npm
 # (e.g. NodeSource's) is kept as it is.
