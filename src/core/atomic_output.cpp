@@ -69,13 +69,8 @@ void unregister_stage(int slot) {
 void remove_stage_raw(const char* path) {
   const int fd = ::open(path, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) return;
-  struct Entry {  // struct linux_dirent64
-    std::uint64_t ino;
-    std::int64_t off;
-    unsigned short reclen;
-    unsigned char type;
-    char name[1];
-  };
+  // struct linux_dirent64: d_ino (8 bytes), d_off (8), d_reclen (2), d_type (1), d_name.
+  constexpr long kReclen = 16, kName = 19;
   alignas(8) char buffer[4096];
   for (int pass = 0; pass < 2; ++pass) {
     ::lseek(fd, 0, SEEK_SET);
@@ -83,9 +78,11 @@ void remove_stage_raw(const char* path) {
       const long n = ::syscall(SYS_getdents64, fd, buffer, sizeof(buffer));
       if (n <= 0) break;
       for (long at = 0; at < n;) {
-        const auto* e = reinterpret_cast<const Entry*>(buffer + at);
-        at += e->reclen;
-        const char* name = e->name;
+        unsigned short reclen = 0;
+        std::memcpy(&reclen, buffer + at + kReclen, sizeof(reclen));
+        const char* name = buffer + at + kName;
+        at += reclen;
+        if (reclen == 0) break;
         if (std::strcmp(name, ".") == 0 || std::strcmp(name, "..") == 0) continue;
         if (::unlinkat(fd, name, 0) != 0) ::unlinkat(fd, name, AT_REMOVEDIR);
       }

@@ -348,7 +348,7 @@ void check_ply_body(const std::string& path, std::istream& in, const PlyLayout& 
             truncated(e, item, fmt::format("the list count {:.40} is not a count the file can hold", word));
           for (long long k = 0; k < static_cast<long long>(x); ++k) {
             if (!(in >> word)) truncated(e, item, "the file ends inside a list");
-            std::strtod(word.c_str(), &end);
+            static_cast<void>(std::strtod(word.c_str(), &end));
             if (end != word.c_str() + word.size())
               truncated(e, item, fmt::format("'{:.40}' is not a number", word));
           }
