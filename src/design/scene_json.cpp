@@ -541,6 +541,17 @@ GridSpec Reader::grid(const json& j, const std::string& path) const {
                        "least {:g} × max(1, |min|, |max|)",
                        g.min.x(), g.max.x(), g.min.y(), g.max.y(), axis == 0 ? "x" : "y", kMinRelativeSpan));
   }
+  // Nor may its triangles be too thin for the mesh's own check (area ≥ 1e-14 of the
+  // squared diagonal, mesh_validate.h), which would name no key.
+  {
+    const double cx = (g.max.x() - g.min.x()) / (g.nx - 1), cy = (g.max.y() - g.min.y()) / (g.ny - 1);
+    const double ex = g.max.x() - g.min.x(), ey = g.max.y() - g.min.y();
+    if (0.5 * (cx / ex) * (cy / ex) / (1 + (ey / ex) * (ey / ex)) < 2e-14)
+      fail(join_key(path, "max"),
+           fmt::format("the box [{}, {}] × [{}, {}] is too elongated for a grid of {} × {} vertices: its cells would "
+                       "be degenerate (zero-area) triangles",
+                       g.min.x(), g.max.x(), g.min.y(), g.max.y(), g.nx, g.ny));
+  }
   return g;
 }
 

@@ -173,7 +173,6 @@ TEST(Cli, BadInputIsOneSentenceNonZeroExitAndNoOutput) {
        R"({"tvf": 1, "domain": {"grid": {"size": [300, 300]}}, "time": {"frames": 100000}})", "time.frames"},
       {"missing mesh", R"({"tvf": 1, "domain": {"mesh": "nowhere.obj"}})", "domain.mesh"},
       // Issue 17 items 8 and 9: these stopped at an internal check or wrote inf/NaN.
-      {"folded planar mesh", R"({"tvf": 1, "domain": {"mesh": "folded.obj"}})", "folds over itself at vertex 4"},
       {"huge grid box", R"({"tvf": 1, "domain": {"grid": {"size": [5, 5], "min": [-1, -1], "max": [1e200, 1]}}})",
        "domain.grid.max[0]"},
       {"huge time range", R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "time": {"range": [-1e308, 1e308]}})",
@@ -193,10 +192,6 @@ TEST(Cli, BadInputIsOneSentenceNonZeroExitAndNoOutput) {
     SCOPED_TRACE(c.name);
     TempDir dir;
     test::write_text(dir / "scene.json", c.scene);
-    // A 3 × 3 grid whose centre (vertex 4, line 5) lies outside its neighbours' square.
-    test::write_text(dir / "folded.obj",
-                     "v -1 -1 0\nv 0 -1 0\nv 1 -1 0\nv -1 0 0\nv 1.5 0.2 0\nv 1 0 0\nv -1 1 0\nv 0 1 0\nv 1 1 0\n"
-                     "f 1 2 5\nf 1 5 4\nf 2 3 6\nf 2 6 5\nf 4 5 8\nf 4 8 7\nf 5 6 9\nf 5 9 8\n");
     const auto out = dir / "out";
     const auto r = run_tvf("generate '" + (dir / "scene.json").string() + "' -o '" + out.string() + "'");
     EXPECT_NE(r.exit_code, 0);
@@ -240,6 +235,22 @@ TEST(Cli, RegeneratingReplacesTheWholeOutputAndKeepsItsInputScene) {
   r = run_tvf("generate '" + scene.string() + "' -o ''");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("the output folder is an empty path"), std::string::npos) << r.output;
+}
+
+// Issue 17 item 8: a folded planar mesh stopped at an internal check (exit 2).
+TEST(Cli, FoldedPlanarMeshIsNamedWithItsVertex) {
+  TempDir dir;
+  // A 3 × 3 grid whose centre (vertex 4, line 5) lies outside its neighbours' square.
+  test::write_text(dir / "folded.obj",
+                   "v -1 -1 0\nv 0 -1 0\nv 1 -1 0\nv -1 0 0\nv 1.5 0.2 0\nv 1 0 0\nv -1 1 0\nv 0 1 0\nv 1 1 0\n"
+                   "f 1 2 5\nf 1 5 4\nf 2 3 6\nf 2 6 5\nf 4 5 8\nf 4 8 7\nf 5 6 9\nf 5 9 8\n");
+  test::write_text(dir / "scene.json", R"({"tvf": 1, "domain": {"mesh": "folded.obj"}})");
+  const auto r = run_tvf("generate '" + (dir / "scene.json").string() + "' -o '" + (dir / "out").string() + "'");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(count_lines(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("folded.obj: the planar mesh folds over itself at vertex 4 (1.5, 0.2, 0)"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
 TEST(Cli, BrokenMeshIsNamedAndNothingIsWritten) {

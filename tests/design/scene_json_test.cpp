@@ -901,6 +901,11 @@ std::vector<BadCase> bad_cases() {
          j["domain"]["grid"]["max"] = {1e14 + 1, 1};
        }),
        "domain.grid.max", "is too narrow for its magnitude along x", false},
+      {"grid box too elongated", planar([](json& j) {
+         j["domain"]["grid"]["min"] = {-1, -1};
+         j["domain"]["grid"]["max"] = {1e15, 1};
+       }),
+       "domain.grid.max", "is too elongated for a grid of 9 × 9 vertices", false},
       {"huge smooth strength", planar([](json& j) { j["edits"][1]["strength"] = 1e300; }), "edits[1].strength",
        "must be a number of magnitude at most 1e+15", false},
       {"NUL after the scene", std::string("{\"tvf\": 1, \"domain\": {\"grid\": {}}}\0garbage", 42), "line 1, column 35",
