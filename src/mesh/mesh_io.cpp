@@ -207,6 +207,38 @@ void check_off_header(const std::string& path, std::istream& in, std::uintmax_t 
   check_count(path, Format::off, counts[first], "vertices", file_size);
   check_count(path, Format::off, counts[first + 1], "faces", file_size);
   check_count(path, Format::off, counts[first + 2], "edges", file_size);
+  if (w == "BINARY") return;
+  // The vertex lines of a text OFF: numbers only, as many on every line as on the first.
+  // CGAL's reader counts the colour entries on the first line and reads as many on every
+  // other line without checking that the line had them (found by fuzzing: "0 0~ 0 255 0 0
+  // 255" in a COFF made it read past its buffer).
+  std::string line;
+  std::getline(in, line);  // the rest of the counts' line
+  std::size_t expected = 0;
+  for (long long v = 0; v < counts[first];) {
+    if (!std::getline(in, line))
+      throw_input_error(path, "", fmt::format("the OFF file ends before vertex {} of {}", v, counts[first]));
+    line = line.substr(0, line.find('#'));
+    std::istringstream words(line);
+    std::string token;
+    std::size_t n = 0;
+    while (words >> token) {
+      char* end = nullptr;
+      static_cast<void>(std::strtod(token.c_str(), &end));
+      if (end != token.c_str() + token.size())
+        throw_input_error(path, "", fmt::format("OFF vertex {}: '{:.40}' is not a number", v, token));
+      ++n;
+    }
+    if (n == 0) continue;  // a blank or comment line
+    if (n < 3) throw_input_error(path, "", fmt::format("OFF vertex {} has {} numbers; a vertex needs at least 3", v, n));
+    if (expected == 0) expected = n;
+    if (n != expected)
+      throw_input_error(path, "",
+                        fmt::format("OFF vertex {} has {} numbers where vertex 0 has {} (every vertex line of an OFF "
+                                    "file gives the same values)",
+                                    v, n, expected));
+    ++v;
+  }
 }
 
 // Bytes of a PLY scalar type, or 0 when the name is not one.

@@ -448,6 +448,23 @@ TEST(MeshIo, ObjFaceIndexOutOfRangeIsNamedOnItsLine) {
                     "vertices read before it");
 }
 
+// Found by fuzzing (fuzz/crashers/mesh_off): CGAL's OFF reader counts the colour values on
+// the first vertex line and reads as many on every line, past its buffer when a line has
+// fewer numbers.
+TEST(MeshIo, OffVertexLinesMustAllGiveTheSameNumbers) {
+  TempDir dir;
+  const fs::path coff = dir / "colours.off";
+  write_text(coff, "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0~ 0 0 255 0 255\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n"
+                   "3 0 1 2\n3 0 2 3\n");
+  expect_error(coff, "OFF vertex 1: '0~' is not a number");
+  write_text(coff, "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n"
+                   "3 0 1 2\n3 0 2 3\n");
+  expect_error(coff, "OFF vertex 1 has 4 numbers where vertex 0 has 7");
+  write_text(coff, "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n\n1 0 0 0 255 0 255 # red\n1 1 0 0 0 255 255\n"
+                   "0 1 0 9 9 9 255\n3 0 1 2\n3 0 2 3\n");
+  EXPECT_EQ(load_mesh(coff.string()).mesh.num_faces(), 2);
+}
+
 TEST(MeshIo, TruncatedFilesNeverCrash) {
   // Every prefix of a saved mesh: OBJ and OFF may happen to stop at a valid mesh, binary
   // PLY never does (its data has fixed sizes); all others are tvf::Errors naming the file.
