@@ -215,6 +215,10 @@ void check_off_header(const std::string& path, std::istream& in, std::uintmax_t 
   std::string line;
   std::getline(in, line);  // the rest of the counts' line
   std::size_t expected = 0;
+  const std::string prefix = keyword.substr(0, keyword.size() - 3);
+  const bool coloured = prefix.find('C') != std::string::npos;
+  const std::size_t colour_from = (prefix.find('4') != std::string::npos ? 4u : 3u) +
+                                  (prefix.find('N') != std::string::npos ? 3u : 0u);
   for (long long v = 0; v < counts[first];) {
     if (!std::getline(in, line))
       throw_input_error(path, "", fmt::format("the OFF file ends before vertex {} of {}", v, counts[first]));
@@ -224,9 +228,13 @@ void check_off_header(const std::string& path, std::istream& in, std::uintmax_t 
     std::size_t n = 0;
     while (words >> token) {
       char* end = nullptr;
-      static_cast<void>(std::strtod(token.c_str(), &end));
+      const double x = std::strtod(token.c_str(), &end);
       if (end != token.c_str() + token.size())
         throw_input_error(path, "", fmt::format("OFF vertex {}: '{:.40}' is not a number", v, token));
+      // Colours (after the coordinates and any normal) become bytes in CGAL: out of
+      // [0, 255] that conversion is undefined (found by fuzzing).
+      if (coloured && n >= colour_from && !(x >= 0 && x <= 255))
+        throw_input_error(path, "", fmt::format("OFF vertex {}: the colour value {:.40} is outside [0, 255]", v, token));
       ++n;
     }
     if (n == 0) continue;  // a blank or comment line

@@ -460,6 +460,10 @@ TEST(MeshIo, OffVertexLinesMustAllGiveTheSameNumbers) {
   write_text(coff, "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n"
                    "3 0 1 2\n3 0 2 3\n");
   expect_error(coff, "OFF vertex 1 has 4 numbers where vertex 0 has 7");
+  // A colour out of [0, 255] (CGAL's conversion to a byte is undefined there).
+  write_text(coff, "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 21474836485 0 255\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n"
+                   "3 0 1 2\n3 0 2 3\n");
+  expect_error(coff, "OFF vertex 1: the colour value 21474836485 is outside [0, 255]");
   write_text(coff, "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n\n1 0 0 0 255 0 255 # red\n1 1 0 0 0 255 255\n"
                    "0 1 0 9 9 9 255\n3 0 1 2\n3 0 2 3\n");
   EXPECT_EQ(load_mesh(coff.string()).mesh.num_faces(), 2);
