@@ -213,7 +213,10 @@ void check_off_header(const std::string& path, std::istream& in, std::uintmax_t 
   // other line without checking that the line had them (found by fuzzing: "0 0~ 0 255 0 0
   // 255" in a COFF made it read past its buffer).
   std::string line;
-  std::getline(in, line);  // the rest of the counts' line
+  std::getline(in, line);  // the rest of the counts' line: nothing but a comment
+  line = line.substr(0, line.find('#'));
+  if (line.find_first_not_of(" \t\r") != std::string::npos)
+    throw_input_error(path, "", fmt::format("the OFF counts line goes on after its counts ('{:.40}')", line));
   std::size_t expected = 0;
   const std::string prefix = keyword.substr(0, keyword.size() - 3);
   const bool coloured = prefix.find('C') != std::string::npos;
