@@ -250,6 +250,33 @@ void check_off_header(const std::string& path, std::istream& in, std::uintmax_t 
                                     v, n, expected));
     ++v;
   }
+  // The face lines: a count, then that many vertex numbers in range (CGAL converts them to
+  // unsigned integers, undefined beyond their range: found by fuzzing).
+  for (long long f = 0; f < counts[first + 1];) {
+    if (!std::getline(in, line))
+      throw_input_error(path, "", fmt::format("the OFF file ends before face {} of {}", f, counts[first + 1]));
+    line = line.substr(0, line.find('#'));
+    std::istringstream words(line);
+    std::vector<double> values;
+    std::string token;
+    while (words >> token) {
+      char* end = nullptr;
+      const double x = std::strtod(token.c_str(), &end);
+      if (end != token.c_str() + token.size())
+        throw_input_error(path, "", fmt::format("OFF face {}: '{:.40}' is not a number", f, token));
+      values.push_back(x);
+    }
+    if (values.empty()) continue;
+    const double k = values[0];
+    if (!(k >= 0) || k != std::floor(k) || k > static_cast<double>(values.size() - 1))
+      throw_input_error(path, "", fmt::format("OFF face {}: the corner count {} does not match the line", f, k));
+    for (std::size_t c = 1; c <= static_cast<std::size_t>(k); ++c)
+      if (!(values[c] >= 0) || values[c] != std::floor(values[c]) ||
+          values[c] >= static_cast<double>(counts[first]))
+        throw_input_error(path, "", fmt::format("OFF face {}: {} is not a vertex number in 0 to {}", f, values[c],
+                                                counts[first] - 1));
+    ++f;
+  }
 }
 
 // Bytes of a PLY scalar type, or 0 when the name is not one.

@@ -364,7 +364,7 @@ TEST(MeshIo, CorruptHeadersCannotTriggerHugeAllocations) {
   write_text(dir / "binary-count.off", binary_off);
   expect_error(dir / "binary-count.off", "header announces 2130706432 vertices");
   write_text(dir / "corners.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n9e12 0 1 2\n");
-  expect_error(dir / "corners.off", "not a readable OFF");
+  expect_error(dir / "corners.off", "OFF face 0: the corner count 9000000000000 does not match the line");
   const std::string ply_head = "ply\nformat binary_little_endian 1.0\n";
   write_text(dir / "count.ply", ply_head +
                                     "element vertex 99999999999\nproperty float x\n"
@@ -464,6 +464,10 @@ TEST(MeshIo, OffVertexLinesMustAllGiveTheSameNumbers) {
   write_text(coff, "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 21474836485 0 255\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n"
                    "3 0 1 2\n3 0 2 3\n");
   expect_error(coff, "OFF vertex 1: the colour value 21474836485 is outside [0, 255]");
+  // A face's vertex number out of range (CGAL converts it to an unsigned integer).
+  const fs::path big = dir / "big_index.off";
+  write_text(big, "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 6.6e55\n");
+  expect_error(big, "OFF face 1: 6.6e+55 is not a vertex number in 0 to 3");
   write_text(coff, "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n\n1 0 0 0 255 0 255 # red\n1 1 0 0 0 255 255\n"
                    "0 1 0 9 9 9 255\n3 0 1 2\n3 0 2 3\n");
   EXPECT_EQ(load_mesh(coff.string()).mesh.num_faces(), 2);
