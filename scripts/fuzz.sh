@@ -29,6 +29,7 @@ for t in "${targets[@]}"; do
   corpus=build/fuzz/corpus/$t
   artifacts=build/fuzz/artifacts/$t
   mkdir -p "$corpus" "$artifacts"
+  rm -f "$artifacts"/*  # only this run's findings are reported
   seeds=(fuzz/corpus/$t)
   dict=()
   case $t in
