@@ -9,3 +9,10 @@ if(TVF_SANITIZE)
     -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
   target_link_options(tvf_options INTERFACE -fsanitize=address,undefined)
 endif()
+# The fuzz build (fuzz/, preset "fuzz"): everything instrumented for libFuzzer's coverage
+# and checked by ASan + UBSan; the fuzz programs add libFuzzer's main at link time.
+if(TVF_FUZZ)
+  target_compile_options(tvf_options INTERFACE
+    -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+  target_link_options(tvf_options INTERFACE -fsanitize=address,undefined)
+endif()

@@ -256,6 +256,9 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
 
+  // Ctrl-C or SIGTERM during a run removes its staging folders (tvf serve installs its
+  // own handlers, which stop the server cleanly instead).
+  install_output_cleanup_on_signals();
   try {
     if (*generate_cmd) return run_generate(load_scene(gen.scene), gen, false);
     if (*analyze_cmd) return run_analyze(analyze);

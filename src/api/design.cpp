@@ -154,6 +154,34 @@ Design::Design(Scene scene, DesignOptions options) : s_(std::make_unique<State>(
   s_->scene = std::move(scene);
 }
 
+namespace {
+
+// The copy of the scene inside a field file, written with the field: one that does not
+// describe this field (a spliced or corrupt file) is refused rather than checked against
+// the wrong design.
+Scene embedded_scene(const FieldFile& file, const std::string& label, const std::string& source) {
+  Scene scene = scene_from_json(file.scene, label, source);
+  const TimeSampling& t = file.field.time();
+  if (scene.time.t0 != t.t0 || scene.time.t1 != t.t1 || scene.time.frames != t.frames)
+    throw Error(fmt::format("{}: time: the scene's {} frames over [{}, {}] do not match the field's {} frames over "
+                            "[{}, {}] (the file is corrupt)",
+                            label, scene.time.frames, scene.time.t0, scene.time.t1, t.frames, t.t0, t.t1));
+  if (const auto& g = scene.domain.grid) {
+    if (!file.mesh.is_planar_xy() ||
+        static_cast<long long>(g->nx) * g->ny != static_cast<long long>(file.mesh.num_vertices()))
+      throw Error(fmt::format("{}: domain.grid: a grid of {} × {} vertices does not match the field's mesh of {} "
+                              "vertices (the file is corrupt)",
+                              label, g->nx, g->ny, file.mesh.num_vertices()));
+  } else if ((scene.domain.sphere || scene.domain.torus) && file.mesh.is_planar_xy()) {
+    throw Error(fmt::format("{}: domain: the scene's surface does not match the field's planar mesh (the file is "
+                            "corrupt)",
+                            label));
+  }
+  return scene;
+}
+
+}  // namespace
+
 Design Design::open(const std::string& path, DesignOptions options) {
   const fs::path input(path);
   std::error_code ec;
@@ -176,7 +204,7 @@ Design Design::open(const std::string& path, DesignOptions options) {
   if (fs::exists(beside, ec))
     s->scene = load_scene(beside.string());
   else if (!ff.scene.is_null())
-    s->scene = scene_from_json(ff.scene, path + " (its scene)", beside.string());
+    s->scene = embedded_scene(ff, path + " (its scene)", beside.string());
   // The domain is the file's mesh (a scene's mesh path is relative to where it was
   // written, which need not be beside the field).
   s->space = std::make_shared<DesignSpace>(std::move(ff.mesh));

@@ -11,6 +11,13 @@ void throw_input_error(const std::string& file, const std::string& where,
     text.append(": ");
   }
   text.append(message);
+  // A NUL byte (from a "\u0000" in a JSON string, say) would end the message where a
+  // client prints what(): write it visibly instead.
+  std::string::size_type nul = 0;
+  while ((nul = text.find('\0', nul)) != std::string::npos) {
+    text.replace(nul, 1, "\\u0000");
+    nul += 6;
+  }
   throw Error(text);
 }
 

@@ -2,11 +2,16 @@
 
 #include "tvf/analysis/coherence.h"
 #include "tvf/core/atomic_output.h"
+#include "tvf/core/error.h"
 #include "tvf/design/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/field/npy.h"
 #include "tvf/field/vtk_io.h"
 #include "tvf/field/world_vectors.h"
+
+#include <algorithm>
+#include <cmath>
+#include <regex>
 
 namespace tvf {
 
@@ -26,6 +31,23 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
                                                        const DesignSpace& space,
                                                        const Field& field, const Scene& scene,
                                                        const OutputOptions& options) {
+  // Written into the scene's own folder, the outputs keep the input scene as the user wrote
+  // it: the scene.json of the outputs would replace it (in canonical form, its mesh path
+  // made absolute).
+  std::error_code same_ec;
+  const bool input_scene_here =
+      !scene.source_path.empty() && std::filesystem::equivalent(dir / "scene.json", scene.source_path, same_ec);
+  // Nothing non-finite is written (the formats have no NaN): such a field means the
+  // design's numbers were too extreme to compute with.
+  for (size_t k = 0; k < field.data().size(); ++k) {
+    const cplx z = field.data()[k];
+    if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
+      throw_input_error(scene.label(), "",
+                        fmt::format("the computed field is not finite at frame {}, vertex {} (the design's numbers "
+                                    "are too extreme to compute with); nothing was written",
+                                    k / static_cast<size_t>(field.num_vertices()),
+                                    k % static_cast<size_t>(field.num_vertices())));
+  }
   OutputStage stage(dir);
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
@@ -37,6 +59,10 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
 
   step("field.npy");
   const std::vector<float> world = world_vectors_f32(space.bundle(), field);
+  if (!std::all_of(world.begin(), world.end(), [](float x) { return std::isfinite(x); }))
+    throw_input_error(scene.label(), "",
+                      "the computed field's vectors exceed the range of field.npy's 32-bit floats (the design's "
+                      "numbers are too extreme); nothing was written");
   write_npy(stage.file("field.npy").string(), {n, nv, 3}, world.data());
 
   step("vertices.npy, faces.npy, times.npy");
@@ -66,7 +92,7 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
 
   step("coherence.csv, scene.json");
   write_file_atomically(stage.file("coherence.csv"), coherence_csv(field, coherence(field)));
-  write_file_atomically(stage.file("scene.json"), scene_to_text(copy));
+  if (!input_scene_here) write_file_atomically(stage.file("scene.json"), scene_to_text(copy));
 
   if (options.incompressible) {
     step("divergence.json");
@@ -78,7 +104,16 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
     step("field.pvd + field_NNNN.vtu");
     write_vtk_series(stage.stage().string(), "field", space.bundle(), field);
   }
-  return stage.commit();
+  // The outputs of an earlier run into the same folder that this run does not write
+  // (divergence.json without "incompressible", the VTK series with --no-vtk or fewer
+  // frames) go in the same commit.
+  return stage.commit([input_scene_here](const std::string& name) {
+    if (name == "scene.json") return !input_scene_here;
+    static const std::regex vtu("field_[0-9]+\\.vtu");
+    return name == "field.npy" || name == "vertices.npy" || name == "faces.npy" || name == "times.npy" ||
+           name == "field.tvff" || name == "coherence.csv" || name == "divergence.json" ||
+           name == "field.pvd" || std::regex_match(name, vtu);
+  });
 }
 
 }  // namespace tvf

@@ -2,6 +2,7 @@
 
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
+#include "tvf/core/json_text.h"
 
 #include <algorithm>
 #include <cctype>
@@ -44,6 +45,13 @@ constexpr SolverMethod kSolverMethods[] = {SolverMethod::automatic, SolverMethod
 constexpr FluxBoundary kFluxBoundaries[] = {FluxBoundary::no_flux, FluxBoundary::open};
 
 constexpr int kMaxFrames = 100'000;
+// The range of numbers a scene may give (docs/scene_reference.md, "Limits").
+constexpr double kMaxMagnitude = 1e15;
+constexpr double kMinPositive = 1e-12;
+// A span (time range, grid cell) must be at least this fraction of the magnitude of its
+// ends, so that its frame times or vertex positions stay distinct.
+constexpr double kMinRelativeSpan = 1e-9;
+constexpr double kMaxTemporalWeight = 1e6;
 constexpr int kMaxSphereSubdivisions = 9;  // make_icosphere's limit
 
 std::string join_key(const std::string& path, const std::string& key) {
@@ -82,25 +90,33 @@ std::vector<std::pair<const std::string*, const json*>> ordered_items(const json
   return items;
 }
 
-void write_compact(const json& v, std::string& out) {
+// Stops once `out` is longer than `limit` (the text is then cut by the caller): a value
+// quoted in a message is written only as far as it is shown, and the recursion is no
+// deeper than the characters written.
+void write_compact(const json& v, std::string& out, size_t limit = std::string::npos) {
+  if (out.size() > limit) return;
   if (v.is_array()) {
     out += '[';
-    for (size_t i = 0; i < v.size(); ++i) {
+    for (size_t i = 0; i < v.size() && out.size() <= limit; ++i) {
       if (i) out += ", ";
-      write_compact(v[i], out);
+      write_compact(v[i], out, limit);
     }
     out += ']';
   } else if (v.is_object()) {
     out += '{';
     bool first = true;
     for (const auto& [k, x] : ordered_items(v)) {
+      if (out.size() > limit) break;
       if (!first) out += ", ";
       first = false;
       out += json(*k).dump();
       out += ": ";
-      write_compact(*x, out);
+      write_compact(*x, out, limit);
     }
     out += '}';
+  } else if (v.is_string() && limit != std::string::npos) {
+    const std::string& text = v.get_ref<const std::string&>();
+    out += json(text.substr(0, limit + 1)).dump();
   } else {
     out += v.dump();
   }
@@ -155,7 +171,8 @@ void write_pretty(const json& v, size_t indent, size_t column, std::string& out)
 std::string describe(const json& j) {
   if (j.is_number_float()) return fmt::format("{}", j.get<double>());
   if (j.is_null()) return "null";
-  std::string s = compact(j);
+  std::string s;
+  write_compact(j, s, 60);
   if (s.size() > 60) s = s.substr(0, 56) + " ...";
   return s;
 }
@@ -218,15 +235,25 @@ private:
     fail(path, fmt::format("missing key \"{}\" ({})", key, hint));
   }
 
+  // Every number: finite and of magnitude at most kMaxMagnitude, so that the products and
+  // squares the computations form stay finite (1e200 squared is not).
   double number(const json& j, const std::string& path) const {
     if (!j.is_number()) fail(path, fmt::format("must be a number, got {}", describe(j)));
     const double x = j.get<double>();
     if (!std::isfinite(x)) fail(path, fmt::format("must be a finite number, got {}", x));
+    if (std::abs(x) > kMaxMagnitude)
+      fail(path, fmt::format("must be a number of magnitude at most {:g} (larger values overflow in the "
+                             "computations), got {}",
+                             kMaxMagnitude, x));
     return x;
   }
+  // Sizes, scales and radii (what the computations divide by): at least kMinPositive.
   double positive(const json& j, const std::string& path) const {
     const double x = number(j, path);
     if (!(x > 0)) fail(path, fmt::format("must be a number > 0, got {}", x));
+    if (x < kMinPositive)
+      fail(path, fmt::format("must be at least {:g} (smaller values overflow what is divided by them), got {}",
+                             kMinPositive, x));
     return x;
   }
   double non_negative(const json& j, const std::string& path) const {
@@ -516,6 +543,28 @@ GridSpec Reader::grid(const json& j, const std::string& path) const {
     fail(join_key(path, "max"),
          fmt::format("must be greater than min in both coordinates, got min [{}, {}] and max [{}, {}]",
                      g.min.x(), g.min.y(), g.max.x(), g.max.y()));
+  // Cells must stay distinct in floating point: a box of [-1, 1e14] × [-1, 1] on 65 × 65
+  // vertices has cells, one of [1e14, 1e14 + 1e-6] has not.
+  for (int axis = 0; axis < 2; ++axis) {
+    const double cell = (g.max[axis] - g.min[axis]) / ((axis == 0 ? g.nx : g.ny) - 1);
+    const double magnitude = std::max({1.0, std::abs(g.min[axis]), std::abs(g.max[axis])});
+    if (cell < kMinRelativeSpan * magnitude)
+      fail(join_key(path, "max"),
+           fmt::format("the box [{}, {}] × [{}, {}] is too narrow for its magnitude along {}: a cell must span at "
+                       "least {:g} × max(1, |min|, |max|)",
+                       g.min.x(), g.max.x(), g.min.y(), g.max.y(), axis == 0 ? "x" : "y", kMinRelativeSpan));
+  }
+  // Nor may its triangles be too thin for the mesh's own check (area ≥ 1e-14 of the
+  // squared diagonal, mesh_validate.h), which would name no key.
+  {
+    const double cx = (g.max.x() - g.min.x()) / (g.nx - 1), cy = (g.max.y() - g.min.y()) / (g.ny - 1);
+    const double ex = g.max.x() - g.min.x(), ey = g.max.y() - g.min.y();
+    if (0.5 * (cx / ex) * (cy / ex) / (1 + (ey / ex) * (ey / ex)) < 2e-14)
+      fail(join_key(path, "max"),
+           fmt::format("the box [{}, {}] × [{}, {}] is too elongated for a grid of {} × {} vertices: its cells would "
+                       "be degenerate (zero-area) triangles",
+                       g.min.x(), g.max.x(), g.min.y(), g.max.y(), g.nx, g.ny));
+  }
   return g;
 }
 
@@ -586,6 +635,10 @@ TimeSampling Reader::time(const json& j) const {
     s.t1 = number((*r)[1], "time.range[1]");
     if (!(s.t0 < s.t1))
       fail("time.range", fmt::format("must have t0 < t1, got [{}, {}]", s.t0, s.t1));
+    if (s.t1 - s.t0 < kMinRelativeSpan * std::max({1.0, std::abs(s.t0), std::abs(s.t1)}))
+      fail("time.range", fmt::format("[{}, {}] is too short for its magnitude: t1 − t0 must be at least {:g} × "
+                                     "max(1, |t0|, |t1|) so that frame times stay distinct",
+                                     s.t0, s.t1, kMinRelativeSpan));
   }
   return s;
 }
@@ -595,8 +648,14 @@ SolverSettings Reader::solver(const json& j) const {
              {"weights", "temporal_weight", "tolerance", "region_radius", "method"});
   SolverSettings s;
   if (const json* v = get(j, "weights")) s.weights = enumeration(*v, "solver.weights", kWeights, "weights");
-  if (const json* v = get(j, "temporal_weight"))
+  if (const json* v = get(j, "temporal_weight")) {
     s.temporal_weight = non_negative(*v, "solver.temporal_weight");
+    if (s.temporal_weight > kMaxTemporalWeight)
+      fail("solver.temporal_weight",
+           fmt::format("must be at most {:g} (a larger weight makes the space-time system too ill-conditioned to "
+                       "solve), got {}",
+                       kMaxTemporalWeight, s.temporal_weight));
+  }
   if (const json* v = get(j, "tolerance")) {
     s.tolerance = number(*v, "solver.tolerance");
     if (!(s.tolerance > 0 && s.tolerance < 1))
@@ -943,167 +1002,10 @@ Scene Reader::scene(const json& j, const std::string& source_path) {
   return s;
 }
 
-// ---------------------------------------------------------------------------------------
-// Text to JSON, with positions for syntax errors and no silently dropped duplicate keys.
-
-// Builds the DOM like nlohmann's own parser, and remembers where a parse error happened.
-class DomBuilder : public nlohmann::json_sax<json> {
-public:
-  explicit DomBuilder(json& root) : root_(root) {}
-
-  bool null() override { return add(nullptr); }
-  bool boolean(bool v) override { return add(v); }
-  bool number_integer(number_integer_t v) override { return add(v); }
-  bool number_unsigned(number_unsigned_t v) override { return add(v); }
-  bool number_float(number_float_t v, const string_t&) override { return add(v); }
-  bool string(string_t& v) override { return add(std::move(v)); }
-  bool binary(binary_t& v) override { return add(json::binary(std::move(v))); }
-  bool start_object(std::size_t) override { return open(json::object()); }
-  bool key(string_t& k) override {
-    if (stack_.back()->contains(k)) {
-      duplicate_ = paths_.back().empty() ? k : paths_.back() + "." + k;
-      return false;
-    }
-    key_ = k;
-    return true;
-  }
-  bool end_object() override { return close(); }
-  bool start_array(std::size_t) override { return open(json::array()); }
-  bool end_array() override { return close(); }
-  bool parse_error(std::size_t position, const std::string&,
-                   const nlohmann::detail::exception& ex) override {
-    error_position_ = position;
-    error_id_ = ex.id;
-    error_text_ = ex.what();
-    return false;
-  }
-
-  const std::string& duplicate() const { return duplicate_; }
-  std::size_t error_position() const { return error_position_; }
-  int error_id() const { return error_id_; }
-  const std::string& error_text() const { return error_text_; }
-
-private:
-  json& root_;
-  std::vector<json*> stack_;
-  std::vector<std::string> paths_;  // JSON path of each open container
-  std::string key_;
-  std::string duplicate_;
-  std::size_t error_position_ = 0;
-  int error_id_ = 0;
-  std::string error_text_;
-
-  std::string child_path() const {
-    if (stack_.empty()) return "";
-    if (stack_.back()->is_array()) return join_index(paths_.back(), stack_.back()->size());
-    return join_key(paths_.back(), key_);
-  }
-  json* insert(json&& v) {
-    if (stack_.empty()) {
-      root_ = std::move(v);
-      return &root_;
-    }
-    json& parent = *stack_.back();
-    if (parent.is_array()) {
-      parent.push_back(std::move(v));
-      return &parent.back();
-    }
-    json& slot = parent[key_];
-    slot = std::move(v);
-    return &slot;
-  }
-  bool add(json&& v) {
-    insert(std::move(v));
-    return true;
-  }
-  bool open(json&& v) {
-    std::string path = child_path();
-    stack_.push_back(insert(std::move(v)));
-    paths_.push_back(std::move(path));
-    return true;
-  }
-  bool close() {
-    stack_.pop_back();
-    paths_.pop_back();
-    return true;
-  }
-};
-
-// 1-based line and column (in code points) of the byte at `index` (0-based).
-std::pair<size_t, size_t> line_and_column(const std::string& text, size_t index) {
-  index = std::min(index, text.size());
-  size_t line = 1, column = 1;
-  for (size_t i = 0; i < index; ++i) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    if (c == '\n') {
-      ++line;
-      column = 1;
-    } else if ((c & 0xC0) != 0x80) {
-      ++column;
-    }
-  }
-  return {line, column};
-}
-
-bool is_word_char(char c) { return std::isalpha(static_cast<unsigned char>(c)) != 0; }
-
-json parse_text(const std::string& text, const std::string& label) {
-  json root;
-  DomBuilder builder(root);
-  if (json::sax_parse(text, &builder)) return root;
-  if (!builder.duplicate().empty())
-    throw_input_error(label, builder.duplicate(),
-                      "the key appears twice in the same object (JSON keys must be unique)");
-  // nlohmann's position counts the characters read, the last one being where it stopped.
-  size_t index = builder.error_position() > 0 ? builder.error_position() - 1 : 0;
-  index = std::min(index, text.size());
-  std::string message;
-  if (builder.error_id() == 406) {
-    // Number overflow (e.g. 1e999): point at the start of the number.
-    size_t start = std::min(index + 1, text.size());
-    while (start > 0 && std::strchr("0123456789+-.eE", text[start - 1]) != nullptr) --start;
-    size_t end = start;
-    while (end < text.size() && std::strchr("0123456789+-.eE", text[end]) != nullptr) ++end;
-    index = start;
-    message = fmt::format("the number {} is out of range (numbers must be finite)",
-                          text.substr(start, end - start));
-  } else {
-    // NaN, Infinity and friends are not JSON: say so plainly.
-    size_t start = index;
-    while (start > 0 && is_word_char(text[start - 1])) --start;
-    size_t end = start;
-    while (end < text.size() && is_word_char(text[end])) ++end;
-    std::string word = text.substr(start, end - start);
-    std::transform(word.begin(), word.end(), word.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
-      throw_input_error(label, "", "the text is empty; a scene is a JSON object {\"tvf\": 1, ...}");
-    } else if (index < text.size() && text[index] == '/') {
-      message = "comments are not allowed in JSON";
-    } else if (word == "nan" || word == "inf" || word == "infinity") {
-      index = start > 0 && (text[start - 1] == '-' || text[start - 1] == '+') ? start - 1 : start;
-      message = fmt::format("{} is not a JSON number (numbers must be finite)",
-                            text.substr(index, end - index));
-    } else {
-      // "[json.exception.parse_error.101] parse error at line 1, column 7: syntax error ..."
-      const std::string& what = builder.error_text();
-      const size_t column = what.find("column ");
-      const size_t colon = column == std::string::npos ? std::string::npos : what.find(": ", column);
-      if (colon != std::string::npos) {
-        message = what.substr(colon + 2);
-      } else {
-        const size_t bracket = what.find("] ");
-        message = bracket == std::string::npos ? what : what.substr(bracket + 2);
-      }
-    }
-  }
-  const auto [line, col] = line_and_column(text, index);
-  throw_input_error(label, fmt::format("line {}, column {}", line, col), message);
-}
-
 Scene parse_with_source(const std::string& text, const std::string& label,
                         const std::string& source_path) {
-  return scene_from_json(parse_text(text, label), label, source_path);
+  return scene_from_json(
+      parse_json_text(text, label, "a scene is a JSON object {\"tvf\": 1, ...}"), label, source_path);
 }
 
 }  // namespace
@@ -1118,21 +1020,7 @@ Scene parse_scene(const std::string& text, const std::string& label) {
 }
 
 Scene load_scene(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const auto status = fs::status(path, ec);
-  if (!fs::exists(status))
-    throw_input_error("", "", fmt::format("cannot read the scene file '{}': it does not exist", path));
-  if (fs::is_directory(status))
-    throw_input_error("", "", fmt::format("cannot read the scene file '{}': it is a folder", path));
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw_input_error("", "", fmt::format("cannot read the scene file '{}': {}", path, std::strerror(errno)));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad())
-    throw_input_error("", "", fmt::format("cannot read the scene file '{}': a read error occurred", path));
-  return parse_with_source(text.str(), path, path);
+  return parse_with_source(read_text_file(path, "the scene file"), path, path);
 }
 
 nlohmann::json scene_to_json(const Scene& scene) {

@@ -46,7 +46,13 @@ Similarity similarity_at(const nlohmann::json& keys, double t0, double t) {
 }  // namespace
 
 Vec3 seed_translation(const DesignSpace& space, const Vec3& seed, const Vec3& to) {
-  if (space.planar()) return {to.x() - seed.x(), to.y() - seed.y(), 0.0};
+  if (space.planar()) {
+    const Vec3 t(to.x() - seed.x(), to.y() - seed.y(), 0.0);
+    if (!t.allFinite())
+      throw Error(fmt::format("the translation from ({:.4g}, {:.4g}) to ({:.4g}, {:.4g}) is too large to represent",
+                              seed.x(), seed.y(), to.x(), to.y()));
+    return t;
+  }
   const SurfacePoint p = space.locate(seed);
   LocalChart chart;
   space.log_map().compute(p, chart);

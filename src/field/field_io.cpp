@@ -2,8 +2,10 @@
 
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
+#include "tvf/core/json_text.h"
 
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -96,6 +98,9 @@ void save_field_file(const std::string& path, const Mesh& mesh, const Field& fie
 }
 
 FieldFile load_field_file(const std::string& path) {
+  // A folder whose commit was interrupted may hold this file from one run and the rest
+  // from another (core/atomic_output.h).
+  check_output_complete(fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path());
   std::error_code ec;
   const std::uint64_t file_size = fs::file_size(path, ec);
   if (ec) fail(path, "cannot read the field file (" + ec.message() + ")");
@@ -124,8 +129,8 @@ FieldFile load_field_file(const std::string& path) {
     fail(path, "cannot read the field file header");
   nlohmann::json header;
   try {
-    header = nlohmann::json::parse(header_text);
-  } catch (const nlohmann::json::exception& e) {
+    header = parse_json_text(header_text, "", "expected a JSON object");
+  } catch (const Error& e) {
     fail(path, std::string("bad field file header (") + e.what() + ")");
   }
   if (!header.is_object()) fail(path, "bad field file header (not a JSON object)");
@@ -133,6 +138,10 @@ FieldFile load_field_file(const std::string& path) {
   const int nf = header_count(path, header, "faces", 0);
   const int frames = header_count(path, header, "frames", 1);
   const TimeSampling time{header_number(path, header, "t0"), header_number(path, header, "t1"), frames};
+  if (!(time.t0 < time.t1))
+    fail(path, fmt::format("header: the time range [{}, {}] must have t0 < t1", time.t0, time.t1));
+  if (!std::isfinite(time.t1 - time.t0))
+    fail(path, fmt::format("header: the time range [{}, {}] is too long to represent", time.t0, time.t1));
 
   // Check the sizes against the file before allocating anything they imply.
   std::uint64_t expected = kPreamble + header_len;
@@ -159,6 +168,12 @@ FieldFile load_field_file(const std::string& path) {
     in.read(reinterpret_cast<char*>(field.data().data()),
             static_cast<std::streamsize>(field.data().size() * sizeof(cplx)));
   if (!in) fail(path, "cannot read the field file data");
+  for (size_t k = 0; k < field.data().size(); ++k) {
+    const cplx z = field.data()[k];
+    if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
+      fail(path, fmt::format("frame {}, vertex {}: the vector ({}, {}) is not finite", k / static_cast<size_t>(nv),
+                             k % static_cast<size_t>(nv), z.real(), z.imag()));
+  }
 
   FieldFile result{Mesh(std::move(positions), std::move(faces), path), std::move(field),
                    header.value("scene", nlohmann::json())};

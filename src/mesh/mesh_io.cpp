@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -106,6 +107,21 @@ std::string diagnose_obj(const std::string& path) {
       if (coordinates < 3)
         return fmt::format("line {}: the vertex '{}' does not have three finite coordinates",
                            number, quoted());
+    } else if (keyword == "f") {
+      // Each corner "v", "v/vt", "v//vn" or "v/vt/vn": v a vertex number, 1-based, or
+      // negative counting back from the last vertex read.
+      std::string word;
+      while (words >> word) {
+        const std::string index = word.substr(0, word.find('/'));
+        char* end = nullptr;
+        errno = 0;
+        const long long v = std::strtoll(index.c_str(), &end, 10);
+        if (index.empty() || end != index.c_str() + index.size() || errno == ERANGE || v == 0 ||
+            v > vertices || v < -vertices)
+          return fmt::format("line {}: the face corner '{:.40}' is not a vertex number in 1 to {} (or -1 to -{}) "
+                             "of the vertices read before it",
+                             number, word, vertices, vertices);
+      }
     } else if (std::find_if(std::begin(known), std::end(known),
                             [&](const char* k) { return keyword == k; }) == std::end(known)) {
       return fmt::format("line {}: '{}' is not an OBJ statement that tvf reads", number, quoted());
@@ -191,6 +207,76 @@ void check_off_header(const std::string& path, std::istream& in, std::uintmax_t 
   check_count(path, Format::off, counts[first], "vertices", file_size);
   check_count(path, Format::off, counts[first + 1], "faces", file_size);
   check_count(path, Format::off, counts[first + 2], "edges", file_size);
+  if (w == "BINARY") return;
+  // The vertex lines of a text OFF: numbers only, as many on every line as on the first.
+  // CGAL's reader counts the colour entries on the first line and reads as many on every
+  // other line without checking that the line had them (found by fuzzing: "0 0~ 0 255 0 0
+  // 255" in a COFF made it read past its buffer).
+  std::string line;
+  std::getline(in, line);  // the rest of the counts' line: nothing but a comment
+  line = line.substr(0, line.find('#'));
+  if (line.find_first_not_of(" \t\r") != std::string::npos)
+    throw_input_error(path, "", fmt::format("the OFF counts line goes on after its counts ('{:.40}')", line));
+  std::size_t expected = 0;
+  const std::string prefix = keyword.substr(0, keyword.size() - 3);
+  const bool coloured = prefix.find('C') != std::string::npos;
+  const std::size_t colour_from = (prefix.find('4') != std::string::npos ? 4u : 3u) +
+                                  (prefix.find('N') != std::string::npos ? 3u : 0u);
+  for (long long v = 0; v < counts[first];) {
+    if (!std::getline(in, line))
+      throw_input_error(path, "", fmt::format("the OFF file ends before vertex {} of {}", v, counts[first]));
+    line = line.substr(0, line.find('#'));
+    std::istringstream words(line);
+    std::string token;
+    std::size_t n = 0;
+    while (words >> token) {
+      char* end = nullptr;
+      const double x = std::strtod(token.c_str(), &end);
+      if (end != token.c_str() + token.size())
+        throw_input_error(path, "", fmt::format("OFF vertex {}: '{:.40}' is not a number", v, token));
+      // Colours (after the coordinates and any normal) become bytes in CGAL: out of
+      // [0, 255] that conversion is undefined (found by fuzzing).
+      if (coloured && n >= colour_from && !(x >= 0 && x <= 255))
+        throw_input_error(path, "", fmt::format("OFF vertex {}: the colour value {:.40} is outside [0, 255]", v, token));
+      ++n;
+    }
+    if (n == 0) continue;  // a blank or comment line
+    if (n < 3) throw_input_error(path, "", fmt::format("OFF vertex {} has {} numbers; a vertex needs at least 3", v, n));
+    if (expected == 0) expected = n;
+    if (n != expected)
+      throw_input_error(path, "",
+                        fmt::format("OFF vertex {} has {} numbers where vertex 0 has {} (every vertex line of an OFF "
+                                    "file gives the same values)",
+                                    v, n, expected));
+    ++v;
+  }
+  // The face lines: a count, then that many vertex numbers in range (CGAL converts them to
+  // unsigned integers, undefined beyond their range: found by fuzzing).
+  for (long long f = 0; f < counts[first + 1];) {
+    if (!std::getline(in, line))
+      throw_input_error(path, "", fmt::format("the OFF file ends before face {} of {}", f, counts[first + 1]));
+    line = line.substr(0, line.find('#'));
+    std::istringstream words(line);
+    std::vector<double> values;
+    std::string token;
+    while (words >> token) {
+      char* end = nullptr;
+      const double x = std::strtod(token.c_str(), &end);
+      if (end != token.c_str() + token.size())
+        throw_input_error(path, "", fmt::format("OFF face {}: '{:.40}' is not a number", f, token));
+      values.push_back(x);
+    }
+    if (values.empty()) continue;
+    const double k = values[0];
+    if (!(k >= 0) || k != std::floor(k) || k > static_cast<double>(values.size() - 1))
+      throw_input_error(path, "", fmt::format("OFF face {}: the corner count {} does not match the line", f, k));
+    for (std::size_t c = 1; c <= static_cast<std::size_t>(k); ++c)
+      if (!(values[c] >= 0) || values[c] != std::floor(values[c]) ||
+          values[c] >= static_cast<double>(counts[first]))
+        throw_input_error(path, "", fmt::format("OFF face {}: {} is not a vertex number in 0 to {}", f, values[c],
+                                                counts[first] - 1));
+    ++f;
+  }
 }
 
 // Bytes of a PLY scalar type, or 0 when the name is not one.
@@ -203,27 +289,47 @@ int ply_type_size(const std::string& t) {
   return 0;
 }
 
+// A PLY header as far as the body check needs it.
+struct PlyProperty {
+  int bytes = 0;        // a scalar's size, or a list's count's size
+  bool list = false;
+  bool signed_count = false;
+  int index_bytes = 0;  // a list item's size
+};
+struct PlyElement {
+  std::string name;
+  long long count = 0;
+  std::vector<PlyProperty> properties;
+};
+struct PlyLayout {
+  std::string encoding;  // ascii, binary_little_endian or binary_big_endian
+  std::vector<PlyElement> elements;
+};
+
+bool ply_signed(const std::string& t) { return t == "char" || t == "int8" || t == "short" || t == "int16" || t == "int" || t == "int32"; }
+
 // CGAL's PLY reader trusts its header: a property before any element crashes it, an
 // element whose properties it does not know makes it loop over the announced count
 // without reading, and counts are used as given. So the header is checked first: known
 // types only, and every element's items must fit in the file (at least the size of their
 // scalars, or two characters per property in ASCII), which bounds what reading allocates.
-void check_ply_header(const std::string& path, std::istream& in, std::uintmax_t file_size) {
+// Leaves `in` at the first byte of the body.
+PlyLayout check_ply_header(const std::string& path, std::istream& in, std::uintmax_t file_size) {
   auto corrupt = [&](const std::string& what) {
     throw_input_error(path, "", fmt::format("the PLY header {} (corrupt file)", what));
   };
+  PlyLayout layout;
   std::string line;
   bool binary = false;
-  bool in_element = false;
-  std::string element;
-  long long count = 0;
   std::uintmax_t item_bytes = 0;
   auto finish_element = [&] {
-    if (!in_element || count == 0) return;
+    if (layout.elements.empty()) return;
+    const PlyElement& e = layout.elements.back();
+    if (e.count == 0) return;
     if (item_bytes == 0)
-      corrupt(fmt::format("declares {} '{}' items without any property", count, element));
-    if (static_cast<std::uintmax_t>(count) > (file_size + 1) / item_bytes)
-      corrupt(fmt::format("announces {} '{}' items, more than the file can hold", count, element));
+      corrupt(fmt::format("declares {} '{}' items without any property", e.count, e.name));
+    if (static_cast<std::uintmax_t>(e.count) > (file_size + 1) / item_bytes)
+      corrupt(fmt::format("announces {} '{}' items, more than the file can hold", e.count, e.name));
   };
   for (long long number = 1; std::getline(in, line); ++number) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -241,14 +347,15 @@ void check_ply_header(const std::string& path, std::istream& in, std::uintmax_t 
                                   encoding != "binary_big_endian"))
         fail_unreadable(path, Format::ply);
       binary = encoding != "ascii";
+      layout.encoding = encoding;
       continue;
     }
     if (keyword == "element") {
       finish_element();
-      std::string count_text;
-      element.clear();
+      std::string count_text, element;
       words >> element >> count_text;
       std::size_t used = 0;
+      long long count = 0;
       try {
         count = std::stoll(count_text, &used);
       } catch (const std::exception&) {
@@ -256,29 +363,110 @@ void check_ply_header(const std::string& path, std::istream& in, std::uintmax_t 
       }
       if (element.empty() || used == 0 || used != count_text.size() || count < 0)
         corrupt(fmt::format("has a malformed element line '{}'", line));
-      in_element = true;
+      layout.elements.push_back({element, count, {}});
       item_bytes = 0;
     } else if (keyword == "property") {
-      if (!in_element) corrupt(fmt::format("has the property '{}' before any element", line));
+      if (layout.elements.empty()) corrupt(fmt::format("has the property '{}' before any element", line));
       std::string type, size_type, index_type;
       words >> type;
-      int bytes = 0;
+      PlyProperty property;
       if (type == "list") {
         words >> size_type >> index_type;
         const bool integer_size = size_type != "float" && size_type != "float32" &&
                                   size_type != "double" && size_type != "float64";
-        bytes = integer_size && ply_type_size(index_type) > 0 ? ply_type_size(size_type) : 0;
+        property.list = true;
+        property.bytes = integer_size && ply_type_size(index_type) > 0 ? ply_type_size(size_type) : 0;
+        property.signed_count = ply_signed(size_type);
+        property.index_bytes = ply_type_size(index_type);
       } else {
-        bytes = ply_type_size(type);
+        property.bytes = ply_type_size(type);
       }
-      if (bytes == 0) corrupt(fmt::format("has the property '{}' of an unknown type", line));
-      item_bytes += binary ? static_cast<std::uintmax_t>(bytes) : 2;
+      if (property.bytes == 0) corrupt(fmt::format("has the property '{}' of an unknown type", line));
+      item_bytes += binary ? static_cast<std::uintmax_t>(property.bytes) : 2;
+      layout.elements.back().properties.push_back(property);
     } else if (keyword == "end_header") {
       finish_element();
-      return;
+      return layout;
     }
   }
   fail_unreadable(path, Format::ply);
+}
+
+// The body against the header, before CGAL reads it: every item present, and every list's
+// count read and checked against what is left of the file before the list is skipped.
+// CGAL's reader does not check its reads: in a truncated file it used a list count it never
+// read (uninitialised memory) and allocated by it.
+void check_ply_body(const std::string& path, std::istream& in, const PlyLayout& layout, std::uintmax_t file_size) {
+  auto truncated = [&](const PlyElement& e, long long item, const std::string& why) {
+    throw_input_error(path, "",
+                      fmt::format("PLY '{}' item {} of {}: {} (truncated or corrupt file)", e.name, item, e.count, why));
+  };
+  const std::streamoff start = in.tellg();
+  if (start < 0) fail_unreadable(path, Format::ply);
+  std::uintmax_t left = file_size - static_cast<std::uintmax_t>(start);
+  if (layout.encoding == "ascii") {
+    std::string word;
+    for (const PlyElement& e : layout.elements) {
+      for (long long item = 0; item < e.count; ++item) {
+        for (const PlyProperty& p : e.properties) {
+          if (!(in >> word)) truncated(e, item, "the file ends inside it");
+          char* end = nullptr;
+          const double x = std::strtod(word.c_str(), &end);
+          if (end != word.c_str() + word.size()) truncated(e, item, fmt::format("'{:.40}' is not a number", word));
+          if (!p.list) continue;
+          if (!(x >= 0) || x != std::floor(x) || x > static_cast<double>(file_size))
+            truncated(e, item, fmt::format("the list count {:.40} is not a count the file can hold", word));
+          for (long long k = 0; k < static_cast<long long>(x); ++k) {
+            if (!(in >> word)) truncated(e, item, "the file ends inside a list");
+            static_cast<void>(std::strtod(word.c_str(), &end));
+            if (end != word.c_str() + word.size())
+              truncated(e, item, fmt::format("'{:.40}' is not a number", word));
+          }
+        }
+      }
+    }
+    return;
+  }
+  const bool big = layout.encoding == "binary_big_endian";
+  for (const PlyElement& e : layout.elements) {
+    const bool scalars_only = std::none_of(e.properties.begin(), e.properties.end(),
+                                           [](const PlyProperty& p) { return p.list; });
+    if (scalars_only) {
+      std::uintmax_t item = 0;
+      for (const PlyProperty& p : e.properties) item += static_cast<std::uintmax_t>(p.bytes);
+      const auto count = static_cast<std::uintmax_t>(e.count);
+      if (item > 0 && count > left / item) truncated(e, static_cast<long long>(left / item), "the file ends inside it");
+      left -= count * item;
+      in.seekg(static_cast<std::streamoff>(count * item), std::ios::cur);
+      continue;
+    }
+    for (long long item = 0; item < e.count; ++item) {
+      for (const PlyProperty& p : e.properties) {
+        const auto bytes = static_cast<std::uintmax_t>(p.bytes);
+        if (bytes > left) truncated(e, item, "the file ends inside it");
+        left -= bytes;
+        if (!p.list) {
+          in.seekg(static_cast<std::streamoff>(bytes), std::ios::cur);
+          continue;
+        }
+        unsigned char b[8] = {};
+        if (!in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(bytes)))
+          truncated(e, item, "the file ends inside it");
+        std::uint64_t u = 0;
+        for (std::size_t k = 0; k < bytes; ++k) {
+          const std::size_t at = big ? k : bytes - 1 - k;
+          u = (u << 8) | b[at];
+        }
+        const bool negative = p.signed_count && (b[big ? 0 : bytes - 1] & 0x80) != 0;
+        if (negative) truncated(e, item, "a list count is negative");
+        const auto index_bytes = static_cast<std::uint64_t>(p.index_bytes);
+        if (u > left / index_bytes)
+          truncated(e, item, fmt::format("a list of {} entries does not fit in the {} bytes left", u, left));
+        left -= u * index_bytes;
+        in.seekg(static_cast<std::streamoff>(u * index_bytes), std::ios::cur);
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -319,13 +507,15 @@ LoadedMesh load_mesh(const std::string& path) {
         in.seekg(0);
         ok = CGAL::IO::read_OFF(in, points, polygons, np);
         break;
-      case Format::ply:
-        check_ply_header(path, in, file_size);
+      case Format::ply: {
+        const PlyLayout layout = check_ply_header(path, in, file_size);
+        check_ply_body(path, in, layout, file_size);
         in.clear();
         in.seekg(0);
         CGAL::IO::set_mode(in, CGAL::IO::BINARY);
         ok = CGAL::IO::read_PLY(in, points, polygons, np);
         break;
+      }
     }
     if (!ok) fail_unreadable(path, format);
   } catch (const Error&) {
@@ -350,6 +540,11 @@ LoadedMesh load_mesh(const std::string& path) {
   faces.reserve(polygons.size());
   for (size_t i = 0; i < polygons.size(); ++i) {
     const Polygon& poly = polygons[i];
+    if (poly.size() < 3 && format == Format::obj) {
+      // CGAL stops reading a face at an index it cannot read (2^31, say): name that line.
+      const std::string line = diagnose_obj(path);
+      if (!line.empty()) throw_input_error(path, "", line);
+    }
     if (poly.size() < 3)
       throw_input_error(path, "",
                         fmt::format("polygon {} has {} corner{}; a face needs at least 3", i,

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 
 namespace tvf {
 
@@ -219,6 +220,49 @@ void validate_triangle_soup(const std::vector<Vec3>& positions, const std::vecto
           fmt::format("vertex {} joins faces that form more than one fan around it "
                       "(non-manifold vertex)",
                       v));
+  }
+
+  // A planar mesh (every z = 0) must not fold over itself: where it does (an interior
+  // vertex moved outside the ring of its neighbours), the faces on either side of an edge
+  // turn opposite ways and the plane's own directions are no longer the mesh's.
+  const bool planar = std::all_of(positions.begin(), positions.end(), [](const Vec3& p) { return p.z() == 0.0; });
+  if (planar) {
+    auto signed_area = [&](size_t f) {
+      const Face& t = faces[f];
+      const Vec3& a = positions[static_cast<size_t>(t[0])];
+      const Vec3 u = positions[static_cast<size_t>(t[1])] - a, w = positions[static_cast<size_t>(t[2])] - a;
+      return u.x() * w.y() - u.y() * w.x();
+    };
+    std::vector<double> area(nf);
+    double total = 0;
+    for (size_t f = 0; f < nf; ++f) total += area[f] = signed_area(f);
+    size_t fold = nh;
+    for (size_t h = 0; h < nh && fold == nh; ++h)
+      if (twin[h] >= 0 && (area[h / 3] > 0) != (area[static_cast<size_t>(twin[h]) / 3] > 0)) fold = h;
+    if (fold != nh) {
+      // Name the vertex the fold is around: an interior vertex whose faces do not wind
+      // once around it (their signed corner angles sum to 0 instead of ±2π).
+      std::vector<double> winding(nv, 0.0);
+      std::vector<std::uint8_t> boundary(nv, 0);
+      for (size_t h = 0; h < nh; ++h) {
+        const auto v = static_cast<size_t>(tail(h));
+        if (twin[h] < 0) boundary[v] = boundary[static_cast<size_t>(head(h))] = 1;
+        const Vec3 a = positions[static_cast<size_t>(head(h))] - positions[v];
+        const Vec3 b = positions[static_cast<size_t>(head(next(h)))] - positions[v];
+        winding[v] += std::atan2(a.x() * b.y() - a.y() * b.x(), a.x() * b.x() + a.y() * b.y());
+      }
+      const double turn = total > 0 ? 2 * std::numbers::pi : -2 * std::numbers::pi;
+      size_t vertex = static_cast<size_t>(tail(fold));
+      for (size_t v = 0; v < nv; ++v)
+        if (!boundary[v] && std::abs(winding[v] - turn) > 1e-6) {
+          vertex = v;
+          break;
+        }
+      fail(fmt::format("the planar mesh folds over itself at vertex {} {}: faces {} and {} on either side of edge "
+                       "{}–{} turn opposite ways (a vertex outside the ring of its neighbours)",
+                       vertex, format_point(positions[vertex]), fold / 3, static_cast<size_t>(twin[fold]) / 3,
+                       tail(fold), head(fold)));
+    }
   }
 }
 

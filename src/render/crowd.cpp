@@ -4,6 +4,7 @@
 
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
+#include "tvf/core/json_text.h"
 #include "tvf/integrate/pathline.h"
 #include "tvf/render/frame_output.h"
 
@@ -173,17 +174,8 @@ CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
 }
 
 CrowdSpec load_crowd_spec(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw_input_error(path, "", "cannot open the crowd file");
-  std::stringstream text;
-  text << in.rdbuf();
-  json j;
-  try {
-    j = json::parse(text.str());
-  } catch (const json::parse_error& e) {
-    throw_input_error(path, "", fmt::format("not valid JSON ({})", e.what()));
-  }
-  return parse_crowd_spec(j, path);
+  return parse_crowd_spec(parse_json_text(read_text_file(path, "the crowd file"), path, "a crowd file is a JSON object"),
+                          path);
 }
 
 // --- Fast marching -----------------------------------------------------------------------

@@ -1,9 +1,12 @@
 #include "tvf/serve/http_server.h"
 
+#include "tvf/core/json_text.h"
+
 #include <fmt/format.h>
 #include <httplib.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <condition_variable>
 #include <fstream>
@@ -40,77 +43,15 @@ void send_error(httplib::Response& res, int status, const std::string& message) 
   send_json(res, {{"error", message}}, status);
 }
 
-// JSON bodies nest at most this deep (as simdjson's default): deeper is refused while
-// parsing, before anything recurses over the value.
-constexpr int kMaxJsonDepth = 1000;
-
-// A key as an error message shows it: at most 40 characters.
-std::string shown_key(const std::string& key) {
-  return key.size() <= 40 ? key : key.substr(0, 37) + "...";
-}
-
-// Parses a request body, tracking the JSON path of the value being read so that an error
-// names it ("time.frames: the number 1e400 is out of range"), and refusing nesting deeper
-// than kMaxJsonDepth. Never shows a library's exception text.
+// Request bodies go through the shared JSON reader (tvf/core/json_text.h): nesting beyond
+// 1,000 levels, NUL bytes and repeated keys are refused while parsing, with their line and
+// column (and the key of a number out of range); no library's exception text is shown.
 json parse_json(const std::string& text) {
   if (text.empty()) return json::object();
-  struct Level {
-    bool array;
-    long long index;
-    std::string key;
-  };
-  std::vector<Level> stack;
-  auto path = [&] {
-    std::string out;
-    for (size_t k = 0; k < stack.size(); ++k) {
-      const Level& l = stack[k];
-      if (l.array) {
-        // An open container is counted when it starts; the innermost level's value
-        // (the one being read) is not counted yet.
-        out += fmt::format("[{}]", std::max(0LL, k + 1 == stack.size() ? l.index + 1 : l.index));
-      } else if (!l.key.empty()) {
-        if (!out.empty()) out += '.';
-        out += shown_key(l.key);
-      }
-      if (out.size() > 200) return out.substr(0, 197) + "...";
-    }
-    return out;
-  };
-  using Event = json::parse_event_t;
-  const json::parser_callback_t track = [&](int, Event event, json& parsed) {
-    switch (event) {
-      case Event::object_start:
-      case Event::array_start:
-        if (!stack.empty() && stack.back().array) ++stack.back().index;
-        if (stack.size() >= static_cast<size_t>(kMaxJsonDepth))
-          throw RequestError(400, fmt::format("request body: {}: nested deeper than {} levels", path(), kMaxJsonDepth));
-        stack.push_back({event == Event::array_start, -1, {}});
-        break;
-      case Event::key:
-        stack.back().key = parsed.get<std::string>();
-        break;
-      case Event::value:
-        if (!stack.empty() && stack.back().array) ++stack.back().index;
-        break;
-      case Event::object_end:
-      case Event::array_end:
-        stack.pop_back();
-        break;
-    }
-    return true;
-  };
   try {
-    return json::parse(text, track);
-  } catch (const json::parse_error& e) {
-    const std::string where = path();
-    throw RequestError(400, fmt::format("request body: not valid JSON (at byte {}{})", e.byte,
-                                        where.empty() ? "" : ", in " + where));
-  } catch (const json::out_of_range&) {
-    const std::string where = path();
-    throw RequestError(400, fmt::format("request body: {}: a number is out of range (beyond ±1.8e308)",
-                                        where.empty() ? "the value" : where));
-  } catch (const json::exception&) {
-    throw RequestError(400, "request body: not valid JSON");
+    return parse_json_text(text, "");
+  } catch (const Error& e) {
+    throw RequestError(400, fmt::format("request body: not valid JSON at {}", e.what()));
   }
 }
 
@@ -139,7 +80,10 @@ std::string plain_message(const char* what) {
   return m.size() <= 300 ? m : m.substr(0, 297) + "...";
 }
 
-bool loopback_host(const std::string& host) {
+// Host names compare case-insensitively (RFC 9110 §4.2.3): "LOCALHOST" is "localhost".
+bool loopback_host(std::string host) {
+  std::transform(host.begin(), host.end(), host.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return host == "127.0.0.1" || host == "localhost" || host == "::1" || host == "[::1]";
 }
 

@@ -571,6 +571,9 @@ json Session::seed_translation(const json& request) const {
     Vec3 x = Vec3::Zero();
     for (size_t k = 0; k < n; ++k) x[static_cast<int>(k)] = (*it)[k].get<double>();
     if (!x.allFinite()) throw RequestError(400, fmt::format("seed_translation: \"{}\" is not finite", key));
+    // The same bound as every number of a scene (docs/scene_reference.md, "Limits").
+    if (x.cwiseAbs().maxCoeff() > 1e15)
+      throw RequestError(400, fmt::format("seed_translation: \"{}\" has a coordinate of magnitude over 1e15", key));
     return x;
   };
   const Vec3 seed = position("seed");

@@ -172,6 +172,21 @@ TEST(Cli, BadInputIsOneSentenceNonZeroExitAndNoOutput) {
       {"too many frames for memory",
        R"({"tvf": 1, "domain": {"grid": {"size": [300, 300]}}, "time": {"frames": 100000}})", "time.frames"},
       {"missing mesh", R"({"tvf": 1, "domain": {"mesh": "nowhere.obj"}})", "domain.mesh"},
+      // Issue 17 items 8 and 9: these stopped at an internal check or wrote inf/NaN.
+      {"huge grid box", R"({"tvf": 1, "domain": {"grid": {"size": [5, 5], "min": [-1, -1], "max": [1e200, 1]}}})",
+       "domain.grid.max[0]"},
+      {"huge time range", R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "time": {"range": [-1e308, 1e308]}})",
+       "time.range[0]"},
+      {"subnormal time scale",
+       R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "elements": [{"kind": "bifurcation",
+           "type": "saddle_sink_creation", "at": [0, 0, 0.5], "time_scale": 1e-320}]})",
+       "elements[0].time_scale"},
+      {"huge jacobian",
+       R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "elements": [{"kind": "singular",
+           "jacobian": [[1e200, 0], [0, 1e200]], "path": [[0, 0, 0]]}]})",
+       "elements[0].jacobian[0][0]"},
+      {"huge temporal weight", R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "solver": {"temporal_weight": 1e308}})",
+       "solver.temporal_weight"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.name);
@@ -185,6 +200,57 @@ TEST(Cli, BadInputIsOneSentenceNonZeroExitAndNoOutput) {
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out)) << "partial output left behind";
   }
+}
+
+// Issue 17 items 7 and 10: regenerating into a used folder leaves no file of the older run;
+// the scene's own folder keeps the scene as written; an empty -o is refused.
+TEST(Cli, RegeneratingReplacesTheWholeOutputAndKeepsItsInputScene) {
+  TempDir dir;
+  const auto scene = dir / "scene.json";
+  test::write_text(scene, R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "time": {"frames": 4},
+      "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 0]]}]})");
+  const auto out = dir / "out";
+  ASSERT_EQ(run_tvf("generate '" + scene.string() + "' -o '" + out.string() + "' --quiet").exit_code, 0);
+  EXPECT_TRUE(fs::exists(out / "field_0003.vtu"));
+  test::write_text(out / "notes.txt", "mine");
+  test::write_text(scene, R"({"tvf": 1, "domain": {"grid": {"size": [5, 5]}}, "time": {"frames": 2},
+      "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 0]]}]})");
+  ASSERT_EQ(run_tvf("generate '" + scene.string() + "' -o '" + out.string() + "' --quiet").exit_code, 0);
+  EXPECT_TRUE(fs::exists(out / "field_0001.vtu"));
+  EXPECT_FALSE(fs::exists(out / "field_0002.vtu"));
+  EXPECT_FALSE(fs::exists(out / "field_0003.vtu"));
+  ASSERT_EQ(run_tvf("generate '" + scene.string() + "' -o '" + out.string() + "' --quiet --no-vtk").exit_code, 0);
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"coherence.csv", "faces.npy", "field.npy", "field.tvff", "notes.txt",
+                                             "scene.json", "times.npy", "vertices.npy"}));
+
+  // Into the scene's own folder: the outputs are written, the scene stays as it was.
+  const std::string before = test::read_text(scene);
+  auto r = run_tvf("generate '" + scene.string() + "' -o '" + dir.path().string() + "' --quiet --no-vtk");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "field.tvff"));
+  EXPECT_EQ(test::read_text(scene), before);
+  r = run_tvf("generate '" + scene.string() + "' -o ''");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("the output folder is an empty path"), std::string::npos) << r.output;
+}
+
+// Issue 17 item 8: a folded planar mesh stopped at an internal check (exit 2).
+TEST(Cli, FoldedPlanarMeshIsNamedWithItsVertex) {
+  TempDir dir;
+  // A 3 × 3 grid whose centre (vertex 4, line 5) lies outside its neighbours' square.
+  test::write_text(dir / "folded.obj",
+                   "v -1 -1 0\nv 0 -1 0\nv 1 -1 0\nv -1 0 0\nv 1.5 0.2 0\nv 1 0 0\nv -1 1 0\nv 0 1 0\nv 1 1 0\n"
+                   "f 1 2 5\nf 1 5 4\nf 2 3 6\nf 2 6 5\nf 4 5 8\nf 4 8 7\nf 5 6 9\nf 5 9 8\n");
+  test::write_text(dir / "scene.json", R"({"tvf": 1, "domain": {"mesh": "folded.obj"}})");
+  const auto r = run_tvf("generate '" + (dir / "scene.json").string() + "' -o '" + (dir / "out").string() + "'");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(count_lines(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("folded.obj: the planar mesh folds over itself at vertex 4 (1.5, 0.2, 0)"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
 TEST(Cli, BrokenMeshIsNamedAndNothingIsWritten) {

@@ -6,8 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <csignal>
 #include <set>
 #include <stdexcept>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace tvf {
 namespace {
@@ -142,6 +146,85 @@ TEST(OutputStage, TargetThatIsAFileIsAnErrorNamingIt) {
     EXPECT_NE(std::string(e.what()).find(target.string()), std::string::npos) << e.what();
   }
   EXPECT_EQ(read_text(target), "x");
+}
+
+// --- Issue 17 item 7: folders committed as a whole, stale staging cleaned.
+
+TEST(OutputStage, CommitRemovesTheOwnedFilesOfAnEarlierRunAndKeepsOthers) {
+  TempDir dir;
+  write_text(dir / "field_0000.vtu", "old");
+  write_text(dir / "field_0099.vtu", "old");
+  write_text(dir / "field.pvd", "old");
+  write_text(dir / "notes.txt", "mine");
+  {
+    OutputStage stage(dir.path());
+    write_text(stage.file("field_0000.vtu"), "new");
+    stage.commit([](const std::string& name) { return name.rfind("field", 0) == 0; });
+  }
+  EXPECT_EQ(listing(dir.path()), (std::vector<std::string>{"field_0000.vtu", "notes.txt"}));
+  EXPECT_EQ(read_text(dir / "field_0000.vtu"), "new");
+}
+
+TEST(OutputStage, StagingFoldersOfDeadProcessesAreRemovedOnStart) {
+  TempDir dir;
+  // A process that has ended: its pid names no process any more.
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  ASSERT_GT(child, 0);
+  int status = 0;
+  waitpid(child, &status, 0);
+  const fs::path dead = dir / (".tvf-stage-" + std::to_string(child) + "-0");
+  fs::create_directory(dead);
+  write_text(dead / "field.npy", "half");
+  // One of a live process (this one's parent) stays: a run may be writing there now.
+  const fs::path live = dir / (".tvf-stage-" + std::to_string(getppid()) + "-0");
+  fs::create_directory(live);
+  {
+    OutputStage stage(dir.path());
+    stage.commit();
+  }
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_TRUE(fs::exists(live));
+}
+
+TEST(OutputStage, SigtermRemovesTheStagingFolder) {
+  TempDir dir;
+  const pid_t child = fork();
+  if (child == 0) {
+    install_output_cleanup_on_signals();
+    OutputStage stage(dir.path());
+    write_text(stage.file("field.npy"), "half");
+    write_text(dir / "ready", "");
+    for (;;) pause();
+  }
+  ASSERT_GT(child, 0);
+  for (int k = 0; k < 500 && !fs::exists(dir / "ready"); ++k) usleep(10'000);
+  ASSERT_TRUE(fs::exists(dir / "ready"));
+  kill(child, SIGTERM);
+  int status = 0;
+  waitpid(child, &status, 0);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
+  EXPECT_EQ(listing(dir.path()), std::vector<std::string>{"ready"});
+}
+
+TEST(OutputStage, AnInterruptedCommitIsRefusedByReaders) {
+  TempDir dir;
+  EXPECT_NO_THROW(check_output_complete(dir.path()));
+  write_text(dir / kCommitMarker, "");
+  EXPECT_NE(test::error_of([&] { check_output_complete(dir.path()); }).find("interrupted output"), std::string::npos);
+  // The next commit into the folder makes it whole again.
+  {
+    OutputStage stage(dir.path());
+    write_text(stage.file("a.txt"), "A");
+    stage.commit();
+  }
+  EXPECT_NO_THROW(check_output_complete(dir.path()));
+  EXPECT_EQ(listing(dir.path()), std::vector<std::string>{"a.txt"});
+}
+
+TEST(OutputStage, AnEmptyTargetIsRefused) {
+  EXPECT_EQ(test::error_of([] { OutputStage stage(""); }),
+            "the output folder is an empty path; give a folder (\".\" for the current one)");
 }
 
 }  // namespace

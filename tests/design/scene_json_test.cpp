@@ -416,7 +416,7 @@ TEST(SceneJson, RoundTripsEveryElementKindBuiltInCode) {
   BifurcationElement f;
   f.type = BifurcationType::saddle_source_cancellation;
   f.at = {Vec3(odd, -odd, 0), odd};
-  f.scale = tiny;
+  f.scale = 1e-12;  // the smallest a scale may be (scene_reference.md, "Limits")
   f.time_scale = third;
   f.angle = -third;
   s.elements = {a, b, r, f};
@@ -569,6 +569,52 @@ TEST(SceneJson, DuplicateKeysAreErrorsNamingThePath) {
                 "elements": [{}, {"kind": "regular", "kind": "singular"}]})", "d.json");
             }),
             "d.json: elements[1].kind: the key appears twice in the same object (JSON keys must be unique)");
+}
+
+// Issue 17 items 1 and 2: deep nesting used to crash the message (a recursive print of
+// the value) and take memory quadratic in the depth (a path string per open container).
+TEST(SceneJson, DeepNestingIsRefusedAtOneThousandLevelsWithABoundedMessage) {
+  // 1,000 levels in all are read; the message quoting such a value stays short.
+  const std::string deep999 = std::string(999, '[') + std::string(999, ']');
+  const std::string message = error_of([&] {
+    parse_scene("{\"tvf\": 1, \"domain\": {\"grid\": {}}, \"description\": " + deep999 + "}", "s.json");
+  });
+  EXPECT_EQ(message.rfind("s.json: description: must be a string, got [[[[", 0), 0u) << message.substr(0, 200);
+  EXPECT_LT(message.size(), 120u);
+  // A smooth edit's strength as an array 100,000 deep (the server's crash), and a megabyte
+  // of '[' (which took 8 GB): refused at level 1,001.
+  const std::string strength = std::string(100'000, '[') + std::string(100'000, ']');
+  const std::string edit_message = error_of([&] {
+    parse_scene("{\"tvf\": 1, \"domain\": {\"grid\": {}}, \"edits\": [{\"op\": \"smooth\", \"strength\": " + strength +
+                    "}]}",
+                "s.json");
+  });
+  EXPECT_EQ(edit_message,
+            "s.json: line 1, column 1072: arrays and objects nest more than 1000 deep, more than tvf reads");
+  EXPECT_EQ(error_of([&] { parse_scene(std::string(1 << 20, '['), "s.json"); }),
+            "s.json: line 1, column 1001: arrays and objects nest more than 1000 deep, more than tvf reads");
+  // A key repeated deep inside names its path, built only then.
+  std::string nested = "{\"tvf\": 1, \"description\": ";
+  for (int k = 0; k < 3; ++k) nested += "[0, {\"a\": ";
+  nested += "{\"b\": 1, \"b\": 2}";
+  for (int k = 0; k < 3; ++k) nested += "}]";
+  EXPECT_EQ(error_of([&] { parse_scene(nested + "}", "s.json"); }),
+            "s.json: description[1].a[1].a[1].a.b: the key appears twice in the same object (JSON keys must be "
+            "unique)");
+}
+
+// Issue 17 item 10: a scene is read up to a size limit (/dev/zero used to be read until
+// memory ran out), and a NUL byte anywhere is refused rather than ending the text.
+TEST(SceneJson, EndlessFilesAndNulBytesAreRefused) {
+  if (std::filesystem::exists("/dev/zero"))
+    EXPECT_EQ(error_of([] { load_scene("/dev/zero"); }),
+              "cannot read the scene file '/dev/zero': it is longer than 67108864 bytes, the limit for a JSON file");
+  // A NUL inside a string (written \u0000) is legal JSON; the message shows it visibly.
+  const std::string message = error_of([] {
+    parse_scene(R"({"tvf": 1, "domain": {"grid": {}}, "generator": "ba\u0000sis"})", "s.json");
+  });
+  EXPECT_EQ(message, "s.json: generator: unknown generator \"ba\\u0000sis\" (expected one of basis, constrained, "
+                     "spacetime, deform)");
 }
 
 TEST(SceneJson, NonFiniteNumbersBuiltInCodeAreRejected) {
@@ -831,6 +877,41 @@ std::vector<BadCase> bad_cases() {
        "incompressible", "unknown key \"tolerance\" (expected one of boundary)", true},
       {"incompressible as a number", planar([](json& j) { j["incompressible"] = 1; }), "incompressible",
        "must be true, false or an object", true},
+      // Issue 17: numbers that overflow the computations are refused where they are read.
+      {"huge time range", planar([](json& j) { j["time"]["range"] = {-1e308, 1e308}; }), "time.range[0]",
+       "must be a number of magnitude at most 1e+15 (larger values overflow in the computations), got -1e+308",
+       false},
+      {"time range too short for its magnitude", planar([](json& j) { j["time"]["range"] = {1e12, 1e12 + 1}; }),
+       "time.range", "is too short for its magnitude", false},
+      {"subnormal time_scale", planar([](json& j) { j["elements"][2]["time_scale"] = 1e-320; }),
+       "elements[2].time_scale", "must be at least 1e-12 (smaller values overflow what is divided by them)", false},
+      {"huge jacobian", planar([](json& j) {
+         j["elements"][0].erase("type");
+         j["elements"][0]["jacobian"] = {{1e200, 0}, {0, 1}};
+       }),
+       "elements[0].jacobian[0][0]", "must be a number of magnitude at most 1e+15", false},
+      {"huge temporal weight", planar([](json& j) { j["solver"]["temporal_weight"] = 1e308; }),
+       "solver.temporal_weight", "must be a number of magnitude at most 1e+15", false},
+      {"large temporal weight", planar([](json& j) { j["solver"]["temporal_weight"] = 1e9; }),
+       "solver.temporal_weight", "must be at most 1e+06 (a larger weight makes the space-time system", false},
+      {"huge grid box", planar([](json& j) { j["domain"]["grid"]["max"] = {1e200, 1}; }), "domain.grid.max[0]",
+       "must be a number of magnitude at most 1e+15", false},
+      {"grid box too narrow for its magnitude", planar([](json& j) {
+         j["domain"]["grid"]["min"] = {1e14, -1};
+         j["domain"]["grid"]["max"] = {1e14 + 1, 1};
+       }),
+       "domain.grid.max", "is too narrow for its magnitude along x", false},
+      {"grid box too elongated", planar([](json& j) {
+         j["domain"]["grid"]["min"] = {-1, -1};
+         j["domain"]["grid"]["max"] = {1e15, 1};
+       }),
+       "domain.grid.max", "is too elongated for a grid of 9 × 9 vertices", false},
+      {"huge smooth strength", planar([](json& j) { j["edits"][1]["strength"] = 1e300; }), "edits[1].strength",
+       "must be a number of magnitude at most 1e+15", false},
+      {"NUL after the scene", std::string("{\"tvf\": 1, \"domain\": {\"grid\": {}}}\0garbage", 42), "line 1, column 35",
+       "the text contains a NUL byte", false},
+      {"nested too deep", "{\"tvf\": 1, \"description\": " + std::string(1001, '[') + std::string(1001, ']') + "}",
+       "line 1, column 1026", "arrays and objects nest more than 1000 deep, more than tvf reads", false},
   };
 }
 

@@ -103,6 +103,13 @@ TEST(FieldFile, CorruptFilesAreErrorsNamingTheFile) {
                                 2 * static_cast<size_t>(mesh.num_vertices()) * 16);
   ASSERT_EQ(field_bytes(header, payload), bytes);
 
+  std::string nan_payload = payload;
+  const double nan_value[2] = {std::numeric_limits<double>::quiet_NaN(), 0.0};
+  std::memcpy(nan_payload.data() + static_cast<size_t>(mesh.num_vertices()) * 24 +
+                  static_cast<size_t>(mesh.num_faces()) * 12 + (static_cast<size_t>(mesh.num_vertices()) + 2) * 16,
+              nan_value, 16);
+  nlohmann::json deep = nlohmann::json::array();
+  for (int k = 0; k < 1200; ++k) deep = nlohmann::json::array({deep});
   auto with = [&](const char* key, const nlohmann::json& value) {
     nlohmann::json h = nlohmann::json::parse(header);
     h[key] = value;
@@ -138,6 +145,10 @@ TEST(FieldFile, CorruptFilesAreErrorsNamingTheFile) {
       {"negative.tvff", field_bytes(with("faces", -3), payload), "'faces' = -3 is out of range"},
       {"no_frames.tvff", field_bytes(with("frames", 0), payload), "'frames' = 0 is out of range"},
       {"string.tvff", field_bytes(with("t0", "zero"), payload), "'t0' must be a number"},
+      // Issue 17: a reversed time range, a NaN vector and a header nested too deep.
+      {"reversed.tvff", field_bytes(with("t0", 2.0), payload), "header: the time range [2, 1] must have t0 < t1"},
+      {"nan.tvff", field_bytes(header, nan_payload), "frame 1, vertex 2: the vector (nan, 0) is not finite"},
+      {"deep.tvff", field_bytes(with("scene", deep), payload), "arrays and objects nest more than 1000 deep"},
   };
   for (const Case& c : cases) {
     const fs::path path = dir / c.name;
@@ -155,6 +166,12 @@ TEST(FieldFile, CorruptFilesAreErrorsNamingTheFile) {
   write_text(face_path, field_bytes(header, bad_face));
   EXPECT_NE(error_of([&] { load_field_file(face_path.string()); }).find(face_path.string()),
             std::string::npos);
+
+  // A folder whose commit was interrupted (core/atomic_output.h) is refused.
+  write_text(dir / ".tvf-committing", "");
+  EXPECT_NE(error_of([&] { load_field_file(good.string()); }).find("interrupted output"), std::string::npos);
+  fs::remove(dir / ".tvf-committing");
+  EXPECT_NO_THROW(load_field_file(good.string()));
 
   const fs::path missing = dir / "missing.tvff";
   EXPECT_NE(error_of([&] { load_field_file(missing.string()); }).find(missing.string()), std::string::npos);

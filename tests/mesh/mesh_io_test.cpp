@@ -364,7 +364,7 @@ TEST(MeshIo, CorruptHeadersCannotTriggerHugeAllocations) {
   write_text(dir / "binary-count.off", binary_off);
   expect_error(dir / "binary-count.off", "header announces 2130706432 vertices");
   write_text(dir / "corners.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n9e12 0 1 2\n");
-  expect_error(dir / "corners.off", "not a readable OFF");
+  expect_error(dir / "corners.off", "OFF face 0: the corner count 9000000000000 does not match the line");
   const std::string ply_head = "ply\nformat binary_little_endian 1.0\n";
   write_text(dir / "count.ply", ply_head +
                                     "element vertex 99999999999\nproperty float x\n"
@@ -394,6 +394,83 @@ TEST(MeshIo, CorruptHeadersCannotTriggerHugeAllocations) {
   expect_error(dir / "no-end.ply", "not a readable PLY");
   write_text(dir / "no-format.ply", "ply\nelement vertex 3\nproperty float x\nend_header\n");
   expect_error(dir / "no-format.ply", "not a readable PLY");
+}
+
+// Issue 17 item 4: in a truncated big-endian PLY whose lists are counted by uint, CGAL's
+// reader used a count it never read (valgrind: uninitialised) and allocated by it. The body
+// is now checked list by list before CGAL reads it.
+TEST(MeshIo, TruncatedPlyListsAreRefusedAtTheirCount) {
+  TempDir dir;
+  std::string head =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 2\nproperty list uint uint vertex_indices\nend_header\n";
+  for (const Vec3& x : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)})
+    for (int k = 0; k < 3; ++k) put(head, static_cast<float>(x[k]), true);
+  std::string one_face = head;
+  put(one_face, std::uint32_t{3}, true);
+  for (std::uint32_t v : {0u, 1u, 2u}) put(one_face, v, true);
+  // The second face's count is missing altogether, or announces more than is left.
+  const fs::path no_count = dir / "no_count.ply";
+  write_text(no_count, one_face);
+  expect_error(no_count, "PLY 'face' item 1 of 2: the file ends inside it (truncated or corrupt file)");
+  std::string huge = one_face;
+  put(huge, std::uint32_t{0xF0000000u}, true);
+  put(huge, std::uint32_t{1}, true);
+  const fs::path huge_count = dir / "huge_count.ply";
+  write_text(huge_count, huge);
+  expect_error(huge_count, "PLY 'face' item 1 of 2: a list of 4026531840 entries does not fit in the 4 bytes left");
+  // Cut inside the first list.
+  const fs::path cut = dir / "cut.ply";
+  write_text(cut, one_face.substr(0, one_face.size() - 2));
+  expect_error(cut, "PLY 'face' item 0 of 2: a list of 3 entries does not fit in the 10 bytes left");
+  // The same in ASCII: a list count with its entries missing.
+  const fs::path ascii = dir / "ascii.ply";
+  write_text(ascii,
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n");
+  expect_error(ascii, "PLY 'face' item 0 of 1: the file ends inside a list");
+  // And whole, it loads.
+  std::string whole = one_face;
+  put(whole, std::uint32_t{3}, true);
+  for (std::uint32_t v : {0u, 1u, 2u}) put(whole, v, true);
+  const fs::path good = dir / "good.ply";
+  write_text(good, whole);
+  EXPECT_EQ(load_mesh(good.string()).mesh.num_faces(), 1);  // the repeated face is repaired away
+}
+
+// Issue 17 item 10: CGAL stops reading a face at an index it cannot read as an int; the
+// message named a "polygon with 2 corners" instead of the index.
+TEST(MeshIo, ObjFaceIndexOutOfRangeIsNamedOnItsLine) {
+  TempDir dir;
+  const fs::path obj = dir / "big_index.obj";
+  write_text(obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2147483648\n");
+  expect_error(obj, "line 4: the face corner '2147483648' is not a vertex number in 1 to 3 (or -1 to -3) of the "
+                    "vertices read before it");
+}
+
+// Found by fuzzing (fuzz/crashers/mesh_off): CGAL's OFF reader counts the colour values on
+// the first vertex line and reads as many on every line, past its buffer when a line has
+// fewer numbers.
+TEST(MeshIo, OffVertexLinesMustAllGiveTheSameNumbers) {
+  TempDir dir;
+  const fs::path coff = dir / "colours.off";
+  write_text(coff, "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0~ 0 0 255 0 255\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n"
+                   "3 0 1 2\n3 0 2 3\n");
+  expect_error(coff, "OFF vertex 1: '0~' is not a number");
+  write_text(coff, "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n"
+                   "3 0 1 2\n3 0 2 3\n");
+  expect_error(coff, "OFF vertex 1 has 4 numbers where vertex 0 has 7");
+  // A colour out of [0, 255] (CGAL's conversion to a byte is undefined there).
+  write_text(coff, "COFF\n4 2 0\n0 0 0 255 0 0 255\n1 0 0 0 21474836485 0 255\n1 1 0 0 0 255 255\n0 1 0 9 9 9 255\n"
+                   "3 0 1 2\n3 0 2 3\n");
+  expect_error(coff, "OFF vertex 1: the colour value 21474836485 is outside [0, 255]");
+  // A face's vertex number out of range (CGAL converts it to an unsigned integer).
+  const fs::path big = dir / "big_index.off";
+  write_text(big, "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 6.6e55\n");
+  expect_error(big, "OFF face 1: 6.6e+55 is not a vertex number in 0 to 3");
+  write_text(coff, "COFF\n# comment\n4 2 0\n0 0 0 255 0 0 255\n\n1 0 0 0 255 0 255 # red\n1 1 0 0 0 255 255\n"
+                   "0 1 0 9 9 9 255\n3 0 1 2\n3 0 2 3\n");
+  EXPECT_EQ(load_mesh(coff.string()).mesh.num_faces(), 2);
 }
 
 TEST(MeshIo, TruncatedFilesNeverCrash) {

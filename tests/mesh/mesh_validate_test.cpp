@@ -287,3 +287,28 @@ TEST(MeshRepair, LeavesOutOfRangeIndicesForValidation) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// Issue 17 item 8: a planar mesh folded over itself (an interior vertex moved outside the
+// ring of its neighbours) reached an internal check of the tangent bundle ("planar
+// transport is not 1"); it is refused here, naming the vertex.
+TEST(MeshValidate, RejectsAFoldedPlanarMeshNamingTheVertex) {
+  Mesh grid = make_grid(GridSpec{3, 3, {-1, -1}, {1, 1}});
+  std::vector<Vec3> p = grid.positions();
+  const std::vector<Face> f = grid.faces();
+  EXPECT_NO_THROW(validate_triangle_soup(p, f, "bunny.obj"));
+  p[4] = Vec3(1.5, 0.2, 0);  // the centre, outside the square of its neighbours
+  expect_message(validation_error(p, f),
+                 {"the planar mesh folds over itself at vertex 4 (1.5, 0.2, 0)", "turn opposite ways"});
+  // The whole mesh turned clockwise is not folded.
+  std::vector<Face> clockwise = f;
+  for (Face& t : clockwise) std::swap(t[1], t[2]);
+  EXPECT_NO_THROW(validate_triangle_soup(grid.positions(), clockwise, "bunny.obj"));
+  // Nor is a surface whose faces turn both ways seen from +z (a tetrahedron).
+  EXPECT_NO_THROW(validate_triangle_soup(tetra_points(), tetra_faces(), "bunny.obj"));
+}
+
+}  // namespace
+}  // namespace tvf

@@ -133,7 +133,7 @@ TEST(ServeHttp, MalformedRequestsGetAClearJsonError) {
       f.client->Post("/api/edit", "{\"strength\": " + std::string(1500, '[') + std::string(1500, ']') + "}",
                      "application/json"),
       400);
-  EXPECT_NE(nested.find("deeper than 1000"), std::string::npos) << nested;
+  EXPECT_NE(nested.find("more than 1000 deep"), std::string::npos) << nested;
   EXPECT_NE(error_of(f.client->Get("/api/files/..%2f..%2fetc%2fpasswd"), 403).find("leaves the working folder"),
             std::string::npos);
   EXPECT_NE(error_of(f.client->Get("/api/files/missing.npy"), 404).find("no such file"), std::string::npos);
@@ -144,6 +144,39 @@ TEST(ServeHttp, MalformedRequestsGetAClearJsonError) {
   httplib::Headers evil{{"Host", "evil.example:80"}};
   EXPECT_EQ(f.client->Get("/api/scene", evil)->status, 403);
   // The server is still up and the scene as it was.
+  EXPECT_EQ(body(f.client->Get("/api/scene"), 200)["revision"], 1);
+}
+
+// Issue 17: a request nested 100,000 deep crashed the server (the message printed the value
+// recursively); host names compare case-insensitively; seed_translation answered null.
+TEST(ServeHttp, HostileBodiesAreRefusedAndTheServerStaysUp) {
+  Fixture f;
+  ASSERT_TRUE(f.session->wait_idle(60));
+  auto error_of = [](const httplib::Result& r, int status) {
+    return body(r, status).value("error", std::string());
+  };
+  const std::string deep = std::string(100'000, '[') + std::string(100'000, ']');
+  EXPECT_EQ(error_of(f.client->Put("/api/scene", "{\"tvf\": 1, \"description\": " + deep + "}", "application/json"),
+                     400),
+            "request body: not valid JSON at line 1, column 1026: arrays and objects nest more than 1000 deep, more "
+            "than tvf reads");
+  EXPECT_NE(error_of(f.client->Post("/api/edit", "{\"op\": \"smooth\", \"strength\": " + deep + "}", "application/json"),
+                     400)
+                .find("nest more than 1000 deep"),
+            std::string::npos);
+  // Within the limit, the value is quoted short.
+  const std::string message = error_of(
+      f.client->Post("/api/edit", "{\"op\": \"smooth\", \"strength\": " + std::string(900, '[') + std::string(900, ']') + "}",
+                     "application/json"),
+      400);
+  EXPECT_NE(message.find("strength: must be a number, got [[[["), std::string::npos) << message.substr(0, 300);
+  EXPECT_LT(message.size(), 400u);
+  EXPECT_EQ(error_of(f.client->Post("/api/seed_translation", R"({"seed": [-1e308, 0], "to": [1e308, 0]})",
+                                    "application/json"),
+                     400),
+            "seed_translation: \"seed\" has a coordinate of magnitude over 1e15");
+  httplib::Headers upper{{"Host", "LOCALHOST:" + std::to_string(f.server->port())}};
+  EXPECT_EQ(f.client->Get("/api/scene", upper)->status, 200);
   EXPECT_EQ(body(f.client->Get("/api/scene"), 200)["revision"], 1);
 }
 

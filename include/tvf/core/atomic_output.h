@@ -1,6 +1,18 @@
 #pragma once
 // Outputs appear complete or not at all: files are written under a temporary name and
-// renamed into place when complete (DESIGN §11, engineering standards).
+// renamed into place when complete (DESIGN §11, engineering standards). The promise, as
+// docs/file_formats.md ("Atomic outputs") states it:
+//  - a single file (write_file_atomically) is the old file or the new one, never a mix,
+//    and once the call returns it survives a power loss (the file and its folder are
+//    fsynced);
+//  - a folder of outputs (OutputStage) is committed as a whole: while its files are being
+//    moved into place the folder holds the marker kCommitMarker, written (and fsynced)
+//    before the first file moves and removed after the last; readers (tvf's own, through
+//    check_output_complete) refuse a folder that holds it. The files of the previous run
+//    that this run does not write (those its `owned` names) are removed in the same window.
+//    Staging folders of runs that died (SIGKILL, power loss) are removed by the next
+//    OutputStage in the same folder; SIGINT and SIGTERM remove them at once
+//    (install_output_cleanup_on_signals).
 #include <filesystem>
 #include <functional>
 #include <ostream>
@@ -8,6 +20,22 @@
 #include <vector>
 
 namespace tvf {
+
+// The marker present in an output folder while a commit is under way (or was interrupted).
+inline constexpr const char* kCommitMarker = ".tvf-committing";
+
+// Throws tvf::Error naming `dir` when it holds kCommitMarker: an interrupted run left a
+// mix of two runs' files there.
+void check_output_complete(const std::filesystem::path& dir);
+
+// Installs SIGINT and SIGTERM handlers that remove the staging folders of every live
+// OutputStage (with async-signal-safe system calls only), then end the process as the
+// signal would have. For the command line; a program that handles the signals itself
+// (tvf serve) does not call it.
+void install_output_cleanup_on_signals();
+
+// Flushes a file or folder to the disk (fsync). Throws tvf::Error naming it on failure.
+void sync_path(const std::filesystem::path& path);
 
 // Path of a temporary sibling of `path` (same folder, so rename() is atomic).
 std::filesystem::path temporary_sibling(const std::filesystem::path& path);
@@ -23,8 +51,9 @@ void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& writer);
 
 // A staging folder inside `target_dir`: files are written into stage(), and commit()
-// moves them all into target_dir. Destroyed uncommitted, it removes the staging folder
-// and everything in it, so a failed run leaves no partial output.
+// moves them all into target_dir (see the promise above). Destroyed uncommitted, it removes
+// the staging folder and everything in it, so a failed run leaves no partial output.
+// Creating one removes the staging folders that dead processes left in target_dir.
 class OutputStage {
 public:
   explicit OutputStage(const std::filesystem::path& target_dir);
@@ -35,14 +64,17 @@ public:
   const std::filesystem::path& stage() const { return stage_; }
   std::filesystem::path file(const std::string& name) const { return stage_ / name; }
   // Moves every staged file into the target folder (replacing files of the same name)
-  // and returns their final paths.
-  std::vector<std::filesystem::path> commit();
+  // and returns their final paths. Files of the target that this commit does not write
+  // and that `owned` claims (outputs of an earlier run, like field_0099.vtu when this run
+  // has fewer frames) are removed in the same commit; all other files stay.
+  std::vector<std::filesystem::path> commit(const std::function<bool(const std::string&)>& owned = {});
 
 private:
   std::filesystem::path target_;
   std::filesystem::path stage_;
   bool created_target_ = false;
   bool committed_ = false;
+  int slot_ = -1;  // in the table the signal handlers clean
 };
 
 }  // namespace tvf
