@@ -23,7 +23,7 @@ serve::Session& the_session() {
       "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.3, 0, 0], [0.3, 0, 1]]},
                    {"kind": "singular", "type": "saddle", "path": [[0.5, 0.5, 0]]}]})";
     o.parallel = false;
-    o.edit_wait_seconds = 30;
+    o.field_wait_seconds = 30;
     auto s = std::make_unique<serve::Session>(o);
     s->wait_idle(60);
     return s;

@@ -2,6 +2,8 @@
 
 #include "tvf/core/error.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -84,7 +86,7 @@ private:
   std::string value_path() const {
     if (stack_.empty()) return "";
     const json& top = *stack_.back().value;
-    return top.is_array() ? path() + "[" + std::to_string(top.size()) + "]" : join_key(path(), key_);
+    return top.is_array() ? fmt::format("{}[{}]", path(), top.size()) : join_key(path(), key_);
   }
 
   // The JSON path of the innermost open container.
@@ -93,7 +95,7 @@ private:
     for (std::size_t i = 1; i < stack_.size(); ++i) {
       const json& parent = *stack_[i - 1].value;
       if (parent.is_array())
-        p += "[" + std::to_string(parent.size() - 1) + "]";
+        p += fmt::format("[{}]", parent.size() - 1);  // (not "[" + …: GCC 12 warns falsely there)
       else
         p = join_key(p, stack_[i].key);
     }

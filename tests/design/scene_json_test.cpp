@@ -606,9 +606,10 @@ TEST(SceneJson, DeepNestingIsRefusedAtOneThousandLevelsWithABoundedMessage) {
 // Issue 17 item 10: a scene is read up to a size limit (/dev/zero used to be read until
 // memory ran out), and a NUL byte anywhere is refused rather than ending the text.
 TEST(SceneJson, EndlessFilesAndNulBytesAreRefused) {
-  if (std::filesystem::exists("/dev/zero"))
+  if (std::filesystem::exists("/dev/zero")) {
     EXPECT_EQ(error_of([] { load_scene("/dev/zero"); }),
               "cannot read the scene file '/dev/zero': it is longer than 67108864 bytes, the limit for a JSON file");
+  }
   // A NUL inside a string (written \u0000) is legal JSON; the message shows it visibly.
   const std::string message = error_of([] {
     parse_scene(R"({"tvf": 1, "domain": {"grid": {}}, "generator": "ba\u0000sis"})", "s.json");
