@@ -46,8 +46,12 @@ TEST(Design, GeneratesWhatThePipelineGenerates) {
   EXPECT_TRUE(bitwise_equal(generate_scene(scene).field, by_hand));
   EXPECT_EQ(design.report().frames, 5);
   EXPECT_EQ(design.report().vertices, 17 * 17);
-  // The analysis is the one of the field.
-  EXPECT_EQ(design.analysis_json(), topology_to_json(analyze_topology(space->bundle(), by_hand)));
+  // The analysis is the one of the field, periodic orbits included (DESIGN §12).
+  const Topology topology = analyze_topology(space->bundle(), by_hand);
+  nlohmann::json expected = topology_to_json(topology);
+  add_periodic_orbits_to_json(expected, find_periodic_orbits(space->bundle(), by_hand, topology));
+  EXPECT_EQ(design.analysis_json(), expected);
+  EXPECT_EQ(analysis_json_of(*space, by_hand), expected);
 }
 
 TEST(Design, KeepsTheFieldUntilTheSceneChangesAndUndoBringsItBack) {

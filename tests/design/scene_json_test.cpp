@@ -697,7 +697,7 @@ std::vector<BadCase> bad_cases() {
       {"-Infinity", "{\"tvf\": 1,\n \"domain\": {\"grid\": {}},\n \"falloff\": -Infinity}",
        "line 3, column 13", "-Infinity is not a JSON number", false},
       {"inf", "{\"tvf\": 1, \"domain\": {\"grid\": {}}, \"time\": {\"range\": [0, 1e999]}}",
-       "line 1, column 58", "the number 1e999 is out of range (numbers must be finite)", false},
+       "time.range[1] (line 1, column 58)", "the number 1e999 is out of range (numbers must be finite)", false},
       {"not an object", "[1, 2]", "", "a scene must be a JSON object {\"tvf\": 1, ...}, got [1, 2]", true},
       {"missing tvf", planar([](json& j) { j.erase("tvf"); }), "",
        "missing key \"tvf\" (a tvf scene starts with \"tvf\": 1, the format version)", true},
