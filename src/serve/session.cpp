@@ -25,7 +25,7 @@
 #include <deque>
 #include <mutex>
 #include <new>
-#include <regex>
+#include <string_view>
 #include <thread>
 
 #include <cerrno>
@@ -88,14 +88,25 @@ void check_revision(long long on_revision, long long current, const char* what) 
 
 // Temporary files of a crashed session: ".NAME.tmp-PID-N" (temporary_sibling) of a
 // process that no longer runs. Removed at start; files of a running process are kept.
+// The process id in a temporary's name ".NAME.tmp-PID-N", or -1 for any other name.
+long temporary_owner(const std::string& name) {
+  const auto digits = [](std::string_view v) {
+    return !v.empty() && std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
+  };
+  const size_t tag = name.rfind(".tmp-");
+  if (name.size() < 2 || name[0] != '.' || tag == std::string::npos || tag < 2) return -1;
+  const std::string_view rest = std::string_view(name).substr(tag + 5);
+  const size_t dash = rest.find('-');
+  if (dash == std::string_view::npos || dash > 9 || !digits(rest.substr(0, dash)) || !digits(rest.substr(dash + 1)))
+    return -1;
+  return std::stol(std::string(rest.substr(0, dash)));
+}
+
 void remove_stale_temporaries(const fs::path& folder) {
-  static const std::regex pattern(R"(\..+\.tmp-([0-9]{1,9})-[0-9]+)");
   std::error_code ec;
   for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    std::smatch m;
-    if (!std::regex_match(name, m, pattern) || !it->is_regular_file(ec)) continue;
-    const long pid = std::stol(m[1].str());
+    const long pid = temporary_owner(it->path().filename().string());
+    if (pid < 0 || !it->is_regular_file(ec)) continue;
     const bool alive = pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
     if (!alive || pid == static_cast<long>(::getpid())) fs::remove(it->path(), ec);
     ec.clear();
