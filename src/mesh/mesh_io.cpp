@@ -275,6 +275,19 @@ void check_off_header(const std::string& path, std::istream& in, std::uintmax_t 
           values[c] >= static_cast<double>(counts[first]))
         throw_input_error(path, "", fmt::format("OFF face {}: {} is not a vertex number in 0 to {}", f, values[c],
                                                 counts[first] - 1));
+    // After the corners, a face may give a colour: an index, RGB or RGBA in [0, 255]. Any
+    // other number of values made CGAL's colour reader run past its buffer (found by
+    // fuzzing: "0 2 3", a face of no corners and two colour values).
+    const std::size_t extra = values.size() - 1 - static_cast<std::size_t>(k);
+    if (k < 3)
+      throw_input_error(path, "", fmt::format("OFF face {} has {} corners; a face needs at least 3", f, k));
+    if (extra != 0 && extra != 1 && extra != 3 && extra != 4)
+      throw_input_error(path, "",
+                        fmt::format("OFF face {}: {} values follow the corners, where a colour has 1, 3 or 4", f,
+                                    extra));
+    for (std::size_t c = values.size() - extra; c < values.size(); ++c)
+      if (!(values[c] >= 0 && values[c] <= 255))
+        throw_input_error(path, "", fmt::format("OFF face {}: the colour value {} is outside [0, 255]", f, values[c]));
     ++f;
   }
 }
