@@ -6,6 +6,8 @@
 #            build links the whole library; name it to fuzz it)
 # TVF_FUZZ_SEED=N fixes libFuzzer's random seed, so that a run (CI's) explores the same
 # inputs each time and a finding is reproducible; unset, each run starts elsewhere.
+# TVF_FUZZ_RUNS=N stops each target after N inputs (with a fixed seed the run is then the
+# same on any machine, however fast; SECONDS still bounds it).
 # Builds the fuzz preset (clang, ASan + UBSan), runs each target from its seed corpus
 # (fuzz/corpus/<target>, the example scenes for `scene`) at low priority, keeps what it
 # finds in build/fuzz/corpus/<target>, and copies every crashing input to
@@ -46,7 +48,7 @@ for t in "${targets[@]}"; do
   echo "fuzz: $t for ${per}s"
   status=0
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    nice -n 19 "build/fuzz/fuzz/fuzz_$t" "${dict[@]}" ${TVF_FUZZ_SEED:+-seed=$TVF_FUZZ_SEED} -max_total_time="$per" -timeout=20 -rss_limit_mb=4096 \
+    nice -n 19 "build/fuzz/fuzz/fuzz_$t" "${dict[@]}" ${TVF_FUZZ_SEED:+-seed=$TVF_FUZZ_SEED} ${TVF_FUZZ_RUNS:+-runs=$TVF_FUZZ_RUNS} -max_total_time="$per" -timeout=20 -rss_limit_mb=4096 \
     -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/" "$corpus" 2>&1 | tail -n 25 || status=$?
   for a in "$artifacts"/crash-* "$artifacts"/leak-* "$artifacts"/timeout-* "$artifacts"/oom-*; do
     [ -e "$a" ] || continue
