@@ -1,12 +1,12 @@
-// End-to-end test of the surface designer's moving preview and its drawing tools (issue
-// 14). On the sphere:
+// End-to-end test of the designer's moving preview and the surface's drawing tools (issue
+// 14). On the plane, the preview moves out of a source and into a sink. On the sphere:
 // - a moving source is drawn by a drag with the Singular tool (the drag draws, it does not
 //   orbit): the scene gets a singular element with a path of [x, y, z, t] points from the
 //   drag's start at the first time to its end at the last, and the analysis finds the
 //   source there;
 // - the dense preview (texture advection in image space) moves outwards around it: the
-//   motion between two pictures of the canvas, two steps apart, is measured on a ring
-//   around the source (window.tvf.ringMotion, block matching) and its radial part is
+//   motion between pictures of the canvas two steps apart (four pairs) is measured on a
+//   ring around the source (window.tvf.ringMotion, block matching) and its radial part is
 //   positive; the same drawn as a sink moves inwards, as a counter-clockwise centre
 //   (a vortex) round, counter-clockwise;
 // - a control point of the drawn path is dragged elsewhere with the Select tool;
@@ -43,6 +43,40 @@ try {
   const frameAt = (j) => page.evaluate((k) => fetch(`api/frame/${k}`).then((r) => r.json()), j);
   const analysis = () => page.evaluate(() => fetch("api/analysis").then((r) => r.json()));
   const message = async () => (await page.textContent("#message")).trim();
+  const planarMotion = (p) => motion(p, 40, 40, true);
+  // The radial and tangential motion (canvas pixels) of the preview on a ring of radius r
+  // around the world point p, between the picture after `warm` steps and two steps later.
+  const motion = (p, r = 36, warm = 40, planar = false) =>
+    page.evaluate(
+      ([q, radius, n, flat]) => {
+        const gl = document.querySelector(flat ? "#field" : "#surface canvas");
+        const grab = () => {
+          const c = document.createElement("canvas");
+          c.width = gl.width;
+          c.height = gl.height;
+          const x = c.getContext("2d");
+          x.drawImage(gl, 0, 0);
+          const px = x.getImageData(0, 0, c.width, c.height).data;
+          const g = new Float32Array(c.width * c.height);
+          for (let k = 0; k < g.length; ++k) g[k] = px[4 * k];
+          return g;
+        };
+        // The mean over four pairs of pictures (each two steps apart).
+        window.tvf.preview.step(n);
+        const [cx, cy] = flat ? window.tvf.view().toCanvas(q) : window.tvf.surface(q).map((v) => (v * gl.width) / gl.clientWidth);
+        const sum = { radial: 0, tangential: 0, used: 16 };
+        for (let k = 0; k < 4; ++k) {
+          const before = grab();
+          window.tvf.preview.step(2);
+          const m = window.tvf.ringMotion(before, grab(), gl.width, gl.height, cx, cy, radius, { half: 8, search: 8 });
+          sum.radial += m.radial / 4;
+          sum.tangential += m.tangential / 4;
+          sum.used = Math.min(sum.used, m.used);
+        }
+        return sum;
+      },
+      [p, r, warm, planar],
+    );
   const applyScene = (edit) =>
     d.change(async () => {
       const s = (await d.scene()).scene;
@@ -50,6 +84,19 @@ try {
       await page.fill("#scene-json", JSON.stringify(s, null, 2));
       await page.click("#apply-json");
     });
+
+  // ---- the plane: a source's texture moves outwards, a sink's inwards ---------------------
+  await page.evaluate(() => window.tvf.preview.pause(true));
+  await d.change(() => page.click("#new"));
+  await d.tool("singular");
+  for (const [type, sign] of [["source", 1], ["sink", -1]]) {
+    await page.selectOption("#singular-type", type);
+    await d.change(() => d.click([0.2, 0.1]));
+    const m = await planarMotion([0.2, 0.1]);
+    check(sign * m.radial > 1.5, `on the plane the preview moves ${sign > 0 ? "out of the source" : "into the sink"} (radial ${m.radial.toFixed(2)} px over 2 steps of 3.3 px each, around ${m.tangential.toFixed(2)})`);
+    if (sign > 0) await d.shot(a.out, "surface_preview_00_planar_source.png");
+    await d.change(() => page.click("#undo"));
+  }
 
   await d.change(() => page.selectOption("#domain", "sphere"));
   await applyScene((s) => {
@@ -72,34 +119,10 @@ try {
     await page.mouse.move(...pts[0]);
     await page.mouse.down();
     for (const s of pts.slice(1)) await page.mouse.move(...s, { steps: 4 });
+    released = Date.now();
     await page.mouse.up();
   };
-  // The radial and tangential motion (canvas pixels) of the preview on a ring of radius r
-  // around the world point p, between the picture after `warm` steps and two steps later.
-  const motion = (p, r = 36, warm = 40) =>
-    page.evaluate(
-      ([q, radius, n]) => {
-        const gl = document.querySelector("#surface canvas");
-        const grab = () => {
-          const c = document.createElement("canvas");
-          c.width = gl.width;
-          c.height = gl.height;
-          const x = c.getContext("2d");
-          x.drawImage(gl, 0, 0);
-          const px = x.getImageData(0, 0, c.width, c.height).data;
-          const g = new Float32Array(c.width * c.height);
-          for (let k = 0; k < g.length; ++k) g[k] = px[4 * k];
-          return g;
-        };
-        window.tvf.preview.step(n);
-        const before = grab();
-        window.tvf.preview.step(2);
-        const after = grab();
-        const [cx, cy] = window.tvf.surface(q).map((v) => (v * gl.width) / gl.clientWidth);
-        return window.tvf.ringMotion(before, after, gl.width, gl.height, cx, cy, radius, { half: 8, search: 8 });
-      },
-      [p, r, warm],
-    );
+  let released = 0;
   // The camera looks at the sphere from (0.2, −1, 0.6): draw on the side it sees.
   const from = unit([-0.3, -1, 0.3]);
   const to = unit([0.25, -1, 0.55]);
@@ -108,13 +131,12 @@ try {
   await page.fill("#life-end", "1");
   const drawMoving = async (type) => {
     await page.selectOption("#singular-type", type);
-    const t0 = Date.now();
-    await d.change(() => dragOnSurface(from, to));
-    return Date.now() - t0;
+    const st = await d.change(() => dragOnSurface(from, to));
+    return [Date.now() - released, st.seconds];
   };
 
   // ---- a moving source drawn by a drag ----------------------------------------------------
-  const latency = await drawMoving("source");
+  const [latency, solve] = await drawMoving("source");
   const el = (await d.scene()).scene.elements.at(-1);
   check(el?.kind === "singular" && el.type === "source", `the drag adds a singular element: "${await message()}"`);
   check(el.path.length >= 3 && el.path.every((q) => q.length === 4), `a moving one: ${el.path.length} control points [x, y, z, t]`);
@@ -134,9 +156,9 @@ try {
   const stepMs = (Date.now() - stepStart) / 30;
   const source = await motion(at);
   check(source.used >= 12, `the ring around the source is on the canvas (${source.used} of 16 patches)`);
-  check(source.radial > 1.5, `the preview moves outwards around the source (radial ${source.radial.toFixed(2)} px in 2 steps, around ${source.tangential.toFixed(2)})`);
+  check(source.radial > 1.5, `the preview moves outwards around the source (radial ${source.radial.toFixed(2)} px over 2 steps of 3 px each, around ${source.tangential.toFixed(2)})`);
   await d.shot(a.out, "surface_preview_01_source.png");
-  console.log(`latency on the sphere (${(await page.evaluate(() => window.tvf.state.mesh.vertices.length / 3))} vertices): drag released → new field shown ${latency} ms; one preview step (advect + draw) ${stepMs.toFixed(1)} ms`);
+  console.log(`latency on the sphere (${(await page.evaluate(() => window.tvf.state.mesh.vertices.length / 3))} vertices): drag released → new field shown ${latency} ms (the server's solve ${(1000 * solve).toFixed(0)} ms); one preview step (advect + draw) ${stepMs.toFixed(1)} ms`);
 
   // ---- the same as a sink, and as a vortex ------------------------------------------------
   await d.change(() => page.click("#undo"));
@@ -202,6 +224,12 @@ try {
   await d.settled();
   await page.evaluate(() => window.tvf.preview.step(20));
   await d.shot(a.out, "surface_preview_04_paths_through_time.png");
+  // Arrows over the texture (the glyph view).
+  await page.selectOption("#preview-mode", "both");
+  await d.goto(12);
+  await d.settled();
+  await page.evaluate(() => window.tvf.preview.step(20));
+  await d.shot(a.out, "surface_preview_05_texture_and_arrows.png");
   check(errors.length === 0, `no errors in the page${errors.length ? ": " + errors.join("; ") : ""}`);
 } catch (e) {
   failed = true;

@@ -133,9 +133,9 @@ function showDesignCurves() {
   if (S.isPlanar(s)) spacetime.setDesign(pathlines);
   if (!S.isPlanar(s) && surface) {
     const j = state.frame;
-    const lines = pathlines.map((points) => ({ points, color: PATHLINE_COLOR }));
+    const lines: { points: number[][]; color: string; dashed?: boolean }[] = pathlines.map((points) => ({ points, color: PATHLINE_COLOR }));
     // Singular elements' paths with their control points (the Select tool moves them).
-    for (const e of s.elements ?? []) if (e.kind === "singular" && e.path.length > 1) lines.push({ points: e.path, color: "#0f172a" });
+    for (const e of s.elements ?? []) if (e.kind === "singular" && e.path.length > 1) lines.push({ points: e.path, color: "#0f172a", dashed: true });
     for (const k of s.keyframes ?? [])
       if (S.frameOf(s, k.t) === j) for (const sl of k.streamlines ?? []) lines.push({ points: sl.points, color: STREAMLINE_COLOR });
     surface.setDesign(lines);
@@ -665,8 +665,21 @@ function surfacePick(p: number[]) {
   } else if (state.tool === "cancel") {
     pickForCancel(at, 0.2);
   } else if (state.tool === "select") {
-    state.selected = S.pick(scene(), t, at, 0.1);
-    say(state.selected ? "selected: Delete removes it" : "nothing here");
+    state.selected = surfaceHandleAt(at) ?? S.pick(scene(), t, at, 0.1);
+    if (state.selected) return say("selected: drag it over the surface to move it, Delete removes it");
+    // A bifurcation's diamond of the paths through time: picked, and its time shown.
+    const a = state.analysis;
+    let best = -1;
+    let bestD = 0.05 * surfaceRadius();
+    a?.bifurcations.forEach((b, i) => {
+      const d = Math.hypot(...at.map((x, k) => x - (b.position[k] ?? 0)));
+      if (d < bestD) [best, bestD] = [i, d];
+    });
+    if (best < 0 || !a) return say("nothing here");
+    selectBifurcation(best);
+    const b = a.bifurcations[best];
+    say(`bifurcation ${best}: ${b.kind} at t = ${b.t.toFixed(3)}: "remove" in the list, or the Move bifurcation tool and a click where it should go`);
+    void showFrame(S.frameOf(scene(), b.t));
   } else if (state.tool === "move-bifurcation") {
     const b = state.analysis?.bifurcations[state.selectedBifurcation];
     if (!b) return say("pick a bifurcation first: press go to in the list", true);

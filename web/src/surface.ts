@@ -103,7 +103,9 @@ export class SurfaceView {
   }
 
   // The design's curves on the surface: pathlines and streamlines, [x, y, z, …] points.
-  setDesign(lines: { points: number[][]; color: string }[]) {
+  // `dashed`: a thin dashed line through the control points (the singular elements'
+  // paths, so that the analysis's time-coloured path under it stays visible).
+  setDesign(lines: { points: number[][]; color: string; dashed?: boolean }[]) {
     for (const c of [...this.design.children]) {
       this.design.remove(c);
       (c as THREE.Mesh).geometry?.dispose();
@@ -113,7 +115,14 @@ export class SurfaceView {
       const pts = line.points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
       const curve = new THREE.CatmullRomCurve3(pts, false, "catmullrom", 0.5);
       const material = new THREE.MeshBasicMaterial({ color: line.color });
-      this.design.add(new THREE.Mesh(new THREE.TubeGeometry(curve, 8 * pts.length, 0.008 * this.radius, 6, false), material));
+      if (line.dashed) {
+        const l = new THREE.Line(
+          new THREE.BufferGeometry().setFromPoints(curve.getPoints(8 * pts.length)),
+          new THREE.LineDashedMaterial({ color: line.color, dashSize: 0.03 * this.radius, gapSize: 0.02 * this.radius }),
+        );
+        l.computeLineDistances();
+        this.design.add(l);
+      } else this.design.add(new THREE.Mesh(new THREE.TubeGeometry(curve, 8 * pts.length, 0.008 * this.radius, 6, false), material));
       for (const p of pts) {
         const dot = new THREE.Mesh(new THREE.SphereGeometry(0.014 * this.radius, 10, 8), material);
         dot.position.copy(p);

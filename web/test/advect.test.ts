@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { advect, Advection, gridFlow, ringMotion, type PixelFlow } from "../src/preview/advect";
+import { advect, Advection, gridFlow, ringMotion, shortLic, type PixelFlow } from "../src/preview/advect";
 
 function uniform(w: number, h: number, dx: number, dy: number): PixelFlow {
   return { width: w, height: h, dx: new Float32Array(w * h).fill(dx), dy: new Float32Array(w * h).fill(dy), mask: new Uint8Array(w * h).fill(1) };
@@ -59,6 +59,8 @@ describe("texture advection (the moving preview)", () => {
     expect(g.dy[9]).toBeCloseTo(-2, 6); // world up is picture up
     const z = gridFlow(grid(5, () => [0, 0]), 8, 8);
     expect(z.dx.every((v) => v === 0) && z.dy.every((v) => v === 0)).toBe(true);
+    expect(z.mask.every((v) => v === 0)).toBe(true); // no field: nothing shown
+    expect(f.mask.every((v) => v === 1)).toBe(true);
   });
 
   it("finds a whole-picture shift with the ring matcher", () => {
@@ -89,5 +91,22 @@ describe("texture advection (the moving preview)", () => {
     expect(cw.tangential).toBeLessThan(-1.2);
     expect(Math.abs(ccw.radial)).toBeLessThan(1);
     expect(Math.abs(cw.radial)).toBeLessThan(1);
+  });
+});
+
+describe("the short LIC of the shown picture", () => {
+  it("averages along the flow and not across it", () => {
+    const w = 9;
+    const h = 5;
+    // Columns alternate 0, 1; the flow runs down the columns: the LIC keeps them, and
+    // smooths a flow across them to the mean of the walked pixels.
+    const src = Float32Array.from({ length: w * h }, (_, k) => (k % w) % 2);
+    const out = new Float32Array(w * h);
+    shortLic(src, uniform(w, h, 0, 1.5), 2, out);
+    for (let k = 0; k < w * h; ++k) expect(out[k]).toBeCloseTo(src[k], 6);
+    shortLic(src, uniform(w, h, 1.5, 0), 1, out);
+    const c = 2 * w + 4; // (4, 2), value 0, neighbours 1: (0 + 1 + 1) / 3
+    expect(out[c]).toBeCloseTo(2 / 3, 6);
+    expect(out[2 * w]).toBeCloseTo((0 + 1) / 2, 6); // at the left edge the walk back stops
   });
 });

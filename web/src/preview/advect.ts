@@ -73,6 +73,7 @@ export class Advection {
   image: Float32Array; // values in [0, 1], row-major, top row first
   steps = 0;
   private scratch: Float32Array;
+  private lic = new Float32Array();
   private readonly blend: number;
   private seed: number;
 
@@ -107,6 +108,21 @@ export class Advection {
     [this.image, this.scratch] = [this.scratch, this.image];
   }
 
+  // The picture as shown: a short LIC (`lic` steps each way; 0: none) along the flow of
+  // the last step, contrast stretched (grey()).
+  shown(flow: PixelFlow, lic: number, out: Uint8Array): Uint8Array {
+    if (lic <= 0) return this.grey(flow.mask, out);
+    const image = this.image;
+    if (this.lic.length !== image.length) this.lic = new Float32Array(image.length);
+    shortLic(image, flow, lic, this.lic);
+    this.image = this.lic;
+    try {
+      return this.grey(flow.mask, out);
+    } finally {
+      this.image = image;
+    }
+  }
+
   // Greys (0–255) of the picture with its contrast stretched (mean ± 2.5 standard
   // deviations over the masked pixels), grey 128 outside the mask.
   grey(mask?: Uint8Array, out: Uint8Array = new Uint8Array(this.image.length)): Uint8Array {
@@ -127,10 +143,51 @@ export class Advection {
   }
 }
 
+// A short line integral convolution of `src` along the flow (Cabral & Leedom 1993): each
+// pixel the mean of `length` unit steps each way along the flow's direction (nearest-pixel
+// directions, bilinear values), as `tvf render texture` shows its advected texture: the
+// advected noise moves, the short LIC draws it out into streaks along the flow, so that a
+// still picture shows the flow's lines too. Pixels outside the mask, or where the flow
+// vanishes, keep their value; a walk stops at the mask's edge.
+export function shortLic(src: Float32Array, flow: PixelFlow, length: number, out: Float32Array): void {
+  const { width: w, height: h, dx, dy, mask } = flow;
+  for (let j = 0; j < h; ++j)
+    for (let i = 0; i < w; ++i) {
+      const k = j * w + i;
+      let sum = src[k];
+      let count = 1;
+      if (mask[k] && (dx[k] !== 0 || dy[k] !== 0))
+        for (let dir = 1; dir >= -1; dir -= 2) {
+          let x = i;
+          let y = j;
+          let q = k;
+          for (let step = 0; step < length; ++step) {
+            const n = Math.hypot(dx[q], dy[q]);
+            if (n === 0) break;
+            x += (dir * dx[q]) / n;
+            y += (dir * dy[q]) / n;
+            if (x < 0 || y < 0 || x > w - 1 || y > h - 1) break;
+            const i0 = Math.min(w - 2, Math.floor(x));
+            const j0 = Math.min(h - 2, Math.floor(y));
+            q = Math.round(y) * w + Math.round(x);
+            if (!mask[q]) break;
+            const a = x - i0;
+            const b = y - j0;
+            const k0 = j0 * w + i0;
+            sum += (1 - b) * ((1 - a) * src[k0] + a * src[k0 + 1]) + b * ((1 - a) * src[k0 + w] + a * src[k0 + w + 1]);
+            ++count;
+          }
+        }
+      out[k] = sum / count;
+    }
+}
+
 // The flow of a planar grid field on a width × height picture of the grid (pixel (i, j)
 // centred at world (xmin + (i + ½)·dx, ymax − (j + ½)·dy)): the field's direction at each
 // pixel, `pixels` long (a designed field's speed falls off far from its elements, so only
-// the direction is shown, as in the LIC picture); 0 where the field vanishes.
+// the direction is shown, as in the LIC picture). Where the field vanishes (exactly 0: far
+// from every element under a steep falloff) the pixel is masked out: shown grey, not as
+// a still noise.
 export function gridFlow(
   f: { nx: number; ny: number; min: [number, number]; max: [number, number]; vectors: ArrayLike<number> },
   width: number,
@@ -139,7 +196,7 @@ export function gridFlow(
 ): PixelFlow {
   const dx = new Float32Array(width * height);
   const dy = new Float32Array(width * height);
-  const mask = new Uint8Array(width * height).fill(1);
+  const mask = new Uint8Array(width * height);
   const sx = (f.max[0] - f.min[0]) / width;
   const sy = (f.max[1] - f.min[1]) / height;
   const v = f.vectors;
@@ -160,6 +217,7 @@ export function gridFlow(
       if (n > 1e-12) {
         dx[j * width + i] = (pixels * pu) / n;
         dy[j * width + i] = (pixels * pv) / n;
+        mask[j * width + i] = 1;
       }
     }
   return { width, height, dx, dy, mask };

@@ -42,7 +42,8 @@ export class PlanarPreview {
   }
 
   private draw() {
-    this.advection.grey(undefined, this.grey);
+    if (this.flow) this.advection.shown(this.flow, 8, this.grey);
+    else this.advection.grey(undefined, this.grey);
     const d = this.image.data;
     for (let k = 0; k < this.grey.length; ++k) {
       const g = 40 + Math.round((215 * this.grey[k]) / 255);

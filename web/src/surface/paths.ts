@@ -1,5 +1,5 @@
 // The singularity paths through time on a surface: the analysis's paths drawn on the mesh
-// as lines coloured by time (timeColor: dark blue at the first time, through teal and
+// as thin tubes coloured by time (timeColor: dark blue at the first time, through teal and
 // green, to yellow at the last), a white ball where a path is born, a black one where it
 // dies (inside the time range), and the bifurcations as diamonds. The time strip
 // (timestrip.ts) uses the same colours.
@@ -33,13 +33,24 @@ export function pathObjects(a: Analysis, range: [number, number], radius: number
   const out: THREE.Object3D[] = [];
   const span = range[1] - range[0] || 1;
   const eps = 1e-6 * span;
-  const positions: number[] = [];
-  const colors: number[] = [];
+  const material = new THREE.MeshBasicMaterial({ vertexColors: true });
   for (const path of a.paths) {
-    for (let k = 0; k + 1 < path.points.length; ++k) {
-      const [p, q] = [path.points[k], path.points[k + 1]];
-      positions.push(p[0], p[1], p[2] ?? 0, q[0], q[1], q[2] ?? 0);
-      colors.push(...timeColor((p[3] - range[0]) / span), ...timeColor((q[3] - range[0]) / span));
+    // A tube along the path's points, each ring coloured by the time there.
+    const pts = path.points.map((p) => new THREE.Vector3(p[0], p[1], p[2] ?? 0));
+    if (pts.length >= 2) {
+      const segments = Math.min(2000, 2 * (pts.length - 1));
+      const radial = 6;
+      const tube = new THREE.TubeGeometry(new THREE.CatmullRomCurve3(pts, false, "centripetal"), segments, 0.007 * radius, radial, false);
+      const colors = new Float32Array(3 * tube.getAttribute("position").count);
+      for (let i = 0; i <= segments; ++i) {
+        const x = (i / segments) * (pts.length - 1);
+        const k = Math.min(pts.length - 2, Math.floor(x));
+        const t = (1 - (x - k)) * path.points[k][3] + (x - k) * path.points[k + 1][3];
+        const c = timeColor((t - range[0]) / span);
+        for (let r = 0; r <= radial; ++r) colors.set(c, 3 * (i * (radial + 1) + r));
+      }
+      tube.setAttribute("color", new THREE.BufferAttribute(colors, 3));
+      out.push(new THREE.Mesh(tube, material));
     }
     const ball = (at: number[], color: number) => {
       const m = new THREE.Mesh(new THREE.SphereGeometry(0.012 * radius, 8, 6), new THREE.MeshBasicMaterial({ color }));
@@ -49,12 +60,6 @@ export function pathObjects(a: Analysis, range: [number, number], radius: number
     if (path.points.length && path.birth > range[0] + eps) ball(path.points[0], 0xffffff);
     if (path.points.length && path.death < range[1] - eps) ball(path.points[path.points.length - 1], 0x000000);
   }
-  const g = new THREE.BufferGeometry();
-  g.setAttribute("position", new THREE.Float32BufferAttribute(positions, 3));
-  g.setAttribute("color", new THREE.Float32BufferAttribute(colors, 3));
-  const lines = new THREE.LineSegments(g, new THREE.LineBasicMaterial({ vertexColors: true, depthTest: true }));
-  lines.renderOrder = 1;
-  out.push(lines);
   a.bifurcations.forEach((b, i) => {
     const size = (i === selected ? 0.04 : 0.025) * radius;
     const m = new THREE.Mesh(new THREE.OctahedronGeometry(size), new THREE.MeshBasicMaterial({ color: BIFURCATION_COLOR }));

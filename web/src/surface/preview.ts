@@ -3,9 +3,9 @@
 // the direction in which the field at that point of the surface moves on the screen (the
 // vertex's unit field vector, projected by the camera); it is read back when the camera,
 // the field or the size changes. The picture (preview/advect.ts) is carried along those
-// directions each step and shown on the surface by a material that looks it up at the
+// directions each step, drawn out along them by a short LIC, and shown on the surface by a material that looks it up at the
 // fragment's screen position, shaded by the surface's normal. Texture advection on the
-// CPU at half the canvas's resolution: about 1–2 ms a step at 280².
+// CPU at half the canvas's resolution (280² for the page's 560² view).
 import * as THREE from "three";
 import { Advection, type PixelFlow } from "../preview/advect";
 
@@ -121,7 +121,7 @@ export class SurfaceTexture {
     if (this.dirty) this.readFlow(camera);
     if (!this.advection || !this.flow || !this.texture) return;
     for (let k = 0; k < n; ++k) this.advection.step(this.flow);
-    this.advection.grey(this.flow.mask, this.grey);
+    this.advection.shown(this.flow, 5, this.grey);
     const data = this.texture.image.data as Uint8Array;
     for (let k = 0; k < this.grey.length; ++k) {
       const g = this.grey[k];
