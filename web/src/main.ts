@@ -709,11 +709,16 @@ function surfaceHandleAt(p: number[]): S.Handle | undefined {
   }
   return best;
 }
+// Half the diagonal of the mesh's bounding box: the scale of "near" on the surface.
 function surfaceRadius(): number {
   const v = state.mesh?.vertices ?? [];
-  let r = 0;
-  for (let k = 0; k < v.length; k += 3) r = Math.max(r, Math.hypot(v[k], v[k + 1], v[k + 2]));
-  return r || 1;
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  for (let k = 0; k < v.length; ++k) {
+    lo[k % 3] = Math.min(lo[k % 3], v[k]);
+    hi[k % 3] = Math.max(hi[k % 3], v[k]);
+  }
+  return v.length ? Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2 || 1 : 1;
 }
 
 // Whether a left drag from p on the surface is the tool's (else it orbits the camera):

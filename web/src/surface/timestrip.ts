@@ -26,6 +26,8 @@ export class TimeStrip {
   set(a: Analysis, range: [number, number]) {
     this.analysis = a;
     this.range = range;
+    // Rows of at least 3 pixels: the strip grows with the number of paths (to 600 pixels).
+    this.canvas.height = Math.max(150, Math.min(600, 32 + 6 * a.paths.length));
     this.draw();
   }
   setTime(t: number) {
