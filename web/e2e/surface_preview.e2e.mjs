@@ -7,8 +7,10 @@
 // - the dense preview (texture advection in image space) moves outwards around it: the
 //   motion between pictures of the canvas two steps apart (four pairs) is measured on a
 //   ring around the source (window.tvf.ringMotion, block matching) and its radial part is
-//   positive; the same drawn as a sink moves inwards, as a counter-clockwise centre
-//   (a vortex) round, counter-clockwise;
+//   positive; the whole field turned by π over time (Rotate field, paper Fig. 10) makes
+//   the drawn element a source at t = 0, a vortex at t = ½ and a sink at t = 1, and the
+//   preview around it moves outwards, round and inwards; the same drawn as a sink moves
+//   inwards, as a counter-clockwise centre (a vortex) round, counter-clockwise;
 // - a control point of the drawn path is dragged elsewhere with the Select tool;
 // - a bifurcation placed on the surface is picked in the time strip of the paths through
 //   time, which goes to its time.
@@ -159,6 +161,30 @@ try {
   check(source.radial > 1.5, `the preview moves outwards around the source (radial ${source.radial.toFixed(2)} px over 2 steps of 3 px each, around ${source.tangential.toFixed(2)})`);
   await d.shot(a.out, "surface_preview_01_source.png");
   console.log(`latency on the sphere (${(await page.evaluate(() => window.tvf.state.mesh.vertices.length / 3))} vertices): drag released → new field shown ${latency} ms (the server's solve ${(1000 * solve).toFixed(0)} ms); one preview step (advect + draw) ${stepMs.toFixed(1)} ms`);
+
+  // ---- the drawn source turned by π over time: a source, a vortex, a sink (Fig. 10) ------
+  // Rotate field (the deform generator's transform keys) turns every vector by πt: the
+  // drawn element is a source at t = 0, a centre at t = ½ and a sink at t = 1, and the
+  // preview around it changes direction accordingly. (The deform generator's base is the
+  // design at the first time, so the element stays where the drag started.)
+  await d.change(() => page.click("#rotate-field"), 90000);
+  const around = async (j) => {
+    const guess = from;
+    const f = await frameAt(j);
+    const s = f.singularities.reduce((b, x) => (angle(x.position, guess) < angle(b.position, guess) ? x : b));
+    await d.goto(j);
+    await d.settled();
+    return [s, await motion(s.position)];
+  };
+  const [s0, m0] = await around(0);
+  const [s12, m12] = await around(12);
+  const [s23, m23] = await around(23);
+  check(s0.type === "source" && m0.radial > 1.5, `turned: at t = 0 a ${s0.type}, the preview moves outwards (radial ${m0.radial.toFixed(2)} px)`);
+  check(m12.tangential > 1 && Math.abs(m12.radial) < Math.abs(m12.tangential),
+    `at t = 0.52 a ${s12.type}, the preview turns counter-clockwise (around ${m12.tangential.toFixed(2)} px, radial ${m12.radial.toFixed(2)})`);
+  check(s23.type === "sink" && m23.radial < -1.5, `at t = 1 a ${s23.type}, the preview moves inwards (radial ${m23.radial.toFixed(2)} px)`);
+  await d.shot(a.out, "surface_preview_01b_turned_end.png");
+  await d.change(() => page.click("#undo"));
 
   // ---- the same as a sink, and as a vortex ------------------------------------------------
   await d.change(() => page.click("#undo"));
