@@ -9,14 +9,15 @@ import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneStat
 import { ChangeQueue } from "./changes";
 import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
 import { CoherencePlot } from "./coherence";
-import { sample, type GridField } from "./lic";
+import type { GridField } from "./lic";
 import { ringMotion } from "./preview/advect";
-import { PlanarPreview } from "./preview/planar";
+import { drawArrows, PlanarPreview } from "./preview/planar";
 import { Ticker } from "./preview/ticker";
 import * as S from "./scene";
 import { SpaceTimeView } from "./spacetime";
 import { spaceTimePathline } from "./spacetime_draw";
 import { SurfaceView, type SurfaceMode } from "./surface";
+import { bifurcationAt, boundingRadius, surfaceHandleAt as handleOnSurface } from "./surface/handles";
 import { TimeStrip } from "./surface/timestrip";
 import { resample } from "./stroke";
 import { rounded, View } from "./view";
@@ -403,7 +404,7 @@ function redraw() {
       ctx.imageSmoothingEnabled = true;
       ctx.drawImage(planarPreview.canvas, x0, y0, x1 - x0, y1 - y0);
     }
-    if (mode !== "texture") arrows(v, field, mode === "both" ? "#f97316" : "#334155");
+    if (mode !== "texture") drawArrows(ctx, v, field, mode === "both" ? "#f97316" : "#334155");
   }
   const line = (pts: number[][], color: string, width = 2, dash: number[] = []) => {
     if (pts.length < 2) return;
@@ -466,32 +467,6 @@ function redraw() {
     if (h) ring(v, h.position, "#f97316", 14);
   }
   if (state.stroke) line(state.stroke, "#f97316", 2);
-}
-
-// The field's directions at a 21 × 21 lattice of points, as arrows of one length.
-function arrows(v: View, f: GridField, color: string) {
-  const n = 21;
-  const len = (canvas.width / n) * 0.8;
-  ctx.strokeStyle = color;
-  ctx.lineWidth = 1.2;
-  ctx.beginPath();
-  for (let a = 0; a < n; ++a)
-    for (let b = 0; b < n; ++b) {
-      const p = [f.min[0] + ((a + 0.5) / n) * (f.max[0] - f.min[0]), f.min[1] + ((b + 0.5) / n) * (f.max[1] - f.min[1])];
-      const [u, w] = sample(f, p[0], p[1]);
-      const m = Math.hypot(u, w);
-      if (!(m > 0)) continue;
-      const [x, y] = v.toCanvas(p);
-      const dx = (len * u) / m;
-      const dy = (-len * w) / m;
-      const [tx, ty] = [x + dx / 2, y + dy / 2];
-      ctx.moveTo(x - dx / 2, y - dy / 2);
-      ctx.lineTo(tx, ty);
-      ctx.moveTo(tx - 0.35 * dx + 0.2 * dy, ty - 0.35 * dy - 0.2 * dx);
-      ctx.lineTo(tx, ty);
-      ctx.lineTo(tx - 0.35 * dx - 0.2 * dy, ty - 0.35 * dy + 0.2 * dx);
-    }
-  ctx.stroke();
 }
 
 function dot(v: View, p: number[], color: string, r: number, outline?: string) {
@@ -669,12 +644,7 @@ function surfacePick(p: number[]) {
     if (state.selected) return say("selected: drag it over the surface to move it, Delete removes it");
     // A bifurcation's diamond of the paths through time: picked, and its time shown.
     const a = state.analysis;
-    let best = -1;
-    let bestD = 0.05 * surfaceRadius();
-    a?.bifurcations.forEach((b, i) => {
-      const d = Math.hypot(...at.map((x, k) => x - (b.position[k] ?? 0)));
-      if (d < bestD) [best, bestD] = [i, d];
-    });
+    const best = bifurcationAt(a, at, 0.05 * surfaceRadius());
     if (best < 0 || !a) return say("nothing here");
     selectBifurcation(best);
     const b = a.bifurcations[best];
@@ -691,34 +661,12 @@ function surfacePick(p: number[]) {
   }
 }
 
-// Handles on the surface: those of the planar view (S.handles) and every control point of
-// the singular elements' paths (moved in space, their times kept).
-function surfaceHandles(t: number): { handle: S.Handle; position: S.Vec }[] {
-  const out = S.handles(scene(), t);
-  (scene().elements ?? []).forEach((e, index) => {
-    if (e.kind === "singular" && e.path.length > 1) e.path.forEach((q, point) => out.push({ handle: { kind: "element", index, point }, position: q.slice(0, -1) }));
-  });
-  return out;
+// "Near" on the surface: a share of the mesh's size.
+function surfaceRadius(): number {
+  return boundingRadius(state.mesh?.vertices ?? []);
 }
 function surfaceHandleAt(p: number[]): S.Handle | undefined {
-  let best: S.Handle | undefined;
-  let bestD = 0.06 * surfaceRadius();
-  for (const h of surfaceHandles(currentTime())) {
-    const d = Math.hypot(...h.position.map((x, k) => x - p[k]));
-    if (d <= bestD) [best, bestD] = [h.handle, d];
-  }
-  return best;
-}
-// Half the diagonal of the mesh's bounding box: the scale of "near" on the surface.
-function surfaceRadius(): number {
-  const v = state.mesh?.vertices ?? [];
-  const lo = [Infinity, Infinity, Infinity];
-  const hi = [-Infinity, -Infinity, -Infinity];
-  for (let k = 0; k < v.length; ++k) {
-    lo[k % 3] = Math.min(lo[k % 3], v[k]);
-    hi[k % 3] = Math.max(hi[k % 3], v[k]);
-  }
-  return v.length ? Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2 || 1 : 1;
+  return handleOnSurface(scene(), currentTime(), p, 0.06 * surfaceRadius());
 }
 
 // Whether a left drag from p on the surface is the tool's (else it orbits the camera):

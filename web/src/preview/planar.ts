@@ -1,6 +1,8 @@
 // The planar grid's moving preview: texture advection (advect.ts) on a square picture of
-// the grid, stepped by the page's ticker (ticker.ts) and drawn under the design.
-import type { GridField } from "../lic";
+// the grid, stepped by the page's ticker (ticker.ts) and drawn under the design; and the
+// arrows of the planar glyph view.
+import { sample, type GridField } from "../lic";
+import type { View } from "../view";
 import { Advection, gridFlow, type PixelFlow } from "./advect";
 
 export class PlanarPreview {
@@ -54,4 +56,30 @@ export class PlanarPreview {
     }
     this.ctx.putImageData(this.image, 0, 0);
   }
+}
+
+// The field's directions at a 21 × 21 lattice of points, as arrows of one length.
+export function drawArrows(ctx: CanvasRenderingContext2D, v: View, f: GridField, color: string) {
+  const n = 21;
+  const len = (v.width / n) * 0.8;
+  ctx.strokeStyle = color;
+  ctx.lineWidth = 1.2;
+  ctx.beginPath();
+  for (let a = 0; a < n; ++a)
+    for (let b = 0; b < n; ++b) {
+      const p = [f.min[0] + ((a + 0.5) / n) * (f.max[0] - f.min[0]), f.min[1] + ((b + 0.5) / n) * (f.max[1] - f.min[1])];
+      const [u, w] = sample(f, p[0], p[1]);
+      const m = Math.hypot(u, w);
+      if (!(m > 0)) continue;
+      const [x, y] = v.toCanvas(p);
+      const dx = (len * u) / m;
+      const dy = (-len * w) / m;
+      const [tx, ty] = [x + dx / 2, y + dy / 2];
+      ctx.moveTo(x - dx / 2, y - dy / 2);
+      ctx.lineTo(tx, ty);
+      ctx.moveTo(tx - 0.35 * dx + 0.2 * dy, ty - 0.35 * dy - 0.2 * dx);
+      ctx.lineTo(tx, ty);
+      ctx.lineTo(tx - 0.35 * dx - 0.2 * dy, ty - 0.35 * dy + 0.2 * dx);
+    }
+  ctx.stroke();
 }
