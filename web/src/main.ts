@@ -259,7 +259,7 @@ async function loadResult(revision: number) {
   $("timestrip-title").hidden = !!g;
   if (!g) {
     strip.set(analysis, range);
-    surface?.setPaths($<HTMLInputElement>("show-paths").checked ? analysis : undefined, range, state.selectedBifurcation);
+    showSurfacePaths();
   }
   coherence.set(analysis.times, analysis.coherence);
   listBifurcations();
