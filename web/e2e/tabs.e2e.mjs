@@ -78,6 +78,7 @@ try {
   const clickMs = await pageA.evaluate(async (pts) => {
     const c = document.getElementById("field");
     c.setPointerCapture = () => {}; // synthetic pointers cannot be captured
+    window.tvf.preview?.pause(true); // the moving preview's ticks would space the clicks out
     const t0 = performance.now();
     for (const [x, y] of pts) {
       const o = { clientX: x, clientY: y, pointerId: 1, pointerType: "mouse", isPrimary: true, button: 0, bubbles: true };

@@ -1,7 +1,7 @@
-// Line integral convolution (Cabral & Leedom 1993) of one frame of a planar grid field,
-// computed in the browser for the live preview: white noise smeared along the field's
-// streamlines. (`tvf render texture` makes the animated, temporally coherent version of
-// the same picture on the server; the preview only needs one still frame, fast.)
+// Line integral convolution (Cabral & Leedom 1993) of one frame of a planar grid field:
+// white noise smeared along the field's streamlines, a still picture. The page's preview
+// is now the moving texture of preview/advect.ts (a still picture shows a source and a
+// sink alike); the grid field's type and its bilinear sample() here serve both.
 
 export interface GridField {
   nx: number;

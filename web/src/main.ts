@@ -9,11 +9,16 @@ import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneStat
 import { ChangeQueue } from "./changes";
 import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
 import { CoherencePlot } from "./coherence";
-import { lic, noise, type GridField } from "./lic";
+import type { GridField } from "./lic";
+import { ringMotion } from "./preview/advect";
+import { drawArrows, PlanarPreview } from "./preview/planar";
+import { Ticker } from "./preview/ticker";
 import * as S from "./scene";
 import { SpaceTimeView } from "./spacetime";
 import { spaceTimePathline } from "./spacetime_draw";
-import { SurfaceView } from "./surface";
+import { SurfaceView, type SurfaceMode } from "./surface";
+import { bifurcationAt, boundingRadius, surfaceHandleAt as handleOnSurface } from "./surface/handles";
+import { TimeStrip } from "./surface/timestrip";
 import { resample } from "./stroke";
 import { rounded, View } from "./view";
 
@@ -25,8 +30,17 @@ const slider = $<HTMLInputElement>("time");
 const message = $<HTMLPreElement>("message");
 const sceneText = $<HTMLTextAreaElement>("scene-json");
 
-const LIC_SIZE = 256;
-const licNoise = noise(LIC_SIZE, LIC_SIZE, 7);
+// The moving previews (preview/, surface/preview.ts), stepped about 30 times a second.
+const planarPreview = new PlanarPreview(256);
+const ticker = new Ticker((n) => {
+  if (!state.scene) return;
+  if (planar()) {
+    if (state.mesh?.grid && state.frames.get(state.frame)) {
+      planarPreview.step(n);
+      redraw();
+    }
+  } else surface?.animate(n);
+});
 
 interface State {
   scene?: SceneState;
@@ -35,7 +49,6 @@ interface State {
   resultRevision: number;
   analysis?: Analysis;
   frames: Map<number, Frame>;
-  textures: Map<number, HTMLCanvasElement>;
   frame: number;
   tool: string;
   selected?: S.Handle;
@@ -49,7 +62,6 @@ interface State {
 const state: State = {
   resultRevision: -1,
   frames: new Map(),
-  textures: new Map(),
   frame: 0,
   tool: "select",
   selectedBifurcation: -1,
@@ -60,6 +72,7 @@ const state: State = {
 
 const spacetime = new SpaceTimeView($("spacetime"));
 const coherence = new CoherencePlot($("coherence"));
+const strip = new TimeStrip($<HTMLCanvasElement>("timestrip"));
 let surface: SurfaceView | undefined;
 
 function say(text: string, error = false) {
@@ -121,7 +134,9 @@ function showDesignCurves() {
   if (S.isPlanar(s)) spacetime.setDesign(pathlines);
   if (!S.isPlanar(s) && surface) {
     const j = state.frame;
-    const lines = pathlines.map((points) => ({ points, color: PATHLINE_COLOR }));
+    const lines: { points: number[][]; color: string; dashed?: boolean }[] = pathlines.map((points) => ({ points, color: PATHLINE_COLOR }));
+    // Singular elements' paths with their control points (the Select tool moves them).
+    for (const e of s.elements ?? []) if (e.kind === "singular" && e.path.length > 1) lines.push({ points: e.path, color: "#0f172a", dashed: true });
     for (const k of s.keyframes ?? [])
       if (S.frameOf(s, k.t) === j) for (const sl of k.streamlines ?? []) lines.push({ points: sl.points, color: STREAMLINE_COLOR });
     surface.setDesign(lines);
@@ -226,7 +241,6 @@ async function loadResult(revision: number) {
   const [analysis, mesh] = await Promise.all([api.analysis(), api.mesh()]);
   state.resultRevision = revision;
   state.frames.clear();
-  state.textures.clear();
   state.analysis = analysis;
   const key = JSON.stringify(mesh.grid ?? mesh.vertices.length);
   if (key !== state.meshKey || !mesh.planar) {
@@ -238,7 +252,15 @@ async function loadResult(revision: number) {
   // The space-time view is of planar domains (a surface × time has no picture in 3-D).
   $("spacetime").hidden = !g;
   $("spacetime-title").hidden = !g;
-  if (g) spacetime.set(analysis, g.min, g.max, [analysis.times[0], analysis.times[analysis.times.length - 1]]);
+  const range: [number, number] = [analysis.times[0], analysis.times[analysis.times.length - 1]];
+  if (g) spacetime.set(analysis, g.min, g.max, range);
+  // On surfaces: the paths through time on the mesh and in the time strip.
+  $("timestrip").hidden = !!g;
+  $("timestrip-title").hidden = !!g;
+  if (!g) {
+    strip.set(analysis, range);
+    showSurfacePaths();
+  }
   coherence.set(analysis.times, analysis.coherence);
   listBifurcations();
   await showFrame(state.frame);
@@ -254,7 +276,8 @@ function setupDomainView() {
       surface = new SurfaceView(host);
       surface.onPick = surfacePick;
       surface.onStroke = surfaceStroke;
-      surface.drawing = drawsOnSurface();
+      surface.grab = surfaceGrab;
+      surface.setMode($<HTMLSelectElement>("preview-mode").value as SurfaceMode);
     }
     surface.setMesh(state.mesh!);
     showDesignCurves();
@@ -276,6 +299,7 @@ async function showFrame(j: number) {
   $("time-label").textContent = `t = ${currentTime().toFixed(3)}`;
   coherence.setTime(currentTime());
   spacetime.setTime(currentTime());
+  strip.setTime(currentTime());
   if (state.resultRevision < 0) return redraw();
   try {
     const f = await frameData(j);
@@ -327,8 +351,24 @@ function listBifurcations() {
 function selectBifurcation(i: number) {
   state.selectedBifurcation = i;
   spacetime.highlight(i);
+  strip.highlight(i);
+  if (!planar() && surface && state.analysis) showSurfacePaths();
   listBifurcations();
 }
+function showSurfacePaths() {
+  const a = state.analysis!;
+  surface?.setPaths($<HTMLInputElement>("show-paths").checked ? a : undefined, [a.times[0], a.times[a.times.length - 1]], state.selectedBifurcation);
+}
+strip.onPickBifurcation = (i) => {
+  selectBifurcation(i);
+  const b = state.analysis!.bifurcations[i];
+  say(`bifurcation ${i}: ${b.kind} at t = ${b.t.toFixed(3)}: "remove" in the list, or the Move bifurcation tool and a click where it should go`);
+  void showFrame(S.frameOf(scene(), b.t));
+};
+strip.onPickTime = (t, what) => {
+  if (what !== "time") say(`${what} at t = ${t.toFixed(3)}`);
+  void showFrame(S.frameOf(scene(), t));
+};
 spacetime.onPick = (i) => {
   selectBifurcation(i);
   const b = state.analysis!.bifurcations[i];
@@ -336,27 +376,6 @@ spacetime.onPick = (i) => {
 };
 
 // ---- drawing the planar canvas ----------------------------------------------------------
-
-function texture(f: Frame): HTMLCanvasElement {
-  let c = state.textures.get(f.frame);
-  if (c) return c;
-  const g = state.mesh!.grid!;
-  const field: GridField = { nx: g.size[0], ny: g.size[1], min: g.min, max: g.max, vectors: f.vectors };
-  const img = lic(field, { width: LIC_SIZE, height: LIC_SIZE, noise: licNoise, length: 10 });
-  c = document.createElement("canvas");
-  c.width = LIC_SIZE;
-  c.height = LIC_SIZE;
-  const ictx = c.getContext("2d")!;
-  const data = ictx.createImageData(LIC_SIZE, LIC_SIZE);
-  for (let k = 0; k < img.length; ++k) {
-    const g8 = Math.round(40 + 215 * img[k]);
-    data.data.set([g8, g8, g8, 255], 4 * k);
-  }
-  ictx.putImageData(data, 0, 0);
-  state.textures.set(f.frame, c);
-  if (state.textures.size > 400) state.textures.clear();
-  return c;
-}
 
 // Boxes on the surface: the elements' handles, and with the deform generator its base
 // field's singular elements and the deformed streamlines' seeds.
@@ -374,11 +393,18 @@ function redraw() {
   ctx.fillStyle = "#fff";
   ctx.fillRect(0, 0, canvas.width, canvas.height);
   const f = state.frames.get(state.frame);
+  const mode = $<HTMLSelectElement>("preview-mode").value;
   if (f && state.mesh?.grid) {
-    const [x0, y0] = v.toCanvas([state.mesh.grid.min[0], state.mesh.grid.max[1]]);
-    const [x1, y1] = v.toCanvas([state.mesh.grid.max[0], state.mesh.grid.min[1]]);
-    ctx.imageSmoothingEnabled = true;
-    ctx.drawImage(texture(f), x0, y0, x1 - x0, y1 - y0);
+    const g = state.mesh.grid;
+    const field: GridField = { nx: g.size[0], ny: g.size[1], min: g.min, max: g.max, vectors: f.vectors };
+    if (mode !== "arrows") {
+      planarPreview.setField(field, f);
+      const [x0, y0] = v.toCanvas([g.min[0], g.max[1]]);
+      const [x1, y1] = v.toCanvas([g.max[0], g.min[1]]);
+      ctx.imageSmoothingEnabled = true;
+      ctx.drawImage(planarPreview.canvas, x0, y0, x1 - x0, y1 - y0);
+    }
+    if (mode !== "texture") drawArrows(ctx, v, field, mode === "both" ? "#f97316" : "#334155");
   }
   const line = (pts: number[][], color: string, width = 2, dash: number[] = []) => {
     if (pts.length < 2) return;
@@ -614,8 +640,16 @@ function surfacePick(p: number[]) {
   } else if (state.tool === "cancel") {
     pickForCancel(at, 0.2);
   } else if (state.tool === "select") {
-    state.selected = S.pick(scene(), t, at, 0.1);
-    say(state.selected ? "selected: Delete removes it" : "nothing here");
+    state.selected = surfaceHandleAt(at) ?? S.pick(scene(), t, at, 0.1);
+    if (state.selected) return say("selected: drag it over the surface to move it, Delete removes it");
+    // A bifurcation's diamond of the paths through time: picked, and its time shown.
+    const a = state.analysis;
+    const best = bifurcationAt(a, at, 0.05 * surfaceRadius());
+    if (best < 0 || !a) return say("nothing here");
+    selectBifurcation(best);
+    const b = a.bifurcations[best];
+    say(`bifurcation ${best}: ${b.kind} at t = ${b.t.toFixed(3)}: "remove" in the list, or the Move bifurcation tool and a click where it should go`);
+    void showFrame(S.frameOf(scene(), b.t));
   } else if (state.tool === "move-bifurcation") {
     const b = state.analysis?.bifurcations[state.selectedBifurcation];
     if (!b) return say("pick a bifurcation first: press go to in the list", true);
@@ -627,8 +661,23 @@ function surfacePick(p: number[]) {
   }
 }
 
-function drawsOnSurface() {
-  return state.tool === "pathline" || state.tool === "streamline" || state.tool === "deform";
+// "Near" on the surface: a share of the mesh's size.
+function surfaceRadius(): number {
+  return boundingRadius(state.mesh?.vertices ?? []);
+}
+function surfaceHandleAt(p: number[]): S.Handle | undefined {
+  return handleOnSurface(scene(), currentTime(), p, 0.06 * surfaceRadius());
+}
+
+// Whether a left drag from p on the surface is the tool's (else it orbits the camera):
+// the drawing tools own every drag on the surface; the Select tool a drag from a handle.
+function surfaceGrab(p: number[]): boolean {
+  if (state.tool === "pathline" || state.tool === "streamline" || state.tool === "deform" || state.tool === "singular") return true;
+  if (state.tool === "select") {
+    state.selected = surfaceHandleAt(p);
+    return state.selected !== undefined;
+  }
+  return false;
 }
 
 // The Deform streamline tool on a surface: the drag's first point is the seed, its last
@@ -655,7 +704,16 @@ function surfaceStroke(points: number[][]) {
   const [ts, te] = lifeSpan();
   try {
     if (points.length < 2) return say(`drag on the surface to draw a ${state.tool}`, true);
-    if (state.tool === "pathline")
+    if (state.tool === "singular") {
+      const type = selectedType();
+      if (keyframeMode()) void change((s) => S.addKeyframeSingular(s, t, type, rounded(points[0])), `${type} in the key frame at t = ${t}`);
+      // The element moves along the dragged curve (a few of its points) over the life span.
+      else void change((s) => S.addSingularPath(s, type, resample(points, 6).map(rounded), ts, te), `${type} moving along the curve drawn on the surface from t = ${ts} to ${te}`);
+    } else if (state.tool === "select") {
+      const h = state.selected;
+      const to = rounded(points[points.length - 1]);
+      if (h) void change((s) => S.moveHandle(s, h, to), "moved on the surface");
+    } else if (state.tool === "pathline")
       void change((s) => S.addPathline(s, resample(points, 8), ts, te), `pathline on the surface from t = ${ts} to ${te}`);
     else if (state.tool === "streamline")
       void change((s) => S.addKeyframeStreamline(s, t, resample(points, 10)), `streamline on the surface in the key frame at t = ${t}`);
@@ -736,13 +794,19 @@ document.querySelectorAll<HTMLInputElement>("input[name=tool]").forEach((r) =>
   r.addEventListener("change", () => {
     state.tool = r.value;
     spacetime.drawing = state.tool === "pathline";
-    if (surface) surface.drawing = drawsOnSurface();
     state.cancelPicks = [];
     state.selected = undefined;
     redraw();
   }),
 );
 slider.addEventListener("input", () => void showFrame(Number(slider.value)));
+$<HTMLSelectElement>("preview-mode").addEventListener("change", (e) => {
+  surface?.setMode((e.target as HTMLSelectElement).value as SurfaceMode);
+  redraw();
+});
+$<HTMLInputElement>("show-paths").addEventListener("change", () => {
+  if (state.analysis && !planar()) showSurfacePaths();
+});
 $("play").addEventListener("click", () => play(!state.playing));
 $("delete").addEventListener("click", deleteSelected);
 $("undo").addEventListener("click", () => void undo());
@@ -836,7 +900,16 @@ document.addEventListener("keydown", (e) => {
   spacetime: (p: number[]) => spacetime.toScreen(p),
   spacetimeLabels: () => spacetime.timeLabels(),
   surface: (p: number[]) => surface?.toScreen(p),
+  // The moving preview: paused, it steps only when asked (the tests compare two pictures
+  // a known number of steps apart); ringMotion measures the motion between two pictures.
+  preview: {
+    pause: (on: boolean) => (ticker.paused = on),
+    step: (n: number) => ticker.step(n),
+  },
+  ringMotion,
+  timestrip: (i: number) => strip.bifurcationAt(i),
 };
+ticker.start();
 
 (async () => {
   try {

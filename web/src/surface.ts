@@ -1,14 +1,22 @@
-// The surface designer's view: the mesh, the current frame's field as short arrows at a
-// subset of vertices, singularities coloured by type, and design elements (markers, the
-// pathlines and key-frame streamlines as thick curves). A click on the surface reports
-// the picked point [x, y, z] (the server snaps positions to the surface). With `drawing`
-// on (the Pathline and Streamline tools), a drag that starts on the surface draws on it:
-// every pointer position is picked on the surface, and the stroke's points go to
-// onStroke; a drag that starts off the surface orbits.
+// The surface designer's view: the mesh with the current frame's field as a moving
+// texture (surface/preview.ts) and/or arrows at a subset of vertices, singularities
+// coloured by type, design elements (markers, the singular elements' paths, pathlines and
+// key-frame streamlines as thick curves) and the analysis's singularity paths coloured by
+// time (surface/paths.ts). A click on the surface reports the picked point [x, y, z] (the
+// server snaps positions to the surface). A left drag that starts on the surface belongs
+// to the tool when `grab` says so for its first point (drawing tools; the Select tool on
+// a control point): every pointer position is picked on the surface, and the stroke's
+// points go to onStroke. Other drags orbit; a right drag (or Alt + left drag) always
+// orbits, Shift + left drag pans, the wheel zooms.
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
-import type { Frame, MeshData } from "./api";
+import type { Analysis, Frame, MeshData } from "./api";
 import { typeColor } from "./colors";
+import { pathObjects } from "./surface/paths";
+import { SurfaceTexture } from "./surface/preview";
+
+// What the surface shows of the field: the moving texture, arrows, or both.
+export type SurfaceMode = "texture" | "arrows" | "both";
 
 export class SurfaceView {
   private readonly renderer: THREE.WebGLRenderer;
@@ -23,8 +31,15 @@ export class SurfaceView {
   private readonly design = new THREE.Group();
   private readonly strokeLine: THREE.Line;
   private stroke: { points: number[][]; id: number } | undefined;
+  private readonly paths = new THREE.Group();
+  private readonly plain = new THREE.MeshStandardMaterial({ color: 0xe8edf3, roughness: 0.9, side: THREE.DoubleSide });
+  private readonly texture: SurfaceTexture;
+  private mode: SurfaceMode = "texture";
+  private frame: Frame | undefined;
+  private markers: number[][] = [];
   onPick: (p: number[]) => void = () => {};
-  drawing = false;
+  // Whether a left drag starting at this point of the surface is the tool's.
+  grab: (p: number[]) => boolean = () => false;
   onStroke: (points: number[][]) => void = () => {};
 
   constructor(host: HTMLElement) {
@@ -42,10 +57,17 @@ export class SurfaceView {
     el.addEventListener("pointercancel", () => this.strokeCancel());
     this.camera = new THREE.PerspectiveCamera(40, w / h, 0.001, 1000);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
-    this.controls.addEventListener("change", () => this.render());
+    this.controls.mouseButtons = { LEFT: THREE.MOUSE.ROTATE, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.ROTATE };
+    el.addEventListener("contextmenu", (e) => e.preventDefault());
+    this.controls.addEventListener("change", () => {
+      this.texture.invalidate();
+      this.render();
+    });
+    this.texture = new SurfaceTexture(this.renderer);
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8899aa, 3.0));
     this.scene.add(this.overlay);
     this.scene.add(this.design);
+    this.scene.add(this.paths);
     this.strokeLine = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0xf97316, depthTest: false }));
     this.strokeLine.renderOrder = 2;
     this.scene.add(this.strokeLine);
@@ -81,7 +103,9 @@ export class SurfaceView {
   }
 
   // The design's curves on the surface: pathlines and streamlines, [x, y, z, …] points.
-  setDesign(lines: { points: number[][]; color: string }[]) {
+  // `dashed`: a thin dashed line through the control points (the singular elements'
+  // paths, so that the analysis's time-coloured path under it stays visible).
+  setDesign(lines: { points: number[][]; color: string; dashed?: boolean }[]) {
     for (const c of [...this.design.children]) {
       this.design.remove(c);
       (c as THREE.Mesh).geometry?.dispose();
@@ -91,7 +115,14 @@ export class SurfaceView {
       const pts = line.points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
       const curve = new THREE.CatmullRomCurve3(pts, false, "catmullrom", 0.5);
       const material = new THREE.MeshBasicMaterial({ color: line.color });
-      this.design.add(new THREE.Mesh(new THREE.TubeGeometry(curve, 8 * pts.length, 0.008 * this.radius, 6, false), material));
+      if (line.dashed) {
+        const l = new THREE.Line(
+          new THREE.BufferGeometry().setFromPoints(curve.getPoints(8 * pts.length)),
+          new THREE.LineDashedMaterial({ color: line.color, dashSize: 0.03 * this.radius, gapSize: 0.02 * this.radius }),
+        );
+        l.computeLineDistances();
+        this.design.add(l);
+      } else this.design.add(new THREE.Mesh(new THREE.TubeGeometry(curve, 8 * pts.length, 0.008 * this.radius, 6, false), material));
       for (const p of pts) {
         const dot = new THREE.Mesh(new THREE.SphereGeometry(0.014 * this.radius, 10, 8), material);
         dot.position.copy(p);
@@ -111,9 +142,9 @@ export class SurfaceView {
   }
 
   private strokeStart(e: PointerEvent) {
-    if (!this.drawing || e.button !== 0) return;
+    if (e.button !== 0 || e.altKey || e.shiftKey || e.ctrlKey || e.metaKey) return;
     const p = this.hit(e);
-    if (!p) return; // off the surface: orbit
+    if (!p || !this.grab([p.x, p.y, p.z])) return; // off the surface, or not the tool's: orbit
     this.controls.enabled = false;
     this.renderer.domElement.setPointerCapture(e.pointerId);
     this.stroke = { points: [[p.x, p.y, p.z]], id: e.pointerId };
@@ -158,17 +189,29 @@ export class SurfaceView {
     g.setIndex(mesh.faces);
     g.computeVertexNormals();
     g.computeBoundingSphere();
-    this.surface = new THREE.Mesh(g, new THREE.MeshStandardMaterial({ color: 0xe8edf3, roughness: 0.9, side: THREE.DoubleSide }));
-    this.scene.add(this.surface);
     const s = g.boundingSphere!;
     this.radius = s.radius;
+    this.texture.setGeometry(g, s.radius);
+    this.surface = new THREE.Mesh(g, this.mode === "arrows" ? this.plain : this.texture.material);
+    this.scene.add(this.surface);
     this.controls.target.copy(s.center);
     this.camera.position.copy(s.center).add(new THREE.Vector3(0.2, -1, 0.6).normalize().multiplyScalar(3 * s.radius));
     this.controls.update();
     this.render();
   }
 
+  // Texture, arrows or both.
+  setMode(mode: SurfaceMode) {
+    this.mode = mode;
+    if (this.surface) this.surface.material = mode === "arrows" ? this.plain : this.texture.material;
+    if (this.frame) this.setFrame(this.frame, this.markers);
+    this.render();
+  }
+
   setFrame(frame: Frame, markers: number[][]) {
+    this.frame = frame;
+    this.markers = markers;
+    this.texture.setField(frame.vectors);
     for (const c of [...this.overlay.children]) {
       this.overlay.remove(c);
       (c as THREE.Mesh).geometry?.dispose();
@@ -176,19 +219,28 @@ export class SurfaceView {
     const n = this.positions.length / 3;
     const step = Math.max(1, Math.floor(n / 1500));
     // Directions only (a designed field's speed falls off far from its elements): every
-    // arrow has the same length; exact zeros get none.
+    // arrow has the same length, with a head (two short strokes back from the tip, in the
+    // plane of the arrow and the normal's cross product); exact zeros get none.
     const len = 0.045 * this.radius;
     const seg: number[] = [];
-    for (let v = 0; v < n; v += step) {
+    const normals = this.surface?.geometry.getAttribute("normal");
+    for (let v = 0; this.mode !== "texture" && v < n; v += step) {
       const p = [this.positions[3 * v], this.positions[3 * v + 1], this.positions[3 * v + 2]];
       const d = [frame.vectors[3 * v], frame.vectors[3 * v + 1], frame.vectors[3 * v + 2]];
       const m = Math.hypot(d[0], d[1], d[2]);
       if (!(m > 0)) continue;
-      seg.push(...p, p[0] + (len * d[0]) / m, p[1] + (len * d[1]) / m, p[2] + (len * d[2]) / m);
+      const u = d.map((x) => x / m);
+      const tip = p.map((x, k) => x + len * u[k]);
+      seg.push(...p, ...tip);
+      if (normals) {
+        const nv = [normals.getX(v), normals.getY(v), normals.getZ(v)];
+        const side = [nv[1] * u[2] - nv[2] * u[1], nv[2] * u[0] - nv[0] * u[2], nv[0] * u[1] - nv[1] * u[0]];
+        for (const sgn of [1, -1]) seg.push(...tip, ...tip.map((x, k) => x - 0.35 * len * u[k] + sgn * 0.2 * len * side[k]));
+      }
     }
     const g = new THREE.BufferGeometry();
     g.setAttribute("position", new THREE.Float32BufferAttribute(seg, 3));
-    this.overlay.add(new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: 0x334155 })));
+    this.overlay.add(new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: this.mode === "both" ? 0xf97316 : 0x334155 })));
     for (const s of frame.singularities) {
       const m = new THREE.Mesh(new THREE.SphereGeometry(0.025 * this.radius, 12, 8), new THREE.MeshBasicMaterial({ color: typeColor(s.type) }));
       m.position.set(s.position[0], s.position[1], s.position[2] ?? 0);
@@ -200,6 +252,24 @@ export class SurfaceView {
       this.overlay.add(m);
     }
     this.render();
+  }
+
+  // The analysis's singularity paths coloured by time over `range` (surface/paths.ts);
+  // undefined hides them.
+  setPaths(analysis: Analysis | undefined, range: [number, number], selected = -1) {
+    for (const c of [...this.paths.children]) {
+      this.paths.remove(c);
+      (c as THREE.Mesh).geometry?.dispose();
+    }
+    if (analysis) for (const o of pathObjects(analysis, range, this.radius, selected)) this.paths.add(o);
+    this.render();
+  }
+
+  // Steps the moving texture by n and draws at once (the page's ticker calls it).
+  animate(n = 1) {
+    if (!this.surface || this.mode === "arrows") return;
+    this.texture.step(this.camera, n);
+    this.renderer.render(this.scene, this.camera);
   }
 
   private pick(e: PointerEvent) {
