@@ -360,6 +360,7 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
   SpaceTimeOptions st;
   st.tolerance = scene.solver.tolerance;
   st.parallel = options.parallel;
+  st.distributed = true;  // all ranks' solve under mpirun (solve/distributed.h)
   switch (scene.solver.method) {
     case SolverMethod::automatic: st.method = SpaceTimeMethod::automatic; break;
     case SolverMethod::cg: st.method = SpaceTimeMethod::cg; break;
