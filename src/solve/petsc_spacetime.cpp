@@ -40,6 +40,7 @@ bool distributed_built() { return TVF_HAVE_PETSC != 0; }
 int distributed_ranks() { return g_ranks; }
 int distributed_rank() { return g_rank; }
 bool distributed_active() { return g_active; }
+bool distributed_owns_frame(int frame) { return frame % g_ranks == g_rank; }
 
 #if !TVF_HAVE_PETSC
 
@@ -52,6 +53,10 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian&, int, double, std::
                    "libopenmpi-dev)");
   return {};
 }
+
+void distributed_share_frames(std::span<cplx>, size_t, int) {}
+bool distributed_all(bool ok) { return ok; }
+double distributed_max(double x) { return x; }
 
 PetscPartition petsc_partition(const ConnectionLaplacian& laplacian) {
   PetscPartition p;
@@ -82,6 +87,28 @@ DistributedSession::DistributedSession() {
   MPI_Comm_size(PETSC_COMM_WORLD, &g_ranks);
   MPI_Comm_rank(PETSC_COMM_WORLD, &g_rank);
   active_ = g_active = true;
+}
+
+void distributed_share_frames(std::span<cplx> data, size_t vertices_per_frame, int frames) {
+  if (!g_active || g_ranks == 1) return;
+  TVF_CHECK(data.size() == vertices_per_frame * static_cast<size_t>(frames), "{} values for {} frames of {}",
+            data.size(), frames, vertices_per_frame);
+  for (int j = 0; j < frames; ++j)
+    MPI_Bcast(data.data() + static_cast<size_t>(j) * vertices_per_frame, static_cast<int>(2 * vertices_per_frame),
+              MPI_DOUBLE, j % g_ranks, PETSC_COMM_WORLD);
+}
+
+bool distributed_all(bool ok) {
+  if (!g_active) return ok;
+  int v = ok ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &v, 1, MPI_INT, MPI_MIN, PETSC_COMM_WORLD);
+  return v != 0;
+}
+
+double distributed_max(double x) {
+  if (!g_active) return x;
+  MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+  return x;
 }
 
 DistributedSession::~DistributedSession() {

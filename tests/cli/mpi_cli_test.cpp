@@ -29,7 +29,7 @@ std::pair<double, double> field_difference(const std::filesystem::path& a, const
   return {largest, difference};
 }
 
-void expect_same_outputs_on_two_ranks(const std::string& scene_text) {
+void expect_same_outputs_on_two_ranks(const std::string& scene_text, const char* method = "PETSc CG") {
   test::TempDir dir;
   test::write_text(dir / "scene.json", scene_text);
   const std::string cli = std::string("'") + TVF_CLI_PATH + "'";
@@ -40,7 +40,7 @@ void expect_same_outputs_on_two_ranks(const std::string& scene_text) {
   const auto two = test::run_command(std::string(TVF_MPIRUN) + " " + cli + " generate " + scene + " -o " +
                                      test::quoted(dir / "two"));
   ASSERT_EQ(two.exit_code, 0) << two.output;
-  EXPECT_NE(two.output.find("PETSc CG"), std::string::npos) << two.output;
+  EXPECT_NE(two.output.find(method), std::string::npos) << two.output;
   EXPECT_NE(two.output.find("2 ranks"), std::string::npos) << two.output;
   // Rank 0 alone reports and writes.
   size_t reports = 0;
@@ -75,6 +75,17 @@ TEST(CliMpi, SphereWithAMovingVortexIsTheSameOnTwoRanks) {
     "elements": [{"kind": "singular", "type": "ccw_center",
                   "path": [[1, 0, 0, 0], [0, 1, 0, 0.5], [-1, 0, 0, 1]]},
                  {"kind": "singular", "type": "source", "path": [[0, 0, 1, 0]]}]})");
+}
+
+TEST(CliMpi, ConstrainedFramesAreSharedByTwoRanks) {
+  // The per-frame generator: frame j on rank j mod 2, then every frame to rank 0.
+  expect_same_outputs_on_two_ranks(R"({"tvf": 1,
+    "domain": {"grid": {"size": [41, 41], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 12, "range": [0, 1]},
+    "generator": "constrained",
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]},
+                 {"kind": "singular", "type": "source", "path": [[0, 0.5, 0]]}]})",
+                                   "frames shared by 2 ranks");
 }
 
 #else

@@ -13,6 +13,11 @@
 // (mpirun/mpiexec of OpenMPI or MPICH, srun with PMI): a plain `tvf` run, the Python
 // module and `tvf serve` never touch MPI.
 
+#include "tvf/core/types.h"
+
+#include <cstddef>
+#include <span>
+
 namespace tvf {
 
 // Whether this build has the distributed back end (CMake option TVF_MPI).
@@ -41,5 +46,17 @@ int distributed_rank();
 // Whether a session is running (launched by mpirun, even with one rank): generators then
 // solve with the PETSc back end (SpaceTimeOptions::distributed).
 bool distributed_active();
+
+// Generators whose frames are independent (the per-frame `constrained` generator) share
+// them: frame j is computed by rank j mod K. Without a session every frame is this
+// process's.
+bool distributed_owns_frame(int frame);
+// After every rank computed its frames: each frame sent from its rank to all (data is
+// frames × vertices_per_frame, frame-major). Collective; nothing without a session.
+void distributed_share_frames(std::span<cplx> data, size_t vertices_per_frame, int frames);
+// Whether `ok` holds on every rank (collective; `ok` itself without a session).
+bool distributed_all(bool ok);
+// The largest of x over the ranks (collective; x itself without a session).
+double distributed_max(double x);
 
 }  // namespace tvf
