@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 #endif
@@ -311,6 +312,11 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
   const double b = temporal_weight;
   TVF_CHECK(fixed.size() == n * nf && values.size() == n * nf && z.size() == n * nf,
             "distributed space-time sizes {} {} {} for {} entries", fixed.size(), values.size(), z.size(), n * nf);
+  // PETSc's index type (32 bits in Debian's build) must count the real unknowns.
+  if (static_cast<double>(2 * n * nf) > static_cast<double>(std::numeric_limits<PetscInt>::max()))
+    throw Error(fmt::format("the distributed solve's {} real unknowns (2 · {} vertices · {} frames) exceed what "
+                            "this PETSc indexes ({}); it needs a PETSc built with 64-bit indices",
+                            2 * n * nf, n, nf, std::numeric_limits<PetscInt>::max()));
   const Distribution d = distribute(rows, nf, comm);
 
   // This rank's rows: the spatial operator with columns renumbered, fixed set, lines.
