@@ -26,6 +26,7 @@ packages=(
   libopenvdb-dev         # tvf export --vdb: OpenVDB velocity grids for Houdini and Blender
   python3-openvdb        # the tests read the VDB files back with OpenVDB's own reader
   chromium               # the designer's end-to-end test (web/e2e, playwright-core drives it)
+  petsc-dev libopenmpi-dev openmpi-bin  # the distributed space-time solve (CMake TVF_MPI, `mpirun -n K tvf generate`): PETSc's KSP over MPI
   clang libclang-rt-14-dev valgrind  # the fuzz targets (libFuzzer, preset "fuzz", scripts/fuzz.sh) and memory checks
 )
 # The designer's front end (web/) is built with npm; a Node.js that brings its own npm

@@ -25,6 +25,7 @@
 #include "tvf/field/field_io.h"
 #include "tvf/integrate/periodic_orbits.h"
 #include "tvf/mesh/tangent_bundle.h"
+#include "tvf/solve/distributed.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -48,7 +49,9 @@ struct GenerateArgs {
 };
 
 int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
-  const bool show = !args.quiet && cli::progress_wanted();
+  // Under mpirun every rank generates (the solve is shared); rank 0 alone reports and writes.
+  const bool root = distributed_rank() == 0;
+  const bool show = root && !args.quiet && cli::progress_wanted();
   cli::Progress progress(demo ? "tvf demo" : "tvf generate", show);
   Design design(std::move(scene));
   progress.note("building the domain");
@@ -62,6 +65,7 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
   options.progress = [&](int done, int total) { progress.update(done, total); };
   const Field& field = design.generate(options);
   const GenerateReport& report = design.report();
+  if (!root) return 0;
 
   OutputOptions out_options;
   out_options.vtk = !args.no_vtk;
@@ -207,6 +211,7 @@ int run_validate(const std::string& path, bool with_domain) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const DistributedSession mpi;  // MPI and PETSc, where launched by mpirun (solve/distributed.h)
   CLI::App app{"tvf: design of time-varying vector fields on planar domains and surfaces.\n"
                "Run with no command to generate the built-in demo scene."};
   app.require_subcommand(0, 1);

@@ -6,6 +6,7 @@
 #include "tvf/design/keyframes.h"
 #include "tvf/edit/field_editor.h"
 #include "tvf/solve/connection_laplacian.h"
+#include "tvf/solve/distributed.h"
 #include "tvf/solve/spacetime.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -228,6 +229,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   int failed_frame = -1;
   const double ramp = constraint_ramp_edges * mesh.mean_edge_length();
   for_each_frame(scene.time.frames, options, [&](int j) {
+    if (!distributed_owns_frame(j)) return;  // another rank's, under mpirun (solve/distributed.h)
     const double t = scene.time.time(j);
     SmoothConstraints c;
     constrain_elements_smoothly(space, scene, elements, t, d, laplacian.weight_sum, ramp, c);
@@ -241,11 +243,17 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
     all_ok = all_ok && r.success;
     method = r.method;
   });
-  if (!all_ok)
+  if (!distributed_all(all_ok))
     throw_input_error(scene.label(), "generator",
-                      fmt::format("the constrained solve of frame {} failed: {}", failed_frame, failure));
+                      all_ok ? std::string("the constrained solve of a frame failed on another rank")
+                             : fmt::format("the constrained solve of frame {} failed: {}", failed_frame, failure));
+  distributed_share_frames(field.data(), static_cast<size_t>(nv), scene.time.frames);
+  worst_residual = distributed_max(worst_residual);
   if (report) {
     report->method = "constrained optimization per frame, " + method;
+    if (distributed_active())
+      report->method += fmt::format(", frames shared by {} {}", distributed_ranks(),
+                                    distributed_ranks() == 1 ? "rank" : "ranks");
     report->residual = worst_residual;
   }
   finish_report(report, scene, nv, start);
@@ -360,6 +368,7 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
   SpaceTimeOptions st;
   st.tolerance = scene.solver.tolerance;
   st.parallel = options.parallel;
+  st.distributed = true;  // all ranks' solve under mpirun (solve/distributed.h)
   switch (scene.solver.method) {
     case SolverMethod::automatic: st.method = SpaceTimeMethod::automatic; break;
     case SolverMethod::cg: st.method = SpaceTimeMethod::cg; break;

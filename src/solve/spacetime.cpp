@@ -1,6 +1,8 @@
 #include "tvf/solve/spacetime.h"
 
+#include "solve/petsc_spacetime.h"
 #include "tvf/core/error.h"
+#include "tvf/solve/distributed.h"
 
 #include <Eigen/IterativeLinearSolvers>
 #include <fmt/format.h>
@@ -562,6 +564,9 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   const size_t total = n * nf;
   TVF_CHECK(fixed.size() == total && values.size() == total && z.size() == total,
             "space-time sizes {} {} {} for {} entries", fixed.size(), values.size(), z.size(), total);
+  // Under mpirun: the distributed back end (solve/distributed.h).
+  if (options.distributed && distributed_active() && options.method != SpaceTimeMethod::bicgstab_jacobi)
+    return petsc_spacetime_solve(laplacian_, frames_, b_, fixed, values, z, options);
   const bool par = options.parallel;
   const SpaceTime a{*op_, fixed, n, nf, b_, par};
   std::lock_guard lock(work_mutex_);

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# The distributed space-time solve (issue 19; docs/benchmarks.md, "Distributed"): `tvf
+# generate` on an N × N grid × 100 frames (two key frames and a vortex moving diagonally
+# between them, across the partition, held at every frame) by one process, by
+# `mpirun -n 1` and by `mpirun -n 2`; prints Markdown rows: generation time, CG
+# iterations, peak memory of the largest rank (/usr/bin/time), the halo, and the largest
+# difference from the one process's field (relative to its largest vector).
+# Usage: bench/run_mpi.sh [build-dir] [N ...]   (default build/release, N = 141 317 707 1000;
+#        RUNS="one;mpirun -n 2" picks the runs, default one, mpirun -n 1 and mpirun -n 2)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build/release}
+shift || true
+sizes=("$@")
+[ ${#sizes[@]} -eq 0 ] && sizes=(141 317 707 1000)
+tvf="$build/tvf"
+[ -x "$tvf" ] || { echo "run_mpi.sh: $tvf is missing (cmake --build $build --target tvf_cli)" >&2; exit 1; }
+mpirun=(mpirun --oversubscribe --allow-run-as-root --bind-to none)
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')
+echo "Machine: $cpu, $(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GiB; $(date -u +%Y-%m-%d)"
+echo
+echo "| grid | vertices | frames | run | generation | iterations | peak memory (largest rank) | halo | max difference from one process |"
+echo "|---|---:|---:|---|---:|---:|---:|---:|---:|"
+for n in "${sizes[@]}"; do
+  cat >"$dir/scene.json" <<EOF
+{"tvf": 1,
+ "domain": {"grid": {"size": [$n, $n], "min": [-1, -1], "max": [1, 1]}},
+ "time": {"frames": 100, "range": [0, 1]},
+ "generator": "spacetime",
+ "solver": {"region_radius": 0.1},
+ "falloff": 40,
+ "keyframes": [{"t": 0, "elements": [{"kind": "singular", "type": "saddle", "at": [-0.25, 0]},
+                                     {"kind": "singular", "type": "source", "at": [0.25, 0]}]},
+               {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0, 0.5]}]}],
+ "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]}]}
+EOF
+  IFS=';' read -r -a runs <<<"${RUNS:-one;mpirun -n 1;mpirun -n 2}"
+  for run in "${runs[@]}"; do
+    out="$dir/${run// /_}"
+    rm -rf "$out"
+    case "$run" in
+      one) cmd=(/usr/bin/time -f "peak %M" "$tvf") ;;
+      *) cmd=("${mpirun[@]}" -n "${run##* }" /usr/bin/time -f "peak %M" "$tvf") ;;
+    esac
+    "${cmd[@]}" generate "$dir/scene.json" -o "$out" --no-vtk >"$dir/log" 2>&1 || { cat "$dir/log" >&2; exit 1; }
+    /usr/bin/python3 - "$dir/log" "$dir/one/field.tvff" "$out/field.tvff" "$n" "$run" <<'PY'
+import json, re, struct, sys
+import numpy as np
+log = open(sys.argv[1]).read()
+def field(path):  # field.tvff's values (docs/file_formats.md), mapped
+    with open(path, "rb") as f:
+        f.read(12)
+        (h,) = struct.unpack("<Q", f.read(8))
+        head = json.loads(f.read(h))
+    v, fc, nf = head["vertices"], head["faces"], head["frames"]
+    return np.memmap(path, dtype="<f8", mode="r", offset=20 + h + v * 24 + fc * 12, shape=(nf, v, 2))
+gen = re.search(r"generated (\d+) frames × (\d+) vertices by (.*) in ([0-9.]+) s", log)
+its = re.search(r"(\d+) iterations", gen.group(3))
+halo = re.search(r"halo (\d+) vertices", gen.group(3))
+peak = max(int(m) for m in re.findall(r"peak (\d+)", log)) / 1024 / 1024
+a, b = field(sys.argv[2]), field(sys.argv[3])
+diff = max(np.hypot(*(a[j] - b[j]).T).max() for j in range(a.shape[0]))
+d = diff / max(np.hypot(*a[j].T).max() for j in range(a.shape[0]))
+n = sys.argv[4]
+print(f"| {n}² | {gen.group(2)} | {gen.group(1)} | {sys.argv[5]} | {float(gen.group(4)):.1f} s | "
+      f"{its.group(1) if its else ''} | {peak:.2f} GiB | {halo.group(1) if halo else ''} | {d:.1e} |")
+PY
+  done
+  rm -rf "$dir"/one "$dir"/mpirun_*
+done

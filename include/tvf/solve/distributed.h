@@ -1,0 +1,62 @@
+#pragma once
+// Running under MPI (issue 19, DESIGN §12 "MPI"): `mpirun -n K tvf generate SCENE -o DIR`.
+//
+// Every rank runs the whole program on the whole scene (domain, Laplacian, constraints:
+// replicated, cheap beside the solve); the spatio-temporal solve itself is distributed
+// (solve/petsc_spacetime.cpp: vertices partitioned across ranks with whole temporal lines
+// each, a PETSc CG on the matrix-free operator, temporal line solves as preconditioner).
+// Its result is gathered to every rank, so what follows (edits, analysis) is the one
+// process's, and rank 0 alone writes the outputs (docs/architecture.md, "Running on a
+// cluster").
+//
+// MPI and PETSc are started only where the process was launched by an MPI launcher
+// (mpirun/mpiexec of OpenMPI or MPICH, srun with PMI): a plain `tvf` run, the Python
+// module and `tvf serve` never touch MPI.
+
+#include "tvf/core/types.h"
+
+#include <cstddef>
+#include <span>
+
+namespace tvf {
+
+// Whether this build has the distributed back end (CMake option TVF_MPI).
+bool distributed_built();
+
+// Starts MPI and PETSc for the lifetime of the object where the process was launched by an
+// MPI launcher and the build has the back end; otherwise does nothing. One per process
+// (the CLI's main). PETSc reads its options from the environment (PETSC_OPTIONS), not
+// from the command line, which stays the CLI's.
+class DistributedSession {
+public:
+  DistributedSession();
+  ~DistributedSession();
+  DistributedSession(const DistributedSession&) = delete;
+  DistributedSession& operator=(const DistributedSession&) = delete;
+  bool active() const { return active_; }
+
+private:
+  bool active_ = false;
+};
+
+// The number of ranks of the running session (1 without one) and this process's rank (0
+// without one): rank 0 writes the outputs and prints the report.
+int distributed_ranks();
+int distributed_rank();
+// Whether a session is running (launched by mpirun, even with one rank): generators then
+// solve with the PETSc back end (SpaceTimeOptions::distributed).
+bool distributed_active();
+
+// Generators whose frames are independent (the per-frame `constrained` generator) share
+// them: frame j is computed by rank j mod K. Without a session every frame is this
+// process's.
+bool distributed_owns_frame(int frame);
+// After every rank computed its frames: each frame sent from its rank to all (data is
+// frames × vertices_per_frame, frame-major). Collective; nothing without a session.
+void distributed_share_frames(std::span<cplx> data, size_t vertices_per_frame, int frames);
+// Whether `ok` holds on every rank (collective; `ok` itself without a session).
+bool distributed_all(bool ok);
+// The largest of x over the ranks (collective; x itself without a session).
+double distributed_max(double x);
+
+}  // namespace tvf

@@ -1,0 +1,31 @@
+#pragma once
+// The distributed space-time solve (solve/distributed.h; docs/architecture.md, "Running on
+// a cluster"): private to libtvf, called by SpaceTimeSolver::solve under mpirun.
+#include "tvf/solve/spacetime.h"
+
+#include <string>
+#include <vector>
+
+namespace tvf {
+
+// Solves the space-time system of SpaceTimeSolver::solve (same arguments, same meaning of
+// fixed, values and z, all replicated on every rank) on all ranks of the running session:
+// each rank owns a part of the vertices (PETSc's MatPartitioning on L's graph) with their
+// whole temporal lines; PETSc's CG on the matrix-free operator (real form, re and im
+// interleaved), preconditioned by the temporal line solves, to options.tolerance in the
+// one process's residual ‖b − A z‖ / ‖b‖ over the free entries. z receives the whole
+// result on every rank. Collective: every rank must call it with the same arguments.
+SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int frames, double temporal_weight,
+                                  std::span<const char> fixed, std::span<const cplx> values, std::span<cplx> z,
+                                  const SpaceTimeOptions& options);
+
+// The rank that owns each vertex in the partition the solve uses (collective; for tests and
+// benchmarks), and its cut: the edges of L's graph between two ranks.
+struct PetscPartition {
+  std::vector<int> owner;
+  long cut_edges = 0, edges = 0;
+  std::string partitioner;
+};
+PetscPartition petsc_partition(const ConnectionLaplacian& laplacian);
+
+}  // namespace tvf

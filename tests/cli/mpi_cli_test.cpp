@@ -1,0 +1,98 @@
+// DESIGN §12 "MPI": `mpirun -n 2 tvf generate SCENE -o DIR` writes the one process's
+// outputs (the field equal to the solver's tolerance) and its report names the ranks.
+// Built with TVF_MPI only (tests/CMakeLists.txt defines TVF_MPIRUN).
+#include "support/test_paths.h"
+#include "tvf/field/field_io.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+namespace tvf {
+namespace {
+
+#ifdef TVF_MPIRUN
+
+// The largest |z| and the largest difference between two generated folders' fields.
+std::pair<double, double> field_difference(const std::filesystem::path& a, const std::filesystem::path& b) {
+  const FieldFile fa = load_field_file((a / "field.tvff").string());
+  const FieldFile fb = load_field_file((b / "field.tvff").string());
+  EXPECT_EQ(fa.field.data().size(), fb.field.data().size());
+  double largest = 0, difference = 0;
+  for (size_t k = 0; k < std::min(fa.field.data().size(), fb.field.data().size()); ++k) {
+    largest = std::max(largest, std::abs(fa.field.data()[k]));
+    difference = std::max(difference, std::abs(fa.field.data()[k] - fb.field.data()[k]));
+  }
+  return {largest, difference};
+}
+
+void expect_same_outputs_on_two_ranks(const std::string& scene_text, const char* method = "PETSc CG") {
+  test::TempDir dir;
+  test::write_text(dir / "scene.json", scene_text);
+  const std::string cli = std::string("'") + TVF_CLI_PATH + "'";
+  const auto scene = test::quoted(dir / "scene.json");
+  const auto one = test::run_command(cli + " generate " + scene + " -o " + test::quoted(dir / "one"));
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  EXPECT_EQ(one.output.find("ranks"), std::string::npos) << one.output;
+  const auto two = test::run_command(std::string(TVF_MPIRUN) + " " + cli + " generate " + scene + " -o " +
+                                     test::quoted(dir / "two"));
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  EXPECT_NE(two.output.find(method), std::string::npos) << two.output;
+  EXPECT_NE(two.output.find("2 ranks"), std::string::npos) << two.output;
+  // Rank 0 alone reports and writes.
+  size_t reports = 0;
+  for (size_t at = two.output.find("generated "); at != std::string::npos; at = two.output.find("generated ", at + 1))
+    ++reports;
+  EXPECT_EQ(reports, 1u) << two.output;
+  // The same files.
+  for (const char* f : {"field.npy", "field.tvff", "field.pvd", "vertices.npy", "times.npy", "scene.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "one" / f)) << f;
+    EXPECT_TRUE(std::filesystem::exists(dir / "two" / f)) << f;
+  }
+  const auto [largest, difference] = field_difference(dir / "one", dir / "two");
+  EXPECT_GT(largest, 0.1);
+  EXPECT_LE(difference, 1e-8 * largest) << "largest " << largest;
+}
+
+TEST(CliMpi, GridWithAMovingElementIsTheSameOnTwoRanks) {
+  expect_same_outputs_on_two_ranks(R"({"tvf": 1,
+    "domain": {"grid": {"size": [41, 41], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 24, "range": [0, 1]},
+    "generator": "spacetime",
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]}],
+    "keyframes": [{"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [0, 0.5]}]}]})");
+}
+
+TEST(CliMpi, SphereWithAMovingVortexIsTheSameOnTwoRanks) {
+  expect_same_outputs_on_two_ranks(R"({"tvf": 1,
+    "domain": {"sphere": {"subdivisions": 3, "radius": 1}},
+    "time": {"frames": 20, "range": [0, 1]},
+    "generator": "spacetime",
+    "falloff": 20,
+    "elements": [{"kind": "singular", "type": "ccw_center",
+                  "path": [[1, 0, 0, 0], [0, 1, 0, 0.5], [-1, 0, 0, 1]]},
+                 {"kind": "singular", "type": "source", "path": [[0, 0, 1, 0]]}]})");
+}
+
+TEST(CliMpi, ConstrainedFramesAreSharedByTwoRanks) {
+  // The per-frame generator: frame j on rank j mod 2, then every frame to rank 0.
+  expect_same_outputs_on_two_ranks(R"({"tvf": 1,
+    "domain": {"grid": {"size": [41, 41], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 12, "range": [0, 1]},
+    "generator": "constrained",
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]},
+                 {"kind": "singular", "type": "source", "path": [[0, 0.5, 0]]}]})",
+                                   "frames shared by 2 ranks");
+}
+
+#else
+
+TEST(CliMpi, NotBuilt) { GTEST_SKIP() << "this build has no distributed solve (TVF_MPI off)"; }
+
+#endif
+
+}  // namespace
+}  // namespace tvf

@@ -1,0 +1,197 @@
+// The distributed space-time solve (solve/petsc_spacetime.cpp) against the one-process
+// solver, run by ctest under `mpirun -n 2` (tests/CMakeLists.txt): every rank builds the
+// same problem, solves it once with the PETSc back end (all ranks together) and once in
+// its own process, and compares.
+#include "solve/petsc_spacetime.h"
+#include "support/test_meshes.h"
+#include "tvf/mesh/grid.h"
+#include "tvf/mesh/tangent_bundle.h"
+#include "tvf/solve/distributed.h"
+#include "tvf/solve/spacetime.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <set>
+#include <vector>
+
+namespace tvf {
+namespace {
+
+// A design problem on a mesh: a key frame of seeded random vectors at frame 0, and a
+// moving element, a disk of `radius` around a point that travels from `from` to `to` over
+// the frames, holding the unit vector (1, 0) of its vertices' bases at every frame.
+struct Problem {
+  std::vector<char> fixed;
+  std::vector<cplx> values;
+};
+
+Problem moving_element(const Mesh& mesh, int frames, Vec3 from, Vec3 to, double radius, bool keyframe) {
+  const auto n = static_cast<size_t>(mesh.num_vertices());
+  const auto nf = static_cast<size_t>(frames);
+  Problem p{std::vector<char>(n * nf, 0), std::vector<cplx>(n * nf, cplx(0, 0))};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  if (keyframe)
+    for (size_t i = 0; i < n; ++i) {
+      p.fixed[i] = 1;
+      p.values[i] = cplx(u(rng), u(rng));
+    }
+  for (size_t j = keyframe ? 1 : 0; j < nf; ++j) {
+    const double s = static_cast<double>(j) / static_cast<double>(nf - 1);
+    const Vec3 c = (1 - s) * from + s * to;
+    for (size_t i = 0; i < n; ++i)
+      if ((mesh.position(static_cast<int>(i)) - c).norm() < radius) {
+        p.fixed[j * n + i] = 1;
+        p.values[j * n + i] = cplx(1, 0);
+      }
+  }
+  return p;
+}
+
+// The owners the back end's partition gives every vertex (collective).
+std::vector<int> owners(const ConnectionLaplacian& laplacian) {
+  return petsc_partition(laplacian).owner;
+}
+
+struct Comparison {
+  SolveReport one, all;
+  double largest = 0, difference = 0;  // max |z_one|, max |z_all − z_one|
+  bool fixed_kept = true;              // fixed entries hold their values exactly
+};
+
+Comparison compare(const ConnectionLaplacian& laplacian, int frames, const Problem& p) {
+  const SpaceTimeSolver solver(laplacian, frames, 30.0);
+  std::vector<cplx> one(p.values.size()), all(p.values.size());
+  solver.interpolate_in_time(p.fixed, p.values, one);
+  all = one;
+  SpaceTimeOptions local;
+  local.parallel = false;
+  SpaceTimeOptions shared = local;
+  shared.distributed = true;
+  Comparison c;
+  c.one = solver.solve(p.fixed, p.values, one, local);
+  c.all = solver.solve(p.fixed, p.values, all, shared);
+  for (size_t k = 0; k < one.size(); ++k) {
+    c.largest = std::max(c.largest, std::abs(one[k]));
+    c.difference = std::max(c.difference, std::abs(all[k] - one[k]));
+    if (p.fixed[k] && (all[k] != p.values[k] || one[k] != p.values[k])) c.fixed_kept = false;
+  }
+  return c;
+}
+
+// Checks common to every case: both solves met the tolerance, the distributed one on 2
+// ranks, with the one process's iterations (same CG, same preconditioner: only the order
+// of additions differs), and the fields agree to the tolerance.
+void expect_same_field(const Comparison& c) {
+  if (distributed_rank() == 0)
+    std::printf("  one process: %d iterations, residual %.2e; 2 ranks: %d iterations, residual %.2e; "
+                "max |difference| %.2e of max |z| %.3f\n",
+                c.one.iterations, c.one.residual, c.all.iterations, c.all.residual, c.difference, c.largest);
+  ASSERT_TRUE(c.one.success) << c.one.method;
+  ASSERT_TRUE(c.all.success) << c.all.method << " residual " << c.all.residual;
+  EXPECT_NE(c.all.method.find("PETSc CG"), std::string::npos) << c.all.method;
+  EXPECT_NE(c.all.method.find("2 ranks"), std::string::npos) << c.all.method;
+  EXPECT_LE(c.all.residual, 1e-10);
+  EXPECT_GT(c.largest, 0.1);
+  EXPECT_LE(c.difference, 1e-8 * c.largest) << "largest " << c.largest;
+  EXPECT_TRUE(c.fixed_kept);
+}
+
+TEST(DistributedSpaceTime, RunsOnTwoRanks) {
+  EXPECT_TRUE(distributed_built());
+  EXPECT_EQ(distributed_ranks(), 2);
+}
+
+TEST(DistributedSpaceTime, GridWithAnElementCrossingThePartitionBoundary) {
+  const Mesh mesh = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(mesh);
+  const ConnectionLaplacian laplacian = connection_laplacian(bundle);
+  const int frames = 24;
+  const Problem p = moving_element(mesh, frames, Vec3(-0.8, -0.7, 0), Vec3(0.8, 0.7, 0), 0.15, true);
+  // The element's vertices lie on both sides of the partition.
+  const std::vector<int> owner = owners(laplacian);
+  std::set<int> touched;
+  const auto n = static_cast<size_t>(mesh.num_vertices());
+  for (size_t k = n; k < p.fixed.size(); ++k)
+    if (p.fixed[k]) touched.insert(owner[k % n]);
+  EXPECT_EQ(touched.size(), 2u);
+  const Comparison c = compare(laplacian, frames, p);
+  expect_same_field(c);
+  // The same algorithm: the iteration counts agree but for rounding.
+  EXPECT_NEAR(c.all.iterations, c.one.iterations, 2) << c.one.method;
+}
+
+TEST(DistributedSpaceTime, SphereWithAVortexRoundTheEquator) {
+  const Mesh& mesh = test::icosphere_mesh();
+  const TangentBundle bundle(mesh);
+  const ConnectionLaplacian laplacian = connection_laplacian(bundle);
+  const int frames = 20;
+  // No key frame: the element alone (its lines split by the fixed entries, the rest open).
+  const Problem p = moving_element(mesh, frames, Vec3(1, 0, 0), Vec3(-1, 0.05, 0), 0.3, false);
+  const std::vector<int> owner = owners(laplacian);
+  std::set<int> touched;
+  const auto n = static_cast<size_t>(mesh.num_vertices());
+  for (size_t k = 0; k < p.fixed.size(); ++k)
+    if (p.fixed[k]) touched.insert(owner[k % n]);
+  EXPECT_EQ(touched.size(), 2u);
+  const Comparison c = compare(laplacian, frames, p);
+  expect_same_field(c);
+  EXPECT_NEAR(c.all.iterations, c.one.iterations, 2) << c.one.method;
+}
+
+TEST(DistributedSpaceTime, KeyFramesOnlyMatchTheTemporalModes) {
+  // Key frames at both ends: one process takes the temporal-mode method (direct in
+  // time), the ranks CG; the same field to the tolerance.
+  const Mesh mesh = make_grid(GridSpec{33, 25, {-1, -1}, {1, 0.5}});
+  const TangentBundle bundle(mesh);
+  const ConnectionLaplacian laplacian = connection_laplacian(bundle);
+  const int frames = 16;
+  const auto n = static_cast<size_t>(mesh.num_vertices());
+  Problem p{std::vector<char>(n * frames, 0), std::vector<cplx>(n * frames, cplx(0, 0))};
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& x = mesh.position(static_cast<int>(i));
+    p.fixed[i] = p.fixed[(frames - 1) * n + i] = 1;
+    p.values[i] = cplx(1, x.y());
+    p.values[(frames - 1) * n + i] = cplx(-x.y(), x.x());
+  }
+  const Comparison c = compare(laplacian, frames, p);
+  EXPECT_NE(c.one.method.find("temporal eigenmodes"), std::string::npos) << c.one.method;
+  expect_same_field(c);
+}
+
+TEST(DistributedSpaceTime, NothingToSolveGivesZero) {
+  const Mesh& mesh = test::grid_mesh();
+  const TangentBundle bundle(mesh);
+  const ConnectionLaplacian laplacian = connection_laplacian(bundle);
+  const auto n = static_cast<size_t>(mesh.num_vertices());
+  // A zero vector fixed at one vertex of the last frame: the minimiser is zero.
+  std::vector<char> fixed(n * 3, 0);
+  fixed.resize(n * 4, 1);
+  std::fill(fixed.begin() + static_cast<std::ptrdiff_t>(n * 3 + 1), fixed.end(), char{0});
+  const std::vector<cplx> values(n * 4, cplx(0, 0));
+  std::vector<cplx> z(n * 4, cplx(2, 1));
+  SpaceTimeOptions shared;
+  shared.distributed = true;
+  const SolveReport r = SpaceTimeSolver(laplacian, 4, 30.0).solve(fixed, values, z, shared);
+  EXPECT_TRUE(r.success);
+  EXPECT_EQ(*std::max_element(z.begin(), z.end(), [](cplx a, cplx b) { return std::abs(a) < std::abs(b); }),
+            cplx(0, 0));
+}
+
+}  // namespace
+}  // namespace tvf
+
+int main(int argc, char** argv) {
+  const tvf::DistributedSession session;
+  ::testing::InitGoogleTest(&argc, argv);
+  // Rank 0 reports; the others' failures still fail the run (their exit status).
+  if (tvf::distributed_rank() != 0) {
+    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
+    delete listeners.Release(listeners.default_result_printer());
+  }
+  return RUN_ALL_TESTS();
+}
