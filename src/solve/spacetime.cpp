@@ -1193,8 +1193,8 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
     });
   }
   if (!coarse.empty())
-    report.method = fmt::format("preconditioned CG (temporal line solves, {} low temporal modes as coarse "
-                                "correction, {} spatial iterations in all), matrix-free",
+    report.method = fmt::format("preconditioned CG (temporal line solves) with {} low temporal modes as coarse "
+                                "correction ({} spatial iterations in all), matrix-free",
                                 coarse.size(), coarse_iterations.load());
   report.iterations = it;
   report.residual = rnorm / bnorm;
