@@ -39,7 +39,7 @@ struct SpaceTimeSolver::Operator {
 
 // The vectors of a solve (each resized only when the problem's size changes).
 struct SpaceTimeSolver::Workspace {
-  std::vector<cplx> rhs, x, r, p, ap, zp;
+  std::vector<cplx> rhs, x, r, p, ap, zp, t;
   std::vector<double> lower, pivot, upper;
   // What a solve leaves for the next one (a warm re-solve after an edit). The fixed set,
   // its values and the right-hand side: when the next solve has the same fixed set, it
@@ -273,7 +273,7 @@ struct SpaceTime {
 // Scratch vectors of one thread's mode solves, kept between modes (fresh |V|-sized
 // vectors per mode cost more in page faults than the sweeps of a high mode).
 struct ModeScratch {
-  Vec p, ap;
+  Vec p, ap, res, sp;  // res, sp: the coarse solves' only
   std::vector<double> diagonal, inverse;
   void resize(size_t n) {
     if (p.size() == n) return;
@@ -334,6 +334,75 @@ struct ModeSystem {
       if (it == max_iterations) return -1;
       const double pap = apply();
       if (!(pap > 0)) return -1;
+      const double alpha = rz / pap;
+      double rz_new = 0;
+      rr = 0;
+      for (size_t i = 0; i < n; ++i) {
+        y[i] += alpha * p[i];
+        res[i] -= alpha * ap[i];
+        const double q = std::norm(res[i]);
+        rr += q;
+        rz_new += inverse[i] * q;
+      }
+      ++it;
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (size_t i = 0; i < n; ++i) p[i] = inverse[i] * res[i] + beta * p[i];
+    }
+    return it;
+  }
+};
+
+// One low temporal mode q of a segment as a coarse space for CG when the fixed set moves:
+// the space-time vectors w_i(j) = q(j)·[(j, i) free] for every vertex i. Its Galerkin
+// matrix wᵢᴴ A wᵢ' is approximated by the separable
+//   E = S^½ L S^½ + T,  s_i = Σ_j q(j)² [(j, i) free],  T_ii = wᵢᴴ (b·D ⊗ T_time) wᵢ,
+// exact at every vertex the fixed set leaves alone in the segment (s_i = 1, T_ii = b·λ·d_i:
+// the temporal-mode method's system) and Hermitian positive definite everywhere; vertices
+// fixed at every frame of the segment (s_i = 0) are left out.
+struct CoarseMode {
+  size_t first = 0, count = 0;  // the segment's frames
+  Eigen::VectorXd q;            // the mode over them
+  std::vector<double> scale;    // √s_i
+  std::vector<double> shift;    // T_ii
+};
+
+struct CoarseSystem {
+  const SpaceTimeSolver::Operator& op;
+  const CoarseMode& mode;
+
+  // Jacobi-PCG on E y = g from y = 0 until ‖g − E y‖ ≤ tolerance·‖g‖ (or max_iterations).
+  // Returns the iterations.
+  int solve(const cplx* g, cplx* y, double tolerance, int max_iterations, ModeScratch& w) const {
+    const auto n = static_cast<size_t>(op.rows);
+    w.resize(n);
+    cplx *p = w.p.data(), *ap = w.ap.data();
+    double *diagonal = w.diagonal.data(), *inverse = w.inverse.data();
+    const double* sc = mode.scale.data();
+    if (w.res.size() != n) w.res.resize(n), w.sp.resize(n);
+    cplx *res = w.res.data(), *sp = w.sp.data();
+    double rz = 0, rr = 0;
+    for (size_t i = 0; i < n; ++i) {
+      y[i] = 0;
+      const bool out = sc[i] == 0;
+      diagonal[i] = out ? 0.0 : sc[i] * sc[i] * op.diagonal[i] + mode.shift[i];
+      inverse[i] = out ? 0.0 : 1.0 / diagonal[i];
+      res[i] = out ? cplx(0, 0) : g[i];
+      p[i] = inverse[i] * res[i];
+      rz += inverse[i] * std::norm(res[i]);
+      rr += std::norm(res[i]);
+    }
+    const double tau2 = tolerance * tolerance * rr;
+    int it = 0;
+    while (rr > tau2 && it < max_iterations) {
+      double pap = 0;
+      for (size_t i = 0; i < n; ++i) sp[i] = sc[i] * p[i];
+      for (size_t i = 0; i < n; ++i) {
+        const cplx v = sc[i] == 0 ? cplx(0, 0) : diagonal[i] * p[i] + sc[i] * op.off(static_cast<int>(i), sp);
+        ap[i] = v;
+        pap += p[i].real() * v.real() + p[i].imag() * v.imag();
+      }
+      if (!(pap > 0)) break;
       const double alpha = rz / pap;
       double rz_new = 0;
       rr = 0;
@@ -483,6 +552,13 @@ Segments find_segments(std::span<const char> fixed, size_t n, size_t nf) {
 // The transforms cost 6·m flops per entry for a segment of m frames (three products with
 // the m × m basis), a CG iteration about 40: past this length CG is cheaper.
 constexpr size_t kMostModeFrames = 1024;
+
+// The two-level CG's coarse space (SpaceTimeOptions::coarse_modes lowest temporal modes of
+// every segment): each mode's spatial system solved by Jacobi-PCG to this relative residual
+// (or this many iterations). A tighter inner tolerance saved no outer iteration (65² grid
+// × 100 with a moving vortex, docs/benchmarks.md).
+constexpr double kCoarseTolerance = 1e-2;
+constexpr int kCoarseIterations = 200;
 
 // Tolerances from which the temporal-mode method reports the residual its modes add up
 // to instead of measuring it with another sweep over all frames.
@@ -952,41 +1028,179 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
     return ordered_sum(nblocks, par, body);
   };
 
+  // The two-level preconditioner (options.coarse_modes > 0): the line solves leave the low
+  // temporal modes × smooth spatial error nearly untouched (their shift b·λ is small), which
+  // is what makes plain CG take ~70 iterations. A coarse correction over the lowest
+  // kCoarseModes temporal modes of every segment (CoarseMode: each mode's spatial system,
+  // solved by Jacobi-PCG to kCoarseTolerance) comes first, then the line solves act on what
+  // it leaves: z = C r + M⁻¹ (r − A C r). The coarse solve is inexact, so the CG is the
+  // flexible (Polak–Ribière) one.
+  std::vector<CoarseMode> coarse;
+  if (options.coarse_modes > 0) {
+    const Segments segs = find_segments(fixed, n, nf);
+    for (const auto& [first, count] : segs.segments) {
+      const TemporalBasis& basis = temporal_basis(static_cast<int>(first), static_cast<int>(count));
+      for (size_t k = 0; k < std::min(count, static_cast<size_t>(options.coarse_modes)); ++k) {
+        CoarseMode m;
+        m.first = first;
+        m.count = count;
+        m.q = basis.q.col(static_cast<Eigen::Index>(k));
+        m.scale.resize(n);
+        m.shift.resize(n);
+        coarse.push_back(std::move(m));
+      }
+    }
+    // √s_i and T_ii of every mode, vertex blocks in parallel.
+    blocks(n, par, [&](size_t i0, size_t i1) {
+      for (CoarseMode& m : coarse)
+        for (size_t i = i0; i < i1; ++i) {
+          const double c = b_ * op.weight_sum[i];
+          double mass = 0, t = 0;
+          for (size_t jj = 0; jj < m.count; ++jj) {
+            const size_t j = m.first + jj;
+            if (fixed[j * n + i]) continue;
+            const double q = m.q[static_cast<Eigen::Index>(jj)];
+            const double neighbours = (j > 0 ? 1.0 : 0.0) + (j + 1 < nf ? 1.0 : 0.0);
+            mass += q * q;
+            t += c * neighbours * q * q;
+            if (jj + 1 < m.count && !fixed[(j + 1) * n + i])
+              t -= 2 * c * q * m.q[static_cast<Eigen::Index>(jj + 1)];
+          }
+          const bool in = mass > 1e-12;
+          m.scale[i] = in ? std::sqrt(mass) : 0.0;
+          m.shift[i] = in ? std::max(t, 0.0) : 0.0;
+        }
+    });
+  }
+  std::vector<std::vector<cplx>> coarse_g(coarse.size()), coarse_y(coarse.size());
+  for (size_t m = 0; m < coarse.size(); ++m) coarse_g[m].resize(n), coarse_y[m].resize(n);
+  tbb::enumerable_thread_specific<ModeScratch> coarse_scratch;
+  std::atomic<long> coarse_iterations{0};
+  // out = C r: restriction to the modes, their spatial solves, prolongation (fixed entries 0).
+  // The modes of each frame (index into coarse, the frame's index in the segment).
+  std::vector<std::vector<std::pair<size_t, size_t>>> frame_modes(nf);
+  for (size_t m = 0; m < coarse.size(); ++m)
+    for (size_t jj = 0; jj < coarse[m].count; ++jj) frame_modes[coarse[m].first + jj].emplace_back(m, jj);
+  auto coarse_correction = [&](const Vec& r, Vec& out) {
+    // Blocks of vertices, every frame read once and used by all its modes.
+    blocks(n, par, [&](size_t i0, size_t i1) {
+      for (size_t m = 0; m < coarse.size(); ++m)
+        std::fill(coarse_g[m].begin() + static_cast<std::ptrdiff_t>(i0),
+                  coarse_g[m].begin() + static_cast<std::ptrdiff_t>(i1), cplx(0, 0));
+      for (size_t j = 0; j < nf; ++j) {
+        const cplx* rj = r.data() + j * n;
+        for (const auto& [m, jj] : frame_modes[j]) {
+          const double q = coarse[m].q[static_cast<Eigen::Index>(jj)];
+          cplx* g = coarse_g[m].data();
+          for (size_t i = i0; i < i1; ++i) g[i] += q * rj[i];
+        }
+      }
+    });
+    auto solve_mode = [&](size_t m) {
+      const int it = CoarseSystem{op, coarse[m]}.solve(coarse_g[m].data(), coarse_y[m].data(), kCoarseTolerance,
+                                                      kCoarseIterations, coarse_scratch.local());
+      coarse_iterations += it;
+    };
+    if (par)
+      tbb::parallel_for(size_t{0}, coarse.size(), solve_mode, tbb::simple_partitioner());
+    else
+      for (size_t m = 0; m < coarse.size(); ++m) solve_mode(m);
+    blocks(n, par, [&](size_t i0, size_t i1) {
+      for (size_t j = 0; j < nf; ++j) {
+        cplx* oj = out.data() + j * n;
+        std::fill(oj + i0, oj + i1, cplx(0, 0));
+        for (const auto& [m, jj] : frame_modes[j]) {
+          const double q = coarse[m].q[static_cast<Eigen::Index>(jj)];
+          const cplx* y = coarse_y[m].data();
+          for (size_t i = i0; i < i1; ++i) oj[i] += q * y[i];
+        }
+        const char* fj = fixed.data() + j * n;
+        for (size_t i = i0; i < i1; ++i)
+          if (fj[i]) oj[i] = 0;
+      }
+    });
+  };
+
   Vec& r = sized(work_->r, total);
   Vec& p = sized(work_->p, total);
   Vec& ap = sized(work_->ap, total);
   Vec& zp = sized(work_->zp, total);
+  Vec& t = coarse.empty() ? work_->t : sized(work_->t, total);
+  // zp = M r (either preconditioner); returns Re <r, zp>.
+  auto apply_preconditioner = [&]() {
+    if (coarse.empty()) return precondition(r, zp);
+    coarse_correction(r, t);  // t = C r
+    // ap = r − A C r (ap is free until the next product), in the sweep itself.
+    a.sweep(
+        t,
+        [&](size_t k, cplx, cplx yk) {
+          ap[k] = r[k] - yk;
+          return 0.0;
+        },
+        [&](size_t k) { ap[k] = 0; });
+    precondition(ap, zp);  // zp = M⁻¹ (r − A C r)
+    return chunked_sum(total, par, [&](size_t s, size_t e) {
+      double partial = 0;
+      for (size_t k = s; k < e; ++k) {
+        zp[k] += t[k];
+        partial += r[k].real() * zp[k].real() + r[k].imag() * zp[k].imag();
+      }
+      return partial;
+    });
+  };
   a.apply(x, ap);
   blocks(total, par, [&](size_t s, size_t e) {
     for (size_t k = s; k < e; ++k) r[k] = rhs_span[k] - ap[k];
   });
-  double rz = precondition(r, zp);
+  double rz = apply_preconditioner();
   p = zp;
   double rnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(r[k]); }));
   int it = 0;
+  const bool flexible = !coarse.empty();
   while (rnorm > options.tolerance * bnorm && it < options.max_iterations) {
     const double pap = a.apply(p, ap);
     if (!(pap > 0)) break;  // not positive definite on this subspace
     const double alpha = rz / pap;
-    // x += αp, r −= αAp and ‖r‖² in one pass.
-    rnorm = std::sqrt(chunked_sum(total, par, [&](size_t s, size_t e) {
-      double partial = 0;
-      for (size_t k = s; k < e; ++k) {
-        x[k] += alpha * p[k];
-        r[k] -= alpha * ap[k];
-        partial += std::norm(r[k]);
-      }
-      return partial;
-    }));
+    // x += αp, r −= αAp, ‖r‖² and (flexible CG) Re <r_new, z_old> in one pass.
+    double r_z_old = 0;
+    if (flexible) {
+      std::vector<double> parts((total + kSumChunk - 1) / kSumChunk);
+      rnorm = std::sqrt(chunked_sum(total, par, [&](size_t s, size_t e) {
+        double partial = 0, cross = 0;
+        for (size_t k = s; k < e; ++k) {
+          x[k] += alpha * p[k];
+          r[k] -= alpha * ap[k];
+          partial += std::norm(r[k]);
+          cross += r[k].real() * zp[k].real() + r[k].imag() * zp[k].imag();
+        }
+        parts[s / kSumChunk] = cross;
+        return partial;
+      }));
+      for (const double c : parts) r_z_old += c;
+    } else {
+      rnorm = std::sqrt(chunked_sum(total, par, [&](size_t s, size_t e) {
+        double partial = 0;
+        for (size_t k = s; k < e; ++k) {
+          x[k] += alpha * p[k];
+          r[k] -= alpha * ap[k];
+          partial += std::norm(r[k]);
+        }
+        return partial;
+      }));
+    }
     ++it;
     if (rnorm <= options.tolerance * bnorm) break;
-    const double rz_new = precondition(r, zp);
-    const double beta = rz_new / rz;
+    const double rz_new = apply_preconditioner();
+    const double beta = (rz_new - r_z_old) / rz;
     rz = rz_new;
     blocks(total, par, [&](size_t s, size_t e) {
       for (size_t k = s; k < e; ++k) p[k] = zp[k] + beta * p[k];
     });
   }
+  if (!coarse.empty())
+    report.method = fmt::format("preconditioned CG (temporal line solves) with {} low temporal modes as coarse "
+                                "correction ({} spatial iterations in all), matrix-free",
+                                coarse.size(), coarse_iterations.load());
   report.iterations = it;
   report.residual = rnorm / bnorm;
   report.success = std::isfinite(report.residual) && report.residual <= options.tolerance;
