@@ -115,7 +115,8 @@ RenderCommand::RenderCommand(CLI::App& app) {
   crowd_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
 
   particles_ = render_->add_subcommand(
-      "particles", "Particles with self-spin: leaves carried by the field, at a constant angle to it (planar domains)");
+      "particles", "Particles with self-spin: leaves carried by the field, at a constant angle to it (planar domains, "
+                   "or on a surface seen from a camera)");
   common(particles_, frames_or_video, true);
   particles_->add_option("--count", count_, "Number of particles")->capture_default_str();
   particles_->add_option("--particle-size", particle_size_, "Leaf length in pixels")->capture_default_str();
@@ -124,6 +125,13 @@ RenderCommand::RenderCommand(CLI::App& app) {
                          "(default: random per leaf)");
   particles_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
   time_scale(particles_, "leaves");
+  particles_->add_option("--view", view_, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default 1,-0.6,0.5)")
+      ->delimiter(',')
+      ->expected(3);
+  particles_->add_option("--up", up_, "Surfaces: the direction that points up in the picture, X,Y,Z (default 0,0,1)")
+      ->delimiter(',')
+      ->expected(3);
+  particles_->add_option("--fov", fov_, "Surfaces: vertical field of view of the camera in degrees")->capture_default_str();
 
   grass_ = render_->add_subcommand(
       "grass", "Grass: strands rooted on the ground whose tips an IK solve pulls toward the field (planar domains)");
@@ -273,7 +281,10 @@ int RenderCommand::run_particles() {
   options.particles.image_size = app_size_;
   options.particles.seed = seed_;
   options.time_scale = time_scale_;
-  RenderInput in = load_render_input(input_, progress, "particles", false);
+  if (!view_.empty()) options.surface.direction = Vec3(view_[0], view_[1], view_[2]);
+  if (!up_.empty()) options.surface.up = Vec3(up_[0], up_[1], up_[2]);
+  options.surface.fov = fov_;
+  RenderInput in = load_render_input(input_, progress, "particles", true);
   const TangentBundle bundle(in.mesh);
   progress.note("rendering");
   options.progress = [&](int done, int total) { progress.update(done, total); };
