@@ -89,5 +89,57 @@ void BM_SurfaceTextureFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_SurfaceTextureFrame)->Arg(512)->Arg(800)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The same frame in image space (SurfaceImageAnimator, what `tvf render texture` uses on
+// surfaces since issue 14): SIZE × SIZE texels, the mesh rasterized once for the camera;
+// per frame the field at the texels, the advection, the LIC and the composite with the
+// renderer's two pictures (made once, outside the timing). VERTICES picks the surface: the
+// 20,000-vertex torus above, or a 40,962-vertex geodesic sphere (icosphere level 6) with a
+// rotation about a tilted axis plus a time-varying swirl.
+void BM_SurfaceImageFrame(benchmark::State& state) {
+  const bool sphere = state.range(1) > 30000;
+  const Mesh mesh = sphere ? make_icosphere(6, 1.0) : make_torus(200, 100);
+  const TangentBundle bundle(mesh);
+  Field field(TimeSampling{0, 1, 40}, mesh.num_vertices());
+  for (int j = 0; j < field.frames(); ++j)
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      const Vec3& x = mesh.position(v);
+      const double t = field.time().time(j);
+      const Vec3 w = sphere ? Vec3(Vec3(0.3, 0.2, 1).normalized().cross(x) + t * Vec3(0, 0, 1).cross(x).cross(x))
+                            : Vec3(Vec3::UnitZ().cross(x) + (0.5 + t) * Vec3(0, 0, 1).cross(x).cross(x).normalized());
+      field.at(j, v) = bundle.world_to_vertex(v, w);
+    }
+  TextureOptions o;
+  o.size = static_cast<int>(state.range(0));
+  SurfaceImageAnimator animator(bundle, field, o);
+  MeshRenderer renderer;
+  renderer.set_mesh(mesh);
+  RenderOptions ro;
+  ro.width = ro.height = o.size;
+  ro.ambient = 0.5;
+  renderer.set_colors(std::vector<std::uint32_t>(static_cast<size_t>(mesh.num_vertices()), 0u));
+  const Image dark = renderer.render(animator.camera(), ro);
+  renderer.set_colors(std::vector<std::uint32_t>(static_cast<size_t>(mesh.num_vertices()), 0xFFFFFFu));
+  const Image lit = renderer.render(animator.camera(), ro);
+  animator.advance(0.0);
+  int k = 0;
+  timespec c0{}, c1{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
+  for (auto _ : state) {
+    k = (k + 1) % field.frames();
+    animator.advance(field.time().time(k));
+    const Image img = animator.composite(lit, dark);
+    benchmark::DoNotOptimize(img.pixels.data());
+  }
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+  const double cpu = (static_cast<double>(c1.tv_sec - c0.tv_sec) + 1e-9 * static_cast<double>(c1.tv_nsec - c0.tv_nsec)) /
+                     static_cast<double>(state.iterations());
+  state.counters["cpu_ms"] = 1e3 * cpu;
+  state.counters["vertices"] = mesh.num_vertices();
+  state.counters["fps"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["fps_2_idle_cores"] = 2.0 / cpu;
+}
+BENCHMARK(BM_SurfaceImageFrame)->Args({512, 20000})->Args({512, 40962})->Args({800, 20000})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
+
 }  // namespace
 }  // namespace tvf

@@ -12,6 +12,7 @@
 #include "tvf/render/grass.h"
 #include "tvf/render/painterly.h"
 #include "tvf/render/particles.h"
+#include "tvf/render/surface_crowd.h"
 #include "tvf/render/texture_animation.h"
 
 #include <fmt/format.h>
@@ -105,7 +106,8 @@ RenderCommand::RenderCommand(CLI::App& app) {
   time_scale(painterly_, "strokes");
 
   crowd_ = render_->add_subcommand(
-      "crowd", "Crowd steering: agents moving by w_goal*G + w_field*F around obstacles to goals (planar domains)");
+      "crowd", "Crowd steering: agents moving by w_goal*G + w_field*F around obstacles to goals (planar domains, or "
+               "on a surface by geodesic distance)");
   common(crowd_, "Output: a folder of PNG frames, a file ending in .mp4, and/or a file ending in .csv (trajectories)",
          false);
   crowd_->add_option("--crowd", crowd_file_, "The crowd file (JSON: agents, start, goals, obstacles, weights)")
@@ -113,9 +115,17 @@ RenderCommand::RenderCommand(CLI::App& app) {
   crowd_->add_option("--w-goal", weight_goal_, "Weight of the goal direction G (overrides the crowd file)");
   crowd_->add_option("--w-field", weight_field_, "Weight of the designed field F (overrides the crowd file)");
   crowd_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
+  crowd_->add_option("--view", view_, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default 1,-0.6,0.5)")
+      ->delimiter(',')
+      ->expected(3);
+  crowd_->add_option("--up", up_, "Surfaces: the direction that points up in the picture, X,Y,Z (default 0,0,1)")
+      ->delimiter(',')
+      ->expected(3);
+  crowd_->add_option("--fov", fov_, "Surfaces: vertical field of view of the camera in degrees")->capture_default_str();
 
   particles_ = render_->add_subcommand(
-      "particles", "Particles with self-spin: leaves carried by the field, at a constant angle to it (planar domains)");
+      "particles", "Particles with self-spin: leaves carried by the field, at a constant angle to it (planar domains, "
+                   "or on a surface seen from a camera)");
   common(particles_, frames_or_video, true);
   particles_->add_option("--count", count_, "Number of particles")->capture_default_str();
   particles_->add_option("--particle-size", particle_size_, "Leaf length in pixels")->capture_default_str();
@@ -124,6 +134,13 @@ RenderCommand::RenderCommand(CLI::App& app) {
                          "(default: random per leaf)");
   particles_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
   time_scale(particles_, "leaves");
+  particles_->add_option("--view", view_, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default 1,-0.6,0.5)")
+      ->delimiter(',')
+      ->expected(3);
+  particles_->add_option("--up", up_, "Surfaces: the direction that points up in the picture, X,Y,Z (default 0,0,1)")
+      ->delimiter(',')
+      ->expected(3);
+  particles_->add_option("--fov", fov_, "Surfaces: vertical field of view of the camera in degrees")->capture_default_str();
 
   grass_ = render_->add_subcommand(
       "grass", "Grass: strands rooted on the ground whose tips an IK solve pulls toward the field (planar domains)");
@@ -234,11 +251,39 @@ int RenderCommand::run_crowd() {
   options.frames = frames_or_default();
   options.fps = fps_;
   options.size = app_size_;
+  RenderInput in = load_render_input(input_, progress, "crowd", true);
+  const TangentBundle bundle(in.mesh);
+  if (!bundle.is_flat()) {
+    // A surface: agents walk on the mesh to goals by geodesic distance (render/surface_crowd.h).
+    if (!options.csv.empty()) throw Error(fmt::format("{}: CSV trajectories are written for planar crowds only", options.csv));
+    SurfaceCrowdSpec sspec = load_surface_crowd_spec(crowd_file_);
+    if (weight_goal_) sspec.weight_goal = *weight_goal_;
+    if (weight_field_) sspec.weight_field = *weight_field_;
+    SurfaceCrowdAnimationOptions so;
+    so.frames = options.frames;
+    so.size = options.size;
+    so.frames_dir = options.frames_dir;
+    so.video = options.video;
+    so.fps = options.fps;
+    if (!view_.empty()) so.view.direction = Vec3(view_[0], view_[1], view_[2]);
+    if (!up_.empty()) so.view.up = Vec3(up_[0], up_[1], up_[2]);
+    so.view.fov = fov_;
+    progress.note("simulating");
+    so.progress = [&](int done, int total) { progress.update(done, total); };
+    SurfaceCrowdResult sres;
+    const AnimationReport sreport = write_surface_crowd_animation(bundle, in.field, sspec, so, &sres);
+    progress.finish();
+    for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    if (!quiet_) {
+      const long arrived = std::count_if(sres.arrived.begin(), sres.arrived.end(), [](int k) { return k >= 0; });
+      std::printf("%ld of %zu agents reached a goal\n", arrived, sres.arrived.size());
+      print_report("crowd", sreport.frames, sreport.width, sreport.height, sreport.seconds, sreport.files);
+    }
+    return 0;
+  }
   CrowdSpec spec = load_crowd_spec(crowd_file_);
   if (weight_goal_) spec.weight_goal = *weight_goal_;
   if (weight_field_) spec.weight_field = *weight_field_;
-  RenderInput in = load_render_input(input_, progress, "crowd", false);
-  const TangentBundle bundle(in.mesh);
   progress.note("simulating");
   options.progress = [&](int done, int total) { progress.update(done, total); };
   CrowdResult result;
@@ -273,7 +318,10 @@ int RenderCommand::run_particles() {
   options.particles.image_size = app_size_;
   options.particles.seed = seed_;
   options.time_scale = time_scale_;
-  RenderInput in = load_render_input(input_, progress, "particles", false);
+  if (!view_.empty()) options.surface.direction = Vec3(view_[0], view_[1], view_[2]);
+  if (!up_.empty()) options.surface.up = Vec3(up_[0], up_[1], up_[2]);
+  options.surface.fov = fov_;
+  RenderInput in = load_render_input(input_, progress, "particles", true);
   const TangentBundle bundle(in.mesh);
   progress.note("rendering");
   options.progress = [&](int done, int total) { progress.update(done, total); };

@@ -1,4 +1,5 @@
 #include "tvf/mesh/log_map.h"
+#include "tvf/mesh/heat_distance.h"
 
 #include "tvf/core/error.h"
 #include "tvf/mesh/intrinsic_triangulation.h"
@@ -8,6 +9,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 
 namespace tvf {
 
@@ -33,7 +35,8 @@ Vec3 face_gradient(const TangentBundle& bundle, int f, const Eigen::VectorXd& u)
 
 }  // namespace
 
-struct LogMap::Solvers {
+// The scalar heat method's systems (shared by LogMap and HeatDistance).
+struct HeatSolvers {
   Eigen::VectorXd mass;                              // lumped (barycentric) areas
   // The heat flows, the heat method's gradient and divergence and the Poisson solve run on
   // the intrinsic Delaunay triangulation (non-negative cotan weights on any mesh): its
@@ -43,7 +46,6 @@ struct LogMap::Solvers {
   std::vector<std::array<Vec3, 3>> corners;
   std::vector<Vec3> normals;
   std::vector<double> cot;
-  Eigen::SimplicialLDLT<SpCMat> vector_heat;         // M + t L∇
   Eigen::SimplicialLDLT<SpMat> scalar_heat;          // M + t L
   Eigen::SimplicialLDLT<SpMat> poisson;              // L with vertex 0 pinned
   double h = 0;                                      // mean edge length
@@ -52,16 +54,23 @@ struct LogMap::Solvers {
   double far = 0;  // the distance given to vertices of other components than p's
 };
 
+
+struct LogMap::Solvers : HeatSolvers {
+  Eigen::SimplicialLDLT<SpCMat> vector_heat;         // M + t L∇
+};
+
 LogMap::~LogMap() = default;
 
-LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
-    : bundle_(bundle), options_(options) {
-  if (bundle.is_flat()) return;
+namespace {
+
+// Assembles and factors the scalar systems on the intrinsic Delaunay triangulation (and
+// the vector heat system's triplets when ct is given); t = time_factor · h².
+void build_heat(const TangentBundle& bundle, double time_factor, HeatSolvers* s,
+                std::vector<Eigen::Triplet<cplx>>* ct) {
   const Mesh& mesh = bundle.mesh();
   const int nv = mesh.num_vertices();
-  auto s = std::make_unique<Solvers>();
   s->h = mesh.mean_edge_length();
-  const double t = options_.time_factor * s->h * s->h;
+  const double t = time_factor * s->h * s->h;
 
   s->mass = Eigen::VectorXd::Zero(nv);
   for (int f = 0; f < mesh.num_faces(); ++f)
@@ -87,12 +96,11 @@ LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
   s->cot.resize(static_cast<size_t>(idt.num_halfedges()));
   for (int h = 0; h < idt.num_halfedges(); ++h) s->cot[static_cast<size_t>(h)] = idt.cot_opposite(h);
 
-  std::vector<Eigen::Triplet<cplx>> ct;
   std::vector<Eigen::Triplet<double>> rt, ht;
-  ct.reserve(static_cast<size_t>(nv + 4 * mesh.num_edges()));
+  if (ct) ct->reserve(static_cast<size_t>(nv + 4 * mesh.num_edges()));
   rt.reserve(static_cast<size_t>(nv + 4 * mesh.num_edges()));
   for (int v = 0; v < nv; ++v) {
-    ct.emplace_back(v, v, s->mass[v]);
+    if (ct) ct->emplace_back(v, v, s->mass[v]);
     ht.emplace_back(v, v, s->mass[v]);
   }
   for (int h = 0; h < idt.num_halfedges(); ++h) {
@@ -102,10 +110,12 @@ LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
     const int i = idt.tail(h), j = idt.head(h);
     const cplx rij = idt.transport(h);  // T_i → T_j
     // (L∇ z)_j ∋ −w·r_ij·z_i and (L∇ z)_i ∋ −w·conj(r_ij)·z_j: Hermitian.
-    ct.emplace_back(i, i, t * w);
-    ct.emplace_back(j, j, t * w);
-    ct.emplace_back(j, i, -t * w * rij);
-    ct.emplace_back(i, j, -t * w * std::conj(rij));
+    if (ct) {
+      ct->emplace_back(i, i, t * w);
+      ct->emplace_back(j, j, t * w);
+      ct->emplace_back(j, i, -t * w * rij);
+      ct->emplace_back(i, j, -t * w * std::conj(rij));
+    }
     ht.emplace_back(i, i, t * w);
     ht.emplace_back(j, j, t * w);
     ht.emplace_back(i, j, -t * w);
@@ -141,10 +151,6 @@ LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
   }
   s->far = 1e3 * mesh.diameter();
 
-  SpCMat a(nv, nv);
-  a.setFromTriplets(ct.begin(), ct.end());
-  s->vector_heat.compute(a);
-  TVF_CHECK(s->vector_heat.info() == Eigen::Success, "vector heat factorization failed");
   SpMat hs(nv, nv);
   hs.setFromTriplets(ht.begin(), ht.end());
   s->scalar_heat.compute(hs);
@@ -153,43 +159,32 @@ LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
   l.setFromTriplets(rt.begin(), rt.end());
   s->poisson.compute(l);
   TVF_CHECK(s->poisson.info() == Eigen::Success, "Poisson factorization failed");
+}
+
+}  // namespace
+
+LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
+    : bundle_(bundle), options_(options) {
+  if (bundle.is_flat()) return;
+  const int nv = bundle.mesh().num_vertices();
+  auto s = std::make_unique<Solvers>();
+  std::vector<Eigen::Triplet<cplx>> ct;
+  build_heat(bundle, options_.time_factor, s.get(), &ct);
+  SpCMat a(nv, nv);
+  a.setFromTriplets(ct.begin(), ct.end());
+  s->vector_heat.compute(a);
+  TVF_CHECK(s->vector_heat.info() == Eigen::Success, "vector heat factorization failed");
   solvers_ = std::move(s);
 }
 
-void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
-  const Mesh& mesh = bundle_.mesh();
-  const int nv = mesh.num_vertices();
-  chart.coords.resize(static_cast<size_t>(nv));
-  chart.frame.resize(static_cast<size_t>(nv));
-  const Face& pf = mesh.face(p.face);
-  const Vec3 x = p.bary[0] * mesh.position(pf[0]) + p.bary[1] * mesh.position(pf[1]) +
-                 p.bary[2] * mesh.position(pf[2]);
-
-  if (!solvers_) {
-    // Flat: the plane's own coordinates; the frame at p is the global frame.
-    for (int v = 0; v < nv; ++v) {
-      const Vec3 d = mesh.position(v) - x;
-      chart.coords[static_cast<size_t>(v)] = cplx(d.x(), d.y());
-      chart.frame[static_cast<size_t>(v)] = cplx(1, 0);
-    }
-    return;
-  }
-  const Solvers& s = *solvers_;
-
-  // 1. Parallel transport of p's frame: heat-flow the face frame's e1, placed on the
-  //    face's corners with barycentric weights.
-  Eigen::VectorXcd y0 = Eigen::VectorXcd::Zero(nv);
-  for (int c = 0; c < 3; ++c) {
-    const int h = 3 * p.face + c;
-    y0[pf[static_cast<size_t>(c)]] += p.bary[c] * std::conj(bundle_.corner_to_face(h));
-  }
-  const Eigen::VectorXcd y = s.vector_heat.solve(y0);
-
+// The heat method's distance (Crane, Weischedel & Wardetzky 2013) from the heat u0 placed
+// at the sources, up to a constant per component: heat flow, unit gradient field, Poisson.
+namespace {
+Eigen::VectorXd heat_distance(const HeatSolvers& s, const Eigen::VectorXd& u0) {
+  const int nv = static_cast<int>(u0.size());
   // 2. Geodesic direction: the heat method's unit field X = −∇u/|∇u| per face, u the
   //    heat flowed from p (a delta with barycentric weights). Unlike a diffused ring of
   //    radial vectors, a point delta has no preferred direction, so X is unbiased.
-  Eigen::VectorXd u0 = Eigen::VectorXd::Zero(nv);
-  for (int c = 0; c < 3; ++c) u0[pf[static_cast<size_t>(c)]] += p.bary[c];
   const Eigen::VectorXd u = s.scalar_heat.solve(u0);
   const int nf = static_cast<int>(s.faces.size());
   std::vector<Vec3> xf(static_cast<size_t>(nf));
@@ -235,7 +230,105 @@ void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
       div[v] -= sum[c] / area[c] * s.mass[v];
     }
   }
-  const Eigen::VectorXd phi = s.poisson.solve(-div);
+  return s.poisson.solve(-div);
+}
+}  // namespace
+
+HeatDistance::HeatDistance(const TangentBundle& bundle, double time_factor) : bundle_(bundle) {
+  if (bundle.is_flat()) return;
+  auto s = std::make_unique<HeatSolvers>();
+  build_heat(bundle, time_factor, s.get(), nullptr);
+  solvers_ = std::move(s);
+}
+
+HeatDistance::~HeatDistance() = default;
+
+std::vector<double> HeatDistance::distance(std::span<const SurfacePoint> sources) const {
+  const Mesh& mesh = bundle_.mesh();
+  const int nv = mesh.num_vertices();
+  TVF_CHECK(!sources.empty(), "geodesic distance from no source");
+  std::vector<double> out(static_cast<size_t>(nv), 0.0);
+  auto point_of = [&](const SurfacePoint& p) {
+    const Face& f = mesh.face(p.face);
+    return Vec3(p.bary[0] * mesh.position(f[0]) + p.bary[1] * mesh.position(f[1]) + p.bary[2] * mesh.position(f[2]));
+  };
+  if (!solvers_) {
+    for (int v = 0; v < nv; ++v) {
+      double d = std::numeric_limits<double>::infinity();
+      for (const SurfacePoint& p : sources) d = std::min(d, (mesh.position(v) - point_of(p)).norm());
+      out[static_cast<size_t>(v)] = d;
+    }
+    return out;
+  }
+  const HeatSolvers& s = *solvers_;
+  Eigen::VectorXd u0 = Eigen::VectorXd::Zero(nv);
+  for (const SurfacePoint& p : sources) {
+    const Face& f = mesh.face(p.face);
+    for (int c = 0; c < 3; ++c) u0[f[static_cast<size_t>(c)]] += p.bary[c];
+  }
+  const Eigen::VectorXd phi = heat_distance(s, u0);
+  // The constant of each component: fitted, as in compute(), on the vertices around its
+  // sources, where the distance to the nearest source is the chord to O(h³).
+  std::vector<double> offset(static_cast<size_t>(s.num_components), 0.0);
+  std::vector<int> count(offset.size(), 0);
+  for (const SurfacePoint& p : sources) {
+    const Vec3 x = point_of(p);
+    auto fit = [&](int v) {
+      double chord = std::numeric_limits<double>::infinity();
+      for (const SurfacePoint& q : sources) chord = std::min(chord, (mesh.position(v) - point_of(q)).norm());
+      if (chord > 2 * (mesh.position(v) - x).norm() + 1e-300) return;  // nearer another source's tip
+      const auto c = static_cast<size_t>(s.component[static_cast<size_t>(v)]);
+      offset[c] += phi[v] - chord;
+      ++count[c];
+    };
+    for (int c : mesh.face(p.face)) {
+      fit(c);
+      for (int h : mesh.outgoing(c)) fit(mesh.head(h));
+    }
+  }
+  for (int v = 0; v < nv; ++v) {
+    const auto c = static_cast<size_t>(s.component[static_cast<size_t>(v)]);
+    out[static_cast<size_t>(v)] =
+        count[c] > 0 ? std::max(0.0, phi[v] - offset[c] / count[c]) : std::numeric_limits<double>::infinity();
+  }
+  return out;
+}
+
+void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
+  const Mesh& mesh = bundle_.mesh();
+  const int nv = mesh.num_vertices();
+  chart.coords.resize(static_cast<size_t>(nv));
+  chart.frame.resize(static_cast<size_t>(nv));
+  const Face& pf = mesh.face(p.face);
+  const Vec3 x = p.bary[0] * mesh.position(pf[0]) + p.bary[1] * mesh.position(pf[1]) +
+                 p.bary[2] * mesh.position(pf[2]);
+
+  if (!solvers_) {
+    // Flat: the plane's own coordinates; the frame at p is the global frame.
+    for (int v = 0; v < nv; ++v) {
+      const Vec3 d = mesh.position(v) - x;
+      chart.coords[static_cast<size_t>(v)] = cplx(d.x(), d.y());
+      chart.frame[static_cast<size_t>(v)] = cplx(1, 0);
+    }
+    return;
+  }
+  const Solvers& s = *solvers_;
+
+  // 1. Parallel transport of p's frame: heat-flow the face frame's e1, placed on the
+  //    face's corners with barycentric weights.
+  Eigen::VectorXcd y0 = Eigen::VectorXcd::Zero(nv);
+  for (int c = 0; c < 3; ++c) {
+    const int h = 3 * p.face + c;
+    y0[pf[static_cast<size_t>(c)]] += p.bary[c] * std::conj(bundle_.corner_to_face(h));
+  }
+  const Eigen::VectorXcd y = s.vector_heat.solve(y0);
+
+  // 2–3. Geodesic direction and distance by the heat method from a point delta at p
+  //      (barycentric weights): unlike a diffused ring of radial vectors, a point delta
+  //      has no preferred direction, so the direction field is unbiased.
+  Eigen::VectorXd u0 = Eigen::VectorXd::Zero(nv);
+  for (int c = 0; c < 3; ++c) u0[pf[static_cast<size_t>(c)]] += p.bary[c];
+  const Eigen::VectorXd phi = heat_distance(s, u0);
   // Geodesic direction at the vertices: ∇φ (the gradient field closest to X, smoother
   // than X itself), area-weighted over the faces around each vertex and carried into T_v.
   Eigen::VectorXcd radial = Eigen::VectorXcd::Zero(nv);

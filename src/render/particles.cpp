@@ -5,6 +5,7 @@
 #include "tvf/core/error.h"
 #include "tvf/integrate/pathline.h"
 #include "tvf/render/frame_output.h"
+#include "tvf/render/surface_particles.h"
 
 #include <cairo.h>
 #include <fmt/format.h>
@@ -206,6 +207,7 @@ Image ParticleSystem::picture() const { return impl_->picture(); }
 
 AnimationReport write_particle_animation(const TangentBundle& bundle, const Field& field,
                                          const ParticleAnimationOptions& options) {
+  if (!bundle.is_flat()) return write_surface_particle_animation(bundle, field, options);
   const auto start = std::chrono::steady_clock::now();
   const int total = options.frames > 0 ? options.frames : field.frames();
   check_option(total >= 1 && total <= 1'000'000, "frames", fmt::format("{} is outside [1, 1000000]", total));

@@ -60,14 +60,13 @@ Field resample_field(const TangentBundle& bundle, const Field& field, const Tang
 
 namespace {
 
-// The samples: the mesh's vertices (density 1) or those of its faces subdivided, with the
-// field resampled there (FieldSampler in the original face, projected onto the new vertex's
-// tangent plane, its length kept).
+// The samples: the mesh's vertices (density 1) or those of its faces subdivided. The field
+// is read there frame by frame (Impl::vertex_values), not resampled for all its frames at
+// once: memory does not grow with the field's frames.
 struct SampleSurface {
   int density = 1;
   std::unique_ptr<FaceSubdivision> subdivision;
   std::unique_ptr<TangentBundle> bundle;
-  std::unique_ptr<Field> field;
 };
 
 int automatic_density(const Mesh& mesh) {
@@ -77,13 +76,12 @@ int automatic_density(const Mesh& mesh) {
   return n;
 }
 
-SampleSurface make_samples(const TangentBundle& bundle, const Field& field, int density) {
+SampleSurface make_samples(const TangentBundle& bundle, int density) {
   SampleSurface s;
   s.density = density > 0 ? density : automatic_density(bundle.mesh());
   if (s.density == 1) return s;
   s.subdivision = std::make_unique<FaceSubdivision>(subdivide_faces(bundle.mesh(), s.density));
   s.bundle = std::make_unique<TangentBundle>(s.subdivision->mesh);
-  s.field = std::make_unique<Field>(resample_field(bundle, field, *s.bundle, *s.subdivision));
   return s;
 }
 
@@ -92,7 +90,8 @@ SampleSurface make_samples(const TangentBundle& bundle, const Field& field, int 
 struct SurfaceSynthesizer::Impl {
   SampleSurface samples;
   const TangentBundle& bundle;  // of the samples
-  const Field& field;           // at the samples
+  const TangentBundle& input;   // of the field's mesh
+  const Field& field;           // on the input mesh
   SynthesisOptions o;
   int C = 3;
   double texel_ = 0;
@@ -110,9 +109,10 @@ struct SurfaceSynthesizer::Impl {
   SynthesisFrameReport report;
 
   Impl(const TangentBundle& b, const Field& f, const Exemplar& e, const SynthesisOptions& options)
-      : samples(make_samples(b, f, checked_density(options.density))),
+      : samples(make_samples(b, checked_density(options.density))),
         bundle(samples.bundle ? *samples.bundle : b),
-        field(samples.field ? *samples.field : f),
+        input(b),
+        field(f),
         o(options),
         C(e.channels) {
     const Mesh& mesh = bundle.mesh();
@@ -134,9 +134,9 @@ struct SurfaceSynthesizer::Impl {
     check_option(o.candidates >= 1 && o.candidates <= 16, "candidates", fmt::format("{} is outside [1, 16]", o.candidates));
     for (const cplx& z : field.data())
       if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
-        throw_input_error(mesh.source(), "", "the field has a value that is not a finite number");
-    TVF_CHECK(field.num_vertices() == mesh.num_vertices(), "field of {} vertices on a mesh of {}", field.num_vertices(),
-              mesh.num_vertices());
+        throw_input_error(b.mesh().source(), "", "the field has a value that is not a finite number");
+    TVF_CHECK(field.num_vertices() == b.mesh().num_vertices(), "field of {} vertices on a mesh of {}",
+              field.num_vertices(), b.mesh().num_vertices());
     texel_ = o.texel > 0 ? o.texel : mesh.mean_edge_length();
 
     build_exemplar_pyramid(e, o, exemplars, indices);
@@ -184,10 +184,26 @@ struct SurfaceSynthesizer::Impl {
     return density;
   }
 
+  // The field at time tt at the samples: at the input's vertices, or (subdivided) as
+  // resample_field does for one time: FieldSampler in the original face, projected onto
+  // the sample's tangent plane, its length kept.
   std::vector<cplx> vertex_values(double tt) const {
-    const FieldSampler sampler(bundle, field);
+    const FieldSampler sampler(input, field);
     std::vector<cplx> values(static_cast<size_t>(bundle.mesh().num_vertices()));
-    for (size_t v = 0; v < values.size(); ++v) values[v] = sampler.at_vertex(static_cast<int>(v), tt);
+    if (!samples.subdivision) {
+      for (size_t v = 0; v < values.size(); ++v) values[v] = sampler.at_vertex(static_cast<int>(v), tt);
+      return values;
+    }
+    const FaceSubdivision& sub = *samples.subdivision;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, values.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t v = r.begin(); v < r.end(); ++v) {
+        const Vec3 w = sampler.world(SurfacePoint{sub.face[v], sub.bary[v]}, tt);
+        cplx z = bundle.world_to_vertex(static_cast<int>(v), w);
+        const double m = std::abs(z);
+        if (m > 0) z *= w.norm() / m;
+        values[v] = z;
+      }
+    });
     return values;
   }
 

@@ -81,8 +81,13 @@ TEST(CliRender, SurfaceTextureFromACamera) {
   EXPECT_EQ(count_lines(z.output), 1) << z.output;
   EXPECT_NE(z.output.find("view"), std::string::npos) << z.output;
   EXPECT_FALSE(fs::exists(dir / "o3"));
+  // Leaves are carried on the surface too, seen from the same camera options.
+  const auto q = run_tvf("render particles " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "leaves") +
+                         " --size 64 --count 50 --view 0,-1,1 -q");
+  ASSERT_EQ(q.exit_code, 0) << q.output;
+  EXPECT_EQ(count_pngs(dir / "leaves"), 3);
   // The other kinds still draw planar domains only, and say so in one sentence.
-  const auto p = run_tvf("render particles " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "p"));
+  const auto p = run_tvf("render grass " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "p"));
   EXPECT_NE(p.exit_code, 0);
   EXPECT_EQ(count_lines(p.output), 1) << p.output;
   EXPECT_NE(p.output.find("sphere.json"), std::string::npos) << p.output;

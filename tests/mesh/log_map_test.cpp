@@ -1,4 +1,5 @@
 #include "tvf/mesh/log_map.h"
+#include "tvf/mesh/heat_distance.h"
 
 #include "support/test_meshes.h"
 #include "tvf/mesh/grid.h"
@@ -6,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace tvf {
@@ -95,6 +97,54 @@ TEST(LogMap, UnchangedByUniformScaling) {
     EXPECT_LT(std::abs(c2.coords[v] / 1000.0 - c1.coords[v]), 1e-9 * (1 + std::abs(c1.coords[v])));
     EXPECT_LT(std::abs(c2.frame[v] - c1.frame[v]), 1e-9);
   }
+}
+
+}  // namespace
+}  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// The heat method's geodesic distance on the unit sphere is the great-circle distance
+// acos(p·x) from the nearest source, within the discretization's error.
+TEST(GeodesicDistance, GreatCircleDistanceOnTheSphere) {
+  const Mesh sphere = make_icosphere(5, 1.0);
+  const TangentBundle bundle(sphere);
+  const HeatDistance map(bundle);
+  const SurfacePoint a = closest_point(sphere, Vec3(0.3, -0.2, 0.9).normalized());
+  const SurfacePoint b = closest_point(sphere, Vec3(-0.5, 0.6, -0.4).normalized());
+  auto at = [&](const SurfacePoint& p) {
+    const Face& f = sphere.face(p.face);
+    return Vec3(p.bary[0] * sphere.position(f[0]) + p.bary[1] * sphere.position(f[1]) +
+                p.bary[2] * sphere.position(f[2]));
+  };
+  for (const bool both : {false, true}) {
+    std::vector<SurfacePoint> sources{a};
+    if (both) sources.push_back(b);
+    const std::vector<double> d = map.distance(sources);
+    double worst = 0, mean = 0;
+    for (int v = 0; v < sphere.num_vertices(); ++v) {
+      const Vec3 x = sphere.position(v).normalized();
+      double exact = std::acos(std::clamp(x.dot(at(a).normalized()), -1.0, 1.0));
+      if (both) exact = std::min(exact, std::acos(std::clamp(x.dot(at(b).normalized()), -1.0, 1.0)));
+      const double err = std::abs(d[static_cast<size_t>(v)] - exact);
+      worst = std::max(worst, err);
+      mean += err;
+    }
+    mean /= sphere.num_vertices();
+    EXPECT_LT(mean, 0.01) << "sources " << sources.size();
+    EXPECT_LT(worst, 0.04) << "sources " << sources.size();  // the antipode's cone tip, the cut locus' ridge
+  }
+}
+
+TEST(GeodesicDistance, StraightLineOnAPlane) {
+  const Mesh& grid = test::grid_mesh();
+  const TangentBundle bundle(grid);
+  const HeatDistance map(bundle);
+  const SurfacePoint p = closest_point(grid, Vec3(0.2, 0.1, 0));
+  const std::vector<double> d = map.distance(std::vector<SurfacePoint>{p});
+  for (int v = 0; v < grid.num_vertices(); ++v)
+    EXPECT_NEAR(d[static_cast<size_t>(v)], (grid.position(v) - Vec3(0.2, 0.1, 0)).norm(), 1e-9);
 }
 
 }  // namespace

@@ -322,5 +322,151 @@ TEST(SurfaceTexture, VideoOfASurfaceHasEveryFrame) {
   EXPECT_GT(std::count_if(levels.begin(), levels.end(), [](int n) { return n > 0; }), 100);
 }
 
+
+// --- Image-space advection (SurfaceImageAnimator) ----------------------------------------
+
+TEST(SurfaceImage, TexelsSeeTheNearestPointOfTheSurface) {
+  Spin s;
+  TextureOptions o;
+  o.size = 120;
+  const SurfaceImageAnimator a(s.bundle, s.field, o);
+  ASSERT_EQ(a.grid(), 120);
+  const Camera& cam = a.camera();
+  const double dist = (cam.eye - cam.target).norm();
+  const Vec3 c = cam.project(Vec3::Zero(), 120, 120);
+  // The silhouette of the (faceted) unit sphere: a circle of angular radius asin(1/D).
+  const double r = 60.0 * std::tan(std::asin(1.0 / dist)) / std::tan(15.0 * kPi / 180.0);
+  int seen = 0;
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 120; ++x) {
+      const size_t k = static_cast<size_t>(y) * 120 + static_cast<size_t>(x);
+      const double d = std::hypot(x + 0.5 - c.x(), y + 0.5 - c.y());
+      const int f = a.texel_faces()[k];
+      if (d > r + 0.5) {
+        EXPECT_EQ(f, -1) << x << "," << y;
+      }
+      if (d < r - 2.0) {
+        EXPECT_GE(f, 0) << x << "," << y;  // inside the inscribed polygon
+      }
+      if (f < 0) continue;
+      ++seen;
+      // The point seen projects onto the texel's centre, lies on the face, and faces the eye
+      // (the nearest of the two points where the ray meets the sphere).
+      const Vec3 p = a.texel_position(k);
+      const Vec3 q = cam.project(p, 120, 120);
+      EXPECT_NEAR(q.x(), x + 0.5, 1e-3);
+      EXPECT_NEAR(q.y(), y + 0.5, 1e-3);
+      EXPECT_NEAR(p.norm(), 1.0, 0.02);
+      EXPECT_GT(s.bundle.face_normal(f).dot(cam.eye - p), 0.0);
+    }
+  EXPECT_NEAR(seen, kPi * r * r, 0.03 * kPi * r * r);
+}
+
+TEST(SurfaceImage, FramesAreCoherentAndMoveWithTheFlow) {
+  Spin s;
+  TextureOptions o;
+  o.size = 160;
+  o.lic = 0;
+  o.pixels_per_frame = 6;
+  o.warmup = 15;
+  const double dt = 1.0 / 40;
+  SurfaceImageAnimator a(s.bundle, s.field, o);
+  a.advance(0.5);
+  const std::vector<float> f0 = a.texture();
+  a.advance(0.5 + dt);
+  const std::vector<float> f1 = a.texture();
+  TextureOptions o2 = o;
+  o2.seed = 7;
+  SurfaceImageAnimator b(s.bundle, s.field, o2);
+  b.advance(0.5);
+  std::vector<float> s0, s1, sb;
+  for (size_t k = 0; k < f0.size(); ++k)
+    if (a.texel_faces()[k] >= 0) s0.push_back(f0[k]), s1.push_back(f1[k]), sb.push_back(b.texture()[k]);
+  const double coherent = correlation(s0, s1), unrelated = correlation(s0, sb);
+  EXPECT_GT(coherent, 0.75) << coherent << " unrelated " << unrelated;
+  EXPECT_LT(std::abs(unrelated), 0.05);
+  // Frame 1 at a texel matches frame 0 at the texel that sees where the rotation about z
+  // carried the texture from, better than frame 0 at the same texel.
+  const Camera& cam = a.camera();
+  // mult 1: from upstream (the texture moved with the flow); 0: in place; −1: from
+  // downstream (it moved against the flow).
+  std::vector<double> corr;
+  for (const double mult : {1.0, 0.0, -1.0}) {
+  std::vector<float> after, moved;
+  for (size_t k = 0; k < f1.size(); ++k) {
+    if (a.texel_faces()[k] < 0) continue;
+    const Vec3 x = a.texel_position(k);
+    const double rho = std::hypot(x.x(), x.y());
+    if (rho < 0.4 || (cam.eye - x).normalized().dot(x) < 0.5) continue;  // away from poles and the rim
+    const double angle = -mult * o.pixels_per_frame / a.pixels_per_unit() / rho;
+    const Vec3 from(std::cos(angle) * x.x() - std::sin(angle) * x.y(), std::sin(angle) * x.x() + std::cos(angle) * x.y(),
+                    x.z());
+    // f0 there, bilinear between the texel centres around it.
+    const Vec3 px = cam.project(from, 160, 160);
+    const int i0 = static_cast<int>(std::floor(px.x() - 0.5)), j0 = static_cast<int>(std::floor(px.y() - 0.5));
+    const double u = px.x() - 0.5 - i0, w = px.y() - 0.5 - j0;
+    auto at = [&](int i, int j) { return static_cast<size_t>(j) * 160 + static_cast<size_t>(i); };
+    if (a.texel_faces()[at(i0, j0)] < 0 || a.texel_faces()[at(i0 + 1, j0)] < 0 ||
+        a.texel_faces()[at(i0, j0 + 1)] < 0 || a.texel_faces()[at(i0 + 1, j0 + 1)] < 0)
+      continue;
+    after.push_back(f1[k]);
+    moved.push_back(static_cast<float>((1 - u) * (1 - w) * f0[at(i0, j0)] + u * (1 - w) * f0[at(i0 + 1, j0)] +
+                                       (1 - u) * w * f0[at(i0, j0 + 1)] + u * w * f0[at(i0 + 1, j0 + 1)]));
+  }
+  ASSERT_GT(after.size(), 3000u);
+  corr.push_back(correlation(after, moved));
+  }
+  // Streaks along the flow (and the noise cells, which stay on for several frames) keep
+  // the in-place correlation high; the texture still matches its upstream place best, and
+  // far better than its downstream one.
+  EXPECT_GT(corr[0], corr[1] + 0.01) << corr[0] << " vs " << corr[1];
+  EXPECT_GT(corr[0], corr[2] + 0.2) << corr[0] << " vs " << corr[2];
+  EXPECT_GT(corr[0], 0.8);
+}
+
+TEST(SurfaceImage, CompositeShadesTheShownTextureBetweenDarkAndLit) {
+  Spin s;
+  TextureOptions o;
+  o.size = 64;
+  SurfaceImageAnimator a(s.bundle, s.field, o);
+  a.advance(0.2);
+  const std::vector<float> v = a.shown();
+  Image lit(64, 64), dark(64, 64);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      lit.at(x, y) = rgb(255, 200, static_cast<std::uint8_t>(4 * x));
+      dark.at(x, y) = rgb(0, 100, static_cast<std::uint8_t>(4 * x));  // blue: lit == dark
+    }
+  const Image img = a.composite(lit, dark);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const float g = v[static_cast<size_t>(y) * 64 + static_cast<size_t>(x)];
+      ASSERT_GE(g, 0.0f);
+      ASSERT_LE(g, 1.0f);
+      const std::uint32_t px = img.at(x, y);
+      EXPECT_EQ((px >> 16) & 255u, static_cast<std::uint32_t>(std::lround(255 * g)));
+      EXPECT_EQ((px >> 8) & 255u, static_cast<std::uint32_t>(std::lround(100 + 100 * g)));
+      EXPECT_EQ(px & 255u, static_cast<std::uint32_t>(4 * x));
+    }
+  EXPECT_NE(test::error_of([&] { a.composite(Image(32, 32), dark); }).find("32×32"), std::string::npos);
+}
+
+TEST(SurfaceImage, OpenSurfacesKeepAFiniteTexture) {
+  const Mesh& mesh = test::hemisphere_mesh();
+  const TangentBundle bundle(mesh);
+  const Field field = sample_world(bundle, TimeSampling{0, 1, 5}, [](const Vec3& x, double t) {
+    return Vec3(Vec3(1, 0.5 * t, 0) - x.dot(Vec3(1, 0.5 * t, 0)) * x);
+  });
+  TextureOptions o;
+  o.size = 96;
+  SurfaceImageAnimator a(bundle, field, o);
+  for (int k = 0; k < 5; ++k) a.advance(field.time().time(k));
+  for (const float v : a.texture()) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << v;
+  const auto shown = a.shown();
+  const auto [lo, hi] = std::minmax_element(shown.begin(), shown.end());
+  EXPECT_EQ(*lo, 0.0f);
+  EXPECT_EQ(*hi, 1.0f);
+}
+
 }  // namespace
 }  // namespace tvf

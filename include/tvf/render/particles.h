@@ -12,6 +12,7 @@
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
 #include "tvf/render/painterly.h"
+#include "tvf/render/texture_animation.h"
 
 #include <cmath>
 #include <cstdint>
@@ -71,9 +72,11 @@ struct ParticleAnimationOptions {
   // over the clip they travel as the field would carry them over time_scale × its time range,
   // while the field itself still changes at its own pace. > 0.
   double time_scale = 1.0;
+  SurfaceView surface;            // surfaces only (render/surface_particles.h): the camera
   std::function<void(int done, int total)> progress;
 };
 
+// On a surface domain the leaves are carried on the surface (render/surface_particles.h).
 AnimationReport write_particle_animation(const TangentBundle& bundle, const Field& field,
                                          const ParticleAnimationOptions& options);
 

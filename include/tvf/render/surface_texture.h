@@ -70,7 +70,6 @@ private:
                  static_cast<size_t>(FaceSubdivision::local_index(n_, i, j))];
   }
   float noise(const Vec3& a, const Vec3& b, long step) const;
-  float lattice(long ix, long iy, long iz, long step) const;
 
   const TangentBundle& bundle_;
   const Field& field_;
@@ -90,6 +89,75 @@ private:
   double t_ = 0;
   bool started_ = false;
   std::uint64_t seed_hash_ = 0;  // the noise seed, mixed
+};
+
+// The same animation computed in image space, for speed (Laramee, Jobard & Hauser 2003,
+// "Image space based visualization of unsteady flow on surfaces"; van Wijk's IBFVS): the
+// surface is rasterized once, for the fixed camera, into a grid of texels (the picture's
+// pixels, or one every `spacing` pixels), each holding the place on the mesh it sees
+// (face, perspective-correct barycentric coordinates, world position; -1 where no surface
+// is seen). Every frame the field is interpolated at the texels and projected onto the
+// picture plane; the texture is advected there as on the plane,
+//     T_k(x) = (1 − α)·T_{k−1}(x − d_k(x)) + α·N_k(x),
+// d_k the screen image of the surface displacement (midpoint rule, bilinear reads over
+// texels that see the surface), with the world-space noise of SurfaceTextureAnimator.
+// A source that falls off the surface, or onto another layer of it (its texel sees a
+// point farther from the expected one than the step plus two texels), keeps the texel's
+// own value: texture is born at silhouettes and occlusions. The line integral convolution
+// walks the projected unit direction for the same world length as on the surface. Memory
+// and work per frame are a few arrays of the picture's size, whatever the mesh and the
+// number of frames. Shading, anti-aliased silhouettes and overlays come from the offscreen
+// renderer (composite()).
+class SurfaceImageAnimator {
+public:
+  SurfaceImageAnimator(const TangentBundle& bundle, const Field& field, const TextureOptions& options = {},
+                       const SurfaceView& view = {});
+
+  int width() const { return size_; }
+  int height() const { return size_; }
+  int grid() const { return g_; }  // texels on a side
+  const Camera& camera() const { return camera_; }
+  double pixels_per_unit() const { return ppu_; }
+  // Per texel (row-major, top row first): the face seen (-1: none) and the point seen.
+  const std::vector<int>& texel_faces() const { return face_; }
+  Vec3 texel_position(size_t k) const { return pos_[k].cast<double>(); }
+
+  void advance(double t);  // as SurfaceTextureAnimator::advance
+  double time() const { return t_; }
+  const std::vector<float>& texture() const { return tex_; }  // per texel, about [0, 1]
+  // Per texel: the line integral convolution of the texture, contrast stretched into
+  // [0, 1]; texels that see no surface take the mean of those around them that do (0.5
+  // when none), for the anti-aliased silhouette.
+  std::vector<float> shown() const;
+  // The picture: per pixel dark + g·(lit − dark), with lit
+  // and dark the renderer's pictures of the mesh in white and in black (same camera,
+  // width() × height()) and g the shown value there (bilinear when grid() ≠ width()).
+  Image composite(const Image& lit, const Image& dark) const;
+
+private:
+  void velocities(double t, double dt);
+  bool bilinear2(double x, double y, const std::vector<float>& v, Vec2& out) const;
+  template <class Get>
+  bool bilinear(double x, double y, Get&& get, float& out) const;
+
+  const TangentBundle& bundle_;
+  const Field& field_;
+  TextureOptions o_;
+  SurfaceView view_;
+  Camera camera_;
+  int size_ = 512, g_ = 512;
+  double ppu_ = 1, p90_ = 0, time_scale_ = 0, cell_ = 1, focal_ = 1;
+  Eigen::Matrix3d rot_ = Eigen::Matrix3d::Identity();  // world → view axes
+  std::vector<int> face_;
+  std::vector<Eigen::Vector3f> bary_, pos_, eye_;   // eye_: view-space position
+  std::vector<float> vel_, dir_, step_len_;          // per texel: 2 + 2 + 1
+  std::vector<Eigen::Vector3f> world_;               // field per vertex, world, this step
+  std::vector<float> phase_, cell_texels_;          // per texel: noise cell phase, cells per texel
+  std::vector<float> tex_, next_;
+  long step_ = 0;
+  double t_ = 0;
+  bool started_ = false;
+  std::uint64_t seed_hash_ = 0;
 };
 
 // The renderer's lines for the singularity paths up to time t (trails in the colours of

@@ -1,0 +1,83 @@
+// Crowds on a surface (render/surface_crowd.h): agents walk on the mesh to goals by the
+// geodesic distance, around obstacle regions, and reach them.
+#include "tvf/render/surface_crowd.h"
+
+#include "support/test_meshes.h"
+#include "support/test_paths.h"
+#include "tvf/core/error.h"
+#include "tvf/mesh/primitives.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace tvf {
+namespace {
+
+TEST(SurfaceCrowd, AgentsWalkOnTheSphereToTheGoalAroundAnObstacle) {
+  const Mesh sphere = make_icosphere(4, 1.0);
+  const TangentBundle bundle(sphere);
+  const Field still(TimeSampling{0, 1, 41}, sphere.num_vertices());  // no field: the goal term alone
+  SurfaceCrowdSpec spec;
+  spec.agents = 30;
+  spec.weight_goal = 1.0;
+  spec.weight_field = 0.0;
+  spec.speed = 4.0;  // world units per unit time: the half circumference (π) well within the time range
+  spec.starts = {{Vec3(0, 0, -1), 0.3}};
+  spec.goals = {{Vec3(0, 0, 1), 0.25}};
+  spec.obstacles = {{Vec3(1, 0, 0), 0.5}};  // a cap on the equator in the way of some
+  const SurfaceCrowdResult r = simulate_surface_crowd(bundle, still, spec);
+  ASSERT_EQ(r.arrived.size(), 30u);
+  // The potential grows as the geodesic distance from the goal cap (the goal faces'
+  // centres, within an angular radius ≈ 2·asin(0.125)), up to a constant: only its
+  // gradient steers. (The heat method from a whole region rounds φ over the region.)
+  const double cap = 2 * std::asin(0.125);
+  std::vector<double> diff;
+  for (int v = 0; v < sphere.num_vertices(); ++v) {
+    const Vec3 x = sphere.position(v).normalized();
+    if (x.x() > -0.1) continue;  // the obstacle's side: geodesics round it are longer
+    if (std::acos(x.z()) < cap + 0.2) continue;       // in and near the goal
+    diff.push_back(r.distance[static_cast<size_t>(v)] - (std::acos(x.z()) - cap));
+  }
+  ASSERT_GT(diff.size(), 800u);
+  double mean = 0;
+  for (double d : diff) mean += d;
+  mean /= static_cast<double>(diff.size());
+  double worst = 0;
+  for (double d : diff) worst = std::max(worst, std::abs(d - mean));
+  EXPECT_LT(worst, 0.05) << "offset " << mean;
+  EXPECT_LT(std::abs(mean), 0.15);
+  for (size_t a = 0; a < r.arrived.size(); ++a) {
+    EXPECT_GE(r.arrived[a], 1) << "agent " << a;  // everyone reaches the goal
+    for (size_t k = 0; k < r.positions[a].size(); ++k) {
+      const Vec3& x = r.positions[a][k];
+      EXPECT_LE(x.norm(), 1.0 + 1e-9);  // on the mesh
+      EXPECT_GT(x.norm(), 0.99);
+      EXPECT_FALSE(r.obstacle_face[static_cast<size_t>(r.where[a][k].face)]) << "agent " << a << " picture " << k;
+    }
+    // Arrived agents stay in the goal.
+    const Vec3& last = r.positions[a].back();
+    EXPECT_GT(last.z(), 0.9);
+  }
+}
+
+TEST(SurfaceCrowd, BadSpecsAreNamed) {
+  const Mesh sphere = make_icosphere(2, 1.0);
+  const TangentBundle bundle(sphere);
+  const Field still(TimeSampling{0, 1, 3}, sphere.num_vertices());
+  SurfaceCrowdSpec spec;
+  spec.starts = {{Vec3(0, 0, -1), 0.3}};
+  spec.goals = {{Vec3(5, 5, 5), 0.1}};  // off the surface
+  EXPECT_NE(test::error_of([&] { simulate_surface_crowd(bundle, still, spec); }).find("goals hold no face"),
+            std::string::npos);
+  test::TempDir dir;
+  test::write_text(dir / "c.json", R"({"start": [{"ball": {"center": [0, 0, -1], "radius": 0.3}}],
+    "goals": [{"circle": {"center": [0, 0], "radius": 0.3}}]})");
+  const std::string e = test::error_of([&] { load_surface_crowd_spec((dir / "c.json").string()); });
+  EXPECT_NE(e.find("c.json"), std::string::npos) << e;
+  EXPECT_NE(e.find("goals[0]"), std::string::npos) << e;
+  EXPECT_NE(e.find("ball"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace tvf
