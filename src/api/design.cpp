@@ -363,6 +363,8 @@ std::vector<fs::path> Design::write_outputs(const fs::path& dir, OutputOptions o
   const Scene& scene = s_->need_scene();
   const DesignResult& r = s_->made({});
   if (r.report.incompressible && !options.incompressible) options.incompressible = &*r.report.incompressible;
+  if (!r.report.keyframe_intervals.empty() && !options.keyframe_intervals)
+    options.keyframe_intervals = &r.report.keyframe_intervals;
   return write_field_outputs(dir, *r.space, r.field, scene, options);
 }
 

@@ -3,6 +3,7 @@
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
+#include "tvf/design/keyframe_topology.h"
 #include "tvf/design/keyframes.h"
 #include "tvf/edit/edits.h"
 #include "tvf/field/field_sampler.h"
@@ -282,6 +283,35 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
       add_singularity(fmt::format("keyframes[{}].elements[{}]", k, i), e.type ? to_string(*e.type) : "jacobian",
                       {ex}, ex.index, ex.position);
     }
+  }
+
+  // Key-frame topology "matched": the pairs it creates or cancels between key frames are
+  // designed bifurcations (keyframe_topology.h; planned again from the key frames, which
+  // the spacetime generator holds exactly).
+  if (scene.generator == Generator::spacetime && scene.solver.keyframe_topology == KeyframeTopology::matched &&
+      scene.keyframes.size() >= 2 && N == scene.time.frames) {
+    std::vector<std::vector<cplx>> key_fields;
+    for (const Keyframe& kf : scene.keyframes) {
+      const auto frame = field.frame(keyframe_frame(scene, kf.t));
+      key_fields.emplace_back(frame.begin(), frame.end());
+    }
+    const KeyframeTopologyPlan plan(space, scene, key_fields);
+    for (const KeyframeIntervalReport& r : plan.intervals())
+      for (int creation = 0; creation < 2; ++creation)
+        for (const KeyframeIntervalReport::Pair& p : creation ? r.created : r.cancelled) {
+          if (N < 2 || p.t <= topo.times.front() || p.t >= topo.times.back()) continue;
+          const bool sink = p.node_type == SingularityType::sink || p.node_type == SingularityType::attracting_focus;
+          DesignedFeature f;
+          f.kind = FeatureKind::bifurcation;
+          f.source = fmt::format("solver.keyframe_topology (keyframes[{}] to [{}])", r.from_keyframe, r.to_keyframe);
+          f.type = creation ? (sink ? "saddle_sink_creation" : "saddle_source_creation")
+                            : (sink ? "saddle_sink_cancellation" : "saddle_source_cancellation");
+          f.t_begin = f.t_end = p.t;
+          f.position = on_domain(p.at);
+          bifurcation_features.push_back(
+              {out.designed.size(), creation ? BifurcationKind::creation : BifurcationKind::cancellation, sink, true});
+          out.designed.push_back(std::move(f));
+        }
   }
 
   // Deformation: the base's singular elements stay in place, with Jacobian M(t)·J.

@@ -3,6 +3,7 @@
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "design/element_regions.h"
+#include "tvf/design/keyframe_topology.h"
 #include "tvf/design/keyframes.h"
 #include "tvf/edit/field_editor.h"
 #include "tvf/solve/connection_laplacian.h"
@@ -272,8 +273,11 @@ void check_spacetime_scene(const Scene& scene, int nv) {
 
 // Which entries of the space-time system are fixed, to what (spacetime_problem's work,
 // on a given Laplacian).
+// With solver.keyframe_topology "matched", what each key-frame interval does goes into
+// `intervals` (when given).
 void spacetime_constraints(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
-                           const GenerateOptions& options, std::vector<char>& fixed, std::vector<cplx>& values);
+                           const GenerateOptions& options, std::vector<char>& fixed, std::vector<cplx>& values,
+                           std::vector<KeyframeIntervalReport>* intervals = nullptr);
 
 }  // namespace
 
@@ -288,7 +292,8 @@ SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
 namespace {
 
 void spacetime_constraints(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
-                           const GenerateOptions& options, std::vector<char>& fixed, std::vector<cplx>& values) {
+                           const GenerateOptions& options, std::vector<char>& fixed, std::vector<cplx>& values,
+                           std::vector<KeyframeIntervalReport>* intervals) {
   const int nv = space.mesh().num_vertices();
   const auto n = static_cast<size_t>(nv);
   const auto frames = static_cast<size_t>(scene.time.frames);
@@ -297,6 +302,8 @@ void spacetime_constraints(const DesignSpace& space, const Scene& scene, const C
 
   // Key frames: whole frames held fixed.
   std::vector<char> is_key(frames, 0);
+  const bool matched = scene.solver.keyframe_topology == KeyframeTopology::matched;
+  std::vector<std::vector<cplx>> key_fields(matched ? scene.keyframes.size() : 0);
   for (size_t k = 0; k < scene.keyframes.size(); ++k) {
     const auto j = static_cast<size_t>(keyframe_frame(scene, scene.keyframes[k].t));
     if (is_key[j])
@@ -308,6 +315,14 @@ void spacetime_constraints(const DesignSpace& space, const Scene& scene, const C
     const std::vector<cplx> key = keyframe_field(space, scene, k, laplacian);
     std::fill_n(fixed.begin() + static_cast<std::ptrdiff_t>(j * n), n, char{1});
     std::copy(key.begin(), key.end(), values.begin() + static_cast<std::ptrdiff_t>(j * n));
+    if (matched) key_fields[k] = key;
+  }
+  // Topology kept between key frames (keyframe_topology.h): moving constraints and
+  // templates, added at every other frame below.
+  std::optional<KeyframeTopologyPlan> plan;
+  if (matched) {
+    plan.emplace(space, scene, key_fields);
+    if (intervals) *intervals = plan->intervals();
   }
 
   // Element regions at every other frame (key frames and elements combine in one solve).
@@ -320,6 +335,7 @@ void spacetime_constraints(const DesignSpace& space, const Scene& scene, const C
     const std::span<char> f(fixed.data() + static_cast<size_t>(j) * n, n);
     const std::span<cplx> v(values.data() + static_cast<size_t>(j) * n, n);
     constrain_elements(space, scene, elements, scene.time.time(j), d, f, v);
+    if (plan) plan->constrain(space, scene, scene.time.time(j), d, f, v);
   });
 }
 
@@ -333,7 +349,8 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
   std::unique_ptr<ConnectionLaplacian> own_laplacian;
   const ConnectionLaplacian& laplacian = laplacian_for(space, scene.solver.weights, options.cache, own_laplacian);
   SpaceTimeProblem problem;  // its laplacian stays empty: `laplacian` is used
-  spacetime_constraints(space, scene, laplacian, options, problem.fixed, problem.values);
+  std::vector<KeyframeIntervalReport> intervals;
+  spacetime_constraints(space, scene, laplacian, options, problem.fixed, problem.values, &intervals);
   Field field(scene.time, nv);
   // The solver object: the cache's when it was made for these frames and temporal weight
   // (it keeps its set-up and the temporal modes of its last solve), else a new one.
@@ -395,6 +412,7 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
     report->method = "spatio-temporal optimization, " + r.method + (warm ? " (warm start)" : "");
     report->residual = r.residual;
     report->iterations = r.iterations;
+    report->keyframe_intervals = std::move(intervals);
   }
   finish_report(report, scene, nv, start);
   return field;

@@ -100,6 +100,13 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
                           incompressible_report_json(*options.incompressible, field.time()).dump(2) + "\n");
   }
 
+  if (options.keyframe_intervals && !options.keyframe_intervals->empty()) {
+    step("keyframe_topology.json");
+    write_file_atomically(stage.file("keyframe_topology.json"),
+                          nlohmann::json{{"intervals", keyframe_intervals_json(*options.keyframe_intervals)}}.dump(2) +
+                              "\n");
+  }
+
   if (options.vtk) {
     step("field.pvd + field_NNNN.vtu");
     write_vtk_series(stage.stage().string(), "field", space.bundle(), field);
@@ -112,6 +119,7 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
     static const std::regex vtu("field_[0-9]+\\.vtu");
     return name == "field.npy" || name == "vertices.npy" || name == "faces.npy" || name == "times.npy" ||
            name == "field.tvff" || name == "coherence.csv" || name == "divergence.json" ||
+           name == "keyframe_topology.json" ||
            name == "field.pvd" || std::regex_match(name, vtu);
   });
 }

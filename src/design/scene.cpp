@@ -79,6 +79,7 @@ const char* to_string(SolverMethod m) {
   }
   return "auto";
 }
+const char* to_string(KeyframeTopology k) { return k == KeyframeTopology::matched ? "matched" : "free"; }
 
 std::optional<SingularType> singular_type_from_string(const std::string& s) {
   return value_of(kSingularNames, s);

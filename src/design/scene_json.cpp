@@ -71,8 +71,9 @@ int key_rank(const std::string& key) {
       "tvf", "description", "op", "frame", "kind", "t", "domain", "grid", "mesh", "sphere", "torus",
       "size", "min", "max", "subdivisions", "radius", "nu", "nv", "major_radius",
       "minor_radius", "time", "frames", "range", "generator", "solver", "weights",
-      "temporal_weight", "tolerance", "region_radius", "method", "falloff", "base", "type", "jacobian",
-      "at", "to", "vector", "path", "pathline", "attach", "elements", "keyframes", "matrix",
+      "temporal_weight", "tolerance", "region_radius", "method", "keyframe_topology", "links",
+      "bifurcation_times", "falloff", "base", "type", "jacobian",
+      "at", "from", "to", "vector", "path", "pathline", "attach", "elements", "keyframes", "matrix",
       "m", "transform", "sx", "sy", "theta", "translate", "rotate", "scale", "time_scale",
       "angle", "streamlines", "seed", "keys", "points", "speed", "field", "deform", "edits",
       "incompressible", "boundary", "pair", "strength", "window"};
@@ -419,6 +420,7 @@ private:
   BifurcationElement bifurcation(const json& j, const std::string& path) const;
   std::vector<Element> elements(const json& j, const std::string& path) const;
   std::vector<Keyframe> keyframes(const json& j) const;
+  void keyframe_topology(const json& solver, Scene& s) const;
   KeyframeElement keyframe_element(const json& j, const std::string& path) const;
   KeyframeStreamline keyframe_streamline(const json& j, const std::string& path) const;
   json deform(const json& j) const;
@@ -645,7 +647,8 @@ TimeSampling Reader::time(const json& j) const {
 
 SolverSettings Reader::solver(const json& j) const {
   check_keys(j, "solver", "solver settings",
-             {"weights", "temporal_weight", "tolerance", "region_radius", "method"});
+             {"weights", "temporal_weight", "tolerance", "region_radius", "method", "keyframe_topology", "links",
+              "bifurcation_times"});
   SolverSettings s;
   if (const json* v = get(j, "weights")) s.weights = enumeration(*v, "solver.weights", kWeights, "weights");
   if (const json* v = get(j, "temporal_weight")) {
@@ -817,6 +820,90 @@ std::vector<Keyframe> Reader::keyframes(const json& j) const {
     out.push_back(std::move(key));
   }
   return out;
+}
+
+// solver.keyframe_topology, solver.links and solver.bifurcation_times (DESIGN §12;
+// tvf/design/keyframe_topology.h), read once the key frames are known.
+void Reader::keyframe_topology(const json& solver, Scene& s) const {
+  constexpr KeyframeTopology kinds[] = {KeyframeTopology::free, KeyframeTopology::matched};
+  if (const json* v = get(solver, "keyframe_topology"))
+    s.solver.keyframe_topology = enumeration(*v, "solver.keyframe_topology", kinds, "key-frame topology");
+  const bool matched = s.solver.keyframe_topology == KeyframeTopology::matched;
+  for (const char* key : {"links", "bifurcation_times"})
+    if (get(solver, key) && !matched)
+      fail(join_key("solver", key), "applies only with \"keyframe_topology\": \"matched\"");
+  if (!matched) return;
+  if (s.generator != Generator::spacetime)
+    fail("solver.keyframe_topology", fmt::format("\"matched\" applies to the spacetime generator, not \"{}\"",
+                                                 to_string(s.generator)));
+  if (s.keyframes.size() < 2)
+    fail("solver.keyframe_topology",
+         fmt::format("\"matched\" needs at least two key frames to match, got {}", s.keyframes.size()));
+  const auto nk = static_cast<long long>(s.keyframes.size());
+  if (const json* links = get(solver, "links")) {
+    array(*links, "solver.links", 0, "links {\"from\": [k, i], \"to\": [k + 1, j]}");
+    std::vector<std::pair<long long, long long>> used;
+    for (size_t m = 0; m < links->size(); ++m) {
+      const std::string path = join_index("solver.links", m);
+      const json& l = (*links)[m];
+      check_keys(l, path, "a link {\"from\": [k, i], \"to\": [k + 1, j]}", {"from", "to"});
+      long long ends[2][2];
+      std::string where[2];
+      for (int e = 0; e < 2; ++e) {
+        const char* key = e == 0 ? "from" : "to";
+        const std::string p = join_key(path, key);
+        const json& pair = need(l, path, key, "[key frame, element] indices");
+        if (!pair.is_array() || pair.size() != 2)
+          fail(p, fmt::format("must be [key frame, element] (two indices), got {}", describe(pair)));
+        ends[e][0] = integer(pair[0], join_index(p, 0), 0, nk - 1);
+        const auto ne = static_cast<long long>(s.keyframes[static_cast<size_t>(ends[e][0])].elements.size());
+        if (ne == 0)
+          fail(join_index(p, 0), fmt::format("keyframes[{}] has no elements to link", ends[e][0]));
+        ends[e][1] = integer(pair[1], join_index(p, 1), 0, ne - 1);
+        where[e] = fmt::format("keyframes[{}].elements[{}]", ends[e][0], ends[e][1]);
+        if (s.keyframes[static_cast<size_t>(ends[e][0])].elements[static_cast<size_t>(ends[e][1])].kind != "singular")
+          fail(p, fmt::format("{} is a regular element; only singular elements are linked", where[e]));
+        for (const auto& u : used)
+          if (u.first == ends[e][0] && u.second == ends[e][1])
+            fail(p, fmt::format("{} is already linked by an earlier link", where[e]));
+      }
+      if (ends[1][0] != ends[0][0] + 1)
+        fail(join_key(path, "to"), fmt::format("links key frame {} with key frame {}; a link joins a key frame "
+                                               "with the next one (k and k + 1)",
+                                               ends[0][0], ends[1][0]));
+      const KeyframeElement& a = s.keyframes[static_cast<size_t>(ends[0][0])].elements[static_cast<size_t>(ends[0][1])];
+      const KeyframeElement& b = s.keyframes[static_cast<size_t>(ends[1][0])].elements[static_cast<size_t>(ends[1][1])];
+      auto name = [](const KeyframeElement& e) {
+        return e.type ? std::string(to_string(*e.type))
+                      : std::string(e.jacobian.determinant() < 0 ? "Jacobian of index −1" : "Jacobian of index +1");
+      };
+      const bool same = a.type && b.type ? *a.type == *b.type
+                                         : (a.jacobian.determinant() < 0) == (b.jacobian.determinant() < 0);
+      if (!same)
+        fail(path, fmt::format("links a {} ({}) with a {} ({}); linked singularities must have the same type", name(a),
+                               where[0], name(b), where[1]));
+      used.emplace_back(ends[0][0], ends[0][1]);
+      used.emplace_back(ends[1][0], ends[1][1]);
+      s.solver.links.push_back({static_cast<int>(ends[0][0]), static_cast<int>(ends[0][1]),
+                                static_cast<int>(ends[1][0]), static_cast<int>(ends[1][1])});
+    }
+  }
+  if (const json* times = get(solver, "bifurcation_times")) {
+    array(*times, "solver.bifurcation_times", 0, "times, one per interval between consecutive key frames");
+    if (static_cast<long long>(times->size()) != nk - 1)
+      fail("solver.bifurcation_times",
+           fmt::format("needs one time per interval between consecutive key frames ({}), got {}", nk - 1,
+                       times->size()));
+    for (size_t k = 0; k < times->size(); ++k) {
+      const std::string p = join_index("solver.bifurcation_times", k);
+      const double t = number((*times)[k], p);
+      const double t0 = s.keyframes[k].t, t1 = s.keyframes[k + 1].t;
+      if (!(t > t0 && t < t1))
+        fail(p, fmt::format("t = {} is not inside the interval ({}, {}) between keyframes[{}] and keyframes[{}]", t,
+                            t0, t1, k, k + 1));
+      s.solver.bifurcation_times.push_back(t);
+    }
+  }
 }
 
 json Reader::deform(const json& j) const {
@@ -994,6 +1081,7 @@ Scene Reader::scene(const json& j, const std::string& source_path) {
   if (const json* f = get(j, "falloff")) s.falloff = positive(*f, "falloff");
   if (const json* e = get(j, "elements")) s.elements = elements(*e, "elements");
   if (const json* k = get(j, "keyframes")) s.keyframes = keyframes(*k);
+  if (const json* v = get(j, "solver")) keyframe_topology(*v, s);
   if (const json* d = get(j, "deform")) s.deform = deform(*d);
   if (const json* e = get(j, "edits")) s.edits = edits(*e);
   if (const json* i = get(j, "incompressible")) s.incompressible = incompressible(*i);
@@ -1052,6 +1140,14 @@ nlohmann::json scene_to_json(const Scene& scene) {
                  {"tolerance", scene.solver.tolerance},
                  {"region_radius", scene.solver.region_radius},
                  {"method", to_string(scene.solver.method)}};
+  if (scene.solver.keyframe_topology == KeyframeTopology::matched) {
+    j["solver"]["keyframe_topology"] = "matched";
+    json links = json::array();
+    for (const KeyframeLink& l : scene.solver.links)
+      links.push_back({{"from", {l.from_keyframe, l.from_element}}, {"to", {l.to_keyframe, l.to_element}}});
+    if (!links.empty()) j["solver"]["links"] = links;
+    if (!scene.solver.bifurcation_times.empty()) j["solver"]["bifurcation_times"] = scene.solver.bifurcation_times;
+  }
   j["falloff"] = scene.falloff;
   j["elements"] = json::array();
   for (const Element& e : scene.elements) j["elements"].push_back(element_json(e, planar));

@@ -18,6 +18,9 @@
 //   the Hopf events after Topology::bifurcations;
 // - a singular element of a key frame (keyframes[k].elements[i]): a singularity of its
 //   index at its point in that key frame's frame;
+// - with solver.keyframe_topology "matched" (keyframe_topology.h): each pair it creates or
+//   cancels between key frames, as a bifurcation of that kind at its template's point and
+//   time (planned again from the field's key frames);
 // - deform generator: each singular element of deform.base, fixed, at every frame, with
 //   the Jacobian M(t)·J (so a turned source is expected to become a center, then a sink).
 // A frame singularity matches when it has the feature's index, lies within

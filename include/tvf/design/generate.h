@@ -7,6 +7,7 @@
 // (tvf/solve/hodge_projection.h): generator → edits → projection, so the field written is
 // divergence-free whatever the edits did.
 #include "tvf/design/design_space.h"
+#include "tvf/design/keyframe_topology.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
 #include "tvf/solve/connection_laplacian.h"
@@ -93,6 +94,9 @@ struct GenerateReport {
   // Set when the scene's "incompressible" projection ran: divergence per frame before and
   // after it.
   std::optional<IncompressibleReport> incompressible;
+  // The spacetime generator with solver.keyframe_topology "matched": what was matched,
+  // created and cancelled in each interval between key frames (keyframe_topology.h).
+  std::vector<KeyframeIntervalReport> keyframe_intervals;
 };
 
 // Field of the scene on `space` (which must be make_design_space(scene)): the generator's

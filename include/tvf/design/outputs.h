@@ -4,8 +4,11 @@
 //   field.npy (N×|V|×3 float32, world vectors, frame-major), vertices.npy (|V|×3 float64),
 //   faces.npy (|F|×3 int32), times.npy (N float64), field.tvff (native, exact reload),
 //   field.pvd + field_NNNN.vtu (VTK series), coherence.csv, scene.json (canonical scene),
-//   and divergence.json when the scene is "incompressible" (OutputOptions::incompressible).
+//   divergence.json when the scene is "incompressible" (OutputOptions::incompressible),
+//   keyframe_topology.json when its key-frame topology is "matched"
+//   (OutputOptions::keyframe_intervals; keyframe_intervals_json's form).
 #include "tvf/design/design_space.h"
+#include "tvf/design/keyframe_topology.h"
 #include "tvf/design/scene.h"
 #include "tvf/field/field.h"
 #include "tvf/solve/hodge_projection.h"
@@ -23,6 +26,8 @@ struct OutputOptions {
   std::function<void(const std::string&)> on_step;  // progress: name of the part written
   // The projection's report (GenerateReport::incompressible): written as divergence.json.
   const IncompressibleReport* incompressible = nullptr;
+  // GenerateReport::keyframe_intervals: written as keyframe_topology.json when not empty.
+  const std::vector<KeyframeIntervalReport>* keyframe_intervals = nullptr;
 };
 
 // divergence.json: {"boundary", "method", "seconds", "max_before", "max_after",

@@ -110,12 +110,30 @@ enum class Weights { cotan, uniform, mean_value };
 // where the fixed set allows them, else CG; bicgstab is the paper's kind of method.
 enum class SolverMethod { automatic, modes, cg, bicgstab };
 
+// What the spacetime generator does with the singularities of consecutive key frames
+// (DESIGN §12; tvf/design/keyframe_topology.h): "free" leaves the frames between to the
+// solve (the paper's behaviour), "matched" carries each matched singularity from one key
+// frame to the next and creates or cancels the others in pairs.
+enum class KeyframeTopology { free, matched };
+
+// A pair the user links (solver.links): keyframes[from_keyframe].elements[from_element] is
+// carried to keyframes[to_keyframe].elements[to_element], to_keyframe = from_keyframe + 1.
+struct KeyframeLink {
+  int from_keyframe = 0, from_element = 0;
+  int to_keyframe = 0, to_element = 0;
+};
+
 struct SolverSettings {
   Weights weights = Weights::cotan;
   double temporal_weight = 30.0;
   double tolerance = 1e-10;
   double region_radius = 0.1;
   SolverMethod method = SolverMethod::automatic;
+  KeyframeTopology keyframe_topology = KeyframeTopology::free;
+  std::vector<KeyframeLink> links{};  // "matched" only
+  // One time per interval between consecutive key frames, inside it: when its unmatched
+  // singularities are created or cancelled. Empty: the middle of each interval.
+  std::vector<double> bifurcation_times{};
 };
 
 // Meshes made in code (tvf additions to the format, so examples need no mesh files).
@@ -174,6 +192,7 @@ const char* to_string(BifurcationType t);
 const char* to_string(Generator g);
 const char* to_string(Weights w);
 const char* to_string(SolverMethod m);
+const char* to_string(KeyframeTopology k);
 std::optional<SingularType> singular_type_from_string(const std::string& s);
 std::optional<BifurcationType> bifurcation_type_from_string(const std::string& s);
 std::optional<Generator> generator_from_string(const std::string& s);

@@ -1,0 +1,86 @@
+#pragma once
+// Topology kept between key frames (DESIGN §12, beyond the paper's §10: "only the
+// topology at the key frames is defined"). With "solver": {"keyframe_topology":
+// "matched"} the spacetime generator
+//  1. finds the singularities of every key frame's field (find_singularities);
+//  2. matches those of consecutive key frames: first the pairs the scene links
+//     (solver.links, by key-frame element), then the same type nearest first, then the
+//     same index nearest first (never a source with a sink: a node keeps its stability);
+//  3. carries each matched singularity from its key-frame position to the next one's as a
+//     moving constraint (the linear field J(t)·w within solver.region_radius, as a moving
+//     singular element is constrained; the position follows a smoothstep in time along
+//     the straight segment, snapped to the surface; J(t) turns from one end's Jacobian to
+//     the other's with det J keeping its sign, so the index cannot change on the way);
+//  4. pairs the unmatched ones of each key frame (opposite index, nearest first) and
+//     cancels (first key frame's) or creates (second key frame's) each pair with a
+//     saddle–node template (the bifurcation elements of DESIGN §4) centred between the
+//     two, at the interval's bifurcation time (solver.bifurcation_times, default
+//     mid-interval): the two are carried to the template's zeros at t_c − τ (cancellation)
+//     or from them at t_c + τ (creation), and the template holds [t_c − τ, t_c + τ].
+// Key frames themselves are unchanged. What could not be paired (an odd singularity out,
+// e.g. one that must leave through the boundary) is left to the solve and reported.
+#include "tvf/analysis/singularities.h"
+#include "tvf/design/design_space.h"
+#include "tvf/design/scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <span>
+#include <vector>
+
+namespace tvf {
+
+// What happens in one interval between consecutive key frames (in time order).
+struct KeyframeIntervalReport {
+  int from_keyframe = 0, to_keyframe = 0;  // indices into scene.keyframes
+  double t0 = 0, t1 = 0;                   // the two key frames' times
+  double bifurcation_t = 0;                // when unmatched pairs are created/cancelled
+  struct Match {
+    SingularityType type = SingularityType::source;  // at the first key frame
+    Vec3 from = Vec3::Zero(), to = Vec3::Zero();
+    bool linked = false;  // named by solver.links
+  };
+  struct Pair {
+    SingularityType saddle_type = SingularityType::saddle, node_type = SingularityType::source;
+    Vec3 saddle = Vec3::Zero(), node = Vec3::Zero();  // positions at the key frame
+    Vec3 at = Vec3::Zero();                           // where the template sits
+    double t = 0;
+  };
+  std::vector<Match> matched;
+  std::vector<Pair> created, cancelled;
+  std::vector<Vec3> unpaired_first, unpaired_second;  // left to the solve
+};
+
+// The constraints that keep the topology between key frames, planned once per generation.
+class KeyframeTopologyPlan {
+public:
+  // keyframe_fields[k]: the field of scene.keyframes[k] (|V|, vertex bases). Throws
+  // tvf::Error naming solver.links[i] when a linked element has no singularity of the
+  // key frame's field near it.
+  KeyframeTopologyPlan(const DesignSpace& space, const Scene& scene,
+                       const std::vector<std::vector<cplx>>& keyframe_fields);
+
+  // Adds the plan's constraints at time t (a frame that is not a key frame) to a frame's
+  // fixed set and values, as constrain_elements does: d is the falloff's d.
+  void constrain(const DesignSpace& space, const Scene& scene, double t, double d, std::span<char> fixed,
+                 std::span<cplx> values) const;
+
+  const std::vector<KeyframeIntervalReport>& intervals() const { return intervals_; }
+
+  struct Track;     // one singularity carried between two times
+  struct Template;  // one saddle–node template
+  ~KeyframeTopologyPlan();
+  KeyframeTopologyPlan(KeyframeTopologyPlan&&) noexcept;
+
+private:
+  std::vector<Track> tracks_;
+  std::vector<Template> templates_;
+  std::vector<KeyframeIntervalReport> intervals_;
+};
+
+// {"interval": [t0, t1], "keyframes": [k0, k1], "bifurcation_t", "matched": [{"type",
+// "from", "to", "linked"}], "created": [{"t", "at", "saddle", "node", "node_type"}],
+// "cancelled": [same], "unpaired": [[x, y, z], ...]} per interval.
+nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals);
+
+}  // namespace tvf

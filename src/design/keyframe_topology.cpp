@@ -1,0 +1,338 @@
+#include "tvf/design/keyframe_topology.h"
+
+#include "design/element_regions.h"
+
+#include "tvf/core/error.h"
+#include "tvf/design/element_field.h"
+#include "tvf/field/field_sampler.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace tvf {
+
+namespace {
+
+// A real linear map of the plane as J w = α w + β w̄ (w complex). det J = |α|² − |β|²;
+// a rotation of the frame by φ leaves α and turns β by −2φ.
+struct Linear {
+  cplx alpha{0, 0}, beta{0, 0};
+};
+
+Linear to_linear(const Mat2& m) {
+  return {cplx(m(0, 0) + m(1, 1), m(1, 0) - m(0, 1)) / 2.0, cplx(m(0, 0) - m(1, 1), m(1, 0) + m(0, 1)) / 2.0};
+}
+
+Mat2 to_matrix(const Linear& l) {
+  Mat2 m;
+  m << l.alpha.real() + l.beta.real(), l.beta.imag() - l.alpha.imag(), l.alpha.imag() + l.beta.imag(),
+      l.alpha.real() - l.beta.real();
+  return m;
+}
+
+// Moduli linearly, arguments along the shorter arc: |α| − |β| (the sign of det J) moves
+// linearly between its two ends, so it keeps its sign when both ends have the same.
+cplx blend(cplx a, cplx b, double s) {
+  const double r = (1 - s) * std::abs(a) + s * std::abs(b);
+  if (r == 0) return {0, 0};
+  const double pa = std::abs(a) > 0 ? std::arg(a) : std::arg(b);
+  const double pb = std::abs(b) > 0 ? std::arg(b) : pa;
+  return std::polar(r, pa + s * std::remainder(pb - pa, 2 * std::numbers::pi));
+}
+
+double smoothstep(double u) {
+  u = std::clamp(u, 0.0, 1.0);
+  return u * u * (3 - 2 * u);
+}
+
+// +1 repelling, −1 attracting, 0 neither (saddles and centers).
+int stability(SingularityType t) {
+  switch (t) {
+    case SingularityType::source:
+    case SingularityType::repelling_focus: return 1;
+    case SingularityType::sink:
+    case SingularityType::attracting_focus: return -1;
+    default: return 0;
+  }
+}
+
+}  // namespace
+
+// One singularity carried from (p0, t0) to (p1, t1), present for t0 < t < t1. Its linear
+// field is given in the frame of face `ref` (the frame at p0): the ends' α and β.
+struct KeyframeTopologyPlan::Track {
+  Vec3 p0, p1;
+  double t0 = 0, t1 = 0;
+  Linear j0, j1;
+  Vec3 ref_e1 = Vec3::UnitX();  // the first axis of the reference frame, world
+};
+
+struct KeyframeTopologyPlan::Template {
+  CompiledElement element;
+  double t0 = 0, t1 = 0;  // present for t0 ≤ t ≤ t1
+  double radius = 0;
+};
+
+KeyframeTopologyPlan::~KeyframeTopologyPlan() = default;
+KeyframeTopologyPlan::KeyframeTopologyPlan(KeyframeTopologyPlan&&) noexcept = default;
+
+namespace {
+
+// β of a Jacobian given in face f's frame, re-expressed in the frame whose first axis is
+// the world vector e1 (projected onto f's plane): a vector z in that frame is z·c in f's.
+cplx beta_in_frame(const TangentBundle& bundle, int f, const Vec3& e1, cplx beta) {
+  const cplx c = bundle.world_to_face(f, e1);
+  if (std::abs(c) == 0) return beta;
+  const cplx u = c / std::abs(c);
+  return beta * std::conj(u) * std::conj(u);
+}
+
+struct Candidate {
+  double distance;
+  size_t a, b;
+};
+
+// Greedy matching nearest first among the pairs `allowed` accepts.
+template <class Allowed>
+void match_nearest(const std::vector<Singularity>& A, const std::vector<Singularity>& B, std::vector<int>& match_a,
+                   std::vector<int>& match_b, Allowed allowed, std::vector<std::pair<size_t, size_t>>& out) {
+  std::vector<Candidate> c;
+  for (size_t a = 0; a < A.size(); ++a)
+    for (size_t b = 0; b < B.size(); ++b)
+      if (match_a[a] < 0 && match_b[b] < 0 && allowed(A[a], B[b]))
+        c.push_back({(A[a].position - B[b].position).norm(), a, b});
+  std::sort(c.begin(), c.end(), [](const Candidate& x, const Candidate& y) {
+    return x.distance < y.distance || (x.distance == y.distance && std::make_pair(x.a, x.b) < std::make_pair(y.a, y.b));
+  });
+  for (const Candidate& x : c) {
+    if (match_a[x.a] >= 0 || match_b[x.b] >= 0) continue;
+    match_a[x.a] = static_cast<int>(x.b);
+    match_b[x.b] = static_cast<int>(x.a);
+    out.emplace_back(x.a, x.b);
+  }
+}
+
+// Pairs a saddle with a node (index +1) of one key frame's unmatched singularities,
+// nearest first: (saddle, node) indices.
+std::vector<std::pair<size_t, size_t>> pair_unmatched(const std::vector<Singularity>& S, const std::vector<int>& matched) {
+  std::vector<Candidate> c;
+  for (size_t a = 0; a < S.size(); ++a)
+    for (size_t b = 0; b < S.size(); ++b)
+      if (matched[a] < 0 && matched[b] < 0 && S[a].index < 0 && S[b].index > 0)
+        c.push_back({(S[a].position - S[b].position).norm(), a, b});
+  std::sort(c.begin(), c.end(), [](const Candidate& x, const Candidate& y) {
+    return x.distance < y.distance || (x.distance == y.distance && std::make_pair(x.a, x.b) < std::make_pair(y.a, y.b));
+  });
+  std::vector<char> used(S.size(), 0);
+  std::vector<std::pair<size_t, size_t>> out;
+  for (const Candidate& x : c) {
+    if (used[x.a] || used[x.b]) continue;
+    used[x.a] = used[x.b] = 1;
+    out.emplace_back(x.a, x.b);
+  }
+  return out;
+}
+
+}  // namespace
+
+KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene& scene,
+                                           const std::vector<std::vector<cplx>>& keyframe_fields) {
+  const TangentBundle& bundle = space.bundle();
+  const Mesh& mesh = space.mesh();
+  const double h = mesh.mean_edge_length();
+  const size_t nk = scene.keyframes.size();
+  TVF_CHECK(keyframe_fields.size() == nk, "one field per key frame");
+  std::vector<std::vector<Singularity>> sing(nk);
+  for (size_t k = 0; k < nk; ++k) sing[k] = find_singularities(bundle, keyframe_fields[k]);
+
+  // A linked key-frame element's singularity: the nearest of its key frame's field.
+  const double link_reach = std::max(scene.solver.region_radius, 3 * h);
+  auto linked_singularity = [&](size_t link, int key, int element) {
+    const Vec3 at = scene.keyframes[static_cast<size_t>(key)].elements[static_cast<size_t>(element)].at;
+    const Vec3 p = surface_position(mesh, space.locate(at));
+    int best = -1;
+    double best_d = link_reach;
+    for (size_t s = 0; s < sing[static_cast<size_t>(key)].size(); ++s) {
+      const double dist = (sing[static_cast<size_t>(key)][s].position - p).norm();
+      if (dist <= best_d) best = static_cast<int>(s), best_d = dist;
+    }
+    if (best < 0)
+      throw_input_error(scene.label(), fmt::format("solver.links[{}]", link),
+                        fmt::format("keyframes[{}].elements[{}] has no singularity of the key frame's field within {:.3g} "
+                                    "of it (its neighbours' regions overlap it); move it or the others apart",
+                                    key, element, link_reach));
+    return static_cast<size_t>(best);
+  };
+
+  auto add_track = [&](const Singularity& a, const Vec3& p1, double t0, double t1, const Linear& j1_in_face,
+                       int face1) {
+    Track tr;
+    tr.p0 = a.position;
+    tr.p1 = p1;
+    tr.t0 = t0;
+    tr.t1 = t1;
+    tr.ref_e1 = bundle.face_e1(a.where.face);
+    tr.j0 = to_linear(a.jacobian);
+    tr.j1 = {j1_in_face.alpha, beta_in_frame(bundle, face1, tr.ref_e1, j1_in_face.beta)};
+    tracks_.push_back(tr);
+  };
+
+  for (size_t k = 0; k + 1 < nk; ++k) {
+    const std::vector<Singularity>& A = sing[k];
+    const std::vector<Singularity>& B = sing[k + 1];
+    KeyframeIntervalReport rep;
+    rep.from_keyframe = static_cast<int>(k);
+    rep.to_keyframe = static_cast<int>(k + 1);
+    rep.t0 = scene.keyframes[k].t;
+    rep.t1 = scene.keyframes[k + 1].t;
+    rep.bifurcation_t = k < scene.solver.bifurcation_times.size() ? scene.solver.bifurcation_times[k]
+                                                                   : 0.5 * (rep.t0 + rep.t1);
+    std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
+    std::vector<std::pair<size_t, size_t>> pairs;
+    std::vector<char> linked_pair;
+    for (size_t l = 0; l < scene.solver.links.size(); ++l) {
+      const KeyframeLink& link = scene.solver.links[l];
+      if (link.from_keyframe != static_cast<int>(k)) continue;
+      const size_t a = linked_singularity(l, link.from_keyframe, link.from_element);
+      const size_t b = linked_singularity(l, link.to_keyframe, link.to_element);
+      if (ma[a] >= 0 || mb[b] >= 0)
+        throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
+                          "links a singularity of the key frames' fields that an earlier link already holds (the two "
+                          "elements are too close to tell apart)");
+      if (A[a].index != B[b].index)
+        throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
+                          fmt::format("the key frames' fields have singularities of index {} and {} at the linked "
+                                      "elements; linked singularities must have the same index",
+                                      A[a].index, B[b].index));
+      ma[a] = static_cast<int>(b);
+      mb[b] = static_cast<int>(a);
+      pairs.emplace_back(a, b);
+    }
+    const size_t n_linked = pairs.size();
+    match_nearest(A, B, ma, mb, [](const Singularity& x, const Singularity& y) { return x.type == y.type; }, pairs);
+    match_nearest(A, B, ma, mb,
+                  [](const Singularity& x, const Singularity& y) {
+                    return x.index == y.index && stability(x.type) * stability(y.type) >= 0;
+                  },
+                  pairs);
+    for (size_t m = 0; m < pairs.size(); ++m) {
+      const Singularity& a = A[pairs[m].first];
+      const Singularity& b = B[pairs[m].second];
+      add_track(a, b.position, rep.t0, rep.t1, to_linear(b.jacobian), b.where.face);
+      rep.matched.push_back({a.type, a.position, b.position, m < n_linked});
+    }
+
+    // The unmatched, in pairs: cancelled before t_c, created after.
+    const double tc = rep.bifurcation_t;
+    const double tau = 0.25 * std::min(tc - rep.t0, rep.t1 - tc);
+    const double diam = space.diameter();
+    for (int side = 0; side < 2; ++side) {
+      const std::vector<Singularity>& S = side == 0 ? A : B;
+      const std::vector<int>& matched = side == 0 ? ma : mb;
+      std::vector<char> paired(S.size(), 0);
+      for (const auto& [si, ni] : pair_unmatched(S, matched)) {
+        paired[si] = paired[ni] = 1;
+        const Singularity& saddle = S[si];
+        const Singularity& node = S[ni];
+        const Vec3 mid = surface_position(mesh, space.locate(0.5 * (saddle.position + node.position)));
+        const int face = space.locate(mid).face;
+        const double dist = (node.position - saddle.position).norm();
+        const double s = std::max(1.5 * h, std::min(0.25 * dist, 0.1 * diam));
+        cplx axis = bundle.world_to_face(face, node.position - saddle.position);
+        axis = std::abs(axis) > 0 ? axis / std::abs(axis) : cplx(1, 0);
+        const bool sink = stability(node.type) < 0;
+        BifurcationElement b;
+        b.type = side == 0 ? (sink ? BifurcationType::saddle_sink_cancellation : BifurcationType::saddle_source_cancellation)
+                           : (sink ? BifurcationType::saddle_sink_creation : BifurcationType::saddle_source_creation);
+        b.at = {mid, tc};
+        b.scale = s;
+        b.time_scale = tau;
+        b.angle = std::arg(axis);
+        templates_.push_back({CompiledElement(b), tc - tau, tc + tau, std::max(scene.solver.region_radius, 2 * s)});
+        // The template's zeros at |t′| = 1 (node on +axis, saddle on −axis) and its
+        // Jacobians there: R diag(±2, ±1) Rᵀ in the frame of `face`.
+        const Vec3 off = s * bundle.face_to_world(face, axis);
+        const Vec3 node_end = surface_position(mesh, space.locate(mid + off));
+        const Vec3 saddle_end = surface_position(mesh, space.locate(mid - off));
+        const double sign = sink ? -1.0 : 1.0;
+        const cplx rot = axis * axis;
+        const Linear j_node{cplx(sign * 1.5, 0), sign * 0.5 * rot};
+        const Linear j_saddle{cplx(sign * -0.5, 0), sign * -1.5 * rot};
+        KeyframeIntervalReport::Pair pr{saddle.type, node.type, saddle.position, node.position, mid, tc};
+        if (side == 0) {
+          add_track(saddle, saddle_end, rep.t0, tc - tau, j_saddle, face);
+          add_track(node, node_end, rep.t0, tc - tau, j_node, face);
+          rep.cancelled.push_back(pr);
+        } else {
+          // Carried backwards in time: from the key frame at t1 to the template's zeros at t_c + τ.
+          add_track(saddle, saddle_end, rep.t1, tc + tau, j_saddle, face);
+          add_track(node, node_end, rep.t1, tc + tau, j_node, face);
+          rep.created.push_back(pr);
+        }
+      }
+      for (size_t i = 0; i < S.size(); ++i)
+        if (matched[i] < 0 && !paired[i]) (side == 0 ? rep.unpaired_first : rep.unpaired_second).push_back(S[i].position);
+    }
+    intervals_.push_back(std::move(rep));
+  }
+}
+
+void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scene, double t, double d,
+                                     std::span<char> fixed, std::span<cplx> values) const {
+  LocalChart chart;
+  detail::ElementOnDomain placed;
+  for (const Track& tr : tracks_) {
+    const double lo = std::min(tr.t0, tr.t1), hi = std::max(tr.t0, tr.t1);
+    if (!(t > lo && t < hi)) continue;
+    const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
+    ElementState st;
+    st.active = true;
+    st.position = tr.p0 + s * (tr.p1 - tr.p0);
+    const SurfacePoint at = space.locate(st.position);
+    Linear j{blend(tr.j0.alpha, tr.j1.alpha, s), blend(tr.j0.beta, tr.j1.beta, s)};
+    // From the reference frame into the frame at p(t) (the face holding it).
+    const cplx c = space.bundle().world_to_face(at.face, tr.ref_e1);
+    if (std::abs(c) > 0) j.beta *= (c / std::abs(c)) * (c / std::abs(c));
+    st.field.kind = LocalField::Kind::linear;
+    st.field.matrix = to_matrix(j);
+    detail::place_state(space, st, d, chart, placed);
+    detail::constrain_region(space.mesh(), placed, scene.solver.region_radius, fixed, values);
+  }
+  for (const Template& tp : templates_) {
+    if (t < tp.t0 || t > tp.t1) continue;
+    detail::place_element(space, tp.element, t, d, chart, placed);
+    detail::constrain_region(space.mesh(), placed, tp.radius, fixed, values);
+  }
+}
+
+nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals) {
+  using nlohmann::json;
+  auto xyz = [](const Vec3& p) { return json::array({p.x(), p.y(), p.z()}); };
+  json out = json::array();
+  for (const KeyframeIntervalReport& r : intervals) {
+    json j;
+    j["interval"] = {r.t0, r.t1};
+    j["keyframes"] = {r.from_keyframe, r.to_keyframe};
+    j["bifurcation_t"] = r.bifurcation_t;
+    j["matched"] = json::array();
+    for (const auto& m : r.matched)
+      j["matched"].push_back({{"type", to_string(m.type)}, {"from", xyz(m.from)}, {"to", xyz(m.to)}, {"linked", m.linked}});
+    for (const char* key : {"created", "cancelled"}) {
+      j[key] = json::array();
+      for (const auto& p : std::string(key) == "created" ? r.created : r.cancelled)
+        j[key].push_back({{"t", p.t},
+                          {"at", xyz(p.at)},
+                          {"saddle", xyz(p.saddle)},
+                          {"node", xyz(p.node)},
+                          {"node_type", to_string(p.node_type)}});
+    }
+    j["unpaired"] = json::array();
+    for (const auto& p : r.unpaired_first) j["unpaired"].push_back(xyz(p));
+    for (const auto& p : r.unpaired_second) j["unpaired"].push_back(xyz(p));
+    out.push_back(j);
+  }
+  return out;
+}
+
+}  // namespace tvf

@@ -1,0 +1,70 @@
+// `tvf generate` on a scene with "keyframe_topology": "matched": one line per key-frame
+// interval and keyframe_topology.json; `tvf analyze` then finds what it planned.
+#include "support/test_paths.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <cmath>
+#include <fstream>
+
+namespace tvf {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(CliKeyframeTopology, Example24ReportsItsIntervalAndTheAnalysisAgrees) {
+  test::TempDir dir;
+  const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/scene.json";
+  const auto g = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+  EXPECT_NE(g.output.find("key frames 0 → 1 (t 0 → 1): 3 matched, 1 pairs created and 0 cancelled at t = 0.6"),
+            std::string::npos)
+      << g.output;
+  std::ifstream in(dir / "out" / "keyframe_topology.json");
+  ASSERT_TRUE(in.good());
+  const nlohmann::json k = nlohmann::json::parse(in);
+  ASSERT_EQ(k.at("intervals").size(), 1u);
+  const nlohmann::json& i = k["intervals"][0];
+  EXPECT_EQ(i.at("bifurcation_t"), 0.6);
+  EXPECT_EQ(i.at("matched").size(), 3u);
+  ASSERT_EQ(i.at("created").size(), 1u);
+  EXPECT_EQ(i["created"][0].at("node_type"), "sink");
+  EXPECT_TRUE(i.at("cancelled").empty());
+
+  const auto a = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json"));
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  // The design check counts the planned creation as designed.
+  EXPECT_NE(a.output.find("designed 6 singularities, 1 bifurcation: all found; no extras"), std::string::npos)
+      << a.output;
+  std::ifstream ain(dir / "a.json");
+  const nlohmann::json analysis = nlohmann::json::parse(ain);
+  // Exactly the planned creation, where and when the template put it; no other event.
+  ASSERT_EQ(analysis.at("bifurcations").size(), 1u) << analysis["bifurcations"].dump();
+  const nlohmann::json& b = analysis["bifurcations"][0];
+  EXPECT_EQ(b.at("kind"), "creation");
+  EXPECT_NEAR(b.at("t").get<double>(), 0.6, 1.5 / 59);
+  const auto at = i["created"][0]["at"];
+  const double dx = b["position"][0].get<double>() - at[0].get<double>();
+  const double dy = b["position"][1].get<double>() - at[1].get<double>();
+  EXPECT_LT(std::hypot(dx, dy), 0.1);
+  EXPECT_EQ(analysis.at("paths").size(), 5u);
+
+  // The same scene with "free": bifurcations nobody designed, and no keyframe_topology.json.
+  std::ifstream sin(scene);
+  nlohmann::json free = nlohmann::json::parse(sin);
+  free["solver"] = {{"region_radius", 0.15}};
+  test::write_text(dir / "free.json", free.dump());
+  const auto f = test::run_tvf("generate " + test::quoted(dir / "free.json") + " -o " + test::quoted(dir / "free") +
+                               " --no-vtk -q");
+  ASSERT_EQ(f.exit_code, 0) << f.output;
+  EXPECT_FALSE(fs::exists(dir / "free" / "keyframe_topology.json"));
+  const auto fa = test::run_tvf("analyze " + test::quoted(dir / "free") + " -o " + test::quoted(dir / "f.json"));
+  ASSERT_EQ(fa.exit_code, 0) << fa.output;
+  std::ifstream fin(dir / "f.json");
+  EXPECT_GE(nlohmann::json::parse(fin).at("bifurcations").size(), 3u);
+}
+
+}  // namespace
+}  // namespace tvf
