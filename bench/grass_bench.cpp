@@ -4,9 +4,9 @@
 // and video are outside both.
 #include "tvf/render/grass.h"
 
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include "bench_scenes.h"
 

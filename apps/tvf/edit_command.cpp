@@ -3,9 +3,9 @@
 #include "progress.h"
 
 #include "tvf/core/error.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/edit/field_editor.h"
 
 #include <fmt/format.h>

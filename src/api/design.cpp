@@ -3,7 +3,7 @@
 #include "tvf/integrate/periodic_orbits.h"
 
 #include "tvf/core/error.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/solve/hodge_projection.h"
 

@@ -3,7 +3,7 @@
 #include "design/element_regions.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/hermite_path.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/design/streamline_deform.h"
 
 #include <tbb/enumerable_thread_specific.h>

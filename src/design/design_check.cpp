@@ -4,7 +4,7 @@
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframes.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/edits.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/integrate/periodic_orbits.h"
 

@@ -3,7 +3,7 @@
 // cancellation that change nothing, and a generated folder read back.
 #include "tvf/api/design.h"
 
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include "support/test_paths.h"
 

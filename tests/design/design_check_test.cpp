@@ -9,7 +9,7 @@
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

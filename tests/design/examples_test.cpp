@@ -12,7 +12,7 @@
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframes.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include <gtest/gtest.h>
 

@@ -445,7 +445,7 @@ TEST(SpaceTimeGenerator, RefusesMeanValueWeights) {
 }  // namespace
 }  // namespace tvf
 
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 namespace tvf {
 namespace {

@@ -4,10 +4,10 @@
 #include "support/test_paths.h"
 
 #include "tvf/analysis/topology.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/scene_json.h"
+#include "tvf/scene/edits.h"
 #include "tvf/field/field_sampler.h"
 
 #include <gtest/gtest.h>

@@ -5,8 +5,8 @@
 //   faces.npy (|F|×3 int32), times.npy (N float64), field.tvff (native, exact reload),
 //   field.pvd + field_NNNN.vtu (VTK series), coherence.csv, scene.json (canonical scene),
 //   and divergence.json when the scene is "incompressible" (OutputOptions::incompressible).
-#include "tvf/design/design_space.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/design_space.h"
+#include "tvf/scene/scene.h"
 #include "tvf/field/field.h"
 #include "tvf/solve/hodge_projection.h"
 

@@ -8,7 +8,7 @@
 // or in space-time), so an edit keeps its meaning when the design is regenerated.
 // Positions are world coordinates (z = 0 on planar domains); times are design times.
 #include "tvf/core/types.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/scene.h"
 
 #include <nlohmann/json.hpp>
 

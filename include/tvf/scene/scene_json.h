@@ -3,7 +3,7 @@
 // Every error is a tvf::Error whose message names the file and the JSON path:
 //   "scene.json: elements[2].path[1]: t = 7 is outside the time range [0, 1]"
 // Unknown keys, wrong types, out-of-range values and non-finite numbers are errors.
-#include "tvf/design/scene.h"
+#include "tvf/scene/scene.h"
 
 #include <string>
 

@@ -1,7 +1,7 @@
 // The typed edits of a scene (edits.h): read from the canonical JSON the scene parser keeps,
 // written back identically, and checked for scenes built in code.
-#include "tvf/design/scene_json.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/scene_json.h"
+#include "tvf/scene/edits.h"
 
 #include "support/test_paths.h"
 

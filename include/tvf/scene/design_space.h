@@ -2,12 +2,13 @@
 // The domain a design lives on, built once from a scene: the mesh (grid, file or
 // primitive), its tangent bundle and its log map. Not movable: the bundle and log map
 // refer to the mesh.
-#include "tvf/design/scene.h"
+#include "tvf/scene/scene.h"
 #include "tvf/field/point_locator.h"
 #include "tvf/mesh/log_map.h"
 #include "tvf/mesh/mesh_validate.h"
 #include "tvf/mesh/tangent_bundle.h"
 
+#include <cstdint>
 #include <memory>
 
 namespace tvf {
@@ -36,6 +37,12 @@ private:
   PointLocator locator_;
   double diameter_;
 };
+
+// Bytes a generated field needs in memory (double complex values plus float32 export).
+std::uint64_t field_memory_bytes(int frames, long long vertices);
+// Throws tvf::Error naming the scene and "time.frames" when the field of `scene` on
+// `vertices` vertices would need more than 80 % of this machine's memory.
+void check_field_memory(const Scene& scene, long long vertices);
 
 // Builds the domain of a scene. Mesh files are resolved relative to the scene file;
 // errors name the scene and "domain.mesh" or the mesh file.

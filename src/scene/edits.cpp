@@ -1,4 +1,4 @@
-#include "tvf/edit/edits.h"
+#include "tvf/scene/edits.h"
 
 #include "tvf/core/error.h"
 

@@ -1,4 +1,4 @@
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include "tvf/core/error.h"
 #include "support/test_paths.h"
