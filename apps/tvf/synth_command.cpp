@@ -176,7 +176,7 @@ int SynthCommand::run_checked() {
   so.seed = seed_;
 
   RenderInput in = load_render_input(input_, progress, "synth", true);
-  const TangentBundle bundle(in.mesh);
+  const TangentBundle& bundle = in.space->bundle();
   progress.note("synthesizing");
   SynthesisAnimationReport report;
   if (in.mesh.is_planar_xy()) {

@@ -41,8 +41,12 @@ void check_field_memory(const Scene& scene, long long vertices) {
 }
 
 DesignSpace::DesignSpace(Mesh mesh)
-    : mesh_(std::move(mesh)), bundle_(mesh_), log_map_(bundle_), locator_(mesh_),
-      diameter_(mesh_.diameter()) {}
+    : mesh_(std::move(mesh)), bundle_(mesh_), locator_(mesh_), diameter_(mesh_.diameter()) {}
+
+const LogMap& DesignSpace::log_map() const {
+  std::call_once(log_map_once_, [this] { log_map_ = std::make_unique<LogMap>(bundle_); });
+  return *log_map_;
+}
 
 SurfacePoint DesignSpace::locate(const Vec3& x) const { return locator_.closest(x); }
 

@@ -1,7 +1,9 @@
 #pragma once
 // The domain a design lives on, built once from a scene: the mesh (grid, file or
 // primitive), its tangent bundle and its log map. Not movable: the bundle and log map
-// refer to the mesh.
+// refer to the mesh. The log map (three sparse factorizations on a surface) is built on
+// its first use, so a domain that only carries a field read from a file (rendering,
+// analysis) does not pay for it.
 #include "tvf/scene/scene.h"
 #include "tvf/field/point_locator.h"
 #include "tvf/mesh/log_map.h"
@@ -10,6 +12,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 
 namespace tvf {
 
@@ -21,7 +24,8 @@ public:
 
   const Mesh& mesh() const { return mesh_; }
   const TangentBundle& bundle() const { return bundle_; }
-  const LogMap& log_map() const { return log_map_; }
+  // Built on first use (thread-safe).
+  const LogMap& log_map() const;
   bool planar() const { return bundle_.is_flat(); }
   // Length unit of the falloff: the bounding-box diagonal (DESIGN §4).
   double diameter() const { return diameter_; }
@@ -33,7 +37,8 @@ public:
 private:
   Mesh mesh_;
   TangentBundle bundle_;
-  LogMap log_map_;
+  mutable std::once_flag log_map_once_;
+  mutable std::unique_ptr<LogMap> log_map_;
   PointLocator locator_;
   double diameter_;
 };
