@@ -1003,7 +1003,7 @@ EditSettings edit_settings(const Scene& scene) {
 }
 
 std::vector<EditReport> apply_scene_edits(const DesignSpace& space, const Scene& scene, Field& field) {
-  const std::vector<Edit> edits = edits_from_scene(scene);
+  const std::vector<Edit>& edits = scene.edits;
   std::vector<EditReport> reports;
   if (edits.empty()) return reports;
   FieldEditor editor(space, edit_settings(scene));

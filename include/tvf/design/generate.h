@@ -151,9 +151,9 @@ Field generate_deform(const DesignSpace& space, const Scene& scene,
                       const GenerateOptions& options = {}, GenerateReport* report = nullptr);
 
 // The deform generator's parts, for checking a deformed design against its field: the
-// base design (deform.base's elements as a constrained scene; throws tvf::Error naming
-// the JSON path when they do not form a valid scene) and M(t) (the identity without keys).
-// Needs a scene with a deform block.
+// base design (the scene with deform.base's elements, constrained, without key frames and
+// edits) and M(t) (the identity without keys). deform_base_scene needs a scene with a
+// deform block.
 Scene deform_base_scene(const Scene& scene);
 Mat2 deform_matrix(const Scene& scene, double t);
 

@@ -13,7 +13,8 @@ namespace tvf {
 // `source_path` (may be empty) is stored in Scene::source_path to resolve mesh paths.
 Scene scene_from_json(const nlohmann::json& j, const std::string& label,
                       const std::string& source_path = "");
-// Reads a scene file (UTF-8 JSON). Syntax errors name the line and column.
+// Reads a scene file (UTF-8 JSON). Syntax errors name the line and column; every error's
+// location() has the file, the JSON path and the line and column of the value.
 Scene load_scene(const std::string& path);
 // Parses scene text (e.g. the embedded default scene); `label` names it in messages.
 Scene parse_scene(const std::string& text, const std::string& label);
