@@ -6,6 +6,7 @@
 // (GenerateOptions::cancel) and is raised once the worker has stopped.
 #include "tvf/api/design.h"
 #include "tvf/core/error.h"
+#include "tvf/core/error_location.h"
 #include "tvf/scene/scene_json.h"
 #include "tvf/field/animation_export.h"
 #include "tvf/field/world_vectors.h"
