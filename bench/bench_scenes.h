@@ -2,7 +2,7 @@
 // The designs the benchmarks share.
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/scene.h"
 
 #include <benchmark/benchmark.h>
 

@@ -2,11 +2,12 @@
 // 2 cores. BM_GrassPose is the per-frame simulation (field at every root, the IK solve of
 // every strand); BM_GrassFrame adds the picture (Cairo lines, one thread). PNG encoding
 // and video are outside both.
+#include "tvf/api/design.h"
 #include "tvf/render/grass.h"
 
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include "bench_scenes.h"
 
@@ -25,8 +26,9 @@ double cpu_seconds() {
 
 void grass_case(benchmark::State& state, bool picture) {
   const Scene s = bench::on_grid(bench::combined_scene(), 65);
-  const auto space = make_design_space(s);
-  const Field field = generate(*space, s);
+  const GeneratedField generated = generate_scene(s);  // the facade's one-shot (api/design.h)
+  const auto& space = generated.space;
+  const Field& field = generated.field;
   GrassOptions o;
   o.count = static_cast<int>(state.range(0));
   o.segments = static_cast<int>(state.range(1));

@@ -12,9 +12,9 @@
 //
 //   build/release/bench/tvf_serve_latency [--repeats N] [--only NAME]
 #include "tvf/analysis/topology.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/mesh/mesh_io.h"
 #include "tvf/mesh/primitives.h"
 #include "tvf/serve/session.h"

@@ -6,6 +6,7 @@
 // says little; cpu_ms / 2 is what two idle cores take when the work splits evenly.
 #include "bench_scenes.h"
 
+#include "tvf/api/design.h"
 #include "tvf/mesh/primitives.h"
 #include "tvf/synth/planar_synthesis.h"
 #include "tvf/synth/surface_synthesis.h"
@@ -44,8 +45,9 @@ void time_frames(benchmark::State& state, Synth& synth, const Field& field, int 
 // The combined design (bench_scenes.h) on a 65 × 65 grid; pebbles, 64-pixel exemplar.
 void BM_SynthPlanarFrame(benchmark::State& state) {
   const Scene s = bench::on_grid(bench::combined_scene(), 65);
-  const auto space = make_design_space(s);
-  const Field field = generate(*space, s);
+  const GeneratedField generated = generate_scene(s);  // the facade's one-shot (api/design.h)
+  const auto& space = generated.space;
+  const Field& field = generated.field;
   SynthesisOptions o;
   o.size = static_cast<int>(state.range(0));
   PlanarSynthesizer synth(space->bundle(), field, make_procedural_exemplar(ProceduralExemplar::pebbles, 64, 1), o);

@@ -1,6 +1,7 @@
 // Texture animation frames (IBFV) on a planar domain: the target is ≥ 10 frames/s
 // at 1024 × 1024 on 2 cores. One iteration advances the texture by one frame and makes
 // its picture (the per-frame work; PNG encoding and video are outside it).
+#include "tvf/api/design.h"
 #include "tvf/render/texture_animation.h"
 #include "tvf/mesh/primitives.h"
 #include "tvf/render/mesh_renderer.h"
@@ -17,8 +18,9 @@ namespace {
 
 void BM_TextureFrame(benchmark::State& state) {
   const Scene s = bench::on_grid(bench::combined_scene(), 65);
-  const auto space = make_design_space(s);
-  const Field field = generate(*space, s);
+  const GeneratedField generated = generate_scene(s);  // the facade's one-shot (api/design.h)
+  const auto& space = generated.space;
+  const Field& field = generated.field;
   TextureOptions o;
   o.size = static_cast<int>(state.range(0));
   o.lic = static_cast<int>(state.range(1));

@@ -2,6 +2,7 @@
 // of a generated 20,000-vertex × 100-frame field (Google Benchmark). Issue 4 asks that
 // analysing such a field take a small fraction of generating it (BM_BasisSum*,
 // BM_Constrained* in basis_sum_bench.cpp).
+#include "tvf/api/design.h"
 #include "tvf/analysis/topology.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
@@ -26,8 +27,9 @@ void report(benchmark::State& state, const DesignSpace& space, const Field& fiel
 
 // Generates the scene once, then times its analysis.
 void run(benchmark::State& state, const Scene& s) {
-  const auto space = make_design_space(s);
-  const Field field = generate(*space, s);
+  const GeneratedField generated = generate_scene(s);  // the facade's one-shot (api/design.h)
+  const auto& space = generated.space;
+  const Field& field = generated.field;
   Topology t;
   for (auto _ : state) {
     t = analyze_topology(space->bundle(), field);

@@ -1,7 +1,7 @@
 #include "targets.h"
 
 #include "tvf/core/error.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/mesh/mesh_io.h"
 

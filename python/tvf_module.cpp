@@ -6,7 +6,8 @@
 // (GenerateOptions::cancel) and is raised once the worker has stopped.
 #include "tvf/api/design.h"
 #include "tvf/core/error.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/core/error_location.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/animation_export.h"
 #include "tvf/field/world_vectors.h"
 #include "tvf/integrate/pathline.h"
@@ -214,7 +215,17 @@ PYBIND11_MODULE(_tvf, m) {
     } catch (const GenerationCancelled& e) {
       PyErr_SetString(cancelled_type, e.what());
     } catch (const Error& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      // The place as attributes too: file, json_path (None when unknown), line, column
+      // (0 when unknown), as the server's error answers carry them.
+      const ErrorLocation w = location_of(e);
+      py::object error = py::reinterpret_steal<py::object>(PyObject_CallFunction(PyExc_ValueError, "s", e.what()));
+      if (!error) return;  // the call's own error is set
+      auto text_or_none = [](const std::string& s) { return s.empty() ? py::object(py::none()) : py::object(py::str(s)); };
+      error.attr("file") = text_or_none(w.file);
+      error.attr("json_path") = text_or_none(w.json_path);
+      error.attr("line") = py::int_(w.line);
+      error.attr("column") = py::int_(w.column);
+      PyErr_SetObject(PyExc_ValueError, error.ptr());
     }
   });
 

@@ -2,11 +2,9 @@
 
 #include "progress.h"
 
+#include "tvf/api/design.h"
 #include "tvf/core/error.h"
-#include "tvf/design/design_space.h"
-#include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
-#include "tvf/edit/field_editor.h"
+#include "tvf/scene/scene_json.h"
 
 #include <fmt/format.h>
 
@@ -119,44 +117,30 @@ int run_edit(const EditArgs& args) {
   Scene scene = load_scene(args.scene);
   if (args.undo) {
     if (scene.edits.empty()) throw Error(fmt::format("{}: the scene has no edits to undo", args.scene));
-    const nlohmann::json dropped = scene.edits.back();
-    scene.edits.erase(scene.edits.size() - 1);
+    const nlohmann::json dropped = edit_to_json(scene.edits.back(), scene.domain.is_planar());
+    scene.edits.pop_back();
     save_scene(scene, args.scene);
     if (!args.quiet)
       std::printf("%s: dropped the last edit (%s); %zu edits left\n", args.scene.c_str(), dropped.dump().c_str(),
                   scene.edits.size());
     return 0;
   }
-  // The new scene, validated as a whole (JSON paths name the new entry).
-  nlohmann::json j = scene_to_json(scene);
-  j["edits"].push_back(requested_edit(args, scene));
-  const Scene edited = scene_from_json(j, args.scene, scene.source_path);
-  const std::vector<Edit> edits = edits_from_scene(edited);
-  const Edit& edit = edits.back();
-
-  // Check on the field the scene makes now.
+  // Through the library's facade (api/design.h), as the server and Python edit: the new
+  // entry is validated with the scene (JSON paths name it), then checked on the field the
+  // scene makes now; a refused edit changes nothing.
   const bool show = !args.quiet && progress_wanted();
   Progress progress("tvf edit", show);
-  progress.note("building the domain");
-  const auto space = make_design_space(scene);
+  Design design(std::move(scene));
   GenerateOptions options;
   options.progress = [&](int done, int total) { progress.update(done, total); };
-  options.project = false;  // edits act before the "incompressible" projection
-  Field field = generate(*space, scene, options);
-  progress.note("applying the edit");
-  FieldEditor editor(*space, edit_settings(scene));
-  EditReport report;
-  try {
-    report = editor.apply(field, edit);
-  } catch (const EditRefused& e) {
-    throw Error(fmt::format("{}: refused to {}: {}; the scene is unchanged", args.scene, describe(edit), e.what()));
-  }
+  progress.note("generating, then applying the edit");
+  const EditReport report = design.edit(requested_edit(args, design.scene()), options);
   progress.note("writing " + args.scene);
-  save_scene(edited, args.scene);
+  design.save(args.scene);
   progress.finish();
   if (!args.quiet)
     std::printf("%s: %s; appended as edits[%zu]\n", args.scene.c_str(), report.summary.c_str(),
-                edited.edits.size() - 1);
+                design.scene().edits.size() - 1);
   return 0;
 }
 

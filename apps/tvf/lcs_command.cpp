@@ -141,7 +141,7 @@ int LcsCommand::run_ftle() {
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf ftle", show);
   RenderInput in = load_render_input(input_, progress, "ftle", true);
-  const TangentBundle bundle(in.mesh);
+  const TangentBundle& bundle = in.space->bundle();
   FtleOptions o;
   o.horizon = horizon_;
   o.forward = direction_ != "backward";
@@ -249,7 +249,7 @@ int LcsCommand::run_streaklines() {
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf streaklines", show);
   RenderInput in = load_render_input(input_, progress, "streaklines", true);
-  const TangentBundle bundle(in.mesh);
+  const TangentBundle& bundle = in.space->bundle();
   check_point_dims(seed_, seed_.size(), bundle.is_flat(), "--seed");
   StreaklineOptions o;
   o.t0 = time_option(from_, "--from", in.field.time(), true);
@@ -298,7 +298,7 @@ int LcsCommand::run_timelines() {
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf timelines", show);
   RenderInput in = load_render_input(input_, progress, "timelines", true);
-  const TangentBundle bundle(in.mesh);
+  const TangentBundle& bundle = in.space->bundle();
   const size_t dims = line_.size() / 2;
   check_point_dims(line_, dims, bundle.is_flat(), "--line");
   TimelineOptions o;

@@ -4,9 +4,9 @@
 #include "render_input.h"
 
 #include "tvf/core/error.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/render/crowd.h"
 #include "tvf/render/grass.h"

@@ -4,9 +4,9 @@
 #include "render_input.h"
 
 #include "tvf/core/error.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/render/mesh_renderer.h"
 #include "tvf/synth/planar_synthesis.h"
@@ -176,7 +176,7 @@ int SynthCommand::run_checked() {
   so.seed = seed_;
 
   RenderInput in = load_render_input(input_, progress, "synth", true);
-  const TangentBundle bundle(in.mesh);
+  const TangentBundle& bundle = in.space->bundle();
   progress.note("synthesizing");
   SynthesisAnimationReport report;
   if (in.mesh.is_planar_xy()) {

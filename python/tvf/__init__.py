@@ -8,7 +8,8 @@ Quick start::
     a = tvf.analyze(f)              # singularities, paths, bifurcations, coherence
 
 `tvf.Design(scene)` is the stateful form: change the scene, generate, analyze, edit,
-undo. Bad input raises ValueError with the command line's sentence. See
+undo. Bad input raises ValueError with the command line's sentence and the place as
+attributes (file, json_path, line, column). See
 docs/user_guide.md ("Python") and examples/python/.
 """
 from ._tvf import (  # noqa: F401

@@ -3,7 +3,7 @@
 #include "tvf/integrate/periodic_orbits.h"
 
 #include "tvf/core/error.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/solve/hodge_projection.h"
 
@@ -289,16 +289,16 @@ std::optional<DesignCheck> Design::check() {
   return check_design(*s_->scene, *r.space, r.field, topology, options);
 }
 
-EditReport Design::edit(const nlohmann::json& entry) {
+EditReport Design::edit(const nlohmann::json& entry, GenerateOptions options) {
   const Scene& scene = s_->need_scene();
   // The new scene, validated as a whole (JSON paths name the new entry).
   nlohmann::json j = scene_to_json(scene);
   j["edits"].push_back(entry);
   Scene edited = scene_from_json(j, scene.label(), scene.source_path);
-  const Edit e = edits_from_scene(edited).back();
+  const Edit e = edited.edits.back();
 
   // The edit acts on the field the scene makes now, before its projection.
-  DesignResult& now = s_->made({});
+  DesignResult& now = s_->made(options);
   if (scene.incompressible && !now.unprojected) {
     // Read from a file: the field before the projection is not there; make it.
     GenerateOptions go;
@@ -329,9 +329,9 @@ EditReport Design::edit(const nlohmann::json& entry) {
   return report;
 }
 
-EditReport Design::edit(const Edit& e) {
+EditReport Design::edit(const Edit& e, GenerateOptions options) {
   const Scene& scene = s_->need_scene();
-  return edit(edit_to_json(e, scene.domain.is_planar()));
+  return edit(edit_to_json(e, scene.domain.is_planar()), std::move(options));
 }
 
 bool Design::can_undo() const { return !s_->undo.empty(); }

@@ -1,9 +1,11 @@
 #include "tvf/core/error.h"
 
-namespace tvf {
+#include "tvf/core/error_location.h"
 
-void throw_input_error(const std::string& file, const std::string& where,
-                       const std::string& message) {
+namespace tvf {
+namespace {
+
+std::string message_text(const std::string& file, const std::string& where, const std::string& message) {
   std::string text;
   for (const std::string* part : {&file, &where}) {
     if (part->empty()) continue;
@@ -18,7 +20,27 @@ void throw_input_error(const std::string& file, const std::string& where,
     text.replace(nul, 1, "\\u0000");
     nul += 6;
   }
-  throw Error(text);
+  return text;
+}
+
+}  // namespace
+
+void throw_input_error(const std::string& file, const std::string& where,
+                       const std::string& message) {
+  ErrorLocation location;
+  location.file = file;
+  location.json_path = where;
+  throw LocatedError(message_text(file, where, message), location);
+}
+
+void throw_located_error(const std::string& where, const std::string& message, ErrorLocation location) {
+  std::string text = message_text(location.file, where, message);  // before location is moved from
+  throw LocatedError(text, std::move(location));
+}
+
+ErrorLocation location_of(const Error& e) {
+  if (const auto* located = dynamic_cast<const LocatedError*>(&e)) return located->location();
+  return {};
 }
 
 void throw_internal_error(const char* condition, const char* file, int line,

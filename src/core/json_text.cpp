@@ -176,10 +176,138 @@ std::size_t too_deep_index(const std::string& text) {
 bool is_word_char(char c) { return std::isalpha(static_cast<unsigned char>(c)) != 0; }
 
 [[noreturn]] void fail_at(const std::string& text, std::size_t index, const std::string& label,
-                          const std::string& message) {
+                          const std::string& message, const std::string& json_path = "") {
   const auto [line, col] = line_and_column(text, index);
-  throw_input_error(label, fmt::format("line {}, column {}", line, col), message);
+  ErrorLocation location;
+  location.file = label;
+  location.json_path = json_path;
+  location.line = static_cast<int>(line);
+  location.column = static_cast<int>(col);
+  const std::string where = json_path.empty() ? fmt::format("line {}, column {}", line, col)
+                                              : fmt::format("{} (line {}, column {})", json_path, line, col);
+  throw_located_error(where, message, std::move(location));
 }
+
+// One step of a JSON path: a key, or an index.
+struct PathStep {
+  std::string key;
+  std::size_t index = 0;
+  bool is_index = false;
+};
+
+// Splits "a.b[2].c" into steps; false for a path tvf would not write.
+bool split_path(const std::string& path, std::vector<PathStep>& steps) {
+  std::size_t i = 0;
+  while (i < path.size()) {
+    if (path[i] == '[') {
+      const std::size_t close = path.find(']', i);
+      if (close == std::string::npos || close == i + 1) return false;
+      PathStep s;
+      s.is_index = true;
+      for (std::size_t k = i + 1; k < close; ++k) {
+        if (path[k] < '0' || path[k] > '9') return false;
+        s.index = s.index * 10 + static_cast<std::size_t>(path[k] - '0');
+      }
+      steps.push_back(s);
+      i = close + 1;
+      if (i < path.size() && path[i] == '.') ++i;
+      continue;
+    }
+    std::size_t end = i;
+    while (end < path.size() && path[end] != '.' && path[end] != '[') ++end;
+    if (end == i) return false;
+    steps.push_back({path.substr(i, end - i), 0, false});
+    i = end < path.size() && path[end] == '.' ? end + 1 : end;
+  }
+  return true;
+}
+
+// A scanner over JSON text that has already parsed: it finds where values start.
+class PathScanner {
+public:
+  explicit PathScanner(const std::string& text) : t_(text) {}
+
+  // Index of the value at `steps` (from the value starting at `i`), or npos.
+  std::size_t find(std::size_t i, const std::vector<PathStep>& steps, std::size_t depth) {
+    i = skip_space(i);
+    if (depth == steps.size()) return i;
+    if (i >= t_.size()) return std::string::npos;
+    const PathStep& step = steps[depth];
+    if (t_[i] == '{' && !step.is_index) {
+      i = skip_space(i + 1);
+      while (i < t_.size() && t_[i] == '"') {
+        const std::size_t key_end = skip_string(i);
+        const std::string key = unescaped(i, key_end);
+        i = skip_space(key_end);
+        if (i >= t_.size() || t_[i] != ':') return std::string::npos;
+        i = skip_space(i + 1);
+        if (key == step.key) return find(i, steps, depth + 1);
+        i = skip_space(skip_value(i));
+        if (i < t_.size() && t_[i] == ',') i = skip_space(i + 1);
+      }
+      return std::string::npos;
+    }
+    if (t_[i] == '[' && step.is_index) {
+      i = skip_space(i + 1);
+      for (std::size_t k = 0; i < t_.size() && t_[i] != ']'; ++k) {
+        if (k == step.index) return find(i, steps, depth + 1);
+        i = skip_space(skip_value(i));
+        if (i < t_.size() && t_[i] == ',') i = skip_space(i + 1);
+      }
+    }
+    return std::string::npos;
+  }
+
+private:
+  const std::string& t_;
+
+  std::size_t skip_space(std::size_t i) const {
+    while (i < t_.size() && (t_[i] == ' ' || t_[i] == '\t' || t_[i] == '\n' || t_[i] == '\r')) ++i;
+    return i;
+  }
+  // From an opening quote to the index after the closing one.
+  std::size_t skip_string(std::size_t i) const {
+    for (++i; i < t_.size(); ++i) {
+      if (t_[i] == '\\')
+        ++i;
+      else if (t_[i] == '"')
+        return i + 1;
+    }
+    return t_.size();
+  }
+  // The key between the quotes at [begin, end) with the simple escapes undone (keys tvf
+  // names in paths are plain words; anything else only has to compare unequal).
+  std::string unescaped(std::size_t begin, std::size_t end) const {
+    std::string out;
+    for (std::size_t i = begin + 1; i + 1 < end; ++i) {
+      if (t_[i] == '\\' && i + 2 < end) ++i;
+      out += t_[i];
+    }
+    return out;
+  }
+  // Past one value; containers are skipped by counting brackets outside strings (no
+  // recursion: the text nests at most kMaxJsonDepth deep, and this needs no stack).
+  std::size_t skip_value(std::size_t i) const {
+    if (i >= t_.size()) return i;
+    if (t_[i] == '"') return skip_string(i);
+    if (t_[i] == '{' || t_[i] == '[') {
+      std::size_t depth = 0;
+      for (; i < t_.size(); ++i) {
+        const char c = t_[i];
+        if (c == '"') {
+          i = skip_string(i) - 1;
+        } else if (c == '{' || c == '[') {
+          ++depth;
+        } else if (c == '}' || c == ']') {
+          if (--depth == 0) return i + 1;
+        }
+      }
+      return i;
+    }
+    while (i < t_.size() && std::strchr(",]} \t\r\n", t_[i]) == nullptr) ++i;
+    return i;
+  }
+};
 
 }  // namespace
 
@@ -217,8 +345,7 @@ json parse_json_text(const std::string& text, const std::string& label, const st
     message = fmt::format("the number {} is out of range (numbers must be finite)", text.substr(start, end - start));
     if (!builder.error_path().empty()) {
       // Name the key too, as every other check of a value does.
-      const auto [line, col] = line_and_column(text, index);
-      throw_input_error(label, fmt::format("{} (line {}, column {})", builder.error_path(), line, col), message);
+      fail_at(text, index, label, message, builder.error_path());
     }
   } else {
     // NaN, Infinity and friends are not JSON: say so plainly.
@@ -250,6 +377,25 @@ json parse_json_text(const std::string& text, const std::string& label, const st
     }
   }
   fail_at(text, index, label, message);
+}
+
+JsonTextPosition json_path_position(const std::string& text, const std::string& json_path) {
+  std::vector<PathStep> steps;
+  if (!split_path(json_path, steps)) return {};
+  const std::size_t index = PathScanner(text).find(0, steps, 0);
+  if (index == std::string::npos || index >= text.size()) return {};
+  const auto [line, col] = line_and_column(text, index);
+  return {static_cast<int>(line), static_cast<int>(col)};
+}
+
+void rethrow_with_position(const Error& e, const std::string& text) {
+  ErrorLocation location = location_of(e);
+  if (location.line == 0 && !location.json_path.empty()) {
+    const JsonTextPosition p = json_path_position(text, location.json_path);
+    location.line = p.line;
+    location.column = p.column;
+  }
+  throw LocatedError(e.what(), std::move(location));
 }
 
 std::string read_text_file(const std::string& path, const std::string& what, std::size_t max_bytes) {

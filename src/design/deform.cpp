@@ -3,7 +3,7 @@
 #include "design/element_regions.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/hermite_path.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/design/streamline_deform.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -16,14 +16,12 @@ namespace {
 
 // M(t) from matrix keys {t, m}: linear from the identity at t0 to the first key, then
 // key to key, constant after the last.
-Mat2 matrix_at(const nlohmann::json& keys, double t0, double t) {
+Mat2 matrix_at(const std::vector<MatrixKey>& keys, double t0, double t) {
   double ta = t0;
   Mat2 ma = Mat2::Identity();
-  for (const auto& k : keys) {
-    const double tb = k.at("t").get<double>();
-    Mat2 mb;
-    mb << k.at("m")[0][0].get<double>(), k.at("m")[0][1].get<double>(), k.at("m")[1][0].get<double>(),
-        k.at("m")[1][1].get<double>();
+  for (const MatrixKey& k : keys) {
+    const double tb = k.t;
+    const Mat2& mb = k.m;
     if (t <= tb) {
       if (tb <= ta) return mb;
       const double w = std::clamp((t - ta) / (tb - ta), 0.0, 1.0);
@@ -36,12 +34,11 @@ Mat2 matrix_at(const nlohmann::json& keys, double t0, double t) {
 }
 
 // Transform keys {t, sx, sy, theta}, with the identity at t0 unless a key is there.
-std::vector<TransformKey> transform_keys(const nlohmann::json& keys, double t0) {
+std::vector<TransformKey> transform_keys(const std::vector<TransformKey>& keys, double t0) {
   std::vector<TransformKey> out;
-  for (const auto& k : keys)
-    out.push_back({k.at("t").get<double>(), k.at("sx").get<double>(), k.at("sy").get<double>(),
-                   k.at("theta").get<double>()});
-  if (out.empty() || out.front().t > t0) out.insert(out.begin(), TransformKey{t0, 1, 1, 0});
+  out.reserve(keys.size() + 1);
+  if (keys.empty() || keys.front().t > t0) out.push_back(TransformKey{t0, 1, 1, 0});
+  for (const TransformKey& k : keys) out.push_back(k);
   return out;
 }
 
@@ -50,21 +47,22 @@ cplx apply(const Mat2& m, cplx z) { return to_complex(m * to_vec2(z)); }
 }  // namespace
 
 Scene deform_base_scene(const Scene& scene) {
-  nlohmann::json base_json = scene_to_json(scene);
-  base_json["elements"] = scene.deform.at("base").value("elements", nlohmann::json::array());
-  base_json["generator"] = "constrained";
-  base_json.erase("deform");
-  base_json["keyframes"] = nlohmann::json::array();
-  base_json["edits"] = nlohmann::json::array();
-  return scene_from_json(base_json, scene.label() + " (deform.base)", scene.source_path);
+  TVF_CHECK(scene.deform.has_value(), "deform_base_scene needs a scene with a deform block");
+  Scene base = scene;
+  base.elements = scene.deform->base;
+  base.generator = Generator::constrained;
+  base.deform.reset();
+  base.keyframes.clear();
+  base.edits.clear();
+  return base;
 }
 
 Mat2 deform_matrix(const Scene& scene, double t) {
-  const nlohmann::json& def = scene.deform;
+  if (!scene.deform) return Mat2::Identity();
+  const Deform& def = *scene.deform;
   const double t0 = scene.time.t0;
-  if (def.contains("matrix")) return matrix_at(def.at("matrix"), t0, t);
-  if (def.contains("transform"))
-    return transform_matrix(interpolate_transform(transform_keys(def.at("transform"), t0), t));
+  if (def.matrix) return matrix_at(*def.matrix, t0, t);
+  if (def.transform) return transform_matrix(interpolate_transform(transform_keys(*def.transform, t0), t));
   return Mat2::Identity();
 }
 
@@ -75,7 +73,7 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
   const int nv = mesh.num_vertices();
   const auto n = static_cast<size_t>(nv);
   check_field_memory(scene, nv);
-  if (scene.deform.is_null())
+  if (!scene.deform)
     throw_input_error(scene.label(), "deform", "the deform generator needs a deform block");
   const double t0 = scene.time.t0;
 

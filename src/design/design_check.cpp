@@ -5,7 +5,7 @@
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframe_topology.h"
 #include "tvf/design/keyframes.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/edits.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/integrate/periodic_orbits.h"
 
@@ -154,7 +154,7 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
 
   // The scene's edits (validated with the scene). Cancelled pairs: the frame, the window
   // (frames each way) and the two positions on the domain.
-  const std::vector<Edit> edits = edits_from_scene(scene);
+  const std::vector<Edit>& edits = scene.edits;
   struct Cut {
     size_t edit;
     int frame, window;
@@ -315,7 +315,7 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   }
 
   // Deformation: the base's singular elements stay in place, with Jacobian M(t)·J.
-  if (scene.generator == Generator::deform && scene.deform.is_object() && scene.deform.contains("base")) {
+  if (scene.generator == Generator::deform && scene.deform) {
     const Scene base = deform_base_scene(scene);
     for (size_t k = 0; k < base.elements.size(); ++k) {
       const auto* s = std::get_if<SingularElement>(&base.elements[k]);

@@ -2,7 +2,7 @@
 // Internal to the design module: placing elements on the domain and turning them into
 // constraints, shared by the generators (generate.cpp, keyframes.cpp, deform.cpp).
 #include "tvf/core/error.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
 #include "tvf/solve/connection_laplacian.h"

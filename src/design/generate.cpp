@@ -17,27 +17,10 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
-#include <unistd.h>
 
 namespace tvf {
 
 using namespace detail;
-
-std::uint64_t field_memory_bytes(int frames, long long vertices) {
-  // 16 bytes per complex double in memory, 12 per float32 world vector when exporting.
-  return static_cast<std::uint64_t>(frames) * static_cast<std::uint64_t>(vertices) * 28u;
-}
-
-namespace {
-
-std::uint64_t physical_memory_bytes() {
-  const long pages = ::sysconf(_SC_PHYS_PAGES);
-  const long page = ::sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page)
-                               : std::uint64_t{1} << 34;
-}
-
-}  // namespace
 
 struct GenerateCache::State {
   std::uint64_t domain = 0;  // content hash of the mesh the Laplacian was made on
@@ -110,19 +93,6 @@ const ConnectionLaplacian& laplacian_for(const DesignSpace& space, Weights weigh
 }
 
 }  // namespace
-
-void check_field_memory(const Scene& scene, long long vertices) {
-  const int frames = scene.time.frames;
-  const std::uint64_t need = field_memory_bytes(frames, vertices);
-  const std::uint64_t have = physical_memory_bytes();
-  if (need > have / 10 * 8)
-    throw_input_error(scene.label(), "time.frames",
-                      fmt::format("{} frames × {} vertices need {:.1f} GiB, more than 80 % of the {:.1f} GiB "
-                                  "of memory this machine has",
-                                  frames, vertices, static_cast<double>(need) / (1u << 30),
-                                  static_cast<double>(have) / (1u << 30)));
-}
-
 
 std::vector<std::string> design_warnings(const Scene& scene) {
   std::vector<std::string> out;

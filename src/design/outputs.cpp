@@ -3,7 +3,7 @@
 #include "tvf/analysis/coherence.h"
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/field/npy.h"
 #include "tvf/field/vtk_io.h"

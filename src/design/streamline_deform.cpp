@@ -21,16 +21,12 @@ struct Similarity {
   double rotate = 0;
   double scale = 1;
 };
-Similarity similarity_at(const nlohmann::json& keys, double t0, double t) {
+Similarity similarity_at(const std::vector<StreamlineKey>& keys, double t0, double t) {
   double ta = t0;
   Similarity a;
-  for (const auto& k : keys) {
-    const double tb = k.at("t").get<double>();
-    Similarity b;
-    const auto& tr = k.at("translate");
-    b.translate = Vec3(tr[0].get<double>(), tr[1].get<double>(), tr.size() > 2 ? tr[2].get<double>() : 0.0);
-    b.rotate = k.at("rotate").get<double>();
-    b.scale = k.at("scale").get<double>();
+  for (const StreamlineKey& k : keys) {
+    const double tb = k.t;
+    const Similarity b{k.translate, k.rotate, k.scale};
     if (t <= tb) {
       if (tb <= ta) return b;
       const double w = std::clamp((t - ta) / (tb - ta), 0.0, 1.0);
@@ -85,12 +81,11 @@ StreamlineDeformation::~StreamlineDeformation() = default;
 StreamlineDeformation::StreamlineDeformation(const DesignSpace& space, const Scene& scene,
                                              std::span<const cplx> base)
     : space_(space), scene_(scene) {
-  if (!scene.deform.is_object() || !scene.deform.contains("streamlines")) return;
-  const nlohmann::json& streamlines = scene.deform.at("streamlines");
+  if (!scene.deform) return;
+  const std::vector<DeformStreamline>& streamlines = scene.deform->streamlines;
   const Mesh& mesh = space.mesh();
   for (size_t k = 0; k < streamlines.size(); ++k) {
-    const auto& seed = streamlines[k].at("seed");
-    const Vec3 x(seed[0].get<double>(), seed[1].get<double>(), seed.size() > 2 ? seed[2].get<double>() : 0.0);
+    const Vec3 x = streamlines[k].seed;
     auto line = std::make_unique<Line>();
     try {
       if (space.planar()) {
@@ -122,13 +117,13 @@ StreamlineDeformation::StreamlineDeformation(const DesignSpace& space, const Sce
 }
 
 std::vector<MovedStreamline> StreamlineDeformation::at(double t) const {
-  const nlohmann::json& streamlines = scene_.deform.at("streamlines");
+  const std::vector<DeformStreamline>& streamlines = scene_.deform->streamlines;
   const double t0 = scene_.time.t0;
   std::vector<MovedStreamline> out(lines_.size());
   for (size_t k = 0; k < lines_.size(); ++k) {
     const Line& line = *lines_[k];
     const Streamline& traced = line.traced;
-    const Similarity sim = similarity_at(streamlines[k].at("keys"), t0, t);
+    const Similarity sim = similarity_at(streamlines[k].keys, t0, t);
     const cplx rot = std::polar(sim.scale, sim.rotate);
     MovedStreamline& m = out[k];
     m.seed = traced.seed;

@@ -2,7 +2,7 @@
 
 #include "tvf/analysis/singularities.h"
 #include "tvf/analysis/topology.h"
-#include "tvf/design/design_check.h"
+#include "tvf/scene/design_tolerance.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/mesh/chart_inverse.h"
 #include "tvf/solve/spacetime.h"
@@ -242,14 +242,13 @@ std::string bifurcation_name(const Bifurcation& b) {
 }
 
 // How close an edited field must put a bifurcation to count as the one asked for: the
-// design check's tolerances (design_check.h), so an edit accepted here is one the design
-// check finds as edited.
+// design check's tolerances (scene/design_tolerance.h), so an edit accepted here is one
+// the design check finds as edited.
 struct Faithful {
   double x = 0, t = 0;  // world units, time units
   Faithful(const Mesh& mesh, const TimeSampling& time) {
-    const DesignCheckOptions d;
-    x = d.position_tolerance * mesh.mean_edge_length();
-    t = d.time_tolerance * (time.frames > 1 ? std::abs(time.t1 - time.t0) / (time.frames - 1) : 0.0);
+    x = kDesignPositionTolerance * mesh.mean_edge_length();
+    t = kDesignTimeTolerance * (time.frames > 1 ? std::abs(time.t1 - time.t0) / (time.frames - 1) : 0.0);
   }
   bool near(const Vec3& p, double tp, const Vec3& q, double tq) const {
     return (p - q).norm() <= x && std::abs(tp - tq) <= t + 1e-12;
@@ -1004,7 +1003,7 @@ EditSettings edit_settings(const Scene& scene) {
 }
 
 std::vector<EditReport> apply_scene_edits(const DesignSpace& space, const Scene& scene, Field& field) {
-  const std::vector<Edit> edits = edits_from_scene(scene);
+  const std::vector<Edit>& edits = scene.edits;
   std::vector<EditReport> reports;
   if (edits.empty()) return reports;
   FieldEditor editor(space, edit_settings(scene));

@@ -91,6 +91,43 @@ Geometry make_geometry(const Mesh& mesh) {
   return g;
 }
 
+// Writes one .vtu: the mesh of `g` and the point data arrays described by `data_arrays`
+// (their <DataArray> lines, offsets counted from the start of the appended section) whose
+// bytes `a` holds after g's. `attributes` are the <PointData> element's (active arrays).
+void write_piece(const fs::path& path, double time, const Mesh& mesh, const Geometry& g,
+                 const std::string& attributes, const std::string& data_arrays, Appended& a) {
+  const std::string head = fmt::format(
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt64\">\n"
+      "  <UnstructuredGrid>\n"
+      "    <FieldData>\n"
+      "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+      "format=\"ascii\">{:.17g}</DataArray>\n"
+      "    </FieldData>\n"
+      "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n"
+      "      <PointData {}>\n"
+      "{}"
+      "      </PointData>\n"
+      "      <Points>\n"
+      "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" "
+      "offset=\"{}\"/>\n"
+      "      </Points>\n"
+      "      <Cells>\n"
+      "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"{}\"/>\n"
+      "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\"{}\"/>\n"
+      "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{}\"/>\n"
+      "      </Cells>\n"
+      "    </Piece>\n"
+      "  </UnstructuredGrid>\n"
+      "  <AppendedData encoding=\"raw\">\n"
+      "   _",
+      time, mesh.num_vertices(), mesh.num_faces(), attributes, data_arrays, g.points, g.connectivity, g.offsets,
+      g.types);
+  a.data().append("\n  </AppendedData>\n</VTKFile>\n");
+  write_whole_file(path, head, g.appended, a.data());
+}
+
 void write_frame(const fs::path& path, const TangentBundle& bundle, const Field& field, int frame,
                  const Geometry& g) {
   const Mesh& mesh = bundle.mesh();
@@ -108,38 +145,13 @@ void write_frame(const fs::path& path, const TangentBundle& bundle, const Field&
   const std::uint64_t mag = base + a.begin(static_cast<std::uint64_t>(nv) * sizeof(float));
   for (float m : magnitude) a.put(m);
 
-  const std::string head = fmt::format(
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-      "header_type=\"UInt64\">\n"
-      "  <UnstructuredGrid>\n"
-      "    <FieldData>\n"
-      "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
-      "format=\"ascii\">{:.17g}</DataArray>\n"
-      "    </FieldData>\n"
-      "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n"
-      "      <PointData Vectors=\"vector\" Scalars=\"magnitude\">\n"
+  const std::string data_arrays = fmt::format(
       "        <DataArray type=\"Float32\" Name=\"vector\" NumberOfComponents=\"3\" "
       "format=\"appended\" offset=\"{}\"/>\n"
-      "        <DataArray type=\"Float32\" Name=\"magnitude\" format=\"appended\" offset=\"{}\"/>\n"
-      "      </PointData>\n"
-      "      <Points>\n"
-      "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" "
-      "offset=\"{}\"/>\n"
-      "      </Points>\n"
-      "      <Cells>\n"
-      "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"{}\"/>\n"
-      "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\"{}\"/>\n"
-      "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{}\"/>\n"
-      "      </Cells>\n"
-      "    </Piece>\n"
-      "  </UnstructuredGrid>\n"
-      "  <AppendedData encoding=\"raw\">\n"
-      "   _",
-      field.time().time(frame), nv, mesh.num_faces(), vector, mag, g.points, g.connectivity,
-      g.offsets, g.types);
-  a.data().append("\n  </AppendedData>\n</VTKFile>\n");
-  write_whole_file(path, head, g.appended, a.data());
+      "        <DataArray type=\"Float32\" Name=\"magnitude\" format=\"appended\" offset=\"{}\"/>\n",
+      vector, mag);
+  write_piece(path, field.time().time(frame), mesh, g, "Vectors=\"vector\" Scalars=\"magnitude\"", data_arrays,
+              a);
 }
 
 std::string frame_name(const std::string& stem, int frame, int digits) {
@@ -181,36 +193,10 @@ void write_vtk_scalar_series(const std::string& dir, const std::string& stem, co
           "        <DataArray type=\"Float32\" Name=\"{}\" format=\"appended\" offset=\"{}\"/>\n",
           xml_escape(array.name), offset);
     }
-    const std::string head = fmt::format(
-        "<?xml version=\"1.0\"?>\n"
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-        "header_type=\"UInt64\">\n"
-        "  <UnstructuredGrid>\n"
-        "    <FieldData>\n"
-        "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
-        "format=\"ascii\">{:.17g}</DataArray>\n"
-        "    </FieldData>\n"
-        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n"
-        "      <PointData Scalars=\"{}\">\n"
-        "{}"
-        "      </PointData>\n"
-        "      <Points>\n"
-        "        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" "
-        "offset=\"{}\"/>\n"
-        "      </Points>\n"
-        "      <Cells>\n"
-        "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"{}\"/>\n"
-        "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\"{}\"/>\n"
-        "        <DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"{}\"/>\n"
-        "      </Cells>\n"
-        "    </Piece>\n"
-        "  </UnstructuredGrid>\n"
-        "  <AppendedData encoding=\"raw\">\n"
-        "   _",
-        times[static_cast<size_t>(j)], nv, mesh.num_faces(), arrays.empty() ? "" : xml_escape(arrays.front().name),
-        data_arrays, g.points, g.connectivity, g.offsets, g.types);
-    a.data().append("\n  </AppendedData>\n</VTKFile>\n");
-    write_whole_file(folder / frame_name(stem, j, digits), head, g.appended, a.data());
+    const std::string attributes =
+        fmt::format("Scalars=\"{}\"", arrays.empty() ? "" : xml_escape(arrays.front().name));
+    write_piece(folder / frame_name(stem, j, digits), times[static_cast<size_t>(j)], mesh, g, attributes, data_arrays,
+                a);
   });
   write_collection(folder, stem, times, digits);
 }

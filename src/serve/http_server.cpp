@@ -39,8 +39,28 @@ void send_json(httplib::Response& res, const json& body, int status = 200) {
   res.set_content(body.dump(), kJson);
 }
 
-void send_error(httplib::Response& res, int status, const std::string& message) {
-  send_json(res, {{"error", message}}, status);
+// {"error": sentence} and, where the error has them, the place as fields (docs/serve_api.md):
+// "file", "json_path", "line" and "column" (1-based, in the request body or file).
+void send_error(httplib::Response& res, int status, const std::string& message, const ErrorLocation& where = {}) {
+  json body = {{"error", message}};
+  if (!where.file.empty()) body["file"] = where.file;
+  if (!where.json_path.empty()) body["json_path"] = where.json_path;
+  if (where.line > 0) {
+    body["line"] = where.line;
+    body["column"] = where.column;
+  }
+  send_json(res, body, status);
+}
+
+// An error's location completed with the line and column of its JSON path in the request
+// body (a scene sent with PUT /api/scene names its own paths).
+ErrorLocation in_body(ErrorLocation where, const std::string& body) {
+  if (where.line == 0 && !where.json_path.empty()) {
+    const JsonTextPosition p = json_path_position(body, where.json_path);
+    where.line = p.line;
+    where.column = p.column;
+  }
+  return where;
 }
 
 // Request bodies go through the shared JSON reader (tvf/core/json_text.h): nesting beyond
@@ -51,7 +71,7 @@ json parse_json(const std::string& text) {
   try {
     return parse_json_text(text, "");
   } catch (const Error& e) {
-    throw RequestError(400, fmt::format("request body: not valid JSON at {}", e.what()));
+    throw RequestError(400, fmt::format("request body: not valid JSON at {}", e.what()), location_of(e));
   }
 }
 
@@ -328,9 +348,9 @@ struct HttpServer::Impl {
     try {
       f();
     } catch (const RequestError& e) {
-      send_error(res, e.status(), e.what());
+      send_error(res, e.status(), e.what(), e.location());
     } catch (const Error& e) {
-      send_error(res, 400, e.what());
+      send_error(res, 400, e.what(), location_of(e));
     } catch (const std::bad_alloc&) {
       send_error(res, 503, "the server has not enough memory for this request");
     } catch (const json::exception& e) {
@@ -352,7 +372,11 @@ struct HttpServer::Impl {
     server.Put("/api/scene", wrap_body([&s, with_etag](const auto& req, auto& res, const std::string& text) {
                  json body = parse_json(text);
                  if (!body.is_object()) throw RequestError(400, "request body: expected a scene object");
-                 with_etag(res, s.put_scene(body, if_match(req)));
+                 try {
+                   with_etag(res, s.put_scene(body, if_match(req)));
+                 } catch (const RequestError& e) {
+                   throw RequestError(e.status(), e.what(), in_body(e.location(), text));
+                 }
                }));
     server.Post("/api/edit", wrap_body([&s, with_etag](const auto& req, auto& res, const std::string& text) {
                   with_etag(res, s.edit(parse_json(text), if_match(req)));

@@ -2,12 +2,12 @@
 
 #include "tvf/analysis/topology.h"
 #include "tvf/core/atomic_output.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/outputs.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/design/streamline_deform.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/edits.h"
 #include "tvf/edit/field_editor.h"
 #include "tvf/field/world_vectors.h"
 #include "tvf/integrate/periodic_orbits.h"
@@ -176,7 +176,7 @@ struct Session::State {
     } catch (const RequestError&) {
       throw;
     } catch (const Error& e) {
-      throw RequestError(400, e.what());
+      throw RequestError(400, e.what(), location_of(e));
     }
   }
 
@@ -434,7 +434,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   j["edits"].push_back(entry);
   const std::string where = fmt::format("edits[{}]", j["edits"].size() - 1);
   const Scene edited = s_->parse(j);
-  const Edit e = edits_from_scene(edited).back();
+  const Edit e = edited.edits.back();
 
   // The field of the revision the edit was made on (no lock held while waiting).
   const std::shared_ptr<const Result> r = s_->result_of(base_revision, "edit", deadline);
@@ -452,7 +452,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   } catch (const EditRefused& refused) {
     throw RequestError(422, fmt::format("refused to {}: {}; the scene is unchanged", describe(e), refused.what()));
   } catch (const Error& err) {
-    throw RequestError(422, fmt::format("{}: {}", where, err.what()));
+    throw RequestError(422, fmt::format("{}: {}", where, err.what()), location_of(err));
   }
   TopologyOptions to;
   to.parallel = s_->options.parallel;

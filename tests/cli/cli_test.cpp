@@ -3,9 +3,9 @@
 #include "support/test_paths.h"
 
 #include "tvf/analysis/singularities.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/element_field.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/field/npy.h"
 #include "tvf/mesh/tangent_bundle.h"

@@ -27,12 +27,7 @@ constexpr const char* kScene = R"({"tvf": 1,
     {"kind": "singular", "type": "ccw_center", "path": [[0.1, 0.6, 0]]}]})";
 
 // Shell-quoted path (built by insert: GCC 12 warns falsely on "'" + s + "'").
-std::string q(const std::filesystem::path& p) {
-  std::string s = p.string();
-  s.insert(s.begin(), '\'');
-  s.push_back('\'');
-  return s;
-}
+std::string q(const std::filesystem::path& p) { return test::quoted(p); }
 
 TEST(CliEdit, AppendsCheckedEditsAndUndoes) {
   TempDir dir;

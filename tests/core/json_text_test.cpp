@@ -37,6 +37,60 @@ TEST(JsonText, RefusesNulBytesRepeatedKeysAndEmptyText) {
   EXPECT_LT(error_of([] { parse_json_text("[\"" + std::string(1 << 20, 'x') + "\" 1]", "t"); }).size(), 300u);
 }
 
+TEST(JsonText, FindsTheLineAndColumnOfAJsonPath) {
+  const std::string text =
+      "{\"tvf\": 1,\n"
+      " \"a\": {\"b\": [10, {\"c\": \"x]}\"}, [7, 8]],\n"
+      "       \"d\\\"e\": null, \"d\": true},\n"
+      " \"\u00e9\": 0, \"z\": 5}";
+  auto at = [&](const std::string& path) {
+    const JsonTextPosition p = json_path_position(text, path);
+    return std::pair(p.line, p.column);
+  };
+  EXPECT_EQ(at(""), std::pair(1, 1));
+  EXPECT_EQ(at("tvf"), std::pair(1, 9));
+  EXPECT_EQ(at("a"), std::pair(2, 7));
+  EXPECT_EQ(at("a.b"), std::pair(2, 13));
+  EXPECT_EQ(at("a.b[0]"), std::pair(2, 14));
+  EXPECT_EQ(at("a.b[1].c"), std::pair(2, 24));  // a bracket inside a string is text
+  EXPECT_EQ(at("a.b[2][1]"), std::pair(2, 36));
+  EXPECT_EQ(at("a.d"), std::pair(3, 27));       // not the key with an escaped quote
+  EXPECT_EQ(at("z"), std::pair(4, 15));         // columns count code points (é is one)
+  EXPECT_EQ(at("a.b[3]"), std::pair(0, 0));     // no such value
+  EXPECT_EQ(at("a.x"), std::pair(0, 0));
+  EXPECT_EQ(at("tvf.x"), std::pair(0, 0));
+  EXPECT_EQ(at("a..b"), std::pair(0, 0));       // not a path tvf writes
+}
+
+TEST(JsonText, ErrorsCarryTheirPlaceAsFields) {
+  try {
+    parse_json_text("{\"a\": 1,\n \"b\": [1, 2,, 3]}", "f.json");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(location_of(e).file, "f.json");
+    EXPECT_EQ(location_of(e).line, 2);
+    EXPECT_EQ(location_of(e).column, 13);
+    EXPECT_EQ(std::string(e.what()).rfind("f.json: line 2, column 13: ", 0), 0u) << e.what();
+  }
+  // A value's error found after parsing gets its line and column from the text.
+  const std::string text = "{\"time\": {\n  \"frames\": -3}}";
+  try {
+    try {
+      throw_input_error("s.json", "time.frames", "must be at least 2, got -3");
+    } catch (const Error& e) {
+      EXPECT_EQ(location_of(e).json_path, "time.frames");
+      EXPECT_EQ(location_of(e).line, 0);
+      rethrow_with_position(e, text);
+    }
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "s.json: time.frames: must be at least 2, got -3");  // unchanged
+    EXPECT_EQ(location_of(e).file, "s.json");
+    EXPECT_EQ(location_of(e).json_path, "time.frames");
+    EXPECT_EQ(location_of(e).line, 2);
+    EXPECT_EQ(location_of(e).column, 13);
+  }
+}
+
 TEST(JsonText, ReadsFilesUpToALimit) {
   test::TempDir dir;
   test::write_text(dir / "a.json", "[1, 2]");

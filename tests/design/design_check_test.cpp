@@ -9,7 +9,7 @@
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -233,9 +233,10 @@ TEST(DesignCheck, DeformedSourceIsFoundThroughItsTypeChanges) {
   // A deformed source turned by π: a source, then (after the center) a sink, in place.
   Scene s = grid_scene(33, 21, 20);
   s.generator = Generator::deform;
-  s.deform = nlohmann::json::parse(R"({"base": {"elements": [{"kind": "singular", "type": "source",
-      "path": [[0.1, -0.05, 0]]}]}, "transform": [{"t": 0, "sx": 1, "sy": 1, "theta": 0},
-      {"t": 1, "sx": 1, "sy": 1, "theta": 3.141592653589793}]})");
+  Deform deform;
+  deform.base.push_back(singular(SingularType::source, {{Vec3(0.1, -0.05, 0), 0}}));
+  deform.transform = {{0, 1, 1, 0}, {1, 1, 1, 3.141592653589793}};
+  s.deform = deform;
   const Generated g = generate_and_analyze(s);
   const DesignCheck check = check_design(s, *g.space, g.field, g.topology);
   ASSERT_EQ(check.designed.size(), 1u);

@@ -12,7 +12,7 @@
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframes.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include <gtest/gtest.h>
 
@@ -119,7 +119,7 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
     // Deformation: the base field's singular elements are in the first frame.
     if (scene.generator == Generator::deform) {
       nlohmann::json j = scene_to_json(scene);
-      j["elements"] = scene.deform.at("base").at("elements");
+      j["elements"] = j["deform"]["base"]["elements"];
       j["generator"] = "constrained";
       j.erase("deform");
       const Scene base = scene_from_json(j, "base");
@@ -151,7 +151,7 @@ TEST(Examples, EveryExampleHasItsDesignedSingularities) {
 
     // The analysis finds every designed feature (of the design without its edits).
     Scene unedited = scene;
-    unedited.edits = nlohmann::json::array();
+    unedited.edits.clear();
     const Topology topology = analyze_topology(space->bundle(), field);
     const DesignCheck check = check_design(unedited, *space, field, topology);
     EXPECT_FALSE(check.designed.empty());

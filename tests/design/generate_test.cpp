@@ -135,7 +135,7 @@ TEST(Generate, AppliesTheScenesEditsAfterTheGenerator) {
   Scene s = grid_scene(9, 1.0, 4);
   s.elements.push_back(singular(SingularType::source, {{Vec3(-0.3, 0.2, 0), 0}, {Vec3(0.3, -0.1, 0), 1}}));
   s.source_path = "my.json";
-  s.edits = nlohmann::json::array({{{"op", "smooth"}, {"strength", 0.5}}});
+  s.edits = {SmoothEdit{0.5}};
   const auto space = make_design_space(s);
   GenerateReport report;
   const Field edited = generate(*space, s, {}, &report);
@@ -445,7 +445,7 @@ TEST(SpaceTimeGenerator, RefusesMeanValueWeights) {
 }  // namespace
 }  // namespace tvf
 
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 namespace tvf {
 namespace {

@@ -3,7 +3,7 @@
 #include "tvf/analysis/topology.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframes.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/solve/connection_laplacian.h"
 
 #include "support/test_paths.h"

@@ -5,7 +5,7 @@
 
 #include "tvf/core/error.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/field/field_sampler.h"
 
 #include <fmt/format.h>

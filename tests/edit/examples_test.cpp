@@ -4,10 +4,10 @@
 #include "support/test_paths.h"
 
 #include "tvf/analysis/topology.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/scene_json.h"
+#include "tvf/scene/edits.h"
 #include "tvf/field/field_sampler.h"
 
 #include <gtest/gtest.h>
@@ -47,7 +47,7 @@ const Bifurcation* match(const std::vector<Bifurcation>& list, const Bifurcation
 
 TEST(EditExamples, BifurcationRemovalRemovesOneBifurcationAndItsTwoPaths) {
   BeforeAfter e("10_bifurcation_removal");
-  const auto edits = edits_from_scene(e.scene);
+  const std::vector<Edit>& edits = e.scene.edits;
   ASSERT_EQ(edits.size(), 1u);
   const PathPoint at = std::get<RemoveBifurcationEdit>(edits[0]).at;
   ASSERT_EQ(e.before.bifurcations.size(), 4u);
@@ -81,7 +81,7 @@ TEST(EditExamples, BifurcationRemovalRemovesOneBifurcationAndItsTwoPaths) {
 
 TEST(EditExamples, BifurcationMoveMovesItToTheCorner) {
   BeforeAfter e("11_bifurcation_move");
-  const auto edits = edits_from_scene(e.scene);
+  const std::vector<Edit>& edits = e.scene.edits;
   ASSERT_EQ(edits.size(), 1u);
   const auto& move = std::get<MoveBifurcationEdit>(edits[0]);
   ASSERT_EQ(e.before.bifurcations.size(), 1u);
@@ -103,7 +103,7 @@ TEST(EditExamples, BifurcationMoveMovesItToTheCorner) {
 
 TEST(EditExamples, BifurcationMoveOnTheSphereMovesItAQuarterTurnRoundThePole) {
   BeforeAfter e("20_sphere_bifurcation_move");
-  const auto edits = edits_from_scene(e.scene);
+  const std::vector<Edit>& edits = e.scene.edits;
   ASSERT_EQ(edits.size(), 1u);
   const auto& move = std::get<MoveBifurcationEdit>(edits[0]);
   const Vec3 to = surface_position(e.space->mesh(), e.space->locate(move.to.position));

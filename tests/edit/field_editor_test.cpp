@@ -3,9 +3,9 @@
 #include "tvf/analysis/coherence.h"
 #include "tvf/analysis/singularities.h"
 #include "tvf/analysis/topology.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/edit/field_editor.h"
 
 #include "support/test_paths.h"

@@ -2,7 +2,7 @@
 // every value outside the region is kept bit for bit, and the fill inside obeys the
 // maximum principle.
 #include "tvf/analysis/singularities.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/edit/region_solve.h"
 
 #include <gtest/gtest.h>

@@ -8,7 +8,7 @@
 #include "tvf/integrate/periodic_orbits.h"
 
 #include "tvf/analysis/topology.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
 
 #include <gtest/gtest.h>

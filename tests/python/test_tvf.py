@@ -88,8 +88,14 @@ def test_bad_input_raises_value_error_with_the_cli_sentence(tmp_path):
         tvf.generate(str(path))
     assert text.strip() == "tvf: error: " + str(e.value)
     assert "elements[0].type" in str(e.value)
-    with pytest.raises(ValueError, match=r"^scene: elements\[0\]\.type"):
+    # The place as attributes: the file, the JSON path, and the line and column of the
+    # value in the file (json.dumps writes one line; columns count from 1).
+    assert e.value.file == str(path)
+    assert e.value.json_path == "elements[0].type"
+    assert (e.value.line, e.value.column) == (1, path.read_text().index('"sourse"') + 1)
+    with pytest.raises(ValueError, match=r"^scene: elements\[0\]\.type") as d:
         tvf.generate(bad)
+    assert (d.value.file, d.value.json_path, d.value.line) == ("scene", "elements[0].type", 0)
     with pytest.raises(TypeError):
         tvf.generate(42)
 

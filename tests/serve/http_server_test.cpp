@@ -147,6 +147,29 @@ TEST(ServeHttp, MalformedRequestsGetAClearJsonError) {
   EXPECT_EQ(body(f.client->Get("/api/scene"), 200)["revision"], 1);
 }
 
+// Issue 18: errors carry their place as fields beside the sentence (docs/serve_api.md):
+// the file, the JSON path, and the line and column of the value in the request body.
+TEST(ServeHttp, ErrorsNameTheirPlaceAsFields) {
+  Fixture f;
+  ASSERT_TRUE(f.session->wait_idle(60));
+  const json bad = body(f.client->Put("/api/scene", "{\"tvf\": 1, \"domain\": {\"grid\": {}},\n \"time\": {\"frames\": -3, \"range\": [0, 1]}}",
+                                      "application/json"),
+                        400);
+  EXPECT_EQ(bad.value("error", std::string()).rfind("scene.json: time.frames: ", 0), 0u) << bad;
+  EXPECT_EQ(bad["file"], "scene.json");
+  EXPECT_EQ(bad["json_path"], "time.frames");
+  EXPECT_EQ(bad["line"], 2);
+  EXPECT_EQ(bad["column"], 21);
+  // A syntax error has its line and column and no JSON path.
+  const json syntax = body(f.client->Put("/api/scene", "{\"tvf\": 1,\n\n  ]", "application/json"), 400);
+  EXPECT_EQ(syntax["line"], 3) << syntax;
+  EXPECT_EQ(syntax["column"], 3) << syntax;
+  EXPECT_FALSE(syntax.contains("json_path")) << syntax;
+  // An error without a place has the sentence alone.
+  const json none = body(f.client->Post("/api/undo", "", "application/json"), 409);
+  EXPECT_FALSE(none.contains("file") || none.contains("json_path") || none.contains("line")) << none;
+}
+
 // Issue 17: a request nested 100,000 deep crashed the server (the message printed the value
 // recursively); host names compare case-insensitively; seed_translation answered null.
 TEST(ServeHttp, HostileBodiesAreRefusedAndTheServerStaysUp) {

@@ -6,7 +6,7 @@
 #include "support/test_paths.h"
 #include "test_scene.h"
 
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/render/video.h"
 
 #include <gtest/gtest.h>

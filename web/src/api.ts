@@ -2,10 +2,20 @@
 // throws ApiError with the server's one-sentence message.
 import type { Scene } from "./scene";
 
+// `place`: where the error is, when the server knows (docs/serve_api.md): the file, the
+// JSON path of the value ("elements[2].type"), its line and column in the request body.
+export interface ErrorPlace {
+  file?: string;
+  json_path?: string;
+  line?: number;
+  column?: number;
+}
+
 export class ApiError extends Error {
   constructor(
     readonly status: number,
     message: string,
+    readonly place: ErrorPlace = {},
   ) {
     super(message);
   }
@@ -28,7 +38,10 @@ async function call<T>(method: string, path: string, body?: unknown, revision?: 
   } catch {
     throw new ApiError(res.status, `${method} ${path}: the server answered ${res.status} without JSON`);
   }
-  if (!res.ok) throw new ApiError(res.status, (json as { error?: string }).error ?? `HTTP ${res.status}`);
+  if (!res.ok) {
+    const { error, file, json_path, line, column } = json as { error?: string } & ErrorPlace;
+    throw new ApiError(res.status, error ?? `HTTP ${res.status}`, { file, json_path, line, column });
+  }
   return json as T;
 }
 

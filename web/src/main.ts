@@ -6,6 +6,7 @@
 // applied again on top of that change (or, when it cannot be, reported).
 import "./style.css";
 import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneState } from "./api";
+import { locateJsonPath } from "./error_place";
 import { ChangeQueue } from "./changes";
 import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
 import { CoherencePlot } from "./coherence";
@@ -165,8 +166,19 @@ async function change(mutate: (s: S.Scene) => S.Scene, what: string, rebase = tr
     else say(what);
   } catch (e) {
     say((e as Error).message, true);
+    showErrorPlace(e);
     redraw();
   }
+}
+
+// Selects, in the scene's JSON, the value a refused change names (its JSON path).
+function showErrorPlace(e: unknown) {
+  const path = e instanceof ApiError ? e.place.json_path : undefined;
+  if (!path) return;
+  const range = locateJsonPath(sceneText.value, path);
+  if (!range) return;
+  sceneText.focus();
+  sceneText.setSelectionRange(range.start, range.end);
 }
 
 // Export, render and edits use the field of the current revision: while it is being

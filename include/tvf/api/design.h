@@ -24,11 +24,11 @@
 #include "tvf/analysis/topology.h"
 #include "tvf/design/design_check.h"
 #include "tvf/integrate/periodic_orbits.h"
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/outputs.h"
-#include "tvf/design/scene.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/scene.h"
+#include "tvf/scene/edits.h"
 #include "tvf/edit/field_editor.h"
 #include "tvf/field/field.h"
 
@@ -112,10 +112,12 @@ public:
   // field before the scene's "incompressible" projection, which is then applied again. A
   // refused edit throws tvf::Error ("scene.json: refused to cancel …: why; the scene is
   // unchanged") and changes nothing. The edited field is the current field at once.
-  EditReport edit(const Edit& edit);
+  // `options` (progress, cancel) serve the generation the edit needs when the field is not
+  // there yet; the entry is validated before it.
+  EditReport edit(const Edit& edit, GenerateOptions options = {});
   // The same from one JSON entry ({"op": "cancel", "frame": 40, "pair": [[x, y], [x, y]]},
   // …): validated with the scene, errors naming "edits[k]".
-  EditReport edit(const nlohmann::json& entry);
+  EditReport edit(const nlohmann::json& entry, GenerateOptions options = {});
   bool can_undo() const;
   bool can_redo() const;
   // Steps back to the scene before the last change (set_scene or edit), and its field when

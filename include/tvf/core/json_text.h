@@ -9,6 +9,9 @@
 //  - non-finite numbers (1e999, NaN, Infinity) and comments, said plainly.
 // Memory is linear in the text: the JSON path of an error is built only when one is
 // reported (each open container keeps its key, nothing more).
+#include "tvf/core/error.h"
+#include "tvf/core/error_location.h"
+
 #include <nlohmann/json.hpp>
 
 #include <cstddef>
@@ -26,6 +29,20 @@ inline constexpr std::size_t kMaxJsonBytes = std::size_t{64} << 20;
 // for empty text ("the text is empty; <empty_hint>").
 nlohmann::json parse_json_text(const std::string& text, const std::string& label,
                                const std::string& empty_hint = "expected a JSON value");
+
+// The 1-based line and column of the value at `json_path` ("elements[2].path[1]", "" for
+// the root; keys joined by '.', indices in brackets, as tvf's messages write them) in
+// JSON `text`; {0, 0} when the text has no value there. Used when an error is reported
+// (a scan of the text), so that parsed values carry no positions.
+struct JsonTextPosition {
+  int line = 0;
+  int column = 0;
+};
+JsonTextPosition json_path_position(const std::string& text, const std::string& json_path);
+
+// Completes an error about JSON `text` with the line and column of its JSON path, when
+// it has one and none yet: throws a LocatedError with e's message and the fields set.
+[[noreturn]] void rethrow_with_position(const Error& e, const std::string& text);
 
 // Reads a whole file of at most `max_bytes` bytes (a larger file, a device like
 // /dev/zero or a FIFO that never ends is refused with one sentence naming the file and

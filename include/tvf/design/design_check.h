@@ -56,8 +56,9 @@
 // Extras are grouped into connected sets (paths joined by extra bifurcations and type
 // changes), each described in one line.
 #include "tvf/analysis/topology.h"
-#include "tvf/design/design_space.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/design_space.h"
+#include "tvf/scene/design_tolerance.h"
+#include "tvf/scene/scene.h"
 #include "tvf/field/field.h"
 
 #include <nlohmann/json.hpp>
@@ -71,11 +72,10 @@ struct PeriodicOrbits;  // integrate/periodic_orbits.h
 
 struct DesignCheckOptions {
   // How far a found singularity or bifurcation may lie from the designed point, in mean
-  // edge lengths of the domain: the zero of a sampled field moves by O(h), and the
-  // neighbouring elements push it a little further.
-  double position_tolerance = 2.5;
+  // edge lengths of the domain (scene/design_tolerance.h).
+  double position_tolerance = kDesignPositionTolerance;
   // How far a found bifurcation's time may lie from the designed one, in frame steps.
-  double time_tolerance = 2.0;
+  double time_tolerance = kDesignTimeTolerance;
   // The field's periodic orbits and Hopf events, when the caller has them; else they are
   // found here when the scene has a Hopf element.
   const PeriodicOrbits* orbits = nullptr;

@@ -5,7 +5,7 @@
 // expressed in the same frame (carried back to each vertex by the log map's transport).
 // The falloff exp(−d‖w‖²) is applied by the generator, not here.
 #include "tvf/design/hermite_path.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/scene.h"
 
 #include <string>
 

@@ -6,9 +6,9 @@
 // "incompressible", every frame is projected onto the divergence-free fields
 // (tvf/solve/hodge_projection.h): generator → edits → projection, so the field written is
 // divergence-free whatever the edits did.
-#include "tvf/design/design_space.h"
 #include "tvf/design/keyframe_topology.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/design_space.h"
+#include "tvf/scene/scene.h"
 #include "tvf/field/field.h"
 #include "tvf/solve/connection_laplacian.h"
 #include "tvf/solve/hodge_projection.h"
@@ -155,20 +155,14 @@ Field generate_deform(const DesignSpace& space, const Scene& scene,
                       const GenerateOptions& options = {}, GenerateReport* report = nullptr);
 
 // The deform generator's parts, for checking a deformed design against its field: the
-// base design (deform.base's elements as a constrained scene; throws tvf::Error naming
-// the JSON path when they do not form a valid scene) and M(t) (the identity without keys).
-// Needs a scene with a deform block.
+// base design (the scene with deform.base's elements, constrained, without key frames and
+// edits) and M(t) (the identity without keys). deform_base_scene needs a scene with a
+// deform block.
 Scene deform_base_scene(const Scene& scene);
 Mat2 deform_matrix(const Scene& scene, double t);
 
 // Checks that need the scene only (no mesh): singular paths that begin or end inside
 // the time range without a bifurcation there (DESIGN §4). One warning per problem.
 std::vector<std::string> design_warnings(const Scene& scene);
-
-// Bytes a generated field needs in memory (double complex values plus float32 export).
-std::uint64_t field_memory_bytes(int frames, long long vertices);
-// Throws tvf::Error naming the scene and "time.frames" when the field of `scene` on
-// `vertices` vertices would need more than 80 % of this machine's memory.
-void check_field_memory(const Scene& scene, long long vertices);
 
 }  // namespace tvf

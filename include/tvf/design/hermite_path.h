@@ -5,7 +5,7 @@
 // the velocity dP/dt exact, so a particle following a regular element's field follows
 // the path in design time (DESIGN §4), and keeps t monotone where a spline through
 // (x, y, t) could fold back.
-#include "tvf/design/scene.h"
+#include "tvf/scene/scene.h"
 
 #include <vector>
 

@@ -4,8 +4,8 @@
 // imposes its own field within solver.region_radius, as in the constrained generator) and
 // streamlines (the tangents of each streamline, at the vertices of the faces it crosses,
 // with magnitude `speed`), or the frame of a given field file at the key frame's time.
-#include "tvf/design/design_space.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/design_space.h"
+#include "tvf/scene/scene.h"
 #include "tvf/solve/connection_laplacian.h"
 
 #include <vector>

@@ -7,9 +7,9 @@
 //   divergence.json when the scene is "incompressible" (OutputOptions::incompressible),
 //   keyframe_topology.json when its key-frame topology is "matched"
 //   (OutputOptions::keyframe_intervals; keyframe_intervals_json's form).
-#include "tvf/design/design_space.h"
 #include "tvf/design/keyframe_topology.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/design_space.h"
+#include "tvf/scene/scene.h"
 #include "tvf/field/field.h"
 #include "tvf/solve/hodge_projection.h"
 

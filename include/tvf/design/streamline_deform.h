@@ -15,8 +15,8 @@
 // The moved curve's speeds are the traced speeds times s. The deform generator constrains
 // each frame's solve with the moved curves' tangents (element_regions.h,
 // constrain_polyline).
-#include "tvf/design/design_space.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/design_space.h"
+#include "tvf/scene/scene.h"
 
 #include <memory>
 #include <span>

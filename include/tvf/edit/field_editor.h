@@ -40,8 +40,8 @@
 //   solve is the SpaceTimeSolver's own.
 #include "tvf/analysis/topology.h"
 #include "tvf/core/error.h"
-#include "tvf/design/design_space.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/design_space.h"
+#include "tvf/scene/edits.h"
 #include "tvf/edit/region_solve.h"
 #include "tvf/field/field.h"
 #include "tvf/solve/connection_laplacian.h"

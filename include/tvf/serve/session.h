@@ -21,6 +21,7 @@
 //   files named by the scene, exports, videos, uploads) lies inside the working folder;
 //   a path that leaves it is refused.
 #include "tvf/core/error.h"
+#include "tvf/core/error_location.h"
 
 #include <nlohmann/json.hpp>
 
@@ -34,9 +35,10 @@ namespace tvf::serve {
 // A request that cannot be served: an HTTP status (400 bad input, 403 path outside the
 // working folder, 404 missing, 409 conflict/no field yet, 412 made on a revision that is
 // no longer current, 422 refused edit, 503 busy or stopping) and one sentence saying why.
-class RequestError : public Error {
+class RequestError : public LocatedError {
 public:
-  RequestError(int status, const std::string& message) : Error(message), status_(status) {}
+  RequestError(int status, const std::string& message, ErrorLocation location = {})
+      : LocatedError(message, std::move(location)), status_(status) {}
   int status() const { return status_; }
 
 private:

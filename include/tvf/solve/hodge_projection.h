@@ -34,6 +34,7 @@
 // Closed components are the same under both.
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
+#include "tvf/solve/flux_boundary.h"
 
 #include <functional>
 #include <memory>
@@ -42,9 +43,6 @@
 #include <vector>
 
 namespace tvf {
-
-enum class FluxBoundary { no_flux, open };
-const char* to_string(FluxBoundary b);
 
 // Result of one projection (STYLE 5).
 struct ProjectionStats {

@@ -1,21 +1,19 @@
 #pragma once
 // Topological edits of a time-varying field (DESIGN §7, paper §8): the typed form of the
-// scene's `edits` list. scene_json.cpp validates the JSON (naming the JSON path of every
-// problem) and keeps it in canonical form in Scene::edits; edits_from_scene() turns that
-// list into the entries below, which field_editor.h applies.
+// scene's `edits` list. scene_json.cpp reads and validates the JSON once (naming the JSON
+// path of every problem) into Scene::edits; field_editor.h applies them.
 //
 // Edits name singularities and bifurcations by position (the nearest one of that frame,
 // or in space-time), so an edit keeps its meaning when the design is regenerated.
 // Positions are world coordinates (z = 0 on planar domains); times are design times.
 #include "tvf/core/types.h"
-#include "tvf/design/scene.h"
+#include "tvf/scene/path_point.h"
 
 #include <nlohmann/json.hpp>
 
 #include <array>
 #include <string>
 #include <variant>
-#include <vector>
 
 namespace tvf {
 
@@ -55,10 +53,6 @@ using Edit = std::variant<CancelEdit, RemoveBifurcationEdit, MoveBifurcationEdit
 // "cancel" | "remove_bifurcation" | "move_bifurcation" | "smooth" (the scene's "op").
 const char* op_name(const Edit& edit);
 
-// The typed edits of a scene. Scene::edits has been validated by scene_json.cpp for files;
-// scenes built in code are checked here too, and a malformed entry throws tvf::Error
-// naming the scene and its JSON path ("scene.json: edits[1].frame: ...").
-std::vector<Edit> edits_from_scene(const Scene& scene);
 // One entry of the canonical `edits` list (2-D positions on planar domains).
 nlohmann::json edit_to_json(const Edit& edit, bool planar);
 // One line describing an edit for messages, e.g. "cancel the pair near (0.1, 0.2) and

@@ -1,14 +1,18 @@
 #pragma once
 // The domain a design lives on, built once from a scene: the mesh (grid, file or
 // primitive), its tangent bundle and its log map. Not movable: the bundle and log map
-// refer to the mesh.
-#include "tvf/design/scene.h"
+// refer to the mesh. The log map (three sparse factorizations on a surface) is built on
+// its first use, so a domain that only carries a field read from a file (rendering,
+// analysis) does not pay for it.
+#include "tvf/scene/scene.h"
 #include "tvf/field/point_locator.h"
 #include "tvf/mesh/log_map.h"
 #include "tvf/mesh/mesh_validate.h"
 #include "tvf/mesh/tangent_bundle.h"
 
+#include <cstdint>
 #include <memory>
+#include <mutex>
 
 namespace tvf {
 
@@ -20,7 +24,8 @@ public:
 
   const Mesh& mesh() const { return mesh_; }
   const TangentBundle& bundle() const { return bundle_; }
-  const LogMap& log_map() const { return log_map_; }
+  // Built on first use (thread-safe).
+  const LogMap& log_map() const;
   bool planar() const { return bundle_.is_flat(); }
   // Length unit of the falloff: the bounding-box diagonal (DESIGN §4).
   double diameter() const { return diameter_; }
@@ -32,10 +37,17 @@ public:
 private:
   Mesh mesh_;
   TangentBundle bundle_;
-  LogMap log_map_;
+  mutable std::once_flag log_map_once_;
+  mutable std::unique_ptr<LogMap> log_map_;
   PointLocator locator_;
   double diameter_;
 };
+
+// Bytes a generated field needs in memory (double complex values plus float32 export).
+std::uint64_t field_memory_bytes(int frames, long long vertices);
+// Throws tvf::Error naming the scene and "time.frames" when the field of `scene` on
+// `vertices` vertices would need more than 80 % of this machine's memory.
+void check_field_memory(const Scene& scene, long long vertices);
 
 // Builds the domain of a scene. Mesh files are resolved relative to the scene file;
 // errors name the scene and "domain.mesh" or the mesh file.

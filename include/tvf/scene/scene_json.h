@@ -3,7 +3,7 @@
 // Every error is a tvf::Error whose message names the file and the JSON path:
 //   "scene.json: elements[2].path[1]: t = 7 is outside the time range [0, 1]"
 // Unknown keys, wrong types, out-of-range values and non-finite numbers are errors.
-#include "tvf/design/scene.h"
+#include "tvf/scene/scene.h"
 
 #include <string>
 
@@ -13,7 +13,8 @@ namespace tvf {
 // `source_path` (may be empty) is stored in Scene::source_path to resolve mesh paths.
 Scene scene_from_json(const nlohmann::json& j, const std::string& label,
                       const std::string& source_path = "");
-// Reads a scene file (UTF-8 JSON). Syntax errors name the line and column.
+// Reads a scene file (UTF-8 JSON). Syntax errors name the line and column; every error's
+// location() has the file, the JSON path and the line and column of the value.
 Scene load_scene(const std::string& path);
 // Parses scene text (e.g. the embedded default scene); `label` names it in messages.
 Scene parse_scene(const std::string& text, const std::string& label);

@@ -6,9 +6,9 @@
 #include "tvf/core/types.h"
 #include "tvf/field/time_sampling.h"
 #include "tvf/mesh/grid.h"
-#include "tvf/solve/hodge_projection.h"
-
-#include <nlohmann/json.hpp>
+#include "tvf/scene/edits.h"
+#include "tvf/scene/path_point.h"
+#include "tvf/solve/flux_boundary.h"
 
 #include <optional>
 #include <string>
@@ -16,12 +16,6 @@
 #include <vector>
 
 namespace tvf {
-
-// A control point of a path: a position and a time.
-struct PathPoint {
-  Vec3 position = Vec3::Zero();
-  double t = 0.0;
-};
 
 // M(t) = diag(sx, sy)·R(θ), keyed; sx, sy, θ interpolated linearly (paper §5.1).
 struct TransformKey {
@@ -111,9 +105,9 @@ enum class Weights { cotan, uniform, mean_value };
 enum class SolverMethod { automatic, modes, cg, bicgstab };
 
 // What the spacetime generator does with the singularities of consecutive key frames
-// (DESIGN §12; tvf/design/keyframe_topology.h): "free" leaves the frames between to the
-// solve (the paper's behaviour), "matched" carries each matched singularity from one key
-// frame to the next and creates or cancels the others in pairs.
+// (DESIGN §12; the generator's side is tvf/design/keyframe_topology.h): "free" leaves the
+// frames between to the solve (the paper's behaviour), "matched" carries each matched
+// singularity from one key frame to the next and creates or cancels the others in pairs.
 enum class KeyframeTopology { free, matched };
 
 // A pair the user links (solver.links): keyframes[from_keyframe].elements[from_element] is
@@ -123,6 +117,33 @@ struct KeyframeLink {
   int to_keyframe = 0, to_element = 0;
 };
 
+// The deform generator's block (DESIGN §10, paper §7): V(t) = M(t) V(t0), with V(t0)
+// the static constrained design of `base`, M(t) from `matrix` or `transform` keys (at
+// most one of them is given; neither: the identity), and representative streamlines
+// moved by keyed similarities.
+struct MatrixKey {
+  double t = 0.0;
+  Mat2 m = Mat2::Identity();  // interpolated linearly, from the identity at t0 to the first key
+};
+struct StreamlineKey {
+  double t = 0.0;
+  Vec3 translate = Vec3::Zero();  // world vector (on surfaces: in the tangent plane at the seed)
+  double rotate = 0.0;            // radians, counter-clockwise about the seed
+  double scale = 1.0;             // > 0
+};
+struct DeformStreamline {
+  Vec3 seed = Vec3::Zero();
+  std::vector<StreamlineKey> keys;  // ≥ 1, increasing t
+};
+struct Deform {
+  std::vector<Element> base;  // deform.base.elements
+  std::optional<std::vector<MatrixKey>> matrix;
+  std::optional<std::vector<TransformKey>> transform;
+  std::vector<DeformStreamline> streamlines;
+};
+
+// The solver block (DESIGN §10). Every key is read in one place (scene_json.cpp's
+// Reader::solver) and written in one place (scene_json.cpp's solver_json).
 struct SolverSettings {
   Weights weights = Weights::cotan;
   double temporal_weight = 30.0;
@@ -167,8 +188,8 @@ struct Scene {
   double falloff = 8.0;  // d̂: the basis fields decay as exp(−d̂·‖x − p‖² / diam²)
   std::vector<Element> elements;
   std::vector<Keyframe> keyframes;
-  nlohmann::json deform;  // validated by scene_json; interpreted by the deform generator
-  nlohmann::json edits = nlohmann::json::array();  // validated list of edit entries
+  std::optional<Deform> deform;  // set when the scene has a deform block
+  std::vector<Edit> edits;       // the scene's edits, in order (scene/edits.h)
   // "incompressible" (tvf addition): when set, every frame is projected onto the
   // divergence-free fields after the generator and the edits (solve/hodge_projection.h),
   // with this boundary condition.

@@ -1,6 +1,7 @@
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include "tvf/core/error.h"
+#include "tvf/core/error_location.h"
 #include "support/test_paths.h"
 
 #include <fmt/format.h>
@@ -9,6 +10,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 
@@ -120,8 +122,11 @@ void expect_same_scene(const Scene& a, const Scene& b) {
       EXPECT_EQ(x.streamlines[k].speed, y.streamlines[k].speed);
     }
   }
-  EXPECT_EQ(a.deform, b.deform);
-  EXPECT_EQ(a.edits, b.edits);
+  const json ja = scene_to_json(a), jb = scene_to_json(b);
+  EXPECT_EQ(a.deform.has_value(), b.deform.has_value());
+  EXPECT_EQ(ja.value("deform", json()), jb.value("deform", json()));
+  EXPECT_EQ(a.edits.size(), b.edits.size());
+  EXPECT_EQ(ja["edits"], jb["edits"]);
   EXPECT_EQ(a.incompressible, b.incompressible);
   EXPECT_EQ(a.source_path, b.source_path);
 }
@@ -271,17 +276,30 @@ TEST(SceneJson, ReadsTheDesignExampleExactly) {
   EXPECT_EQ(s.keyframes[1].streamlines[0].speed, 1.0);
   EXPECT_TRUE(s.keyframes[1].field.empty());
 
-  // deform and edits are kept as JSON, in normalised form (every default written).
+  // deform and edits are typed; written back in normalised form (every default written).
   const json deform = json::parse(R"({
     "base": {"elements": [{"kind": "singular", "type": "saddle", "path": [[0.0, 0.0, 0.0]], "transform": []}]},
     "transform": [{"t": 0.0, "sx": 1.0, "sy": 1.0, "theta": 0.0}, {"t": 1.0, "sx": 1.0, "sy": 1.0, "theta": 3.14159}],
     "streamlines": [{"seed": [0.0, 0.0], "keys": [{"t": 1.0, "translate": [0.2, 0.0], "rotate": 0.5, "scale": 1.0}]}]})");
-  EXPECT_EQ(s.deform, deform);
+  ASSERT_TRUE(s.deform.has_value());
+  ASSERT_EQ(s.deform->base.size(), 1u);
+  EXPECT_EQ(std::get<SingularElement>(s.deform->base[0]).type, SingularType::saddle);
+  EXPECT_FALSE(s.deform->matrix.has_value());
+  ASSERT_TRUE(s.deform->transform.has_value());
+  EXPECT_EQ(s.deform->transform->at(1).theta, 3.14159);
+  ASSERT_EQ(s.deform->streamlines.size(), 1u);
+  EXPECT_EQ(s.deform->streamlines[0].keys[0].translate, Vec3(0.2, 0, 0));
+  EXPECT_EQ(s.deform->streamlines[0].keys[0].rotate, 0.5);
+  const json written = scene_to_json(s);
+  EXPECT_EQ(written["deform"], deform);
   const json edits = json::parse(R"([
     {"op": "cancel", "frame": 40, "pair": [[0.1, 0.2], [0.15, 0.22]], "window": 0.1},
     {"op": "smooth", "strength": 0.5}])");
-  EXPECT_EQ(s.edits, edits);
-  EXPECT_TRUE(s.edits[0]["frame"].is_number_integer());
+  ASSERT_EQ(s.edits.size(), 2u);
+  EXPECT_EQ(std::get<CancelEdit>(s.edits[0]).frame, 40);
+  EXPECT_EQ(std::get<SmoothEdit>(s.edits[1]).strength, 0.5);
+  EXPECT_EQ(written["edits"], edits);
+  EXPECT_TRUE(written["edits"][0]["frame"].is_number_integer());
   EXPECT_TRUE(s.source_path.empty());
 }
 
@@ -322,11 +340,16 @@ TEST(SceneJson, ReadsASurfaceSceneWithThreeDimensionalPositions) {
   EXPECT_EQ(k0.elements[1].vector, Vec3(0, 1, 0));
   EXPECT_EQ(k0.streamlines[0].speed, 2.5);
   EXPECT_EQ(s.keyframes[1].field, "fields/end.tvff");
-  EXPECT_EQ(s.deform["matrix"][1]["m"], json::parse("[[2.0, 0.0], [0.0, 2.0]]"));
-  EXPECT_FALSE(s.deform.contains("transform"));
-  EXPECT_EQ(s.deform["streamlines"][0]["keys"][0],
+  ASSERT_TRUE(s.deform && s.deform->matrix);
+  EXPECT_EQ(s.deform->matrix->at(1).m, Mat2(2 * Mat2::Identity()));
+  EXPECT_FALSE(s.deform->transform.has_value());
+  const json written = scene_to_json(s);
+  EXPECT_EQ(written["deform"]["matrix"][1]["m"], json::parse("[[2.0, 0.0], [0.0, 2.0]]"));
+  EXPECT_FALSE(written["deform"].contains("transform"));
+  EXPECT_EQ(written["deform"]["streamlines"][0]["keys"][0],
             json::parse(R"({"t": 0.0, "translate": [0.0, 0.0, 0.0], "rotate": 0.0, "scale": 1.0})"));
-  EXPECT_EQ(s.edits[2]["to"], json::parse("[0.0, 0.0, -2.0, 2.0]"));
+  EXPECT_EQ(std::get<MoveBifurcationEdit>(s.edits[2]).to.position, Vec3(0, 0, -2));
+  EXPECT_EQ(written["edits"][2]["to"], json::parse("[0.0, 0.0, -2.0, 2.0]"));
 }
 
 TEST(SceneJson, OmittedKeysTakeTheDefaultsOfSceneH) {
@@ -350,8 +373,9 @@ TEST(SceneJson, OmittedKeysTakeTheDefaultsOfSceneH) {
   EXPECT_EQ(s.falloff, d.falloff);
   EXPECT_TRUE(s.elements.empty());
   EXPECT_TRUE(s.keyframes.empty());
-  EXPECT_TRUE(s.deform.is_null());
-  EXPECT_EQ(s.edits, json::array());
+  EXPECT_FALSE(s.deform.has_value());
+  EXPECT_TRUE(s.edits.empty());
+  EXPECT_EQ(scene_to_json(s)["edits"], json::array());
 
   const Scene sphere = parse_scene(R"({"tvf": 1, "domain": {"sphere": {}}})", "s.json");
   EXPECT_EQ(sphere.domain.sphere->subdivisions, SphereSpec{}.subdivisions);
@@ -1048,6 +1072,39 @@ TEST(SceneJson, BadIncompressibleValuesNameThePath) {
             "i.json: incompressible: unknown key \"boundry\" (expected one of boundary)");
   EXPECT_NE(error("1").find("i.json: incompressible: must be true, false or an object"), std::string::npos);
   EXPECT_NE(error(R"("yes")").find("i.json: incompressible:"), std::string::npos);
+}
+
+// Issue 18: an error names its place in what() and as fields; the line and column are the
+// value's in the text (from its JSON path), for parsed text and files alike.
+TEST(SceneJson, ErrorsCarryTheFileJsonPathLineAndColumn) {
+  const std::string text = "{\"tvf\": 1, \"domain\": {\"grid\": {}},\n"
+                           "  \"elements\": [\n"
+                           "    {\"kind\": \"singular\", \"type\": \"sourse\", \"path\": [[0, 0, 0]]}]}";
+  auto check = [&](const std::function<void()>& f, const std::string& file) {
+    try {
+      f();
+      ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(file + ": elements[0].type: ", 0), 0u) << e.what();
+      EXPECT_EQ(location_of(e).file, file);
+      EXPECT_EQ(location_of(e).json_path, "elements[0].type");
+      EXPECT_EQ(location_of(e).line, 3);
+      EXPECT_EQ(location_of(e).column, 34);
+    }
+  };
+  check([&] { parse_scene(text, "t.json"); }, "t.json");
+  test::TempDir dir;
+  const std::string path = (dir.path() / "bad.json").string();
+  std::ofstream(path) << text;
+  check([&] { load_scene(path); }, path);
+  // Scenes from parsed JSON have no text: the path, and no line.
+  try {
+    scene_from_json(json::parse(text), "j");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(location_of(e).json_path, "elements[0].type");
+    EXPECT_EQ(location_of(e).line, 0);
+  }
 }
 
 }  // namespace

@@ -1,18 +1,52 @@
-#include "tvf/design/design_space.h"
+#include "tvf/scene/design_space.h"
 
 #include "tvf/core/error.h"
-#include "tvf/design/generate.h"
 #include "tvf/mesh/grid.h"
 #include "tvf/mesh/mesh_io.h"
 #include "tvf/mesh/primitives.h"
 
+#include <fmt/format.h>
+
 #include <filesystem>
+#include <unistd.h>
 
 namespace tvf {
 
+std::uint64_t field_memory_bytes(int frames, long long vertices) {
+  // 16 bytes per complex double in memory, 12 per float32 world vector when exporting.
+  return static_cast<std::uint64_t>(frames) * static_cast<std::uint64_t>(vertices) * 28u;
+}
+
+namespace {
+
+std::uint64_t physical_memory_bytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES);
+  const long page = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page)
+                               : std::uint64_t{1} << 34;
+}
+
+}  // namespace
+
+void check_field_memory(const Scene& scene, long long vertices) {
+  const int frames = scene.time.frames;
+  const std::uint64_t need = field_memory_bytes(frames, vertices);
+  const std::uint64_t have = physical_memory_bytes();
+  if (need > have / 10 * 8)
+    throw_input_error(scene.label(), "time.frames",
+                      fmt::format("{} frames × {} vertices need {:.1f} GiB, more than 80 % of the {:.1f} GiB "
+                                  "of memory this machine has",
+                                  frames, vertices, static_cast<double>(need) / (1u << 30),
+                                  static_cast<double>(have) / (1u << 30)));
+}
+
 DesignSpace::DesignSpace(Mesh mesh)
-    : mesh_(std::move(mesh)), bundle_(mesh_), log_map_(bundle_), locator_(mesh_),
-      diameter_(mesh_.diameter()) {}
+    : mesh_(std::move(mesh)), bundle_(mesh_), locator_(mesh_), diameter_(mesh_.diameter()) {}
+
+const LogMap& DesignSpace::log_map() const {
+  std::call_once(log_map_once_, [this] { log_map_ = std::make_unique<LogMap>(bundle_); });
+  return *log_map_;
+}
 
 SurfacePoint DesignSpace::locate(const Vec3& x) const { return locator_.closest(x); }
 

@@ -1,4 +1,4 @@
-#include "tvf/design/scene_json.h"
+#include "tvf/scene/scene_json.h"
 
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
@@ -423,10 +423,10 @@ private:
   void keyframe_topology(const json& solver, Scene& s) const;
   KeyframeElement keyframe_element(const json& j, const std::string& path) const;
   KeyframeStreamline keyframe_streamline(const json& j, const std::string& path) const;
-  json deform(const json& j) const;
-  json edits(const json& j) const;
+  Deform deform(const json& j) const;
+  std::vector<Edit> edits(const json& j) const;
   std::optional<FluxBoundary> incompressible(const json& j) const;
-  json edit(const json& j, const std::string& path) const;
+  Edit edit(const json& j, const std::string& path) const;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -506,6 +506,45 @@ json keyframe_json(const Keyframe& k, bool planar) {
     json points = json::array();
     for (const Vec3& p : s.points) points.push_back(point_json(p, planar));
     j["streamlines"].push_back({{"points", points}, {"speed", s.speed}});
+  }
+  return j;
+}
+
+json deform_json(const Deform& d, bool planar) {
+  json out;
+  out["base"]["elements"] = json::array();
+  for (const Element& e : d.base) out["base"]["elements"].push_back(element_json(e, planar));
+  if (d.matrix) {
+    out["matrix"] = json::array();
+    for (const MatrixKey& k : *d.matrix) out["matrix"].push_back({{"t", k.t}, {"m", matrix_json(k.m)}});
+  }
+  if (d.transform) out["transform"] = transform_json(*d.transform);
+  out["streamlines"] = json::array();
+  for (const DeformStreamline& line : d.streamlines) {
+    json keys = json::array();
+    for (const StreamlineKey& k : line.keys)
+      keys.push_back({{"t", k.t}, {"translate", point_json(k.translate, planar)}, {"rotate", k.rotate}, {"scale", k.scale}});
+    out["streamlines"].push_back({{"seed", point_json(line.seed, planar)}, {"keys", std::move(keys)}});
+  }
+  return out;
+}
+
+// The solver block: every key of SolverSettings, written here and read by Reader::solver.
+// The key-frame topology keys (solver.keyframe_topology, links, bifurcation_times) are
+// read by Reader::keyframe_topology once the key frames are known.
+json solver_json(const SolverSettings& s) {
+  json j = {{"weights", to_string(s.weights)},
+            {"temporal_weight", s.temporal_weight},
+            {"tolerance", s.tolerance},
+            {"region_radius", s.region_radius},
+            {"method", to_string(s.method)}};
+  if (s.keyframe_topology == KeyframeTopology::matched) {
+    j["keyframe_topology"] = "matched";
+    json links = json::array();
+    for (const KeyframeLink& l : s.links)
+      links.push_back({{"from", {l.from_keyframe, l.from_element}}, {"to", {l.to_keyframe, l.to_element}}});
+    if (!links.empty()) j["links"] = links;
+    if (!s.bifurcation_times.empty()) j["bifurcation_times"] = s.bifurcation_times;
   }
   return j;
 }
@@ -906,22 +945,19 @@ void Reader::keyframe_topology(const json& solver, Scene& s) const {
   }
 }
 
-json Reader::deform(const json& j) const {
+Deform Reader::deform(const json& j) const {
   check_keys(j, "deform", "the deformation {\"base\", \"matrix\" or \"transform\", \"streamlines\"}",
              {"base", "matrix", "transform", "streamlines"});
-  json out;
+  Deform out;
   const json& base = need(j, "deform", "base", "the field V(t0) to deform: {\"elements\": [...]}");
   check_keys(base, "deform.base", "the base field {\"elements\": [...]}", {"elements"});
-  out["base"]["elements"] = json::array();
-  if (const json* e = get(base, "elements"))
-    for (const Element& element : elements(*e, "deform.base.elements"))
-      out["base"]["elements"].push_back(element_json(element, planar_));
+  if (const json* e = get(base, "elements")) out.base = elements(*e, "deform.base.elements");
   const json* matrix = get(j, "matrix");
   const json* transform = get(j, "transform");
   if (matrix && transform) fail("deform", "give either \"matrix\" or \"transform\" keys, not both");
   if (matrix) {
     array(*matrix, "deform.matrix", 0, "matrix keys {\"t\", \"m\"}");
-    out["matrix"] = json::array();
+    out.matrix.emplace();
     double previous = 0;
     for (size_t i = 0; i < matrix->size(); ++i) {
       const std::string p = join_index("deform.matrix", i);
@@ -930,59 +966,63 @@ json Reader::deform(const json& j) const {
       const double t = key_time(k, p, "the time of the key");
       if (i > 0) check_after(previous, t, join_key(p, "t"), "key");
       previous = t;
-      const Mat2 m = matrix2(need(k, p, "m", "the 2×2 matrix [[a, b], [c, d]] at t"), join_key(p, "m"));
-      out["matrix"].push_back({{"t", t}, {"m", matrix_json(m)}});
+      out.matrix->push_back({t, matrix2(need(k, p, "m", "the 2×2 matrix [[a, b], [c, d]] at t"), join_key(p, "m"))});
     }
   }
-  if (transform) out["transform"] = transform_json(transform_keys(*transform, "deform.transform"));
-  out["streamlines"] = json::array();
+  if (transform) out.transform = transform_keys(*transform, "deform.transform");
   if (const json* s = get(j, "streamlines")) {
     array(*s, "deform.streamlines", 0, "streamlines {\"seed\", \"keys\"}");
     for (size_t i = 0; i < s->size(); ++i) {
       const std::string p = join_index("deform.streamlines", i);
       const json& line = (*s)[i];
       check_keys(line, p, "a streamline {\"seed\", \"keys\"}", {"seed", "keys"});
-      const Vec3 seed = position(need(line, p, "seed", fmt::format("where the streamline starts, {}", point_form())),
-                                 join_key(p, "seed"));
+      DeformStreamline moved;
+      moved.seed = position(need(line, p, "seed", fmt::format("where the streamline starts, {}", point_form())),
+                            join_key(p, "seed"));
       const std::string kp = join_key(p, "keys");
       const json& keys = array(need(line, p, "keys", "its keyed motion [{\"t\", \"translate\", \"rotate\", \"scale\"}]"),
                                kp, 1, "keys {\"t\", \"translate\", \"rotate\", \"scale\"}");
-      json keys_out = json::array();
       double previous = 0;
       for (size_t m = 0; m < keys.size(); ++m) {
         const std::string q = join_index(kp, m);
         const json& k = keys[m];
         check_keys(k, q, "a streamline key", {"t", "translate", "rotate", "scale"});
-        const double t = key_time(k, q, "the time of the key");
-        if (m > 0) check_after(previous, t, join_key(q, "t"), "key");
-        previous = t;
-        Vec3 translate = Vec3::Zero();
-        double rotate = 0.0, scale = 1.0;
-        if (const json* v = get(k, "translate")) translate = position(*v, join_key(q, "translate"));
-        if (const json* v = get(k, "rotate")) rotate = number(*v, join_key(q, "rotate"));
-        if (const json* v = get(k, "scale")) scale = positive(*v, join_key(q, "scale"));
-        keys_out.push_back({{"t", t},
-                            {"translate", point_json(translate, planar_)},
-                            {"rotate", rotate},
-                            {"scale", scale}});
+        StreamlineKey key;
+        key.t = key_time(k, q, "the time of the key");
+        if (m > 0) check_after(previous, key.t, join_key(q, "t"), "key");
+        previous = key.t;
+        if (const json* v = get(k, "translate")) key.translate = position(*v, join_key(q, "translate"));
+        if (const json* v = get(k, "rotate")) key.rotate = number(*v, join_key(q, "rotate"));
+        if (const json* v = get(k, "scale")) key.scale = positive(*v, join_key(q, "scale"));
+        moved.keys.push_back(key);
       }
-      out["streamlines"].push_back({{"seed", point_json(seed, planar_)}, {"keys", keys_out}});
+      out.streamlines.push_back(std::move(moved));
     }
   }
   return out;
 }
 
-json Reader::edit(const json& j, const std::string& path) const {
+Edit Reader::edit(const json& j, const std::string& path) const {
   check_object(j, path, "an edit with an \"op\"");
   const std::string op = string(
       need(j, path, "op", "cancel, smooth, remove_bifurcation or move_bifurcation"), join_key(path, "op"));
-  json out;
-  out["op"] = op;
+  // Half-width of the time window re-solved around the edit, as a fraction of the time
+  // range (DESIGN §7; docs/scene_reference.md).
+  auto window = [&] {
+    double w = kDefaultEditWindow;
+    if (const json* v = get(j, "window")) {
+      const std::string p = join_key(path, "window");
+      w = number(*v, p);
+      if (!(w >= 0 && w <= 1)) fail(p, fmt::format("must be in [0, 1] (a fraction of the time range), got {}", w));
+    }
+    return w;
+  };
   const std::string at_hint = fmt::format("the bifurcation's place and time {}", path_point_form());
   if (op == "cancel") {
     check_keys(j, path, "a cancel edit", {"op", "frame", "pair", "window"});
-    out["frame"] = integer(need(j, path, "frame", "the frame to edit"), join_key(path, "frame"), 0,
-                           time_.frames - 1);
+    CancelEdit out;
+    out.frame = static_cast<int>(
+        integer(need(j, path, "frame", "the frame to edit"), join_key(path, "frame"), 0, time_.frames - 1));
     const std::string p = join_key(path, "pair");
     const std::string form = fmt::format("positions {}", point_form());
     const json& pair = need(j, path, "pair", fmt::format("the two singularities to cancel, [{0}, {0}]", point_form()));
@@ -993,19 +1033,24 @@ json Reader::edit(const json& j, const std::string& path) const {
     check_on_domain(a, join_index(p, 0));
     check_on_domain(b, join_index(p, 1));
     if (a == b) fail(p, "names the same position twice (a pair is two different singularities)");
-    out["pair"] = json::array({point_json(a, planar_), point_json(b, planar_)});
-  } else if (op == "smooth") {
+    out.pair = {a, b};
+    out.window = window();
+    return out;
+  }
+  if (op == "smooth") {
     check_keys(j, path, "a smooth edit", {"op", "strength"});
     const std::string p = join_key(path, "strength");
     const double s = number(need(j, path, "strength", "how much to smooth, in (0, 1]"), p);
     if (!(s > 0 && s <= 1)) fail(p, fmt::format("must be in (0, 1], got {}", s));
-    out["strength"] = s;
-  } else if (op == "remove_bifurcation") {
+    return SmoothEdit{s};
+  }
+  if (op == "remove_bifurcation") {
     check_keys(j, path, "a remove_bifurcation edit", {"op", "at", "window"});
     const PathPoint at = path_point(need(j, path, "at", at_hint), join_key(path, "at"));
     check_on_domain(at.position, join_key(path, "at"));
-    out["at"] = path_point_json(at, planar_);
-  } else if (op == "move_bifurcation") {
+    return RemoveBifurcationEdit{at, window()};
+  }
+  if (op == "move_bifurcation") {
     check_keys(j, path, "a move_bifurcation edit", {"op", "at", "to", "window"});
     const PathPoint at = path_point(need(j, path, "at", at_hint), join_key(path, "at"));
     const PathPoint to =
@@ -1013,31 +1058,17 @@ json Reader::edit(const json& j, const std::string& path) const {
                    join_key(path, "to"));
     check_on_domain(at.position, join_key(path, "at"));
     check_on_domain(to.position, join_key(path, "to"));
-    out["at"] = path_point_json(at, planar_);
-    out["to"] = path_point_json(to, planar_);
-  } else {
-    fail(join_key(path, "op"),
-         fmt::format("unknown edit \"{}\" (expected one of cancel, smooth, remove_bifurcation, "
-                     "move_bifurcation)",
-                     op));
+    return MoveBifurcationEdit{at, to, window()};
   }
-  if (op != "smooth") {
-    // Half-width of the time window re-solved around the edit, as a fraction of the time
-    // range (DESIGN §7; docs/scene_reference.md).
-    double w = 0.1;
-    if (const json* v = get(j, "window")) {
-      const std::string p = join_key(path, "window");
-      w = number(*v, p);
-      if (!(w >= 0 && w <= 1)) fail(p, fmt::format("must be in [0, 1] (a fraction of the time range), got {}", w));
-    }
-    out["window"] = w;
-  }
-  return out;
+  fail(join_key(path, "op"),
+       fmt::format("unknown edit \"{}\" (expected one of cancel, smooth, remove_bifurcation, "
+                   "move_bifurcation)",
+                   op));
 }
 
-json Reader::edits(const json& j) const {
+std::vector<Edit> Reader::edits(const json& j) const {
   array(j, "edits", 0, "edits");
-  json out = json::array();
+  std::vector<Edit> out;
   for (size_t i = 0; i < j.size(); ++i) out.push_back(edit(j[i], join_index("edits", i)));
   return out;
 }
@@ -1085,15 +1116,20 @@ Scene Reader::scene(const json& j, const std::string& source_path) {
   if (const json* d = get(j, "deform")) s.deform = deform(*d);
   if (const json* e = get(j, "edits")) s.edits = edits(*e);
   if (const json* i = get(j, "incompressible")) s.incompressible = incompressible(*i);
-  if (s.generator == Generator::deform && s.deform.is_null())
+  if (s.generator == Generator::deform && !s.deform)
     fail("", "missing key \"deform\" (the deform generator needs a deform block with its base field)");
   return s;
 }
 
+// Errors about the scene's values get the line and column of their JSON path in `text`.
 Scene parse_with_source(const std::string& text, const std::string& label,
                         const std::string& source_path) {
-  return scene_from_json(
-      parse_json_text(text, label, "a scene is a JSON object {\"tvf\": 1, ...}"), label, source_path);
+  const json j = parse_json_text(text, label, "a scene is a JSON object {\"tvf\": 1, ...}");
+  try {
+    return scene_from_json(j, label, source_path);
+  } catch (const Error& e) {
+    rethrow_with_position(e, text);
+  }
 }
 
 }  // namespace
@@ -1135,26 +1171,15 @@ nlohmann::json scene_to_json(const Scene& scene) {
   }
   j["time"] = {{"frames", scene.time.frames}, {"range", {scene.time.t0, scene.time.t1}}};
   j["generator"] = to_string(scene.generator);
-  j["solver"] = {{"weights", to_string(scene.solver.weights)},
-                 {"temporal_weight", scene.solver.temporal_weight},
-                 {"tolerance", scene.solver.tolerance},
-                 {"region_radius", scene.solver.region_radius},
-                 {"method", to_string(scene.solver.method)}};
-  if (scene.solver.keyframe_topology == KeyframeTopology::matched) {
-    j["solver"]["keyframe_topology"] = "matched";
-    json links = json::array();
-    for (const KeyframeLink& l : scene.solver.links)
-      links.push_back({{"from", {l.from_keyframe, l.from_element}}, {"to", {l.to_keyframe, l.to_element}}});
-    if (!links.empty()) j["solver"]["links"] = links;
-    if (!scene.solver.bifurcation_times.empty()) j["solver"]["bifurcation_times"] = scene.solver.bifurcation_times;
-  }
+  j["solver"] = solver_json(scene.solver);
   j["falloff"] = scene.falloff;
   j["elements"] = json::array();
   for (const Element& e : scene.elements) j["elements"].push_back(element_json(e, planar));
   j["keyframes"] = json::array();
   for (const Keyframe& k : scene.keyframes) j["keyframes"].push_back(keyframe_json(k, planar));
-  if (!scene.deform.is_null()) j["deform"] = scene.deform;
-  j["edits"] = scene.edits.is_null() ? json::array() : scene.edits;
+  if (scene.deform) j["deform"] = deform_json(*scene.deform, planar);
+  j["edits"] = json::array();
+  for (const Edit& e : scene.edits) j["edits"].push_back(edit_to_json(e, planar));
   if (scene.incompressible) j["incompressible"] = {{"boundary", to_string(*scene.incompressible)}};
   return j;
 }

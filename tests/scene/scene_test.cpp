@@ -1,4 +1,4 @@
-#include "tvf/design/scene.h"
+#include "tvf/scene/scene.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // The typed edits of a scene (edits.h): read from the canonical JSON the scene parser keeps,
 // written back identically, and checked for scenes built in code.
-#include "tvf/design/scene_json.h"
-#include "tvf/edit/edits.h"
+#include "tvf/scene/scene_json.h"
+#include "tvf/scene/edits.h"
 
 #include "support/test_paths.h"
 
@@ -26,7 +26,7 @@ TEST(Edits, TypedEntriesFromTheScene) {
                                {"op": "move_bifurcation", "at": [0, 0.1, 0.4], "to": [0.5, 0.5, 0.6]},
                                {"op": "smooth", "strength": 0.25}])");
   const Scene scene = scene_from_json(j, "test.json", "test.json");
-  const auto edits = edits_from_scene(scene);
+  const std::vector<Edit>& edits = scene.edits;
   ASSERT_EQ(edits.size(), 4u);
   const auto& c = std::get<CancelEdit>(edits[0]);
   EXPECT_EQ(c.frame, 3);
@@ -35,14 +35,20 @@ TEST(Edits, TypedEntriesFromTheScene) {
   EXPECT_EQ(std::get<RemoveBifurcationEdit>(edits[1]).window, kDefaultEditWindow);
   EXPECT_EQ(std::get<MoveBifurcationEdit>(edits[2]).to.t, 0.6);
   EXPECT_EQ(std::get<SmoothEdit>(edits[3]).strength, 0.25);
-  for (size_t i = 0; i < edits.size(); ++i) EXPECT_EQ(edit_to_json(edits[i], true), scene.edits[i]) << i;
+  // Written back as the canonical entries (every default written, 2-D positions).
+  const json canonical = json::parse(R"([{"op": "cancel", "frame": 3, "pair": [[0.0, 0.0], [0.1, 0.0]], "window": 0.2},
+                                         {"op": "remove_bifurcation", "at": [0.0, 0.1, 0.4], "window": 0.1},
+                                         {"op": "move_bifurcation", "at": [0.0, 0.1, 0.4], "to": [0.5, 0.5, 0.6],
+                                          "window": 0.1},
+                                         {"op": "smooth", "strength": 0.25}])");
+  for (size_t i = 0; i < edits.size(); ++i) EXPECT_EQ(edit_to_json(edits[i], true), canonical[i]) << i;
+  EXPECT_EQ(scene_to_json(scene)["edits"], canonical);
 
-  // Scenes built in code are checked too.
-  Scene bad = scene;
-  bad.edits[0]["frame"] = 21;
-  EXPECT_NE(test::error_of([&] { edits_from_scene(bad); }).find("test.json: edits[0].frame: frame 21 is outside"),
+  // The file parser names the path of a bad frame and of a bad window.
+  j["edits"][0]["frame"] = 21;
+  EXPECT_NE(test::error_of([&] { scene_from_json(j, "test.json"); }).find("test.json: edits[0].frame: "),
             std::string::npos);
-  // And the file parser names the path of a bad window.
+  j["edits"][0]["frame"] = 3;
   j["edits"][0]["window"] = 2;
   EXPECT_NE(test::error_of([&] { scene_from_json(j, "test.json"); }).find("edits[0].window: must be in [0, 1]"),
             std::string::npos);
