@@ -416,6 +416,39 @@ TEST(Painterly, StrokesFollowTheFieldInsideTheMaskAndStayPutOutside) {
   EXPECT_NE(pic.pixels, ramp(100, 100).pixels);
 }
 
+// The same fault as the crowd's (issue 16 item 13), in the painterly strokes: the mask was
+// checked only where a frame's travel ended, so a stroke carried 20 pixels across a
+// 4-pixel band where the field does not apply moved on beyond it. It now stops in the band.
+TEST(Painterly, AStrokeCarriedAcrossAThinMaskedBandStopsInIt) {
+  const Mesh grid = make_grid(GridSpec{17, 17, {0, 0}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = sample(grid, TimeSampling{0, 1, 11}, [](cplx, double) { return cplx(1, 0); });
+  Image mask(100, 100);
+  for (int y = 0; y < 100; ++y)
+    for (int x = 0; x < 100; ++x) mask.at(x, y) = x >= 48 && x < 52 ? 0u : 0x00FFFFFFu;
+  PainterlyOptions o;
+  o.stroke_width = 4;
+  o.stroke_length = 12;
+  o.density = 1;
+  PainterlyAnimator painter(bundle, field, ramp(100, 100), mask, o);
+  painter.advance(0.0);
+  const auto first = painter.strokes();
+  painter.advance(0.2);  // 20 pixels to the right
+  int across = 0, stopped = 0;
+  for (const auto& s : painter.strokes())
+    for (const auto& f : first)
+      if (f.id == s.id && f.moving && f.centre.x() > 32 && f.centre.x() < 47) {
+        // Its way crosses x = 48: it ends in the band, not beyond it.
+        EXPECT_GE(s.centre.x(), 48 - 1e-9) << "stroke " << s.id;
+        EXPECT_LE(s.centre.x(), 48.5 + 1e-9) << "stroke " << s.id << " went on across the band";
+        EXPECT_FALSE(s.moving);
+        ++across;
+        stopped += !s.moving;
+      }
+  EXPECT_GT(across, 3);
+  EXPECT_EQ(stopped, across);
+}
+
 TEST(Painterly, BadOptionsAndSurfacesAreErrors) {
   const Mesh grid = make_grid(GridSpec{5, 5, {0, 0}, {1, 1}});
   const TangentBundle bundle(grid);
