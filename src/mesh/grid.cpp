@@ -1,7 +1,9 @@
 #include "tvf/mesh/grid.h"
 
 #include "tvf/core/error.h"
+#include "tvf/mesh/mesh_validate.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace tvf {
@@ -21,6 +23,11 @@ Mesh make_grid(const GridSpec& spec, const std::string& where) {
     throw_input_error(where, "",
                       fmt::format("the box [{}, {}] × [{}, {}] has a non-finite corner",
                                   spec.min.x(), spec.max.x(), spec.min.y(), spec.max.y()));
+  if (std::max(spec.min.cwiseAbs().maxCoeff(), spec.max.cwiseAbs().maxCoeff()) > kMaxCoordinate)
+    throw_input_error(where, "",
+                      fmt::format("the box [{}, {}] × [{}, {}] is too large: a corner coordinate has a magnitude "
+                                  "above {:g} (larger ones overflow the squared distances and areas tvf computes)",
+                                  spec.min.x(), spec.max.x(), spec.min.y(), spec.max.y(), kMaxCoordinate));
   if (!(spec.max.x() > spec.min.x()) || !(spec.max.y() > spec.min.y()))
     throw_input_error(where, "",
                       fmt::format("the box [{}, {}] × [{}, {}] is empty or inverted (max must be "

@@ -153,8 +153,9 @@ void check_count(const std::string& path, Format format, long long count, const 
                                   format_name(format), count, what));
 }
 
-// The counts of an OFF header, read here rather than by CGAL, whose header reader computes
-// with them in int before anyone could check them. Each must fit in the file.
+// The counts of a binary OFF header, read here rather than by CGAL, whose header reader
+// computes with them in int before anyone could check them. Each must fit in the file.
+// (Text OFF is read by read_off_text below.)
 void check_off_header(const std::string& path, std::istream& in, std::uintmax_t file_size) {
   auto unreadable = [&] { fail_unreadable(path, Format::off); };
   // The next word, skipping '#' comments to the end of their line.
@@ -211,89 +212,170 @@ void check_off_header(const std::string& path, std::istream& in, std::uintmax_t 
   check_count(path, Format::off, counts[first], "vertices", file_size);
   check_count(path, Format::off, counts[first + 1], "faces", file_size);
   check_count(path, Format::off, counts[first + 2], "edges", file_size);
-  if (w == "BINARY") return;
-  // The vertex lines of a text OFF: numbers only, as many on every line as on the first.
-  // CGAL's reader counts the colour entries on the first line and reads as many on every
-  // other line without checking that the line had them (found by fuzzing: "0 0~ 0 255 0 0
-  // 255" in a COFF made it read past its buffer).
-  std::string line;
-  std::getline(in, line);  // the rest of the counts' line: nothing but a comment
-  line = line.substr(0, line.find('#'));
-  if (line.find_first_not_of(" \t\r") != std::string::npos)
-    throw_input_error(path, "", fmt::format("the OFF counts line goes on after its counts ('{:.40}')", line));
-  std::size_t expected = 0;
-  const std::string prefix = keyword.substr(0, keyword.size() - 3);
-  const bool coloured = prefix.find('C') != std::string::npos;
-  const std::size_t colour_from = (prefix.find('4') != std::string::npos ? 4u : 3u) +
-                                  (prefix.find('N') != std::string::npos ? 3u : 0u);
-  for (long long v = 0; v < counts[first];) {
-    if (!std::getline(in, line))
-      throw_input_error(path, "", fmt::format("the OFF file ends before vertex {} of {}", v, counts[first]));
-    line = line.substr(0, line.find('#'));
-    std::istringstream words(line);
-    std::string token;
-    std::size_t n = 0;
-    while (words >> token) {
-      char* end = nullptr;
-      const double x = std::strtod(token.c_str(), &end);
-      if (end != token.c_str() + token.size())
-        throw_input_error(path, "", fmt::format("OFF vertex {}: '{:.40}' is not a number", v, token));
-      // Colours (after the coordinates and any normal) become bytes in CGAL: out of
-      // [0, 255] that conversion is undefined (found by fuzzing).
-      if (coloured && n >= colour_from && !(x >= 0 && x <= 255))
-        throw_input_error(path, "", fmt::format("OFF vertex {}: the colour value {:.40} is outside [0, 255]", v, token));
-      ++n;
+}
+
+// --- Text OFF: our own reader ----------------------------------------------------------
+//
+// CGAL's OFF reader ran past its buffers twice under fuzzing (colour values counted on the
+// first vertex line and read on every other; a face line of no corners and two colour
+// values), and its header arithmetic is done in int before anything can be checked. Text
+// OFF is simple enough to read strictly here: every error names the file and the line.
+// Binary OFF still goes to CGAL, after check_off_header.
+
+// The lines of a text OFF file, comments ('#' to the end of the line) and blank lines skipped.
+class OffLines {
+public:
+  OffLines(const std::string& path, std::istream& in) : path_(path), in_(in) {}
+  // The next line with words, split; false at the end of the file.
+  bool next(std::vector<std::string>& words) {
+    std::string line;
+    while (std::getline(in_, line)) {
+      ++number_;
+      line = line.substr(0, line.find('#'));
+      words.clear();
+      std::istringstream split(line);
+      for (std::string w; split >> w;) words.push_back(std::move(w));
+      if (!words.empty()) return true;
     }
-    if (n == 0) continue;  // a blank or comment line
-    if (n < 3) throw_input_error(path, "", fmt::format("OFF vertex {} has {} numbers; a vertex needs at least 3", v, n));
-    if (expected == 0) expected = n;
-    if (n != expected)
-      throw_input_error(path, "",
-                        fmt::format("OFF vertex {} has {} numbers where vertex 0 has {} (every vertex line of an OFF "
-                                    "file gives the same values)",
-                                    v, n, expected));
-    ++v;
+    return false;
   }
-  // The face lines: a count, then that many vertex numbers in range (CGAL converts them to
-  // unsigned integers, undefined beyond their range: found by fuzzing).
-  for (long long f = 0; f < counts[first + 1];) {
-    if (!std::getline(in, line))
-      throw_input_error(path, "", fmt::format("the OFF file ends before face {} of {}", f, counts[first + 1]));
-    line = line.substr(0, line.find('#'));
-    std::istringstream words(line);
-    std::vector<double> values;
-    std::string token;
-    while (words >> token) {
-      char* end = nullptr;
-      const double x = std::strtod(token.c_str(), &end);
-      if (end != token.c_str() + token.size())
-        throw_input_error(path, "", fmt::format("OFF face {}: '{:.40}' is not a number", f, token));
-      values.push_back(x);
+  long long number() const { return number_; }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw_input_error(path_, "", fmt::format("line {}: {}", number_, what));
+  }
+  // A finite number, or an error naming `what` (a vertex, a face).
+  double number_of(const std::string& word, const std::string& what) const {
+    char* end = nullptr;
+    const double x = std::strtod(word.c_str(), &end);
+    if (word.empty() || end != word.c_str() + word.size())
+      fail(fmt::format("{}: '{:.40}' is not a number", what, word));
+    if (!std::isfinite(x)) fail(fmt::format("{}: '{:.40}' is not a finite number", what, word));
+    return x;
+  }
+
+private:
+  const std::string& path_;
+  std::istream& in_;
+  long long number_ = 0;
+};
+
+// Reads a text OFF file into points and polygons. Returns false, having read nothing, when
+// the file is binary OFF ("OFF BINARY"). The header is the keyword [ST][C][N][4][n]OFF, the
+// dimension after it for nOFF (3 only), and the counts of vertices, faces and edges (on
+// the keyword's line or after it, nothing after them on their line); each count must fit
+// in the file. Then one vertex per line: x y z (x y z w with '4', divided by w), then any
+// normal, colour and texture values, every vertex line giving as many numbers as the
+// first, colours (after the coordinates and any normal) in [0, 255]; then one face per
+// line: a corner count k ≥ 3, k vertex numbers in range, then nothing, a colour index, RGB
+// or RGBA in [0, 255]. Lines after the faces (edges) are not read, but must hold numbers
+// only.
+bool read_off_text(const std::string& path, std::istream& in, std::uintmax_t file_size, std::vector<Point>& points,
+                   std::vector<Polygon>& polygons) {
+  OffLines lines(path, in);
+  std::vector<std::string> words;
+  if (!lines.next(words)) throw_input_error(path, "", "the file has only comments and blank lines: not a readable OFF mesh");
+  const std::string keyword = words[0];
+  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0 ||
+      keyword.substr(0, keyword.size() - 3).find_first_not_of("STCN4n") != std::string::npos)
+    lines.fail(fmt::format("'{:.40}' is not an OFF keyword ([ST][C][N][4][n]OFF): not a readable OFF mesh", keyword));
+  if (words.size() > 1 && words[1] == "BINARY") return false;
+  const std::string prefix = keyword.substr(0, keyword.size() - 3);
+  const bool homogeneous = prefix.find('4') != std::string::npos;
+  const bool dimensional = prefix.find('n') != std::string::npos;
+  const bool coloured = prefix.find('C') != std::string::npos;
+  // The header's numbers: the dimension (nOFF), then the three counts.
+  std::vector<long long> header;
+  std::size_t at = 1;
+  const std::size_t wanted = dimensional ? 4 : 3;
+  while (header.size() < wanted) {
+    if (at == words.size()) {
+      if (!lines.next(words)) lines.fail("the OFF file ends in its header, before the counts of vertices, faces and edges");
+      at = 0;
     }
-    if (values.empty()) continue;
+    const std::string& w = words[at++];
+    std::size_t used = 0;
+    long long value = 0;
+    try {
+      value = std::stoll(w, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != w.size())
+      lines.fail(fmt::format("the OFF header's '{:.40}' is not a whole number (the header gives the counts of "
+                             "vertices, faces and edges)",
+                             w));
+    header.push_back(value);
+  }
+  if (at != words.size())
+    lines.fail(fmt::format("the OFF counts line goes on after its counts ('{:.40}')", words[at]));
+  if (dimensional && header[0] != 3)
+    lines.fail(fmt::format("the nOFF dimension is {}; tvf reads vertices of 3 coordinates", header[0]));
+  const std::size_t first = dimensional ? 1 : 0;
+  const long long nv = header[first], nf = header[first + 1];
+  check_count(path, Format::off, nv, "vertices", file_size);
+  check_count(path, Format::off, nf, "faces", file_size);
+  check_count(path, Format::off, header[first + 2], "edges", file_size);
+
+  const std::size_t coordinates = homogeneous ? 4 : 3;
+  const std::size_t colour_from = coordinates + (prefix.find('N') != std::string::npos ? 3u : 0u);
+  std::size_t expected = 0;
+  points.reserve(static_cast<std::size_t>(nv));
+  for (long long v = 0; v < nv; ++v) {
+    if (!lines.next(words))
+      lines.fail(fmt::format("the OFF file ends before vertex {} of the {} its header announces", v, nv));
+    const std::string what = fmt::format("OFF vertex {}", v);
+    std::vector<double> x;
+    x.reserve(words.size());
+    for (const std::string& w : words) {
+      x.push_back(lines.number_of(w, what));
+      // Colours, after the coordinates and any normal.
+      if (coloured && x.size() > colour_from && !(x.back() >= 0 && x.back() <= 255))
+        lines.fail(fmt::format("{}: the colour value {:.40} is outside [0, 255]", what, w));
+    }
+    if (x.size() < coordinates)
+      lines.fail(fmt::format("{} has {} numbers; a vertex needs at least {}", what, x.size(), coordinates));
+    if (expected == 0) expected = x.size();
+    if (x.size() != expected)
+      lines.fail(fmt::format("{} has {} numbers where vertex 0 has {} (every vertex line of an OFF file gives the "
+                             "same values)",
+                             what, x.size(), expected));
+    const double w = homogeneous ? x[3] : 1.0;
+    if (w == 0) lines.fail(fmt::format("{}: the homogeneous coordinate w is 0", what));
+    points.emplace_back(x[0] / w, x[1] / w, x[2] / w);
+  }
+  polygons.reserve(static_cast<std::size_t>(nf));
+  for (long long f = 0; f < nf; ++f) {
+    if (!lines.next(words))
+      lines.fail(fmt::format("the OFF file ends before face {} of the {} its header announces", f, nf));
+    const std::string what = fmt::format("OFF face {}", f);
+    std::vector<double> values;
+    values.reserve(words.size());
+    for (const std::string& w : words) values.push_back(lines.number_of(w, what));
     const double k = values[0];
     if (!(k >= 0) || k != std::floor(k) || k > static_cast<double>(values.size() - 1))
-      throw_input_error(path, "", fmt::format("OFF face {}: the corner count {} does not match the line", f, k));
-    for (std::size_t c = 1; c <= static_cast<std::size_t>(k); ++c)
-      if (!(values[c] >= 0) || values[c] != std::floor(values[c]) ||
-          values[c] >= static_cast<double>(counts[first]))
-        throw_input_error(path, "", fmt::format("OFF face {}: {} is not a vertex number in 0 to {}", f, values[c],
-                                                counts[first] - 1));
-    // After the corners, a face may give a colour: an index, RGB or RGBA in [0, 255]. Any
-    // other number of values made CGAL's colour reader run past its buffer (found by
-    // fuzzing: "0 2 3", a face of no corners and two colour values).
+      lines.fail(fmt::format("{}: the corner count {} does not match the line", what, k));
+    if (k < 3) lines.fail(fmt::format("{} has {} corners; a face needs at least 3", what, k));
+    Polygon poly;
+    poly.resize(static_cast<std::size_t>(k));
+    for (std::size_t c = 1; c <= static_cast<std::size_t>(k); ++c) {
+      if (!(values[c] >= 0) || values[c] != std::floor(values[c]) || values[c] >= static_cast<double>(nv))
+        lines.fail(fmt::format("{}: {} is not a vertex number in 0 to {}", what, values[c], nv - 1));
+      poly[c - 1] = static_cast<std::size_t>(values[c]);
+    }
+    // After the corners, a face may give a colour: an index, RGB or RGBA in [0, 255].
     const std::size_t extra = values.size() - 1 - static_cast<std::size_t>(k);
-    if (k < 3)
-      throw_input_error(path, "", fmt::format("OFF face {} has {} corners; a face needs at least 3", f, k));
     if (extra != 0 && extra != 1 && extra != 3 && extra != 4)
-      throw_input_error(path, "",
-                        fmt::format("OFF face {}: {} values follow the corners, where a colour has 1, 3 or 4", f,
-                                    extra));
+      lines.fail(fmt::format("{}: {} values follow the corners, where a colour has 1, 3 or 4", what, extra));
     for (std::size_t c = values.size() - extra; c < values.size(); ++c)
       if (!(values[c] >= 0 && values[c] <= 255))
-        throw_input_error(path, "", fmt::format("OFF face {}: the colour value {} is outside [0, 255]", f, values[c]));
-    ++f;
+        lines.fail(fmt::format("{}: the colour value {} is outside [0, 255]", what, values[c]));
+    polygons.push_back(std::move(poly));
   }
+  // What follows the faces is not read (edges, or faces beyond the count, as CGAL reads
+  // it: CGAL's own prim.off announces 7 faces and lists 8), but it must be numbers.
+  while (lines.next(words))
+    for (const std::string& w : words) (void)lines.number_of(w, fmt::format("after the {} faces", nf));
+  return true;
 }
 
 // Bytes of a PLY scalar type, or 0 when the name is not one.
@@ -519,10 +601,15 @@ LoadedMesh load_mesh(const std::string& path) {
         break;
       }
       case Format::off:
-        check_off_header(path, in, file_size);
-        in.clear();
-        in.seekg(0);
-        ok = CGAL::IO::read_OFF(in, points, polygons, np);
+        ok = read_off_text(path, in, file_size, points, polygons);
+        if (!ok) {  // binary OFF: CGAL reads it, its header counts checked first
+          in.clear();
+          in.seekg(0);
+          check_off_header(path, in, file_size);
+          in.clear();
+          in.seekg(0);
+          ok = CGAL::IO::read_OFF(in, points, polygons, np);
+        }
         break;
       case Format::ply: {
         const PlyLayout layout = check_ply_header(path, in, file_size);

@@ -101,9 +101,20 @@ void validate_triangle_soup(const std::vector<Vec3>& positions, const std::vecto
     const Vec3& p = positions[v];
     if (!p.allFinite())
       fail(fmt::format("vertex {} has a non-finite coordinate {}", v, format_point(p)));
+    if (p.cwiseAbs().maxCoeff() > kMaxCoordinate)
+      fail(fmt::format("vertex {} at {} has a coordinate of magnitude above {:g} (larger ones overflow the "
+                       "squared distances and areas tvf computes; scale the mesh down)",
+                       v, format_point(p), kMaxCoordinate));
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
+  // An extent too small for the coordinates' magnitude: the vertices' differences lose all
+  // precision (a mesh a unit wide 1e15 from the origin has vertices 0.125 apart at best).
+  const double magnitude = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+  if ((hi - lo).maxCoeff() < kMinRelativeExtent * magnitude)
+    fail(fmt::format("the mesh spans only {:g} but lies {:g} from the origin: it must span at least {:g} of its "
+                     "largest coordinate, or its vertices lose their precision (move it nearer the origin)",
+                     (hi - lo).maxCoeff(), magnitude, kMinRelativeExtent));
 
   // Faces on their own: indices, repeated vertices, area.
   for (size_t f = 0; f < nf; ++f) {

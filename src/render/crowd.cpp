@@ -21,6 +21,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <queue>
 #include <sstream>
 
@@ -139,6 +140,31 @@ Vec2 CrowdShape::push_out(const Vec2& x, double margin) const {
   if (k == 2) p.y() = min.y() - margin;
   if (k == 3) p.y() = max.y() + margin;
   return p;
+}
+
+bool CrowdShape::crosses(const Vec2& a, const Vec2& b) const {
+  const Vec2 d = b - a;
+  if (kind == Kind::circle) {
+    // The point of the segment nearest the centre.
+    const double len2 = d.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((center - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+    return (a + t * d - center).norm() < radius;
+  }
+  // Liang–Barsky clipping against the open rectangle: the parameters t in [0, 1] where the
+  // segment is strictly inside on both axes form an interval; it crosses when that is not empty.
+  double t0 = 0, t1 = 1;
+  for (int i = 0; i < 2; ++i) {
+    if (d[i] == 0) {
+      if (!(a[i] > min[i] && a[i] < max[i])) return false;
+      continue;
+    }
+    double ta = (min[i] - a[i]) / d[i], tb = (max[i] - a[i]) / d[i];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 >= t1) return false;
+  }
+  return true;
 }
 
 CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
@@ -367,12 +393,13 @@ private:
 
 // Agent–agent separation after a step: pairs of active agents closer than `sep` are
 // pushed apart along the line joining them, half the overlap each (Jacobi iterations of
-// position-based dynamics), each position kept in the box and out of obstacles by
-// `fix` and refused (back to `old`) when the step from `old` to it is not `free` (it would
-// pass through an obstacle). Pairs still too close after the iterations go back to their
-// positions `old`, which kept the distance: so no two active agents are ever closer than sep.
+// position-based dynamics), each move kept in the box and slid along obstacles by `fix`
+// and refused when the whole step from `old` is not `free` (it would pass through an
+// obstacle). Pairs still too close after the iterations go back to their positions `old`
+// (one agent of a pair at a time, the later first), which kept the distance: so no two
+// active agents are ever closer than sep.
 void separate(std::vector<Vec2>& x, const std::vector<Vec2>& old, const std::vector<char>& active, double sep,
-              const std::function<Vec2(const Vec2&)>& fix,
+              const std::function<Vec2(const Vec2& from, const Vec2& to)>& fix,
               const std::function<bool(const Vec2& from, const Vec2& to)>& free) {
   const size_t n = x.size();
   const double tolerance = sep * (1 - 1e-9);
@@ -399,8 +426,12 @@ void separate(std::vector<Vec2>& x, const std::vector<Vec2>& old, const std::vec
     if (!overlap) return;
     for (size_t a = 0; a < n; ++a)
       if (active[a] && correction[a].squaredNorm() > 0) {
-        const Vec2 p = fix(x[a] + correction[a]);
-        x[a] = free(old[a], p) ? p : old[a];  // the whole step from old[a] stays clear of obstacles
+        // The correction slides along obstacles from where the agent is; where the whole
+        // step from old[a] to there would cut an obstacle's corner, it slides from old[a]
+        // instead; a correction still not clear is refused.
+        Vec2 p = fix(x[a], x[a] + correction[a]);
+        if (!free(old[a], p)) p = fix(old[a], p);
+        if (free(old[a], p)) x[a] = p;
       }
   }
   // The guarantee: revert both agents of any pair still too close, until none is.
@@ -414,12 +445,39 @@ void separate(std::vector<Vec2>& x, const std::vector<Vec2>& old, const std::vec
       grid.for_each_near(x[a], sep, [&](int b) {
         const size_t bb = static_cast<size_t>(b);
         if (bb == a || (x[a] - x[bb]).norm() >= tolerance) return;
-        if (x[a] != old[a] || x[bb] != old[bb]) again = true;
-        x[a] = old[a];
-        x[bb] = old[bb];
+        // One of the two goes back, the later one first (old positions kept the distance,
+        // so a pair with both back is apart): reverting both made a dense crowd at a gap
+        // lock into the same state step after step.
+        const size_t later = std::max(a, bb), earlier = std::min(a, bb);
+        const size_t back = x[later] != old[later] ? later : earlier;
+        x[back] = old[back];
+        again = true;
       });
     }
   }
+}
+
+// Where a move from `from` (outside o) to `to` that enters o ends instead: on the face of a
+// rectangle it enters through, `margin` outside, keeping the motion along that face (the
+// agent slides along a wall and round its corner, never across it); a circle's point
+// nearest `to` on its boundary grown by `margin`.
+Vec2 slide(const CrowdShape& o, const Vec2& from, const Vec2& to, double margin) {
+  if (o.kind == CrowdShape::Kind::circle) return o.push_out(to, margin);
+  const Vec2 d = to - from;
+  int axis = -1;
+  double entry = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 2; ++i) {
+    if (d[i] == 0) continue;
+    const double t = std::min((o.min[i] - from[i]) / d[i], (o.max[i] - from[i]) / d[i]);
+    if (t > entry) {
+      entry = t;
+      axis = i;
+    }
+  }
+  if (axis < 0) return o.push_out(to, margin);
+  Vec2 q = to;
+  q[axis] = d[axis] > 0 ? o.min[axis] - margin : o.max[axis] + margin;
+  return q;
 }
 
 // Halton sequence value of index k in base b.
@@ -480,6 +538,23 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
   // terms of the same size, and where the field is weak the goal still draws agents on.
   const double speed = spec.speed > 0 ? spec.speed : fscale > 0 ? 0.25 * fscale : 1.5 * diag / span;
   const Vec2 lo = mesh.bbox_min().head<2>(), hi = mesh.bbox_max().head<2>();
+  auto clear_of_obstacles = [&](const Vec2& from, const Vec2& to) {
+    for (const auto& o : spec.obstacles)
+      if (o.crosses(from, to)) return false;
+    return true;
+  };
+  // A move from `from` to `to`, clamped to the domain and slid along every obstacle it
+  // would enter (`touched` set then); the caller checks that the result is clear.
+  auto move_clear = [&](const Vec2& from, const Vec2& to, bool& touched) {
+    Vec2 q = to.cwiseMax(lo).cwiseMin(hi);
+    for (int pass = 0; pass < 2; ++pass)  // a slide along one obstacle may enter another
+      for (const auto& o : spec.obstacles)
+        if (o.distance(q) <= 0 || o.crosses(from, q)) {
+          q = slide(o, from, q, 1e-9 * diag).cwiseMax(lo).cwiseMin(hi);
+          touched = true;
+        }
+    return q;
+  };
   auto blocked = [&](const Vec2& x) {
     for (const auto& o : spec.obstacles)
       if (o.contains(x)) return true;
@@ -587,53 +662,59 @@ CrowdResult simulate_crowd(const TangentBundle& bundle, const Field& field, cons
         const Vec2 mid = (x[a] + 0.5 * dt * (velocity(x[a], t0) + push)).cwiseMax(lo).cwiseMin(hi);
         Vec2 next = x[a] + dt * (velocity(mid, t0 + 0.5 * dir * dt) + push);
         next = next.cwiseMax(lo).cwiseMin(hi);
-        // The whole step is checked, not only where it ends: a long step (the separation
-        // push adds to it) could otherwise jump a thin wall, or be pushed out on its far
-        // side. It is walked in substeps shorter than half the thinnest obstacle, each
-        // pushed out of an obstacle it enters: a substep cannot reach past an obstacle's
-        // middle, so it is pushed back to the side it came from, and the agent slides along
-        // walls and round corners instead of passing through them.
+        // The whole step is checked as a segment, not only where it ends: a long step (the
+        // separation push adds to it) could otherwise jump a thin wall, and clamping to the
+        // domain could walk it along the edge under a wall that reaches the edge. It is
+        // walked in substeps shorter than half the thinnest obstacle, each slid along the
+        // face of an obstacle it would enter (docs/architecture.md#crowd-obstacles).
         {
           const Vec2 move = next - x[a];
           const int substeps = std::clamp(static_cast<int>(std::ceil(move.norm() / substep)), 1, 4096);
-          Vec2 p = x[a];
+          Vec2 p = x[a], reached = x[a];
           bool touched = false;
-          for (int step = 0; step < substeps; ++step) {
-            const Vec2 before = p;
-            p = (p + move / substeps).cwiseMax(lo).cwiseMin(hi);
-            bool on = false;
+          // One substep from `from` by `d`: clamped to the domain and pushed out of any
+          // obstacle it enters; empty when it ends on an obstacle still (a wall that meets
+          // the domain's edge: the box put it back) or passes through one on the way (an
+          // agent on the domain's edge walking under a wall that meets it, or a push out
+          // of the face nearest a corner).
+          auto substep_to = [&](const Vec2& from, const Vec2& d) -> std::optional<Vec2> {
+            const Vec2 q = move_clear(from, from + d, touched);
             for (const auto& o : spec.obstacles)
-              if (o.distance(p) <= 0) {
-                p = o.push_out(p, 1e-9 * diag).cwiseMax(lo).cwiseMin(hi);
-                touched = true;
-                on = on || o.distance(p) <= 0;
-              }
-            // Still on an obstacle after the push (a wall that meets the domain's edge: the
-            // box put it back): the step ends before it, so no agent walks along the edge
-            // under a wall.
-            if (on) {
-              p = before;
-              break;
-            }
+              if (o.distance(q) <= 0) return std::nullopt;
+            if (!clear_of_obstacles(from, q)) return std::nullopt;
+            return q;
+          };
+          for (int step = 0; step < substeps; ++step) {
+            const Vec2 d = move / substeps;
+            // The pushed substep, and its parts along x and along y (an agent slides along a
+            // wall's face and round its corner that way): the one that gets farthest along d.
+            std::optional<Vec2> q;
+            for (const Vec2& part : {d, Vec2(d.x(), 0), Vec2(0, d.y())})
+              if (const auto c = substep_to(p, part); c && (!q || (*c - p).dot(d) > (*q - p).dot(d))) q = c;
+            if (!q || (*q - p).dot(d) <= 0) break;
+            p = *q;
+            // The step taken is a straight segment from x[a]: it ends at the farthest point
+            // of the walk that segment reaches without crossing an obstacle (a walk that
+            // slid round a corner would otherwise cut it).
+            if (clear_of_obstacles(x[a], p)) reached = p;
           }
-          next = p;
+          next = reached;
           if (touched) ++contacts[a];
         }
         if (!locator.locate(next)) next = x[a];  // a step off a non-rectangular domain is refused
         moved[a] = next;
       });
-      if (avoid) separate(moved, x, active, sep, [&](const Vec2& p) {
-        Vec2 q = p.cwiseMax(lo).cwiseMin(hi);
-        for (const auto& o : spec.obstacles)
-          if (o.contains(q)) q = o.push_out(q, 1e-9 * diag);
-        return q;
-      }, [&](const Vec2&, const Vec2& p) {
-        // A correction moves an agent by at most half the separation: when that is under
-        // half the thinnest obstacle, `fix` pushes it back to the side it came from. One
-        // left on an obstacle's boundary (where a wall meets the domain's edge) is refused.
+      if (avoid) separate(moved, x, active, sep, [&](const Vec2& from, const Vec2& p) {
+        bool touched = false;
+        return move_clear(from, p, touched);
+      }, [&](const Vec2& from, const Vec2& p) {
+        // The agent's whole step of this round, from where it stood (`from`) to where the
+        // separation put it, must stay clear of the obstacles: `fix` clamps to the domain
+        // and pushes out of obstacles, which could otherwise carry it across a wall's end
+        // on the domain's edge. One left on an obstacle's boundary is refused too.
         for (const auto& o : spec.obstacles)
           if (o.distance(p) <= 0) return false;
-        return !blocked(p);
+        return clear_of_obstacles(from, p) && !blocked(p);
       });
       x.swap(moved);
       for (size_t a = 0; a < na; ++a)

@@ -53,14 +53,18 @@ struct PainterlyAnimator::Impl {
       : bundle(b), field(f), image(std::move(img)), mask(std::move(m)), o(opt),
         view(b.mesh(), image.width, image.height), locator(b.mesh()), rng(opt.seed) {}
 
+  // Whether p is on the picture where the mask says the field does not apply.
+  bool masked_at(const Vec2& p) const {
+    if (mask.width == 0 || p.x() < 0 || p.y() < 0 || p.x() >= image.width || p.y() >= image.height) return false;
+    const Vec2 q(p.x() * mask.width / image.width, p.y() * mask.height / image.height);
+    const std::uint32_t c = sample(mask, q);
+    const double lum = 0.299 * ((c >> 16) & 255) + 0.587 * ((c >> 8) & 255) + 0.114 * (c & 255);
+    return lum <= 127.5;
+  }
+
   bool moves_at(const Vec2& p) const {
     if (p.x() < 0 || p.y() < 0 || p.x() >= image.width || p.y() >= image.height) return false;
-    if (mask.width > 0) {
-      const Vec2 q(p.x() * mask.width / image.width, p.y() * mask.height / image.height);
-      const std::uint32_t c = sample(mask, q);
-      const double lum = 0.299 * ((c >> 16) & 255) + 0.587 * ((c >> 8) & 255) + 0.114 * (c & 255);
-      if (lum <= 127.5) return false;
-    }
+    if (masked_at(p)) return false;
     return locator.locate(view.to_domain(p)).has_value();
   }
 
@@ -171,6 +175,23 @@ struct PainterlyAnimator::Impl {
         po.stop_speed = 0;
         const Pathline p = trace_pathline(bundle, field, where[k], po);
         if (p.where.empty()) return;
+        // The whole way is checked against the mask, not only where it ends: a stroke
+        // carried across a band where the field does not apply (thinner than a frame's
+        // travel) stops in it, at the first point of the band (every half pixel of the
+        // pathline is looked at), instead of moving on beyond it.
+        Vec2 prev = s.centre;
+        for (const Vec3& point : p.points) {
+          const Vec2 q = view.to_pixel(point.head<2>());
+          const int n = std::clamp(static_cast<int>(std::ceil((q - prev).norm() / 0.5)), 1, 10000);
+          for (int m = 1; m <= n; ++m) {
+            const Vec2 r = prev + (q - prev) * (static_cast<double>(m) / n);
+            if (masked_at(r)) {
+              s.centre = r;  // no longer moving (moves_at below)
+              return;
+            }
+          }
+          prev = q;
+        }
         where[k] = p.where.back();
         s.centre = view.to_pixel(p.points.back().head<2>());
       });

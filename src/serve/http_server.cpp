@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <fstream>
@@ -15,10 +16,13 @@
 #include <new>
 #include <set>
 #include <sstream>
+#include <string_view>
 #include <thread>
+#include <vector>
 
 #include <dirent.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -261,17 +265,76 @@ thread_local CurrentConnection t_connection;
 
 Clock::time_point after(double seconds);
 
+// Whether the request line and headers arriving on `fd` end within `limit` bytes. The
+// bytes are only looked at (MSG_PEEK), not taken: cpp-httplib reads them afterwards. The
+// Debian build of cpp-httplib (0.11, a shared library, so its CPPHTTPLIB_HEADER_MAX_LENGTH
+// cannot be set here) reads a header line whole, however long, before it checks its
+// length: a 10 MB header line was 10 MB in memory. A connection that closes, or the
+// deadline (request_timeout, when the watchdog cuts the connection; bytes already sent
+// stay readable after that, so the deadline is checked here too), ends the wait:
+// cpp-httplib then reads what there is and finds the connection closed.
+bool head_fits(int fd, std::size_t limit, Clock::time_point deadline) {
+  std::vector<char> buf(limit + 1);
+  ssize_t seen = -1;
+  for (; Clock::now() < deadline;) {
+    const ssize_t n = ::recv(fd, buf.data(), buf.size(), MSG_PEEK | MSG_DONTWAIT);
+    if (n == 0) return true;
+    if (n < 0) {
+      if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) return true;
+      pollfd p{fd, POLLIN, 0};
+      ::poll(&p, 1, 100);
+      continue;
+    }
+    const std::string_view v(buf.data(), static_cast<size_t>(n));
+    if (v.find("\r\n\r\n") != std::string_view::npos || v.find("\n\n") != std::string_view::npos) return true;
+    if (static_cast<size_t>(n) > limit) return false;
+    // Nothing new since the last look: wait for more (poll would say "readable" at once).
+    if (n == seen) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    seen = n;
+  }
+  return true;
+}
+
+// Answers 431 on `fd` and closes it for reading and writing; what the client is still
+// sending is read and dropped for a moment first (up to 4 MiB or 250 ms), so that the
+// answer is not lost to a reset.
+void refuse_head(int fd, std::size_t limit) {
+  const std::string body =
+      json{{"error", fmt::format("the request line and headers are longer than {} KiB", limit >> 10)}}.dump();
+  const std::string answer = fmt::format(
+      "HTTP/1.1 431 Request Header Fields Too Large\r\nContent-Type: application/json\r\nContent-Length: "
+      "{}\r\nConnection: close\r\n\r\n{}",
+      body.size(), body);
+  (void)::send(fd, answer.data(), answer.size(), MSG_NOSIGNAL);
+  ::shutdown(fd, SHUT_WR);
+  const auto end = Clock::now() + std::chrono::milliseconds(250);
+  std::vector<char> sink(64u << 10);
+  for (std::size_t drained = 0; drained < (4u << 20) && Clock::now() < end;) {
+    pollfd p{fd, POLLIN, 0};
+    if (::poll(&p, 1, 50) <= 0) continue;
+    const ssize_t n = ::recv(fd, sink.data(), sink.size(), MSG_DONTWAIT);
+    if (n <= 0) break;
+    drained += static_cast<std::size_t>(n);
+  }
+  ::shutdown(fd, SHUT_RDWR);
+}
+
 // The server's task queue: a pool of `threads` workers, each connection registered with
-// the watchdog while a worker serves it, with request_timeout to send its request.
+// the watchdog while a worker serves it, with request_timeout to send its request and its
+// request line and headers limited to max_head bytes (431 beyond, before cpp-httplib reads them).
 class WatchedPool : public httplib::TaskQueue {
 public:
-  WatchedPool(size_t threads, Connections& connections, int port, double request_timeout)
-      : pool_(threads), connections_(connections), port_(port), request_timeout_(request_timeout) {}
+  WatchedPool(size_t threads, Connections& connections, int port, double request_timeout, std::size_t max_head)
+      : pool_(threads), connections_(connections), port_(port), request_timeout_(request_timeout),
+        max_head_(max_head) {}
   void enqueue(std::function<void()> fn) override {
     const int copy = connections_.adopt(port_);  // the listener accepted it just now
     pool_.enqueue([this, copy, fn = std::move(fn)] {
       t_connection = {&connections_, copy};
-      connections_.arm(copy, after(request_timeout_), true);
+      const Clock::time_point deadline = after(request_timeout_);
+      connections_.arm(copy, deadline, true);
+      if (copy >= 0 && !head_fits(copy, max_head_, deadline + std::chrono::milliseconds(300)))
+        refuse_head(copy, max_head_);
       fn();
       connections_.remove(copy);
       t_connection = {};
@@ -284,6 +347,7 @@ private:
   Connections& connections_;
   int port_;
   double request_timeout_;
+  std::size_t max_head_;
 };
 
 Clock::time_point after(double seconds) {
@@ -490,7 +554,7 @@ struct HttpServer::Impl {
     server.set_write_timeout(microseconds(std::min(5.0, o.answer_timeout)));
     const size_t threads = static_cast<size_t>(std::max(2, o.threads));
     server.new_task_queue = [this, threads] {
-      return new WatchedPool(threads, connections, port, options.request_timeout);
+      return new WatchedPool(threads, connections, port, options.request_timeout, options.max_head);
     };
 
     std::error_code ec;

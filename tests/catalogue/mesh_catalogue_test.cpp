@@ -12,7 +12,10 @@
 //  - On a set of real meshes (closed of genus 0 and 3, with boundary, several components)
 //    every generator gives a finite field with a source and a sink designed at two
 //    vertices, the design check finds both at every frame, and on closed connected meshes
-//    the indices of every frame sum to the Euler characteristic (Poincaré–Hopf).
+//    the indices of every frame sum to the Euler characteristic (Poincaré–Hopf); the
+//    constrained generator's singularities beyond the designed two are printed beside the
+//    smoothest fill's (the cotan connection Laplacian's smallest eigenvector field; issue
+//    14's criterion, within one ±1 pair, is not asserted: the camel has two pairs more).
 //
 // Label `catalogue`. The sanitize build (TVF_SANITIZE_BUILD) runs the generators on the
 // smaller meshes only (cow, elephant, mushroom, blobby_3cc) and checks the operator on
@@ -288,6 +291,39 @@ Scene catalogue_scene(const fs::path& mesh_file, const Mesh& mesh, const std::st
   return parse_scene(text, mesh_file.filename().string() + " scene");
 }
 
+// The smoothest field of the shape, designed by nobody: per connected component, the
+// eigenvector of the cotan connection Laplacian for its smallest eigenvalue, L z = λ M z
+// with M the lumped vertex areas (Knöppel et al. 2013's smoothest direction field for
+// n = 1), by inverse iteration on L + εM. Its singularities are the ones the shape itself
+// asks for (Poincaré–Hopf on closed components, the boundary's turning elsewhere).
+std::vector<cplx> smoothest_fill(const TangentBundle& bundle, const std::vector<int>& component, int components) {
+  const Mesh& mesh = bundle.mesh();
+  const int nv = mesh.num_vertices();
+  Eigen::VectorXd area = Eigen::VectorXd::Zero(nv);
+  for (const Face& f : mesh.faces()) {
+    const Vec3 a = mesh.position(f[0]), b = mesh.position(f[1]), c = mesh.position(f[2]);
+    const double third = (b - a).cross(c - a).norm() / 6;
+    for (int v : f) area[v] += third;
+  }
+  const ConnectionLaplacian l = connection_laplacian(bundle);
+  const double eps = 1e-6 * l.weight_sum.sum() / area.sum();
+  Eigen::SparseMatrix<cplx> shifted = l.matrix;
+  for (int v = 0; v < nv; ++v) shifted.coeffRef(v, v) += eps * area[v];
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<cplx>> ldlt(shifted);
+  EXPECT_EQ(ldlt.info(), Eigen::Success);
+  Eigen::VectorXcd x(nv);
+  for (int v = 0; v < nv; ++v) x[v] = cplx(std::cos(0.7 * v), std::sin(1.3 * v));
+  for (int k = 0; k < 60; ++k) {
+    x = ldlt.solve(area.cast<cplx>().cwiseProduct(x)).eval();
+    // L is block diagonal by components: each block iterates on its own, so each
+    // component is normalised on its own.
+    std::vector<double> norm(static_cast<size_t>(components), 0.0);
+    for (int v = 0; v < nv; ++v) norm[static_cast<size_t>(component[static_cast<size_t>(v)])] += area[v] * std::norm(x[v]);
+    for (int v = 0; v < nv; ++v) x[v] /= std::sqrt(norm[static_cast<size_t>(component[static_cast<size_t>(v)])]);
+  }
+  return {x.data(), x.data() + nv};
+}
+
 struct Entry {
   const char* file;
   bool in_sanitize_subset;
@@ -310,6 +346,7 @@ TEST_P(GeneratorsOnMeshes, FiniteFieldsWithTheDesignFoundAndPoincareHopf) {
   const DesignSpace space(load_mesh(file.string()).mesh);
   const Mesh& mesh = space.mesh();
   int components = 0;
+  std::vector<int> component(static_cast<size_t>(mesh.num_vertices()));
   {
     // Components (for Poincaré–Hopf): χ per frame holds on closed connected meshes.
     std::vector<int> parent(static_cast<size_t>(mesh.num_vertices()));
@@ -320,8 +357,17 @@ TEST_P(GeneratorsOnMeshes, FiniteFieldsWithTheDesignFoundAndPoincareHopf) {
     };
     for (const Face& f : mesh.faces())
       for (int k = 1; k < 3; ++k) parent[static_cast<size_t>(find(f[static_cast<size_t>(k)]))] = find(f[0]);
-    for (int v = 0; v < mesh.num_vertices(); ++v) components += find(v) == v;
+    std::map<int, int> label;
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      const auto [it, added] = label.emplace(find(v), components);
+      components += added;
+      component[static_cast<size_t>(v)] = it->second;
+    }
   }
+  // Issue 14: the extra singularities of the constrained generator (those beyond the
+  // designed source and sink) against what the smoothest fill of the shape has.
+  const std::vector<cplx> smooth = smoothest_fill(space.bundle(), component, components);
+  const int smooth_count = static_cast<int>(find_singularities(space.bundle(), smooth).size());
   const bool ph = mesh.is_closed() && components == 1;
   for (const std::string generator : {"basis", "constrained", "spacetime", "deform"}) {
     SCOPED_TRACE(std::string(entry.file) + ", " + generator);
@@ -331,6 +377,18 @@ TEST_P(GeneratorsOnMeshes, FiniteFieldsWithTheDesignFoundAndPoincareHopf) {
     const Topology topology = analyze_topology(space.bundle(), field);
     const DesignCheck check = check_design(scene, space, field, topology);
     EXPECT_TRUE(check.all_found()) << check.summary();
+    if (generator == "constrained") {
+      for (int j = 0; j < field.frames(); ++j) {
+        const int count = static_cast<int>(topology.singularities[static_cast<size_t>(j)].size());
+        std::cout << fmt::format("{}: constrained frame {}: {} singularities (2 designed, {} extra); the smoothest "
+                                 "fill has {}\n",
+                                 entry.file, j, count, count - 2, smooth_count);
+        // Not asserted: on camel.off the constrained field has 26 extra singularities where
+        // the smoothest fill has 22 (two pairs more; the other seven meshes are within one
+        // pair: man 46/44, cow 22/22, elephant 18/18, bear 6/10, mushroom 2/0, holes 0/0,
+        // blobby_3cc 1/1). Issue 14's criterion does not hold on the camel yet.
+      }
+    }
     if (ph) {
       for (int j = 0; j < field.frames(); ++j) {
         int sum = 0;

@@ -146,6 +146,11 @@ TEST(Grid, RejectsBadBoxes) {
   }
   const double big = std::numeric_limits<double>::max();
   EXPECT_NE(grid_error(GridSpec{3, 3, {-big, 0}, {big, 1}}).find("too large"), std::string::npos);
+  // Issue 17: [-1, 1e200] × [-1, 1] reached the planar transport check (NaN frames) from
+  // the library (the scene reader refuses it first); 1e15 is the limit, as for scenes.
+  const std::string msg = grid_error(GridSpec{3, 3, {-1, -1}, {1e200, 1}});
+  EXPECT_NE(msg.find("magnitude above 1e+15"), std::string::npos) << msg;
+  EXPECT_NO_THROW(make_grid(GridSpec{3, 3, {-1e15, -1e15}, {1e15, 1e15}}));
 }
 
 TEST(Grid, RejectsTooManyVerticesWithoutAllocating) {

@@ -473,6 +473,62 @@ TEST(MeshIo, OffVertexLinesMustAllGiveTheSameNumbers) {
   EXPECT_EQ(load_mesh(coff.string()).mesh.num_faces(), 2);
 }
 
+// Issue 17: text OFF is read by tvf's own strict reader (CGAL's overflowed its buffers
+// twice under fuzzing). Counts are checked against the file, colours follow face corners,
+// comments go anywhere, homogeneous 4OFF is divided by w, and every error names its line.
+TEST(MeshIo, TextOffIsReadStrictlyWithEveryErrorOnItsLine) {
+  TempDir dir;
+  const fs::path off = dir / "m.off";
+  const std::string vertices = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+  // Comments glued to words, on the keyword's line, between vertices; counts on the keyword's line.
+  write_text(off, "OFF 4 2 0 # counts\n# the square\n0 0 0#a\n1 0 0\n\n1 1 0\n0 1 0\n3 0 1 2 255 0 0\n3 0 2 3 7\n");
+  LoadedMesh m = load_mesh(off.string());
+  EXPECT_EQ(m.mesh.num_vertices(), 4);
+  ASSERT_EQ(m.mesh.num_faces(), 2);
+  EXPECT_EQ(m.mesh.position(2), Vec3(1, 1, 0));
+  // Homogeneous coordinates: (2 2 0 2) is (1 1 0).
+  write_text(off, "4OFF\n4 2 0\n0 0 0 1\n2 0 0 2\n2 2 0 2\n0 3 0 3\n3 0 1 2\n3 0 2 3\n");
+  m = load_mesh(off.string());
+  EXPECT_EQ(m.mesh.position(2), Vec3(1, 1, 0));
+  EXPECT_EQ(m.mesh.position(3), Vec3(0, 1, 0));
+  // Counts against the file: fewer vertex or face lines than announced.
+  write_text(off, "OFF\n5 2 0\n" + vertices + "3 0 1 2\n3 0 2 3\n");
+  expect_error(off, "line 7: OFF vertex 4 has 4 numbers where vertex 0 has 3");  // a face line read as vertex 4
+  write_text(off, "OFF\n4 3 0\n" + vertices + "3 0 1 2\n3 0 2 3\n");
+  expect_error(off, "line 8: the OFF file ends before face 2 of the 3 its header announces");
+  write_text(off, "OFF\n4 2\n");
+  expect_error(off, "line 2: the OFF file ends in its header");
+  // Colours after the corners: 1, 3 or 4 values in [0, 255].
+  write_text(off, "OFF\n4 2 0\n" + vertices + "3 0 1 2 1 2\n3 0 2 3\n");
+  expect_error(off, "line 7: OFF face 0: 2 values follow the corners, where a colour has 1, 3 or 4");
+  write_text(off, "OFF\n4 2 0\n" + vertices + "3 0 1 2\n3 0 2 3 0 0 300\n");
+  expect_error(off, "line 8: OFF face 1: the colour value 300 is outside [0, 255]");
+  // Faces: at least 3 corners, numbers in range, whole numbers.
+  write_text(off, "OFF\n4 2 0\n" + vertices + "2 0 1\n3 0 2 3\n");
+  expect_error(off, "line 7: OFF face 0 has 2 corners; a face needs at least 3");
+  write_text(off, "OFF\n4 2 0\n" + vertices + "3 0 1 2\n3 0 2 4\n");
+  expect_error(off, "line 8: OFF face 1: 4 is not a vertex number in 0 to 3");
+  write_text(off, "OFF\n4 2 0\n" + vertices + "3 0 1 2.5\n3 0 2 3\n");
+  expect_error(off, "line 7: OFF face 0: 2.5 is not a vertex number");
+  // Vertices: numbers, finite, as many on every line; w = 0 refused.
+  write_text(off, "OFF\n4 2 0\n0 0 0\n1 nan 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n");
+  expect_error(off, "line 4: OFF vertex 1: 'nan' is not a finite number");
+  write_text(off, "4OFF\n4 2 0\n0 0 0 1\n1 0 0 0\n1 1 0 1\n0 1 0 1\n3 0 1 2\n3 0 2 3\n");
+  expect_error(off, "line 4: OFF vertex 1: the homogeneous coordinate w is 0");
+  // The header: keyword, counts, dimension.
+  write_text(off, "OFFX\n4 2 0\n" + vertices + "3 0 1 2\n3 0 2 3\n");
+  expect_error(off, "line 1: 'OFFX' is not an OFF keyword");
+  write_text(off, "OFF\n4 two 0\n" + vertices + "3 0 1 2\n3 0 2 3\n");
+  expect_error(off, "line 2: the OFF header's 'two' is not a whole number");
+  write_text(off, "nOFF\n4 4 2 0\n" + vertices + "3 0 1 2\n3 0 2 3\n");
+  expect_error(off, "line 2: the nOFF dimension is 4; tvf reads vertices of 3 coordinates");
+  // After the faces: numbers only (not read).
+  write_text(off, "OFF\n4 2 0\n" + vertices + "3 0 1 2\n3 0 2 3\n0 1\n3 1 2 3\n");
+  EXPECT_EQ(load_mesh(off.string()).mesh.num_faces(), 2);
+  write_text(off, "OFF\n4 2 0\n" + vertices + "3 0 1 2\n3 0 2 3\nend\n");
+  expect_error(off, "line 9: after the 2 faces: 'end' is not a number");
+}
+
 TEST(MeshIo, TruncatedFilesNeverCrash) {
   // Every prefix of a saved mesh: OBJ and OFF may happen to stop at a valid mesh, binary
   // PLY never does (its data has fixed sizes); all others are tvf::Errors naming the file.

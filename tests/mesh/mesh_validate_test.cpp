@@ -63,6 +63,26 @@ TEST(MeshValidate, RejectsNonFiniteCoordinatesNamingTheVertex) {
   }
 }
 
+// Issue 17: coordinates of 1e200 passed validation and stopped at the planar transport
+// check (their squared distances overflow): refused above 1e15, naming the vertex; and a
+// mesh far smaller than its distance from the origin (no precision left between vertices).
+TEST(MeshValidate, RejectsCoordinatesTooLargeOrWithoutPrecisionNamingTheVertex) {
+  for (double big : {1e200, -1e16, 1.0000001e15}) {
+    auto p = square_points();
+    p[2].x() = big;
+    expect_message(validation_error(p, square_faces()), {"vertex 2 ", "magnitude above 1e+15"});
+  }
+  auto p = square_points();
+  for (Vec3& q : p) q = 1e14 * Vec3(1, 1, 0) + q;  // one unit wide, 1e14 away: 1e-14 relative
+  expect_message(validation_error(p, square_faces()), {"spans only 1 ", "from the origin"});
+  p = square_points();
+  for (Vec3& q : p) q = 1e15 * q;  // at the limit, spanning all of it: accepted
+  EXPECT_NO_THROW(validate_triangle_soup(p, square_faces(), "bunny.obj"));
+  p = square_points();
+  for (Vec3& q : p) q = Vec3(1e5, 0, 0) + q;  // 1e-5 relative: still precise enough
+  EXPECT_NO_THROW(validate_triangle_soup(p, square_faces(), "bunny.obj"));
+}
+
 TEST(MeshValidate, RejectsIndicesOutOfRange) {
   auto f = square_faces();
   f[1][2] = 7;
@@ -92,12 +112,11 @@ TEST(MeshValidate, RejectsZeroAreaFaces) {
   auto tiny = square_points();
   for (Vec3& x : tiny) x *= 1e-6;
   EXPECT_NO_THROW(validate_triangle_soup(tiny, square_faces(), "tiny"));
-  // And huge coordinates do not overflow it.
-  for (double scale : {1e150, 1e200}) {
-    auto huge = square_points();
-    for (Vec3& x : huge) x *= scale;
-    EXPECT_NO_THROW(validate_triangle_soup(huge, square_faces(), "huge")) << scale;
-  }
+  // And coordinates at the limit (1e15) do not overflow it; beyond it they are refused
+  // before (RejectsCoordinatesTooLargeOrWithoutPrecisionNamingTheVertex).
+  auto huge = square_points();
+  for (Vec3& x : huge) x *= 1e15;
+  EXPECT_NO_THROW(validate_triangle_soup(huge, square_faces(), "huge"));
 }
 
 TEST(MeshValidate, RejectsUnreferencedVertices) {

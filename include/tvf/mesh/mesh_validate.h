@@ -25,6 +25,14 @@ struct MeshRepairReport {
   bool changed() const { return duplicate_faces_removed + unreferenced_vertices_removed > 0; }
 };
 
+// The largest coordinate magnitude a mesh (or a grid's box) may have, the scene's own limit
+// for numbers: squared distances, areas and the products of the solvers stay finite (1e200
+// squared overflows; the tangent frames of such a mesh were NaN). A mesh must also span at
+// least kMinRelativeExtent of its largest coordinate, so that its vertices stay distinct
+// in double precision.
+inline constexpr double kMaxCoordinate = 1e15;
+inline constexpr double kMinRelativeExtent = 1e-9;
+
 // Throws tvf::Error on the first problem found. Requires no repairs to be pending
 // (unreferenced vertices are an error here).
 void validate_triangle_soup(const std::vector<Vec3>& positions, const std::vector<Face>& faces,

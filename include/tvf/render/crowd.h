@@ -40,6 +40,9 @@ struct CrowdShape {
   bool contains(const Vec2& x) const { return distance(x) < 0; }
   // The point closest to x on the boundary grown by `margin`.
   Vec2 push_out(const Vec2& x, double margin) const;
+  // Whether the segment from a to b passes through the inside (touching or sliding along
+  // the boundary does not count): the whole of an agent's step is checked with it.
+  bool crosses(const Vec2& a, const Vec2& b) const;
 };
 
 struct CrowdSpec {

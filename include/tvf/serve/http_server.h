@@ -30,6 +30,7 @@ struct ServerOptions {
   int port = 8080;                       // 0: any free port (see HttpServer::port())
   std::filesystem::path web_root;        // the built front end; empty or missing: a note page
   std::size_t max_body = 64u << 20;      // bytes, after decoding (uploaded meshes are the large requests)
+  std::size_t max_head = 32u << 10;      // bytes of the request line and headers together (more: 431)
   double request_timeout = 10;           // seconds to send a request (headers and body)
   double answer_timeout = 60;            // seconds for a client to take an answer
   int threads = 32;                      // requests served at once
