@@ -6,6 +6,7 @@
 #include <httplib.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
@@ -378,12 +379,39 @@ std::string read_body(const httplib::ContentReader& reader, httplib::Response& r
   return body;
 }
 
+// Whether the client of `fd` has closed its end (or the connection broke): looked at
+// without waiting and without taking any byte.
+bool peer_gone(int fd) {
+  if (fd < 0) return false;
+  pollfd p{fd, POLLIN | POLLRDHUP, 0};
+  if (::poll(&p, 1, 0) <= 0) return false;
+  if (p.revents & (POLLRDHUP | POLLHUP | POLLERR)) return true;
+  char c = 0;
+  return ::recv(fd, &c, 1, MSG_PEEK | MSG_DONTWAIT) == 0;
+}
+
+// One GET /api/events stream: counts itself among the open streams while it lives (the
+// content provider owns it, and cpp-httplib drops the provider when the answer ends).
+struct EventStream {
+  explicit EventStream(std::atomic<int>& open) : open_(open) {}
+  ~EventStream() { open_.fetch_sub(1); }
+  EventStream(const EventStream&) = delete;
+  EventStream& operator=(const EventStream&) = delete;
+  long long seen = 0;  // Session::wait_change's count when the last event was sent
+  Clock::time_point end, heartbeat;
+  bool started = false;
+
+private:
+  std::atomic<int>& open_;
+};
+
 }  // namespace
 
 struct HttpServer::Impl {
   Session& session;
   ServerOptions options;
   Connections connections;
+  std::atomic<int> streams{0};  // GET /api/events answers being streamed
   httplib::Server server;
   int port = 0;
   std::thread thread;
@@ -452,6 +480,52 @@ struct HttpServer::Impl {
                   with_etag(res, s.redo(if_match(req)));
                 }));
     server.Get("/api/status", wrap([&s](const auto&, auto& res) { send_json(res, s.status()); }));
+    // Server-sent events: `event: status` with the JSON of /api/status, sent at once and
+    // whenever the revision, the generation state or the result changes; a comment line
+    // as a heartbeat. The provider waits at most a second at a time, so that a stopping
+    // server (Session::interrupt ends the wait at once), a client gone away (peer_gone)
+    // or the stream's end (stream_seconds) frees the worker within a second.
+    server.Get("/api/events", wrap([this, &s](const auto&, auto& res) {
+                 if (streams.fetch_add(1) >= options.max_streams) {
+                   streams.fetch_sub(1);
+                   throw RequestError(503, fmt::format("too many event streams open (the limit is {}): poll "
+                                                       "GET /api/status instead",
+                                                       options.max_streams));
+                 }
+                 auto stream = std::make_shared<EventStream>(streams);
+                 const ServerOptions& o = options;
+                 res.set_header("Cache-Control", "no-store");
+                 res.set_chunked_content_provider("text/event-stream", [stream, &s, &o](size_t, httplib::DataSink& sink) {
+                   EventStream& e = *stream;
+                   const auto send = [&sink](const std::string& text) {
+                     return sink.write(text.data(), text.size());
+                   };
+                   if (!e.started) {
+                     // The watchdog's deadline for the answer does not apply: the stream
+                     // ends by itself; each write is bounded by the socket's write timeout.
+                     if (t_connection.connections) t_connection.connections->disarm(t_connection.copy);
+                     e.started = true;
+                     e.end = after(o.stream_seconds);
+                     e.heartbeat = after(o.heartbeat_seconds);
+                     if (!send("retry: 1000\n\n")) return false;
+                   }
+                   const long long now = s.wait_change(e.seen, 1.0);
+                   if (now < 0 || Clock::now() >= e.end || peer_gone(t_connection.copy)) {
+                     sink.done();
+                     return true;
+                   }
+                   if (now != e.seen) {
+                     e.seen = now;
+                     e.heartbeat = after(o.heartbeat_seconds);
+                     return send(fmt::format("event: status\ndata: {}\n\n", s.status().dump()));
+                   }
+                   if (Clock::now() >= e.heartbeat) {
+                     e.heartbeat = after(o.heartbeat_seconds);
+                     return send(": heartbeat\n\n");
+                   }
+                   return true;
+                 });
+               }));
     server.Get("/api/mesh", wrap([&s](const auto&, auto& res) { send_json(res, s.mesh()); }));
     server.Get(R"(/api/frame/(-?\d{1,9}))", wrap([&s](const auto& req, auto& res) {
                  send_json(res, s.frame(std::stoi(req.matches[1].str())));

@@ -150,6 +150,13 @@ struct Session::State {
   std::thread worker;
 
   bool interrupted = false;  // interrupt(): waits end at once
+  // Counts the changes of status() that GET /api/events pushes: the revision, the
+  // generation state, the field's readiness (Session::wait_change).
+  long long changes = 1;
+  void touch() {
+    ++changes;
+    changed.notify_all();
+  }
   std::mutex render_mutex;  // one video at a time
 
   fs::path scene_path() const { return dir / options.scene; }
@@ -192,6 +199,7 @@ struct Session::State {
     scene = std::move(next);
     ++revision;
     if (schedule_solve) schedule();
+    touch();
   }
 
   void schedule() {
@@ -202,6 +210,7 @@ struct Session::State {
     done = 0;
     total = scene.time.frames;
     work.notify_one();
+    touch();
   }
 
   void run_worker() {
@@ -241,7 +250,7 @@ struct Session::State {
         state = "failed";
         error = failure;
       }
-      changed.notify_all();
+      touch();
     }
   }
 
@@ -470,7 +479,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   s_->result = std::move(made);
   s_->state = "ready";
   s_->error.clear();
-  s_->changed.notify_all();
+  s_->touch();
   return {{"revision", s_->revision}, {"summary", report.summary}};
 }
 
@@ -510,6 +519,13 @@ json Session::status() const {
     j["seconds"] = s_->result->seconds;
   }
   return j;
+}
+
+long long Session::wait_change(long long seen, double seconds) const {
+  std::unique_lock lock(s_->mutex);
+  s_->changed.wait_for(lock, std::chrono::duration<double>(seconds),
+                       [&] { return s_->changes != seen || s_->interrupted; });
+  return s_->interrupted ? -1 : s_->changes;
 }
 
 bool Session::wait_idle(double seconds) const {

@@ -9,6 +9,9 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <condition_variable>
+#include <mutex>
+#include <atomic>
 #include <chrono>
 #include <fstream>
 #include <future>
@@ -429,6 +432,113 @@ TEST(ServeHttp, StopIsPromptWhileRequestsWaitForAField) {
   ASSERT_EQ(waiting.wait_for(std::chrono::seconds(5)), std::future_status::ready);
   const int st = waiting.get();
   EXPECT_EQ(st, 503);  // answered, not cut
+}
+
+// The `event: status` payloads of a server-sent event stream, in the order they arrive.
+struct EventLog {
+  std::mutex mutex;
+  std::condition_variable arrived;
+  std::string text;
+  std::vector<json> events;
+  bool ended = false;
+  void add(const char* data, size_t n) {
+    std::lock_guard lock(mutex);
+    text.append(data, n);
+    for (size_t end; (end = text.find("\n\n")) != std::string::npos; text.erase(0, end + 2)) {
+      const std::string block = text.substr(0, end);
+      if (block.rfind("event: status\ndata: ", 0) == 0) events.push_back(json::parse(block.substr(20)));
+    }
+    arrived.notify_all();
+  }
+  // Waits until an event satisfies `want`; returns it (null after `seconds`).
+  json wait_for(const std::function<bool(const json&)>& want, double seconds) {
+    std::unique_lock lock(mutex);
+    json found;
+    arrived.wait_for(lock, std::chrono::duration<double>(seconds), [&] {
+      for (const json& e : events)
+        if (want(e)) return found = e, true;
+      return ended;
+    });
+    return found;
+  }
+};
+
+TEST(ServeHttp, EventStreamPushesTheNewRevisionAndItsReadiness) {
+  Fixture f;
+  ASSERT_TRUE(f.session->wait_idle(60));
+  EventLog log;
+  std::atomic<bool> quit{false};
+  int stream_status = 0;
+  std::string type;
+  std::thread reader([&] {
+    httplib::Client c("127.0.0.1", f.server->port());
+    auto r = c.Get(
+        "/api/events",
+        [&](const httplib::Response& res) {
+          stream_status = res.status;
+          type = res.get_header_value("Content-Type");
+          return true;
+        },
+        [&](const char* data, size_t n) {
+          log.add(data, n);
+          return !quit.load();
+        });
+    std::lock_guard lock(log.mutex);
+    log.ended = true;
+    log.arrived.notify_all();
+  });
+  // First the status as it is: revision 1, ready, its field.
+  const json first = log.wait_for([](const json&) { return true; }, 20);
+  ASSERT_TRUE(first.is_object());
+  EXPECT_EQ(stream_status, 200);
+  EXPECT_EQ(type, "text/event-stream");
+  EXPECT_EQ(first["revision"], 1);
+  EXPECT_EQ(first["state"], "ready");
+  EXPECT_EQ(first["result_revision"], 1);
+
+  json scene = body(f.client->Get("/api/scene"), 200);
+  scene["scene"]["falloff"] = 15;
+  auto put = f.client->Put("/api/scene", httplib::Headers{{"If-Match", "\"1\""}}, scene["scene"].dump(),
+                           "application/json");
+  ASSERT_TRUE(put);
+  ASSERT_EQ(put->status, 200) << put->body;
+  // Pushed without asking: the new revision, then its field ready.
+  const json changed = log.wait_for([](const json& e) { return e["revision"] == 2; }, 20);
+  ASSERT_TRUE(changed.is_object());
+  const json ready = log.wait_for(
+      [](const json& e) { return e["revision"] == 2 && e["state"] == "ready" && e["result_revision"] == 2; }, 60);
+  ASSERT_TRUE(ready.is_object()) << "no ready event for revision 2";
+  EXPECT_EQ(ready, body(f.client->Get("/api/status"), 200));
+  quit = true;
+  // The reader stops at the next event or heartbeat; a scene change makes one now.
+  (void)f.client->Post("/api/undo", "{}", "application/json");
+  reader.join();
+}
+
+TEST(ServeHttp, EventStreamsAreLimitedAndStopEndsThemPromptly) {
+  Fixture f({}, 64u << 20, [](SessionOptions&, ServerOptions& o) { o.max_streams = 2; });
+  std::vector<std::thread> readers;
+  std::atomic<int> opened{0};
+  for (int k = 0; k < 2; ++k)
+    readers.emplace_back([&] {
+      httplib::Client c("127.0.0.1", f.server->port());
+      c.set_read_timeout(60, 0);
+      (void)c.Get("/api/events", [&](const char*, size_t) {
+        opened.fetch_add(1);
+        return true;
+      });
+    });
+  for (int k = 0; k < 200 && opened.load() < 2; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_GE(opened.load(), 2);
+  // A third stream is refused with a sentence; plain requests are still answered.
+  const json refused = body(f.client->Get("/api/events"), 503);
+  EXPECT_NE(refused["error"].get<std::string>().find("the limit is 2"), std::string::npos) << refused;
+  EXPECT_EQ(body(f.client->Get("/api/status"), 200)["revision"], 1);
+  const auto start = std::chrono::steady_clock::now();
+  f.server->stop();
+  for (auto& t : readers) t.join();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 5.0);  // not the 300 s a stream may last
 }
 
 }  // namespace

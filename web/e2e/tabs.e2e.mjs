@@ -22,6 +22,9 @@ try {
   const A = new Designer(pageA, server.url);
   await A.settled();
   await A.change(() => pageA.click("#new"));
+  // Tab B runs on the polling fallback (its event stream refused, as behind a proxy that
+  // cuts streams), so that its polling can be held back below; tab A uses the stream.
+  await pageB.route("**/api/events", (route) => route.abort());
   await pageB.goto(server.url);
   const B = new Designer(pageB, server.url);
   await B.settled();

@@ -1,11 +1,12 @@
 // The tvf designer: the page that `tvf serve` serves. Every change is a new scene (or an
 // edit entry) sent to the server, which validates it, saves it, and re-solves in the
-// background; the page polls the status and shows the newest finished field. Changes go
+// background; the server pushes its status (server-sent events; the page polls where the
+// stream is unavailable) and the page shows the newest finished field. Changes go
 // one at a time, each naming the revision it was made on (changes.ts): a quick burst of
 // clicks builds on itself, and a change refused because another tab changed the scene is
 // applied again on top of that change (or, when it cannot be, reported).
 import "./style.css";
-import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneState } from "./api";
+import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneState, type Status } from "./api";
 import { locateJsonPath } from "./error_place";
 import { ChangeQueue } from "./changes";
 import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
@@ -225,28 +226,75 @@ async function edit(entry: unknown) {
   }
 }
 
-async function poll() {
-  try {
-    const st = await api.status();
-    const label = $("status");
-    label.dataset.state = st.state;
-    if (st.state === "running") label.textContent = `rev ${st.revision} · solving ${st.progress[0]}/${st.progress[1]}…`;
-    else if (st.state === "failed") label.textContent = `rev ${st.revision} · failed: ${st.error}`;
-    else label.textContent = `rev ${st.revision} · ready in ${(st.seconds ?? 0).toFixed(2)} s`;
-    // Another tab or client changed the scene: show it (not while changes of ours are
-    // under way or an element is dragged).
-    if (state.scene && st.revision !== state.scene.revision && !queue.busy && !state.drag) {
-      const fresh = await api.scene();
-      if (!queue.busy && !state.drag && fresh.revision !== state.scene.revision) {
-        showScene(fresh);
-        say(`${otherClient(fresh.revision)}: the page shows it`);
-      }
+// The server's status, as pushed by GET /api/events (or polled): shown one at a time, the
+// newest waiting while one is being shown (loading a result takes a few requests).
+async function showStatus(st: Status) {
+  const label = $("status");
+  label.dataset.state = st.state;
+  lastState = st.state;
+  if (st.state === "running") label.textContent = `rev ${st.revision} · solving ${st.progress[0]}/${st.progress[1]}…`;
+  else if (st.state === "failed") label.textContent = `rev ${st.revision} · failed: ${st.error}`;
+  else label.textContent = `rev ${st.revision} · ready in ${(st.seconds ?? 0).toFixed(2)} s`;
+  // Another tab or client changed the scene: show it (not while changes of ours are
+  // under way or an element is dragged).
+  if (state.scene && st.revision !== state.scene.revision && !queue.busy && !state.drag) {
+    const fresh = await api.scene();
+    if (!queue.busy && !state.drag && fresh.revision !== state.scene.revision) {
+      showScene(fresh);
+      say(`${otherClient(fresh.revision)}: the page shows it`);
     }
-    if (st.result_revision !== state.resultRevision && st.result_revision > 0) await loadResult(st.result_revision);
+  }
+  if (st.result_revision !== state.resultRevision && st.result_revision > 0) await loadResult(st.result_revision);
+}
+
+let nextStatus: Status | null = null;
+let showing = false;
+let lastState: Status["state"] | "" = "";
+async function applyStatus(st: Status) {
+  nextStatus = st;
+  if (showing) return;
+  showing = true;
+  try {
+    while (nextStatus) {
+      const s = nextStatus;
+      nextStatus = null;
+      await showStatus(s);
+    }
   } catch (e) {
     $("status").textContent = `server unreachable (${(e as Error).message})`;
+  } finally {
+    showing = false;
   }
-  setTimeout(poll, state.playing ? 400 : 200);
+}
+
+// Results are pushed (server-sent events, GET /api/events): a change is shown as soon as
+// its field is ready. Where the stream is unavailable (an old browser, the server's limit
+// of streams, a proxy) the page polls /api/status instead, and retries the stream later.
+let stream: EventSource | null = null;
+function listen() {
+  if (typeof EventSource === "undefined") return;
+  const es = new EventSource("/api/events");
+  es.addEventListener("status", (ev) => void applyStatus(JSON.parse((ev as MessageEvent<string>).data) as Status));
+  es.onerror = () => {
+    if (es.readyState === EventSource.CLOSED) {
+      stream = null;
+      setTimeout(listen, 10000);
+    }
+  };
+  stream = es;
+}
+const streaming = () => stream !== null && stream.readyState === EventSource.OPEN;
+
+// The fallback, and the solve's progress (not pushed: only its state is).
+async function poll() {
+  if (!streaming() || lastState === "running") {
+    try {
+      await applyStatus(await api.status());
+    } catch (e) {
+      $("status").textContent = `server unreachable (${(e as Error).message})`;
+    }
+  }
+  setTimeout(poll, streaming() ? 500 : state.playing ? 400 : 200);
 }
 
 async function loadResult(revision: number) {
@@ -929,5 +977,6 @@ ticker.start();
   } catch (e) {
     say((e as Error).message, true);
   }
+  listen();
   void poll();
 })();

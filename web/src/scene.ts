@@ -99,17 +99,19 @@ export function frameOf(scene: Scene, t: number): number {
   return Math.min(n - 1, Math.max(0, Math.round(((t - t0) / (t1 - t0)) * (n - 1))));
 }
 
-// An empty design on the paper's 65×65 grid over [−1, 1]², 100 frames. The constrained
-// generator keeps every element at its place with its type (paper §5.3), which is what a
-// designer placing elements by hand expects; the basis sum lets wide elements shift
-// each other.
+// An empty design on the paper's 65×65 grid over [−1, 1]², 100 frames, with the
+// spatio-temporal generator (paper §6.1): it keeps every element at its place with its
+// type, as the constrained generator does, and it is temporally coherent by
+// construction (one solve over space and time: no frame-to-frame flips) and faster (the
+// designer answers a change in about 0.5 s against 2 s; docs/benchmarks.md). The basis
+// sum is faster still but lets wide elements shift each other.
 export function emptyScene(): Scene {
   return {
     tvf: 1,
     description: "designed in the browser (tvf serve)",
     domain: { grid: { size: [65, 65], min: [-1, -1], max: [1, 1] } },
     time: { frames: 100, range: [0, 1] },
-    generator: "constrained",
+    generator: "spacetime",
     falloff: 8,
     elements: [],
     keyframes: [],

@@ -34,6 +34,12 @@ struct ServerOptions {
   double request_timeout = 10;           // seconds to send a request (headers and body)
   double answer_timeout = 60;            // seconds for a client to take an answer
   int threads = 32;                      // requests served at once
+  // GET /api/events: status pushed as server-sent events. At most max_streams at once
+  // (503 beyond, so streams never take the whole pool), each ended after stream_seconds
+  // (the browser's EventSource reconnects), with a comment line every heartbeat_seconds.
+  int max_streams = 8;
+  double stream_seconds = 300;
+  double heartbeat_seconds = 15;
 };
 
 class HttpServer {

@@ -105,6 +105,11 @@ public:
   //  "progress": [done, total], "error", "cancelled" (solves stopped by newer changes so
   //  far), "warnings", "method", "seconds"}
   nlohmann::json status() const;
+  // The number of changes of status() so far that a client may be told of: a new
+  // revision, the generation state (running, ready, failed) or a new result. It waits up
+  // to `seconds` while that number is still `seen` (0 never is: it returns at once), then
+  // returns it; −1 once interrupt() was called (the server is stopping). GET /api/events.
+  long long wait_change(long long seen, double seconds) const;
   // Waits until the current revision has a result or failed; false on timeout.
   bool wait_idle(double seconds) const;
 
