@@ -12,13 +12,19 @@
 #include "tvf/field/world_vectors.h"
 #include "tvf/integrate/pathline.h"
 #include "tvf/integrate/streamline.h"
+#include "tvf/mesh/mesh.h"
+#include "tvf/render/texture_animation.h"
 
 #include <pybind11/complex.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <atomic>
+#include <climits>
+#include <map>
+#include <set>
 #include <chrono>
 #include <condition_variable>
 #include <exception>
@@ -128,6 +134,79 @@ Scene scene_of(const py::object& scene) {
     return load_scene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>());
   if (py::isinstance<py::dict>(scene)) return scene_from_json(to_json(scene), "scene");
   throw py::type_error("a scene is a dict (the scene JSON) or the path of a scene file");
+}
+
+// ---- domains from numpy ----
+// What names a mesh given as arrays in messages and in the scene's domain ({"mesh": ...}).
+const char* const kArrayMesh = "vertices/faces";
+
+// A scene dict for a mesh given as arrays: a copy with {"mesh": "vertices/faces"} as its
+// domain, so that its points are read as on a mesh ([x, y, z, t]); Design(Scene, Mesh)
+// sets that domain on a scene read from a file too.
+py::object with_array_domain(const py::object& scene) {
+  if (!py::isinstance<py::dict>(scene)) return scene;
+  py::dict d = py::dict(scene);
+  py::dict domain;
+  domain["mesh"] = kArrayMesh;
+  d["domain"] = domain;
+  return d;
+}
+
+// The Mesh of (vertices, faces) arrays: V (|V|, 3) floats, F (|F|, 3) integers, checked
+// by the Mesh constructor as a mesh file is (mesh_validate.h: the same sentences, naming
+// "vertices/faces").
+Mesh mesh_of(const py::object& vertices, const py::object& faces) {
+  if (vertices.is_none() || faces.is_none())
+    throw py::value_error(std::string(kArrayMesh) + ": give both vertices (|V| x 3) and faces (|F| x 3)");
+  auto np = py::module_::import("numpy");
+  py::array v = np.attr("asarray")(vertices);
+  py::array f = np.attr("asarray")(faces);
+  auto shape_text = [](const py::array& a) { return py::str(py::tuple(a.attr("shape"))).cast<std::string>(); };
+  if (v.ndim() != 2 || v.shape(1) != 3)
+    throw py::value_error(std::string(kArrayMesh) + ": vertices must be a |V| x 3 array, not of shape " + shape_text(v));
+  if (f.ndim() != 2 || f.shape(1) != 3)
+    throw py::value_error(std::string(kArrayMesh) + ": faces must be a |F| x 3 array, not of shape " + shape_text(f));
+  const char kind = v.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u')
+    throw py::value_error(std::string(kArrayMesh) + ": vertices must be numbers (float64), not dtype " +
+                          py::str(v.dtype()).cast<std::string>());
+  if (f.dtype().kind() != 'i' && f.dtype().kind() != 'u')
+    throw py::value_error(std::string(kArrayMesh) + ": faces must be integers (vertex indices), not dtype " +
+                          py::str(f.dtype()).cast<std::string>());
+  auto vd = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(v);
+  auto fd = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(f);
+  const auto nv = static_cast<size_t>(vd.shape(0));
+  const auto nf = static_cast<size_t>(fd.shape(0));
+  std::vector<Vec3> positions(nv);
+  for (size_t i = 0; i < nv; ++i)
+    for (int k = 0; k < 3; ++k) positions[i][k] = vd.at(static_cast<py::ssize_t>(i), k);
+  std::vector<Face> tris(nf);
+  for (size_t i = 0; i < nf; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const std::int64_t x = fd.at(static_cast<py::ssize_t>(i), k);
+      // Indices beyond int are out of range too: the validation's own sentence.
+      if (x < 0 || x >= static_cast<std::int64_t>(nv))
+        throw_input_error(kArrayMesh, "",
+                          "face " + std::to_string(i) + " uses vertex " + std::to_string(x) +
+                              ", but the vertices are numbered 0 to " + std::to_string(static_cast<long long>(nv) - 1));
+      tris[i][static_cast<size_t>(k)] = static_cast<int>(x);
+    }
+  py::gil_scoped_release release;  // validation and connectivity of a large mesh take a while
+  return Mesh(std::move(positions), std::move(tris), kArrayMesh);
+}
+
+// ---- pictures ----
+// An RGB24 picture as an H x W x 3 uint8 array.
+py::array_t<std::uint8_t> rgb_array(const Image& img) {
+  py::array_t<std::uint8_t> a({static_cast<py::ssize_t>(img.height), static_cast<py::ssize_t>(img.width), py::ssize_t{3}});
+  std::uint8_t* out = a.mutable_data();
+  for (size_t q = 0; q < img.pixels.size(); ++q) {
+    const std::uint32_t p = img.pixels[q];
+    out[3 * q] = static_cast<std::uint8_t>((p >> 16) & 0xFF);
+    out[3 * q + 1] = static_cast<std::uint8_t>((p >> 8) & 0xFF);
+    out[3 * q + 2] = static_cast<std::uint8_t>(p & 0xFF);
+  }
+  return a;
 }
 
 py::dict report_dict(const GenerateReport& r) {
@@ -365,7 +444,17 @@ end of the time range; earlier integrates backwards). Returns {"points": (K, 3),
 
   m.def(
       "generate",
-      [](const py::object& scene, const py::object& progress, const py::object& cancel, bool parallel) {
+      [](const py::object& scene, const py::object& vertices, const py::object& faces, const py::object& progress,
+         const py::object& cancel, bool parallel) {
+        if (!vertices.is_none() || !faces.is_none()) {
+          // A mesh from arrays: a Design on it (the library's one path for a given mesh).
+          DesignOptions dopt;
+          dopt.parallel = parallel;
+          Mesh mesh = mesh_of(vertices, faces);
+          PyDesign d(Design(scene_of(with_array_domain(scene)), std::move(mesh), dopt));
+          run_interruptible(progress, cancel, [&](GenerateOptions& o) { d.design.generate(o); });
+          return d.field();
+        }
         const Scene s = scene_of(scene);
         auto out = std::make_shared<PyField>();
         run_interruptible(progress, cancel, [&](GenerateOptions& o) {
@@ -377,9 +466,16 @@ end of the time range; earlier integrates backwards). Returns {"points": (K, 3),
         });
         return out;
       },
-      py::arg("scene"), py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
-      py::arg("parallel") = true,
+      py::arg("scene"), py::kw_only(), py::arg("vertices") = py::none(), py::arg("faces") = py::none(),
+      py::arg("progress") = py::none(), py::arg("cancel") = py::none(), py::arg("parallel") = true,
       R"(Generates the field of a scene (a dict of the scene JSON, or a scene file's path).
+
+vertices (|V|, 3) float64 and faces (|F|, 3) int: the domain as arrays instead of the
+scene's own (which they replace; a dict may leave out "domain"; points are [x, y, z, t]
+as on any mesh, a planar one too). They are checked
+as a mesh file is, with the same sentences naming "vertices/faces" (out-of-range
+indices, NaN coordinates, degenerate faces, non-manifold edges and vertices, unused
+vertices, flipped orientation); nothing is repaired, so field.vertices are yours.
 
 progress(done, total) is called as frames complete; `cancel` is any object with
 is_set() (threading.Event): once set, the solve stops and tvf.Cancelled is raised.
@@ -417,21 +513,125 @@ line's sentence ("scene: elements[0].type: ...").)");
       py::arg("field"), py::arg("dir"), "Field.export_ply as a function: DIR/velocity_NNNN.ply per frame.");
   m.attr("vdb_available") = vdb_export_available();
 
+  m.def(
+      "render_texture",
+      [](const PyField& f, int size, const py::object& frames, const std::optional<std::string>& frames_dir,
+         const std::optional<std::string>& video, int pictures, double alpha, int lic, double noise_scale,
+         const std::string& speed, double pixels_per_frame, double contrast, std::uint64_t seed,
+         const std::vector<std::string>& overlay, const std::optional<std::vector<double>>& view,
+         const std::optional<std::vector<double>>& up, double fps, const py::object& progress) -> py::object {
+        TextureAnimationOptions o;
+        o.texture.size = size;
+        o.texture.alpha = alpha;
+        o.texture.lic = lic;
+        o.texture.noise_scale = noise_scale;
+        o.texture.pixels_per_frame = pixels_per_frame;
+        o.texture.contrast = contrast;
+        o.texture.seed = seed;
+        if (speed == "physical")
+          o.texture.speed = TextureSpeed::physical;
+        else if (speed != "uniform")
+          throw py::value_error("render_texture: speed is \"uniform\" or \"physical\", not \"" + speed + "\"");
+        for (const auto& what : overlay) {
+          if (what != "singularities" && what != "paths" && what != "streamlines" && what != "orbits")
+            throw py::value_error("render_texture: overlay \"" + what +
+                                  "\" is not one of singularities, paths, streamlines, orbits");
+          o.overlay_singularities |= what == "singularities";
+          o.overlay_paths |= what == "paths";
+          o.overlay_streamlines |= what == "streamlines";
+          o.overlay_orbits |= what == "orbits";
+        }
+        if (view) o.surface.direction = vec3_of(*view, "view");
+        if (up) o.surface.up = vec3_of(*up, "up");
+        o.frames = pictures;
+        o.fps = fps;
+        o.frames_dir = frames_dir.value_or("");
+        o.video = video.value_or("");
+        // Which pictures come back: one (an int), several (a sequence) or all (None). The
+        // animation runs from the first asked for to the last (the texture is advected
+        // frame by frame), files holding every picture of that range.
+        const int total = pictures > 0 ? pictures : f.field->frames();
+        std::vector<int> wanted;
+        const bool single = py::isinstance<py::int_>(frames);
+        if (frames.is_none()) {
+          for (int k = 0; k < total; ++k) wanted.push_back(k);
+        } else if (single) {
+          wanted.push_back(frames.cast<int>());
+        } else {
+          wanted = frames.cast<std::vector<int>>();
+          if (wanted.empty()) throw py::value_error("render_texture: frames is empty (give picture numbers, or None for all)");
+        }
+        o.first = INT_MAX;
+        o.last = -1;
+        for (int k : wanted) {
+          if (k < 0 || k >= total)
+            throw py::value_error("render_texture: frame " + std::to_string(k) + " is outside [0, " +
+                                  std::to_string(total - 1) + "] (the animation has " + std::to_string(total) +
+                                  " pictures)");
+          o.first = std::min(o.first, k);
+          o.last = std::max(o.last, k);
+        }
+        const std::set<int> keep(wanted.begin(), wanted.end());
+        std::map<int, Image> made;  // filled in order by the one thread that hands pictures on
+        o.on_picture = [&](int k, const Image& img) {
+          if (keep.count(k)) made.emplace(k, img);
+        };
+        run_interruptible(progress, py::none(), [&](GenerateOptions& g) {
+          o.progress = g.progress;
+          write_texture_animation(f.bundle(), *f.field, o);
+        });
+        if (single) return rgb_array(made.at(wanted.front()));
+        py::list out;
+        for (int k : wanted) out.append(rgb_array(made.at(k)));
+        return out;
+      },
+      py::arg("field"), py::arg("size") = 512, py::arg("frames") = py::none(), py::kw_only(),
+      py::arg("frames_dir") = py::none(), py::arg("video") = py::none(), py::arg("pictures") = 0,
+      py::arg("alpha") = 0.1, py::arg("lic") = -1, py::arg("noise_scale") = 0.0, py::arg("speed") = "uniform",
+      py::arg("pixels_per_frame") = 0.0, py::arg("contrast") = 1.0, py::arg("seed") = 1,
+      py::arg("overlay") = std::vector<std::string>{}, py::arg("view") = py::none(), py::arg("up") = py::none(),
+      py::arg("fps") = 25.0, py::arg("progress") = py::none(),
+      R"(The texture animation of a field (`tvf render texture`: LIC over advected noise on
+planar grids, the image-space texture on surfaces) as pictures in memory.
+
+frames: a picture number (returns one (H, W, 3) uint8 array), a sequence of them
+(returns a list of such arrays, in that order) or None (every picture). Pictures are
+numbered 0 .. pictures-1 over the field's time range (pictures 0: one per field frame);
+the texture is warmed up at the first picture asked for and advected from there to the
+last (as `tvf render texture --range A:B`): picture k is the same whichever later
+pictures are asked for with it, and the same as frame_k.png of a run from that first.
+frames_dir / video: also write every picture of that range as PNG frames
+(frame_NNNNN.png, the folder appears complete or not at all) or as an MP4.
+size: pixels on the long side (surfaces: the square picture's side). alpha, lic,
+noise_scale, speed ("uniform" | "physical"), pixels_per_frame, contrast, seed: as
+`tvf render texture`'s options; overlay: any of "singularities", "paths",
+"streamlines", "orbits" (planar only); view, up: the camera on surfaces (from the
+mesh's centre towards the eye; up in the picture). progress(done, total) as pictures
+are made. Bad options raise ValueError naming the option.)");
+
   py::class_<PyDesign>(m, "Design", R"(A design you change step by step: the scene, its domain, the solver
 set-up kept between solves (so re-solves after small changes start warm), the field
 and its analysis, with undo and redo (tvf/api/design.h).
 
 Design(scene): a dict, a scene file, or a folder written by `tvf generate` (its field is
-read, not regenerated).)")
-      .def(py::init([](const py::object& scene, bool parallel) {
+read, not regenerated); Design(scene, vertices=V, faces=F): on a mesh given as arrays.)")
+      .def(py::init([](const py::object& scene, const py::object& vertices, const py::object& faces, bool parallel) {
              DesignOptions o;
              o.parallel = parallel;
+             if (!vertices.is_none() || !faces.is_none()) {
+               Mesh mesh = mesh_of(vertices, faces);
+               return PyDesign(Design(scene_of(with_array_domain(scene)), std::move(mesh), o));
+             }
              if (py::isinstance<py::dict>(scene)) return PyDesign(Design(scene_of(scene), o));
              if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__"))
                return PyDesign(Design::open(py::str(py::module_::import("os").attr("fspath")(scene)), o));
              throw py::type_error("a scene is a dict (the scene JSON) or a path");
            }),
-           py::arg("scene"), py::kw_only(), py::arg("parallel") = true)
+           py::arg("scene"), py::kw_only(), py::arg("vertices") = py::none(), py::arg("faces") = py::none(),
+           py::arg("parallel") = true,
+           R"(Design(scene, *, vertices=None, faces=None, parallel=True). vertices/faces: the domain
+as arrays, as in tvf.generate (the scene's domain becomes {"mesh": "vertices/faces"}, and
+every later scene with that domain lives on these arrays).)")
       .def_property(
           "scene", [](const PyDesign& d) { return to_python(scene_to_json(d.design.scene())); },
           [](PyDesign& d, const py::dict& scene) { d.design.set_scene(to_json(scene), "scene"); },

@@ -11,7 +11,8 @@ print(len(lines), "streamlines;", "pathline of", len(path["points"]), "points, s
 try:
     import matplotlib.pyplot as plt
 except ImportError:
-    raise SystemExit("(install python3-matplotlib to see them)")
+    print("(install python3-matplotlib to see them)")
+    raise SystemExit(0)
 for s in lines:
     plt.plot(s["points"][:, 0], s["points"][:, 1], "k-", lw=0.8)
 plt.plot(path["points"][:, 0], path["points"][:, 1], "r-", lw=2)

@@ -1,12 +1,16 @@
 # Type stub of the tvf module (python/tvf_module.cpp). Shapes: N frames, V vertices, F faces.
 import os
-from typing import Any, Callable, Optional, Protocol, Sequence, Union
+from typing import Any, Callable, Literal, Optional, Protocol, Sequence, Union, overload
 
 import numpy as np
 import numpy.typing as npt
 
 JSON = Any
 SceneLike = Union[dict, str, os.PathLike]
+# Vertices (V, 3) float64 and faces (F, 3) integer indices, or anything np.asarray makes so.
+VertexArray = Union[npt.NDArray[np.floating], Sequence[Sequence[float]]]
+FaceArray = Union[npt.NDArray[np.integer], Sequence[Sequence[int]]]
+Image = npt.NDArray[np.uint8]  # (H, W, 3) RGB
 
 class _Event(Protocol):
     def is_set(self) -> bool: ...
@@ -45,15 +49,33 @@ class Field:
     def export_vdb(self, dir: str) -> list[str]: ...
     def export_ply(self, dir: str) -> list[str]: ...
 
-def generate(scene: SceneLike, *, progress: Optional[Progress] = None, cancel: Optional[_Event] = None,
+def generate(scene: SceneLike, *, vertices: Optional[VertexArray] = None, faces: Optional[FaceArray] = None,
+             progress: Optional[Progress] = None, cancel: Optional[_Event] = None,
              parallel: bool = True) -> Field: ...
 def analyze(field: Field) -> JSON: ...
 def load(path: str) -> Field: ...
 def export_vdb(field: Field, dir: str) -> list[str]: ...
 def export_ply(field: Field, dir: str) -> list[str]: ...
+@overload
+def render_texture(field: Field, size: int = 512, frames: int = ..., *, frames_dir: Optional[str] = None,
+                   video: Optional[str] = None, pictures: int = 0, alpha: float = 0.1, lic: int = -1,
+                   noise_scale: float = 0.0, speed: Literal["uniform", "physical"] = "uniform",
+                   pixels_per_frame: float = 0.0, contrast: float = 1.0, seed: int = 1,
+                   overlay: Sequence[str] = (), view: Optional[Sequence[float]] = None,
+                   up: Optional[Sequence[float]] = None, fps: float = 25.0,
+                   progress: Optional[Progress] = None) -> Image: ...
+@overload
+def render_texture(field: Field, size: int = 512, frames: Optional[Sequence[int]] = None, *,
+                   frames_dir: Optional[str] = None, video: Optional[str] = None, pictures: int = 0,
+                   alpha: float = 0.1, lic: int = -1, noise_scale: float = 0.0,
+                   speed: Literal["uniform", "physical"] = "uniform", pixels_per_frame: float = 0.0,
+                   contrast: float = 1.0, seed: int = 1, overlay: Sequence[str] = (),
+                   view: Optional[Sequence[float]] = None, up: Optional[Sequence[float]] = None,
+                   fps: float = 25.0, progress: Optional[Progress] = None) -> list[Image]: ...
 
 class Design:
-    def __init__(self, scene: SceneLike, *, parallel: bool = True) -> None: ...
+    def __init__(self, scene: SceneLike, *, vertices: Optional[VertexArray] = None,
+                 faces: Optional[FaceArray] = None, parallel: bool = True) -> None: ...
     scene: dict
     @property
     def field(self) -> Field: ...

@@ -43,6 +43,9 @@ struct Design::State {
   std::string label;  // names the input in messages when there is no scene
   std::shared_ptr<const DesignSpace> space;
   std::string space_key;
+  // A mesh given in code (Design(Scene, Mesh)) and the domain key of the scenes on it.
+  std::shared_ptr<const DesignSpace> given_space;
+  std::string given_key;
   std::unique_ptr<GenerateCache> cache = std::make_unique<GenerateCache>();
   std::shared_ptr<DesignResult> result;  // of *scene, or null
   std::shared_ptr<DesignResult> last;    // the last result made (field() after a change)
@@ -83,7 +86,7 @@ struct Design::State {
     const Scene& s = need_scene();
     const std::string key = domain_key(s);
     if (!space || key != space_key) {
-      space = make_design_space(s);
+      space = given_space && key == given_key ? given_space : std::shared_ptr<const DesignSpace>(make_design_space(s));
       space_key = key;
     }
     return space;
@@ -151,6 +154,19 @@ Design::Design(std::unique_ptr<State> state) : s_(std::move(state)) {}
 Design::Design(Scene scene, DesignOptions options) : s_(std::make_unique<State>()) {
   s_->options = options;
   s_->label = scene.label();
+  s_->scene = std::move(scene);
+}
+
+Design::Design(Scene scene, Mesh mesh, DesignOptions options) : s_(std::make_unique<State>()) {
+  s_->options = options;
+  s_->label = scene.label();
+  check_field_memory(scene, mesh.num_vertices());
+  scene.domain = Domain{};
+  scene.domain.mesh = mesh.source();
+  s_->given_key = domain_key(scene);
+  s_->given_space = std::make_shared<DesignSpace>(std::move(mesh));
+  s_->space = s_->given_space;
+  s_->space_key = s_->given_key;
   s_->scene = std::move(scene);
 }
 

@@ -56,9 +56,10 @@ void StagedFolder::commit() {
   }
 
 
-FrameOutput::FrameOutput(const std::string& frames_dir, const std::string& video, int width, int height, double fps)
-    : frames_dir_(frames_dir), video_(video), width_(width), height_(height) {
-  if (frames_dir.empty() && video.empty())
+FrameOutput::FrameOutput(const std::string& frames_dir, const std::string& video, int width, int height, double fps,
+                         Sink sink)
+    : frames_dir_(frames_dir), video_(video), width_(width), height_(height), sink_(std::move(sink)) {
+  if (frames_dir.empty() && video.empty() && !sink_)
     throw Error("give a folder for the PNG frames or an MP4 file to write");
   if (!(std::isfinite(fps) && fps > 0 && fps <= 1000))
     throw Error(fmt::format("fps {} is outside (0, 1000]", fps));
@@ -78,6 +79,7 @@ void FrameOutput::add(const Image& frame) {
     throw Error(fmt::format("frame of {}×{} pixels given to an output of {}×{}", frame.width, frame.height, width_, height_));
   if (folder_) write_png((folder_->stage() / fmt::format("frame_{:05d}.png", count_)).string(), frame);
   if (writer_) writer_->add(frame);
+  if (sink_) sink_(count_, frame);
   ++count_;
 }
 
@@ -112,6 +114,7 @@ void FrameOutput::add_in_order(int first, int last, const std::function<Image(in
                                        }) &
           tbb::make_filter<Item, void>(tbb::filter_mode::serial_in_order, [&](Item item) {
             if (writer_) writer_->add(*item.image);
+            if (sink_) sink_(item.k, *item.image);
             ++count_;
             if (done) done(++written);
           }));

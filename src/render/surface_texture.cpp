@@ -743,7 +743,7 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
   const bool overlays = options.overlay_streamlines || options.overlay_paths || options.overlay_singularities;
   Topology topology;
   if (options.overlay_paths) topology = analyze_topology(bundle, field);
-  FrameOutput out(options.frames_dir, options.video, ro.width, ro.height, options.fps);
+  FrameOutput out(options.frames_dir, options.video, ro.width, ro.height, options.fps, options.on_picture);
 
   const TimeSampling& ts = field.time();
   auto time_of = [&](int k) { return total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0; };

@@ -506,7 +506,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
                                                const TextureAnimationOptions& options) {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
-  if (options.frames_dir.empty() && options.video.empty())
+  if (options.frames_dir.empty() && options.video.empty() && !options.on_picture)
     throw Error("texture animation: give a folder for the PNG frames or an MP4 file to write");
   const int total = options.frames > 0 ? options.frames : field.frames();
   check_option(total >= 1 && total <= 1'000'000, "frames", fmt::format("{} is outside [1, 1000000]", total));
@@ -525,7 +525,8 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
   if (options.overlay_paths || options.overlay_orbits) topology = analyze_topology(bundle, field);
   PeriodicOrbits orbits;
   if (options.overlay_orbits) orbits = find_periodic_orbits(bundle, field, topology);
-  FrameOutput out(options.frames_dir, options.video, animator.width(), animator.height(), options.fps);
+  FrameOutput out(options.frames_dir, options.video, animator.width(), animator.height(), options.fps,
+                  options.on_picture);
 
   const TimeSampling& ts = field.time();
   auto time_of = [&](int k) { return total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0; };

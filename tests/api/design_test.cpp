@@ -54,6 +54,34 @@ TEST(Design, GeneratesWhatThePipelineGenerates) {
   EXPECT_EQ(analysis_json_of(*space, by_hand), expected);
 }
 
+TEST(Design, LivesOnAMeshGivenInCodeWhileTheSceneKeepsItsDomain) {
+  const Scene grid_scene = scene_of(small_scene());
+  const auto grid = make_design_space(grid_scene);
+  // The grid's own vertices and faces, given as a mesh made in code.
+  Design design(grid_scene, Mesh(grid->mesh().positions(), grid->mesh().faces(), "arrays"));
+  EXPECT_EQ(design.scene().domain.mesh, "arrays");
+  EXPECT_FALSE(design.scene().domain.grid.has_value());
+  const DesignSpace* given = &design.space();
+  EXPECT_TRUE(given->planar());
+  // The same vertices and faces: the same field, bit for bit.
+  EXPECT_TRUE(bitwise_equal(design.generate(), generate(*grid, grid_scene)));
+  // A change that keeps the domain keeps the mesh; so does undo after a change of domain.
+  nlohmann::json moved = scene_to_json(design.scene());
+  moved["elements"][1]["path"] = json::parse("[[0.2, 0.5, 0, 0]]");
+  design.set_scene(moved);
+  EXPECT_EQ(&design.space(), given);
+  nlohmann::json other = small_scene();
+  other["domain"]["grid"]["size"] = json::parse("[9, 9]");
+  design.set_scene(other);
+  EXPECT_EQ(design.space().mesh().num_vertices(), 81);
+  design.undo();
+  EXPECT_EQ(&design.space(), given);
+  // A mesh that would not fit in memory is refused before anything is built.
+  Scene huge = grid_scene;
+  huge.time.frames = 100000000;
+  EXPECT_THROW(Design(huge, Mesh(grid->mesh().positions(), grid->mesh().faces(), "arrays")), Error);
+}
+
 TEST(Design, KeepsTheFieldUntilTheSceneChangesAndUndoBringsItBack) {
   Design design(scene_of(small_scene()));
   const Field* first = &design.generate();

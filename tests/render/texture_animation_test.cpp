@@ -230,6 +230,51 @@ TEST(TextureAnimation, SendsSurfacesElsewhereAndRefusesBadOptions) {
   EXPECT_NE(test::error_of([&] { TextureAnimator(bundle, field, o); }).find("contrast"), std::string::npos);
 }
 
+TEST(TextureAnimation, HandsPicturesOnWithoutFilesAndAsTheFilesHoldThem) {
+  const Mesh grid = make_grid(GridSpec{9, 9, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = sample(grid, TimeSampling{0, 1, 6}, [](cplx x, double) { return cplx(0, 1) * x; });
+  TextureAnimationOptions o;
+  o.texture.size = 40;
+  o.first = 2;
+  o.last = 4;
+  std::vector<int> order;
+  std::vector<Image> pictures;
+  o.on_picture = [&](int k, const Image& img) {
+    order.push_back(k);
+    pictures.push_back(img);
+  };
+  // Without frames_dir or video: pictures only.
+  const auto r = write_texture_animation(bundle, field, o);
+  EXPECT_EQ(r.frames, 3);
+  EXPECT_TRUE(r.files.empty());
+  ASSERT_EQ(order, (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(pictures[0].width, 40);
+  EXPECT_EQ(pictures[0].height, 40);
+  // The PNG frames of the same run hold the same pixels.
+  test::TempDir dir;
+  o.frames_dir = (dir / "frames").string();
+  const std::vector<Image> without_files = pictures;
+  order.clear();
+  pictures.clear();
+  write_texture_animation(bundle, field, o);
+  ASSERT_EQ(order, (std::vector<int>{2, 3, 4}));
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(pictures[static_cast<size_t>(i)].pixels, without_files[static_cast<size_t>(i)].pixels);
+    const Image png = read_png((dir / "frames" / fmt::format("frame_{:05d}.png", i + 2)).string());
+    ASSERT_EQ(png.pixels.size(), pictures[static_cast<size_t>(i)].pixels.size());
+    size_t differ = 0;  // RGB compared (the unused top byte aside)
+    for (size_t q = 0; q < png.pixels.size(); ++q)
+      differ += (png.pixels[q] & 0xFFFFFFu) != (pictures[static_cast<size_t>(i)].pixels[q] & 0xFFFFFFu);
+    EXPECT_EQ(differ, 0u);
+  }
+  // Neither files nor pictures asked for: refused as before.
+  o.frames_dir.clear();
+  o.on_picture = {};
+  EXPECT_NE(test::error_of([&] { write_texture_animation(bundle, field, o); }).find("give a folder"),
+            std::string::npos);
+}
+
 TEST(TextureAnimation, WritesEveryFrameOrNothing) {
   const Mesh grid = make_grid(GridSpec{9, 9, {-1, -1}, {1, 1}});
   const TangentBundle bundle(grid);

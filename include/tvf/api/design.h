@@ -54,6 +54,13 @@ class Design {
 public:
   // A scene built in code or read by scene_json.h. Nothing is built yet.
   explicit Design(Scene scene, DesignOptions options = {});
+  // A scene on a mesh made in code (vertices and faces from a script: the Python module's
+  // vertices=/faces=). The Mesh constructor has checked it as a mesh file is checked
+  // (mesh_validate.h; nothing repaired). The scene's domain becomes {"mesh":
+  // mesh.source()}, and every scene of this design with that domain (set_scene, undo)
+  // lives on this mesh; a scene with another domain builds its own. Throws tvf::Error
+  // when the field would not fit in memory (check_field_memory).
+  Design(Scene scene, Mesh mesh, DesignOptions options = {});
   // A scene file, or a folder written by `tvf generate` (or its field.tvff). A folder's
   // field is read, not regenerated, and its scene (DIR/scene.json, else the copy inside
   // the field file) becomes the design's scene; a field file without any scene gives a

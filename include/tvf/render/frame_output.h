@@ -33,8 +33,13 @@ private:
 // PNG frames and/or MP4, frames given in order. Nothing appears unless finish() is called.
 class FrameOutput {
 public:
-  // frames_dir or video may be empty (not both). Throws tvf::Error naming the output.
-  FrameOutput(const std::string& frames_dir, const std::string& video, int width, int height, double fps);
+  // A frame as it is handed on in order: its number (k of add_in_order; 0, 1, … for add)
+  // and the picture (e.g. kept in memory by the Python module's render_texture).
+  using Sink = std::function<void(int k, const Image& frame)>;
+  // frames_dir or video may be empty (not both, unless a sink takes the frames). Throws
+  // tvf::Error naming the output.
+  FrameOutput(const std::string& frames_dir, const std::string& video, int width, int height, double fps,
+              Sink sink = {});
   void add(const Image& frame);
   // Frames first … last: make(k) runs in order (one at a time, on whichever thread the
   // pipeline picks), the PNGs (frame_<k>.png) are encoded in parallel while the next
@@ -50,6 +55,7 @@ private:
   int width_, height_;
   std::unique_ptr<StagedFolder> folder_;
   std::unique_ptr<VideoWriter> writer_;
+  Sink sink_;
   int count_ = 0;
 };
 

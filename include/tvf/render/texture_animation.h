@@ -170,6 +170,10 @@ struct TextureAnimationOptions {
   std::vector<Vec3> streakline_seeds;
   std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
   std::string video;              // MP4 file (empty: none)
+  // Every picture also handed here, in order (k, the picture), from whichever thread
+  // makes it: pictures without files (the Python module's render_texture). With it set,
+  // frames_dir and video may both be empty.
+  std::function<void(int k, const Image& picture)> on_picture;
   SurfaceView surface;            // surfaces only (render/surface_texture.h): the camera, samples
   int streamline_seeds = 150;     // surfaces only: streamlines of the overlay
   double fps = 25.0;
