@@ -700,7 +700,7 @@ Returns {"summary", "key_frames", "window", "region_faces", "iterations", "resid
       .def_property_readonly("can_redo", [](const PyDesign& d) { return d.design.can_redo(); })
       .def(
           "save", [](const PyDesign& d, const std::optional<std::string>& path) { d.design.save(path.value_or("")); },
-          py::arg("path") = py::none(), "Writes the scene file (atomically); default: the file it was read from.")
+          py::arg("path") = py::none(), "Writes the scene file (atomically); default: the file it was read from. A mesh given as\narrays is written beside it (NAME.mesh.off) and the saved scene names that file.")
       .def(
           "write_outputs",
           [](PyDesign& d, const std::string& dir, bool vtk) {

@@ -5,12 +5,14 @@
 #include "tvf/core/error.h"
 #include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
+#include "tvf/mesh/mesh_io.h"
 #include "tvf/solve/hodge_projection.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <deque>
+#include <filesystem>
 #include <utility>
 
 namespace fs = std::filesystem;
@@ -254,6 +256,18 @@ void Design::save(const std::string& path) const {
   const Scene& s = s_->need_scene();
   const std::string target = path.empty() ? s.source_path : path;
   if (target.empty()) throw Error("scene: built in code, so it has no file to save to: give a path");
+  if (s_->given_space && domain_key(s) == s_->given_key) {
+    // A mesh given as arrays has no file the scene could name: it is written beside the
+    // scene (NAME.mesh.off, every double exactly) and the saved scene names it, so that
+    // the file loads again on its own.
+    const std::filesystem::path scene_path(target);
+    const std::string mesh_name = scene_path.stem().string() + ".mesh.off";
+    save_mesh(s_->given_space->mesh(), (scene_path.parent_path() / mesh_name).string());
+    Scene copy = s;
+    copy.domain.mesh = mesh_name;
+    save_scene(copy, target);
+    return;
+  }
   save_scene(s, target);
 }
 

@@ -176,7 +176,7 @@ def test_planar_grid_from_arrays_is_planar_and_radial():
     assert np.all(w[:, 2] == 0)
 
 
-def test_design_on_arrays_keeps_the_mesh_through_scene_changes_and_undo():
+def test_design_on_arrays_keeps_the_mesh_through_scene_changes_and_undo(tmp_path):
     v, f = icosphere(1)
     d = tvf.Design(SPHERE_SCENE, vertices=v, faces=f)
     assert d.scene["domain"] == {"mesh": "vertices/faces"}
@@ -188,6 +188,13 @@ def test_design_on_arrays_keeps_the_mesh_through_scene_changes_and_undo():
     assert not np.array_equal(d.field.vectors, first)
     d.undo()
     assert np.array_equal(d.generate().vectors, first)
+    # Saved, the scene names a mesh file written beside it, and loads again on its own.
+    path = tmp_path / "on_arrays.json"
+    d.save(str(path))
+    assert json.loads(path.read_text())["domain"] == {"mesh": "on_arrays.mesh.off"}
+    again = tvf.generate(str(path))
+    assert np.array_equal(again.vertices, v) and np.array_equal(again.faces, f)
+    assert np.array_equal(again.vectors, first)
     # A scene dict with its own domain: the arrays replace it.
     assert tvf.Design({**SPHERE_SCENE, "domain": {"grid": {"size": [5, 5]}}}, vertices=v,
                       faces=f).generate().vectors.shape == (3, 42, 3)

@@ -82,7 +82,8 @@ public:
   // JSON path). Mesh paths resolve against the current scene's file.
   void set_scene(const nlohmann::json& scene, const std::string& label = "scene");
   // Writes the scene (atomically, scene_json.h's save_scene) to `path`, or to the file it
-  // was read from when `path` is empty.
+  // was read from when `path` is empty. A mesh given to the constructor (as arrays) is
+  // written beside it as NAME.mesh.off, which the saved scene's domain names.
   void save(const std::string& path = "") const;
 
   // The domain of the scene, built on first use (make_design_space).
