@@ -393,7 +393,9 @@ TEST(ServeHttp, AHugeHeaderLineIsRefusedQuicklyWithBoundedMemory) {
   EXPECT_LT(sent, 10'000'000) << "the server took the whole 10 MB line";
   const long long after = peak_resident();
   if (before > 0 && after > 0) {
-    EXPECT_LT(after - before, 4LL << 20) << "peak resident set grew by " << after - before;
+    // Under 8 MiB, below the 10 MB line (reading it whole grew the peak by 17 MB): the
+    // sanitizers' allocator adds ~4.5 MiB of its own to the few buffers the refusal needs.
+    EXPECT_LT(after - before, 8LL << 20) << "peak resident set grew by " << after - before;
   }
   // Still up, and ordinary headers still pass.
   EXPECT_EQ(body(f.client->Get("/api/status"), 200)["state"], "ready");
