@@ -44,19 +44,7 @@ std::uint32_t to_rgb(const std::array<double, 3>& c) {
 }
 
 void check_surface_options(TextureOptions& o, const SurfaceView& view) {
-  check_option(o.size >= 16 && o.size <= 8192, "size", fmt::format("{} pixels is outside [16, 8192]", o.size));
-  check_option(o.alpha > 0 && o.alpha <= 1, "alpha", fmt::format("{} is outside (0, 1]", o.alpha));
-  check_option(std::isfinite(o.noise_scale) && o.noise_scale >= 0 && o.noise_scale <= o.size / 4.0, "noise_scale",
-               fmt::format("{} pixels is outside [0, size/4]", o.noise_scale));
-  check_option(o.noise_period >= 2 && o.noise_period <= 100000, "noise_period",
-               fmt::format("{} frames is outside [2, 100000]", o.noise_period));
-  check_option(std::isfinite(o.pixels_per_frame) && o.pixels_per_frame >= 0 && o.pixels_per_frame <= o.size,
-               "pixels_per_frame", fmt::format("{} is outside [0, size]", o.pixels_per_frame));
-  check_option(o.lic >= -1 && o.lic <= 1000, "lic", fmt::format("{} pixels is outside [0, 1000] (or -1: automatic)", o.lic));
-  if (o.lic < 0) o.lic = std::max(1, static_cast<int>(std::lround(o.size / 64.0)));
-  check_option(o.warmup >= 0 && o.warmup <= 100000, "warmup", fmt::format("{} is outside [0, 100000]", o.warmup));
-  check_option(std::isfinite(o.contrast) && o.contrast > 0 && o.contrast <= 100, "contrast",
-               fmt::format("{} is outside (0, 100]", o.contrast));
+  check_texture_options(o, 8192);
   check_option(std::isfinite(view.spacing) && view.spacing >= 0.25 && view.spacing <= 100, "spacing",
                fmt::format("{} pixels is outside [0.25, 100]", view.spacing));
   check_option(view.max_samples >= 3 && view.max_samples <= 100'000'000, "max_samples",

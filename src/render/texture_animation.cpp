@@ -35,6 +35,27 @@ void check_option(bool ok, const std::string& name, const std::string& what) {
   if (!ok) throw Error(fmt::format("texture option {}: {}", name, what));
 }
 
+}  // namespace
+
+void check_texture_options(TextureOptions& o, int max_size) {
+  check_option(o.size >= 16 && o.size <= max_size, "size",
+               fmt::format("{} pixels is outside [16, {}]", o.size, max_size));
+  check_option(o.alpha > 0 && o.alpha <= 1, "alpha", fmt::format("{} is outside (0, 1]", o.alpha));
+  check_option(std::isfinite(o.noise_scale) && o.noise_scale >= 0 && o.noise_scale <= o.size / 4.0, "noise_scale",
+               fmt::format("{} pixels is outside [0, size/4]", o.noise_scale));
+  check_option(o.noise_period >= 2 && o.noise_period <= 100000, "noise_period",
+               fmt::format("{} frames is outside [2, 100000]", o.noise_period));
+  check_option(std::isfinite(o.pixels_per_frame) && o.pixels_per_frame >= 0 && o.pixels_per_frame <= o.size,
+               "pixels_per_frame", fmt::format("{} is outside [0, size]", o.pixels_per_frame));
+  check_option(o.lic >= -1 && o.lic <= 1000, "lic", fmt::format("{} pixels is outside [0, 1000] (or -1: automatic)", o.lic));
+  if (o.lic < 0) o.lic = std::max(1, static_cast<int>(std::lround(o.size / 64.0)));
+  check_option(o.warmup >= 0 && o.warmup <= 100000, "warmup", fmt::format("{} is outside [0, 100000]", o.warmup));
+  check_option(std::isfinite(o.contrast) && o.contrast > 0 && o.contrast <= 100, "contrast",
+               fmt::format("{} is outside (0, 100]", o.contrast));
+}
+
+namespace {
+
 // Bilinear sample of a w × h row-major image at (x, y) in pixel-centre coordinates
 // (pixel (i, j) is at (i, j)); clamped to the edge.
 inline float bilinear(const float* img, int w, int h, float x, float y) {
@@ -62,19 +83,7 @@ TextureAnimator::TextureAnimator(const TangentBundle& bundle, const Field& field
                       "(render/surface_texture.h)");
   TVF_CHECK(field.num_vertices() == mesh.num_vertices(), "field of {} vertices on a mesh of {}",
             field.num_vertices(), mesh.num_vertices());
-  check_option(o_.size >= 16 && o_.size <= 16384, "size", fmt::format("{} pixels is outside [16, 16384]", o_.size));
-  check_option(o_.alpha > 0 && o_.alpha <= 1, "alpha", fmt::format("{} is outside (0, 1]", o_.alpha));
-  check_option(std::isfinite(o_.noise_scale) && o_.noise_scale >= 0 && o_.noise_scale <= o_.size / 4.0, "noise_scale",
-               fmt::format("{} pixels is outside [0, size/4]", o_.noise_scale));
-  check_option(o_.noise_period >= 2 && o_.noise_period <= 100000, "noise_period",
-               fmt::format("{} frames is outside [2, 100000]", o_.noise_period));
-  check_option(std::isfinite(o_.pixels_per_frame) && o_.pixels_per_frame >= 0 && o_.pixels_per_frame <= o_.size,
-               "pixels_per_frame", fmt::format("{} is outside [0, size]", o_.pixels_per_frame));
-  check_option(o_.lic >= -1 && o_.lic <= 1000, "lic", fmt::format("{} pixels is outside [0, 1000] (or -1: automatic)", o_.lic));
-  if (o_.lic < 0) o_.lic = std::max(1, static_cast<int>(std::lround(o_.size / 64.0)));
-  check_option(o_.warmup >= 0 && o_.warmup <= 100000, "warmup", fmt::format("{} is outside [0, 100000]", o_.warmup));
-  check_option(std::isfinite(o_.contrast) && o_.contrast > 0 && o_.contrast <= 100, "contrast",
-               fmt::format("{} is outside (0, 100]", o_.contrast));
+  check_texture_options(o_, 16384);
   for (const cplx& z : field.data())
     if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
       throw_input_error(mesh.source(), "", "the field has a value that is not a finite number");

@@ -65,6 +65,11 @@ struct TextureOptions {
   std::uint32_t background = 0x00FFFFFF;
 };
 
+// Checks the options shared by the planar and the surface animators (one sentence naming
+// the option, tvf::Error) and resolves lic = -1 (automatic) from the size; `max_size`
+// bounds `size` (the surface renderer's offscreen buffers allow less than the plane).
+void check_texture_options(TextureOptions& o, int max_size);
+
 // The simulation: frame after frame of the animation. Throws tvf::Error on a domain that
 // is not planar, or options out of range (naming the option).
 class TextureAnimator {
