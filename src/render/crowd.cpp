@@ -1,5 +1,7 @@
 #include "tvf/render/crowd.h"
 
+#include "crowd_file_reader.h"
+
 #include "planar_view.h"
 
 #include "tvf/core/atomic_output.h"
@@ -39,31 +41,7 @@ void check_spec(bool ok, const std::string& what) {
 
 // --- Reading the crowd file -------------------------------------------------------------
 
-struct Reader {
-  std::string file;
-  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
-    throw_input_error(file, path, message);
-  }
-  void keys(const json& j, const std::string& path, std::initializer_list<const char*> allowed) const {
-    if (!j.is_object()) fail(path, "expected an object");
-    for (const auto& [key, value] : j.items()) {
-      (void)value;
-      if (std::find_if(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; }) == allowed.end())
-        fail(path.empty() ? key : path + "." + key, "unknown key");
-    }
-  }
-  double number(const json& j, const std::string& path, double lo, double hi) const {
-    if (!j.is_number()) fail(path, "expected a number");
-    const double v = j.get<double>();
-    if (!std::isfinite(v) || v < lo || v > hi) fail(path, fmt::format("{} is outside [{}, {}]", v, lo, hi));
-    return v;
-  }
-  int integer(const json& j, const std::string& path, int lo, int hi) const {
-    if (!j.is_number_integer()) fail(path, "expected an integer");
-    const auto v = j.get<long long>();
-    if (v < lo || v > hi) fail(path, fmt::format("{} is outside [{}, {}]", v, lo, hi));
-    return static_cast<int>(v);
-  }
+struct Reader : CrowdFileReader {
   Vec2 point(const json& j, const std::string& path) const {
     if (!j.is_array() || j.size() != 2) fail(path, "expected a point [x, y]");
     return {number(j[0], path + "[0]", -1e12, 1e12), number(j[1], path + "[1]", -1e12, 1e12)};
@@ -168,7 +146,7 @@ bool CrowdShape::crosses(const Vec2& a, const Vec2& b) const {
 }
 
 CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
-  const Reader r{file};
+  const Reader r{{file}};
   r.keys(j, "", {"agents", "speed", "weights", "grid", "agent_radius", "steps_per_frame", "avoidance", "start",
                  "goals", "obstacles"});
   CrowdSpec s;

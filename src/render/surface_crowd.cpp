@@ -1,5 +1,7 @@
 #include "tvf/render/surface_crowd.h"
 
+#include "crowd_file_reader.h"
+
 #include "tvf/core/error.h"
 #include "tvf/core/json_text.h"
 #include "tvf/integrate/streamline.h"
@@ -25,29 +27,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-struct Reader {
-  std::string file;
-  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
-    throw_input_error(file, path, message);
-  }
-  void keys(const json& j, const std::string& path, std::initializer_list<const char*> allowed) const {
-    if (!j.is_object()) fail(path, "expected an object");
-    for (const auto& item : j.items())
-      if (std::find_if(allowed.begin(), allowed.end(), [&](const char* a) { return item.key() == a; }) == allowed.end())
-        fail(path.empty() ? item.key() : path + "." + item.key(), "unknown key");
-  }
-  double number(const json& j, const std::string& path, double lo, double hi) const {
-    if (!j.is_number()) fail(path, "expected a number");
-    const double v = j.get<double>();
-    if (!std::isfinite(v) || v < lo || v > hi) fail(path, fmt::format("{} is outside [{}, {}]", v, lo, hi));
-    return v;
-  }
-  int integer(const json& j, const std::string& path, int lo, int hi) const {
-    if (!j.is_number_integer()) fail(path, "expected an integer");
-    const auto v = j.get<long long>();
-    if (v < lo || v > hi) fail(path, fmt::format("{} is outside [{}, {}]", v, lo, hi));
-    return static_cast<int>(v);
-  }
+struct Reader : CrowdFileReader {
   std::vector<SurfaceRegion> regions(const json& j, const std::string& path) const {
     if (!j.is_array()) fail(path, "expected a list of regions");
     std::vector<SurfaceRegion> out;
@@ -75,7 +55,7 @@ struct Reader {
 
 SurfaceCrowdSpec load_surface_crowd_spec(const std::string& path) {
   const json j = parse_json_text(read_text_file(path, "the crowd file"), path, "a crowd file is a JSON object");
-  const Reader r{path};
+  const Reader r{{path}};
   r.keys(j, "", {"agents", "speed", "weights", "steps_per_frame", "seed", "start", "goals", "obstacles"});
   SurfaceCrowdSpec s;
   if (j.contains("agents")) s.agents = r.integer(j["agents"], "agents", 1, 100000);
