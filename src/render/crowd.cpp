@@ -178,8 +178,7 @@ CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
 }
 
 CrowdSpec load_crowd_spec(const std::string& path) {
-  return parse_crowd_spec(parse_json_text(read_text_file(path, "the crowd file"), path, "a crowd file is a JSON object"),
-                          path);
+  return read_crowd_file(path, [&](const json& j) { return parse_crowd_spec(j, path); });
 }
 
 // --- Fast marching -----------------------------------------------------------------------

@@ -1,8 +1,12 @@
 // The checks every crowd file reader shares (planar crowd.cpp, surface_crowd.cpp): one
-// sentence naming the file and the JSON path of the bad value. Internal to render/.
+// sentence naming the file and the JSON path of the bad value, with its line and column in
+// the file (read_crowd_file: the one JSON reader, core/json_text.h, as scenes are read).
+// Internal to render/.
 #pragma once
 
 #include "tvf/core/error.h"
+#include "tvf/core/error_location.h"
+#include "tvf/core/json_text.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -38,5 +42,33 @@ struct CrowdFileReader {
     return static_cast<int>(v);
   }
 };
+
+// Reads the crowd file `path` through the one JSON reader (syntax errors name their line
+// and column) and hands the value to `parse`. An error `parse` throws about a value gets
+// that value's line and column in the file: in its location fields, as a scene's errors
+// do, and in its sentence ("crowd.json: goals[0].radius (line 4, column 17): expected a
+// number"), since a crowd file has no designer to point at the place.
+template <class Parse>
+auto read_crowd_file(const std::string& path, Parse&& parse) {
+  const std::string text = read_text_file(path, "the crowd file");
+  const nlohmann::json j = parse_json_text(text, path, "a crowd file is a JSON object");
+  try {
+    return parse(j);
+  } catch (const Error& e) {
+    ErrorLocation location = location_of(e);
+    const std::string prefix = location.file + ": " + location.json_path + ": ";
+    const std::string message = e.what();
+    if (location.line == 0 && !location.json_path.empty() && message.starts_with(prefix)) {
+      const JsonTextPosition p = json_path_position(text, location.json_path);
+      if (p.line > 0) {
+        location.line = p.line;
+        location.column = p.column;
+        const std::string where = fmt::format("{} (line {}, column {})", location.json_path, p.line, p.column);
+        throw_located_error(where, message.substr(prefix.size()), std::move(location));
+      }
+    }
+    rethrow_with_position(e, text);
+  }
+}
 
 }  // namespace tvf

@@ -8,6 +8,7 @@
 
 #include "support/test_paths.h"
 #include "tvf/core/error.h"
+#include "tvf/core/error_location.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/field/point_locator.h"
 #include "tvf/integrate/pathline.h"
@@ -297,6 +298,50 @@ TEST(Crowd, BadCrowdFilesNameTheJsonPath) {
   EXPECT_NE(message(R"({"start": [{"circle": {"center": [0, 0], "radius": 1}}], "goals": [{"circle": {"center": [0, 0], "radius": 1}}], "avoidance": {"weight": 1}})")
                 .find("avoidance"),
             std::string::npos);
+}
+
+// A crowd file is read as a scene is (core/json_text.h): each error names the file, the
+// JSON path, the line and the column, in the sentence and in the location fields.
+TEST(Crowd, BadCrowdFilesNameLineAndColumn) {
+  test::TempDir dir;
+  auto located = [&](const std::string& text) {
+    test::write_text(dir / "c.json", text);
+    try {
+      load_crowd_spec((dir / "c.json").string());
+    } catch (const LocatedError& e) {
+      return std::make_pair(std::string(e.what()), e.location());
+    }
+    return std::make_pair(std::string("no error"), ErrorLocation{});
+  };
+  const std::string file = (dir / "c.json").string();
+  const std::string shapes = R"("start": [{"circle": {"center": [0, 0], "radius": 1}}],)"
+                             "\n"
+                             R"( "goals": [{"circle": {"center": [1, 1], "radius": 1}}])";
+  // A typo'd key: the key's value on line 2, column 12.
+  auto [typo, at_typo] = located("{" + shapes + ",\n \"agnets\": 3}");
+  EXPECT_EQ(typo, file + ": agnets (line 3, column 12): unknown key") << typo;
+  EXPECT_EQ(at_typo.file, file);
+  EXPECT_EQ(at_typo.json_path, "agnets");
+  EXPECT_EQ(at_typo.line, 3);
+  EXPECT_EQ(at_typo.column, 12);
+  // A wrong type deep inside: goals[0].circle.radius is a string.
+  auto [type, at_type] = located(R"({"start": [{"circle": {"center": [0, 0], "radius": 1}}],)"
+                                 "\n"
+                                 R"( "goals": [{"circle": {"center": [1, 1], "radius": "big"}}]})");
+  EXPECT_EQ(type, file + ": goals[0].circle.radius (line 2, column 52): expected a number") << type;
+  EXPECT_EQ(at_type.json_path, "goals[0].circle.radius");
+  EXPECT_EQ(at_type.line, 2);
+  EXPECT_EQ(at_type.column, 52);
+  // Broken JSON: the reader's own line and column.
+  auto [broken, at_broken] = located("{" + shapes + ",\n \"agents\": 3,\n}");
+  EXPECT_EQ(at_broken.file, file);
+  EXPECT_EQ(at_broken.line, 4);
+  EXPECT_EQ(at_broken.column, 1);
+  EXPECT_EQ(broken.rfind(file + ": line 4, column 1: ", 0), 0u) << broken;
+  // A value without a JSON path (the whole file is not an object) says so plainly.
+  auto [array, at_array] = located("[1, 2]");
+  EXPECT_EQ(array.rfind(file + ": expected an object", 0), 0u) << array;
+  EXPECT_EQ(at_array.line, 0);
 }
 
 // --- Particles ------------------------------------------------------------------------------

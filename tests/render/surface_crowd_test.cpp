@@ -77,6 +77,11 @@ TEST(SurfaceCrowd, BadSpecsAreNamed) {
   EXPECT_NE(e.find("c.json"), std::string::npos) << e;
   EXPECT_NE(e.find("goals[0]"), std::string::npos) << e;
   EXPECT_NE(e.find("ball"), std::string::npos) << e;
+  // The same reader as planar crowd files: the line and column of the bad value.
+  test::write_text(dir / "d.json", "{\"start\": [{\"ball\": {\"center\": [0, 0, -1], \"radius\": 0.3}}],\n"
+                                   " \"goals\": [{\"ball\": {\"center\": [0, 0, 1], \"radius\": 0.3}}],\n  \"speed\": true}");
+  const std::string d = test::error_of([&] { load_surface_crowd_spec((dir / "d.json").string()); });
+  EXPECT_EQ(d, (dir / "d.json").string() + ": speed (line 3, column 12): expected a number") << d;
 }
 
 }  // namespace
