@@ -53,7 +53,8 @@ py::object to_python(const nlohmann::json& j) { return py::module_::import("json
 // every 50 ms takes it back to call `progress(done, total)` when it changed, to check
 // `cancel.is_set()` (any object with that method, e.g. threading.Event) and to let Python
 // handle signals. Ctrl-C (KeyboardInterrupt) or an exception from `progress` cancels the
-// work and is raised once it stopped; a set `cancel` raises tvf.Cancelled.
+// work and is raised once it stopped; a set `cancel`, or `progress` returning False,
+// cancels it and raises tvf.Cancelled (work that finished first returns as usual).
 template <class Work>
 void run_interruptible(const py::object& progress, const py::object& cancel, Work&& work) {
   std::atomic<bool> flag{false};
@@ -95,7 +96,9 @@ void run_interruptible(const py::object& progress, const py::object& cancel, Wor
         if (!progress.is_none() && (done.load() != shown_done || total.load() != shown_total)) {
           shown_done = done.load();
           shown_total = total.load();
-          progress(shown_done, shown_total);
+          // progress returning False (not None) asks to stop, as a set `cancel` does.
+          const py::object answer = progress(shown_done, shown_total);
+          if (answer.is(py::bool_(false))) flag.store(true);
         }
         if (!cancel.is_none() && cancel.attr("is_set")().cast<bool>()) flag.store(true);
       } catch (py::error_already_set& e) {
@@ -115,6 +118,9 @@ void run_interruptible(const py::object& progress, const py::object& cancel, Wor
       std::rethrow_exception(failure);
     } catch (const GenerationCancelled&) {
       PyErr_SetString(cancelled_type, "generation cancelled");
+      throw py::error_already_set();
+    } catch (const RenderCancelled&) {
+      PyErr_SetString(cancelled_type, "rendering cancelled");
       throw py::error_already_set();
     }
   }
@@ -477,8 +483,9 @@ as a mesh file is, with the same sentences naming "vertices/faces" (out-of-range
 indices, NaN coordinates, degenerate faces, non-manifold edges and vertices, unused
 vertices, flipped orientation); nothing is repaired, so field.vertices are yours.
 
-progress(done, total) is called as frames complete; `cancel` is any object with
-is_set() (threading.Event): once set, the solve stops and tvf.Cancelled is raised.
+progress(done, total) is called as frames complete (returning False stops the solve,
+as a set `cancel` does); `cancel` is any object with is_set() (threading.Event): once
+set, the solve stops and tvf.Cancelled is raised.
 Ctrl-C stops it too (KeyboardInterrupt). Bad input raises ValueError with the command
 line's sentence ("scene: elements[0].type: ...").)");
 
@@ -578,6 +585,7 @@ line's sentence ("scene: elements[0].type: ...").)");
         };
         run_interruptible(progress, py::none(), [&](GenerateOptions& g) {
           o.progress = g.progress;
+          o.cancel = g.cancel;
           write_texture_animation(f.bundle(), *f.field, o);
         });
         if (single) return rgb_array(made.at(wanted.front()));
@@ -607,7 +615,10 @@ noise_scale, speed ("uniform" | "physical"), pixels_per_frame, contrast, seed: a
 `tvf render texture`'s options; overlay: any of "singularities", "paths",
 "streamlines", "orbits" (planar only); view, up: the camera on surfaces (from the
 mesh's centre towards the eye; up in the picture). progress(done, total) as pictures
-are made. Bad options raise ValueError naming the option.)");
+are made; returning False from it stops the animation before its next picture and
+raises tvf.Cancelled, as Ctrl-C stops it with KeyboardInterrupt: either way no file is
+left (the PNG folder appears complete or not at all, a partial MP4 is removed). Bad
+options raise ValueError naming the option.)");
 
   py::class_<PyDesign>(m, "Design", R"(A design you change step by step: the scene, its domain, the solver
 set-up kept between solves (so re-solves after small changes start warm), the field

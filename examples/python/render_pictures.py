@@ -3,6 +3,7 @@ planar grid and on a surface; and the same pictures written as PNG frames where 
 
     PYTHONPATH=build/release/python python3 examples/python/render_pictures.py [OUT_DIR]
 """
+import os
 import sys
 
 import numpy as np
@@ -28,6 +29,18 @@ sphere = tvf.generate({**tvf.Design("examples/03_sphere_vortex/scene.json").scen
 pictures = tvf.render_texture(sphere, 256, frames=[0, 7], view=[1, -0.6, 0.3], frames_dir=f"{out}/sphere")
 background = (pictures[1] == 255).all(axis=2).mean()
 print("surface:", pictures[1].shape, f"{background:.0%} background; PNGs in", f"{out}/sphere")
+
+# A long animation stopped from its progress callback: returning False raises
+# tvf.Cancelled before the next picture, and the frame folder is not left half written.
+def stop_after_three(done, total):
+    return done < 3
+
+
+try:
+    tvf.render_texture(f, 256, frames=[0, 399], pictures=400, frames_dir=f"{out}/stopped",
+                       progress=stop_after_three)
+except tvf.Cancelled as e:
+    print("stopped:", e, "| folder written:", os.path.exists(f"{out}/stopped"))
 
 # Arrays go straight to matplotlib (imshow) or imageio where those are installed.
 try:

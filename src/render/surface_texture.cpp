@@ -744,6 +744,7 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
   out.add_in_order(
       first, last,
       [&](int k) {
+        check_render_cancelled(options);
         const double t = time_of(k);
         const auto t0 = clock::now();
         animator.advance(t);

@@ -7,6 +7,7 @@ Run by ctest with the rest of tests/python (PYTHONPATH=BUILD/python, TVF_CLI).""
 import ast
 import json
 import os
+import shutil
 import struct
 import subprocess
 import zlib
@@ -292,6 +293,37 @@ def test_pictures_and_files_at_once_and_progress(tmp_path):
     assert sorted(p.name for p in (tmp_path / "fr").iterdir()) == [f"frame_{k:05d}.png" for k in (1, 2, 3)]
     assert np.array_equal(read_png(tmp_path / "fr" / "frame_00003.png"), pictures[1])
     assert calls[-1] == (3, 3)
+
+
+def test_render_stops_between_pictures_and_leaves_no_output(tmp_path):
+    """progress returning False (tvf.Cancelled) or raising KeyboardInterrupt stops the
+    animation before its next picture: no frame folder, no video, no temporaries."""
+    v, f = planar_grid(9)
+    field = tvf.generate(GRID_SCENE, vertices=v, faces=f)
+    total = 2000  # far more pictures than are made before the stop is seen (50 ms polls)
+    calls = []
+
+    def stop(done, all_):
+        calls.append((done, all_))
+        return False
+
+    with pytest.raises(tvf.Cancelled, match="rendering cancelled"):
+        tvf.render_texture(field, 64, frames=[0, total - 1], pictures=total,
+                           frames_dir=str(tmp_path / "frames"), progress=stop)
+    assert calls and calls[-1][1] == total and calls[-1][0] < total
+    assert list(tmp_path.iterdir()) == []
+
+    def interrupt(done, all_):
+        raise KeyboardInterrupt
+
+    video = shutil.which("ffmpeg") is not None
+    with pytest.raises(KeyboardInterrupt):
+        tvf.render_texture(field, 64, frames=[0, total - 1], pictures=total, frames_dir=str(tmp_path / "frames"),
+                           video=str(tmp_path / "v.mp4") if video else None, progress=interrupt)
+    assert list(tmp_path.iterdir()) == []
+    # None (or anything but False) lets it finish.
+    pictures = tvf.render_texture(field, 32, frames=[0, 2], progress=lambda done, all_: True)
+    assert len(pictures) == 2
 
 
 def test_surface_pictures(tmp_path):

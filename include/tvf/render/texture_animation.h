@@ -23,10 +23,12 @@
 // gives the coherence in time, the convolution smooths the grain of IBFV's blending into
 // the even streaks of the paper's figures (docs/architecture.md, "Texture animation").
 #include "tvf/analysis/topology.h"
+#include "tvf/core/error.h"
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -183,7 +185,21 @@ struct TextureAnimationOptions {
   int streamline_seeds = 150;     // surfaces only: streamlines of the overlay
   double fps = 25.0;
   std::function<void(int done, int total)> progress;
+  // When set, checked before each picture (from another thread: Python's progress
+  // returning False, Ctrl-C): once true the animation stops with RenderCancelled, and
+  // nothing is written (the PNG folder is staged, a partial MP4 removed).
+  const std::atomic<bool>* cancel = nullptr;
 };
+
+// Thrown by write_texture_animation when TextureAnimationOptions::cancel became true.
+class RenderCancelled : public Error {
+public:
+  RenderCancelled() : Error("rendering cancelled") {}
+};
+// Throws RenderCancelled when options.cancel is set and true.
+inline void check_render_cancelled(const TextureAnimationOptions& options) {
+  if (options.cancel && options.cancel->load()) throw RenderCancelled();
+}
 
 struct TextureAnimationReport {
   int frames = 0;                 // pictures made
