@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <deque>
 #include <filesystem>
+#include <mutex>
 #include <utility>
 
 namespace fs = std::filesystem;
@@ -28,16 +29,43 @@ std::string domain_key(const Scene& scene) {
 
 }  // namespace
 
-// What one scene made: its field (after the projection), the field before the
-// projection (incompressible scenes: what an edit acts on), the report and the topology.
-struct DesignResult {
-  std::shared_ptr<const DesignSpace> space;  // the domain it lives on
-  Field field;
-  std::optional<Field> unprojected;
-  GenerateReport report;
-  std::optional<Topology> topology;
-  std::optional<PeriodicOrbits> orbits;
+struct DesignSolverCache {
+  std::mutex mutex;  // one Solve at a time uses the cache
+  GenerateCache cache;
 };
+
+namespace {
+
+// The scene's "incompressible" projection of r.field, reported in r.report.
+void project_result(DesignResult& r, const Scene& s, bool parallel) {
+  IncompressibleOptions io;
+  io.boundary = *s.incompressible;
+  io.parallel = parallel;
+  IncompressibleReport report = make_incompressible(r.space->bundle(), r.field, io);
+  r.report.seconds += report.seconds;
+  r.report.incompressible = std::move(report);
+}
+
+Topology& topology_of(DesignResult& r, bool parallel) {
+  if (!r.topology) {
+    TopologyOptions to;
+    to.parallel = parallel;
+    r.topology = analyze_topology(r.space->bundle(), r.field, to);
+  }
+  return *r.topology;
+}
+
+PeriodicOrbits& orbits_of(DesignResult& r, bool parallel) {
+  Topology& topology = topology_of(r, parallel);
+  if (!r.orbits) {
+    PeriodicOrbitOptions po;
+    po.parallel = parallel;
+    r.orbits = find_periodic_orbits(r.space->bundle(), r.field, topology, po);
+  }
+  return *r.orbits;
+}
+
+}  // namespace
 
 struct Design::State {
   DesignOptions options;
@@ -48,9 +76,10 @@ struct Design::State {
   // A mesh given in code (Design(Scene, Mesh)) and the domain key of the scenes on it.
   std::shared_ptr<const DesignSpace> given_space;
   std::string given_key;
-  std::unique_ptr<GenerateCache> cache = std::make_unique<GenerateCache>();
+  std::shared_ptr<DesignSolverCache> solver = std::make_shared<DesignSolverCache>();
   std::shared_ptr<DesignResult> result;  // of *scene, or null
   std::shared_ptr<DesignResult> last;    // the last result made (field() after a change)
+  long long revision = 1;
 
   struct Step {
     Scene scene;
@@ -74,6 +103,7 @@ struct Design::State {
 
   // Makes `next` the scene (with its result, when known), recording the old one.
   void commit(Scene next, std::shared_ptr<DesignResult> made) {
+    if (options.before_change) options.before_change(next);
     if (scene) {
       undo.push_back({std::move(*scene), result});
       trim(undo);
@@ -82,6 +112,7 @@ struct Design::State {
     scene = std::move(next);
     result = std::move(made);
     if (result) last = result;
+    ++revision;
   }
 
   const std::shared_ptr<const DesignSpace>& domain() {
@@ -94,35 +125,38 @@ struct Design::State {
     return space;
   }
 
-  DesignResult& made(GenerateOptions go) {
-    if (result) return *result;
-    const Scene& s = need_scene();
-    auto r = std::make_shared<DesignResult>();
-    r->space = domain();
-    go.cache = cache.get();
-    go.parallel = options.parallel;
-    // Generator and edits; the projection is done here so that the field before it, the
-    // one a new edit acts on, is kept (generate()'s last step, as generate.cpp does it).
-    go.project = false;
-    r->field = tvf::generate(*r->space, s, go, &r->report);
-    if (s.incompressible) {
-      check_cancelled(go);
-      r->unprojected = r->field;
-      project(*r, s);
-    }
-    result = r;
-    last = r;
-    return *r;
+  Design::Solve prepare_solve() const {
+    Design::Solve job;
+    job.scene_ = need_scene();
+    job.revision_ = revision;
+    job.space_key_ = domain_key(job.scene_);
+    if (space && space_key == job.space_key_) job.space_ = space;
+    job.given_ = given_space;
+    job.given_key_ = given_key;
+    job.shared_ = solver;
+    job.parallel_ = options.parallel;
+    return job;
   }
 
-  // The scene's "incompressible" projection of r.field, reported in r.report.
-  void project(DesignResult& r, const Scene& s) const {
-    IncompressibleOptions io;
-    io.boundary = *s.incompressible;
-    io.parallel = options.parallel;
-    IncompressibleReport report = make_incompressible(r.space->bundle(), r.field, io);
-    r.report.seconds += report.seconds;
-    r.report.incompressible = std::move(report);
+  bool adopt(Design::Solve& job) {
+    TVF_CHECK(job.made_ != nullptr, "a Solve is adopted after it ran");
+    // The domain it built serves the current scene when that has the same domain.
+    if (scene && job.space_ && job.space_ != space && domain_key(*scene) == job.space_key_) {
+      space = job.space_;
+      space_key = job.space_key_;
+    }
+    if (!scene || job.revision_ != revision) return false;
+    result = job.made_;
+    last = result;
+    return true;
+  }
+
+  DesignResult& made(GenerateOptions go) {
+    if (result) return *result;
+    Design::Solve job = prepare_solve();
+    job.run(std::move(go), false);
+    adopt(job);
+    return *result;
   }
 
   // The result of the scene (made if needed), or without a scene the field read.
@@ -133,22 +167,8 @@ struct Design::State {
     return *last;
   }
 
-  Topology& topology() {
-    DesignResult& r = current();
-    if (!r.topology) {
-      TopologyOptions to;
-      to.parallel = options.parallel;
-      r.topology = analyze_topology(r.space->bundle(), r.field, to);
-    }
-    return *r.topology;
-  }
-
-  PeriodicOrbits& orbits() {
-    Topology& topo = topology();
-    DesignResult& r = current();
-    if (!r.orbits) r.orbits = find_periodic_orbits(r.space->bundle(), r.field, topo);
-    return *r.orbits;
-  }
+  Topology& topology() { return topology_of(current(), options.parallel); }
+  PeriodicOrbits& orbits() { return orbits_of(current(), options.parallel); }
 };
 
 Design::Design(std::unique_ptr<State> state) : s_(std::move(state)) {}
@@ -320,42 +340,28 @@ std::optional<DesignCheck> Design::check() {
 }
 
 EditReport Design::edit(const nlohmann::json& entry, GenerateOptions options) {
-  const Scene& scene = s_->need_scene();
   // The new scene, validated as a whole (JSON paths name the new entry).
-  nlohmann::json j = scene_to_json(scene);
-  j["edits"].push_back(entry);
-  Scene edited = scene_from_json(j, scene.label(), scene.source_path);
-  const Edit e = edited.edits.back();
-
+  EditJob job = prepare_edit(entry);
+  const Scene& scene = job.base_scene_;
   // The edit acts on the field the scene makes now, before its projection.
   DesignResult& now = s_->made(options);
   if (scene.incompressible && !now.unprojected) {
     // Read from a file: the field before the projection is not there; make it.
     GenerateOptions go;
     go.parallel = s_->options.parallel;
-    go.cache = s_->cache.get();
+    go.cache = &s_->solver->cache;
     go.project = false;
+    std::lock_guard lock(s_->solver->mutex);
     now.unprojected = tvf::generate(*now.space, scene, go);
   }
-  auto r = std::make_shared<DesignResult>();
-  r->space = now.space;
-  Field field = scene.incompressible ? *now.unprojected : now.field;
-  FieldEditor editor(*now.space, edit_settings(scene));
   EditReport report;
   try {
-    report = editor.apply(field, e);
+    report = job.run(s_->result, false);
   } catch (const EditRefused& refused) {
-    throw Error(fmt::format("{}: refused to {}: {}; the scene is unchanged", scene.label(), describe(e),
+    throw Error(fmt::format("{}: refused to {}: {}; the scene is unchanged", scene.label(), describe(job.edit()),
                             refused.what()));
   }
-  r->report = now.report;
-  r->report.edits.push_back(report.summary);
-  r->field = std::move(field);
-  if (scene.incompressible) {
-    r->unprojected = r->field;
-    s_->project(*r, scene);
-  }
-  s_->commit(std::move(edited), std::move(r));
+  adopt(std::move(job));
   return report;
 }
 
@@ -369,6 +375,8 @@ bool Design::can_redo() const { return !s_->redo.empty(); }
 
 void Design::undo() {
   if (s_->undo.empty()) throw Error(fmt::format("{}: nothing to undo", s_->label));
+  if (s_->options.before_change) s_->options.before_change(s_->undo.back().scene);
+  ++s_->revision;
   State::Step step = std::move(s_->undo.back());
   s_->undo.pop_back();
   s_->redo.push_back({std::move(*s_->scene), s_->result});
@@ -380,6 +388,8 @@ void Design::undo() {
 
 void Design::redo() {
   if (s_->redo.empty()) throw Error(fmt::format("{}: nothing to redo", s_->label));
+  if (s_->options.before_change) s_->options.before_change(s_->redo.back().scene);
+  ++s_->revision;
   State::Step step = std::move(s_->redo.back());
   s_->redo.pop_back();
   s_->undo.push_back({std::move(*s_->scene), s_->result});
@@ -396,6 +406,81 @@ std::vector<fs::path> Design::write_outputs(const fs::path& dir, OutputOptions o
   if (!r.report.keyframe_intervals.empty() && !options.keyframe_intervals)
     options.keyframe_intervals = &r.report.keyframe_intervals;
   return write_field_outputs(dir, *r.space, r.field, scene, options);
+}
+
+long long Design::revision() const { return s_->revision; }
+std::shared_ptr<const DesignResult> Design::result() const { return s_->result; }
+std::shared_ptr<const DesignResult> Design::last_result() const { return s_->last; }
+
+Design::Solve Design::prepare_solve() const { return s_->prepare_solve(); }
+
+bool Design::adopt(Solve&& solve) { return s_->adopt(solve); }
+
+void Design::Solve::run(GenerateOptions options, bool analyze) {
+  TVF_CHECK(shared_ != nullptr, "a Solve comes from Design::prepare_solve");
+  std::lock_guard lock(shared_->mutex);
+  if (!space_)
+    space_ = given_ && space_key_ == given_key_ ? given_ : std::shared_ptr<const DesignSpace>(make_design_space(scene_));
+  auto r = std::make_shared<DesignResult>();
+  r->space = space_;
+  options.cache = &shared_->cache;
+  options.parallel = parallel_;
+  // Generator and edits; the projection is done here so that the field before it, the
+  // one a new edit acts on, is kept (generate()'s last step, as generate.cpp does it).
+  options.project = false;
+  r->field = tvf::generate(*r->space, scene_, options, &r->report);
+  if (scene_.incompressible) {
+    check_cancelled(options);
+    r->unprojected = r->field;
+    project_result(*r, scene_, parallel_);
+  }
+  if (analyze) {
+    check_cancelled(options);
+    orbits_of(*r, parallel_);
+  }
+  made_ = std::move(r);
+}
+
+Design::EditJob Design::prepare_edit(const nlohmann::json& entry, const std::string& label) const {
+  const Scene& scene = s_->need_scene();
+  nlohmann::json j = scene_to_json(scene);
+  j["edits"].push_back(entry);
+  EditJob job;
+  job.scene_ = scene_from_json(j, label.empty() ? scene.label() : label, scene.source_path);
+  job.base_scene_ = scene;
+  job.revision_ = s_->revision;
+  job.parallel_ = s_->options.parallel;
+  return job;
+}
+
+EditReport Design::EditJob::run(const std::shared_ptr<const DesignResult>& base, bool analyze) {
+  TVF_CHECK(base != nullptr, "an edit needs the result it acts on");
+  const bool incompressible = base_scene_.incompressible.has_value();
+  if (incompressible && !base->unprojected)
+    throw Error(fmt::format("{}: the field before the scene's projection is not kept with this result, so the edit "
+                            "cannot act on it",
+                            base_scene_.label()));
+  Field field = incompressible ? *base->unprojected : base->field;
+  FieldEditor editor(*base->space, edit_settings(base_scene_));
+  const EditReport report = editor.apply(field, edit());
+  auto r = std::make_shared<DesignResult>();
+  r->space = base->space;
+  r->report = base->report;
+  r->report.edits.push_back(report.summary);
+  r->field = std::move(field);
+  if (incompressible) {
+    r->unprojected = r->field;
+    project_result(*r, base_scene_, parallel_);
+  }
+  if (analyze) orbits_of(*r, parallel_);
+  made_ = std::move(r);
+  return report;
+}
+
+bool Design::adopt(EditJob&& job) {
+  if (!job.made_ || !s_->scene || job.revision_ != s_->revision) return false;
+  s_->commit(std::move(job.scene_), std::move(job.made_));
+  return true;
 }
 
 GeneratedField generate_scene(const Scene& scene, const GenerateOptions& options) {

@@ -11,6 +11,8 @@
 
 #include <atomic>
 #include <cstring>
+#include <string>
+#include <vector>
 
 namespace tvf {
 namespace {
@@ -153,6 +155,80 @@ TEST(Design, CancelledGenerationLeavesTheDesignAsItWas) {
   EXPECT_THROW(design.generate(options), GenerationCancelled);
   EXPECT_FALSE(design.has_field());
   EXPECT_EQ(design.generate().frames(), 5);
+}
+
+// The steps a caller with threads takes (tvf serve's session): a Solve and an EditJob
+// prepared at one revision, run apart from the Design, adopted only while the Design is
+// still at that revision; before_change sees every change first and can refuse it.
+TEST(Design, SolvesAndEditsRunApartAndAreAdoptedOnlyAtTheirRevision) {
+  std::vector<std::string> seen;  // the edits of each scene about to become current
+  bool refuse = false;
+  DesignOptions options;
+  options.before_change = [&](const Scene& next) {
+    if (refuse) throw Error("cannot save");
+    seen.push_back(std::to_string(next.edits.size()));
+  };
+  Design design(scene_of(small_scene("constrained")), options);
+  EXPECT_EQ(design.revision(), 1);
+  EXPECT_EQ(design.result(), nullptr);
+
+  // A Solve: the same field as generate(), with its analysis, adopted at revision 1.
+  Design::Solve solve = design.prepare_solve();
+  EXPECT_EQ(solve.revision(), 1);
+  solve.run({}, true);
+  const auto made = solve.result();
+  ASSERT_NE(made, nullptr);
+  ASSERT_TRUE(made->topology.has_value());
+  ASSERT_TRUE(made->orbits.has_value());
+  EXPECT_TRUE(bitwise_equal(made->field, generate_scene(design.scene()).field));
+  EXPECT_TRUE(design.adopt(std::move(solve)));
+  EXPECT_EQ(design.result(), made);
+  EXPECT_EQ(&design.field(), &made->field);  // not made again
+  EXPECT_EQ(design.revision(), 1);
+
+  // A Solve overtaken by a change is not adopted; the result it made stays readable.
+  Design::Solve stale = design.prepare_solve();
+  json moved = small_scene("constrained");
+  moved["elements"][1]["path"][0] = {0.2, 0.4, 0};
+  design.set_scene(scene_of(moved));
+  EXPECT_EQ(design.revision(), 2);
+  stale.run();
+  EXPECT_FALSE(design.adopt(std::move(stale)));
+  EXPECT_EQ(design.result(), nullptr);
+  EXPECT_EQ(design.last_result(), made);
+  design.undo();
+  EXPECT_EQ(design.revision(), 3);
+
+  // An EditJob: the edit's scene at once, its field applied to the result it is given,
+  // committed (history, one revision more) only at its revision.
+  Design::EditJob edit = design.prepare_edit(json{{"op", "smooth"}, {"strength", 0.5}});
+  EXPECT_EQ(edit.scene().edits.size(), 1u);
+  EXPECT_EQ(edit.revision(), 3);
+  const EditReport report = edit.run(made, true);
+  EXPECT_FALSE(report.summary.empty());
+  ASSERT_TRUE(edit.result()->topology.has_value());
+  EXPECT_TRUE(bitwise_equal(edit.result()->field, generate_scene(edit.scene()).field));
+  Design::EditJob copy = edit;
+  EXPECT_TRUE(design.adopt(std::move(edit)));
+  EXPECT_EQ(design.revision(), 4);
+  EXPECT_EQ(design.scene().edits.size(), 1u);
+  EXPECT_TRUE(design.can_undo());
+  EXPECT_FALSE(design.adopt(std::move(copy)));  // made on revision 3
+  EXPECT_EQ(design.revision(), 4);
+
+  // A change before_change refuses is not made.
+  refuse = true;
+  EXPECT_EQ(test::error_of([&] { design.undo(); }), "cannot save");
+  EXPECT_EQ(test::error_of([&] { design.set_scene(scene_of(small_scene())); }), "cannot save");
+  EXPECT_EQ(design.revision(), 4);
+  EXPECT_EQ(design.scene().edits.size(), 1u);
+  // Seen: the new scene (no edits), the undo (none), the adopted edit (one).
+  EXPECT_EQ(seen, (std::vector<std::string>{"0", "0", "1"}));
+
+  // Invalid edits are refused when prepared, naming the entry.
+  EXPECT_EQ(test::error_of([&] { design.prepare_edit(json{{"op", "smooth"}, {"strength", 7}}, "s.json"); })
+                .rfind("s.json: edits[1]", 0),
+            0u);
 }
 
 TEST(Design, OpensAGeneratedFolderWithoutRegenerating) {

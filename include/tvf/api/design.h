@@ -35,6 +35,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -48,6 +49,28 @@ struct DesignOptions {
   // Undo steps that keep their field too (undo/redo then need no regeneration); older
   // steps keep only their scene. A field costs 16 bytes per vertex and frame.
   int kept_fields = 4;
+  // Called with the scene about to become the current one, before anything changes
+  // (set_scene, edit, undo, redo, adopt of an edit): an exception from it leaves the
+  // Design as it was. tvf serve's session saves the scene here, so that a change that
+  // cannot be saved is not made.
+  std::function<void(const Scene&)> before_change;
+};
+
+// The solver set-up a Design keeps between generations and the lock its Solves take.
+struct DesignSolverCache;
+
+// What one scene made, complete once handed out: its field (after the scene's
+// "incompressible" projection), the field before the projection (incompressible scenes:
+// what a new edit acts on), the generation report and the analysis (computed when first
+// asked for, or by the Solve/EditJob that made it with `analyze`). Shared: a reader on
+// another thread keeps it, unchanged, while the Design moves on (tvf serve's session).
+struct DesignResult {
+  std::shared_ptr<const DesignSpace> space;  // the domain it lives on
+  Field field;
+  std::optional<Field> unprojected;
+  GenerateReport report;
+  std::optional<Topology> topology;
+  std::optional<PeriodicOrbits> orbits;
 };
 
 class Design {
@@ -135,6 +158,82 @@ public:
 
   // Writes the outputs of `tvf generate` (outputs.h) into `dir`, generating first if needed.
   std::vector<std::filesystem::path> write_outputs(const std::filesystem::path& dir, OutputOptions options = {});
+
+  // --- The same steps for a caller with threads (tvf serve's session) ---
+  // The Design stays single-threaded: the caller serialises its calls with a lock of its
+  // own. A Solve or an EditJob is prepared under that lock, run without it (a solve takes
+  // seconds; status, reads and other changes go on meanwhile) and adopted under it again,
+  // which makes it the Design's only when the Design is still at the revision it was
+  // prepared on. generate() and edit() are these three steps in a row.
+
+  // The revision of the scene: 1 for the first scene, one more with every change
+  // (set_scene, edit, undo, redo, an adopted EditJob).
+  long long revision() const;
+  // The result of the current scene when it is there (null otherwise), and the last one
+  // made or adopted (null before the first).
+  std::shared_ptr<const DesignResult> result() const;
+  std::shared_ptr<const DesignResult> last_result() const;
+
+  // A generation of the scene at one revision.
+  class Solve {
+  public:
+    long long revision() const { return revision_; }
+    const Scene& scene() const { return scene_; }
+    // Builds the domain unless the Design had it, generates (options.progress and
+    // options.cancel; the cache and `parallel` are the Design's) and, with `analyze`, finds
+    // the topology and periodic orbits. Needs no lock; one Solve runs at a time per Design
+    // (a second one waits: they share the solver set-up). Throws GenerationCancelled or
+    // tvf::Error as generate() does.
+    void run(GenerateOptions options = {}, bool analyze = false);
+    // What run() made (null before).
+    std::shared_ptr<const DesignResult> result() const { return made_; }
+
+  private:
+    friend class Design;
+    long long revision_ = 0;
+    Scene scene_;
+    std::shared_ptr<const DesignSpace> space_;  // null: built by run()
+    std::shared_ptr<const DesignSpace> given_;  // the mesh given in code, for its domain
+    std::string space_key_, given_key_;
+    std::shared_ptr<DesignSolverCache> shared_;  // the Design's solver cache and its lock
+    bool parallel_ = true;
+    std::shared_ptr<DesignResult> made_;
+  };
+  // The generation of the current scene (throws tvf::Error without a scene).
+  Solve prepare_solve() const;
+  // Makes solve's result the current scene's when the Design is still at its revision
+  // (true), and keeps the domain it built; false (nothing changes but the kept domain)
+  // when a change came since.
+  bool adopt(Solve&& solve);
+
+  // One edit of the scene at one revision: the scene with the entry appended to its edits
+  // (validated with the scene, errors naming `label` and "edits[k]"; a missing label is
+  // the scene's), applied later to the field of that revision.
+  class EditJob {
+  public:
+    long long revision() const { return revision_; }
+    const Scene& scene() const { return scene_; }  // with the new edit
+    const Edit& edit() const { return scene_.edits.back(); }
+    // Applies the edit to `base`, the result of revision() (Design::result() then, or one
+    // the caller kept): on the field before the scene's projection, which is then done
+    // again, exactly as Design::edit; with `analyze`, the topology and periodic orbits of
+    // the edited field too. Needs no lock. A refused edit throws EditRefused (Design::edit
+    // turns it into its tvf::Error sentence), and nothing changes.
+    EditReport run(const std::shared_ptr<const DesignResult>& base, bool analyze = false);
+    std::shared_ptr<const DesignResult> result() const { return made_; }
+
+  private:
+    friend class Design;
+    long long revision_ = 0;
+    Scene base_scene_, scene_;
+    bool parallel_ = true;
+    std::shared_ptr<DesignResult> made_;
+  };
+  EditJob prepare_edit(const nlohmann::json& entry, const std::string& label = "") const;
+  // Commits the edited scene with its field (recorded in the history, one revision more)
+  // when the Design is still at the job's revision and the job has run (true); false and
+  // nothing changes otherwise. DesignOptions::before_change is called first.
+  bool adopt(EditJob&& job);
 
 private:
   struct State;
