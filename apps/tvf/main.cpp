@@ -205,11 +205,10 @@ int run_validate(const std::string& path, bool with_domain) {
               path.c_str(), scene.elements.size(), scene.keyframes.size(), scene.time.frames,
               scene.time.t0, scene.time.t1, to_string(scene.generator));
   if (with_domain) {
-    const auto space = make_design_space(scene);
-    std::printf("domain: %d vertices, %d faces, %s, Euler characteristic %d\n",
-                space->mesh().num_vertices(), space->mesh().num_faces(),
-                space->mesh().is_closed() ? "closed" : "with boundary",
-                space->mesh().euler_characteristic());
+    Design design(scene);
+    const Mesh& mesh = design.space().mesh();
+    std::printf("domain: %d vertices, %d faces, %s, Euler characteristic %d\n", mesh.num_vertices(),
+                mesh.num_faces(), mesh.is_closed() ? "closed" : "with boundary", mesh.euler_characteristic());
   }
   for (const auto& w : design_warnings(scene)) std::fprintf(stderr, "warning: %s\n", w.c_str());
   return 0;

@@ -1,16 +1,11 @@
 #include "tvf/serve/session.h"
 
-#include "tvf/analysis/topology.h"
+#include "tvf/api/design.h"
 #include "tvf/core/atomic_output.h"
-#include "tvf/scene/design_space.h"
-#include "tvf/design/generate.h"
 #include "tvf/design/outputs.h"
 #include "tvf/scene/scene_json.h"
 #include "tvf/design/streamline_deform.h"
-#include "tvf/scene/edits.h"
-#include "tvf/edit/field_editor.h"
 #include "tvf/field/world_vectors.h"
-#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/render/texture_animation.h"
 #include "tvf/render/video.h"
 
@@ -22,9 +17,9 @@
 #include <chrono>
 #include <cstdlib>
 #include <condition_variable>
-#include <deque>
 #include <mutex>
 #include <new>
+#include <optional>
 #include <string_view>
 #include <thread>
 
@@ -39,17 +34,17 @@ namespace tvf::serve {
 
 namespace {
 
-// What one generation made: everything the readers need, immutable once published.
+// A result as the readers get it: what the Design made for one scene (its field, domain,
+// report, topology and periodic orbits: complete, immutable once published), the
+// revision and scene it belongs to, and the seconds it took.
 struct Result {
   long long revision = 0;
   Scene scene;
-  std::shared_ptr<const DesignSpace> space;
-  Field field;
-  Topology topology;
-  PeriodicOrbits orbits;  // cycles and Hopf events (DESIGN §12)
-  std::vector<std::string> warnings;
-  std::string method;
+  std::shared_ptr<const DesignResult> made;
   double seconds = 0;
+  const DesignSpace& space() const { return *made->space; }
+  const Field& field() const { return made->field; }
+  const Topology& topology() const { return *made->topology; }
 };
 
 bool inside(const fs::path& root, const fs::path& p) {
@@ -113,11 +108,6 @@ void remove_stale_temporaries(const fs::path& folder) {
   }
 }
 
-// The key a design space is cached under: the domain as the scene writes it.
-std::string domain_key(const Scene& scene) {
-  return scene_to_json(scene)["domain"].dump() + "|" + scene.resolved_mesh_path();
-}
-
 }  // namespace
 
 struct Session::State {
@@ -127,9 +117,10 @@ struct Session::State {
   mutable std::mutex mutex;
   mutable std::condition_variable changed;  // a result was published or a solve failed
   std::condition_variable work;             // the worker has something to do
-  Scene scene;
-  long long revision = 1;
-  std::deque<json> undo, redo;
+  // The design (tvf/api/design.h): scene, revision, undo/redo history, domain, solver
+  // set-up and the field of its scene. Used under `mutex`; its Solves and EditJobs run
+  // without it. Kept fields: none (an undo regenerates, as a new scene does).
+  std::optional<Design> design;
 
   // Generation: the worker takes the newest revision; an older one still running is
   // cancelled through its own flag.
@@ -141,12 +132,6 @@ struct Session::State {
   int done = 0, total = 0;
   long long cancelled = 0;  // solves stopped because a newer change came
   std::shared_ptr<const Result> result;
-  std::shared_ptr<const DesignSpace> space;
-  std::string space_key;
-  // The solver set-up and last space-time solution, kept between the worker's solves
-  // (GenerateCache: a re-solve after a small change starts from the last result). Only
-  // the worker thread uses it.
-  GenerateCache solver_cache;
   std::thread worker;
 
   bool interrupted = false;  // interrupt(): waits end at once
@@ -187,64 +172,69 @@ struct Session::State {
     }
   }
 
-  // Makes `next` the current scene: saved first (so a failed save changes nothing), then
-  // the revision advances and a solve is scheduled. Caller holds `mutex`.
-  void commit(Scene next, bool record_undo, bool schedule_solve) {
-    save_scene(next, scene_path().string());
-    if (record_undo) {
-      undo.push_back(scene_to_json(scene));
-      while (static_cast<int>(undo.size()) > options.history) undo.pop_front();
-      redo.clear();
-    }
-    scene = std::move(next);
-    ++revision;
-    if (schedule_solve) schedule();
-    touch();
-  }
-
+  // A new revision needs its field: cancels the running solve and wakes the worker.
+  // Caller holds `mutex`.
   void schedule() {
     if (cancel) cancel->store(true);
     pending = true;
     state = "running";
     error.clear();
     done = 0;
-    total = scene.time.frames;
+    total = design->scene().time.frames;
     work.notify_one();
     touch();
   }
 
+  // The worker: prepares the Design's Solve of the newest revision under the lock, runs it
+  // without (a newer change cancels it through its own flag), and publishes its result
+  // when the Design is still at that revision.
   void run_worker() {
     std::unique_lock lock(mutex);
     for (;;) {
       work.wait(lock, [&] { return pending || stop; });
       if (stop) return;
       pending = false;
-      const Scene job = scene;
-      const long long job_revision = revision;
+      Design::Solve job = design->prepare_solve();
       auto flag = std::make_shared<std::atomic<bool>>(false);
       cancel = flag;
       lock.unlock();
-      std::shared_ptr<Result> made;
       std::string failure;
       bool stopped = false;
+      const auto start = std::chrono::steady_clock::now();
       try {
-        made = generate_result(job, job_revision, *flag);
+        GenerateOptions go;
+        go.cancel = flag.get();
+        go.progress = [this](int d, int t) {
+          std::lock_guard progress_lock(mutex);
+          done = d;
+          total = t;
+        };
+        job.run(go, true);
       } catch (const GenerationCancelled&) {
         stopped = true;
       } catch (const std::bad_alloc&) {
+        const Scene& s = job.scene();
         failure = fmt::format("the scene needs more memory than this machine has ({} frames of {}): make the "
                               "grid, the mesh or time.frames smaller",
-                              job.time.frames, job.domain.is_planar() && job.domain.grid
-                                                   ? fmt::format("a {}×{} grid", job.domain.grid->nx, job.domain.grid->ny)
-                                                   : std::string("the surface"));
+                              s.time.frames, s.domain.is_planar() && s.domain.grid
+                                                 ? fmt::format("a {}×{} grid", s.domain.grid->nx, s.domain.grid->ny)
+                                                 : std::string("the surface"));
       } catch (const std::exception& e) {
         failure = e.what();
       }
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       lock.lock();
       if (stopped) ++cancelled;
-      if (job_revision != revision) continue;  // superseded: its successor is pending
-      if (made) {
-        result = std::move(made);
+      const long long job_revision = job.revision();
+      if (job_revision != design->revision()) continue;  // superseded: its successor is pending
+      if (job.result()) {
+        auto published = std::make_shared<Result>();
+        published->revision = job_revision;
+        published->scene = job.scene();
+        published->made = job.result();
+        published->seconds = seconds;
+        design->adopt(std::move(job));
+        result = std::move(published);
         state = "ready";
       } else if (!failure.empty()) {
         state = "failed";
@@ -252,49 +242,6 @@ struct Session::State {
       }
       touch();
     }
-  }
-
-  std::shared_ptr<const DesignSpace> space_for(const Scene& s) {
-    const std::string key = domain_key(s);
-    {
-      std::lock_guard lock(mutex);
-      if (space && key == space_key) return space;
-    }
-    std::shared_ptr<const DesignSpace> made = make_design_space(s);
-    std::lock_guard lock(mutex);
-    space = made;
-    space_key = key;
-    return made;
-  }
-
-  std::shared_ptr<Result> generate_result(const Scene& s, long long rev, const std::atomic<bool>& flag) {
-    const auto start = std::chrono::steady_clock::now();
-    auto r = std::make_shared<Result>();
-    r->revision = rev;
-    r->scene = s;
-    r->space = space_for(s);
-    GenerateOptions go;
-    go.parallel = options.parallel;
-    go.cancel = &flag;
-    go.cache = &solver_cache;
-    go.progress = [this](int d, int t) {
-      std::lock_guard lock(mutex);
-      done = d;
-      total = t;
-    };
-    GenerateReport report;
-    r->field = generate(*r->space, s, go, &report);
-    check_cancelled(go);
-    TopologyOptions to;
-    to.parallel = options.parallel;
-    r->topology = analyze_topology(r->space->bundle(), r->field, to);
-    PeriodicOrbitOptions po;
-    po.parallel = options.parallel;
-    r->orbits = find_periodic_orbits(r->space->bundle(), r->field, r->topology, po);
-    r->warnings = report.warnings;
-    r->method = report.method;
-    r->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return r;
   }
 
   // The field of revision `want`, waiting for a running solve until `deadline` without
@@ -305,18 +252,19 @@ struct Session::State {
                                           std::chrono::steady_clock::time_point deadline) const {
     std::unique_lock lock(mutex);
     const bool any = want == kAnyRevision;
-    check_revision(want, revision, what);
-    auto target = [&] { return any ? revision : want; };
+    const auto revision = [&] { return design->revision(); };
+    check_revision(want, revision(), what);
+    auto target = [&] { return any ? revision() : want; };
     changed.wait_until(lock, deadline, [&] {
-      return interrupted || revision != target() || (result && result->revision == target()) || state == "failed";
+      return interrupted || revision() != target() || (result && result->revision == target()) || state == "failed";
     });
     if (interrupted) throw RequestError(503, fmt::format("{}: the server is stopping", what));
-    check_revision(want, revision, what);
-    if (result && result->revision == revision) return result;
+    check_revision(want, revision(), what);
+    if (result && result->revision == revision()) return result;
     if (state == "failed") throw RequestError(409, fmt::format("{}: the scene has no field: {}", what, error));
     throw RequestError(409, fmt::format("{}: the field of revision {} is still being generated ({}/{} frames); try "
                                         "again when /api/status says ready",
-                                        what, revision, done, total));
+                                        what, revision(), done, total));
   }
   std::chrono::steady_clock::time_point wait_deadline() const {
     return std::chrono::steady_clock::now() +
@@ -333,12 +281,12 @@ struct Session::State {
   }
 
   json scene_json() const {
-    return {{"revision", revision},
-            {"scene", scene_to_json(scene)},
-            {"text", scene_to_text(scene)},
+    return {{"revision", design->revision()},
+            {"scene", scene_to_json(design->scene())},
+            {"text", scene_to_text(design->scene())},
             {"path", options.scene},
-            {"can_undo", !undo.empty()},
-            {"can_redo", !redo.empty()}};
+            {"can_undo", design->can_undo()},
+            {"can_redo", design->can_redo()}};
   }
 };
 
@@ -355,16 +303,24 @@ Session::Session(SessionOptions options) : s_(std::make_unique<State>()) {
     throw Error(fmt::format("{}: the scene must be a file inside the working folder {}", s_->options.scene,
                             s_->dir.string()));
   const fs::path path = s_->scene_path();
+  Scene scene;
   if (fs::exists(path)) {
-    s_->scene = load_scene(path.string());
+    scene = load_scene(path.string());
   } else {
     if (s_->options.initial_scene.empty())
       throw Error(fmt::format("{}: no such scene file, and no scene to start from", path.string()));
-    s_->scene = parse_scene(s_->options.initial_scene, path.string());
-    s_->scene.source_path = path.string();
-    save_scene(s_->scene, path.string());
+    scene = parse_scene(s_->options.initial_scene, path.string());
+    scene.source_path = path.string();
+    save_scene(scene, path.string());
   }
-  s_->check_scene_paths(s_->scene);
+  s_->check_scene_paths(scene);
+  DesignOptions design_options;
+  design_options.parallel = s_->options.parallel;
+  design_options.history = s_->options.history;
+  design_options.kept_fields = 0;
+  // Every change is saved first, so that one that cannot be saved is not made.
+  design_options.before_change = [path](const Scene& next) { save_scene(next, path.string()); };
+  s_->design.emplace(std::move(scene), std::move(design_options));
   remove_stale_temporaries(s_->dir);
   if (path.parent_path() != s_->dir) remove_stale_temporaries(path.parent_path());
   s_->worker = std::thread([this] { s_->run_worker(); });
@@ -394,7 +350,7 @@ json Session::scene() const {
 
 long long Session::revision() const {
   std::lock_guard lock(s_->mutex);
-  return s_->revision;
+  return s_->design->revision();
 }
 
 void Session::interrupt() {
@@ -407,12 +363,13 @@ void Session::interrupt() {
 json Session::put_scene(const json& j, long long on_revision) {
   {
     std::lock_guard lock(s_->mutex);  // refuse a stale change before the work of parsing it
-    check_revision(on_revision, s_->revision, "scene");
+    check_revision(on_revision, s_->design->revision(), "scene");
   }
   Scene next = s_->parse(j);
   std::lock_guard lock(s_->mutex);
-  check_revision(on_revision, s_->revision, "scene");
-  s_->commit(std::move(next), true, true);
+  check_revision(on_revision, s_->design->revision(), "scene");
+  s_->design->set_scene(std::move(next));
+  s_->schedule();
   return s_->scene_json();
 }
 
@@ -431,91 +388,79 @@ json Session::edit(const json& entry, long long on_revision) {
 }
 
 json Session::edit_on(const json& entry, long long on_revision, std::chrono::steady_clock::time_point deadline) {
-  Scene base;
-  long long base_revision = 0;
+  // The edit on the current revision: the scene with it appended, validated (400 naming
+  // its JSON path) under the lock; applied below without it.
+  std::optional<Design::EditJob> job;
   {
     std::lock_guard lock(s_->mutex);
-    check_revision(on_revision, s_->revision, "edit");
-    base = s_->scene;
-    base_revision = s_->revision;
+    check_revision(on_revision, s_->design->revision(), "edit");
+    try {
+      job.emplace(s_->design->prepare_edit(entry, s_->options.scene));
+    } catch (const Error& e) {
+      throw RequestError(400, e.what(), location_of(e));
+    }
   }
-  json j = scene_to_json(base);
-  j["edits"].push_back(entry);
-  const std::string where = fmt::format("edits[{}]", j["edits"].size() - 1);
-  const Scene edited = s_->parse(j);
-  const Edit e = edited.edits.back();
+  s_->check_scene_paths(job->scene());
+  const std::string where = fmt::format("edits[{}]", job->scene().edits.size() - 1);
 
   // The field of the revision the edit was made on (no lock held while waiting).
-  const std::shared_ptr<const Result> r = s_->result_of(base_revision, "edit", deadline);
-  auto made = std::make_shared<Result>();
-  made->scene = edited;
-  made->space = r->space;
-  made->field = r->field;
-  made->warnings = r->warnings;
-  made->method = r->method;
-  EditReport report;
+  const std::shared_ptr<const Result> r = s_->result_of(job->revision(), "edit", deadline);
   const auto start = std::chrono::steady_clock::now();
+  EditReport report;
   try {
-    FieldEditor editor(*r->space, edit_settings(base));
-    report = editor.apply(made->field, e);
+    report = job->run(r->made, true);
   } catch (const EditRefused& refused) {
-    throw RequestError(422, fmt::format("refused to {}: {}; the scene is unchanged", describe(e), refused.what()));
+    throw RequestError(422, fmt::format("refused to {}: {}; the scene is unchanged", describe(job->edit()),
+                                        refused.what()));
   } catch (const Error& err) {
     throw RequestError(422, fmt::format("{}: {}", where, err.what()), location_of(err));
   }
-  TopologyOptions to;
-  to.parallel = s_->options.parallel;
-  made->topology = analyze_topology(r->space->bundle(), made->field, to);
-  PeriodicOrbitOptions po;
-  po.parallel = s_->options.parallel;
-  made->orbits = find_periodic_orbits(r->space->bundle(), made->field, made->topology, po);
+  auto made = std::make_shared<Result>();
+  made->scene = job->scene();
+  made->made = job->result();
   made->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::lock_guard lock(s_->mutex);
-  check_revision(base_revision, s_->revision, "edit");
-  s_->commit(edited, true, false);
-  made->revision = s_->revision;
+  check_revision(job->revision(), s_->design->revision(), "edit");
+  s_->design->adopt(std::move(*job));  // saves the scene first (before_change)
+  made->revision = s_->design->revision();
   if (s_->cancel) s_->cancel->store(true);
   s_->result = std::move(made);
   s_->state = "ready";
   s_->error.clear();
   s_->touch();
-  return {{"revision", s_->revision}, {"summary", report.summary}};
+  return {{"revision", s_->design->revision()}, {"summary", report.summary}};
 }
 
 json Session::undo(long long on_revision) {
   std::lock_guard lock(s_->mutex);
-  check_revision(on_revision, s_->revision, "undo");
-  if (s_->undo.empty()) throw RequestError(409, "nothing to undo");
-  Scene previous = s_->parse(s_->undo.back());
-  s_->redo.push_back(scene_to_json(s_->scene));
-  s_->undo.pop_back();
-  s_->commit(std::move(previous), false, true);
+  check_revision(on_revision, s_->design->revision(), "undo");
+  if (!s_->design->can_undo()) throw RequestError(409, "nothing to undo");
+  s_->design->undo();  // saves the scene first (before_change)
+  s_->schedule();
   return s_->scene_json();
 }
 
 json Session::redo(long long on_revision) {
   std::lock_guard lock(s_->mutex);
-  check_revision(on_revision, s_->revision, "redo");
-  if (s_->redo.empty()) throw RequestError(409, "nothing to redo");
-  Scene next = s_->parse(s_->redo.back());
-  s_->undo.push_back(scene_to_json(s_->scene));
-  s_->redo.pop_back();
-  s_->commit(std::move(next), false, true);
+  check_revision(on_revision, s_->design->revision(), "redo");
+  if (!s_->design->can_redo()) throw RequestError(409, "nothing to redo");
+  s_->design->redo();
+  s_->schedule();
   return s_->scene_json();
 }
 
 json Session::status() const {
   std::lock_guard lock(s_->mutex);
-  json j = {{"revision", s_->revision},
+  json j = {{"revision", s_->design->revision()},
             {"result_revision", s_->result ? s_->result->revision : 0},
             {"state", s_->state},
             {"progress", {s_->done, s_->total}},
             {"error", s_->error},
             {"cancelled", s_->cancelled}};
   if (s_->result) {
-    j["warnings"] = s_->result->warnings;
-    j["method"] = s_->result->method;
+    j["warnings"] = s_->result->made->report.warnings;
+    j["method"] = s_->result->made->report.method;
     j["seconds"] = s_->result->seconds;
   }
   return j;
@@ -531,13 +476,13 @@ long long Session::wait_change(long long seen, double seconds) const {
 bool Session::wait_idle(double seconds) const {
   std::unique_lock lock(s_->mutex);
   return s_->changed.wait_for(lock, std::chrono::duration<double>(seconds), [&] {
-    return (s_->result && s_->result->revision == s_->revision) || s_->state == "failed";
+    return (s_->result && s_->result->revision == s_->design->revision()) || s_->state == "failed";
   });
 }
 
 json Session::mesh() const {
   const auto r = s_->current_result();
-  const Mesh& m = r->space->mesh();
+  const Mesh& m = r->space().mesh();
   const bool planar = r->scene.domain.is_planar();
   std::vector<float> v;
   v.reserve(static_cast<size_t>(m.num_vertices()) * 3);
@@ -556,29 +501,29 @@ json Session::mesh() const {
 
 json Session::frame(int j) const {
   const auto r = s_->current_result();
-  const int frames = r->field.frames();
+  const int frames = r->field().frames();
   if (j < 0 || j >= frames)
     throw RequestError(400, fmt::format("frame: {} is outside [0, {}]", j, frames - 1));
   const bool planar = r->scene.domain.is_planar();
   json sing = json::array();
-  const auto& list = r->topology.singularities[static_cast<size_t>(j)];
+  const auto& list = r->topology().singularities[static_cast<size_t>(j)];
   for (size_t k = 0; k < list.size(); ++k)
     sing.push_back({{"position", vec3(list[k].position, planar)},
                     {"type", to_string(list[k].type)},
                     {"index", list[k].index},
-                    {"path", r->topology.singularity_path[static_cast<size_t>(j)][k]}});
+                    {"path", r->topology().singularity_path[static_cast<size_t>(j)][k]}});
   return {{"revision", r->revision},
           {"frame", j},
           {"frames", frames},
-          {"t", r->field.time().time(j)},
-          {"vectors", compact(world_vectors_f32(r->space->bundle(), r->field, j))},
+          {"t", r->field().time().time(j)},
+          {"vectors", compact(world_vectors_f32(r->space().bundle(), r->field(), j))},
           {"singularities", sing}};
 }
 
 json Session::analysis() const {
   const auto r = s_->current_result();
-  json j = topology_to_json(r->topology);
-  add_periodic_orbits_to_json(j, r->orbits);
+  json j = topology_to_json(r->topology());
+  add_periodic_orbits_to_json(j, *r->made->orbits);
   j["revision"] = r->revision;
   return j;
 }
@@ -606,7 +551,7 @@ json Session::seed_translation(const json& request) const {
   const Vec3 seed = position("seed");
   const Vec3 to = position("to");
   try {
-    return {{"translate", vec3(tvf::seed_translation(*r->space, seed, to), planar)}};
+    return {{"translate", vec3(tvf::seed_translation(r->space(), seed, to), planar)}};
   } catch (const Error& e) {
     throw RequestError(422, e.what());
   }
@@ -653,7 +598,7 @@ json Session::export_field(const json& request, long long on_revision) {
   o.vtk = format != "npy";
   json files = json::array();
   try {
-    for (const fs::path& f : write_field_outputs(out, *r->space, r->field, r->scene, o))
+    for (const fs::path& f : write_field_outputs(out, r->space(), r->field(), r->scene, o))
       files.push_back(fs::relative(f, s_->dir).generic_string());
   } catch (const Error& e) {
     throw RequestError(400, e.what());
@@ -717,7 +662,7 @@ json Session::render_video(const json& request, long long on_revision) {
     // running twice at once, and a second request is refused rather than queued.
     std::unique_lock lock(s_->render_mutex, std::try_to_lock);
     if (!lock.owns_lock()) throw RequestError(503, "render: a video is being rendered; try again when it is done");
-    const TextureAnimationReport rep = write_texture_animation(r->space->bundle(), r->field, o);
+    const TextureAnimationReport rep = write_texture_animation(r->space().bundle(), r->field(), o);
     return {{"revision", r->revision},
             {"file", fs::relative(out, s_->dir).generic_string()},
             {"frames", rep.frames},
