@@ -145,6 +145,34 @@ TEST(ServeSession, EditsApplyToTheFieldAndARestartedSessionComesBackToThem) {
   EXPECT_EQ(status_of([&] { again.undo(); }), 409);  // the undo history is per session
 }
 
+// An edit on an incompressible scene acts, as `tvf edit` and tvf::Design's do, on the field
+// before the projection, which is made again: a restarted session, which replays the saved
+// edit, comes back to the same field (the session's own copy of the pipeline smoothed
+// the projected field and did not project again, so the two differed).
+TEST(ServeSession, AnEditOnAnIncompressibleSceneIsTheFieldARestartReplays) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  json scene = json::parse(test::kServeScene);
+  scene["incompressible"] = true;
+  o.initial_scene = scene.dump();
+  json frame_after;
+  {
+    Session s(o);
+    ASSERT_TRUE(s.wait_idle(60));
+    const json r = s.edit({{"op", "smooth"}, {"strength", 0.5}});
+    frame_after = s.frame(10);
+    EXPECT_EQ(frame_after["revision"], r["revision"]);
+  }
+  Session again(o);
+  ASSERT_TRUE(again.wait_idle(60));
+  const json f = again.frame(10);
+  ASSERT_EQ(f["vectors"].size(), frame_after["vectors"].size());
+  double worst = 0;
+  for (size_t i = 0; i < f["vectors"].size(); ++i)
+    worst = std::max(worst, std::abs(f["vectors"][i].get<double>() - frame_after["vectors"][i].get<double>()));
+  EXPECT_LT(worst, 1e-5);
+}
+
 TEST(ServeSession, ANewerChangeCancelsTheRunningSolve) {
   test::TempDir dir;
   SessionOptions o = options_in(dir);
