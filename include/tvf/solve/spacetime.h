@@ -63,6 +63,11 @@ struct SpaceTimeOptions {
   // segment as a coarse correction before the temporal line solves (flexible CG). 0: the
   // line solves alone (the method before it, kept as the benchmarks' baseline).
   int coarse_modes = 4;
+  // CG with coarse modes only: a local solve after the coarse correction on the vertices
+  // whose temporal line a moving constraint cuts, grown by this many rings of neighbours
+  // (all frames; a few CG iterations with the line solves). Negative: none (the two-level
+  // method before it, kept as the benchmarks' baseline).
+  int local_rings = 1;
 };
 
 class SpaceTimeSolver {
