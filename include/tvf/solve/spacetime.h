@@ -22,7 +22,9 @@
 //   temporal modes × smooth spatial error; a coarse correction over the lowest
 //   `coarse_modes` temporal modes of every segment (each mode's spatial system by
 //   Jacobi-PCG, as the mode method's) takes that out before the line solves (flexible
-//   CG): ~20–26 iterations instead of 66–72 on the benchmark problems.
+//   CG), and a local solve on the vertices whose temporal line a moving constraint cuts
+//   (`local_rings`) what the coarse space represents poorly: ~15 iterations instead of
+//   66–72 (65² grid, moving vortex).
 //
 // The solver object keeps its set-up (row-major operator, temporal eigenbases, the solve's
 // vectors) between solves, and every solve starts from the z it is given (warm start
@@ -63,6 +65,12 @@ struct SpaceTimeOptions {
   // segment as a coarse correction before the temporal line solves (flexible CG). 0: the
   // line solves alone (the method before it, kept as the benchmarks' baseline).
   int coarse_modes = 4;
+  // CG with coarse modes only: a local solve after the coarse correction on the vertices
+  // whose temporal line a moving constraint cuts, grown by this many rings of neighbours
+  // (all frames; a few CG iterations with the line solves). 0: those vertices alone (one
+  // ring measured the same outer iterations for more work). Negative: none (the two-level
+  // method before it, kept as the benchmarks' baseline).
+  int local_rings = 0;
 };
 
 class SpaceTimeSolver {
