@@ -55,10 +55,10 @@ void one_frame(benchmark::State& state, bool walk) {
 }
 
 void BM_FtleOneFrame(benchmark::State& state) { one_frame(state, false); }
-BENCHMARK(BM_FtleOneFrame)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_FtleOneFrame)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 void BM_FtleOneFrameWalk(benchmark::State& state) { one_frame(state, true); }
-BENCHMARK(BM_FtleOneFrameWalk)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_FtleOneFrameWalk)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 void series(benchmark::State& state, bool compose) {
   const Gyre& g = gyre();
@@ -73,11 +73,11 @@ void series(benchmark::State& state, bool compose) {
 }
 
 void BM_FtleSeries(benchmark::State& state) { series(state, false); }
-BENCHMARK(BM_FtleSeries)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_FtleSeries)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime()->Iterations(1);
 
 // The series by flow-map composition (FtleOptions::compose).
 void BM_FtleSeriesComposed(benchmark::State& state) { series(state, true); }
-BENCHMARK(BM_FtleSeriesComposed)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_FtleSeriesComposed)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 }  // namespace
 }  // namespace tvf

@@ -50,7 +50,7 @@ std::optional<GridLayout> detect_grid(const TangentBundle& bundle) {
 }
 
 void GridFlow::locate(const Vec2& p, int& ix, int& iy, double& fx, double& fy) const {
-  const double u = (p.x() - g_.x0) / g_.hx, v = (p.y() - g_.y0) / g_.hy;
+  const double u = (p.x() - g_.x0) * inv_hx_, v = (p.y() - g_.y0) * inv_hy_;
   ix = std::clamp(static_cast<int>(std::floor(u)), 0, g_.nx - 2);
   iy = std::clamp(static_cast<int>(std::floor(v)), 0, g_.ny - 2);
   fx = std::clamp(u - ix, 0.0, 1.0);
@@ -101,6 +101,9 @@ Vec2 GridFlow::velocity(const Vec2& p, int j, double w) const {
 }
 
 GridFlow::Move GridFlow::move(const Vec2& p, const Vec2& d) const {
+  // Most moves stay inside the box.
+  const Vec2 e = p + d;
+  if (e.x() >= g_.x0 && e.x() <= g_.x1() && e.y() >= g_.y0 && e.y() <= g_.y1()) return {e};
   Move m{p};
   Vec2 rem = d;
   const double tol = 1e-6 * d.norm();

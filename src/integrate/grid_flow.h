@@ -31,7 +31,8 @@ std::optional<GridLayout> detect_grid(const TangentBundle& bundle);
 
 class GridFlow {
 public:
-  GridFlow(const GridLayout& grid, const Field& field) : g_(grid), field_(field) {}
+  GridFlow(const GridLayout& grid, const Field& field)
+      : g_(grid), field_(field), inv_hx_(1.0 / grid.hx), inv_hy_(1.0 / grid.hy) {}
 
   struct Move {
     Vec2 end;
@@ -56,6 +57,7 @@ private:
 
   GridLayout g_;
   const Field& field_;
+  double inv_hx_, inv_hy_;
 };
 
 }  // namespace tvf::detail
