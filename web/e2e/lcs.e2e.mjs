@@ -195,6 +195,24 @@ try {
   await page.waitForFunction(() => Math.abs(window.tvf.lcs.dye[0]?.t - 5) < 1e-9, null, { timeout: 60000 });
   const dye5 = await page.evaluate(() => window.tvf.lcs.dye[0]);
   check(dye5.points.length < dye10.points.length, `at t = 5 the streak is younger (${dye5.points.length} points)`);
+  // A timeline: the segment y = 0.5 dragged at t = 5, then seen at t = 10, wound round
+  // the gyres and refined where it stretches.
+  await page.selectOption("#lcs-mode", "off");
+  await d.drag([
+    [0.1, 0.5],
+    [1.9, 0.5],
+  ]);
+  await page.waitForFunction(() => window.tvf.lcs.timelines.length === 1, null, { timeout: 60000 });
+  const drawn = await page.evaluate(() => window.tvf.lcs.timelines[0]);
+  check(drawn.points.every((p) => Math.abs(p[1] - 0.5) < 0.02), `at the time it is drawn the timeline is the segment (${drawn.points.length} points)`);
+  await d.goto(20);
+  await page.waitForFunction(() => Math.abs(window.tvf.lcs.timelines[0]?.t - 10) < 1e-9, null, { timeout: 60000 });
+  const carried = await page.evaluate(() => window.tvf.lcs.timelines[0]);
+  const ys = carried.points.map((p) => p[1]);
+  check(carried.points.length > drawn.points.length && Math.max(...ys) - Math.min(...ys) > 0.3,
+    `five time units later it is carried and stretched (${carried.points.length} points, y over ${Math.min(...ys).toFixed(2)}–${Math.max(...ys).toFixed(2)})`);
+  await d.shot(a.out, "lcs_timeline_t10.png");
+  await d.goto(10);
   // With the FTLE under it.
   await page.selectOption("#lcs-mode", "forward");
   await waitFtle("forward", 5);

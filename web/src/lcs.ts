@@ -1,9 +1,11 @@
 // The designer's Lagrangian overlays on the planar view (docs/user_guide.md, "The
 // designer's LCS overlay"): the finite-time Lyapunov exponent at the current time
 // (GET /api/ftle, forward: repelling LCS, backward: attracting) as a magma colour map
-// with its legend, and dye: streaklines released from clicked seeds since the field's
-// first time, drawn at the current time (POST /api/streakline). Both are fetched again
-// when the time or the field changes; a request overtaken by a newer one is dropped.
+// with its legend; dye: streaklines released from clicked seeds since the field's first
+// time, drawn at the current time (POST /api/streakline); and timelines: segments drawn
+// at some time, carried by the flow to the current time (POST /api/timeline). All are
+// fetched again when the time or the field changes; a request overtaken by a newer one
+// is dropped.
 import { ApiError } from "./api";
 import type { View } from "./view";
 
@@ -50,6 +52,7 @@ export const lcsApi = {
   ftle: (t: number, horizon: number, direction: "forward" | "backward") =>
     call<FtleAnswer>("GET", `api/ftle?t=${t}&horizon=${horizon}&direction=${direction}`),
   streakline: (seed: number[], from: number, to: number) => call<CurveAnswer>("POST", "api/streakline", { seed, from, to }),
+  timeline: (line: number[][], from: number, to: number) => call<CurveAnswer>("POST", "api/timeline", { line, from, to }),
 };
 
 // Magma (the colour map of tvf ftle's pictures, render/lcs_pictures.cpp), s in [0, 1].
@@ -74,6 +77,7 @@ export function magma(s: number): [number, number, number] {
 }
 
 export const DYE_COLOR = "#16a34a";
+export const TIMELINE_COLOR = "#0ea5e9";
 
 export interface Grid {
   size: [number, number];
@@ -85,8 +89,12 @@ export class LcsOverlay {
   direction: FtleDirection = "off";
   horizon = 1;
   seeds: number[][] = [];
+  // Timelines: segments drawn at time t, shown carried by the flow to the current time
+  // (backwards in time before t).
+  lines: { line: number[][]; t: number }[] = [];
   ftle?: FtleAnswer;
   dye: CurveAnswer[] = [];
+  timelines: CurveAnswer[] = [];
   // Milliseconds of the last FTLE update, from the request to the picture (the e2e test reports it).
   lastUpdateMs = 0;
   error = "";
@@ -152,17 +160,23 @@ export class LcsOverlay {
 
   private async updateDye(t: number, t0: number) {
     const ticket = ++this.dyeTicket;
-    if (this.seeds.length === 0) {
+    if (this.seeds.length === 0 && this.lines.length === 0) {
       this.dye = [];
+      this.timelines = [];
       return;
     }
     try {
-      const lines = await Promise.all(this.seeds.map((s) => lcsApi.streakline(s, t0, t)));
+      const [streaks, material] = await Promise.all([
+        Promise.all(this.seeds.map((s) => lcsApi.streakline(s, t0, t))),
+        Promise.all(this.lines.map((l) => lcsApi.timeline(l.line, l.t, t))),
+      ]);
       if (ticket !== this.dyeTicket) return;
-      this.dye = lines;
+      this.dye = streaks;
+      this.timelines = material;
     } catch (e) {
       if (ticket !== this.dyeTicket) return;
       this.dye = [];
+      this.timelines = [];
       if (!(e instanceof ApiError && e.status === 409)) this.onError((e as Error).message);
     }
     this.onChange();
@@ -180,8 +194,8 @@ export class LcsOverlay {
   // The dye lines and seeds, and the FTLE legend.
   drawMarks(ctx: CanvasRenderingContext2D, v: View) {
     ctx.lineWidth = 2.5;
-    ctx.strokeStyle = DYE_COLOR;
-    for (const d of this.dye) {
+    for (const d of [...this.dye, ...this.timelines]) {
+      ctx.strokeStyle = this.dye.includes(d) ? DYE_COLOR : TIMELINE_COLOR;
       const gaps = new Set(d.gaps);
       ctx.beginPath();
       d.points.forEach((p, i) => {

@@ -624,9 +624,6 @@ canvas.addEventListener("pointerdown", (e) => {
     state.selected = S.pick(scene(), currentTime(), p, radius);
     if (state.selected) state.drag = { handle: state.selected, scene: scene() };
     redraw();
-  } else if (state.tool === "dye") {
-    lcs.seeds.push(p);
-    refreshLcs();
   } else if (state.tool === "cancel") {
     pickForCancel(p, view().worldLength(20));
   } else if (state.tool === "move-bifurcation") {
@@ -677,6 +674,11 @@ canvas.addEventListener("pointerup", (e) => {
       else if (isClick) void change((s) => S.addSingular(s, type, stroke[0], undefined, ts), `fixed ${type} placed`);
       // A drag: the element moves along the dragged curve (a few of its points).
       else void change((s) => S.addSingularPath(s, type, resample(stroke, 6), ts, te), `${type} moving along the drawn curve from t = ${ts} to ${te}`);
+    } else if (state.tool === "dye") {
+      // A click: a streakline's seed; a drag: a timeline, the segment at this time.
+      if (isClick) lcs.seeds.push(stroke[0]);
+      else lcs.lines.push({ line: [stroke[0], p], t: currentTime() });
+      refreshLcs();
     } else if (state.tool === "pathline") {
       if (isClick) return say("drag to draw a pathline", true);
       void change((s) => S.addPathline(s, resample(stroke, 6), ts, te), `pathline from t = ${ts} to ${te}`);
@@ -893,6 +895,7 @@ $<HTMLInputElement>("lcs-horizon").addEventListener("change", (e) => {
 });
 $("dye-clear").addEventListener("click", () => {
   lcs.seeds = [];
+  lcs.lines = [];
   refreshLcs();
   redraw();
 });
