@@ -87,6 +87,9 @@ LcsCommand::LcsCommand(CLI::App& app) {
   ftle_->add_option("--every", every_,
                     "Compute every K-th frame only (frames 0, K, 2K, …; the others are NaN): a faster look")
       ->capture_default_str();
+  ftle_->add_flag("--compose", compose_,
+                  "Planar grids: compose per-frame flow maps instead of integrating every frame's window (much faster "
+                  "for a whole series, less accurate along the ridges; docs/user_guide.md)");
   ftle_->add_option("--pictures", pictures_, "Colour-mapped pictures per direction, frames evenly spaced (0: none)")
       ->capture_default_str();
   ftle_->add_option("-s,--size", size_, "Pixels on the long side of the pictures")->capture_default_str();
@@ -148,6 +151,7 @@ int LcsCommand::run_ftle() {
   o.backward = direction_ != "forward";
   o.beyond_range = beyond_ == "nan" ? HorizonPolicy::nan : HorizonPolicy::clamp;
   o.flow.dt = dt_;
+  o.compose = compose_;
   for (int j = 0; j < in.field.frames(); j += every_) o.frames.push_back(j);
   o.progress = [&](int done, int total) { progress.update(done, total); };
   progress.note("flow maps");
@@ -163,6 +167,7 @@ int LcsCommand::run_ftle() {
                          {"frames", r.frames},
                          {"vertices", r.vertices},
                          {"times", times}};
+  if (compose_) meta["compose"] = true;  // flow maps composed (--compose)
   for (const int dir : {1, -1}) {
     const std::vector<float>& values = dir > 0 ? r.forward : r.backward;
     if (values.empty()) continue;

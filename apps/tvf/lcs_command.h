@@ -34,6 +34,7 @@ private:
   std::string direction_ = "both", beyond_ = "clamp";
   int pictures_ = 4;
   int every_ = 1;
+  bool compose_ = false;
   // streaklines and timelines
   std::vector<double> seed_, line_;
   std::vector<double> from_, to_;  // empty: the field's time range

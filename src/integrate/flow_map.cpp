@@ -3,6 +3,8 @@
 #include "tvf/core/error.h"
 #include "tvf/integrate/surface_walk.h"
 
+#include "grid_flow.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -72,6 +74,8 @@ FlowMap::FlowMap(const TangentBundle& bundle, const Field& field, const FlowMapO
   const double frame_dt = time.frames > 1 ? span / (time.frames - 1) : span;
   dt_ = options.dt > 0 ? options.dt : 0.5 * frame_dt;
   if (!(dt_ > 0)) dt_ = 1.0;
+  if (!options.walk)
+    if (const auto g = detail::detect_grid(bundle)) grid_ = std::make_shared<const detail::GridFlow>(*g, field);
 }
 
 void FlowMap::check_time(double t) const {
@@ -110,6 +114,13 @@ FlowMapResult FlowMap::advect_through(const SurfacePoint& start, const std::vect
   out.where = start;
   out.t_left = knots.back();
   if (knots.front() == knots.back()) return out;
+  if (grid_) {
+    const Vec3 x = surface_position(bundle_.mesh(), start);
+    Vec2 p(x.x(), x.y());
+    out.left = grid_->advect(p, knots, dt_, out.t_left);
+    out.where = grid_->to_surface(p);
+    return out;
+  }
   // Particles are kept strictly inside their faces (moved towards the centroid by 1e-10 of
   // the face): a walk that starts on a vertex or an edge has no well-defined first face and
   // can circle the vertex. The shift is far below the integration error.

@@ -2,6 +2,8 @@
 
 #include "tvf/core/error.h"
 
+#include "grid_flow.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -94,10 +96,158 @@ std::vector<float> ftle_from_flow_map(const TangentBundle& bundle, const std::ve
   return out;
 }
 
+namespace {
+
+void check_horizon(double horizon) {
+  if (!(horizon > 0) || !std::isfinite(horizon))
+    throw Error(fmt::format("FTLE horizon {} must be a positive time", horizon));
+}
+
+// One time, one direction, with the flow map and the vertices' start points made once.
+FtleSlice slice(const TangentBundle& bundle, const FlowMap& flow, std::span<const SurfacePoint> starts, double t0,
+                double horizon, int dir, HorizonPolicy policy) {
+  const TimeSampling& time = flow.field().time();
+  const double lo = std::min(time.t0, time.t1), hi = std::max(time.t0, time.t1);
+  FtleSlice s;
+  double t1 = t0 + dir * horizon;
+  s.cut = t1 > hi + 1e-12 * (hi - lo) || t1 < lo - 1e-12 * (hi - lo);
+  if (s.cut) t1 = std::clamp(t1, lo, hi);
+  if ((s.cut && policy == HorizonPolicy::nan) || t1 == t0) {
+    s.values.assign(starts.size(), kNaN);
+    return s;
+  }
+  const std::vector<FlowMapResult> mapped = flow.advect(starts, t0, t1);
+  for (const auto& m : mapped) s.left += m.left;
+  s.span = std::abs(t1 - t0);
+  s.values = ftle_from_flow_map(bundle, mapped, s.span);
+  return s;
+}
+
+std::vector<SurfacePoint> vertex_starts(const Mesh& mesh) {
+  std::vector<SurfacePoint> starts(static_cast<size_t>(mesh.num_vertices()));
+  for (int v = 0; v < mesh.num_vertices(); ++v) starts[static_cast<size_t>(v)] = vertex_point(mesh, v);
+  return starts;
+}
+
+// compute_ftle with FtleOptions::compose on a planar grid.
+void compose_series(const TangentBundle& bundle, const Field& field, const FlowMap& flow,
+                    const detail::GridLayout& layout, const FtleOptions& options, const std::vector<int>& frames,
+                    FtleResult& r) {
+  const detail::GridFlow grid(layout, field);
+  const TimeSampling& time = field.time();
+  const int n = field.frames(), nv = r.vertices;
+  const double lo = std::min(time.t0, time.t1), hi = std::max(time.t0, time.t1);
+  const double eps = 1e-9 * std::max(1e-300, (hi - lo) / std::max(1, n - 1));
+  auto start = [&](int v) {
+    const Vec3& x = bundle.mesh().position(v);
+    return Vec2(x.x(), x.y());
+  };
+  // One-step maps of every frame interval k (t_k → t_{k+1} forward, back for backward),
+  // at every vertex: where it goes, and whether it left.
+  struct Step {
+    std::vector<Vec2> to;
+    std::vector<char> left;
+  };
+  auto steps = [&](int dir) {
+    Step m;
+    if (n < 2) return m;
+    const size_t size = static_cast<size_t>(n - 1) * static_cast<size_t>(nv);
+    m.to.resize(size);
+    m.left.resize(size);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, size, 256), [&](const tbb::blocked_range<size_t>& rr) {
+      for (size_t i = rr.begin(); i != rr.end(); ++i) {
+        const int k = static_cast<int>(i / static_cast<size_t>(nv)), v = static_cast<int>(i % static_cast<size_t>(nv));
+        Vec2 p = start(v);
+        double t_left = 0.0;
+        const std::vector<double> knots = dir > 0 ? std::vector<double>{time.time(k), time.time(k + 1)}
+                                                  : std::vector<double>{time.time(k + 1), time.time(k)};
+        m.left[i] = grid.advect(p, knots, flow.dt(), t_left);
+        m.to[i] = p;
+      }
+    });
+    return m;
+  };
+  // The one-step map of interval k at p (barycentric in p's triangle); false: it left.
+  auto apply = [&](const Step& m, int k, Vec2& p) {
+    std::array<int, 3> c{};
+    Vec3 w;
+    grid.corners(p, c, w);
+    Vec2 q = Vec2::Zero();
+    const size_t base = static_cast<size_t>(k) * static_cast<size_t>(nv);
+    for (int a = 0; a < 3; ++a) {
+      const size_t i = base + static_cast<size_t>(c[static_cast<size_t>(a)]);
+      if (w[a] > 1e-12 && m.left[i]) return false;
+      q += w[a] * m.to[i];
+    }
+    p = q;
+    return true;
+  };
+  const int total = static_cast<int>(frames.size()) * (options.forward + options.backward);
+  int done = 0;
+  for (const int dir : {1, -1}) {
+    if ((dir > 0 && !options.forward) || (dir < 0 && !options.backward)) continue;
+    const Step m = steps(dir);
+    std::vector<float>& values = dir > 0 ? r.forward : r.backward;
+    std::vector<double>& spans = dir > 0 ? r.forward_span : r.backward_span;
+    int& cut = dir > 0 ? r.forward_cut : r.backward_cut;
+    long& left = dir > 0 ? r.forward_left : r.backward_left;
+    values.assign(static_cast<size_t>(n) * static_cast<size_t>(nv), kNaN);
+    spans.assign(static_cast<size_t>(n), 0.0);
+    for (const int j : frames) {
+      const double t0 = time.time(j);
+      double t1 = t0 + dir * options.horizon;
+      const bool outside = t1 > hi + 1e-12 * (hi - lo) || t1 < lo - 1e-12 * (hi - lo);
+      cut += outside;
+      if (outside) t1 = std::clamp(t1, lo, hi);
+      if (!(outside && options.beyond_range == HorizonPolicy::nan) && t1 != t0) {
+        std::vector<FlowMapResult> mapped(static_cast<size_t>(nv));
+        tbb::parallel_for(tbb::blocked_range<int>(0, nv, 64), [&](const tbb::blocked_range<int>& rr) {
+          for (int v = rr.begin(); v != rr.end(); ++v) {
+            FlowMapResult& out = mapped[static_cast<size_t>(v)];
+            Vec2 p = start(v);
+            int k = j;  // the frame the particle is at
+            bool gone = false;
+            if (dir > 0)
+              while (!gone && k + 1 < n && time.time(k + 1) <= t1 + eps) gone = !apply(m, k++, p);
+            else
+              while (!gone && k > 0 && time.time(k - 1) >= t1 - eps) gone = !apply(m, --k, p);
+            double t_left = t1;
+            if (!gone && std::abs(t1 - time.time(k)) > eps) gone = grid.advect(p, {time.time(k), t1}, flow.dt(), t_left);
+            out.where = grid.to_surface(p);
+            out.left = gone;
+            out.t_left = t_left;
+          }
+        });
+        for (const auto& x : mapped) left += x.left;
+        const double span = std::abs(t1 - t0);
+        spans[static_cast<size_t>(j)] = span;
+        const std::vector<float> sigma = ftle_from_flow_map(bundle, mapped, span);
+        std::copy(sigma.begin(), sigma.end(), values.begin() + static_cast<long>(j) * nv);
+      }
+      ++done;
+      if (options.progress) options.progress(done, total);
+    }
+  }
+}
+
+}  // namespace
+
+FtleSlice compute_ftle_at(const TangentBundle& bundle, const Field& field, double t, double horizon, int direction,
+                          HorizonPolicy policy, const FlowMapOptions& flow_options) {
+  check_horizon(horizon);
+  if (direction != 1 && direction != -1)
+    throw Error(fmt::format("FTLE direction {} must be +1 (forward) or -1 (backward)", direction));
+  const TimeSampling& time = field.time();
+  const double lo = std::min(time.t0, time.t1), hi = std::max(time.t0, time.t1);
+  if (!std::isfinite(t) || t < lo || t > hi)
+    throw Error(fmt::format("FTLE time {} is outside the field's time range [{}, {}]", t, lo, hi));
+  const FlowMap flow(bundle, field, flow_options);
+  return slice(bundle, flow, vertex_starts(bundle.mesh()), t, horizon, direction, policy);
+}
+
 FtleResult compute_ftle(const TangentBundle& bundle, const Field& field, const FtleOptions& options) {
   const Mesh& mesh = bundle.mesh();
-  if (!(options.horizon > 0) || !std::isfinite(options.horizon))
-    throw Error(fmt::format("FTLE horizon {} must be a positive time", options.horizon));
+  check_horizon(options.horizon);
   const int n = field.frames();
   std::vector<int> frames = options.frames;
   if (frames.empty())
@@ -111,11 +261,13 @@ FtleResult compute_ftle(const TangentBundle& bundle, const Field& field, const F
   r.vertices = mesh.num_vertices();
   r.horizon = options.horizon;
   const size_t size = static_cast<size_t>(n) * static_cast<size_t>(r.vertices);
-  std::vector<SurfacePoint> starts(static_cast<size_t>(r.vertices));
-  for (int v = 0; v < r.vertices; ++v) starts[static_cast<size_t>(v)] = vertex_point(mesh, v);
+  if (options.compose && flow.on_grid()) {
+    compose_series(bundle, field, flow, *detail::detect_grid(bundle), options, frames, r);
+    return r;
+  }
+  const std::vector<SurfacePoint> starts = vertex_starts(mesh);
 
   const TimeSampling& time = field.time();
-  const double lo = std::min(time.t0, time.t1), hi = std::max(time.t0, time.t1);
   const int total = static_cast<int>(frames.size()) * (options.forward + options.backward);
   int done = 0;
   for (const int dir : {1, -1}) {
@@ -127,21 +279,11 @@ FtleResult compute_ftle(const TangentBundle& bundle, const Field& field, const F
     values.assign(size, kNaN);
     spans.assign(static_cast<size_t>(n), 0.0);
     for (const int j : frames) {
-      const double t0 = time.time(j);
-      double t1 = t0 + dir * options.horizon;
-      const bool outside = t1 > hi + 1e-12 * (hi - lo) || t1 < lo - 1e-12 * (hi - lo);
-      if (outside) {
-        ++cut;
-        t1 = std::clamp(t1, lo, hi);
-      }
-      if (!(outside && options.beyond_range == HorizonPolicy::nan) && t1 != t0) {
-        const std::vector<FlowMapResult> mapped = flow.advect(starts, t0, t1);
-        for (const auto& m : mapped) left += m.left;
-        const double span = std::abs(t1 - t0);
-        spans[static_cast<size_t>(j)] = span;
-        const std::vector<float> sigma = ftle_from_flow_map(bundle, mapped, span);
-        std::copy(sigma.begin(), sigma.end(), values.begin() + static_cast<long>(j) * r.vertices);
-      }
+      const FtleSlice s = slice(bundle, flow, starts, time.time(j), options.horizon, dir, options.beyond_range);
+      cut += s.cut;
+      left += s.left;
+      spans[static_cast<size_t>(j)] = s.span;
+      std::copy(s.values.begin(), s.values.end(), values.begin() + static_cast<long>(j) * r.vertices);
       ++done;
       if (options.progress) options.progress(done, total);
     }

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -452,6 +453,28 @@ struct HttpServer::Impl {
     }
   }
 
+  // The designer's Lagrangian overlays (docs/serve_api.md): GET /api/ftle?t=&horizon=&direction=,
+  // POST /api/streakline and /api/timeline.
+  void lcs_routes() {
+    Session& s = session;
+    server.Get("/api/ftle", wrap([&s](const auto& req, auto& res) {
+                 // Query parameters as JSON: numbers where the whole value reads as one.
+                 json q = json::object();
+                 for (const auto& [key, value] : req.params) {
+                   char* end = nullptr;
+                   const double x = std::strtod(value.c_str(), &end);
+                   q[key] = !value.empty() && end == value.c_str() + value.size() ? json(x) : json(value);
+                 }
+                 send_json(res, s.ftle(q));
+               }));
+    server.Post("/api/streakline", wrap_body([&s](const auto&, auto& res, const std::string& text) {
+                  send_json(res, s.streakline(parse_json(text)));
+                }));
+    server.Post("/api/timeline", wrap_body([&s](const auto&, auto& res, const std::string& text) {
+                  send_json(res, s.timeline(parse_json(text)));
+                }));
+  }
+
   void routes() {
     Session& s = session;
     // The scene's revision is its ETag; a change sends it back in If-Match (412 when the
@@ -544,6 +567,7 @@ struct HttpServer::Impl {
                   if (!req.has_param("name")) throw RequestError(400, "upload: say the file name (?name=mesh.obj)");
                   send_json(res, s.upload_mesh(req.get_param_value("name"), bytes));
                 }));
+    lcs_routes();
     // Every other request with a body: read within the limit too (httplib would read it
     // whole into memory), then 404.
     const auto no_such = wrap_body([](const auto& req, auto& res, const std::string&) {

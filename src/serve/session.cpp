@@ -528,6 +528,11 @@ json Session::analysis() const {
   return j;
 }
 
+Session::FieldView Session::current_field() const {
+  const auto r = s_->current_result();
+  return {r, &r->space->bundle(), &r->field, r->scene.domain.is_planar(), r->revision};
+}
+
 json Session::seed_translation(const json& request) const {
   if (!request.is_object())
     throw RequestError(400, "seed_translation: expected {\"seed\": position, \"to\": position}");

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -67,6 +68,34 @@ TEST(CliLcs, FtleOfTheDoubleGyreWritesArraysPicturesAndVtk) {
   const NpyArray f = read_npy((dir / "nan" / "ftle_forward.npy").string());
   EXPECT_FALSE(std::isnan(f.values[20 * 861 + 400]));
   EXPECT_TRUE(std::isnan(f.values[21 * 861 + 400]));
+}
+
+TEST(CliLcs, FtleComposedIsCloseToDirect) {
+  // --compose (flow-map composition, planar grids): the same arrays to a small error, the
+  // same cut windows, and ftle.json says how they were made.
+  TempDir dir;
+  write_field(dir / "gyre", GridSpec{41, 21, {0, 0}, {2, 1}}, TimeSampling{0, 10, 41}, test::double_gyre);
+  const std::string common = " --horizon 5 --direction forward --pictures 0 --no-vtk -q --dt 0.125 -o ";
+  const auto a = run_tvf("ftle " + quoted(dir / "gyre") + common + quoted(dir / "direct"));
+  const auto b = run_tvf("ftle " + quoted(dir / "gyre") + common + quoted(dir / "composed") + " --compose");
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  ASSERT_EQ(b.exit_code, 0) << b.output;
+  const NpyArray d = read_npy((dir / "direct" / "ftle_forward.npy").string());
+  const NpyArray c = read_npy((dir / "composed" / "ftle_forward.npy").string());
+  ASSERT_EQ(c.shape, d.shape);
+  std::vector<double> errors;
+  for (size_t i = 0; i < d.values.size(); ++i) {
+    ASSERT_EQ(std::isnan(c.values[i]), std::isnan(d.values[i])) << i;  // frame 40: nothing to integrate
+    if (!std::isnan(d.values[i])) errors.push_back(std::abs(static_cast<double>(c.values[i]) - d.values[i]));
+  }
+  ASSERT_EQ(errors.size(), 40u * 861u);
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.005);
+  EXPECT_LT(errors[errors.size() * 9 / 10], 0.02);
+  const nlohmann::json meta = nlohmann::json::parse(test::read_text(dir / "composed" / "ftle.json"));
+  EXPECT_EQ(meta["compose"], true);
+  EXPECT_EQ(meta["forward"]["cut_frames"], 20);
+  EXPECT_FALSE(nlohmann::json::parse(test::read_text(dir / "direct" / "ftle.json")).contains("compose"));
 }
 
 TEST(CliLcs, StreaklineOfARotationIsTheCircleThroughTheSeed) {

@@ -23,6 +23,7 @@ import { bifurcationAt, boundingRadius, surfaceHandleAt as handleOnSurface } fro
 import { TimeStrip } from "./surface/timestrip";
 import { resample } from "./stroke";
 import { rounded, View } from "./view";
+import { LcsOverlay } from "./lcs";
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -76,6 +77,15 @@ const spacetime = new SpaceTimeView($("spacetime"));
 const coherence = new CoherencePlot($("coherence"));
 const strip = new TimeStrip($<HTMLCanvasElement>("timestrip"));
 let surface: SurfaceView | undefined;
+// FTLE and dye over the planar view (lcs.ts).
+const lcs = new LcsOverlay(
+  () => redraw(),
+  (m) => say(m, true),
+);
+function refreshLcs() {
+  if (state.resultRevision < 0 || !state.mesh?.grid || !state.analysis) return;
+  void lcs.update(currentTime(), state.analysis.times[0], state.mesh.grid);
+}
 
 function say(text: string, error = false) {
   message.textContent = text;
@@ -329,6 +339,7 @@ async function loadResult(revision: number) {
 function setupDomainView() {
   const isPlanar = state.mesh!.planar;
   canvas.hidden = !isPlanar;
+  $("lcs-controls").hidden = !isPlanar;
   const host = $("surface");
   host.hidden = isPlanar;
   if (!isPlanar) {
@@ -372,6 +383,7 @@ async function showFrame(j: number) {
     if (!(e instanceof ApiError && e.status === 409)) say((e as Error).message, true);
   }
   redraw();
+  refreshLcs();
 }
 
 function listBifurcations() {
@@ -464,6 +476,7 @@ function redraw() {
       ctx.imageSmoothingEnabled = true;
       ctx.drawImage(planarPreview.canvas, x0, y0, x1 - x0, y1 - y0);
     }
+    lcs.drawField(ctx, v, g);
     if (mode !== "texture") drawArrows(ctx, v, field, mode === "both" ? "#f97316" : "#334155");
   }
   const line = (pts: number[][], color: string, width = 2, dash: number[] = []) => {
@@ -527,6 +540,7 @@ function redraw() {
     if (h) ring(v, h.position, "#f97316", 14);
   }
   if (state.stroke) line(state.stroke, "#f97316", 2);
+  lcs.drawMarks(ctx, v);
 }
 
 function dot(v: View, p: number[], color: string, r: number, outline?: string) {
@@ -660,6 +674,11 @@ canvas.addEventListener("pointerup", (e) => {
       else if (isClick) void change((s) => S.addSingular(s, type, stroke[0], undefined, ts), `fixed ${type} placed`);
       // A drag: the element moves along the dragged curve (a few of its points).
       else void change((s) => S.addSingularPath(s, type, resample(stroke, 6), ts, te), `${type} moving along the drawn curve from t = ${ts} to ${te}`);
+    } else if (state.tool === "dye") {
+      // A click: a streakline's seed; a drag: a timeline, the segment at this time.
+      if (isClick) lcs.seeds.push(stroke[0]);
+      else lcs.lines.push({ line: [stroke[0], p], t: currentTime() });
+      refreshLcs();
     } else if (state.tool === "pathline") {
       if (isClick) return say("drag to draw a pathline", true);
       void change((s) => S.addPathline(s, resample(stroke, 6), ts, te), `pathline from t = ${ts} to ${te}`);
@@ -864,6 +883,22 @@ $<HTMLSelectElement>("preview-mode").addEventListener("change", (e) => {
   surface?.setMode((e.target as HTMLSelectElement).value as SurfaceMode);
   redraw();
 });
+$<HTMLSelectElement>("lcs-mode").addEventListener("change", (e) => {
+  lcs.direction = (e.target as HTMLSelectElement).value as typeof lcs.direction;
+  refreshLcs();
+});
+$<HTMLInputElement>("lcs-horizon").addEventListener("change", (e) => {
+  const T = Number((e.target as HTMLInputElement).value);
+  if (!(T > 0)) return say("the FTLE horizon T must be a positive time", true);
+  lcs.horizon = T;
+  refreshLcs();
+});
+$("dye-clear").addEventListener("click", () => {
+  lcs.seeds = [];
+  lcs.lines = [];
+  refreshLcs();
+  redraw();
+});
 $<HTMLInputElement>("show-paths").addEventListener("change", () => {
   if (state.analysis && !planar()) showSurfacePaths();
 });
@@ -968,6 +1003,7 @@ document.addEventListener("keydown", (e) => {
   },
   ringMotion,
   timestrip: (i: number) => strip.bifurcationAt(i),
+  lcs,
 };
 ticker.start();
 

@@ -42,6 +42,16 @@ struct FtleOptions {
   HorizonPolicy beyond_range = HorizonPolicy::clamp;
   std::vector<int> frames;  // the frames to compute (the others are NaN); empty: all
   FlowMapOptions flow;
+  // Planar grids only (ignored elsewhere): flow-map composition (Brunton & Rowley 2010).
+  // Each frame interval's one-step maps φ_{k→k+1} and φ_{k+1→k} are integrated once at
+  // the vertices (RK4, as above), and every frame's φ_{j→j±T} is their composition, a
+  // one-step map taken off the vertices by barycentric interpolation (a window ending
+  // between frames is finished by RK4; a particle is gone once a corner it is interpolated
+  // from left the domain). For whole series: the work per frame drops from T/dt RK4 steps
+  // to T/(frame spacing) interpolations per vertex, at the price of the interpolation's
+  // error, which grows with T along the ridges (docs/benchmarks.md, "FTLE", measures it on
+  // the double gyre; the tests bound it).
+  bool compose = false;
   std::function<void(int done, int total)> progress;  // after each frame and direction
 };
 
@@ -63,6 +73,20 @@ struct FtleResult {
 
 // Throws tvf::Error on a horizon that is not positive and finite, or a frame out of range.
 FtleResult compute_ftle(const TangentBundle& bundle, const Field& field, const FtleOptions& options);
+
+// The FTLE at one time t (a frame's or any in the field's range) in one direction
+// (+1 forward, −1 backward): what the designer overlays at its current time. The window
+// [t, t ± T] is cut or NaN'd at the range's end as in compute_ftle (`policy`).
+struct FtleSlice {
+  std::vector<float> values;  // per vertex; NaN where undefined
+  double span = 0.0;          // the time integrated (0: nothing to integrate)
+  bool cut = false;           // the window reached past the range's end
+  long left = 0;              // vertices whose particle left the domain
+};
+// Throws tvf::Error on a horizon that is not positive and finite, t outside the range,
+// or a direction other than ±1.
+FtleSlice compute_ftle_at(const TangentBundle& bundle, const Field& field, double t, double horizon, int direction,
+                          HorizonPolicy policy = HorizonPolicy::clamp, const FlowMapOptions& flow = {});
 
 // The FTLE of one set of flow-mapped vertices: given where every vertex's particle went
 // (FlowMap::advect of each vertex, at its vertex position) over a time `span`, σ per vertex

@@ -30,6 +30,11 @@
 #include <memory>
 #include <string>
 
+namespace tvf {
+class TangentBundle;
+class Field;
+}  // namespace tvf
+
 namespace tvf::serve {
 
 // A request that cannot be served: an HTTP status (400 bad input, 403 path outside the
@@ -148,6 +153,19 @@ public:
   // RequestError(400) for a malformed position, 422 for a point too far from the seed on
   // a surface, 409 before the first result.
   nlohmann::json seed_translation(const nlohmann::json& request) const;
+  // Lagrangian descriptors of the last result for the designer's overlays
+  // (session_lcs.cpp, docs/serve_api.md): RequestError(400) naming the key of a bad
+  // parameter, 409 before the first result.
+  // FTLE at one time: request {"t", "horizon", "direction": "forward" | "backward"} →
+  // {"revision", "t", "horizon", "direction", "span", "cut", "left", "min", "max", "range"
+  // (colour range: 1st and 99th percentiles), "values": σ per vertex (null where
+  // undefined), "seconds"}.
+  nlohmann::json ftle(const nlohmann::json& request) const;
+  // Streakline: {"seed", "from", "to", "spacing" (optional)} → {"revision", "t", "points",
+  // "gaps" (indices of points with a gap before them), "released", "left", "seconds"}.
+  nlohmann::json streakline(const nlohmann::json& request) const;
+  // Timeline: {"line": [a, b], "from", "to", "count" (optional)} → the same answer.
+  nlohmann::json timeline(const nlohmann::json& request) const;
   // Stores an uploaded mesh (OBJ, PLY or OFF, by the name's extension) in the working
   // folder under `name` (a plain file name). Returns {"file": name}.
   nlohmann::json upload_mesh(const std::string& name, const std::string& bytes);
@@ -166,6 +184,15 @@ private:
                          std::chrono::steady_clock::time_point deadline);
   struct State;
   std::unique_ptr<State> s_;
+  // The last result's domain and field, kept alive by `keep` (session_lcs.cpp).
+  struct FieldView {
+    std::shared_ptr<const void> keep;
+    const TangentBundle* bundle = nullptr;
+    const Field* field = nullptr;
+    bool planar = true;
+    long long revision = 0;
+  };
+  FieldView current_field() const;
 };
 
 }  // namespace tvf::serve

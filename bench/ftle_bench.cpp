@@ -1,0 +1,83 @@
+// Finite-time Lyapunov exponents of the double gyre (Shadden, Lekien & Marsden 2005) on a
+// 65² grid over [0, 2] × [0, 1], 100 frames on [0, 20] (RK4 steps of half the frame
+// spacing, ≈ 0.1), horizon T = 10 (Google Benchmark; docs/benchmarks.md, "FTLE"). Issue
+// 20 asks the designer's overlay, one frame's forward and backward FTLE, to update while
+// designing (≤ ~0.5 s on 2 cores): BM_FtleOneFrame. BM_FtleOneFrameWalk is the same on the
+// generic surface walk (the planar-grid fast path off), BM_FtleSeries every frame, and
+// BM_FtleSeriesComposed every frame by flow-map composition (FtleOptions::compose).
+#include "tvf/integrate/ftle.h"
+#include "tvf/mesh/grid.h"
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace tvf {
+namespace {
+
+struct Gyre {
+  Mesh grid = make_grid(GridSpec{65, 65, {0, 0}, {2, 1}});
+  TangentBundle bundle{grid};
+  Field field{TimeSampling{0, 20, 100}, grid.num_vertices()};
+  Gyre() {
+    constexpr double A = 0.1, eps = 0.25, omega = 2 * std::numbers::pi / 10, pi = std::numbers::pi;
+    for (int j = 0; j < field.frames(); ++j) {
+      const double t = field.time().time(j);
+      const double a = eps * std::sin(omega * t), b = 1 - 2 * a;
+      for (int v = 0; v < grid.num_vertices(); ++v) {
+        const double x = grid.position(v).x(), y = grid.position(v).y();
+        const double f = a * x * x + b * x, df = 2 * a * x + b;
+        // On a planar grid each vertex's tangent basis is world x, y.
+        field.at(j, v) = {-pi * A * std::sin(pi * f) * std::cos(pi * y), pi * A * std::cos(pi * f) * std::sin(pi * y) * df};
+      }
+    }
+  }
+};
+
+const Gyre& gyre() {
+  static const Gyre g;
+  return g;
+}
+
+// Frame 40 (t ≈ 8.1): both windows of T = 10 fit.
+void one_frame(benchmark::State& state, bool walk) {
+  const Gyre& g = gyre();
+  FtleOptions o;
+  o.horizon = 10;
+  o.frames = {40};
+  o.flow.walk = walk;
+  for (auto _ : state) {
+    const FtleResult r = compute_ftle(g.bundle, g.field, o);
+    benchmark::DoNotOptimize(r.forward.data());
+  }
+  state.counters["vertices"] = g.grid.num_vertices();
+}
+
+void BM_FtleOneFrame(benchmark::State& state) { one_frame(state, false); }
+BENCHMARK(BM_FtleOneFrame)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+void BM_FtleOneFrameWalk(benchmark::State& state) { one_frame(state, true); }
+BENCHMARK(BM_FtleOneFrameWalk)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+void series(benchmark::State& state, bool compose) {
+  const Gyre& g = gyre();
+  FtleOptions o;
+  o.horizon = 10;
+  o.compose = compose;
+  for (auto _ : state) {
+    const FtleResult r = compute_ftle(g.bundle, g.field, o);
+    benchmark::DoNotOptimize(r.forward.data());
+  }
+  state.counters["frames"] = g.field.frames();
+}
+
+void BM_FtleSeries(benchmark::State& state) { series(state, false); }
+BENCHMARK(BM_FtleSeries)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime()->Iterations(1);
+
+// The series by flow-map composition (FtleOptions::compose).
+void BM_FtleSeriesComposed(benchmark::State& state) { series(state, true); }
+BENCHMARK(BM_FtleSeriesComposed)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+}  // namespace
+}  // namespace tvf

@@ -1,0 +1,266 @@
+// The designer's Lagrangian overlays on the planar view (docs/user_guide.md, "The
+// designer's LCS overlay"): the finite-time Lyapunov exponent at the current time
+// (GET /api/ftle, forward: repelling LCS, backward: attracting) as a magma colour map
+// with its legend; dye: streaklines released from clicked seeds since the field's first
+// time, drawn at the current time (POST /api/streakline); and timelines: segments drawn
+// at some time, carried by the flow to the current time (POST /api/timeline). All are
+// fetched again when the time or the field changes; a request overtaken by a newer one
+// is dropped.
+import { ApiError } from "./api";
+import type { View } from "./view";
+
+export type FtleDirection = "off" | "forward" | "backward";
+
+export interface FtleAnswer {
+  revision: number;
+  t: number;
+  horizon: number;
+  direction: string;
+  span: number;
+  cut: boolean;
+  left: number;
+  min: number | null;
+  max: number | null;
+  range: [number, number];
+  values: (number | null)[];
+  seconds: number;
+}
+
+export interface CurveAnswer {
+  revision: number;
+  t: number;
+  points: number[][];
+  gaps: number[];
+  released: number;
+  left: number;
+  seconds: number;
+}
+
+async function call<T>(method: string, path: string, body?: unknown): Promise<T> {
+  const init: RequestInit = { method };
+  if (body !== undefined) {
+    init.body = JSON.stringify(body);
+    init.headers = { "Content-Type": "application/json" };
+  }
+  const res = await fetch(path, init);
+  const json = (await res.json().catch(() => ({ error: `${method} ${path}: HTTP ${res.status} without JSON` }))) as T & { error?: string };
+  if (!res.ok) throw new ApiError(res.status, json.error ?? `HTTP ${res.status}`);
+  return json;
+}
+
+export const lcsApi = {
+  ftle: (t: number, horizon: number, direction: "forward" | "backward") =>
+    call<FtleAnswer>("GET", `api/ftle?t=${t}&horizon=${horizon}&direction=${direction}`),
+  streakline: (seed: number[], from: number, to: number) => call<CurveAnswer>("POST", "api/streakline", { seed, from, to }),
+  timeline: (line: number[][], from: number, to: number) => call<CurveAnswer>("POST", "api/timeline", { line, from, to }),
+};
+
+// Magma (the colour map of tvf ftle's pictures, render/lcs_pictures.cpp), s in [0, 1].
+const MAGMA = [
+  [0, 0, 4],
+  [28, 16, 68],
+  [79, 18, 123],
+  [129, 37, 129],
+  [181, 54, 122],
+  [229, 80, 100],
+  [251, 135, 97],
+  [254, 194, 135],
+  [252, 253, 191],
+];
+export function magma(s: number): [number, number, number] {
+  const x = Math.min(1, Math.max(0, s)) * (MAGMA.length - 1);
+  const i = Math.min(MAGMA.length - 2, Math.floor(x));
+  const f = x - i;
+  const a = MAGMA[i];
+  const b = MAGMA[i + 1];
+  return [0, 1, 2].map((k) => Math.round(a[k] + f * (b[k] - a[k]))) as [number, number, number];
+}
+
+export const DYE_COLOR = "#16a34a";
+export const TIMELINE_COLOR = "#0ea5e9";
+
+export interface Grid {
+  size: [number, number];
+  min: [number, number];
+  max: [number, number];
+}
+
+export class LcsOverlay {
+  direction: FtleDirection = "off";
+  horizon = 1;
+  seeds: number[][] = [];
+  // Timelines: segments drawn at time t, shown carried by the flow to the current time
+  // (backwards in time before t).
+  lines: { line: number[][]; t: number }[] = [];
+  ftle?: FtleAnswer;
+  dye: CurveAnswer[] = [];
+  timelines: CurveAnswer[] = [];
+  // Milliseconds of the last FTLE update, from the request to the picture (the e2e test reports it).
+  lastUpdateMs = 0;
+  error = "";
+  private image?: HTMLCanvasElement;
+  private ticket = 0;
+  private dyeTicket = 0;
+
+  constructor(
+    private readonly onChange: () => void,
+    private readonly onError: (message: string) => void,
+  ) {}
+
+  // The current time or field changed (or the settings): fetch what is shown again.
+  async update(t: number, t0: number, grid: Grid | undefined) {
+    await Promise.all([this.updateFtle(t, grid), this.updateDye(t, t0)]);
+  }
+
+  // One FTLE request at a time: while one runs, only the newest asked-for time waits
+  // (scrubbing does not queue up a computation per frame on the server).
+  private inFlight = false;
+  private pending?: { t: number; grid: Grid | undefined };
+  private async updateFtle(t: number, grid: Grid | undefined) {
+    if (this.inFlight && this.direction !== "off") {
+      this.pending = { t, grid };
+      return;
+    }
+    this.inFlight = true;
+    try {
+      await this.fetchFtle(t, grid);
+    } finally {
+      this.inFlight = false;
+    }
+    const next = this.pending;
+    this.pending = undefined;
+    if (next) await this.updateFtle(next.t, next.grid);
+  }
+
+  private async fetchFtle(t: number, grid: Grid | undefined) {
+    const ticket = ++this.ticket;
+    if (this.direction === "off" || !grid) {
+      this.ftle = undefined;
+      this.image = undefined;
+      this.onChange();
+      return;
+    }
+    const start = performance.now();
+    try {
+      const a = await lcsApi.ftle(t, this.horizon, this.direction);
+      if (ticket !== this.ticket) return;
+      this.ftle = a;
+      this.image = picture(a, grid);
+      this.lastUpdateMs = performance.now() - start;
+      this.error = "";
+    } catch (e) {
+      if (ticket !== this.ticket) return;
+      this.ftle = undefined;
+      this.image = undefined;
+      this.error = (e as Error).message;
+      if (!(e instanceof ApiError && e.status === 409)) this.onError(this.error);
+    }
+    this.onChange();
+  }
+
+  private async updateDye(t: number, t0: number) {
+    const ticket = ++this.dyeTicket;
+    if (this.seeds.length === 0 && this.lines.length === 0) {
+      this.dye = [];
+      this.timelines = [];
+      return;
+    }
+    try {
+      const [streaks, material] = await Promise.all([
+        Promise.all(this.seeds.map((s) => lcsApi.streakline(s, t0, t))),
+        Promise.all(this.lines.map((l) => lcsApi.timeline(l.line, l.t, t))),
+      ]);
+      if (ticket !== this.dyeTicket) return;
+      this.dye = streaks;
+      this.timelines = material;
+    } catch (e) {
+      if (ticket !== this.dyeTicket) return;
+      this.dye = [];
+      this.timelines = [];
+      if (!(e instanceof ApiError && e.status === 409)) this.onError((e as Error).message);
+    }
+    this.onChange();
+  }
+
+  // The FTLE picture over the grid's box, under the design's marks.
+  drawField(ctx: CanvasRenderingContext2D, v: View, grid: Grid) {
+    if (!this.image || !this.ftle) return;
+    const [x0, y0] = v.toCanvas([grid.min[0], grid.max[1]]);
+    const [x1, y1] = v.toCanvas([grid.max[0], grid.min[1]]);
+    ctx.imageSmoothingEnabled = true;
+    ctx.drawImage(this.image, x0, y0, x1 - x0, y1 - y0);
+  }
+
+  // The dye lines and seeds, and the FTLE legend.
+  drawMarks(ctx: CanvasRenderingContext2D, v: View) {
+    ctx.lineWidth = 2.5;
+    for (const d of [...this.dye, ...this.timelines]) {
+      ctx.strokeStyle = this.dye.includes(d) ? DYE_COLOR : TIMELINE_COLOR;
+      const gaps = new Set(d.gaps);
+      ctx.beginPath();
+      d.points.forEach((p, i) => {
+        const [x, y] = v.toCanvas(p);
+        if (i === 0 || gaps.has(i)) ctx.moveTo(x, y);
+        else ctx.lineTo(x, y);
+      });
+      ctx.stroke();
+    }
+    for (const s of this.seeds) {
+      const [x, y] = v.toCanvas(s);
+      ctx.fillStyle = DYE_COLOR;
+      ctx.strokeStyle = "#fff";
+      ctx.lineWidth = 1.5;
+      ctx.beginPath();
+      ctx.arc(x, y, 5, 0, 2 * Math.PI);
+      ctx.fill();
+      ctx.stroke();
+    }
+    if (this.ftle) legend(ctx, this.ftle);
+  }
+}
+
+// One pixel per grid vertex, the image's rows top (max y) down; NaN grey as in tvf ftle.
+function picture(a: FtleAnswer, grid: Grid): HTMLCanvasElement {
+  const [nx, ny] = grid.size;
+  const c = document.createElement("canvas");
+  c.width = nx;
+  c.height = ny;
+  const g = c.getContext("2d")!;
+  const img = g.createImageData(nx, ny);
+  const [lo, hi] = a.range;
+  const scale = hi > lo ? 1 / (hi - lo) : 0;
+  for (let iy = 0; iy < ny; ++iy)
+    for (let ix = 0; ix < nx; ++ix) {
+      const v = a.values[iy * nx + ix];
+      const k = 4 * ((ny - 1 - iy) * nx + ix);
+      const [r, gg, b] = v === null ? [154, 154, 154] : magma((v - lo) * scale);
+      img.data[k] = r;
+      img.data[k + 1] = gg;
+      img.data[k + 2] = b;
+      img.data[k + 3] = 255;
+    }
+  g.putImageData(img, 0, 0);
+  return c;
+}
+
+// The colour bar in the lower left corner: the range, the direction and the horizon.
+function legend(ctx: CanvasRenderingContext2D, a: FtleAnswer) {
+  const x = 10;
+  const y = ctx.canvas.height - 46;
+  const w = 160;
+  ctx.fillStyle = "rgba(255,255,255,0.85)";
+  ctx.fillRect(x - 6, y - 18, w + 12, 54);
+  for (let i = 0; i < w; ++i) {
+    const [r, g, b] = magma(i / (w - 1));
+    ctx.fillStyle = `rgb(${r},${g},${b})`;
+    ctx.fillRect(x + i, y, 1, 12);
+  }
+  ctx.fillStyle = "#111827";
+  ctx.font = "11px sans-serif";
+  ctx.textAlign = "left";
+  ctx.fillText(`FTLE ${a.direction}, T = ${a.span < a.horizon ? `${a.span.toFixed(3)} (cut)` : a.horizon}`, x, y - 5);
+  ctx.fillText(a.range[0].toPrecision(3), x, y + 26);
+  ctx.textAlign = "right";
+  ctx.fillText(a.range[1].toPrecision(3), x + w, y + 26);
+  ctx.textAlign = "left";
+}
