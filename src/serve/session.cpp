@@ -530,7 +530,7 @@ json Session::analysis() const {
 
 Session::FieldView Session::current_field() const {
   const auto r = s_->current_result();
-  return {r, &r->space->bundle(), &r->field, r->scene.domain.is_planar(), r->revision};
+  return {r, &r->space().bundle(), &r->field(), r->scene.domain.is_planar(), r->revision};
 }
 
 json Session::seed_translation(const json& request) const {
