@@ -148,6 +148,11 @@ public:
   // RequestError(400) for a malformed position, 422 for a point too far from the seed on
   // a surface, 409 before the first result.
   nlohmann::json seed_translation(const nlohmann::json& request) const;
+  // {"at": position, "to": position}: the local coordinates of `to` in the chart an
+  // element at `at` is designed in (chart_coordinates, streamline_deform.h), {"coords":
+  // [u, v]}: a bifurcation's angle is their argument (the designer's Bifurcation drag).
+  // The same errors as seed_translation.
+  nlohmann::json chart_coordinates(const nlohmann::json& request) const;
   // Stores an uploaded mesh (OBJ, PLY or OFF, by the name's extension) in the working
   // folder under `name` (a plain file name). Returns {"file": name}.
   nlohmann::json upload_mesh(const std::string& name, const std::string& bytes);
