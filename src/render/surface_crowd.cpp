@@ -2,6 +2,7 @@
 
 #include "crowd_file_reader.h"
 
+#include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
 #include "tvf/core/json_text.h"
 #include "tvf/integrate/streamline.h"
@@ -242,13 +243,37 @@ SurfaceCrowdResult simulate_surface_crowd(const TangentBundle& bundle, const Fie
   return res;
 }
 
+void write_surface_crowd_csv(const std::string& path, const SurfaceCrowdResult& result) {
+  std::string text = "agent,frame,t,x,y,z,arrived\n";
+  for (size_t a = 0; a < result.positions.size(); ++a)
+    for (size_t k = 0; k < result.positions[a].size(); ++k) {
+      const Vec3& p = result.positions[a][k];
+      const bool arrived = result.arrived[a] >= 0 && static_cast<size_t>(result.arrived[a]) <= k;
+      text += fmt::format("{},{},{:.17g},{:.17g},{:.17g},{:.17g},{}\n", a, k, result.times[k], p.x(), p.y(), p.z(),
+                          arrived ? 1 : 0);
+    }
+  write_file_atomically(path, text);
+}
+
 AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const Field& field,
                                               const SurfaceCrowdSpec& spec, const SurfaceCrowdAnimationOptions& options,
                                               SurfaceCrowdResult* result) {
   const auto start = std::chrono::steady_clock::now();
   if (options.size < 16 || options.size > 8192)
     throw Error(fmt::format("crowd: a picture of {} pixels is outside [16, 8192]", options.size));
+  if (options.frames_dir.empty() && options.video.empty() && options.csv.empty())
+    throw Error("crowd: give a folder for the PNG frames, an MP4 file or a CSV file to write");
   const SurfaceCrowdResult res = simulate_surface_crowd(bundle, field, spec, options.frames);
+  const int total = static_cast<int>(res.times.size());
+  AnimationReport report;
+  report.frames = total;
+  if (!options.csv.empty()) write_surface_crowd_csv(options.csv, res);
+  if (options.frames_dir.empty() && options.video.empty()) {
+    report.files.push_back(options.csv);
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (result) *result = res;
+    return report;
+  }
   const Mesh& mesh = bundle.mesh();
   MeshRenderer renderer;
   renderer.set_mesh(mesh);
@@ -268,7 +293,6 @@ AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const
   ro.lighting = options.view.lighting;
   ro.ambient = 0.5;
   FrameOutput out(options.frames_dir, options.video, ro.width, ro.height, options.fps);
-  const int total = static_cast<int>(res.times.size());
   const double width = std::max(1.5, options.size / 400.0), radius = std::max(3.0, options.size / 160.0);
   for (int k = 0; k < total; ++k) {
     std::vector<RenderLine> lines;
@@ -282,9 +306,8 @@ AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const
     out.add(renderer.render(camera, ro, lines, markers));
     if (options.progress) options.progress(k + 1, total);
   }
-  AnimationReport report;
   report.files = out.finish();
-  report.frames = total;
+  if (!options.csv.empty()) report.files.push_back(options.csv);
   report.width = report.height = options.size;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (result) *result = res;

@@ -10,6 +10,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
 
 namespace tvf {
 namespace {
@@ -59,6 +62,53 @@ TEST(SurfaceCrowd, AgentsWalkOnTheSphereToTheGoalAroundAnObstacle) {
     const Vec3& last = r.positions[a].back();
     EXPECT_GT(last.z(), 0.9);
   }
+}
+
+// The trajectories as CSV, alone (no pictures): one row per agent and picture with the
+// simulated world positions, digit for digit, and the arrival flag from the first picture
+// at a goal on; no output at all is refused.
+TEST(SurfaceCrowd, TrajectoriesAsCsv) {
+  const Mesh sphere = make_icosphere(3, 1.0);
+  const TangentBundle bundle(sphere);
+  const Field still(TimeSampling{0, 1, 11}, sphere.num_vertices());
+  SurfaceCrowdSpec spec;
+  spec.agents = 4;
+  spec.weight_goal = 1.0;
+  spec.weight_field = 0.0;
+  spec.speed = 6.0;
+  spec.starts = {{Vec3(0, 0, -1), 0.3}};
+  spec.goals = {{Vec3(0, 0, 1), 0.3}};
+  const test::TempDir dir;
+  SurfaceCrowdAnimationOptions options;
+  options.csv = (dir / "crowd.csv").string();
+  SurfaceCrowdResult r;
+  const AnimationReport report = write_surface_crowd_animation(bundle, still, spec, options, &r);
+  ASSERT_EQ(report.files, std::vector<std::string>{options.csv});
+  EXPECT_EQ(report.frames, 11);
+  std::ifstream in(options.csv);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "agent,frame,t,x,y,z,arrived");
+  size_t rows = 0;
+  int arrivals = 0;
+  while (std::getline(in, line)) {
+    int a = 0, k = 0, arrived = 0;
+    double t = 0, x = 0, y = 0, z = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%d,%lf,%lf,%lf,%lf,%d", &a, &k, &t, &x, &y, &z, &arrived), 7) << line;
+    const auto ua = static_cast<size_t>(a), uk = static_cast<size_t>(k);
+    EXPECT_EQ(ua, rows / 11);
+    EXPECT_EQ(uk, rows % 11);
+    EXPECT_EQ(t, r.times[uk]);
+    EXPECT_EQ(Vec3(x, y, z), r.positions[ua][uk]) << line;
+    EXPECT_EQ(arrived, r.arrived[ua] >= 0 && r.arrived[ua] <= k ? 1 : 0);
+    arrivals += arrived;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 4u * 11u);
+  EXPECT_GT(arrivals, 0);  // they reach the goal within the time range
+  SurfaceCrowdAnimationOptions none;
+  EXPECT_EQ(test::error_of([&] { write_surface_crowd_animation(bundle, still, spec, none); }),
+            "crowd: give a folder for the PNG frames, an MP4 file or a CSV file to write");
 }
 
 TEST(SurfaceCrowd, BadSpecsAreNamed) {

@@ -66,12 +66,20 @@ struct SurfaceCrowdAnimationOptions {
   int size = 800;
   SurfaceView view;
   std::string frames_dir, video;
+  std::string csv;  // the trajectories (write_surface_crowd_csv); any of the three outputs
   double fps = 25.0;
   std::function<void(int done, int total)> progress;
 };
 
+// The trajectories as CSV, as the planar crowd's (write_crowd_csv) with z: a header
+// `agent,frame,t,x,y,z,arrived`, then one row per agent and picture (world positions on
+// the mesh, full precision; arrived 1 from its first picture at a goal on). Written
+// atomically; throws tvf::Error naming the file.
+void write_surface_crowd_csv(const std::string& path, const SurfaceCrowdResult& result);
+
 // Pictures: the mesh (obstacles dark grey, goals green, the rest pale), each agent's path so
-// far as a brown line and the agent as a dark disc.
+// far as a brown line and the agent as a dark disc; and/or the CSV (written first: if it
+// cannot be written, no pictures appear). Throws tvf::Error when no output is given.
 AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const Field& field,
                                               const SurfaceCrowdSpec& spec, const SurfaceCrowdAnimationOptions& options,
                                               SurfaceCrowdResult* result = nullptr);
