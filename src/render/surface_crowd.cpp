@@ -19,6 +19,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <unordered_map>
 
 namespace tvf {
 
@@ -57,7 +58,7 @@ struct Reader : CrowdFileReader {
 SurfaceCrowdSpec load_surface_crowd_spec(const std::string& path) {
   const json j = parse_json_text(read_text_file(path, "the crowd file"), path, "a crowd file is a JSON object");
   const Reader r{{path}};
-  r.keys(j, "", {"agents", "speed", "weights", "steps_per_frame", "seed", "start", "goals", "obstacles"});
+  r.keys(j, "", {"agents", "speed", "weights", "steps_per_frame", "seed", "avoidance", "start", "goals", "obstacles"});
   SurfaceCrowdSpec s;
   if (j.contains("agents")) s.agents = r.integer(j["agents"], "agents", 1, 100000);
   if (j.contains("speed")) s.speed = r.number(j["speed"], "speed", 0, 1e12);
@@ -67,6 +68,11 @@ SurfaceCrowdSpec load_surface_crowd_spec(const std::string& path) {
     if (j["weights"].contains("field")) s.weight_field = r.number(j["weights"]["field"], "weights.field", 0, 1e6);
   }
   if (j.contains("steps_per_frame")) s.steps_per_frame = r.integer(j["steps_per_frame"], "steps_per_frame", 1, 1000);
+  if (j.contains("avoidance")) {
+    r.keys(j["avoidance"], "avoidance", {"distance"});
+    if (!j["avoidance"].contains("distance")) r.fail("avoidance", "needs distance (the least distance between agents)");
+    s.separation = r.number(j["avoidance"]["distance"], "avoidance.distance", 0, 1e12);
+  }
   if (j.contains("seed")) s.seed = static_cast<std::uint64_t>(r.integer(j["seed"], "seed", 0, 1'000'000'000));
   if (!j.contains("start")) r.fail("start", "missing: give the regions the agents start in");
   if (!j.contains("goals")) r.fail("goals", "missing: give at least one goal region");
@@ -214,6 +220,55 @@ SurfaceCrowdResult simulate_surface_crowd(const TangentBundle& bundle, const Fie
       }
     }
   };
+  // Avoidance: pairs of active agents closer than the separation pushed apart along the
+  // surface, each by half the overlap, in the direction away from the other projected
+  // onto its face (neighbours found in a hash grid of cells one separation wide).
+  const double sep = spec.separation;
+  auto separate = [&]() {
+    if (!(sep > 0)) return;
+    for (int sweep = 0; sweep < 16; ++sweep) {
+      std::unordered_map<std::int64_t, std::vector<int>> cells;
+      std::vector<Vec3> x(agents.size());
+      auto key = [&](long i, long j, long k) { return (i * 73856093L) ^ (j * 19349663L) ^ (k * 83492791L); };
+      for (size_t a = 0; a < agents.size(); ++a) {
+        if (done[a]) continue;
+        x[a] = surface_position(mesh, agents[a]);
+        cells[key(std::lround(std::floor(x[a].x() / sep)), std::lround(std::floor(x[a].y() / sep)),
+                  std::lround(std::floor(x[a].z() / sep)))]
+            .push_back(static_cast<int>(a));
+      }
+      bool moved = false;
+      for (size_t a = 0; a < agents.size(); ++a) {
+        if (done[a]) continue;
+        const long ci = std::lround(std::floor(x[a].x() / sep)), cj = std::lround(std::floor(x[a].y() / sep)),
+                   ck = std::lround(std::floor(x[a].z() / sep));
+        Vec3 push = Vec3::Zero();
+        for (long i = ci - 1; i <= ci + 1; ++i)
+          for (long jj = cj - 1; jj <= cj + 1; ++jj)
+            for (long k = ck - 1; k <= ck + 1; ++k) {
+              const auto it = cells.find(key(i, jj, k));
+              if (it == cells.end()) continue;
+              for (int b : it->second) {
+                if (static_cast<size_t>(b) == a) continue;
+                Vec3 d = x[a] - x[static_cast<size_t>(b)];
+                double r = d.norm();
+                if (r >= (1 - 1e-3) * sep) continue;
+                // Coincident agents: apart along the face's first axis, the lower index the other way.
+                if (r < 1e-12 * sep) d = (static_cast<size_t>(b) < a ? 1.0 : -1.0) * bundle.face_e1(agents[a].face), r = 0;
+                else d /= r;
+                push += 0.5 * (sep - r) * d;
+              }
+            }
+        if (push.squaredNorm() == 0) continue;
+        const SurfaceWalk w = walk_surface(bundle, agents[a], bundle.world_to_face(agents[a].face, push), blocked);
+        agents[a] = w.end;
+        x[a] = surface_position(mesh, agents[a]);
+        moved = true;
+      }
+      if (!moved) break;
+    }
+  };
+  separate();
   record(0);
   for (int k = 1; k < total; ++k) {
     const double t0 = time_of(k - 1), t1 = time_of(k);
@@ -236,6 +291,12 @@ SurfaceCrowdResult simulate_surface_crowd(const TangentBundle& bundle, const Fie
         if (w.stopped || w.hit_boundary) ++contacts[a];
         agents[a] = w.end;
       });
+      // Arrivals first: an agent that reached a goal leaves the crowd before the projection.
+      for (size_t a = 0; a < agents.size(); ++a)
+        if (!done[a] && res.goal_face[static_cast<size_t>(agents[a].face)]) done[a] = 2;
+      separate();
+      for (auto& d : done)
+        if (d == 2) d = 0;
     }
     record(k);
   }

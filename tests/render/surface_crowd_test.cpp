@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -111,6 +112,41 @@ TEST(SurfaceCrowd, TrajectoriesAsCsv) {
             "crowd: give a folder for the PNG frames, an MP4 file or a CSV file to write");
 }
 
+// Avoidance on the sphere: 40 agents crowded in a small start cap walk to the goal; with
+// a separation every two of those still on their way are at least (nearly) that far
+// apart at every picture, from the start on; without, the crowd's agents come much closer.
+TEST(SurfaceCrowd, AvoidanceKeepsAgentsApartOnTheSphere) {
+  const Mesh sphere = make_icosphere(4, 1.0);
+  const TangentBundle bundle(sphere);
+  const Field still(TimeSampling{0, 1, 21}, sphere.num_vertices());
+  SurfaceCrowdSpec spec;
+  spec.agents = 40;
+  spec.weight_goal = 1.0;
+  spec.weight_field = 0.0;
+  spec.speed = 4.0;
+  spec.starts = {{Vec3(0, 0, -1), 0.35}};
+  spec.goals = {{Vec3(0, 0, 1), 0.25}};
+  auto closest = [](const SurfaceCrowdResult& r) {
+    double least = 1e9;
+    for (size_t k = 0; k < r.times.size(); ++k)
+      for (size_t a = 0; a < r.positions.size(); ++a)
+        for (size_t b = a + 1; b < r.positions.size(); ++b) {
+          const auto on_way = [&](size_t i) { return r.arrived[i] < 0 || static_cast<size_t>(r.arrived[i]) > k; };
+          if (on_way(a) && on_way(b)) least = std::min(least, (r.positions[a][k] - r.positions[b][k]).norm());
+        }
+    return least;
+  };
+  const double free_closest = closest(simulate_surface_crowd(bundle, still, spec));
+  spec.separation = 0.06;
+  const SurfaceCrowdResult r = simulate_surface_crowd(bundle, still, spec);
+  const double kept = closest(r);
+  EXPECT_GT(kept, 0.9 * spec.separation) << "without avoidance: " << free_closest;
+  EXPECT_LT(free_closest, 0.5 * spec.separation);
+  for (size_t a = 0; a < r.arrived.size(); ++a) EXPECT_GE(r.arrived[a], 1) << "agent " << a;  // they still arrive
+  for (const auto& path : r.positions)
+    for (const Vec3& x : path) EXPECT_NEAR(x.norm(), 1.0, 0.01);  // on the mesh
+}
+
 TEST(SurfaceCrowd, BadSpecsAreNamed) {
   const Mesh sphere = make_icosphere(2, 1.0);
   const TangentBundle bundle(sphere);
@@ -127,6 +163,15 @@ TEST(SurfaceCrowd, BadSpecsAreNamed) {
   EXPECT_NE(e.find("c.json"), std::string::npos) << e;
   EXPECT_NE(e.find("goals[0]"), std::string::npos) << e;
   EXPECT_NE(e.find("ball"), std::string::npos) << e;
+  // Avoidance: a distance only (the planar weight is not a surface key).
+  test::write_text(dir / "a.json", R"({"start": [{"ball": {"center": [0, 0, -1], "radius": 0.3}}],
+    "goals": [{"ball": {"center": [0, 0, 1], "radius": 0.3}}], "avoidance": {"distance": 0.05, "weight": 1}})");
+  const std::string w = test::error_of([&] { load_surface_crowd_spec((dir / "a.json").string()); });
+  EXPECT_NE(w.find("avoidance"), std::string::npos) << w;
+  EXPECT_NE(w.find("weight"), std::string::npos) << w;
+  test::write_text(dir / "b.json", R"({"start": [{"ball": {"center": [0, 0, -1], "radius": 0.3}}],
+    "goals": [{"ball": {"center": [0, 0, 1], "radius": 0.3}}], "avoidance": {"distance": 0.05}})");
+  EXPECT_EQ(load_surface_crowd_spec((dir / "b.json").string()).separation, 0.05);
 }
 
 }  // namespace

@@ -10,7 +10,7 @@
 // world space: the faces whose centroid lies inside. Agents step together by the midpoint
 // rule, walking on the surface (integrate/surface_walk.h); a walk that would enter an
 // obstacle face stops at its edge (counted in contacts); an agent that enters a goal face
-// has arrived and stays.
+// has arrived and stays. With `separation` the agents keep apart (SurfaceCrowdSpec).
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/mesh/tangent_bundle.h"
@@ -39,6 +39,11 @@ struct SurfaceCrowdSpec {
   double weight_field = 0.5;  // ω_F
   int steps_per_frame = 4;
   std::uint64_t seed = 1;
+  // Avoidance (0: none): agents on their way keep at least this world distance apart
+  // (centre to centre). After every step (and at the start) pairs closer than it are pushed
+  // apart along the surface, each by half the overlap (up to 16 Gauss–Seidel sweeps of the
+  // projection); an agent that reaches a goal leaves the crowd, as on the plane.
+  double separation = 0;
 };
 
 // The crowd file on a surface (docs/file_formats.md): like the planar one, with regions
