@@ -232,6 +232,19 @@ int RenderCommand::run() {
   return 1;
 }
 
+namespace {
+
+// What a crowd run wrote; `trajectories_only`: no pictures were drawn, only the CSV.
+void print_crowd_report(const AnimationReport& report, bool trajectories_only) {
+  if (!trajectories_only)
+    return print_report("crowd", report.frames, report.width, report.height, report.seconds, report.files);
+  std::printf("simulated %d crowd frames in %.2f s; wrote", report.frames, report.seconds);
+  for (const auto& f : report.files) std::printf(" %s", fs::absolute(f).lexically_normal().c_str());
+  std::printf("\n");
+}
+
+}  // namespace
+
 int RenderCommand::run_crowd() {
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf render crowd", show);
@@ -255,7 +268,6 @@ int RenderCommand::run_crowd() {
   const TangentBundle bundle(in.mesh);
   if (!bundle.is_flat()) {
     // A surface: agents walk on the mesh to goals by geodesic distance (render/surface_crowd.h).
-    if (!options.csv.empty()) throw Error(fmt::format("{}: CSV trajectories are written for planar crowds only", options.csv));
     SurfaceCrowdSpec sspec = load_surface_crowd_spec(crowd_file_);
     if (weight_goal_) sspec.weight_goal = *weight_goal_;
     if (weight_field_) sspec.weight_field = *weight_field_;
@@ -264,6 +276,7 @@ int RenderCommand::run_crowd() {
     so.size = options.size;
     so.frames_dir = options.frames_dir;
     so.video = options.video;
+    so.csv = options.csv;
     so.fps = options.fps;
     if (!view_.empty()) so.view.direction = Vec3(view_[0], view_[1], view_[2]);
     if (!up_.empty()) so.view.up = Vec3(up_[0], up_[1], up_[2]);
@@ -277,7 +290,7 @@ int RenderCommand::run_crowd() {
     if (!quiet_) {
       const long arrived = std::count_if(sres.arrived.begin(), sres.arrived.end(), [](int k) { return k >= 0; });
       std::printf("%ld of %zu agents reached a goal\n", arrived, sres.arrived.size());
-      print_report("crowd", sreport.frames, sreport.width, sreport.height, sreport.seconds, sreport.files);
+      print_crowd_report(sreport, so.frames_dir.empty() && so.video.empty());
     }
     return 0;
   }
@@ -293,14 +306,7 @@ int RenderCommand::run_crowd() {
   if (!quiet_) {
     const long arrived = std::count_if(result.arrived.begin(), result.arrived.end(), [](int k) { return k >= 0; });
     std::printf("%ld of %zu agents reached a goal\n", arrived, result.arrived.size());
-    if (options.frames_dir.empty() && options.video.empty()) {
-      // Trajectories only: no pictures were drawn.
-      std::printf("simulated %d crowd frames in %.2f s; wrote", report.frames, report.seconds);
-      for (const auto& f : report.files) std::printf(" %s", fs::absolute(f).lexically_normal().c_str());
-      std::printf("\n");
-    } else {
-      print_report("crowd", report.frames, report.width, report.height, report.seconds, report.files);
-    }
+    print_crowd_report(report, options.frames_dir.empty() && options.video.empty());
   }
   return 0;
 }

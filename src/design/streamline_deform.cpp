@@ -41,30 +41,49 @@ Similarity similarity_at(const std::vector<StreamlineKey>& keys, double t0, doub
 
 }  // namespace
 
-Vec3 seed_translation(const DesignSpace& space, const Vec3& seed, const Vec3& to) {
+namespace {
+
+// chart_coordinates; `seed` says whom the error names (a streamline's seed, or a point).
+cplx chart_coordinates_of(const DesignSpace& space, const Vec3& at, const Vec3& to, bool seed) {
   if (space.planar()) {
-    const Vec3 t(to.x() - seed.x(), to.y() - seed.y(), 0.0);
-    if (!t.allFinite())
+    const cplx w(to.x() - at.x(), to.y() - at.y());
+    if (!std::isfinite(w.real()) || !std::isfinite(w.imag()))
       throw Error(fmt::format("the translation from ({:.4g}, {:.4g}) to ({:.4g}, {:.4g}) is too large to represent",
-                              seed.x(), seed.y(), to.x(), to.y()));
-    return t;
+                              at.x(), at.y(), to.x(), to.y()));
+    return w;
   }
-  const SurfacePoint p = space.locate(seed);
+  const SurfacePoint p = space.locate(at);
   LocalChart chart;
   space.log_map().compute(p, chart);
   const ChartInverse inverse(space.bundle(), chart, 0.5 * space.diameter());
   const SurfacePoint q = space.locate(to);
   const cplx w = inverse.coords(q);
-  // Beyond the inverted faces (far from the seed, or past the cut locus) the chart's
+  // Beyond the inverted faces (far from `at`, or past the cut locus) the chart's
   // coordinates do not lead back to the point.
   const auto back = inverse.locate(w);
   if (!back || (surface_position(space.mesh(), *back) - surface_position(space.mesh(), q)).norm() >
                    1e-3 * space.diameter())
-    throw Error(fmt::format("the point ({:.4g}, {:.4g}, {:.4g}) is too far from the seed ({:.4g}, {:.4g}, {:.4g}): a "
-                            "streamline's seed moves within {:.3g} of it (half the domain's diameter), where its "
-                            "log-map chart is used",
-                            to.x(), to.y(), to.z(), seed.x(), seed.y(), seed.z(), inverse.radius()));
-  return space.bundle().face_to_world(p.face, w - inverse.coords(p));
+    throw Error(seed ? fmt::format("the point ({:.4g}, {:.4g}, {:.4g}) is too far from the seed ({:.4g}, {:.4g}, "
+                                   "{:.4g}): a streamline's seed moves within {:.3g} of it (half the domain's "
+                                   "diameter), where its log-map chart is used",
+                                   to.x(), to.y(), to.z(), at.x(), at.y(), at.z(), inverse.radius())
+                     : fmt::format("the point ({:.4g}, {:.4g}, {:.4g}) is too far from ({:.4g}, {:.4g}, {:.4g}): the "
+                                   "log-map chart around a point is used within {:.3g} of it (half the domain's "
+                                   "diameter)",
+                                   to.x(), to.y(), to.z(), at.x(), at.y(), at.z(), inverse.radius()));
+  return w - inverse.coords(p);
+}
+
+}  // namespace
+
+cplx chart_coordinates(const DesignSpace& space, const Vec3& at, const Vec3& to) {
+  return chart_coordinates_of(space, at, to, false);
+}
+
+Vec3 seed_translation(const DesignSpace& space, const Vec3& seed, const Vec3& to) {
+  const cplx w = chart_coordinates_of(space, seed, to, true);
+  if (space.planar()) return {w.real(), w.imag(), 0.0};
+  return space.bundle().face_to_world(space.locate(seed).face, w);
 }
 
 struct StreamlineDeformation::Line {

@@ -2,6 +2,7 @@
 
 #include "crowd_file_reader.h"
 
+#include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
 #include "tvf/core/json_text.h"
 #include "tvf/integrate/streamline.h"
@@ -18,6 +19,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <unordered_map>
 
 namespace tvf {
 
@@ -56,7 +58,7 @@ struct Reader : CrowdFileReader {
 SurfaceCrowdSpec load_surface_crowd_spec(const std::string& path) {
   return read_crowd_file(path, [&](const json& j) {
     const Reader r{{path}};
-    r.keys(j, "", {"agents", "speed", "weights", "steps_per_frame", "seed", "start", "goals", "obstacles"});
+    r.keys(j, "", {"agents", "speed", "weights", "steps_per_frame", "seed", "avoidance", "start", "goals", "obstacles"});
     SurfaceCrowdSpec s;
     if (j.contains("agents")) s.agents = r.integer(j["agents"], "agents", 1, 100000);
     if (j.contains("speed")) s.speed = r.number(j["speed"], "speed", 0, 1e12);
@@ -66,6 +68,11 @@ SurfaceCrowdSpec load_surface_crowd_spec(const std::string& path) {
       if (j["weights"].contains("field")) s.weight_field = r.number(j["weights"]["field"], "weights.field", 0, 1e6);
     }
     if (j.contains("steps_per_frame")) s.steps_per_frame = r.integer(j["steps_per_frame"], "steps_per_frame", 1, 1000);
+    if (j.contains("avoidance")) {
+      r.keys(j["avoidance"], "avoidance", {"distance"});
+      if (!j["avoidance"].contains("distance")) r.fail("avoidance", "needs distance (the least distance between agents)");
+      s.separation = r.number(j["avoidance"]["distance"], "avoidance.distance", 0, 1e12);
+    }
     if (j.contains("seed")) s.seed = static_cast<std::uint64_t>(r.integer(j["seed"], "seed", 0, 1'000'000'000));
     if (!j.contains("start")) r.fail("start", "missing: give the regions the agents start in");
     if (!j.contains("goals")) r.fail("goals", "missing: give at least one goal region");
@@ -214,6 +221,55 @@ SurfaceCrowdResult simulate_surface_crowd(const TangentBundle& bundle, const Fie
       }
     }
   };
+  // Avoidance: pairs of active agents closer than the separation pushed apart along the
+  // surface, each by half the overlap, in the direction away from the other projected
+  // onto its face (neighbours found in a hash grid of cells one separation wide).
+  const double sep = spec.separation;
+  auto separate = [&]() {
+    if (!(sep > 0)) return;
+    for (int sweep = 0; sweep < 16; ++sweep) {
+      std::unordered_map<std::int64_t, std::vector<int>> cells;
+      std::vector<Vec3> x(agents.size());
+      auto key = [&](long i, long j, long k) { return (i * 73856093L) ^ (j * 19349663L) ^ (k * 83492791L); };
+      for (size_t a = 0; a < agents.size(); ++a) {
+        if (done[a]) continue;
+        x[a] = surface_position(mesh, agents[a]);
+        cells[key(std::lround(std::floor(x[a].x() / sep)), std::lround(std::floor(x[a].y() / sep)),
+                  std::lround(std::floor(x[a].z() / sep)))]
+            .push_back(static_cast<int>(a));
+      }
+      bool moved = false;
+      for (size_t a = 0; a < agents.size(); ++a) {
+        if (done[a]) continue;
+        const long ci = std::lround(std::floor(x[a].x() / sep)), cj = std::lround(std::floor(x[a].y() / sep)),
+                   ck = std::lround(std::floor(x[a].z() / sep));
+        Vec3 push = Vec3::Zero();
+        for (long i = ci - 1; i <= ci + 1; ++i)
+          for (long jj = cj - 1; jj <= cj + 1; ++jj)
+            for (long k = ck - 1; k <= ck + 1; ++k) {
+              const auto it = cells.find(key(i, jj, k));
+              if (it == cells.end()) continue;
+              for (int b : it->second) {
+                if (static_cast<size_t>(b) == a) continue;
+                Vec3 d = x[a] - x[static_cast<size_t>(b)];
+                double r = d.norm();
+                if (r >= (1 - 1e-3) * sep) continue;
+                // Coincident agents: apart along the face's first axis, the lower index the other way.
+                if (r < 1e-12 * sep) d = (static_cast<size_t>(b) < a ? 1.0 : -1.0) * bundle.face_e1(agents[a].face), r = 0;
+                else d /= r;
+                push += 0.5 * (sep - r) * d;
+              }
+            }
+        if (push.squaredNorm() == 0) continue;
+        const SurfaceWalk w = walk_surface(bundle, agents[a], bundle.world_to_face(agents[a].face, push), blocked);
+        agents[a] = w.end;
+        x[a] = surface_position(mesh, agents[a]);
+        moved = true;
+      }
+      if (!moved) break;
+    }
+  };
+  separate();
   record(0);
   for (int k = 1; k < total; ++k) {
     const double t0 = time_of(k - 1), t1 = time_of(k);
@@ -236,11 +292,29 @@ SurfaceCrowdResult simulate_surface_crowd(const TangentBundle& bundle, const Fie
         if (w.stopped || w.hit_boundary) ++contacts[a];
         agents[a] = w.end;
       });
+      // Arrivals first: an agent that reached a goal leaves the crowd before the projection.
+      for (size_t a = 0; a < agents.size(); ++a)
+        if (!done[a] && res.goal_face[static_cast<size_t>(agents[a].face)]) done[a] = 2;
+      separate();
+      for (auto& d : done)
+        if (d == 2) d = 0;
     }
     record(k);
   }
   for (long c : contacts) res.contacts += c;
   return res;
+}
+
+void write_surface_crowd_csv(const std::string& path, const SurfaceCrowdResult& result) {
+  std::string text = "agent,frame,t,x,y,z,arrived\n";
+  for (size_t a = 0; a < result.positions.size(); ++a)
+    for (size_t k = 0; k < result.positions[a].size(); ++k) {
+      const Vec3& p = result.positions[a][k];
+      const bool arrived = result.arrived[a] >= 0 && static_cast<size_t>(result.arrived[a]) <= k;
+      text += fmt::format("{},{},{:.17g},{:.17g},{:.17g},{:.17g},{}\n", a, k, result.times[k], p.x(), p.y(), p.z(),
+                          arrived ? 1 : 0);
+    }
+  write_file_atomically(path, text);
 }
 
 AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const Field& field,
@@ -249,7 +323,19 @@ AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const
   const auto start = std::chrono::steady_clock::now();
   if (options.size < 16 || options.size > 8192)
     throw Error(fmt::format("crowd: a picture of {} pixels is outside [16, 8192]", options.size));
+  if (options.frames_dir.empty() && options.video.empty() && options.csv.empty())
+    throw Error("crowd: give a folder for the PNG frames, an MP4 file or a CSV file to write");
   const SurfaceCrowdResult res = simulate_surface_crowd(bundle, field, spec, options.frames);
+  const int total = static_cast<int>(res.times.size());
+  AnimationReport report;
+  report.frames = total;
+  if (!options.csv.empty()) write_surface_crowd_csv(options.csv, res);
+  if (options.frames_dir.empty() && options.video.empty()) {
+    report.files.push_back(options.csv);
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (result) *result = res;
+    return report;
+  }
   const Mesh& mesh = bundle.mesh();
   MeshRenderer renderer;
   renderer.set_mesh(mesh);
@@ -269,7 +355,6 @@ AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const
   ro.lighting = options.view.lighting;
   ro.ambient = 0.5;
   FrameOutput out(options.frames_dir, options.video, ro.width, ro.height, options.fps);
-  const int total = static_cast<int>(res.times.size());
   const double width = std::max(1.5, options.size / 400.0), radius = std::max(3.0, options.size / 160.0);
   for (int k = 0; k < total; ++k) {
     std::vector<RenderLine> lines;
@@ -283,9 +368,8 @@ AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const
     out.add(renderer.render(camera, ro, lines, markers));
     if (options.progress) options.progress(k + 1, total);
   }
-  AnimationReport report;
   report.files = out.finish();
-  report.frames = total;
+  if (!options.csv.empty()) report.files.push_back(options.csv);
   report.width = report.height = options.size;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (result) *result = res;

@@ -563,6 +563,9 @@ struct HttpServer::Impl {
     server.Post("/api/seed_translation", wrap_body([&s](const auto&, auto& res, const std::string& text) {
                   send_json(res, s.seed_translation(parse_json(text)));
                 }));
+    server.Post("/api/chart_coordinates", wrap_body([&s](const auto&, auto& res, const std::string& text) {
+                  send_json(res, s.chart_coordinates(parse_json(text)));
+                }));
     server.Post("/api/upload", wrap_body([&s](const auto& req, auto& res, const std::string& bytes) {
                   if (!req.has_param("name")) throw RequestError(400, "upload: say the file name (?name=mesh.obj)");
                   send_json(res, s.upload_mesh(req.get_param_value("name"), bytes));

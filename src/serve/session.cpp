@@ -533,30 +533,50 @@ Session::FieldView Session::current_field() const {
   return {r, &r->space().bundle(), &r->field(), r->scene.domain.is_planar(), r->revision};
 }
 
-json Session::seed_translation(const json& request) const {
+namespace {
+
+// The two positions of a chart request (`op`: its name in errors): [x, y] on grids,
+// [x, y, z] on surfaces, finite and within the scene's number bound.
+std::pair<Vec3, Vec3> chart_request(const json& request, const char* op, const char* from, bool planar) {
   if (!request.is_object())
-    throw RequestError(400, "seed_translation: expected {\"seed\": position, \"to\": position}");
-  const auto r = s_->current_result();
-  const bool planar = r->scene.domain.is_planar();
+    throw RequestError(400, fmt::format("{}: expected {{\"{}\": position, \"to\": position}}", op, from));
   auto position = [&](const char* key) {
     const size_t n = planar ? 2 : 3;
     const auto it = request.find(key);
     if (it == request.end() || !it->is_array() || it->size() != n ||
         !std::all_of(it->begin(), it->end(), [](const json& v) { return v.is_number(); }))
-      throw RequestError(400, fmt::format("seed_translation: \"{}\" must be a position of {} numbers on this {}", key,
-                                          n, planar ? "grid" : "surface"));
+      throw RequestError(400, fmt::format("{}: \"{}\" must be a position of {} numbers on this {}", op, key, n,
+                                          planar ? "grid" : "surface"));
     Vec3 x = Vec3::Zero();
     for (size_t k = 0; k < n; ++k) x[static_cast<int>(k)] = (*it)[k].get<double>();
-    if (!x.allFinite()) throw RequestError(400, fmt::format("seed_translation: \"{}\" is not finite", key));
+    if (!x.allFinite()) throw RequestError(400, fmt::format("{}: \"{}\" is not finite", op, key));
     // The same bound as every number of a scene (docs/scene_reference.md, "Limits").
     if (x.cwiseAbs().maxCoeff() > 1e15)
-      throw RequestError(400, fmt::format("seed_translation: \"{}\" has a coordinate of magnitude over 1e15", key));
+      throw RequestError(400, fmt::format("{}: \"{}\" has a coordinate of magnitude over 1e15", op, key));
     return x;
   };
-  const Vec3 seed = position("seed");
-  const Vec3 to = position("to");
+  return {position(from), position("to")};
+}
+
+}  // namespace
+
+json Session::seed_translation(const json& request) const {
+  const auto r = s_->current_result();
+  const bool planar = r->scene.domain.is_planar();
+  const auto [seed, to] = chart_request(request, "seed_translation", "seed", planar);
   try {
     return {{"translate", vec3(tvf::seed_translation(r->space(), seed, to), planar)}};
+  } catch (const Error& e) {
+    throw RequestError(422, e.what());
+  }
+}
+
+json Session::chart_coordinates(const json& request) const {
+  const auto r = s_->current_result();
+  const auto [at, to] = chart_request(request, "chart_coordinates", "at", r->scene.domain.is_planar());
+  try {
+    const cplx w = tvf::chart_coordinates(r->space(), at, to);
+    return {{"coords", {w.real(), w.imag()}}};
   } catch (const Error& e) {
     throw RequestError(422, e.what());
   }

@@ -187,6 +187,20 @@ TEST(CliRenderApps, OutputsAndFrameCountsAreWhatWasAsked) {
   EXPECT_EQ(r.output.find("0×0"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("simulated 10 crowd frames"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir / "paths.csv"));
+  // The same on a surface: the trajectories with z, and the same report.
+  test::write_text(dir / "sphere.json", R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 3, "radius": 1}},
+    "time": {"frames": 4}, "generator": "basis", "elements": [{"kind": "singular", "type": "ccw_center",
+    "path": [[0, 0, 1, 0]]}]})");
+  test::write_text(dir / "ball.json", R"({"agents": 3, "speed": 6, "weights": {"goal": 1, "field": 0},
+    "start": [{"ball": {"center": [0, 0, -1], "radius": 0.3}}], "goals": [{"ball": {"center": [0, 0, 1], "radius": 0.3}}]})");
+  r = run_tvf("render crowd " + quoted(dir / "sphere.json") + " --crowd " + quoted(dir / "ball.json") + " -o " +
+              quoted(dir / "surface.csv") + " --frames 5");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("0×0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("simulated 5 crowd frames"), std::string::npos) << r.output;
+  const std::string csv = test::read_text(dir / "surface.csv");
+  EXPECT_EQ(csv.rfind("agent,frame,t,x,y,z,arrived\n", 0), 0u) << csv.substr(0, 80);
+  EXPECT_EQ(count_lines(csv), 1 + 3 * 5) << csv;
 }
 
 }  // namespace

@@ -110,6 +110,52 @@ TEST(StreamlineDeformation, SeedTranslationGivesTheKeyThatCarriesTheSeedToAPoint
   EXPECT_LT((seed_translation(*flat, Vec3(0.1, 0.2, 0), Vec3(-0.3, 0.5, 0)) - Vec3(-0.4, 0.3, 0)).norm(), 1e-12);
 }
 
+// The designer's Bifurcation drag on a surface: angle = arg and scale = modulus of the
+// chart coordinates of the drag's end around its start. A saddle–sink creation so placed
+// has its axis along the geodesic towards the drag's end: one time scale after t0 its
+// template is (1 − x², −y), so at its place the field runs along +axis (and with the
+// opposite angle, against it).
+TEST(StreamlineDeformation, ChartCoordinatesGiveABifurcationsAxisOnTheSphere) {
+  const Scene plain = sphere_scene(kStreamline + R"([{"t": 1}]}])");
+  const auto space = make_design_space(plain);
+  const double h = space->mesh().mean_edge_length();
+  const Vec3 at = Vec3(0.3, -0.8, 0.5).normalized();
+  const Vec3 to = Vec3(0.55, -0.75, 0.3).normalized();
+  const cplx w = chart_coordinates(*space, at, to);
+  EXPECT_NEAR(std::abs(w), angle_between(at, to), h);  // the geodesic distance
+  // Its direction, as a world vector in at's face, is the great circle's towards `to`.
+  const Vec3 towards = (to - at.dot(to) * at).normalized();
+  const Vec3 axis = space->bundle().face_to_world(space->locate(at).face, w / std::abs(w));
+  EXPECT_GT(axis.dot(towards), 0.99);
+  // The nearest vertex to `at`.
+  int near = 0;
+  for (int v = 0; v < space->mesh().num_vertices(); ++v)
+    if ((space->mesh().position(v) - at).norm() < (space->mesh().position(near) - at).norm()) near = v;
+  for (const double sign : {1.0, -1.0}) {
+    const double angle = std::arg(w) + (sign > 0 ? 0.0 : 3.141592653589793);
+    const Scene s = parse_scene(fmt::format(R"({{"tvf": 1, "domain": {{"sphere": {{"subdivisions": 4, "radius": 1}}}},
+      "time": {{"frames": 2, "range": [0, 1]}}, "generator": "basis", "falloff": 10,
+      "elements": [{{"kind": "bifurcation", "type": "saddle_sink_creation", "at": [{}, {}, {}, 0], "scale": {},
+                    "time_scale": 1, "angle": {}}}]}})",
+                                            at.x(), at.y(), at.z(), std::abs(w), angle),
+                                "bifurcation.json");
+    const Field f = generate(*space, s);
+    const Vec3 v = space->bundle().vertex_to_world(near, f.frame(1)[static_cast<size_t>(near)]);
+    EXPECT_GT(sign * v.normalized().dot(towards), 0.95) << "sign " << sign;
+  }
+  // Planar domains: the difference; beyond the chart: an error naming both points.
+  const Scene grid = parse_scene(R"({"tvf": 1, "domain": {"grid": {"size": [9, 9], "min": [-1, -1], "max": [1, 1]}}})",
+                                 "grid.json");
+  EXPECT_LT(std::abs(chart_coordinates(*make_design_space(grid), Vec3(0.1, 0.2, 0), Vec3(-0.3, 0.5, 0)) - cplx(-0.4, 0.3)),
+            1e-12);
+  try {
+    chart_coordinates(*space, at, -at);
+    ADD_FAILURE() << "the antipode is beyond the chart";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("is too far from ("), std::string::npos) << e.what();
+  }
+}
+
 TEST(StreamlineDeformation, TheFieldFollowsTheMovedStreamlineAndStartsFromTheBase) {
   const Scene s = sphere_scene(kStreamline + R"([{"t": 1, "translate": [0, 0.3, 0], "rotate": 0.6, "scale": 1.2}]}])");
   const auto space = make_design_space(s);

@@ -93,6 +93,13 @@ TEST(ServeHttp, SceneFrameAnalysisAndEditsOverHttp) {
   EXPECT_NEAR(tr["translate"][1].get<double>(), 0.3, 1e-12);
   EXPECT_EQ(f.client->Post("/api/seed_translation", R"({"seed": [0.1, 0.2, 0], "to": [0, 0]})", "application/json")->status,
             400);
+  // The Bifurcation drag's chart coordinates: on a grid the difference too.
+  json cc = body(f.client->Post("/api/chart_coordinates", R"({"at": [0.1, 0.2], "to": [-0.3, 0.5]})", "application/json"), 200);
+  ASSERT_EQ(cc["coords"].size(), 2u) << cc;
+  EXPECT_NEAR(cc["coords"][0].get<double>(), -0.4, 1e-12);
+  EXPECT_NEAR(cc["coords"][1].get<double>(), 0.3, 1e-12);
+  EXPECT_EQ(f.client->Post("/api/chart_coordinates", R"({"seed": [0.1, 0.2], "to": [0, 0]})", "application/json")->status,
+            400);
 
   json exported = body(f.client->Post("/api/export", R"({"dir": "x", "format": "npy"})", "application/json"), 200);
   ASSERT_FALSE(exported["files"].empty());

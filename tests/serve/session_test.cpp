@@ -294,6 +294,16 @@ TEST(ServeSession, SurfacesTakePathlinesAndStreamlinesPickedOnThemAndRenderVideo
   EXPECT_EQ(status_of([&] { s.seed_translation({{"seed", {0, -0.6}}, {"to", {0.3, -0.55, 0.78}}}); }), 400);
   EXPECT_EQ(status_of([&] { s.seed_translation({{"seed", {0, -0.6, 0.8}}}); }), 400);
   EXPECT_EQ(status_of([&] { s.seed_translation({{"seed", {0, -0.6, 0.8}}, {"to", {0, 0.6, -0.8}}}); }), 422);
+  // The Bifurcation drag's axis: the same chart's coordinates, [u, v], as long as the
+  // geodesic, and (in the frame of the seed's face) along the translate above.
+  const json cc = s.chart_coordinates({{"at", {0, -0.6, 0.8}}, {"to", {0.28, -0.55, 0.79}}});
+  ASSERT_EQ(cc["coords"].size(), 2u) << cc;
+  EXPECT_NEAR(std::hypot(cc["coords"][0].get<double>(), cc["coords"][1].get<double>()), std::hypot(t3[0], t3[1], t3[2]),
+              1e-9)
+      << cc;
+  EXPECT_EQ(status_of([&] { s.chart_coordinates({{"seed", {0, -0.6, 0.8}}, {"to", {0.3, -0.55, 0.78}}}); }), 400);
+  EXPECT_EQ(status_of([&] { s.chart_coordinates(json::array()); }), 400);
+  EXPECT_EQ(status_of([&] { s.chart_coordinates({{"at", {0, -0.6, 0.8}}, {"to", {0, 0.6, -0.8}}}); }), 422);
 
   // The video of the surface, seen from the page's camera: PNG frames here (fast), each
   // `size` pixels square.

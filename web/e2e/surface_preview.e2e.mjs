@@ -11,6 +11,7 @@
 //   the drawn element a source at t = 0, a vortex at t = ½ and a sink at t = 1, and the
 //   preview around it moves outwards, round and inwards; the same drawn as a sink moves
 //   inwards, as a counter-clockwise centre (a vortex) round, counter-clockwise;
+// - an orbit of the camera carries the texture with the surface (it does not slide);
 // - a control point of the drawn path is dragged elsewhere with the Select tool;
 // - a bifurcation placed on the surface is picked in the time strip of the paths through
 //   time, which goes to its time.
@@ -202,6 +203,57 @@ try {
   check(vortex.tangential > 1 && Math.abs(vortex.radial) < Math.abs(vortex.tangential),
     `the preview turns counter-clockwise around the vortex (around ${vortex.tangential.toFixed(2)} px, radial ${vortex.radial.toFixed(2)})`);
   await d.shot(a.out, "surface_preview_03_vortex.png");
+
+  // ---- an orbit carries the texture with the surface --------------------------------------
+  // The picture (image space) is reprojected when the camera moves: a patch around a point
+  // of the surface looks after an orbit as it did before, where that point now is on the
+  // screen, not where it was (normalized cross-correlation of 25² patches; the pictures
+  // are of the same step, step(0) only reprojects).
+  const probe = [at, greatCircle(at, [0, 0, 1], 0.25), greatCircle(at, [1, 0, 0], 0.25), greatCircle(at, [-1, 0, 0], 0.2)];
+  const picture = (pts) =>
+    page.evaluate((q) => {
+      const gl = document.querySelector("#surface canvas");
+      const c = document.createElement("canvas");
+      c.width = gl.width;
+      c.height = gl.height;
+      const x = c.getContext("2d");
+      x.drawImage(gl, 0, 0);
+      const px = x.getImageData(0, 0, c.width, c.height).data;
+      const g = [];
+      for (let k = 0; k < c.width * c.height; ++k) g.push(px[4 * k]);
+      return { g, w: c.width, at: q.map((p) => window.tvf.surface(p).map((v) => Math.round((v * gl.width) / gl.clientWidth))) };
+    }, pts);
+  const ncc = (A, pa, B, pb, half = 12) => {
+    const xs = [];
+    const ys = [];
+    for (let v = -half; v <= half; ++v)
+      for (let u = -half; u <= half; ++u) {
+        xs.push(A.g[(pa[1] + v) * A.w + pa[0] + u]);
+        ys.push(B.g[(pb[1] + v) * B.w + pb[0] + u]);
+      }
+    const m = (a) => a.reduce((s, x) => s + x, 0) / a.length;
+    const [mx, my] = [m(xs), m(ys)];
+    let sxy = 0, sxx = 0, syy = 0;
+    xs.forEach((x, k) => ((sxy += (x - mx) * (ys[k] - my)), (sxx += (x - mx) ** 2), (syy += (ys[k] - my) ** 2)));
+    return sxy / Math.sqrt(sxx * syy);
+  };
+  await page.evaluate(() => window.tvf.preview.step(10));
+  const beforeOrbit = await picture(probe);
+  const centre = await onSurface(at);
+  await page.mouse.move(centre[0], centre[1]);
+  await page.mouse.down({ button: "right" });
+  await page.mouse.move(centre[0] + 20, centre[1] + 8, { steps: 4 });
+  await page.mouse.up({ button: "right" });
+  await page.evaluate(() => window.tvf.preview.step(0));
+  const afterOrbit = await picture(probe);
+  const shifts = probe.map((_, k) => Math.hypot(afterOrbit.at[k][0] - beforeOrbit.at[k][0], afterOrbit.at[k][1] - beforeOrbit.at[k][1]));
+  const follow = probe.map((_, k) => ncc(beforeOrbit, beforeOrbit.at[k], afterOrbit, afterOrbit.at[k]));
+  const stay = probe.map((_, k) => ncc(beforeOrbit, beforeOrbit.at[k], afterOrbit, beforeOrbit.at[k]));
+  const fmt = (a) => a.map((x) => x.toFixed(2)).join(", ");
+  check(Math.min(...shifts) > 15, `the orbit moves the surface on the screen (${fmt(shifts)} px)`);
+  check(follow.reduce((x, y) => x + y) / follow.length > 0.6 && follow.every((f, k) => f > stay[k] + 0.3),
+    `the texture moves with the surface: correlation with the old picture where the points now are ${fmt(follow)}, where they were ${fmt(stay)}`);
+  await d.shot(a.out, "surface_preview_03b_vortex_orbited.png");
 
   // ---- a control point moved afterwards ---------------------------------------------------
   const vortexPath = (await d.scene()).scene.elements.at(-1).path;

@@ -1,13 +1,16 @@
 // End-to-end test of the surface designer's Move bifurcation and Deform streamline tools
 // (issue 7: the same tools on surfaces, points picked on the surface). On the sphere:
-// - a saddle–sink creation is placed with the Bifurcation tool, picked in the list ("go
+// - a saddle–sink creation is placed with the Bifurcation tool by press-and-drag (its
+//   axis and size along the drag): the analysis finds it at the press and the time, and
+//   after it the sink runs towards the drag's end; it is picked in the list ("go
 //   to"), and moved with the Move bifurcation tool by a click elsewhere on the surface:
 //   the analysis finds it there and no longer at its old place;
 // - a representative streamline of a storm (counter-clockwise centre) is dragged on the
 //   surface by the last frame and turned by 1.2 rad: the key's translate comes from the
 //   server's log map, and the last frame's field at the drag's end runs along the turned
 //   streamline, not along the base field there;
-// - the whole field turned by π (Rotate field): the centre turns the other way.
+// - the whole field turned by π (Rotate field): the centre turns the other way;
+// - a key frame's source placed by a drag on the sphere: the key frame's field has it there.
 // Screenshots go to --out (looked at by people, not compared by the test).
 // Usage: node e2e/surface_tools.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
 import fs from "node:fs";
@@ -106,10 +109,26 @@ try {
   await d.settled();
   await d.tool("bifurcation");
   await page.selectOption("#bifurcation-type", "saddle_sink_creation");
-  await d.change(() => clickOnSurface(old));
+  // Placed by press-and-drag: where the press is, its pair moving along the drag (axis and
+  // scale from the server's log map around the press), at the current time.
+  const axisEnd = greatCircle(old, unit([-0.35, -1, 0.1]), 0.2);
+  await d.change(() => dragOnSurface(old, axisEnd, 6), 60000);
+  const placed = (await d.scene()).scene.elements.at(-1);
+  const t0 = placed.at[3];
+  check(placed.kind === "bifurcation" && placed.at.length === 4 && angle(placed.at.slice(0, 3), old) < 0.03 && Math.abs(t0 - 19 / 47) < 0.002,
+    `the drag places a bifurcation at its start and the current time: "${await message()}"`);
+  check(Math.abs(placed.scale - 0.2) < 0.03, `as large as the drag is long (scale ${placed.scale} for 0.2 rad)`);
   let an = await analysis();
   const near = (list, p) => Math.min(Infinity, ...list.map((b) => angle(b.position, p)));
-  check(near(an.bifurcations, old) < 0.15, `the analysis finds the placed bifurcation (${near(an.bifurcations, old).toFixed(3)} rad from the click)`);
+  const designed = an.bifurcations.filter((b) => angle(b.position, old) < 0.15);
+  check(designed.length === 1, `the analysis finds the placed bifurcation (${near(an.bifurcations, old).toFixed(3)} rad from the press)`);
+  check(designed.length === 1 && Math.abs(designed[0].t - t0) < 0.05, `at its time (t = ${designed[0]?.t.toFixed(3)}, designed ${t0.toFixed(3)})`);
+  // After it the sink runs ahead along the drag, the saddle behind (axis +x of the template).
+  const after = (await frameAt(30)).singularities.filter((x) => angle(x.position, old) < 0.3);
+  const sink = after.find((x) => x.type === "sink");
+  const saddle = after.find((x) => x.type === "saddle");
+  check(sink && saddle && angle(sink.position, axisEnd) < angle(saddle.position, axisEnd) - 0.05 && angle(sink.position, axisEnd) < angle(old, axisEnd),
+    `at t = 30/47 the sink lies towards the drag's end, the saddle away from it (${sink && angle(sink.position, axisEnd).toFixed(3)} vs ${saddle && angle(saddle.position, axisEnd).toFixed(3)} rad)`);
   const i = an.bifurcations.reduce((bi, b, k) => (angle(b.position, old) < angle(an.bifurcations[bi].position, old) ? k : bi), 0);
   await page.locator("#bifurcations .bifurcation").nth(i).locator("button", { hasText: "go to" }).click();
   check(await page.evaluate(() => window.tvf.state.selectedBifurcation) === i, "it is picked in the list");
@@ -197,6 +216,34 @@ try {
   await d.goto(12);
   await d.settled();
   await d.shot(a.out, "surface_tools_04_field_rotated_mid.png");
+  // ---- a key frame's singularity placed on the sphere by press-and-drag ------------------
+  await applyScene((s) => {
+    s.time.frames = 12;
+    s.elements = [];
+    s.edits = [];
+    delete s.deform;
+    s.keyframes = [];
+    s.generator = "constrained";
+  });
+  await d.goto(6);
+  await d.settled();
+  await d.tool("singular");
+  await page.selectOption("#singular-type", "source");
+  await page.check("#keyframe-mode");
+  const keyAt = unit([0.15, -1, 0.3]);
+  await d.change(() => dragOnSurface(keyAt, greatCircle(keyAt, [0, 0, 1], 0.15), 4), 120000);
+  const ks = (await d.scene()).scene;
+  const k = ks.keyframes?.[0];
+  check(ks.generator === "spacetime" && ks.keyframes.length === 1 && Math.abs(k.t - 6 / 11) < 1e-3 && k.elements.length === 1,
+    `the drag puts a key frame at the current time (t = ${k?.t}) with one element, spatio-temporal generator: "${await message()}"`);
+  check(k.elements[0].type === "source" && k.elements[0].at.length === 3 && angle(k.elements[0].at, keyAt) < 0.03,
+    "a source where the press was, [x, y, z]");
+  await d.settled();
+  const keyFrame = await frameAt(6);
+  const found = keyFrame.singularities.filter((x) => angle(x.position, keyAt) < 0.1);
+  check(found.length === 1 && found[0].type === "source", `the key frame's field has the source there (${found.map((x) => `${x.type} ${angle(x.position, keyAt).toFixed(3)} rad`).join(", ")})`);
+  await page.uncheck("#keyframe-mode");
+  await d.shot(a.out, "surface_tools_05_keyframe_source.png");
   check(errors.length === 0, `no errors in the page${errors.length ? ": " + errors.join("; ") : ""}`);
 } catch (e) {
   failed = true;

@@ -109,6 +109,9 @@ export const api = {
   // The deformation key's translate that moves a streamline's seed to `to` (on surfaces in
   // the log-map chart around the seed, computed by the library).
   seedTranslation: (seed: number[], to: number[]) => call<{ translate: number[] }>("POST", "api/seed_translation", { seed, to }),
+  // The coordinates [u, v] of `to` in the chart an element at `at` is designed in (on
+  // surfaces the log map around `at`, in the frame of its face): a bifurcation's axis.
+  chartCoordinates: (at: number[], to: number[]) => call<{ coords: number[] }>("POST", "api/chart_coordinates", { at, to }),
   exportField: (format: string, dir: string) => call<{ revision: number; files: string[] }>("POST", "api/export", { format, dir }),
   // On surfaces `camera` is the view to render from (SurfaceView.cameraView()).
   render: (name: string, size: number, camera?: { view: number[]; up: number[]; fov: number }, frames?: number) =>

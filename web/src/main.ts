@@ -692,10 +692,7 @@ canvas.addEventListener("pointerup", (e) => {
       void change((s) => S.addDeformStreamline(s, stroke[0], d, t, turn), `streamline from (${stroke[0].join(", ")}) moved by (${d.join(", ")}) at t = ${t}`);
     } else if (state.tool === "bifurcation") {
       const kind = $<HTMLSelectElement>("bifurcation-type").value;
-      const dx = p[0] - stroke[0][0];
-      const dy = p[1] - stroke[0][1];
-      const scale = isClick ? 0.25 : Math.max(0.05, Math.round(Math.hypot(dx, dy) * 1000) / 1000);
-      const angle = isClick ? 0 : Math.round(Math.atan2(dy, dx) * 1000) / 1000;
+      const { scale, angle } = S.bifurcationAxis(isClick ? undefined : [p[0] - stroke[0][0], p[1] - stroke[0][1]]);
       void change((s) => S.addBifurcation(s, kind, stroke[0], t, scale, angle), `${kind} at t = ${t}`);
     }
   } catch (err) {
@@ -715,7 +712,7 @@ function surfacePick(p: number[]) {
     else void change((s) => S.addSingular(s, type, at, undefined, t0), `fixed ${type} placed`);
   } else if (state.tool === "bifurcation") {
     const kind = $<HTMLSelectElement>("bifurcation-type").value;
-    void change((s) => S.addBifurcation(s, kind, at, t), "bifurcation placed");
+    void change((s) => S.addBifurcation(s, kind, at, t), `${kind} at t = ${t} (drag on the surface to give its axis and size)`);
   } else if (state.tool === "cancel") {
     pickForCancel(at, 0.2);
   } else if (state.tool === "select") {
@@ -751,7 +748,7 @@ function surfaceHandleAt(p: number[]): S.Handle | undefined {
 // Whether a left drag from p on the surface is the tool's (else it orbits the camera):
 // the drawing tools own every drag on the surface; the Select tool a drag from a handle.
 function surfaceGrab(p: number[]): boolean {
-  if (state.tool === "pathline" || state.tool === "streamline" || state.tool === "deform" || state.tool === "singular") return true;
+  if (["pathline", "streamline", "deform", "singular", "bifurcation"].includes(state.tool)) return true;
   if (state.tool === "select") {
     state.selected = surfaceHandleAt(p);
     return state.selected !== undefined;
@@ -771,6 +768,21 @@ async function surfaceDeform(points: number[][], t: number) {
     const { translate } = await api.seedTranslation(seed, to);
     const d = rounded(translate);
     await change((s) => S.addDeformStreamline(s, seed, d, t, turn), `streamline from (${seed.join(", ")}) moved to (${to.join(", ")}) at t = ${t}`);
+  } catch (err) {
+    say((err as Error).message, true);
+  }
+}
+
+// The Bifurcation tool on a surface: placed where the drag starts, its pair moving
+// along the drag (the axis and scale from the server's log map around the start, the
+// chart the element is designed in), at the current time.
+async function surfaceBifurcation(points: number[][], t: number) {
+  const at = rounded(points[0]);
+  const to = rounded(points[points.length - 1]);
+  const kind = $<HTMLSelectElement>("bifurcation-type").value;
+  try {
+    const { scale, angle } = S.bifurcationAxis((await api.chartCoordinates(at, to)).coords);
+    await change((s) => S.addBifurcation(s, kind, at, t, scale, angle), `${kind} at t = ${t}, its pair along the drag (scale ${scale})`);
   } catch (err) {
     say((err as Error).message, true);
   }
@@ -797,6 +809,7 @@ function surfaceStroke(points: number[][]) {
     else if (state.tool === "streamline")
       void change((s) => S.addKeyframeStreamline(s, t, resample(points, 10)), `streamline on the surface in the key frame at t = ${t}`);
     else if (state.tool === "deform") void surfaceDeform(points, t);
+    else if (state.tool === "bifurcation") void surfaceBifurcation(points, t);
   } catch (err) {
     say((err as Error).message, true);
   }

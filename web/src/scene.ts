@@ -178,6 +178,16 @@ export function addBifurcation(scene: Scene, type: string, at: Vec, t: number, s
   return s;
 }
 
+// A bifurcation's scale and angle from a drag: `coords` the drag's end in the chart
+// around its start ([u, v]: on grids the difference, on surfaces the server's log map,
+// api.chartCoordinates). The pair moves along the drag, as far apart as it is long (at
+// least 0.05); a click (no drag) is the defaults, 0.25 along +x.
+export function bifurcationAxis(coords?: number[]): { scale: number; angle: number } {
+  if (!coords) return { scale: 0.25, angle: 0 };
+  const r = Math.hypot(coords[0], coords[1]);
+  return { scale: Math.max(0.05, Math.round(r * 1000) / 1000), angle: Math.round(Math.atan2(coords[1], coords[0]) * 1000) / 1000 };
+}
+
 // The key frame at time t (snapped to its frame), created when missing. Key frames need
 // the spatio-temporal generator (paper §6.1), so the scene switches to it.
 function keyframeAt(s: Scene, t: number): Keyframe {

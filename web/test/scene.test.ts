@@ -70,6 +70,15 @@ describe("scene changes", () => {
     expect(S.removeBifurcationEdit([0.1, 0.2], 0.5)).toEqual({ op: "remove_bifurcation", at: [0.1, 0.2, 0.5] });
     expect(S.moveBifurcationEdit([0, 0], 0.5, [0.1, 0], 0.6)).toEqual({ op: "move_bifurcation", at: [0, 0, 0.5], to: [0.1, 0, 0.6] });
   });
+
+  it("give a bifurcation the axis and scale of a drag (its end in the chart around its start)", () => {
+    expect(S.bifurcationAxis()).toEqual({ scale: 0.25, angle: 0 });
+    expect(S.bifurcationAxis([0, 0.3])).toEqual({ scale: 0.3, angle: 1.571 });
+    expect(S.bifurcationAxis([-0.3, -0.4])).toEqual({ scale: 0.5, angle: -2.214 });
+    expect(S.bifurcationAxis([0.01, 0])).toEqual({ scale: 0.05, angle: 0 });
+    const s = S.addBifurcation(S.emptyScene(), "saddle_sink_creation", [0.6, 0, 0.8], 0.4, 0.3, 1.571);
+    expect(s.elements?.[0]).toEqual({ kind: "bifurcation", type: "saddle_sink_creation", at: [0.6, 0, 0.8, 0.4], scale: 0.3, time_scale: 0.25, angle: 1.571 });
+  });
 });
 
 describe("deformation", () => {

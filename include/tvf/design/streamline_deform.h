@@ -39,6 +39,14 @@ struct MovedStreamline {
 // seed in which the chart is inverted.
 Vec3 seed_translation(const DesignSpace& space, const Vec3& seed, const Vec3& to);
 
+// The local coordinates of `to` in the chart around `at` in which an element at `at` is
+// designed (element_regions.h): on planar domains (to − at).xy; on surfaces its log
+// coordinates minus at's own, in the frame of at's face (both snapped to the surface). Its
+// modulus is the geodesic distance, its argument the direction a bifurcation's `angle`
+// names (the designer's Bifurcation drag: angle = arg, scale = modulus). Throws tvf::Error
+// as seed_translation does beyond half the domain's diameter.
+cplx chart_coordinates(const DesignSpace& space, const Vec3& at, const Vec3& to);
+
 class StreamlineDeformation {
 public:
   // `base`: V(t0), |V| values in vertex bases. `space` and `scene` must outlive the object.

@@ -10,7 +10,7 @@
 // world space: the faces whose centroid lies inside. Agents step together by the midpoint
 // rule, walking on the surface (integrate/surface_walk.h); a walk that would enter an
 // obstacle face stops at its edge (counted in contacts); an agent that enters a goal face
-// has arrived and stays.
+// has arrived and stays. With `separation` the agents keep apart (SurfaceCrowdSpec).
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/mesh/tangent_bundle.h"
@@ -39,6 +39,11 @@ struct SurfaceCrowdSpec {
   double weight_field = 0.5;  // ω_F
   int steps_per_frame = 4;
   std::uint64_t seed = 1;
+  // Avoidance (0: none): agents on their way keep at least this world distance apart
+  // (centre to centre). After every step (and at the start) pairs closer than it are pushed
+  // apart along the surface, each by half the overlap (up to 16 Gauss–Seidel sweeps of the
+  // projection); an agent that reaches a goal leaves the crowd, as on the plane.
+  double separation = 0;
 };
 
 // The crowd file on a surface (docs/file_formats.md): like the planar one, with regions
@@ -66,12 +71,20 @@ struct SurfaceCrowdAnimationOptions {
   int size = 800;
   SurfaceView view;
   std::string frames_dir, video;
+  std::string csv;  // the trajectories (write_surface_crowd_csv); any of the three outputs
   double fps = 25.0;
   std::function<void(int done, int total)> progress;
 };
 
+// The trajectories as CSV, as the planar crowd's (write_crowd_csv) with z: a header
+// `agent,frame,t,x,y,z,arrived`, then one row per agent and picture (world positions on
+// the mesh, full precision; arrived 1 from its first picture at a goal on). Written
+// atomically; throws tvf::Error naming the file.
+void write_surface_crowd_csv(const std::string& path, const SurfaceCrowdResult& result);
+
 // Pictures: the mesh (obstacles dark grey, goals green, the rest pale), each agent's path so
-// far as a brown line and the agent as a dark disc.
+// far as a brown line and the agent as a dark disc; and/or the CSV (written first: if it
+// cannot be written, no pictures appear). Throws tvf::Error when no output is given.
 AnimationReport write_surface_crowd_animation(const TangentBundle& bundle, const Field& field,
                                               const SurfaceCrowdSpec& spec, const SurfaceCrowdAnimationOptions& options,
                                               SurfaceCrowdResult* result = nullptr);

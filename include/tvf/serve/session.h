@@ -166,6 +166,11 @@ public:
   nlohmann::json streakline(const nlohmann::json& request) const;
   // Timeline: {"line": [a, b], "from", "to", "count" (optional)} → the same answer.
   nlohmann::json timeline(const nlohmann::json& request) const;
+  // {"at": position, "to": position}: the local coordinates of `to` in the chart an
+  // element at `at` is designed in (chart_coordinates, streamline_deform.h), {"coords":
+  // [u, v]}: a bifurcation's angle is their argument (the designer's Bifurcation drag).
+  // The same errors as seed_translation.
+  nlohmann::json chart_coordinates(const nlohmann::json& request) const;
   // Stores an uploaded mesh (OBJ, PLY or OFF, by the name's extension) in the working
   // folder under `name` (a plain file name). Returns {"file": name}.
   nlohmann::json upload_mesh(const std::string& name, const std::string& bytes);

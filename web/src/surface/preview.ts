@@ -5,9 +5,12 @@
 // the field or the size changes. The picture (preview/advect.ts) is carried along those
 // directions each step, drawn out along them by a short LIC, and shown on the surface by a material that looks it up at the
 // fragment's screen position, shaded by the surface's normal. Texture advection on the
-// CPU at half the canvas's resolution (280² for the page's 560² view).
+// CPU at half the canvas's resolution (280² for the page's 560² view). When the camera
+// moves, the picture is carried with the surface (surface/reproject.ts), so that an orbit
+// turns the texture with the mesh instead of sliding the mesh under it.
 import * as THREE from "three";
 import { Advection, type PixelFlow } from "../preview/advect";
+import { decodeOld, reproject, reprojectFragment, reprojectVertex, valuesLike } from "./reproject";
 
 const velocityVertex = /* glsl */ `
 attribute vec3 direction;
@@ -49,6 +52,10 @@ export class SurfaceTexture {
   private readonly velocityMaterial: THREE.ShaderMaterial;
   private readonly velocityScene = new THREE.Scene();
   private velocityMesh: THREE.Mesh | undefined;
+  private readonly reprojectMaterial: THREE.ShaderMaterial;
+  // The camera's projection × view matrix when the flow was last read (undefined: none).
+  private seen: THREE.Matrix4 | undefined;
+  private seed = 0x9e3779b9;
   private target: THREE.WebGLRenderTarget | undefined;
   private texture: THREE.DataTexture | undefined;
   private advection: Advection | undefined;
@@ -67,6 +74,12 @@ export class SurfaceTexture {
       vertexShader: velocityVertex,
       fragmentShader: velocityFragment,
       uniforms: { eps: { value: 1e-3 }, resolution: { value: new THREE.Vector2(1, 1) } },
+      side: THREE.DoubleSide,
+    });
+    this.reprojectMaterial = new THREE.ShaderMaterial({
+      vertexShader: reprojectVertex,
+      fragmentShader: reprojectFragment,
+      uniforms: { previous: { value: new THREE.Matrix4() }, resolution: { value: new THREE.Vector2(1, 1) } },
       side: THREE.DoubleSide,
     });
     this.material = new THREE.ShaderMaterial({
@@ -151,22 +164,61 @@ export class SurfaceTexture {
     this.advection = new Advection(w, h, { seed: 11 });
     this.pixels = new Uint8Array(4 * w * h);
     this.grey = new Uint8Array(w * h);
+    this.flow = undefined;
+    this.seen = undefined;
+  }
+
+  // A random number in [0, 1) (xorshift32): which pixel's value a pixel new in view takes.
+  private fresh(): number {
+    let s = this.seed;
+    s ^= s << 13;
+    s >>>= 0;
+    s ^= s >>> 17;
+    s ^= s << 5;
+    this.seed = s >>> 0;
+    return this.seed / 4294967296;
+  }
+
+  // Draws the mesh into the target with `material` and reads the bytes back.
+  private pass(camera: THREE.Camera, material: THREE.ShaderMaterial, clear: THREE.Color, clearAlpha: number) {
+    const before = this.renderer.getRenderTarget();
+    const color = this.renderer.getClearColor(new THREE.Color());
+    const alpha = this.renderer.getClearAlpha();
+    this.velocityMesh!.material = material;
+    this.renderer.setRenderTarget(this.target!);
+    this.renderer.setClearColor(clear, clearAlpha);
+    this.renderer.clear();
+    this.renderer.render(this.velocityScene, camera);
+    this.renderer.readRenderTargetPixels(this.target!, 0, 0, this.width, this.height, this.pixels);
+    this.renderer.setRenderTarget(before);
+    this.renderer.setClearColor(color, alpha);
+    this.velocityMesh!.material = this.velocityMaterial;
+  }
+
+  // The camera moved since the flow was last read: each pixel of the picture takes the
+  // value its surface point had under the old camera.
+  private follow(camera: THREE.Camera, now: THREE.Matrix4) {
+    if (!this.seen || !this.advection || !this.flow || this.seen.equals(now)) return;
+    const { width: w, height: h } = this;
+    this.reprojectMaterial.uniforms.previous.value.copy(this.seen);
+    this.reprojectMaterial.uniforms.resolution.value.set(w, h);
+    this.pass(camera, this.reprojectMaterial, new THREE.Color(1, 1, 1), 1);
+    const from = decodeOld(this.pixels, w, h);
+    const out = new Float32Array(w * h);
+    const image = this.advection.image;
+    reproject(image, this.flow.mask, w, h, from, valuesLike(image, this.flow.mask, () => this.fresh()), out);
+    this.advection.image = out;
   }
 
   private readFlow(camera: THREE.Camera) {
     this.resize();
     const { width: w, height: h } = this;
+    camera.updateMatrixWorld();
+    const now = new THREE.Matrix4().multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse);
+    this.follow(camera, now);
+    this.seen = now;
     this.velocityMaterial.uniforms.resolution.value.set(w / 2, h / 2); // NDC → pixels
-    const before = this.renderer.getRenderTarget();
-    const clear = this.renderer.getClearColor(new THREE.Color());
-    const alpha = this.renderer.getClearAlpha();
-    this.renderer.setRenderTarget(this.target!);
-    this.renderer.setClearColor(new THREE.Color(0.5, 0.5, 0), 0);
-    this.renderer.clear();
-    this.renderer.render(this.velocityScene, camera);
-    this.renderer.readRenderTargetPixels(this.target!, 0, 0, w, h, this.pixels);
-    this.renderer.setRenderTarget(before);
-    this.renderer.setClearColor(clear, alpha);
+    this.pass(camera, this.velocityMaterial, new THREE.Color(0.5, 0.5, 0), 0);
     // Read back bottom row first; the flow is top row first, y down.
     const flow: PixelFlow = { width: w, height: h, dx: new Float32Array(w * h), dy: new Float32Array(w * h), mask: new Uint8Array(w * h) };
     const s = this.stepPixels;
