@@ -29,18 +29,45 @@ StreaklineConstraints::StreaklineConstraints(const DesignSpace& space, const Sce
     line.t = sl->t;
     for (size_t i = 0; i + 1 < p.size(); ++i) line.length += (p[i + 1] - p[i]).norm();
     line.speed = line.length / (sl->t - sl->from);
-    double s0 = 0;
+    // The segments (zero-length ones dropped) and the rounding of each corner: the tangent
+    // turns from one segment's direction to the next over ±ρ of arc about the corner, ρ =
+    // one frame's travel plus an edge length (at most half of either segment), so the dye
+    // front never meets a tangent that jumps (a corner switched on at once turned its
+    // vertices by up to the corner's angle in one frame).
+    struct Segment {
+      Vec3 a, b, dir;
+      double len, s0;
+    };
+    std::vector<Segment> segs;
     for (size_t i = 0; i + 1 < p.size(); ++i) {
-      const Vec3 a = p[i], b = p[i + 1];
-      const double len = (b - a).norm();
+      const double len = (p[i + 1] - p[i]).norm();
       if (len == 0) continue;
-      const Vec3 dir = (b - a) / len;
+      segs.push_back({p[i], p[i + 1], (p[i + 1] - p[i]) / len, len, segs.empty() ? 0.0 : segs.back().s0 + segs.back().len});
+    }
+    const double reach = line.speed * frame_dt_ + h;
+    auto tangent = [&](size_t i, double s) {
+      Vec3 dir = segs[i].dir;
+      auto blend = [&](size_t k, double from_start) {  // corner k between segs[k-1] and segs[k]
+        const double rho = std::min({reach, 0.5 * segs[k - 1].len, 0.5 * segs[k].len});
+        if (rho <= 0 || std::abs(from_start) >= rho) return;
+        const double x = (from_start + rho) / (2 * rho), w = x * x * (3 - 2 * x);
+        const Vec3 d = (1 - w) * segs[k - 1].dir + w * segs[k].dir;
+        if (d.norm() > 1e-9) dir = d.normalized();
+      };
+      if (i > 0) blend(i, s - segs[i].s0);
+      if (i + 1 < segs.size()) blend(i + 1, s - segs[i + 1].s0);
+      return dir;
+    };
+    for (size_t i = 0; i < segs.size(); ++i) {
+      const Vec3 a = segs[i].a, b = segs[i].b;
+      const double len = segs[i].len, s0 = segs[i].s0;
       const int steps = std::max(1, static_cast<int>(std::ceil(len / step)));
       for (int q = 0; q < steps; ++q) {
         const double u = (q + 0.5) / steps;
         const Vec3 x = a + (b - a) * u;
         Sample sample;
         sample.s = s0 + u * len;
+        const Vec3 dir = tangent(i, sample.s);
         const SurfacePoint where = space.locate(x);
         const Vec3 on = surface_position(mesh, where);
         const Face& f = mesh.face(where.face);
@@ -55,7 +82,6 @@ StreaklineConstraints::StreaklineConstraints(const DesignSpace& space, const Sce
         }
         line.samples.push_back(sample);
       }
-      s0 += len;
     }
     lines_.push_back(std::move(line));
   }

@@ -15,7 +15,9 @@
 // polyline's first u·(t′ − from) of arc length (the dye front). On that part the field is
 // fixed to u times the polyline's unit tangent T (hard constraints, at the corners of the
 // faces the polyline crosses, sampled every quarter edge length and averaged where
-// samples meet, as key-frame streamlines are); ahead of the front and outside [from, t]
+// samples meet, as key-frame streamlines are; at the polyline's corners the tangent turns
+// smoothly over u·Δt + h of arc on either side, so the front never meets a jump in it);
+// ahead of the front and outside [from, t]
 // the solve is free. Then every released particle moves along the polyline at speed u
 // for its whole life, and so sits at arc length u·(t − τ) at time t: the sketched shape.
 // No smaller set of constraints does that (the field where no dye is never matters to the
