@@ -5,6 +5,7 @@
 
 #include "tvf/core/atomic_output.h"
 #include "tvf/core/error.h"
+#include "tvf/design/streakline_design.h"
 #include "tvf/field/npy.h"
 #include "tvf/field/vtk_io.h"
 #include "tvf/integrate/ftle.h"
@@ -110,9 +111,12 @@ LcsCommand::LcsCommand(CLI::App& app) {
       "streaklines", "A streakline: where dye released continuously from a seed over [--from, --to] is at --to (JSON "
                      "and a picture over the field)");
   common(streak_);
-  streak_->add_option("--seed", seed_, "The seed: X Y on a planar domain, X Y Z on a surface")
-      ->required()
+  streak_->add_option("--seed", seed_, "The seed: X Y on a planar domain, X Y Z on a surface (default: --element's)")
       ->expected(2, 3);
+  streak_->add_option("--element", element_,
+                      "A streakline element of the input's scene (its index in elements): its seed, release "
+                      "interval and time by default, its sketch drawn under the traced streakline, and the "
+                      "distance between the two reported");
   streak_->add_option("--release-spacing", spacing_, "Time between releases (default: a quarter of the frame spacing)");
 
   timeline_ = app.add_subcommand(
@@ -255,6 +259,23 @@ int LcsCommand::run_streaklines() {
   Progress progress("tvf streaklines", show);
   RenderInput in = load_render_input(input_, progress, "streaklines", true);
   const TangentBundle& bundle = in.space->bundle();
+  // --element: the scene's sketched streakline gives what the options leave out.
+  const StreaklineElement* sketch = nullptr;
+  if (element_ >= 0 || streak_->count("--element") > 0) {
+    if (!in.scene)
+      throw Error(fmt::format("--element {}: {} has no scene to take the element from", element_, input_));
+    const auto k = static_cast<size_t>(element_);
+    if (element_ < 0 || k >= in.scene->elements.size() ||
+        !(sketch = std::get_if<StreaklineElement>(&in.scene->elements[k])))
+      throw Error(fmt::format("--element {}: the scene has no streakline element at that index", element_));
+    if (seed_.empty()) {
+      const Vec3& s0 = sketch->points.front();
+      seed_ = bundle.is_flat() ? std::vector<double>{s0.x(), s0.y()} : std::vector<double>{s0.x(), s0.y(), s0.z()};
+    }
+    if (from_.empty()) from_ = {sketch->from};
+    if (to_.empty()) to_ = {sketch->t};
+  }
+  if (seed_.empty()) throw Error("--seed is required (or --element, a streakline element of the scene)");
   check_point_dims(seed_, seed_.size(), bundle.is_flat(), "--seed");
   StreaklineOptions o;
   o.t0 = time_option(from_, "--from", in.field.time(), true);
@@ -266,17 +287,27 @@ int LcsCommand::run_streaklines() {
   const Vec3 seed = point_option(seed_, 0, seed_.size());
   progress.note("releasing");
   const Streakline s = trace_streakline(bundle, in.field, seed, o);
-  const nlohmann::json j = {{"t", s.t},
-                            {"from", o.t0},
-                            {"seed", {seed.x(), seed.y(), seed.z()}},
-                            {"released", s.released},
-                            {"left", s.left},
-                            {"points", points_json(s)}};
+  nlohmann::json j = {{"t", s.t},
+                      {"from", o.t0},
+                      {"seed", {seed.x(), seed.y(), seed.z()}},
+                      {"released", s.released},
+                      {"left", s.left},
+                      {"points", points_json(s)}};
+  StreaklineMatch match;
+  const double h = bundle.mesh().mean_edge_length();
+  if (sketch) {
+    match = compare_streakline(sketch->points, positions(s));
+    j["sketch"] = {{"element", element_},
+                   {"hausdorff", match.hausdorff},
+                   {"mean", match.mean},
+                   {"mean_edge_length", h}};
+  }
   std::string picture;
   if (!no_picture_) {
     progress.note("drawing");
     CurvePictureOptions po;
     po.size = size_;
+    if (sketch) po.under = {sketch->points};
     const Image img = curve_picture(bundle, in.field, s.t, {positions(s)}, std::vector<Vec3>{seed}, po);
     const fs::path out(out_);
     picture = (out.parent_path() / out.stem()).string() + ".png";
@@ -288,6 +319,9 @@ int LcsCommand::run_streaklines() {
   if (!quiet_) {
     std::printf("streakline at t = %g: %d particles released from t = %g", s.t, s.released, o.t0);
     if (s.left > 0) std::printf(", %d of them left the domain", s.left);
+    if (sketch)
+      std::printf("; from elements[%d]'s sketch: Hausdorff %.4g (%.2f edge lengths), mean %.4g (%.2f)", element_,
+                  match.hausdorff, match.hausdorff / h, match.mean, match.mean / h);
     std::printf("; wrote %s", fs::absolute(out_).lexically_normal().c_str());
     if (!picture.empty()) std::printf(" and %s", fs::absolute(picture).lexically_normal().c_str());
     std::printf("\n");

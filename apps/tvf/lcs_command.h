@@ -39,6 +39,7 @@ private:
   std::vector<double> seed_, line_;
   std::vector<double> from_, to_;  // empty: the field's time range
   double spacing_ = 0, max_gap_ = 0;
+  int element_ = -1;  // streaklines --element: a sketched streakline of the scene
   int count_ = 100;
 };
 

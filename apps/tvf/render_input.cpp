@@ -26,6 +26,7 @@ RenderInput load_render_input(const std::string& input_name, Progress& progress,
     warnings = design.report().warnings;
   }
   RenderInput in(design.field_space(), design.field_ptr(), std::move(warnings));
+  if (design.has_scene()) in.scene = design.scene();
   if (!in.mesh.is_planar_xy() && !surfaces) throw Error(fmt::format("{}: {}", input_name, surface_note));
   return in;
 }

@@ -9,6 +9,7 @@
 #include "tvf/scene/design_space.h"
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,6 +25,7 @@ struct RenderInput {
   const Mesh& mesh;    // space->mesh()
   const Field& field;  // *field_data
   std::vector<std::string> warnings;  // the generation's, printed after the render
+  std::optional<Scene> scene;         // the input's scene, when it has one
 };
 
 // Throws tvf::Error naming the input. Planar domains only unless `surfaces`; `kind`

@@ -59,6 +59,9 @@ bool CompiledElement::active(double t) const {
   if (const auto* s = std::get_if<SingularElement>(&element_))
     return s->path.size() == 1 || path_.covers(t);
   if (std::holds_alternative<RegularElement>(element_)) return path_.covers(t);
+  // A streakline has no basis field: it constrains the solve (streakline_design.h) and is
+  // never placed as an element.
+  if (std::holds_alternative<StreaklineElement>(element_)) return false;
   return true;
 }
 
@@ -76,6 +79,9 @@ ElementState CompiledElement::at(double t) const {
     st.field.kind = LocalField::Kind::regular;
     st.field.velocity = cplx(st.velocity.x(), st.velocity.y());
     st.field.attach = r->attach;
+  } else if (const auto* sl = std::get_if<StreaklineElement>(&element_)) {
+    st.active = false;  // no basis field (active() is false at every t)
+    st.position = sl->points.front();
   } else {
     const auto& b = std::get<BifurcationElement>(element_);
     st.position = b.at.position;

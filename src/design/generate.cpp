@@ -5,6 +5,7 @@
 #include "design/element_regions.h"
 #include "tvf/design/keyframe_topology.h"
 #include "tvf/design/keyframes.h"
+#include "tvf/design/streakline_design.h"
 #include "tvf/edit/field_editor.h"
 #include "tvf/solve/connection_laplacian.h"
 #include "tvf/solve/distributed.h"
@@ -130,6 +131,13 @@ std::vector<std::string> design_warnings(const Scene& scene) {
             scene.label(), i, end == &s->path.front() ? "begins" : "ends", end->t));
     }
   }
+  // Streaklines (streakline_design.h) constrain a solve; they have no basis field.
+  if (scene.generator == Generator::basis || scene.generator == Generator::deform)
+    for (size_t i = 0; i < scene.elements.size(); ++i)
+      if (std::holds_alternative<StreaklineElement>(scene.elements[i]))
+        out.push_back(fmt::format("{}: elements[{}]: a streakline is reproduced by the constrained and spacetime "
+                                  "generators only; the {} generator leaves it out",
+                                  scene.label(), i, to_string(scene.generator)));
   return out;
 }
 
@@ -199,11 +207,13 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   std::string method, failure;
   int failed_frame = -1;
   const double ramp = constraint_ramp_edges * mesh.mean_edge_length();
+  const StreaklineConstraints streaklines(space, scene);
   for_each_frame(scene.time.frames, options, [&](int j) {
     if (!distributed_owns_frame(j)) return;  // another rank's, under mpirun (solve/distributed.h)
     const double t = scene.time.time(j);
     SmoothConstraints c;
     constrain_elements_smoothly(space, scene, elements, t, d, laplacian.weight_sum, ramp, c);
+    streaklines.constrain(t, c.fixed, c.values);
     const SolveReport r = solvers.local().solve(c.fixed, c.values, field.frame(j), c.penalty);
     std::lock_guard lock(report_mutex);
     worst_residual = std::max(worst_residual, r.residual);
@@ -298,6 +308,7 @@ void spacetime_constraints(const DesignSpace& space, const Scene& scene, const C
   // Element regions at every other frame (key frames and elements combine in one solve).
   const std::vector<CompiledElement> elements = compile(scene);
   const double d = scene.falloff / (space.diameter() * space.diameter());
+  const StreaklineConstraints streaklines(space, scene);
   GenerateOptions quiet = options;
   quiet.progress = nullptr;
   for_each_frame(scene.time.frames, quiet, [&](int j) {
@@ -306,6 +317,7 @@ void spacetime_constraints(const DesignSpace& space, const Scene& scene, const C
     const std::span<cplx> v(values.data() + static_cast<size_t>(j) * n, n);
     constrain_elements(space, scene, elements, scene.time.time(j), d, f, v);
     if (plan) plan->constrain(space, scene, scene.time.time(j), d, f, v);
+    streaklines.constrain(scene.time.time(j), f, v);
   });
 }
 

@@ -418,6 +418,7 @@ private:
   SingularElement singular(const json& j, const std::string& path) const;
   RegularElement regular(const json& j, const std::string& path) const;
   BifurcationElement bifurcation(const json& j, const std::string& path) const;
+  StreaklineElement streakline(const json& j, const std::string& path) const;
   std::vector<Element> elements(const json& j, const std::string& path) const;
   std::vector<Keyframe> keyframes(const json& j) const;
   void keyframe_topology(const json& solver, Scene& s) const;
@@ -468,6 +469,13 @@ json element_json(const Element& element, bool planar) {
     j["kind"] = "regular";
     j["pathline"] = path_json(r->pathline, planar);
     j["attach"] = r->attach;
+  } else if (const auto* sl = std::get_if<StreaklineElement>(&element)) {
+    j["kind"] = "streakline";
+    j["points"] = json::array();
+    for (const Vec3& p : sl->points) j["points"].push_back(point_json(p, planar));
+    j["t"] = sl->t;
+    j["from"] = sl->from;
+    j["attach"] = sl->attach;
   } else {
     const auto& b = std::get<BifurcationElement>(element);
     j["kind"] = "bifurcation";
@@ -757,15 +765,44 @@ BifurcationElement Reader::bifurcation(const json& j, const std::string& path) c
   return e;
 }
 
+// A sketched streakline (issue 20): the polyline it has at t, seed first, for dye
+// released over [from, t]. Its points lie in a grid domain (snapped to a surface).
+StreaklineElement Reader::streakline(const json& j, const std::string& path) const {
+  check_keys(j, path, "a streakline element", {"kind", "points", "t", "from", "attach"});
+  StreaklineElement e;
+  const std::string what = fmt::format("{} points", point_form());
+  const std::string points_path = join_key(path, "points");
+  const json& points = need(j, path, "points",
+                            fmt::format("the streakline's shape at t: at least 2 {} points, the seed first", point_form()));
+  array(points, points_path, 2, what.c_str());
+  double length = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const std::string where = join_index(points_path, i);
+    e.points.push_back(position(points[i], where));
+    check_on_domain(e.points.back(), where);
+    if (i > 0) length += (e.points[i] - e.points[i - 1]).norm();
+  }
+  if (!(length > 0)) fail(points_path, "must have a length > 0 (its points are all the same)");
+  e.t = key_time(j, path, "the time at which the dye has the sketched shape");
+  const std::string from_path = join_key(path, "from");
+  e.from = number(need(j, path, "from", "the time the dye's release starts, before t"), from_path);
+  check_time(e.from, from_path);
+  if (!(e.from < e.t))
+    fail(from_path, fmt::format("from = {} must come before t = {} (the dye is released over [from, t])", e.from, e.t));
+  if (const json* a = get(j, "attach")) e.attach = non_negative(*a, join_key(path, "attach"));
+  return e;
+}
+
 Element Reader::element(const json& j, const std::string& path) const {
   check_object(j, path, "a design element with a \"kind\"");
   const std::string kind = string(
-      need(j, path, "kind", "singular, regular or bifurcation"), join_key(path, "kind"));
+      need(j, path, "kind", "singular, regular, bifurcation or streakline"), join_key(path, "kind"));
   if (kind == "singular") return singular(j, path);
   if (kind == "regular") return regular(j, path);
   if (kind == "bifurcation") return bifurcation(j, path);
+  if (kind == "streakline") return streakline(j, path);
   fail(join_key(path, "kind"),
-       fmt::format("unknown element kind \"{}\" (expected one of singular, regular, bifurcation)", kind));
+       fmt::format("unknown element kind \"{}\" (expected one of singular, regular, bifurcation, streakline)", kind));
 }
 
 std::vector<Element> Reader::elements(const json& j, const std::string& path) const {
@@ -951,7 +988,14 @@ Deform Reader::deform(const json& j) const {
   Deform out;
   const json& base = need(j, "deform", "base", "the field V(t0) to deform: {\"elements\": [...]}");
   check_keys(base, "deform.base", "the base field {\"elements\": [...]}", {"elements"});
-  if (const json* e = get(base, "elements")) out.base = elements(*e, "deform.base.elements");
+  if (const json* e = get(base, "elements")) {
+    out.base = elements(*e, "deform.base.elements");
+    for (size_t i = 0; i < out.base.size(); ++i)
+      if (std::holds_alternative<StreaklineElement>(out.base[i]))
+        fail(join_key(join_index("deform.base.elements", i), "kind"),
+             "a streakline needs the dye's time-varying flow, which a deform base (one static field) cannot hold; "
+             "put it in the scene's elements with the constrained or spacetime generator");
+  }
   const json* matrix = get(j, "matrix");
   const json* transform = get(j, "transform");
   if (matrix && transform) fail("deform", "give either \"matrix\" or \"transform\" keys, not both");

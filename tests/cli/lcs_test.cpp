@@ -147,6 +147,39 @@ TEST(CliLcs, TakesASceneAsAnalyzeDoes) {
   EXPECT_FALSE(fs::exists(dir / "s.png"));
 }
 
+TEST(CliLcs, StreaklinesOfASketchedElementDrawTheSketchAndMeasureTheDistance) {
+  // A straight sketch from (−0.5, −0.3) to (0.5, −0.3) released over [0.2, 0.8] (issue 20):
+  // --element 1 takes its seed and interval and reports how far the traced dye is from it.
+  TempDir dir;
+  test::write_text(dir / "scene.json", R"({"tvf": 1, "generator": "spacetime",
+    "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 21, "range": [0, 1]},
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[0.5, 0.5, 0]]},
+                 {"kind": "streakline", "points": [[-0.5, -0.3], [0.5, -0.3]], "t": 0.8, "from": 0.2}]})");
+  const auto r = run_tvf("streaklines " + quoted(dir / "scene.json") + " --element 1 -s 64 -o " + quoted(dir / "s.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("from elements[1]'s sketch: Hausdorff"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(test::read_text(dir / "s.json"));
+  EXPECT_EQ(j["t"], 0.8);
+  EXPECT_EQ(j["from"], 0.2);
+  EXPECT_EQ(j["seed"], nlohmann::json::parse("[-0.5, -0.3, 0.0]"));
+  EXPECT_EQ(j["sketch"]["element"], 1);
+  EXPECT_LT(j["sketch"]["hausdorff"].get<double>(), 0.5 * j["sketch"]["mean_edge_length"].get<double>()) << j["sketch"];
+  EXPECT_TRUE(fs::exists(dir / "s.png"));
+  const std::pair<std::string, std::string> bad[] = {
+      {" --element 0", "--element 0: the scene has no streakline element at that index"},
+      {" --element 7", "--element 7: the scene has no streakline element at that index"},
+      {"", "--seed is required (or --element, a streakline element of the scene)"},
+  };
+  for (const auto& [args, message] : bad) {
+    const auto b = run_tvf("streaklines " + quoted(dir / "scene.json") + args + " -o " + quoted(dir / "bad.json"));
+    EXPECT_NE(b.exit_code, 0) << args;
+    EXPECT_EQ(count_lines(b.output), 1) << args << ": " << b.output;
+    EXPECT_NE(b.output.find(message), std::string::npos) << args << ": " << b.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "bad.json"));
+}
+
 TEST(CliLcs, TextureAnimationInjectsDye) {
   // `tvf render texture --streakline X,Y`: the streakline since the first picture drawn in
   // red over the gray texture (gray has red = green); without it no pixel is red.

@@ -51,6 +51,12 @@ void expect_same_element(const Element& a, const Element& b) {
     const auto& q = std::get<RegularElement>(b);
     expect_same_path(r->pathline, q.pathline);
     EXPECT_EQ(r->attach, q.attach);
+  } else if (const auto* l = std::get_if<StreaklineElement>(&a)) {
+    const auto& m = std::get<StreaklineElement>(b);
+    EXPECT_EQ(l->points, m.points);
+    EXPECT_EQ(l->t, m.t);
+    EXPECT_EQ(l->from, m.from);
+    EXPECT_EQ(l->attach, m.attach);
   } else {
     const auto& x = std::get<BifurcationElement>(a);
     const auto& y = std::get<BifurcationElement>(b);
@@ -443,7 +449,12 @@ TEST(SceneJson, RoundTripsEveryElementKindBuiltInCode) {
   f.scale = 1e-12;  // the smallest a scale may be (scene_reference.md, "Limits")
   f.time_scale = third;
   f.angle = -third;
-  s.elements = {a, b, r, f};
+  StreaklineElement sl;
+  sl.points = {Vec3(-third, odd, 0), Vec3(odd, third, 0), Vec3(0.25, 2, 0)};
+  sl.t = 3.0;
+  sl.from = -odd;
+  sl.attach = third;
+  s.elements = {a, b, r, f, sl};
   Keyframe k;
   k.t = third;
   KeyframeElement ke;
@@ -475,6 +486,9 @@ TEST(SceneJson, RoundTripsEveryElementKindBuiltInCode) {
   EXPECT_FALSE(j.contains("deform"));
   EXPECT_EQ(j["elements"][2], json::parse(R"({"kind": "regular", "pathline": [[0.0, 0.0, 0.0],
       [0.30000000000000004, 0.3333333333333333, 1.0]], "attach": 0.3333333333333333})"));
+  EXPECT_EQ(j["elements"][4], json::parse(R"({"kind": "streakline", "points": [[-0.3333333333333333,
+      0.30000000000000004], [0.30000000000000004, 0.3333333333333333], [0.25, 2.0]], "t": 3.0,
+      "from": -0.30000000000000004, "attach": 0.3333333333333333})"));
 }
 
 TEST(SceneJson, TextIsOrderedAndCompact) {
@@ -654,6 +668,15 @@ TEST(SceneJson, NonFiniteNumbersBuiltInCodeAreRejected) {
   j["time"]["frames"] = std::numeric_limits<double>::infinity();
   EXPECT_EQ(error_of([&] { scene_from_json(j, "code"); }),
             "code: time.frames: must be an integer in [2, 100000], got inf");
+  j["time"].erase("frames");
+  j["elements"] = json::parse(R"([{"kind": "streakline", "points": [[0, 0], [0.5, 0]], "t": 1, "from": 0}])");
+  EXPECT_NO_THROW(scene_from_json(j, "code"));
+  j["elements"][0]["points"][1][1] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(error_of([&] { scene_from_json(j, "code"); }),
+            "code: elements[0].points[1][1]: must be a finite number, got nan");
+  j["elements"][0]["points"][1][1] = 0.0;
+  j["elements"][0]["from"] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(error_of([&] { scene_from_json(j, "code"); }), "code: elements[0].from: must be a finite number, got nan");
 }
 
 // --- the table of bad inputs
@@ -667,7 +690,8 @@ json planar_base() {
       {"kind": "singular", "type": "ccw_center", "path": [[-0.5, 0, 0], [0.5, 0, 1]],
        "transform": [{"t": 0}, {"t": 1, "theta": 1}]},
       {"kind": "regular", "pathline": [[-1, -0.6, 0], [1, -0.6, 1]], "attach": 1},
-      {"kind": "bifurcation", "type": "saddle_sink_creation", "at": [0, 0.4, 0.5]}
+      {"kind": "bifurcation", "type": "saddle_sink_creation", "at": [0, 0.4, 0.5]},
+      {"kind": "streakline", "points": [[-0.5, -0.5], [0, -0.3], [0.5, -0.5]], "t": 0.8, "from": 0.2}
     ],
     "keyframes": [
       {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [0, 0]}]},
@@ -830,9 +854,31 @@ std::vector<BadCase> bad_cases() {
        "elements[0].transform[1].t", "t = 0 does not come after the previous key's t = 0", false},
       {"unknown element kind", planar([](json& j) { j["elements"][1]["kind"] = "attachment"; }),
        "elements[1].kind",
-       "unknown element kind \"attachment\" (expected one of singular, regular, bifurcation)", true},
+       "unknown element kind \"attachment\" (expected one of singular, regular, bifurcation, streakline)", true},
       {"missing kind", planar([](json& j) { j["elements"][1].erase("kind"); }), "elements[1]",
-       "missing key \"kind\" (singular, regular or bifurcation)", true},
+       "missing key \"kind\" (singular, regular, bifurcation or streakline)", true},
+      // A sketched streakline (issue 20): elements[3] of the planar base.
+      {"streakline with one point", planar([](json& j) { j["elements"][3]["points"] = json::parse("[[-0.5, -0.5]]"); }),
+       "elements[3].points", "needs at least 2 [x, y] points, got 1", true},
+      {"streakline point outside the grid", planar([](json& j) { j["elements"][3]["points"][1] = {1.5, 0}; }),
+       "elements[3].points[1]", "(1.5, 0) is outside the domain [-1, 1] × [-1, 1]", false},
+      {"streakline from after t", planar([](json& j) { j["elements"][3]["from"] = 0.9; }),
+       "elements[3].from", "from = 0.9 must come before t = 0.8 (the dye is released over [from, t])", false},
+      {"streakline from equal to t", planar([](json& j) { j["elements"][3]["from"] = 0.8; }),
+       "elements[3].from", "from = 0.8 must come before t = 0.8", false},
+      {"streakline t outside the time range", planar([](json& j) { j["elements"][3]["t"] = 2; }),
+       "elements[3].t", "t = 2 is outside the time range [0, 1]", false},
+      {"streakline without from", planar([](json& j) { j["elements"][3].erase("from"); }), "elements[3]",
+       "missing key \"from\" (the time the dye's release starts, before t)", true},
+      {"streakline of zero length", planar([](json& j) { j["elements"][3]["points"] = {{0.1, 0.2}, {0.1, 0.2}}; }),
+       "elements[3].points", "must have a length > 0", false},
+      {"streakline point as a path point", planar([](json& j) { j["elements"][3]["points"][0] = {0.1, 0.2, 0.3}; }),
+       "elements[3].points[0]", "must be [x, y] (2 numbers) on a grid domain", false},
+      {"streakline negative attach", planar([](json& j) { j["elements"][3]["attach"] = -1; }),
+       "elements[3].attach", "must be a number ≥ 0, got -1", true},
+      {"streakline in a deform base",
+       planar([](json& j) { j["deform"]["base"]["elements"].push_back(j["elements"][3]); }),
+       "deform.base.elements[1].kind", "a streakline needs the dye's time-varying flow", false},
       {"pathline with one point", planar([](json& j) { j["elements"][1]["pathline"].erase(1); }),
        "elements[1].pathline", "needs at least 2 [x, y, t] points, got 1", true},
       {"negative attach", planar([](json& j) { j["elements"][1]["attach"] = -2; }),

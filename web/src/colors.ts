@@ -18,3 +18,4 @@ export function typeColor(type: string): string {
 export const BIFURCATION_COLOR = "#f59e0b";
 export const PATHLINE_COLOR = "#0d9488";
 export const STREAMLINE_COLOR = "#2563eb";
+export const STREAKLINE_COLOR = "#db2777";  // sketched streaklines (issue 20)

@@ -9,7 +9,7 @@ import "./style.css";
 import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneState, type Status } from "./api";
 import { locateJsonPath } from "./error_place";
 import { ChangeQueue } from "./changes";
-import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
+import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAKLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
 import { CoherencePlot } from "./coherence";
 import type { GridField } from "./lic";
 import { ringMotion } from "./preview/advect";
@@ -504,6 +504,11 @@ function redraw() {
       for (const q of e.pathline) dot(v, q, PATHLINE_COLOR, 3);
       const p = S.singularPosition({ kind: "singular", path: e.pathline }, t);
       if (p) ring(v, p, PATHLINE_COLOR, 6);
+    } else if (e.kind === "streakline") {
+      // The sketch (solid at its time t, dashed otherwise) and its seed.
+      line(e.points, STREAKLINE_COLOR, 3, Math.abs(e.t - t) < 0.02 ? [] : [6, 4]);
+      for (const q of e.points) dot(v, q, STREAKLINE_COLOR, 3);
+      ring(v, e.points[0], STREAKLINE_COLOR, 7);
     } else {
       const [x, y] = v.toCanvas(e.at);
       const r = 8 + (Math.abs(e.at[e.at.length - 1] - t) < 0.02 ? 3 : 0);
@@ -682,6 +687,9 @@ canvas.addEventListener("pointerup", (e) => {
     } else if (state.tool === "pathline") {
       if (isClick) return say("drag to draw a pathline", true);
       void change((s) => S.addPathline(s, resample(stroke, 6), ts, te), `pathline from t = ${ts} to ${te}`);
+    } else if (state.tool === "streakline") {
+      if (isClick) return say("drag from the seed to draw the streakline the dye should form at the current time", true);
+      void change((s) => S.addStreakline(s, resample(stroke, 12), t), `streakline sketched at t = ${t}`);
     } else if (state.tool === "streamline") {
       if (isClick) return say("drag to draw a streamline", true);
       void change((s) => S.addKeyframeStreamline(s, t, resample(stroke, 8)), `streamline in the key frame at t = ${t}`);

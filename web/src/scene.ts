@@ -26,7 +26,16 @@ export interface BifurcationElement {
   time_scale: number;
   angle: number;
 }
-export type Element = SingularElement | RegularElement | BifurcationElement;
+// A sketched streakline (issue 20): dye released from points[0] over [from, t] has this
+// shape at t (points without time; the constrained and spacetime generators reproduce it).
+export interface StreaklineElement {
+  kind: "streakline";
+  points: Vec[];
+  t: number;
+  from: number;
+  attach?: number;
+}
+export type Element = SingularElement | RegularElement | BifurcationElement | StreaklineElement;
 
 export interface KeyframeElement {
   kind: "singular" | "regular";
@@ -209,6 +218,20 @@ export function addKeyframeSingular(scene: Scene, t: number, type: string, at: V
   return s;
 }
 
+// A streakline sketched at time t (the drawn curve from the seed), its dye released over
+// the half of the time range before t (from the range's start at most). The basis
+// generator leaves streaklines out, so a basis design becomes a spacetime one.
+export function addStreakline(scene: Scene, points: Vec[], t: number): Scene {
+  if (points.length < 2) throw new Error("a streakline needs at least two points");
+  const [t0, t1] = scene.time?.range ?? [0, 1];
+  const from = Number(Math.max(t0, t - 0.5 * (t1 - t0)).toFixed(4));
+  if (!(from < t)) throw new Error("a streakline is sketched at a time after the start of the time range: move the time slider on");
+  const s = clone(scene);
+  if (!s.generator || s.generator === "basis") s.generator = "spacetime";
+  (s.elements ??= []).push({ kind: "streakline", points: points.map((p) => [...p]), t, from });
+  return s;
+}
+
 export function addKeyframeStreamline(scene: Scene, t: number, points: Vec[]): Scene {
   if (points.length < 2) throw new Error("a streamline needs at least two points");
   const s = clone(scene);
@@ -279,6 +302,8 @@ export function handles(scene: Scene, t: number): { handle: Handle; position: Ve
       if (pos) out.push({ handle: { kind: "element", index, point: best }, position: pos });
     } else if (e.kind === "regular") {
       e.pathline.forEach((q, point) => out.push({ handle: { kind: "element", index, point }, position: q.slice(0, -1) }));
+    } else if (e.kind === "streakline") {
+      e.points.forEach((q, point) => out.push({ handle: { kind: "element", index, point }, position: [...q] }));
     } else {
       out.push({ handle: { kind: "element", index, point: 0 }, position: e.at.slice(0, -1) });
     }
@@ -322,6 +347,8 @@ export function moveHandle(scene: Scene, h: Handle, p: Vec): Scene {
   } else if (e.kind === "regular") {
     const q = e.pathline[h.point];
     e.pathline[h.point] = [...p, q[q.length - 1]];
+  } else if (e.kind === "streakline") {
+    e.points[h.point] = [...p];
   } else {
     e.at = [...p, e.at[e.at.length - 1]];
   }

@@ -58,6 +58,22 @@ describe("scene changes", () => {
     expect(S.removeHandle(s, h!).elements).toEqual([]);
   });
 
+  it("add a sketched streakline at the current time and move its points", () => {
+    const s0 = S.emptyScene();
+    const s = S.addStreakline(s0, [[-0.5, -0.5], [0, -0.2], [0.5, -0.5]], 0.8);
+    const [t0, t1] = s0.time?.range ?? [0, 1];
+    expect(s.elements).toEqual([
+      { kind: "streakline", points: [[-0.5, -0.5], [0, -0.2], [0.5, -0.5]], t: 0.8, from: Number(Math.max(t0, 0.8 - 0.5 * (t1 - t0)).toFixed(4)) },
+    ]);
+    expect(s.generator).toBe("spacetime");
+    const h = S.pick(s, 0.8, [0, -0.2], 0.05);
+    expect(h).toEqual({ kind: "element", index: 0, point: 1 });
+    const moved = S.moveHandle(s, h!, [0.1, -0.1]);
+    expect((moved.elements![0] as S.StreaklineElement).points[1]).toEqual([0.1, -0.1]);
+    expect(() => S.addStreakline(s0, [[0, 0]], 0.8)).toThrow(/two points/);
+    expect(() => S.addStreakline(s0, [[0, 0], [1, 0]], t0)).toThrow(/after the start/);
+  });
+
   it("map times and frames both ways", () => {
     const s = S.emptyScene();
     expect(S.frameTime(s, 99)).toBe(1);

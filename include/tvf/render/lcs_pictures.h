@@ -48,6 +48,10 @@ struct CurvePictureOptions {
   std::uint32_t color = 0xE8402A;  // the curves
   double line_width = 0.0;         // pixels; 0: size / 300 (at least 1.5)
   bool dots = true;                // a dot at every point of a curve (the released particles)
+  // Curves drawn first, under the others, three times as wide and without dots (a sketched
+  // streakline the traced one should follow: tvf streaklines --element).
+  std::vector<std::vector<Vec3>> under;
+  std::uint32_t under_color = 0x3FD0F0;
   TextureOptions texture;          // planar: the LIC texture under the curves (its size is `size`)
   SurfaceView surface;             // surfaces: the camera
 };

@@ -77,7 +77,21 @@ struct BifurcationElement {
   double angle = 0.0;       // axis angle θ (radians)
 };
 
-using Element = std::variant<SingularElement, RegularElement, BifurcationElement>;
+// A streakline the user sketches (issue 20; design/streakline_design.h): dye released
+// continuously from points[0] (the seed) over [from, t] has, at time t, the shape of the
+// polyline points[0] … points[n] (points[0] the youngest dye, points[n] the oldest). The
+// generators that solve for the field (constrained, spacetime) make the field carry the
+// dye along the polyline at the constant speed u = length / (t − from); `attach` (≥ 0, per
+// unit length, as a regular element's) adds a pull onto the polyline. It has no basis
+// field of its own: the basis generator ignores it (and warns).
+struct StreaklineElement {
+  std::vector<Vec3> points;  // ≥ 2 world points, the seed first
+  double t = 1.0;            // when the dye has this shape (the end of the release)
+  double from = 0.0;         // the start of the release, from < t
+  double attach = 0.0;       // pull onto the polyline, c ≥ 0 per unit length
+};
+
+using Element = std::variant<SingularElement, RegularElement, BifurcationElement, StreaklineElement>;
 
 // Key frames (DESIGN §10; used by the spacetime generator).
 struct KeyframeElement {

@@ -1,0 +1,168 @@
+#include "tvf/design/streakline_design.h"
+
+#include "tvf/core/error.h"
+#include "tvf/field/field_sampler.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tvf {
+
+StreaklineConstraints::StreaklineConstraints(const DesignSpace& space, const Scene& scene) {
+  const Mesh& mesh = space.mesh();
+  const TangentBundle& bundle = space.bundle();
+  vertices_ = mesh.num_vertices();
+  frame_dt_ = scene.time.frames > 1 ? (scene.time.t1 - scene.time.t0) / (scene.time.frames - 1) : 0.0;
+  const double h = mesh.mean_edge_length();
+  lead_ = 2 * h;
+  const double step = 0.25 * h;
+  for (const Element& e : scene.elements) {
+    const auto* sl = std::get_if<StreaklineElement>(&e);
+    if (!sl) continue;
+    TVF_CHECK(sl->points.size() >= 2 && sl->from < sl->t, "a streakline needs 2 points and from < t");
+    // The polyline on the domain (snapped to a surface).
+    std::vector<Vec3> p;
+    for (const Vec3& x : sl->points) p.push_back(surface_position(mesh, space.locate(x)));
+    Line line;
+    line.from = sl->from;
+    line.t = sl->t;
+    for (size_t i = 0; i + 1 < p.size(); ++i) line.length += (p[i + 1] - p[i]).norm();
+    line.speed = line.length / (sl->t - sl->from);
+    // The segments (zero-length ones dropped) and the rounding of each corner: the tangent
+    // turns from one segment's direction to the next over ±ρ of arc about the corner, ρ =
+    // one frame's travel plus an edge length (at most half of either segment), so the dye
+    // front never meets a tangent that jumps (a corner switched on at once turned its
+    // vertices by up to the corner's angle in one frame).
+    struct Segment {
+      Vec3 a, b, dir;
+      double len, s0;
+    };
+    std::vector<Segment> segs;
+    for (size_t i = 0; i + 1 < p.size(); ++i) {
+      const double len = (p[i + 1] - p[i]).norm();
+      if (len == 0) continue;
+      segs.push_back({p[i], p[i + 1], (p[i + 1] - p[i]) / len, len, segs.empty() ? 0.0 : segs.back().s0 + segs.back().len});
+    }
+    const double reach = line.speed * frame_dt_ + h;
+    auto tangent = [&](size_t i, double s) {
+      Vec3 dir = segs[i].dir;
+      auto blend = [&](size_t k, double from_start) {  // corner k between segs[k-1] and segs[k]
+        const double rho = std::min({reach, 0.5 * segs[k - 1].len, 0.5 * segs[k].len});
+        if (rho <= 0 || std::abs(from_start) >= rho) return;
+        const double x = (from_start + rho) / (2 * rho), w = x * x * (3 - 2 * x);
+        const Vec3 d = (1 - w) * segs[k - 1].dir + w * segs[k].dir;
+        if (d.norm() > 1e-9) dir = d.normalized();
+      };
+      if (i > 0) blend(i, s - segs[i].s0);
+      if (i + 1 < segs.size()) blend(i + 1, s - segs[i + 1].s0);
+      return dir;
+    };
+    for (size_t i = 0; i < segs.size(); ++i) {
+      const Vec3 a = segs[i].a, b = segs[i].b;
+      const double len = segs[i].len, s0 = segs[i].s0;
+      const int steps = std::max(1, static_cast<int>(std::ceil(len / step)));
+      for (int q = 0; q < steps; ++q) {
+        const double u = (q + 0.5) / steps;
+        const Vec3 x = a + (b - a) * u;
+        Sample sample;
+        sample.s = s0 + u * len;
+        const Vec3 dir = tangent(i, sample.s);
+        const SurfacePoint where = space.locate(x);
+        const Vec3 on = surface_position(mesh, where);
+        const Face& f = mesh.face(where.face);
+        for (int k = 0; k < 3; ++k) {
+          const int c = f[static_cast<size_t>(k)];
+          sample.corners[k] = c;
+          // u·(T − c·y′·n): the tangent, and the pull onto the polyline across it.
+          const Vec3 n = bundle.vertex_normal(c).cross(dir);
+          const double offset = (mesh.position(c) - on).dot(n);
+          const Vec3 w = line.speed * (dir - sl->attach * offset * n);
+          sample.value[k] = bundle.world_to_vertex(c, w);
+        }
+        line.samples.push_back(sample);
+      }
+    }
+    lines_.push_back(std::move(line));
+  }
+}
+
+namespace {
+
+// How much faster than the dye the constraints let go after t (see constrain).
+constexpr double kLetGo = 4.0;
+
+double distance_to_polyline(const Vec3& x, std::span<const Vec3> line) {
+  double best = (x - line.front()).norm();
+  for (size_t i = 0; i + 1 < line.size(); ++i) {
+    const Vec3 a = line[i], b = line[i + 1];
+    const double len2 = (b - a).squaredNorm();
+    const double u = len2 > 0 ? std::clamp((x - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, (a + u * (b - a) - x).norm());
+  }
+  return best;
+}
+
+}  // namespace
+
+StreaklineMatch compare_streakline(std::span<const Vec3> sketch, std::span<const Vec3> traced) {
+  StreaklineMatch m;
+  if (sketch.empty() || traced.size() < 2) {
+    m.hausdorff = m.mean = std::numeric_limits<double>::infinity();
+    return m;
+  }
+  double sum = 0;
+  size_t count = 0;
+  auto add = [&](double d) {
+    m.hausdorff = std::max(m.hausdorff, d);
+    sum += d;
+    ++count;
+  };
+  for (const Vec3& x : traced) add(distance_to_polyline(x, sketch));
+  for (size_t i = 0; i + 1 < sketch.size(); ++i)
+    for (int q = 0; q < 12; ++q) add(distance_to_polyline(sketch[i] + (sketch[i + 1] - sketch[i]) * (q / 12.0), traced));
+  add(distance_to_polyline(sketch.back(), traced));
+  m.mean = sum / static_cast<double>(count);
+  return m;
+}
+
+void StreaklineConstraints::constrain(double t, std::span<char> fixed, std::span<cplx> values) const {
+  if (lines_.empty()) return;
+  TVF_CHECK(fixed.size() == static_cast<size_t>(vertices_) && values.size() == fixed.size(),
+            "a frame's constraints have one entry per vertex");
+  const double slack = 1e-9 * std::max(frame_dt_, 1e-300);
+  std::vector<cplx> sum;
+  std::vector<int> count;
+  for (const Line& line : lines_) {
+    // The frames whose interval reaches into [from, t] (frame_dt_ = 0: only [from, t]).
+    if (!(t > line.from - frame_dt_ + slack || t >= line.from)) continue;
+    // After t (and the frame that reaches past it), the constraints let go from the seed
+    // end at kLetGo·u, so the field relaxes over (t − from)/kLetGo instead of at one frame.
+    const double after = t - line.t - frame_dt_;
+    const double tail = after > slack ? kLetGo * line.speed * after : -1.0;
+    if (tail > line.length) continue;
+    const double released = std::clamp(t, line.from, line.t) - line.from;
+    const double front = line.speed * (released + frame_dt_) + lead_;
+    if (sum.empty()) {
+      sum.assign(fixed.size(), cplx(0, 0));
+      count.assign(fixed.size(), 0);
+    }
+    for (const Sample& sample : line.samples) {
+      if (sample.s > front) break;
+      if (sample.s < tail) continue;
+      for (int k = 0; k < 3; ++k) {
+        const auto v = static_cast<size_t>(sample.corners[k]);
+        sum[v] += sample.value[k];
+        ++count[v];
+      }
+    }
+  }
+  for (size_t v = 0; v < count.size(); ++v) {
+    if (count[v] == 0) continue;
+    if (!fixed[v]) values[v] = cplx(0, 0);
+    values[v] += sum[v] / static_cast<double>(count[v]);
+    fixed[v] = 1;
+  }
+}
+
+}  // namespace tvf
