@@ -22,23 +22,35 @@ namespace fs = std::filesystem;
 // One small session for the whole run (a 9 × 9 grid, 6 frames), ready before the first
 // request: requests exercise the request functions, not the solver's cost. Its field is
 // exported once to export/ (so that a fuzzed scene may name export/field.tvff as a key
-// frame's field).
-serve::Session& the_session() {
-  static std::unique_ptr<serve::Session> session = [] {
+// frame's field). Its working folder (under $TMPDIR) is removed when the program ends.
+struct Fixture {
+  fs::path dir;
+  std::unique_ptr<serve::Session> session;
+  Fixture() : dir(fs::temp_directory_path() / ("tvf-fuzz-session-" + std::to_string(::getpid()))) {
+    fs::remove_all(dir);
     serve::SessionOptions o;
-    o.dir = fs::temp_directory_path() / ("tvf-fuzz-session-" + std::to_string(::getpid()));
-    fs::remove_all(o.dir);
+    o.dir = dir;
     o.initial_scene = R"({"tvf": 1, "domain": {"grid": {"size": [9, 9]}}, "time": {"frames": 6},
       "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.3, 0, 0], [0.3, 0, 1]]},
                    {"kind": "singular", "type": "saddle", "path": [[0.5, 0.5, 0]]}]})";
     o.parallel = false;
     o.field_wait_seconds = 15;
-    auto s = std::make_unique<serve::Session>(o);
-    s->wait_idle(60);
-    s->export_field(nlohmann::json::object());
-    return s;
-  }();
-  return *session;
+    session = std::make_unique<serve::Session>(o);
+    session->wait_idle(60);
+    session->export_field(nlohmann::json::object());
+  }
+  ~Fixture() {
+    session.reset();
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+  Fixture(const Fixture&) = delete;
+  Fixture& operator=(const Fixture&) = delete;
+};
+
+serve::Session& the_session() {
+  static Fixture fixture;
+  return *fixture.session;
 }
 
 // TVF_FUZZ_VERBOSE=1 prints what each request was answered (to check that seeds reach
@@ -70,12 +82,14 @@ void clean(const serve::Session& s) {
 
 // Everything a client reads of the current result (each may be refused: no field yet).
 void read_all(serve::Session& s) {
-  s.status();
-  s.scene();
+  // Serialised strictly, as JSON answers must be (dump throws on invalid UTF-8: a message
+  // quoting a file's bytes once did).
+  s.status().dump();
+  s.scene().dump();
   try {
     const nlohmann::json m = s.mesh();
     const bool planar = m.value("planar", true);
-    s.analysis();
+    s.analysis().dump();
     s.frame(0);
     // A seed at the first vertex, moved to the second.
     const nlohmann::json& x = m.at("vertices");
@@ -229,7 +243,9 @@ void session(std::string_view data) {
   } catch (const InternalError&) {
     throw;
   } catch (const Error& e) {
-    // refused with a message (RequestError is a tvf::Error)
+    // Refused with a message (RequestError is a tvf::Error), which the server answers as
+    // {"error": message}: serialised strictly here, so that a message that is not UTF-8 fails.
+    static_cast<void>(nlohmann::json{{"error", e.what()}}.dump());
     note(std::string("refused: ") + e.what());
     return;
   }
