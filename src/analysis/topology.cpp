@@ -677,7 +677,11 @@ Topology analyze_topology(const TangentBundle& bundle, const Field& field, const
   auto is_frame = [&](int n) { return nodes[static_cast<size_t>(n)].kind == kFrameTri; };
   auto frame_of = [&](int n) { return nodes[static_cast<size_t>(n)].layer; };
 
-  for (auto& [c, closed] : curves) {
+  for (auto& curve : curves) {
+    // Named references, not a structured binding: the lambdas below use c, and clang 14
+    // (the fuzz preset's compiler) cannot capture structured bindings.
+    std::vector<int>& c = curve.first;
+    const bool closed = curve.second;
     std::vector<int> F;
     for (size_t k = 0; k < c.size(); ++k)
       if (is_frame(c[k])) F.push_back(static_cast<int>(k));

@@ -1,6 +1,7 @@
 #include "tvf/core/error.h"
 
 #include "tvf/core/error_location.h"
+#include "tvf/core/json_text.h"
 
 namespace tvf {
 namespace {
@@ -20,7 +21,8 @@ std::string message_text(const std::string& file, const std::string& where, cons
     text.replace(nul, 1, "\\u0000");
     nul += 6;
   }
-  return text;
+  // Messages quote the user's bytes; JSON answers (the server's, Python's) hold UTF-8 only.
+  return valid_utf8(text);
 }
 
 }  // namespace

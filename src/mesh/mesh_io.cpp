@@ -574,7 +574,10 @@ LoadedMesh load_mesh(const std::string& path) {
   const Format format = format_of(path);
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) throw_input_error(path, "", "the mesh file does not exist");
+  if (!fs::exists(status))
+    throw_input_error(path, "", ec && ec != std::errc::no_such_file_or_directory
+                                    ? "the mesh file cannot be used: " + ec.message()
+                                    : std::string("the mesh file does not exist"));
   if (fs::is_directory(status))
     throw_input_error(path, "", "the path is a folder, not a mesh file");
   const std::uintmax_t file_size = fs::file_size(path, ec);

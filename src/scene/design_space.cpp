@@ -65,9 +65,14 @@ std::unique_ptr<DesignSpace> make_design_space(const Scene& scene) {
                                                     d.torus->major_radius, d.torus->minor_radius));
   if (!d.mesh.empty()) {
     const std::string path = scene.resolved_mesh_path();
-    if (!std::filesystem::exists(path))
+    // The error_code form: a name the file system refuses (longer than 255 bytes, say) is
+    // an input error, not a std::filesystem exception.
+    std::error_code ec;
+    if (!std::filesystem::exists(std::filesystem::status(path, ec)))
       throw_input_error(scene.label(), "domain.mesh",
-                        fmt::format("the mesh file '{}' does not exist", path));
+                        ec && ec != std::errc::no_such_file_or_directory
+                            ? fmt::format("the mesh file '{:.200}' cannot be used: {}", path, ec.message())
+                            : fmt::format("the mesh file '{}' does not exist", path));
     LoadedMesh loaded = load_mesh(path);
     check_field_memory(scene, loaded.mesh.num_vertices());
     auto space = std::make_unique<DesignSpace>(std::move(loaded.mesh));

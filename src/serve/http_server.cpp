@@ -42,7 +42,8 @@ constexpr const char* kJson = "application/json; charset=utf-8";
 
 void send_json(httplib::Response& res, const json& body, int status = 200) {
   res.status = status;
-  res.set_content(body.dump(), kJson);
+  // Invalid UTF-8 (bytes of a user's file quoted in a message) is replaced, not thrown on.
+  res.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), kJson);
 }
 
 // {"error": sentence} and, where the error has them, the place as fields (docs/serve_api.md):
@@ -540,7 +541,7 @@ struct HttpServer::Impl {
                    if (now != e.seen) {
                      e.seen = now;
                      e.heartbeat = after(o.heartbeat_seconds);
-                     return send(fmt::format("event: status\ndata: {}\n\n", s.status().dump()));
+                     return send(fmt::format("event: status\ndata: {}\n\n", s.status().dump(-1, ' ', false, json::error_handler_t::replace)));
                    }
                    if (Clock::now() >= e.heartbeat) {
                      e.heartbeat = after(o.heartbeat_seconds);

@@ -150,7 +150,11 @@ struct Session::State {
   void check_scene_paths(const Scene& s) const {
     auto check = [&](const std::string& path, const std::string& where) {
       if (path.empty()) return;
-      const fs::path p = fs::weakly_canonical(fs::path(s.resolve_path(path)));
+      std::error_code ec;  // a name too long for the file system, say: refused, not thrown on
+      const fs::path p = fs::weakly_canonical(fs::path(s.resolve_path(path)), ec);
+      if (ec)
+        throw RequestError(400, fmt::format("{}: {}: \"{:.60}\" cannot be used as a path: {}", options.scene, where,
+                                            path, ec.message()));
       if (!inside(dir, p))
         throw RequestError(403, fmt::format("{}: {}: \"{}\" is outside the working folder {}", options.scene, where,
                                             path, dir.string()));
@@ -590,7 +594,9 @@ fs::path Session::resolve(const std::string& relative) const {
     throw RequestError(400, fmt::format("path \"{}\": give a path relative to the working folder", relative));
   for (const auto& part : rel)
     if (part == "..") throw RequestError(403, fmt::format("path \"{}\": leaves the working folder", relative));
-  const fs::path p = fs::weakly_canonical(s_->dir / rel);
+  std::error_code ec;  // a name too long for the file system, say: refused, not thrown on
+  const fs::path p = fs::weakly_canonical(s_->dir / rel, ec);
+  if (ec) throw RequestError(400, fmt::format("path \"{:.60}\": cannot be used: {}", relative, ec.message()));
   if (!inside(s_->dir, p)) throw RequestError(403, fmt::format("path \"{}\": leaves the working folder", relative));
   return p;
 }
@@ -705,6 +711,10 @@ json Session::upload_mesh(const std::string& name, const std::string& bytes) {
   const fs::path n(name);
   if (name.empty() || n.has_parent_path() || n.filename() != n)
     throw RequestError(400, fmt::format("upload \"{}\": give a plain file name", name));
+  // A scene names its mesh in a JSON string, which holds UTF-8 only: a name that is not
+  // could never be used (and could not be answered as JSON).
+  if (valid_utf8(name) != name)
+    throw RequestError(400, fmt::format("upload \"{:.60}\": the file name is not valid UTF-8", name));
   std::string ext = n.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext != ".obj" && ext != ".ply" && ext != ".off")

@@ -100,5 +100,37 @@ TEST(JsonText, ReadsFilesUpToALimit) {
             "JSON file");
 }
 
+// Error messages are valid UTF-8 (the bytes that are not written as \xNN), so that JSON
+// answers can always hold them.
+TEST(ValidUtf8, KeepsWellFormedText) {
+  EXPECT_EQ(valid_utf8(""), "");
+  EXPECT_EQ(valid_utf8("plain text 123"), "plain text 123");
+  EXPECT_EQ(valid_utf8("d\xC3\xA9j\xC3\xA0 \xE2\x80\x94 \xF0\x9F\x98\x80"), "d\xC3\xA9j\xC3\xA0 \xE2\x80\x94 \xF0\x9F\x98\x80");
+  EXPECT_EQ(valid_utf8("\xF4\x8F\xBF\xBF"), "\xF4\x8F\xBF\xBF");  // U+10FFFF, the last code point
+}
+
+TEST(ValidUtf8, WritesEveryOtherByteAsHex) {
+  EXPECT_EQ(valid_utf8("1\xFF\xFF 0"), "1\\xFF\\xFF 0");
+  EXPECT_EQ(valid_utf8("\xC0\xAF"), "\\xC0\\xAF");              // overlong '/'
+  EXPECT_EQ(valid_utf8("\xE2\x82"), "\\xE2\\x82");              // cut short at the end
+  EXPECT_EQ(valid_utf8("\xE2\x82x"), "\\xE2\\x82x");            // cut short before ASCII
+  EXPECT_EQ(valid_utf8("\xED\xA0\x80"), "\\xED\\xA0\\x80");     // a surrogate
+  EXPECT_EQ(valid_utf8("\xF4\x90\x80\x80"), "\\xF4\\x90\\x80\\x80");  // above U+10FFFF
+  EXPECT_EQ(valid_utf8("\x80\xC3\xA9"), "\\x80\xC3\xA9");       // a lone continuation byte
+}
+
+// A mesh word with bytes 0xFF (found by fuzz_session: the server's status and error
+// answers could not be serialised).
+TEST(ValidUtf8, InputErrorsCanGoIntoJson) {
+  try {
+    throw_input_error("m.off", "", "line 5: OFF vertex 1: '1\xFF\xFF' is not a number");
+    FAIL() << "no error thrown";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "m.off: line 5: OFF vertex 1: '1\\xFF\\xFF' is not a number");
+    EXPECT_EQ(nlohmann::json({{"error", e.what()}}).dump(),
+              R"({"error":"m.off: line 5: OFF vertex 1: '1\\xFF\\xFF' is not a number"})");
+  }
+}
+
 }  // namespace
 }  // namespace tvf

@@ -576,3 +576,29 @@ TEST(MeshIo, CorruptedFilesNeverCrash) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// A name the file system refuses (a component over 255 bytes) is an input error naming
+// the reason, not a std::filesystem exception (found by fuzz_session through an upload;
+// `tvf generate` stopped at an internal error with such a domain.mesh).
+TEST(MeshIo, ANameTooLongForTheFileSystemIsAnInputError) {
+  const std::string path = std::string(300, 'a') + ".off";
+  try {
+    load_mesh(path);
+    FAIL() << "no error thrown";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("the mesh file cannot be used: File name too long"), std::string::npos)
+        << e.what();
+  }
+  try {
+    load_mesh("no-such-mesh-here.off");
+    FAIL() << "no error thrown";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "no-such-mesh-here.off: the mesh file does not exist");
+  }
+}
+
+}  // namespace
+}  // namespace tvf

@@ -133,3 +133,29 @@ TEST(SceneResolvePath, AbsolutePathsAndCodeScenesAreUnchanged) {
 
 }  // namespace
 }  // namespace tvf
+
+#include "tvf/core/error.h"
+#include "tvf/scene/design_space.h"
+
+#include <string>
+
+namespace tvf {
+namespace {
+
+// domain.mesh with a name the file system refuses: an input error naming the key (it was
+// an internal error, exit 2, from std::filesystem::exists).
+TEST(DesignSpace, AMeshNameTooLongForTheFileSystemIsAnInputError) {
+  Scene scene;
+  scene.domain.mesh = std::string(300, 'm') + ".off";
+  try {
+    make_design_space(scene);
+    FAIL() << "no error thrown";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("scene: domain.mesh: the mesh file '"), std::string::npos) << what;
+    EXPECT_NE(what.find("' cannot be used: File name too long"), std::string::npos) << what;
+  }
+}
+
+}  // namespace
+}  // namespace tvf

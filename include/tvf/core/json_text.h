@@ -24,6 +24,13 @@ inline constexpr std::size_t kMaxJsonDepth = 1000;
 // below what would exhaust memory once parsed.
 inline constexpr std::size_t kMaxJsonBytes = std::size_t{64} << 20;
 
+// `text` as valid UTF-8: every byte that is not part of a well-formed UTF-8 sequence
+// (RFC 3629) is written as \xNN. Error messages quote the user's bytes (a word of a mesh
+// file, an upload's name), and JSON, which the server and the Python module answer with,
+// holds UTF-8 only: a mesh word with bytes 0xFF made the server's status unserialisable.
+// Every message of throw_input_error and throw_located_error (error.h) goes through it.
+std::string valid_utf8(const std::string& text);
+
 // Parses `text`; throws tvf::Error "<label>: line L, column C: <sentence>" (or
 // "<label>: <json path>: ..." for a repeated key). `empty_hint` completes the sentence
 // for empty text ("the text is empty; <empty_hint>").

@@ -22,6 +22,7 @@
 //   a path that leaves it is refused.
 #include "tvf/core/error.h"
 #include "tvf/core/error_location.h"
+#include "tvf/core/json_text.h"
 
 #include <nlohmann/json.hpp>
 
@@ -42,8 +43,9 @@ namespace tvf::serve {
 // no longer current, 422 refused edit, 503 busy or stopping) and one sentence saying why.
 class RequestError : public LocatedError {
 public:
+  // The message is kept as valid UTF-8 (valid_utf8): it is answered as JSON.
   RequestError(int status, const std::string& message, ErrorLocation location = {})
-      : LocatedError(message, std::move(location)), status_(status) {}
+      : LocatedError(valid_utf8(message), std::move(location)), status_(status) {}
   int status() const { return status_; }
 
 private:
