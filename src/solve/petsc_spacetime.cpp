@@ -215,8 +215,18 @@ struct LocalSystem {
   std::vector<int> row_start, column;
   std::vector<cplx> value;
   std::vector<double> diagonal, weight_sum;
-  std::vector<char> fixed;                  // nf × nl
-  std::vector<double> lower, pivot, upper;  // the temporal lines' elimination (nf × nl)
+  std::vector<char> fixed;    // nf × nl
+  std::vector<double> pivot;  // the temporal lines' elimination (nf × nl): 1 / its pivots
+  // The elimination's off-diagonal factors, recomputed from fixed and weight_sum where
+  // used rather than stored (two fewer arrays of nf × nl doubles per rank):
+  // lower(k) = −b·w_i where the previous frame's entry is free, else 0; upper(k) =
+  // −b·w_i · pivot(k) where the next frame's entry is free, else 0.
+  double lower(size_t j, size_t i) const {
+    return j > 0 && !fixed[(j - 1) * nl + i] ? -b * weight_sum[i] : 0.0;
+  }
+  double upper(size_t j, size_t i) const {
+    return j + 1 < nf && !fixed[(j + 1) * nl + i] ? -b * weight_sum[i] * pivot[j * nl + i] : 0.0;
+  }
   Vec ghost = nullptr;                      // nf × ng ghost values (sequential)
   VecScatter scatter = nullptr;             // global → ghost
 };
@@ -277,12 +287,12 @@ PetscErrorCode apply_preconditioner(PC pc, Vec r, Vec out) {
   for (size_t j = 1; j < nf; ++j)
     for (size_t i = 0; i < nl; ++i) {
       const size_t k = j * nl + i;
-      os[k] = (rs[k] - s->lower[k] * os[k - nl]) * s->pivot[k];
+      os[k] = (rs[k] - s->lower(j, i) * os[k - nl]) * s->pivot[k];
     }
   for (size_t j = nf - 1; j-- > 0;)
     for (size_t i = 0; i < nl; ++i) {
       const size_t k = j * nl + i;
-      os[k] -= s->upper[k] * os[k + nl];
+      os[k] -= s->upper(j, i) * os[k + nl];
     }
   PetscCall(VecRestoreArray(out, &oa));
   PetscCall(VecRestoreArrayRead(r, &ra));
@@ -347,22 +357,16 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
   s.fixed.resize(nlf);
   for (size_t j = 0; j < nf; ++j)
     for (size_t i = 0; i < s.nl; ++i) s.fixed[j * s.nl + i] = fixed[j * n + static_cast<size_t>(d.owned[i])];
-  s.lower.assign(nlf, 0);
   s.pivot.assign(nlf, 0);
-  s.upper.assign(nlf, 0);
   for (size_t j = 0; j < nf; ++j)
     for (size_t i = 0; i < s.nl; ++i) {
       const size_t k = j * s.nl + i;
-      if (s.fixed[k]) continue;
+      if (s.fixed[k]) continue;  // pivot 0: the line solve leaves fixed entries 0
       const bool has_prev = j > 0, has_next = j + 1 < nf;
       const double c = b * s.weight_sum[i];
       const double diag = s.diagonal[i] + c * ((has_prev ? 1 : 0) + (has_next ? 1 : 0));
-      const double lo = (has_prev && !s.fixed[k - s.nl]) ? -c : 0.0;
-      const double up = (has_next && !s.fixed[k + s.nl]) ? -c : 0.0;
-      const double denom = diag - lo * (has_prev ? s.upper[k - s.nl] : 0.0);
-      s.lower[k] = lo;
+      const double denom = diag - (has_prev ? s.lower(j, i) * s.upper(j - 1, i) : 0.0);
       s.pivot[k] = 1.0 / denom;
-      s.upper[k] = up / denom;
     }
 
   // Vectors: this rank's block of 2·nf·nl reals; the ghosts' values in every frame.
