@@ -49,7 +49,8 @@ struct GenerateArgs {
 };
 
 int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
-  // Under mpirun every rank generates (the solve is shared); rank 0 alone reports and writes.
+  // Under mpirun every rank generates (the solve is shared); rank 0 alone reports and writes,
+  // but for the VTK pieces that each rank writes when there are several.
   const bool root = distributed_rank() == 0;
   const bool show = root && !args.quiet && cli::progress_wanted();
   cli::Progress progress(demo ? "tvf demo" : "tvf generate", show);
@@ -65,11 +66,15 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
   options.progress = [&](int done, int total) { progress.update(done, total); };
   const Field& field = design.generate(options);
   const GenerateReport& report = design.report();
-  if (!root) return 0;
 
   OutputOptions out_options;
   out_options.vtk = !args.no_vtk;
   out_options.on_step = [&](const std::string& what) { progress.note("writing " + what); };
+  // With K > 1 ranks every rank writes its pieces of the VTK series (design/outputs.h).
+  if (!root) {
+    if (distributed_ranks() > 1) design.write_outputs(args.out, out_options);
+    return 0;
+  }
   auto files = design.write_outputs(args.out, out_options);
   // The demo ends with what the field is for: a texture animation of it (planar scenes).
   std::string demo_video;

@@ -5,7 +5,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <string>
+#include <vector>
 
 #if TVF_HAVE_PETSC
 #include <mpi.h>
@@ -43,6 +46,20 @@ int distributed_rank() { return g_rank; }
 bool distributed_active() { return g_active; }
 bool distributed_owns_frame(int frame) { return frame % g_ranks == g_rank; }
 
+namespace {
+// The partition of the last distributed space-time solve (distributed_vertex_owners).
+std::vector<int> g_last_owner;
+}  // namespace
+
+std::vector<int> distributed_vertex_owners(int vertices) {
+  if (g_ranks > 1 && g_last_owner.size() == static_cast<size_t>(vertices)) return g_last_owner;
+  std::vector<int> owner(static_cast<size_t>(std::max(vertices, 0)), 0);
+  for (int v = 0; v < vertices; ++v)
+    owner[static_cast<size_t>(v)] =
+        static_cast<int>(static_cast<long long>(g_ranks) * v / std::max(vertices, 1));
+  return owner;
+}
+
 #if !TVF_HAVE_PETSC
 
 DistributedSession::DistributedSession() = default;
@@ -58,6 +75,7 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian&, int, double, std::
 void distributed_share_frames(std::span<cplx>, size_t, int) {}
 bool distributed_all(bool ok) { return ok; }
 double distributed_max(double x) { return x; }
+std::string distributed_broadcast(const std::string& s) { return s; }
 
 PetscPartition petsc_partition(const ConnectionLaplacian& laplacian) {
   PetscPartition p;
@@ -110,6 +128,15 @@ double distributed_max(double x) {
   if (!g_active) return x;
   MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
   return x;
+}
+
+std::string distributed_broadcast(const std::string& s) {
+  if (!g_active || g_ranks == 1) return s;
+  unsigned long long size = s.size();
+  MPI_Bcast(&size, 1, MPI_UNSIGNED_LONG_LONG, 0, PETSC_COMM_WORLD);
+  std::string out = g_rank == 0 ? s : std::string(static_cast<size_t>(size), '\0');
+  if (size > 0) MPI_Bcast(out.data(), static_cast<int>(size), MPI_CHAR, 0, PETSC_COMM_WORLD);
+  return out;
 }
 
 DistributedSession::~DistributedSession() {
@@ -328,6 +355,7 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
                             "this PETSc indexes ({}); it needs a PETSc built with 64-bit indices",
                             2 * n * nf, n, nf, std::numeric_limits<PetscInt>::max()));
   const Distribution d = distribute(rows, nf, comm);
+  g_last_owner = d.owner;  // the per-rank VTK pieces follow it (distributed_vertex_owners)
 
   // This rank's rows: the spatial operator with columns renumbered, fixed set, lines.
   LocalSystem s;
