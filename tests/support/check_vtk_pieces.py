@@ -8,6 +8,8 @@
 # Usage: python3 check_vtk_pieces.py TVF_CLI RANKS MPIRUN [MPIRUN ARGS...]
 #   (the MPIRUN words without the rank count: it adds `-n RANKS`; Debian's python3-vtk9
 #   and python3-numpy; exits 77, skipped, without them)
+#     or: python3 check_vtk_pieces.py --folder DIR RANKS
+#   checks a folder already written (the npy files beside the pieces; tests/field/vtk_io_test).
 import os, subprocess, sys, tempfile
 import xml.etree.ElementTree as ET
 try:
@@ -18,7 +20,10 @@ except ImportError as e:  # ctest reports the test skipped (SKIP_RETURN_CODE 77)
     print('skipped: numpy and VTK are needed (%s)' % e)
     sys.exit(77)
 
-cli, ranks, mpirun = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+if sys.argv[1] == '--folder':
+    folder, ranks = sys.argv[2], int(sys.argv[3])
+else:
+    folder, cli, ranks, mpirun = None, sys.argv[1], int(sys.argv[2]), sys.argv[3:]
 
 SCENES = {
     # A planar grid with a singularity moving across the partition boundary.
@@ -111,27 +116,30 @@ def check_folder(name, out):
               '%s: faces differ from faces.npy' % what)
     return len(sets)
 
-with tempfile.TemporaryDirectory() as tmp:
-    frames = 0
-    for name, text in SCENES.items():
-        scene = os.path.join(tmp, name + '.json')
-        with open(scene, 'w') as f:
-            f.write(text)
-        out = os.path.join(tmp, name)
-        run = subprocess.run(mpirun + ['-n', str(ranks), cli, 'generate', scene, '-o', out, '--quiet'],
+if folder:
+    frames = check_folder('folder', folder)
+else:
+    with tempfile.TemporaryDirectory() as tmp:
+        frames = 0
+        for name, text in SCENES.items():
+            scene = os.path.join(tmp, name + '.json')
+            with open(scene, 'w') as f:
+                f.write(text)
+            out = os.path.join(tmp, name)
+            run = subprocess.run(mpirun + ['-n', str(ranks), cli, 'generate', scene, '-o', out, '--quiet'],
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            if run.returncode != 0:
+                errors.append('%s: mpirun exited %d:\n%s' % (name, run.returncode, run.stdout))
+                continue
+            frames += check_folder(name, out)
+        # One process into a folder of K ranks' pieces: its field_NNNN.vtu replace them.
+        out = os.path.join(tmp, 'grid')
+        run = subprocess.run([cli, 'generate', os.path.join(tmp, 'grid.json'), '-o', out, '--quiet'],
                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        if run.returncode != 0:
-            errors.append('%s: mpirun exited %d:\n%s' % (name, run.returncode, run.stdout))
-            continue
-        frames += check_folder(name, out)
-    # One process into a folder of K ranks' pieces: its field_NNNN.vtu replace them.
-    out = os.path.join(tmp, 'grid')
-    run = subprocess.run([cli, 'generate', os.path.join(tmp, 'grid.json'), '-o', out, '--quiet'],
-                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    check(run.returncode == 0, 'one process into the pieces: exit %d:\n%s' % (run.returncode, run.stdout))
-    left = sorted(f for f in os.listdir(out) if f.endswith('.pvtu') or '_p' in f)
-    check(left == [], 'one process left the pieces %s' % left)
-    check(os.path.exists(os.path.join(out, 'field_0000.vtu')), 'one process wrote no field_0000.vtu')
+        check(run.returncode == 0, 'one process into the pieces: exit %d:\n%s' % (run.returncode, run.stdout))
+        left = sorted(f for f in os.listdir(out) if f.endswith('.pvtu') or '_p' in f)
+        check(left == [], 'one process left the pieces %s' % left)
+        check(os.path.exists(os.path.join(out, 'field_0000.vtu')), 'one process wrote no field_0000.vtu')
 if errors:
     print('\n'.join(errors))
     sys.exit(1)
