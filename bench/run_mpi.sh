@@ -3,10 +3,11 @@
 # generate` on an N × N grid × 100 frames (two key frames and a vortex moving diagonally
 # between them, across the partition, held at every frame) by one process, by
 # `mpirun -n 1` and by `mpirun -n 2`; prints Markdown rows: generation time, CG
-# iterations, peak memory of the largest rank (/usr/bin/time), the halo, and the largest
-# difference from the one process's field (relative to its largest vector).
+# iterations, wall and CPU time, peak memory of every rank (/usr/bin/time), the halo, and
+# the largest difference from the first run's field (relative to its largest vector).
 # Usage: bench/run_mpi.sh [build-dir] [N ...]   (default build/release, N = 141 317 707 1000;
-#        RUNS="one;mpirun -n 2" picks the runs, default one, mpirun -n 1 and mpirun -n 2)
+#        RUNS="one;mpirun -n 2" picks the runs, default one, mpirun -n 1 and mpirun -n 2; the
+#        first is the reference; FREE_CHECK=1 prints the available memory before each run)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build/release}
@@ -21,8 +22,10 @@ trap 'rm -rf "$dir"' EXIT
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')
 echo "Machine: $cpu, $(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GiB; $(date -u +%Y-%m-%d)"
 echo
-echo "| grid | vertices | frames | run | generation | iterations | peak memory (largest rank) | halo | max difference from one process |"
-echo "|---|---:|---:|---|---:|---:|---:|---:|---:|"
+echo "Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo
+echo "| grid | vertices | frames | run | generation | wall | CPU (all ranks) | iterations | peak RSS per rank | halo | max difference from the first run |"
+echo "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|"
 for n in "${sizes[@]}"; do
   cat >"$dir/scene.json" <<EOF
 {"tvf": 1,
@@ -40,15 +43,18 @@ EOF
   for run in "${runs[@]}"; do
     out="$dir/${run// /_}"
     rm -rf "$out"
+    [ -n "${FREE_CHECK:-}" ] && free -g | awk '/Mem:/ {print "free before " r ": " $7 " GiB available"}' r="$run" >&2
     case "$run" in
-      one) cmd=(/usr/bin/time -f "peak %M" "$tvf") ;;
-      *) cmd=("${mpirun[@]}" -n "${run##* }" /usr/bin/time -f "peak %M" "$tvf") ;;
+      one) cmd=(/usr/bin/time -f "peak %M cpu %U %S wall %e" "$tvf") ;;
+      *) cmd=("${mpirun[@]}" -n "${run##* }" /usr/bin/time -f "peak %M cpu %U %S wall %e" "$tvf") ;;
     esac
-    "${cmd[@]}" generate "$dir/scene.json" -o "$out" --no-vtk >"$dir/log" 2>&1 || { cat "$dir/log" >&2; exit 1; }
-    /usr/bin/python3 - "$dir/log" "$dir/one/field.tvff" "$out/field.tvff" "$n" "$run" <<'PY'
+    "${cmd[@]}" generate "$dir/scene.json" -o "$out" --no-vtk >"$out.log" 2>&1 || { cat "$out.log" >&2; exit 1; }
+  done
+  # The rows, each field compared with the first run's (the reference).
+  /usr/bin/python3 - "$dir" "$n" "${runs[@]}" <<'PY'
 import json, re, struct, sys
 import numpy as np
-log = open(sys.argv[1]).read()
+folder, n, runs = sys.argv[1], sys.argv[2], sys.argv[3:]
 def field(path):  # field.tvff's values (docs/file_formats.md), mapped
     with open(path, "rb") as f:
         f.read(12)
@@ -56,17 +62,24 @@ def field(path):  # field.tvff's values (docs/file_formats.md), mapped
         head = json.loads(f.read(h))
     v, fc, nf = head["vertices"], head["faces"], head["frames"]
     return np.memmap(path, dtype="<f8", mode="r", offset=20 + h + v * 24 + fc * 12, shape=(nf, v, 2))
-gen = re.search(r"generated (\d+) frames × (\d+) vertices by (.*) in ([0-9.]+) s", log)
-its = re.search(r"(\d+) iterations", gen.group(3))
-halo = re.search(r"halo (\d+) vertices", gen.group(3))
-peak = max(int(m) for m in re.findall(r"peak (\d+)", log)) / 1024 / 1024
-a, b = field(sys.argv[2]), field(sys.argv[3])
-diff = max(np.hypot(*(a[j] - b[j]).T).max() for j in range(a.shape[0]))
-d = diff / max(np.hypot(*a[j].T).max() for j in range(a.shape[0]))
-n = sys.argv[4]
-print(f"| {n}² | {gen.group(2)} | {gen.group(1)} | {sys.argv[5]} | {float(gen.group(4)):.1f} s | "
-      f"{its.group(1) if its else ''} | {peak:.2f} GiB | {halo.group(1) if halo else ''} | {d:.1e} |")
+def name(run): return f"{folder}/{run.replace(' ', '_')}"
+ref = field(name(runs[0]) + "/field.tvff")
+largest = max(np.hypot(*ref[j].T).max() for j in range(ref.shape[0]))
+for run in runs:
+    log = open(name(run) + ".log").read()
+    gen = re.search(r"generated (\d+) frames × (\d+) vertices by (.*) in ([0-9.]+) s", log)
+    its = re.search(r"(\d+) iterations", gen.group(3))
+    halo = re.search(r"halo (\d+) vertices", gen.group(3))
+    ranks = [(int(p), float(u) + float(s), float(w))
+             for p, u, s, w in re.findall(r"peak (\d+) cpu ([0-9.]+) ([0-9.]+) wall ([0-9.]+)", log)]
+    peaks = " / ".join(f"{p / 1024 / 1024:.2f}" for p, _, _ in ranks)
+    wall = max(w for _, _, w in ranks)
+    cpu = sum(c for _, c, _ in ranks)
+    b = field(name(run) + "/field.tvff")
+    diff = max(np.hypot(*(ref[j] - b[j]).T).max() for j in range(ref.shape[0]))
+    print(f"| {n}² | {gen.group(2)} | {gen.group(1)} | {run} | {float(gen.group(4)):.1f} s | {wall:.0f} s | "
+          f"{cpu:.0f} s | {its.group(1) if its else ''} | {peaks} GiB | {halo.group(1) if halo else ''} | "
+          f"{diff / largest:.1e} |")
 PY
-  done
-  rm -rf "$dir"/one "$dir"/mpirun_*
+  rm -rf "$dir"/one "$dir"/mpirun_* "$dir"/*.log
 done

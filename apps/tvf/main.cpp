@@ -49,14 +49,15 @@ struct GenerateArgs {
 };
 
 int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
-  // Under mpirun every rank generates (the solve is shared); rank 0 alone reports and writes.
+  // Under mpirun every rank generates (the solve is shared); rank 0 alone reports and writes,
+  // but for the VTK pieces that each rank writes when there are several.
   const bool root = distributed_rank() == 0;
   const bool show = root && !args.quiet && cli::progress_wanted();
   cli::Progress progress(demo ? "tvf demo" : "tvf generate", show);
   Design design(std::move(scene));
   progress.note("building the domain");
   const DesignSpace& space = design.space();
-  if (space.repairs.changed() && !args.quiet)
+  if (space.repairs.changed() && !args.quiet && root)
     std::fprintf(stderr, "%s: repaired the mesh: removed %d duplicate faces and %d unreferenced vertices\n",
                  design.scene().resolved_mesh_path().c_str(), space.repairs.duplicate_faces_removed,
                  space.repairs.unreferenced_vertices_removed);
@@ -65,11 +66,15 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
   options.progress = [&](int done, int total) { progress.update(done, total); };
   const Field& field = design.generate(options);
   const GenerateReport& report = design.report();
-  if (!root) return 0;
 
   OutputOptions out_options;
   out_options.vtk = !args.no_vtk;
   out_options.on_step = [&](const std::string& what) { progress.note("writing " + what); };
+  // With K > 1 ranks every rank writes its pieces of the VTK series (design/outputs.h).
+  if (!root) {
+    if (distributed_ranks() > 1) design.write_outputs(args.out, out_options);
+    return 0;
+  }
   auto files = design.write_outputs(args.out, out_options);
   // The demo ends with what the field is for: a texture animation of it (planar scenes).
   std::string demo_video;
@@ -261,9 +266,14 @@ int main(int argc, char** argv) {
   cli::ServeCommand serve(app);
   cli::SynthCommand synth(*app.get_subcommand("render"));
 
+  // Under mpirun every rank parses the same command line and reads the same scene, so an
+  // input error is every rank's: rank 0 alone prints it, and every rank exits with its code
+  // (mpirun's own exit status is then that code).
+  const bool root = distributed_rank() == 0;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (!root) return e.get_exit_code();
     return app.exit(e);
   }
 
@@ -285,17 +295,25 @@ int main(int argc, char** argv) {
       return 0;
     }
     GenerateArgs demo{"", demo_out, false, demo_quiet};
-    if (!demo_quiet)
+    if (!demo_quiet && root)
       std::printf("tvf: no scene given; generating the built-in demo scene (`tvf default-scene` prints it)\n");
     return run_generate(parse_scene(cli::default_scene_text(), "default scene"), demo, true);
   } catch (const tvf::Error& e) {
-    std::fprintf(stderr, "tvf: error: %s\n", e.what());
+    if (root) std::fprintf(stderr, "tvf: error: %s\n", e.what());
     return 1;
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "tvf: error: out of memory\n");
+    // Memory runs out on one rank, not on all: each says which it is.
+    if (distributed_ranks() > 1)
+      std::fprintf(stderr, "tvf: error: out of memory on rank %d of %d\n", distributed_rank(), distributed_ranks());
+    else
+      std::fprintf(stderr, "tvf: error: out of memory\n");
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "tvf: internal error: %s\n", e.what());
+    if (distributed_ranks() > 1)
+      std::fprintf(stderr, "tvf: internal error on rank %d of %d: %s\n", distributed_rank(), distributed_ranks(),
+                   e.what());
+    else
+      std::fprintf(stderr, "tvf: internal error: %s\n", e.what());
     return 2;
   }
 }

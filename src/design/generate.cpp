@@ -381,7 +381,13 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
       break;
   }
   check_cancelled(options);
-  const SolveReport r = solver.solve(problem.fixed, problem.values, field.data(), st);
+  // Under mpirun the solve is PETSc's (solve/distributed.h), which reads the fixed values
+  // from z itself (the first guess holds them at every fixed entry): the separate copy of
+  // frames × |V| values is freed before it, one replicated field fewer on every rank.
+  const bool shared_solve = distributed_active() && st.method != SpaceTimeMethod::bicgstab_jacobi;
+  if (shared_solve) std::vector<cplx>().swap(problem.values);
+  const std::span<const cplx> values = shared_solve ? std::span<const cplx>(field.data()) : problem.values;
+  const SolveReport r = solver.solve(problem.fixed, values, field.data(), st);
   check_cancelled(options);
   if (options.progress) options.progress(scene.time.frames, scene.time.frames);
   if (!r.success)

@@ -8,9 +8,12 @@
 #include "tvf/field/npy.h"
 #include "tvf/field/vtk_io.h"
 #include "tvf/field/world_vectors.h"
+#include "tvf/solve/distributed.h"
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -27,6 +30,23 @@ bool is_vtk_frame_name(const std::string& name) {
   for (size_t k = prefix.size(); k < name.size() - suffix.size(); ++k)
     if (name[k] < '0' || name[k] > '9') return false;
   return true;
+}
+
+bool all_digits(std::string_view s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+// The distributed VTK series (mpirun -n K, K > 1): field_NNNN.pvtu and its pieces
+// field_NNNN_pR.vtu.
+bool is_vtk_parallel_name(const std::string& name) {
+  constexpr std::string_view prefix = "field_";
+  if (!name.starts_with(prefix)) return false;
+  const std::string_view rest = std::string_view(name).substr(prefix.size());
+  if (rest.ends_with(".pvtu")) return all_digits(rest.substr(0, rest.size() - 5));
+  if (!rest.ends_with(".vtu")) return false;
+  const std::string_view body = rest.substr(0, rest.size() - 4);
+  const size_t p = body.find("_p");
+  return p != std::string_view::npos && all_digits(body.substr(0, p)) && all_digits(body.substr(p + 2));
 }
 
 }  // namespace
@@ -64,7 +84,43 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
                                     k / static_cast<size_t>(field.num_vertices()),
                                     k % static_cast<size_t>(field.num_vertices())));
   }
-  OutputStage stage(dir);
+  // Under mpirun with K > 1 ranks (solve/distributed.h) every rank comes here: rank 0 stages
+  // and writes the assembled outputs, every rank writes its pieces of the VTK frames into
+  // rank 0's staging folder (a folder all ranks see), and rank 0 commits once all did.
+  const int ranks = distributed_ranks();
+  const int rank = distributed_rank();
+  const bool root = rank == 0;
+  std::optional<OutputStage> staged;
+  std::exception_ptr failure;
+  std::string stage_path;
+  if (root) {
+    try {
+      staged.emplace(dir);
+      stage_path = staged->stage().string();
+    } catch (...) {
+      if (ranks == 1) throw;
+      failure = std::current_exception();
+    }
+  }
+  if (ranks > 1) {
+    stage_path = distributed_broadcast(stage_path);
+    if (failure) std::rethrow_exception(failure);
+    if (stage_path.empty()) return {};  // rank 0 reports why
+    if (!root) {
+      // This rank's pieces of the VTK series; rank 0 commits them when every rank wrote its own.
+      try {
+        if (options.vtk)
+          write_vtk_series_piece(stage_path, "field", space.bundle(), field,
+                                 distributed_vertex_owners(field.num_vertices()), rank);
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      distributed_all(!failure);
+      if (failure) std::rethrow_exception(failure);
+      return {};
+    }
+  }
+  OutputStage& stage = *staged;
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   const auto nf = static_cast<size_t>(mesh.num_faces());
@@ -72,60 +128,79 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
   auto step = [&](const char* what) {
     if (options.on_step) options.on_step(what);
   };
+  try {
+    step("field.npy");
+    const std::vector<float> world = world_vectors_f32(space.bundle(), field);
+    if (!std::all_of(world.begin(), world.end(), [](float x) { return std::isfinite(x); }))
+      throw_input_error(scene.label(), "",
+                        "the computed field's vectors exceed the range of field.npy's 32-bit floats (the design's "
+                        "numbers are too extreme); nothing was written");
+    write_npy(stage.file("field.npy").string(), {n, nv, 3}, world.data());
 
-  step("field.npy");
-  const std::vector<float> world = world_vectors_f32(space.bundle(), field);
-  if (!std::all_of(world.begin(), world.end(), [](float x) { return std::isfinite(x); }))
-    throw_input_error(scene.label(), "",
-                      "the computed field's vectors exceed the range of field.npy's 32-bit floats (the design's "
-                      "numbers are too extreme); nothing was written");
-  write_npy(stage.file("field.npy").string(), {n, nv, 3}, world.data());
+    step("vertices.npy, faces.npy, times.npy");
+    std::vector<double> verts(nv * 3);
+    for (size_t v = 0; v < nv; ++v)
+      for (size_t k = 0; k < 3; ++k)
+        verts[3 * v + k] = mesh.position(static_cast<int>(v))[static_cast<Eigen::Index>(k)];
+    write_npy(stage.file("vertices.npy").string(), {nv, 3}, verts.data());
+    std::vector<std::int32_t> faces(nf * 3);
+    for (size_t f = 0; f < nf; ++f)
+      for (size_t k = 0; k < 3; ++k) faces[3 * f + k] = mesh.face(static_cast<int>(f))[k];
+    write_npy(stage.file("faces.npy").string(), {nf, 3}, faces.data());
+    const std::vector<double> times = field.time().times();
+    write_npy(stage.file("times.npy").string(), {n}, times.data());
 
-  step("vertices.npy, faces.npy, times.npy");
-  std::vector<double> verts(nv * 3);
-  for (size_t v = 0; v < nv; ++v)
-    for (size_t k = 0; k < 3; ++k) verts[3 * v + k] = mesh.position(static_cast<int>(v))[static_cast<Eigen::Index>(k)];
-  write_npy(stage.file("vertices.npy").string(), {nv, 3}, verts.data());
-  std::vector<std::int32_t> faces(nf * 3);
-  for (size_t f = 0; f < nf; ++f)
-    for (size_t k = 0; k < 3; ++k) faces[3 * f + k] = mesh.face(static_cast<int>(f))[k];
-  write_npy(stage.file("faces.npy").string(), {nf, 3}, faces.data());
-  const std::vector<double> times = field.time().times();
-  write_npy(stage.file("times.npy").string(), {n}, times.data());
+    step("field.tvff");
+    // The copy of the scene must stay valid next to the outputs: its mesh path is made
+    // absolute (relative paths were relative to the original scene file).
+    Scene copy = scene;
+    auto absolute = [&](const std::string& p) {
+      return std::filesystem::absolute(scene.resolve_path(p)).lexically_normal().string();
+    };
+    if (!copy.domain.mesh.empty()) copy.domain.mesh = absolute(copy.domain.mesh);
+    for (Keyframe& k : copy.keyframes)
+      if (!k.field.empty()) k.field = absolute(k.field);
+    const nlohmann::json scene_json = scene_to_json(copy);
+    save_field_file(stage.file("field.tvff").string(), mesh, field, scene_json);
 
-  step("field.tvff");
-  // The copy of the scene must stay valid next to the outputs: its mesh path is made
-  // absolute (relative paths were relative to the original scene file).
-  Scene copy = scene;
-  auto absolute = [&](const std::string& p) {
-    return std::filesystem::absolute(scene.resolve_path(p)).lexically_normal().string();
-  };
-  if (!copy.domain.mesh.empty()) copy.domain.mesh = absolute(copy.domain.mesh);
-  for (Keyframe& k : copy.keyframes)
-    if (!k.field.empty()) k.field = absolute(k.field);
-  const nlohmann::json scene_json = scene_to_json(copy);
-  save_field_file(stage.file("field.tvff").string(), mesh, field, scene_json);
+    step("coherence.csv, scene.json");
+    write_file_atomically(stage.file("coherence.csv"), coherence_csv(field, coherence(field)));
+    if (!input_scene_here) write_file_atomically(stage.file("scene.json"), scene_to_text(copy));
 
-  step("coherence.csv, scene.json");
-  write_file_atomically(stage.file("coherence.csv"), coherence_csv(field, coherence(field)));
-  if (!input_scene_here) write_file_atomically(stage.file("scene.json"), scene_to_text(copy));
+    if (options.incompressible) {
+      step("divergence.json");
+      write_file_atomically(stage.file("divergence.json"),
+                            incompressible_report_json(*options.incompressible, field.time()).dump(2) + "\n");
+    }
 
-  if (options.incompressible) {
-    step("divergence.json");
-    write_file_atomically(stage.file("divergence.json"),
-                          incompressible_report_json(*options.incompressible, field.time()).dump(2) + "\n");
+    if (options.keyframe_intervals && !options.keyframe_intervals->empty()) {
+      step("keyframe_topology.json");
+      const nlohmann::json intervals{{"intervals", keyframe_intervals_json(*options.keyframe_intervals)}};
+      write_file_atomically(stage.file("keyframe_topology.json"), intervals.dump(2) + "\n");
+    }
+
+    if (options.vtk) {
+      if (ranks == 1) {
+        step("field.pvd + field_NNNN.vtu");
+        write_vtk_series(stage.stage().string(), "field", space.bundle(), field);
+      } else {
+        step("field.pvd + field_NNNN.pvtu + field_NNNN_pR.vtu");
+        write_vtk_series_piece(stage.stage().string(), "field", space.bundle(), field,
+                               distributed_vertex_owners(field.num_vertices()), rank);
+      }
+    }
+  } catch (...) {
+    if (ranks == 1) throw;
+    failure = std::current_exception();
   }
-
-  if (options.keyframe_intervals && !options.keyframe_intervals->empty()) {
-    step("keyframe_topology.json");
-    write_file_atomically(stage.file("keyframe_topology.json"),
-                          nlohmann::json{{"intervals", keyframe_intervals_json(*options.keyframe_intervals)}}.dump(2) +
-                              "\n");
-  }
-
-  if (options.vtk) {
-    step("field.pvd + field_NNNN.vtu");
-    write_vtk_series(stage.stage().string(), "field", space.bundle(), field);
+  if (ranks > 1) {
+    const bool all_wrote = distributed_all(!failure);
+    if (failure) std::rethrow_exception(failure);
+    if (!all_wrote)
+      throw Error(fmt::format("{}: another rank could not write its pieces of the VTK series; nothing was "
+                            "written",
+                            dir.string()));
+    if (options.vtk) write_vtk_parallel_series(stage.stage().string(), "field", field.time().times(), ranks);
   }
   // The outputs of an earlier run into the same folder that this run does not write
   // (divergence.json without "incompressible", the VTK series with --no-vtk or fewer
@@ -134,7 +209,8 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
     if (name == "scene.json") return !input_scene_here;
     return name == "field.npy" || name == "vertices.npy" || name == "faces.npy" || name == "times.npy" ||
            name == "field.tvff" || name == "coherence.csv" || name == "divergence.json" ||
-           name == "keyframe_topology.json" || name == "field.pvd" || is_vtk_frame_name(name);
+           name == "keyframe_topology.json" || name == "field.pvd" || is_vtk_frame_name(name) ||
+           is_vtk_parallel_name(name);
   });
 }
 

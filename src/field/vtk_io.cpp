@@ -5,6 +5,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -69,19 +70,30 @@ private:
 struct Geometry {
   std::string appended;  // points, connectivity, offsets, types
   std::uint64_t points = 0, connectivity = 0, offsets = 0, types = 0;
+  std::uint64_t num_points = 0, num_cells = 0;
 };
 
-Geometry make_geometry(const Mesh& mesh) {
+// The points `points` (vertex indices) of `mesh` and its faces `faces` whose corners are
+// renumbered by `local` (vertex → index among `points`); every vertex and face when both
+// are empty.
+Geometry make_geometry(const Mesh& mesh, const std::vector<int>& points = {}, const std::vector<int>& faces = {},
+                       const std::vector<int>& local = {}) {
   Geometry g;
   Appended a;
-  const auto nv = static_cast<std::uint64_t>(mesh.num_vertices());
-  const auto nf = static_cast<std::uint64_t>(mesh.num_faces());
+  const bool whole = points.empty() && faces.empty();
+  const auto nv = whole ? static_cast<std::uint64_t>(mesh.num_vertices()) : points.size();
+  const auto nf = whole ? static_cast<std::uint64_t>(mesh.num_faces()) : faces.size();
+  g.num_points = nv;
+  g.num_cells = nf;
   g.points = a.begin(nv * 3 * sizeof(double));
-  for (const Vec3& p : mesh.positions())
+  for (std::uint64_t i = 0; i < nv; ++i) {
+    const Vec3& p = mesh.position(whole ? static_cast<int>(i) : points[i]);
     for (int k = 0; k < 3; ++k) a.put(p[k]);
+  }
   g.connectivity = a.begin(nf * 3 * sizeof(std::int32_t));
-  for (const Face& f : mesh.faces())
-    for (int v : f) a.put(static_cast<std::int32_t>(v));
+  for (std::uint64_t i = 0; i < nf; ++i)
+    for (int v : mesh.face(whole ? static_cast<int>(i) : faces[i]))
+      a.put(static_cast<std::int32_t>(whole ? v : local[static_cast<size_t>(v)]));
   // Offsets end at 3·|F| = the number of halfedges, an int.
   g.offsets = a.begin(nf * sizeof(std::int32_t));
   for (std::uint64_t f = 0; f < nf; ++f) a.put(static_cast<std::int32_t>(3 * (f + 1)));
@@ -94,7 +106,7 @@ Geometry make_geometry(const Mesh& mesh) {
 // Writes one .vtu: the mesh of `g` and the point data arrays described by `data_arrays`
 // (their <DataArray> lines, offsets counted from the start of the appended section) whose
 // bytes `a` holds after g's. `attributes` are the <PointData> element's (active arrays).
-void write_piece(const fs::path& path, double time, const Mesh& mesh, const Geometry& g,
+void write_piece(const fs::path& path, double time, const Geometry& g,
                  const std::string& attributes, const std::string& data_arrays, Appended& a) {
   const std::string head = fmt::format(
       "<?xml version=\"1.0\"?>\n"
@@ -122,7 +134,7 @@ void write_piece(const fs::path& path, double time, const Mesh& mesh, const Geom
       "  </UnstructuredGrid>\n"
       "  <AppendedData encoding=\"raw\">\n"
       "   _",
-      time, mesh.num_vertices(), mesh.num_faces(), attributes, data_arrays, g.points, g.connectivity, g.offsets,
+      time, g.num_points, g.num_cells, attributes, data_arrays, g.points, g.connectivity, g.offsets,
       g.types);
   a.data().append("\n  </AppendedData>\n</VTKFile>\n");
   write_whole_file(path, head, g.appended, a.data());
@@ -150,7 +162,7 @@ void write_frame(const fs::path& path, const TangentBundle& bundle, const Field&
       "format=\"appended\" offset=\"{}\"/>\n"
       "        <DataArray type=\"Float32\" Name=\"magnitude\" format=\"appended\" offset=\"{}\"/>\n",
       vector, mag);
-  write_piece(path, field.time().time(frame), mesh, g, "Vectors=\"vector\" Scalars=\"magnitude\"", data_arrays,
+  write_piece(path, field.time().time(frame), g, "Vectors=\"vector\" Scalars=\"magnitude\"", data_arrays,
               a);
 }
 
@@ -158,14 +170,30 @@ std::string frame_name(const std::string& stem, int frame, int digits) {
   return fmt::format("{}_{:0{}}.vtu", stem, frame, digits);
 }
 
-void write_collection(const fs::path& folder, const std::string& stem, const std::vector<double>& times, int digits) {
+int frame_digits(size_t frames) {
+  int digits = 4;
+  for (auto n = static_cast<long>(frames) - 1; n >= 10000; n /= 10) ++digits;
+  return digits;
+}
+
+std::string parallel_frame_name(const std::string& stem, int frame, int digits) {
+  return fmt::format("{}_{:0{}}.pvtu", stem, frame, digits);
+}
+
+std::string piece_name(const std::string& stem, int frame, int digits, int rank) {
+  return fmt::format("{}_{:0{}}_p{}.vtu", stem, frame, digits, rank);
+}
+
+void write_collection(const fs::path& folder, const std::string& stem, const std::vector<double>& times, int digits,
+                      bool parallel = false) {
   std::string pvd =
       "<?xml version=\"1.0\"?>\n"
       "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
       "  <Collection>\n";
   for (size_t j = 0; j < times.size(); ++j)
     pvd += fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", times[j],
-                       xml_escape(frame_name(stem, static_cast<int>(j), digits)));
+                       xml_escape(parallel ? parallel_frame_name(stem, static_cast<int>(j), digits)
+                                           : frame_name(stem, static_cast<int>(j), digits)));
   pvd += "  </Collection>\n</VTKFile>\n";
   write_whole_file(folder / (stem + ".pvd"), pvd, {}, {});
 }
@@ -195,8 +223,7 @@ void write_vtk_scalar_series(const std::string& dir, const std::string& stem, co
     }
     const std::string attributes =
         fmt::format("Scalars=\"{}\"", arrays.empty() ? "" : xml_escape(arrays.front().name));
-    write_piece(folder / frame_name(stem, j, digits), times[static_cast<size_t>(j)], mesh, g, attributes, data_arrays,
-                a);
+    write_piece(folder / frame_name(stem, j, digits), times[static_cast<size_t>(j)], g, attributes, data_arrays, a);
   });
   write_collection(folder, stem, times, digits);
 }
@@ -216,6 +243,92 @@ void write_vtk_series(const std::string& dir, const std::string& stem, const Tan
   });
 
   write_collection(folder, stem, field.time().times(), digits);
+}
+
+void write_vtk_series_piece(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
+                            const Field& field, std::span<const int> owner, int rank) {
+  const Mesh& mesh = bundle.mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  TVF_CHECK(field.num_vertices() == mesh.num_vertices() && owner.size() == nv,
+            "field has {} vertices, mesh {}, partition {}", field.num_vertices(), mesh.num_vertices(), owner.size());
+  // The rank's faces (those whose lowest vertex it owns) and points: its own vertices and
+  // the halo vertices of its faces, in vertex order.
+  std::vector<char> used(nv, 0);
+  for (size_t v = 0; v < nv; ++v) used[v] = owner[v] == rank ? 1 : 0;
+  std::vector<int> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Face& face = mesh.face(f);
+    const int lowest = std::min({face[0], face[1], face[2]});
+    if (owner[static_cast<size_t>(lowest)] != rank) continue;
+    faces.push_back(f);
+    for (int v : face) used[static_cast<size_t>(v)] = 1;
+  }
+  std::vector<int> points, local(nv, -1);
+  for (size_t v = 0; v < nv; ++v)
+    if (used[v] != 0) {
+      local[v] = static_cast<int>(points.size());
+      points.push_back(static_cast<int>(v));
+    }
+  const Geometry g = make_geometry(mesh, points, faces, local);
+  const int digits = frame_digits(static_cast<size_t>(field.frames()));
+  const fs::path folder(dir);
+  const auto np = static_cast<std::uint64_t>(points.size());
+  tbb::parallel_for(0, field.frames(), [&](int j) {
+    Appended a;
+    const std::uint64_t base = g.appended.size();
+    const auto values = field.frame(j);
+    const std::uint64_t vector = base + a.begin(np * 3 * sizeof(float));
+    std::vector<float> magnitude(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      const int v = points[i];
+      const Vec3 w = bundle.vertex_to_world(v, values[static_cast<size_t>(v)]);
+      for (int k = 0; k < 3; ++k) a.put(static_cast<float>(w[k]));
+      magnitude[i] = static_cast<float>(w.norm());
+    }
+    const std::uint64_t mag = base + a.begin(np * sizeof(float));
+    for (float m : magnitude) a.put(m);
+    const std::uint64_t vertex = base + a.begin(np * sizeof(std::int32_t));
+    for (int v : points) a.put(static_cast<std::int32_t>(v));
+    const std::uint64_t ghost = base + a.begin(np * sizeof(std::uint8_t));
+    for (int v : points) a.put(static_cast<std::uint8_t>(owner[static_cast<size_t>(v)] == rank ? 0 : 1));
+    const std::string data_arrays = fmt::format(
+        "        <DataArray type=\"Float32\" Name=\"vector\" NumberOfComponents=\"3\" "
+        "format=\"appended\" offset=\"{}\"/>\n"
+        "        <DataArray type=\"Float32\" Name=\"magnitude\" format=\"appended\" offset=\"{}\"/>\n"
+        "        <DataArray type=\"Int32\" Name=\"vertex\" format=\"appended\" offset=\"{}\"/>\n"
+        "        <DataArray type=\"UInt8\" Name=\"vtkGhostType\" format=\"appended\" offset=\"{}\"/>\n",
+        vector, mag, vertex, ghost);
+    write_piece(folder / piece_name(stem, j, digits, rank), field.time().time(j), g,
+                "Vectors=\"vector\" Scalars=\"magnitude\"", data_arrays, a);
+  });
+}
+
+void write_vtk_parallel_series(const std::string& dir, const std::string& stem, const std::vector<double>& times,
+                               int ranks) {
+  const int digits = frame_digits(times.size());
+  const fs::path folder(dir);
+  for (size_t j = 0; j < times.size(); ++j) {
+    std::string pvtu =
+        "<?xml version=\"1.0\"?>\n"
+        "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+        "header_type=\"UInt64\">\n"
+        "  <PUnstructuredGrid GhostLevel=\"0\">\n"
+        "    <PPointData Vectors=\"vector\" Scalars=\"magnitude\">\n"
+        "      <PDataArray type=\"Float32\" Name=\"vector\" NumberOfComponents=\"3\"/>\n"
+        "      <PDataArray type=\"Float32\" Name=\"magnitude\"/>\n"
+        "      <PDataArray type=\"Int32\" Name=\"vertex\"/>\n"
+        "      <PDataArray type=\"UInt8\" Name=\"vtkGhostType\"/>\n"
+        "    </PPointData>\n"
+        "    <PPoints>\n"
+        "      <PDataArray type=\"Float64\" NumberOfComponents=\"3\"/>\n"
+        "    </PPoints>\n";
+    for (int r = 0; r < ranks; ++r)
+      pvtu += fmt::format("    <Piece Source=\"{}\"/>\n",
+                          xml_escape(piece_name(stem, static_cast<int>(j), digits, r)));
+    pvtu += "  </PUnstructuredGrid>\n</VTKFile>\n";
+    write_whole_file(folder / parallel_frame_name(stem, static_cast<int>(j), digits), pvtu, {}, {});
+  }
+  write_collection(folder, stem, times, digits, true);
 }
 
 }  // namespace tvf

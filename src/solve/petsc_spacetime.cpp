@@ -5,7 +5,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <string>
+#include <vector>
 
 #if TVF_HAVE_PETSC
 #include <mpi.h>
@@ -43,6 +46,20 @@ int distributed_rank() { return g_rank; }
 bool distributed_active() { return g_active; }
 bool distributed_owns_frame(int frame) { return frame % g_ranks == g_rank; }
 
+namespace {
+// The partition of the last distributed space-time solve (distributed_vertex_owners).
+std::vector<int> g_last_owner;
+}  // namespace
+
+std::vector<int> distributed_vertex_owners(int vertices) {
+  if (g_ranks > 1 && g_last_owner.size() == static_cast<size_t>(vertices)) return g_last_owner;
+  std::vector<int> owner(static_cast<size_t>(std::max(vertices, 0)), 0);
+  for (int v = 0; v < vertices; ++v)
+    owner[static_cast<size_t>(v)] =
+        static_cast<int>(static_cast<long long>(g_ranks) * v / std::max(vertices, 1));
+  return owner;
+}
+
 #if !TVF_HAVE_PETSC
 
 DistributedSession::DistributedSession() = default;
@@ -58,6 +75,7 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian&, int, double, std::
 void distributed_share_frames(std::span<cplx>, size_t, int) {}
 bool distributed_all(bool ok) { return ok; }
 double distributed_max(double x) { return x; }
+std::string distributed_broadcast(const std::string& s) { return s; }
 
 PetscPartition petsc_partition(const ConnectionLaplacian& laplacian) {
   PetscPartition p;
@@ -110,6 +128,15 @@ double distributed_max(double x) {
   if (!g_active) return x;
   MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
   return x;
+}
+
+std::string distributed_broadcast(const std::string& s) {
+  if (!g_active || g_ranks == 1) return s;
+  unsigned long long size = s.size();
+  MPI_Bcast(&size, 1, MPI_UNSIGNED_LONG_LONG, 0, PETSC_COMM_WORLD);
+  std::string out = g_rank == 0 ? s : std::string(static_cast<size_t>(size), '\0');
+  if (size > 0) MPI_Bcast(out.data(), static_cast<int>(size), MPI_CHAR, 0, PETSC_COMM_WORLD);
+  return out;
 }
 
 DistributedSession::~DistributedSession() {
@@ -215,8 +242,18 @@ struct LocalSystem {
   std::vector<int> row_start, column;
   std::vector<cplx> value;
   std::vector<double> diagonal, weight_sum;
-  std::vector<char> fixed;                  // nf × nl
-  std::vector<double> lower, pivot, upper;  // the temporal lines' elimination (nf × nl)
+  std::vector<char> fixed;    // nf × nl
+  std::vector<double> pivot;  // the temporal lines' elimination (nf × nl): 1 / its pivots
+  // The elimination's off-diagonal factors, recomputed from fixed and weight_sum where
+  // used rather than stored (two fewer arrays of nf × nl doubles per rank):
+  // lower(k) = −b·w_i where the previous frame's entry is free, else 0; upper(k) =
+  // −b·w_i · pivot(k) where the next frame's entry is free, else 0.
+  double lower(size_t j, size_t i) const {
+    return j > 0 && !fixed[(j - 1) * nl + i] ? -b * weight_sum[i] : 0.0;
+  }
+  double upper(size_t j, size_t i) const {
+    return j + 1 < nf && !fixed[(j + 1) * nl + i] ? -b * weight_sum[i] * pivot[j * nl + i] : 0.0;
+  }
   Vec ghost = nullptr;                      // nf × ng ghost values (sequential)
   VecScatter scatter = nullptr;             // global → ghost
 };
@@ -277,12 +314,12 @@ PetscErrorCode apply_preconditioner(PC pc, Vec r, Vec out) {
   for (size_t j = 1; j < nf; ++j)
     for (size_t i = 0; i < nl; ++i) {
       const size_t k = j * nl + i;
-      os[k] = (rs[k] - s->lower[k] * os[k - nl]) * s->pivot[k];
+      os[k] = (rs[k] - s->lower(j, i) * os[k - nl]) * s->pivot[k];
     }
   for (size_t j = nf - 1; j-- > 0;)
     for (size_t i = 0; i < nl; ++i) {
       const size_t k = j * nl + i;
-      os[k] -= s->upper[k] * os[k + nl];
+      os[k] -= s->upper(j, i) * os[k + nl];
     }
   PetscCall(VecRestoreArray(out, &oa));
   PetscCall(VecRestoreArrayRead(r, &ra));
@@ -318,6 +355,7 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
                             "this PETSc indexes ({}); it needs a PETSc built with 64-bit indices",
                             2 * n * nf, n, nf, std::numeric_limits<PetscInt>::max()));
   const Distribution d = distribute(rows, nf, comm);
+  g_last_owner = d.owner;  // the per-rank VTK pieces follow it (distributed_vertex_owners)
 
   // This rank's rows: the spatial operator with columns renumbered, fixed set, lines.
   LocalSystem s;
@@ -347,22 +385,16 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
   s.fixed.resize(nlf);
   for (size_t j = 0; j < nf; ++j)
     for (size_t i = 0; i < s.nl; ++i) s.fixed[j * s.nl + i] = fixed[j * n + static_cast<size_t>(d.owned[i])];
-  s.lower.assign(nlf, 0);
   s.pivot.assign(nlf, 0);
-  s.upper.assign(nlf, 0);
   for (size_t j = 0; j < nf; ++j)
     for (size_t i = 0; i < s.nl; ++i) {
       const size_t k = j * s.nl + i;
-      if (s.fixed[k]) continue;
+      if (s.fixed[k]) continue;  // pivot 0: the line solve leaves fixed entries 0
       const bool has_prev = j > 0, has_next = j + 1 < nf;
       const double c = b * s.weight_sum[i];
       const double diag = s.diagonal[i] + c * ((has_prev ? 1 : 0) + (has_next ? 1 : 0));
-      const double lo = (has_prev && !s.fixed[k - s.nl]) ? -c : 0.0;
-      const double up = (has_next && !s.fixed[k + s.nl]) ? -c : 0.0;
-      const double denom = diag - lo * (has_prev ? s.upper[k - s.nl] : 0.0);
-      s.lower[k] = lo;
+      const double denom = diag - (has_prev ? s.lower(j, i) * s.upper(j - 1, i) : 0.0);
       s.pivot[k] = 1.0 / denom;
-      s.upper[k] = up / denom;
     }
 
   // Vectors: this rank's block of 2·nf·nl reals; the ghosts' values in every frame.

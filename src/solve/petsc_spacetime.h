@@ -14,7 +14,9 @@ namespace tvf {
 // whole temporal lines; PETSc's CG on the matrix-free operator (real form, re and im
 // interleaved), preconditioned by the temporal line solves, to options.tolerance in the
 // one process's residual ‖b − A z‖ / ‖b‖ over the free entries. z receives the whole
-// result on every rank. Collective: every rank must call it with the same arguments.
+// result on every rank. values may be z itself (its fixed entries holding the fixed
+// values): the generator passes it so, to hold one replicated field less per rank.
+// Collective: every rank must call it with the same arguments.
 SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int frames, double temporal_weight,
                                   std::span<const char> fixed, std::span<const cplx> values, std::span<cplx> z,
                                   const SpaceTimeOptions& options);

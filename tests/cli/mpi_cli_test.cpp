@@ -88,6 +88,39 @@ TEST(CliMpi, ConstrainedFramesAreSharedByTwoRanks) {
                                    "frames shared by 2 ranks");
 }
 
+size_t occurrences(const std::string& text, const std::string& what) {
+  size_t count = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++count;
+  return count;
+}
+
+// An input error is every rank's (each reads the same scene): rank 0 alone prints it, every
+// rank exits non-zero, and nothing is written.
+TEST(CliMpi, AnInputErrorIsPrintedOnceAndFailsTheRun) {
+  test::TempDir dir;
+  test::write_text(dir / "scene.json", R"({"tvf": 1,
+    "domain": {"grid": {"size": [21, 21], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 8, "range": [0, 1]},
+    "generator": "spacetime",
+    "solver": {"tolerance": -1}})");
+  const std::string cli = std::string("'") + TVF_CLI_PATH + "'";
+  const auto one = test::run_command(cli + " generate " + test::quoted(dir / "scene.json") + " -o " +
+                                     test::quoted(dir / "one"));
+  ASSERT_NE(one.exit_code, 0) << one.output;
+  ASSERT_EQ(occurrences(one.output, "tvf: error:"), 1u) << one.output;
+  const auto two = test::run_command(std::string(TVF_MPIRUN) + " " + cli + " generate " +
+                                     test::quoted(dir / "scene.json") + " -o " + test::quoted(dir / "two"));
+  EXPECT_NE(two.exit_code, 0) << two.output;
+  EXPECT_EQ(occurrences(two.output, "tvf: error:"), 1u) << two.output;
+  EXPECT_EQ(occurrences(two.output, "solver.tolerance"), 1u) << two.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "two")) << two.output;
+  // A command-line error likewise.
+  const auto bad = test::run_command(std::string(TVF_MPIRUN) + " " + cli + " generate " +
+                                     test::quoted(dir / "scene.json"));
+  EXPECT_NE(bad.exit_code, 0) << bad.output;
+  EXPECT_EQ(occurrences(bad.output, "--output is required"), 1u) << bad.output;
+}
+
 #else
 
 TEST(CliMpi, NotBuilt) { GTEST_SKIP() << "this build has no distributed solve (TVF_MPI off)"; }

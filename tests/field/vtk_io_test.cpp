@@ -96,6 +96,58 @@ TEST(VtkSeries, VtkReadsTheIcosphereSeries) {
   check_with_vtk(test::icosphere_mesh(), TimeSampling{0.0, 1.0, 3});
 }
 
+// The distributed form (mpirun -n K): the pieces of K ranks, as each rank writes its own,
+// then the .pvtu files and the .pvd; VTK's parallel reader joins them into every vertex
+// (halo duplicates agreeing) and every face once (tests/support/check_vtk_pieces.py,
+// which ctest's mpi_vtk_pieces also runs on `mpirun -n 2 tvf generate`).
+void check_pieces_with_vtk(const Mesh& mesh, const TimeSampling& ts, int ranks) {
+  const std::string py = test::python();
+  if (py.empty() ||
+      test::run_command("'" + py + "' -c 'import numpy, vtkmodules.vtkIOXML'").exit_code != 0)
+    GTEST_SKIP() << "Debian python3 with numpy and vtk not available";
+  const TangentBundle bundle(mesh);
+  const Field field = moving_field(mesh, ts);
+  // Stripes across x: owners not contiguous in the vertex order, every rank with a share.
+  double lo = mesh.position(0).x(), hi = lo;
+  for (const Vec3& p : mesh.positions()) lo = std::min(lo, p.x()), hi = std::max(hi, p.x());
+  std::vector<int> owner;
+  for (const Vec3& p : mesh.positions())
+    owner.push_back(std::min(ranks - 1, static_cast<int>(ranks * (p.x() - lo) / (hi - lo))));
+  TempDir dir;
+  for (int r = 0; r < ranks; ++r) write_vtk_series_piece(dir.path().string(), "field", bundle, field, owner, r);
+  write_vtk_parallel_series(dir.path().string(), "field", ts.times(), ranks);
+  EXPECT_TRUE(fs::exists(dir / "field_0000.pvtu"));
+  EXPECT_TRUE(fs::exists(dir / ("field_0000_p" + std::to_string(ranks - 1) + ".vtu")));
+  EXPECT_FALSE(fs::exists(dir / "field_0000.vtu"));
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  const auto n = static_cast<size_t>(field.frames());
+  std::vector<double> verts;
+  for (const Vec3& p : mesh.positions()) verts.insert(verts.end(), {p.x(), p.y(), p.z()});
+  std::vector<std::int32_t> faces;
+  for (const Face& f : mesh.faces()) faces.insert(faces.end(), f.begin(), f.end());
+  const std::vector<double> times = ts.times();
+  const std::vector<float> world = world_vectors_f32(bundle, field);
+  write_npy((dir / "vertices.npy").string(), {nv, 3}, verts.data());
+  write_npy((dir / "faces.npy").string(), {nf, 3}, faces.data());
+  write_npy((dir / "times.npy").string(), {n}, times.data());
+  write_npy((dir / "field.npy").string(), {n, nv, 3}, world.data());
+
+  const auto r = test::run_command("'" + py + "' '" + test::source_dir() +
+                                   "/tests/support/check_vtk_pieces.py' --folder '" + dir.path().string() + "' " +
+                                   std::to_string(ranks));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "ok " + std::to_string(n) + "\n");
+}
+
+TEST(VtkSeries, VtkJoinsTheGridPiecesOfThreeRanks) {
+  check_pieces_with_vtk(test::grid_mesh(), TimeSampling{-0.3, 0.9, 4}, 3);
+}
+
+TEST(VtkSeries, VtkJoinsTheIcospherePiecesOfTwoRanks) {
+  check_pieces_with_vtk(test::icosphere_mesh(), TimeSampling{0.0, 1.0, 3}, 2);
+}
+
 TEST(VtkSeries, VtkReadsScalarSeries) {
   // Two per-vertex arrays (FTLE-like, one with a NaN) read back by VTK's reader: the
   // values of the last time and the time of each file.

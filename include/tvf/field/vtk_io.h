@@ -18,6 +18,19 @@ namespace tvf {
 void write_vtk_series(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
                       const Field& field);
 
+// The distributed form (`mpirun -n K`, K > 1; docs/file_formats.md "VTK series"): each rank
+// writes its piece of every frame, DIR/<stem>_NNNN_pR.vtu (R = `rank`): the vertices that
+// `owner` (per vertex) gives it, the faces whose lowest vertex it owns, and the halo
+// vertices of those faces that other ranks own. Point data "vector" and "magnitude" as
+// above, "vertex" (Int32, the vertex's index in the whole mesh) and "vtkGhostType" (UInt8:
+// 0 for the rank's own vertices, 1 = VTK's DUPLICATEPOINT for halo vertices).
+void write_vtk_series_piece(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
+                            const Field& field, std::span<const int> owner, int rank);
+// Then one process writes DIR/<stem>_NNNN.pvtu (the `ranks` pieces of frame NNNN) and
+// DIR/<stem>.pvd listing the .pvtu files with their times.
+void write_vtk_parallel_series(const std::string& dir, const std::string& stem, const std::vector<double>& times,
+                               int ranks);
+
 // A per-vertex scalar of every frame: frames × |V| values, frame-major (e.g. FTLE).
 struct VtkScalarArray {
   std::string name;

@@ -6,8 +6,9 @@
 // (solve/petsc_spacetime.cpp: vertices partitioned across ranks with whole temporal lines
 // each, a PETSc CG on the matrix-free operator, temporal line solves as preconditioner).
 // Its result is gathered to every rank, so what follows (edits, analysis) is the one
-// process's, and rank 0 alone writes the outputs (docs/architecture.md, "Running on a
-// cluster").
+// process's. Rank 0 writes the assembled outputs (npy, native, csv, json); with K > 1 ranks
+// each rank writes its own piece of every VTK frame (field_NNNN_pR.vtu) and rank 0 the
+// .pvtu files that join them (docs/architecture.md, "Running on a cluster").
 //
 // MPI and PETSc are started only where the process was launched by an MPI launcher
 // (mpirun/mpiexec of OpenMPI or MPICH, srun with PMI): a plain `tvf` run, the Python
@@ -17,6 +18,8 @@
 
 #include <cstddef>
 #include <span>
+#include <string>
+#include <vector>
 
 namespace tvf {
 
@@ -40,7 +43,7 @@ private:
 };
 
 // The number of ranks of the running session (1 without one) and this process's rank (0
-// without one): rank 0 writes the outputs and prints the report.
+// without one): rank 0 writes the assembled outputs and prints the report.
 int distributed_ranks();
 int distributed_rank();
 // Whether a session is running (launched by mpirun, even with one rank): generators then
@@ -58,5 +61,13 @@ void distributed_share_frames(std::span<cplx> data, size_t vertices_per_frame, i
 bool distributed_all(bool ok);
 // The largest of x over the ranks (collective; x itself without a session).
 double distributed_max(double x);
+// Rank 0's `s` on every rank (collective; `s` itself without a session).
+std::string distributed_broadcast(const std::string& s);
+
+// Which rank owns each of `vertices` vertices, for the per-rank VTK pieces: the partition
+// of this process's last distributed space-time solve where it had that many vertices,
+// otherwise (the per-frame generators, no solve) contiguous blocks of vertex indices,
+// ranks × v / vertices. All zeros with one rank. The same on every rank.
+std::vector<int> distributed_vertex_owners(int vertices);
 
 }  // namespace tvf
