@@ -45,6 +45,7 @@ struct GenerateArgs {
   std::string scene;
   std::string out;
   bool no_vtk = false;
+  bool vtk_pieces = false;
   bool quiet = false;
 };
 
@@ -69,6 +70,7 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
 
   OutputOptions out_options;
   out_options.vtk = !args.no_vtk;
+  out_options.vtk_pieces = args.vtk_pieces;
   out_options.on_step = [&](const std::string& what) { progress.note("writing " + what); };
   // With K > 1 ranks every rank writes its pieces of the VTK series (design/outputs.h).
   if (!root) {
@@ -236,6 +238,9 @@ int main(int argc, char** argv) {
   generate_cmd->add_option("scene", gen.scene, "Scene file (JSON)")->required();
   generate_cmd->add_option("-o,--output", gen.out, "Output folder (created if missing)")->required();
   generate_cmd->add_flag("--no-vtk", gen.no_vtk, "Skip the VTK series (.pvd/.vtu)");
+  generate_cmd->add_flag("--vtk-pieces", gen.vtk_pieces,
+                         "Under mpirun with K > 1 ranks: each rank writes its own piece of every VTK frame "
+                         "(field_NNNN.pvtu + field_NNNN_pR.vtu) instead of rank 0 writing field_NNNN.vtu");
   generate_cmd->add_flag("-q,--quiet", gen.quiet, "Print nothing but errors and warnings");
 
   AnalyzeArgs analyze;

@@ -85,11 +85,13 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
                                     k % static_cast<size_t>(field.num_vertices())));
   }
   // Under mpirun with K > 1 ranks (solve/distributed.h) every rank comes here: rank 0 stages
-  // and writes the assembled outputs, every rank writes its pieces of the VTK frames into
-  // rank 0's staging folder (a folder all ranks see), and rank 0 commits once all did.
+  // and writes the assembled outputs (by default the same as one process); with
+  // options.vtk_pieces every rank writes its pieces of the VTK frames into rank 0's staging
+  // folder (a folder all ranks see), and rank 0 commits once all did.
   const int ranks = distributed_ranks();
   const int rank = distributed_rank();
   const bool root = rank == 0;
+  const bool pieces = ranks > 1 && options.vtk && options.vtk_pieces;
   std::optional<OutputStage> staged;
   std::exception_ptr failure;
   std::string stage_path;
@@ -109,7 +111,7 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
     if (!root) {
       // This rank's pieces of the VTK series; rank 0 commits them when every rank wrote its own.
       try {
-        if (options.vtk)
+        if (pieces)
           write_vtk_series_piece(stage_path, "field", space.bundle(), field,
                                  distributed_vertex_owners(field.num_vertices()), rank);
       } catch (...) {
@@ -180,7 +182,7 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
     }
 
     if (options.vtk) {
-      if (ranks == 1) {
+      if (!pieces) {
         step("field.pvd + field_NNNN.vtu");
         write_vtk_series(stage.stage().string(), "field", space.bundle(), field);
       } else {
@@ -200,7 +202,7 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
       throw Error(fmt::format("{}: another rank could not write its pieces of the VTK series; nothing was "
                             "written",
                             dir.string()));
-    if (options.vtk) write_vtk_parallel_series(stage.stage().string(), "field", field.time().times(), ranks);
+    if (pieces) write_vtk_parallel_series(stage.stage().string(), "field", field.time().times(), ranks);
   }
   // The outputs of an earlier run into the same folder that this run does not write
   // (divergence.json without "incompressible", the VTK series with --no-vtk or fewer

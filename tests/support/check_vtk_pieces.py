@@ -126,12 +126,25 @@ else:
             with open(scene, 'w') as f:
                 f.write(text)
             out = os.path.join(tmp, name)
-            run = subprocess.run(mpirun + ['-n', str(ranks), cli, 'generate', scene, '-o', out, '--quiet'],
+            run = subprocess.run(mpirun + ['-n', str(ranks), cli, 'generate', scene, '-o', out, '--quiet', '--vtk-pieces'],
                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
             if run.returncode != 0:
                 errors.append('%s: mpirun exited %d:\n%s' % (name, run.returncode, run.stdout))
                 continue
             frames += check_folder(name, out)
+        # Without --vtk-pieces, K ranks write the one-process series (DESIGN.md §12: the same
+        # outputs as one process), and it replaces the pieces of the run before.
+        out = os.path.join(tmp, 'grid')
+        run = subprocess.run(mpirun + ['-n', str(ranks), cli, 'generate', os.path.join(tmp, 'grid.json'), '-o', out,
+                              '--quiet'], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        check(run.returncode == 0, 'K ranks without --vtk-pieces: exit %d:\n%s' % (run.returncode, run.stdout))
+        left = sorted(f for f in os.listdir(out) if f.endswith('.pvtu') or '_p' in f)
+        check(left == [], 'K ranks without --vtk-pieces left the pieces %s' % left)
+        check(os.path.exists(os.path.join(out, 'field_0000.vtu')), 'K ranks without --vtk-pieces wrote no field_0000.vtu')
+        run = subprocess.run(mpirun + ['-n', str(ranks), cli, 'generate', os.path.join(tmp, 'grid.json'), '-o', out,
+                              '--quiet', '--vtk-pieces'], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        check(run.returncode == 0 and not os.path.exists(os.path.join(out, 'field_0000.vtu')),
+              'K ranks with --vtk-pieces after a one-process series: exit %d, field_0000.vtu left' % run.returncode)
         # One process into a folder of K ranks' pieces: its field_NNNN.vtu replace them.
         out = os.path.join(tmp, 'grid')
         run = subprocess.run([cli, 'generate', os.path.join(tmp, 'grid.json'), '-o', out, '--quiet'],

@@ -23,6 +23,11 @@ namespace tvf {
 
 struct OutputOptions {
   bool vtk = true;  // the VTK series can be large; `--no-vtk` skips it
+  // Under mpirun with K > 1 ranks: each rank writes its own piece of every VTK frame
+  // (field_NNNN_pR.vtu joined by field_NNNN.pvtu; `--vtk-pieces`) instead of rank 0 writing
+  // the one-process series (field_NNNN.vtu), which stays the default so that K ranks write
+  // the same outputs as one process (DESIGN.md §12). Ignored with one rank.
+  bool vtk_pieces = false;
   std::function<void(const std::string&)> on_step;  // progress: name of the part written
   // The projection's report (GenerateReport::incompressible): written as divergence.json.
   const IncompressibleReport* incompressible = nullptr;
