@@ -72,6 +72,25 @@ inline float bilinear(const float* img, int w, int h, float x, float y) {
   return a + fy * (b - a);
 }
 
+// The same bilinear sample of two images of the same size (the two velocity components):
+// the weights and addresses computed once.
+inline void bilinear2(const float* a, const float* b, int w, int h, float x, float y, float& va, float& vb) {
+  x = std::clamp(x, 0.0f, static_cast<float>(w - 1));
+  y = std::clamp(y, 0.0f, static_cast<float>(h - 1));
+  const int x0 = std::min(static_cast<int>(x), w - 2 < 0 ? 0 : w - 2);
+  const int y0 = std::min(static_cast<int>(y), h - 2 < 0 ? 0 : h - 2);
+  const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+  const size_t i00 = static_cast<size_t>(y0) * static_cast<size_t>(w) + static_cast<size_t>(x0);
+  const size_t i01 = static_cast<size_t>(y0) * static_cast<size_t>(w) + static_cast<size_t>(x1);
+  const size_t i10 = static_cast<size_t>(y1) * static_cast<size_t>(w) + static_cast<size_t>(x0);
+  const size_t i11 = static_cast<size_t>(y1) * static_cast<size_t>(w) + static_cast<size_t>(x1);
+  const float a0 = a[i00] + fx * (a[i01] - a[i00]), a1 = a[i10] + fx * (a[i11] - a[i10]);
+  const float b0 = b[i00] + fx * (b[i01] - b[i00]), b1 = b[i10] + fx * (b[i11] - b[i10]);
+  va = a0 + fy * (a1 - a0);
+  vb = b0 + fy * (b1 - b0);
+}
+
 }  // namespace
 
 TextureAnimator::TextureAnimator(const TangentBundle& bundle, const Field& field, const TextureOptions& options)
@@ -188,10 +207,12 @@ void TextureAnimator::compute_velocity(double t, double dt) {
         const cplx z = static_cast<double>(bary_[3 * k]) * values[static_cast<size_t>(tri[0])] +
                        static_cast<double>(bary_[3 * k + 1]) * values[static_cast<size_t>(tri[1])] +
                        static_cast<double>(bary_[3 * k + 2]) * values[static_cast<size_t>(tri[2])];
-        const double g = uniform ? s * p90_ / std::max(std::abs(z), floor) : s;
+        // |z| by sqrt of the squared norm (std::abs is hypot, which guards against
+        // overflow these velocities never reach, at several times the cost).
+        const double m = std::sqrt(std::norm(z));
+        const double g = uniform ? s * p90_ / std::max(m, floor) : s;
         vel_[k] = static_cast<float>(z.real() * g);
         vel_[n + k] = static_cast<float>(-z.imag() * g);  // image y points down
-        const double m = std::abs(z);
         dir_[k] = m > 0 ? static_cast<float>(z.real() / m) : 0.0f;
         dir_[n + k] = m > 0 ? static_cast<float>(-z.imag() / m) : 0.0f;
       }
@@ -227,7 +248,8 @@ void TextureAnimator::blend(int k) {
         // Backward step with the midpoint rule: where did the texture here come from?
         const float fi = static_cast<float>(i), fj = static_cast<float>(j);
         const float mx = fi - 0.5f * vel[p], my = fj - 0.5f * vel[n + p];
-        const float dx = bilinear(vel, w, h, mx, my), dy = bilinear(vel + n, w, h, mx, my);
+        float dx, dy;
+        bilinear2(vel, vel + n, w, h, mx, my, dx, dy);
         const float sx = fi - dx, sy = fj - dy;
         // The noise injected is its mean along the step, not its value at the pixel: a
         // noise cell fixed in space, injected once a frame at the same place, would leave
@@ -339,7 +361,10 @@ Image TextureAnimator::picture() const {
               x += sign * dir[k];
               y += sign * dir[n + k];
               if (!(x >= 0 && y >= 0 && x <= static_cast<float>(w - 1) && y <= static_cast<float>(h - 1))) break;
-              k = static_cast<size_t>(y + 0.5f) * static_cast<size_t>(w) + static_cast<size_t>(x + 0.5f);
+              // Through int (x, y ≥ 0 here): one instruction, where float → size_t is a
+              // compare and branch on x86-64 without AVX-512.
+              k = static_cast<size_t>(static_cast<int>(y + 0.5f)) * static_cast<size_t>(w) +
+                  static_cast<size_t>(static_cast<int>(x + 0.5f));
               sum += tex[k];  // nearest pixel: the advected texture is smooth already
               ++count;
             }
@@ -362,7 +387,7 @@ Image TextureAnimator::picture() const {
         continue;
       }
       const float v = std::clamp(0.5f + (src[k] - m0) * gain, 0.0f, 1.0f);
-      img.pixels[k] = gray(static_cast<std::uint8_t>(std::lround(v * 255.0f)));
+      img.pixels[k] = gray(static_cast<std::uint8_t>(v * 255.0f + 0.5f));  // rounded (v ≥ 0)
     }
   });
   return img;
