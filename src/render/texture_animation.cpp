@@ -347,29 +347,55 @@ Image TextureAnimator::picture() const {
     const float* tex = tex_.data();
     const int steps = std::min(o_.lic, 6);
     const float step = static_cast<float>(o_.lic) / static_cast<float>(steps);
+    // The walks of kGroup neighbouring pixels, each way, advance side by side: 2·kGroup
+    // independent chains of dependent look-ups (direction → position → pixel → direction)
+    // keep the core busy where one walk at a time waits on each load. A walk that leaves
+    // the picture stops (its later samples are not counted); the samples are summed in
+    // the order of one walk at a time (forward, then backward), so the result is the same
+    // bit for bit.
+    constexpr int kGroup = 4, kChains = 2 * kGroup, kMaxSteps = 6;
+    const float xmax = static_cast<float>(w - 1), ymax = static_cast<float>(h - 1);
     tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j)
-        for (int i = 0; i < w; ++i) {
-          const size_t p = static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i);
-          if (face_[p] < 0) continue;
-          float sum = tex[p];
-          int count = 1;
-          for (const float sign : {step, -step}) {
-            float x = static_cast<float>(i), y = static_cast<float>(j);
-            size_t k = p;
-            for (int q = 0; q < steps; ++q) {
-              x += sign * dir[k];
-              y += sign * dir[n + k];
-              if (!(x >= 0 && y >= 0 && x <= static_cast<float>(w - 1) && y <= static_cast<float>(h - 1))) break;
-              // Through int (x, y ≥ 0 here): one instruction, where float → size_t is a
-              // compare and branch on x86-64 without AVX-512.
-              k = static_cast<size_t>(static_cast<int>(y + 0.5f)) * static_cast<size_t>(w) +
-                  static_cast<size_t>(static_cast<int>(x + 0.5f));
-              sum += tex[k];  // nearest pixel: the advected texture is smooth already
-              ++count;
-            }
+        for (int i0 = 0; i0 < w; i0 += kGroup) {
+          const size_t p0 = static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i0);
+          float x[kChains], y[kChains], sign[kChains], value[kChains][kMaxSteps];
+          int k[kChains], count[kChains];
+          bool alive[kChains];
+          for (int c = 0; c < kChains; ++c) {
+            const int g = c / 2;
+            const bool inside = i0 + g < w && face_[p0 + static_cast<size_t>(g)] >= 0;
+            x[c] = static_cast<float>(i0 + g);
+            y[c] = static_cast<float>(j);
+            sign[c] = c % 2 == 0 ? step : -step;
+            k[c] = inside ? static_cast<int>(p0) + g : 0;
+            count[c] = 0;
+            alive[c] = inside;
           }
-          lic_[p] = sum / static_cast<float>(count);
+          for (int q = 0; q < steps; ++q)
+            for (int c = 0; c < kChains; ++c) {
+              const size_t kc = static_cast<size_t>(k[c]);
+              const float nx = x[c] + sign[c] * dir[kc];
+              const float ny = y[c] + sign[c] * dir[n + kc];
+              alive[c] = alive[c] && nx >= 0 && ny >= 0 && nx <= xmax && ny <= ymax;
+              // Through int (in range here): one instruction, where float → size_t is a
+              // compare and branch on x86-64 without AVX-512.
+              const int kn = static_cast<int>(std::clamp(ny, 0.0f, ymax) + 0.5f) * w +
+                             static_cast<int>(std::clamp(nx, 0.0f, xmax) + 0.5f);
+              x[c] = alive[c] ? nx : x[c];
+              y[c] = alive[c] ? ny : y[c];
+              k[c] = alive[c] ? kn : k[c];
+              value[c][q] = tex[static_cast<size_t>(k[c])];  // nearest pixel: the texture is smooth
+              count[c] += alive[c] ? 1 : 0;
+            }
+          for (int g = 0; g < kGroup && i0 + g < w; ++g) {
+            const size_t p = p0 + static_cast<size_t>(g);
+            if (face_[p] < 0) continue;
+            float sum = tex[p];
+            for (int q = 0; q < count[2 * g]; ++q) sum += value[2 * g][q];
+            for (int q = 0; q < count[2 * g + 1]; ++q) sum += value[2 * g + 1][q];
+            lic_[p] = sum / static_cast<float>(1 + count[2 * g] + count[2 * g + 1]);
+          }
         }
     });
     shown = &lic_;
