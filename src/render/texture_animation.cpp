@@ -91,6 +91,12 @@ inline void bilinear2(const float* a, const float* b, int w, int h, float x, flo
   vb = b0 + fy * (b1 - b0);
 }
 
+// The LIC's walks: at most 6 Euler steps each way, of lic / steps pixels.
+inline int lic_steps(int lic) { return std::min(lic, 6); }
+inline float lic_step(int lic) {
+  return lic > 0 ? static_cast<float>(lic) / static_cast<float>(lic_steps(lic)) : 1.0f;
+}
+
 }  // namespace
 
 TextureAnimator::TextureAnimator(const TangentBundle& bundle, const Field& field, const TextureOptions& options)
@@ -193,6 +199,8 @@ void TextureAnimator::compute_velocity(double t, double dt) {
   // Uniform speed: V/max(|V|, floor) times the typical speed.
   const bool uniform = o_.speed == TextureSpeed::uniform;
   const double floor = 1e-12 * p90_;
+  // The unit directions times the LIC's step length: a step of the LIC's walks.
+  const float lic_len = lic_step(o_.lic);
   tbb::parallel_for(tbb::blocked_range<int>(0, height_), [&](const tbb::blocked_range<int>& rows) {
     for (int j = rows.begin(); j < rows.end(); ++j)
       for (int i = 0; i < width_; ++i) {
@@ -213,8 +221,8 @@ void TextureAnimator::compute_velocity(double t, double dt) {
         const double g = uniform ? s * p90_ / std::max(m, floor) : s;
         vel_[k] = static_cast<float>(z.real() * g);
         vel_[n + k] = static_cast<float>(-z.imag() * g);  // image y points down
-        dir_[k] = m > 0 ? static_cast<float>(z.real() / m) : 0.0f;
-        dir_[n + k] = m > 0 ? static_cast<float>(-z.imag() / m) : 0.0f;
+        dir_[k] = m > 0 ? lic_len * static_cast<float>(z.real() / m) : 0.0f;
+        dir_[n + k] = m > 0 ? lic_len * static_cast<float>(-z.imag() / m) : 0.0f;
       }
   });
 }
@@ -345,21 +353,20 @@ Image TextureAnimator::picture() const {
     const size_t n = tex_.size();
     const float* dir = dir_.data();
     const float* tex = tex_.data();
-    const int steps = std::min(o_.lic, 6);
-    const float step = static_cast<float>(o_.lic) / static_cast<float>(steps);
+    const int steps = lic_steps(o_.lic);
     // The walks of kGroup neighbouring pixels, each way, advance side by side: 2·kGroup
     // independent chains of dependent look-ups (direction → position → pixel → direction)
     // keep the core busy where one walk at a time waits on each load. A walk that leaves
     // the picture stops (its later samples are not counted); the samples are summed in
     // the order of one walk at a time (forward, then backward), so the result is the same
-    // bit for bit.
+    // bit for bit. dir_ holds the steps (unit directions times lic / steps).
     constexpr int kGroup = 4, kChains = 2 * kGroup, kMaxSteps = 6;
     const float xmax = static_cast<float>(w - 1), ymax = static_cast<float>(h - 1);
     tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j)
         for (int i0 = 0; i0 < w; i0 += kGroup) {
           const size_t p0 = static_cast<size_t>(j) * static_cast<size_t>(w) + static_cast<size_t>(i0);
-          float x[kChains], y[kChains], sign[kChains], value[kChains][kMaxSteps];
+          float x[kChains], y[kChains], value[kChains][kMaxSteps];
           int k[kChains], count[kChains];
           bool alive[kChains];
           for (int c = 0; c < kChains; ++c) {
@@ -367,26 +374,28 @@ Image TextureAnimator::picture() const {
             const bool inside = i0 + g < w && face_[p0 + static_cast<size_t>(g)] >= 0;
             x[c] = static_cast<float>(i0 + g);
             y[c] = static_cast<float>(j);
-            sign[c] = c % 2 == 0 ? step : -step;
             k[c] = inside ? static_cast<int>(p0) + g : 0;
             count[c] = 0;
             alive[c] = inside;
           }
+          // One step of chain c to (nx, ny). The new pixel's index is computed before the
+          // bounds are known: the position is at most one step outside, well within int
+          // (through int: one instruction, where float → size_t is a compare and branch
+          // on x86-64 without AVX-512); a walk that has left keeps its last pixel.
+          auto advance = [&](int c, int q, float nx, float ny) {
+            alive[c] = alive[c] && nx >= 0 && ny >= 0 && nx <= xmax && ny <= ymax;
+            const int kn = static_cast<int>(ny + 0.5f) * w + static_cast<int>(nx + 0.5f);
+            x[c] = alive[c] ? nx : x[c];
+            y[c] = alive[c] ? ny : y[c];
+            k[c] = alive[c] ? kn : k[c];
+            value[c][q] = tex[static_cast<size_t>(k[c])];  // nearest pixel: the texture is smooth
+            count[c] += alive[c] ? 1 : 0;
+          };
           for (int q = 0; q < steps; ++q)
-            for (int c = 0; c < kChains; ++c) {
-              const size_t kc = static_cast<size_t>(k[c]);
-              const float nx = x[c] + sign[c] * dir[kc];
-              const float ny = y[c] + sign[c] * dir[n + kc];
-              alive[c] = alive[c] && nx >= 0 && ny >= 0 && nx <= xmax && ny <= ymax;
-              // Through int (in range here): one instruction, where float → size_t is a
-              // compare and branch on x86-64 without AVX-512.
-              const int kn = static_cast<int>(std::clamp(ny, 0.0f, ymax) + 0.5f) * w +
-                             static_cast<int>(std::clamp(nx, 0.0f, xmax) + 0.5f);
-              x[c] = alive[c] ? nx : x[c];
-              y[c] = alive[c] ? ny : y[c];
-              k[c] = alive[c] ? kn : k[c];
-              value[c][q] = tex[static_cast<size_t>(k[c])];  // nearest pixel: the texture is smooth
-              count[c] += alive[c] ? 1 : 0;
+            for (int g = 0; g < kGroup; ++g) {
+              const size_t kf = static_cast<size_t>(k[2 * g]), kb = static_cast<size_t>(k[2 * g + 1]);
+              advance(2 * g, q, x[2 * g] + dir[kf], y[2 * g] + dir[n + kf]);
+              advance(2 * g + 1, q, x[2 * g + 1] - dir[kb], y[2 * g + 1] - dir[n + kb]);
             }
           for (int g = 0; g < kGroup && i0 + g < w; ++g) {
             const size_t p = p0 + static_cast<size_t>(g);
