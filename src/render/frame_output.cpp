@@ -57,7 +57,7 @@ void StagedFolder::commit() {
 
 
 FrameOutput::FrameOutput(const std::string& frames_dir, const std::string& video, int width, int height, double fps,
-                         Sink sink)
+                         Sink sink, VideoOptions video_options)
     : frames_dir_(frames_dir), video_(video), width_(width), height_(height), sink_(std::move(sink)) {
   if (frames_dir.empty() && video.empty() && !sink_)
     throw Error("give a folder for the PNG frames or an MP4 file to write");
@@ -68,9 +68,8 @@ FrameOutput::FrameOutput(const std::string& frames_dir, const std::string& video
     const fs::path parent = fs::path(video).parent_path();
     std::error_code ec;
     if (!parent.empty()) fs::create_directories(parent, ec);
-    VideoOptions vo;
-    vo.fps = fps;
-    writer_ = std::make_unique<VideoWriter>(video, width, height, vo);
+    video_options.fps = fps;
+    writer_ = std::make_unique<VideoWriter>(video, width, height, video_options);
   }
 }
 

@@ -50,6 +50,34 @@ TEST(Video, DecodesWithTheRightFrameCount) {
   EXPECT_EQ(names, std::vector<std::string>{"v.mp4"});  // no temporary or log left
 }
 
+TEST(Video, GrayFramesGoInOneByteAPixel) {
+  if (!ffmpeg_available() || !have_ffprobe()) GTEST_SKIP() << "ffmpeg/ffprobe not installed (Debian package ffmpeg)";
+  test::TempDir dir;
+  const fs::path out = dir / "g.mp4";
+  VideoOptions o;
+  o.gray = true;
+  o.preset = "superfast";
+  {
+    VideoWriter w(out.string(), 33, 20, o);  // odd width: padded
+    for (int k = 0; k < 9; ++k) {
+      Image img(33, 20);
+      for (int y = 0; y < 20; ++y)
+        for (int x = 0; x < 33; ++x) img.at(x, y) = gray(static_cast<std::uint8_t>((x * 7 + y * 3 + k * 11) & 255));
+      w.add(img);
+    }
+    w.finish();
+  }
+  EXPECT_EQ(decoded_frames(out), 9);
+  // A coloured pixel in a gray video is a bug of the caller: refused, nothing left behind.
+  {
+    VideoWriter w((dir / "c.mp4").string(), 16, 16, o);
+    Image img(16, 16);
+    img.at(3, 4) = rgb(200, 10, 10);
+    EXPECT_THROW(w.add(img), InternalError);
+  }
+  EXPECT_FALSE(fs::exists(dir / "c.mp4"));
+}
+
 TEST(Video, AbandonedWriterLeavesNothing) {
   if (!ffmpeg_available()) GTEST_SKIP() << "ffmpeg not installed (Debian package ffmpeg)";
   test::TempDir dir;

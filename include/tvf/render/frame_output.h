@@ -37,9 +37,10 @@ public:
   // and the picture (e.g. kept in memory by the Python module's render_texture).
   using Sink = std::function<void(int k, const Image& frame)>;
   // frames_dir or video may be empty (not both, unless a sink takes the frames). Throws
-  // tvf::Error naming the output.
+  // tvf::Error naming the output. The video is encoded with video_options (its fps
+  // replaced by fps).
   FrameOutput(const std::string& frames_dir, const std::string& video, int width, int height, double fps,
-              Sink sink = {});
+              Sink sink = {}, VideoOptions video_options = {});
   void add(const Image& frame);
   // Frames first … last: make(k) runs in order (one at a time, on whichever thread the
   // pipeline picks), the PNGs (frame_<k>.png) are encoded in parallel while the next

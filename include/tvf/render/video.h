@@ -7,12 +7,20 @@
 #include "tvf/render/image.h"
 
 #include <string>
+#include <vector>
 
 namespace tvf {
 
 struct VideoOptions {
   double fps = 25.0;
   int crf = 18;  // H.264 quality: 0 lossless … 51 worst; 18 looks lossless
+  // x264's preset: veryfast halves the encoder's CPU time of its fast preset at the same
+  // file size (docs/benchmarks.md, "Texture animation").
+  std::string preset = "veryfast";
+  // Every frame is gray (red = green = blue in every pixel): the frames go to ffmpeg as
+  // one byte a pixel (a third of the pipe, no RGB → YUV conversion). The video is the
+  // same yuv420p. add() throws tvf::Error on a frame with a coloured pixel.
+  bool gray = false;
 };
 
 // True when an `ffmpeg` executable is on the PATH.
@@ -40,7 +48,8 @@ private:
   int pipe_ = -1;
   int pid_ = -1;
   int frames_ = 0;
-  std::vector<unsigned char> row_;
+  bool gray_ = false;
+  std::vector<unsigned char> buffer_;  // one frame as ffmpeg reads it
 };
 
 }  // namespace tvf
