@@ -444,8 +444,11 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
           if (c != v && fj[c]) acc -= it.value() * vj[c];
         }
         const double c = b * s.weight_sum[i];
-        if (j > 0 && fj[v - n]) acc += c * vj[v - n];
-        if (j + 1 < nf && fj[v + n]) acc += c * vj[v + n];
+        // The temporal neighbours indexed from the array's start: fj[v − n] with v < n adds a
+        // wrapped unsigned offset to the pointer (undefined behaviour; UBSan's pointer-overflow
+        // check, found by fuzz_session).
+        if (j > 0 && fixed[(j - 1) * n + v]) acc += c * values[(j - 1) * n + v];
+        if (j + 1 < nf && fixed[(j + 1) * n + v]) acc += c * values[(j + 1) * n + v];
         rs[k] = acc;
         xs[k] = z[j * n + v];
       }

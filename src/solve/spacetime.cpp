@@ -219,9 +219,12 @@ struct SpaceTime {
       const auto c = static_cast<size_t>(op.column[static_cast<size_t>(k)]);
       if (fj[c]) acc -= op.value[static_cast<size_t>(k)] * vj[c];
     }
+    // The temporal neighbours indexed from the array's start: fj[i − n] with i < n adds a
+    // wrapped unsigned offset to the pointer (undefined behaviour; UBSan's pointer-overflow
+    // check, found by fuzz_session).
     const double c = b * op.weight_sum[i];
-    if (j > 0 && fj[i - n]) acc += c * vj[i - n];
-    if (j + 1 < nf && fj[i + n]) acc += c * vj[i + n];
+    if (j > 0 && fixed[(j - 1) * n + i]) acc += c * values[(j - 1) * n + i];
+    if (j + 1 < nf && fixed[(j + 1) * n + i]) acc += c * values[(j + 1) * n + i];
     return acc;
   }
 
