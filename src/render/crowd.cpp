@@ -150,23 +150,11 @@ CrowdSpec parse_crowd_spec(const json& j, const std::string& file) {
   r.keys(j, "", {"agents", "speed", "weights", "grid", "agent_radius", "steps_per_frame", "avoidance", "start",
                  "goals", "obstacles"});
   CrowdSpec s;
-  if (j.contains("agents")) s.agents = r.integer(j["agents"], "agents", 1, 100000);
-  if (j.contains("speed")) s.speed = r.number(j["speed"], "speed", 0, 1e12);
-  if (j.contains("weights")) {
-    r.keys(j["weights"], "weights", {"goal", "field"});
-    if (j["weights"].contains("goal")) s.weight_goal = r.number(j["weights"]["goal"], "weights.goal", 0, 1e6);
-    if (j["weights"].contains("field")) s.weight_field = r.number(j["weights"]["field"], "weights.field", 0, 1e6);
-  }
+  r.shared_keys(j, s, {"distance", "weight"});
   if (j.contains("grid")) s.grid = r.integer(j["grid"], "grid", 8, 4096);
   if (j.contains("agent_radius")) s.agent_radius = r.number(j["agent_radius"], "agent_radius", 0, 1e12);
-  if (j.contains("steps_per_frame")) s.steps_per_frame = r.integer(j["steps_per_frame"], "steps_per_frame", 1, 1000);
-  if (j.contains("avoidance")) {
-    r.keys(j["avoidance"], "avoidance", {"distance", "weight"});
-    if (!j["avoidance"].contains("distance")) r.fail("avoidance", "needs distance (the least distance between agents)");
-    s.separation = r.number(j["avoidance"]["distance"], "avoidance.distance", 0, 1e12);
-    if (j["avoidance"].contains("weight"))
-      s.avoidance_weight = r.number(j["avoidance"]["weight"], "avoidance.weight", 0, 1e6);
-  }
+  if (j.contains("avoidance") && j["avoidance"].contains("weight"))
+    s.avoidance_weight = r.number(j["avoidance"]["weight"], "avoidance.weight", 0, 1e6);
   if (!j.contains("start")) r.fail("start", "missing: give the shapes the agents start in");
   if (!j.contains("goals")) r.fail("goals", "missing: give at least one goal shape");
   s.starts = r.shapes(j["start"], "start");

@@ -41,6 +41,26 @@ struct CrowdFileReader {
     if (v < lo || v > hi) fail(path, fmt::format("{} is outside [{}, {}]", v, lo, hi));
     return static_cast<int>(v);
   }
+  // The keys planar and surface crowd files share (agents, speed, weights, steps_per_frame,
+  // avoidance.distance) into either spec; `avoidance` may also hold `avoidance_keys` beyond
+  // distance, which the caller reads.
+  template <class Spec>
+  void shared_keys(const nlohmann::json& j, Spec& s, std::initializer_list<const char*> avoidance_keys) const {
+    if (j.contains("agents")) s.agents = integer(j["agents"], "agents", 1, 100000);
+    if (j.contains("speed")) s.speed = number(j["speed"], "speed", 0, 1e12);
+    if (j.contains("weights")) {
+      keys(j["weights"], "weights", {"goal", "field"});
+      if (j["weights"].contains("goal")) s.weight_goal = number(j["weights"]["goal"], "weights.goal", 0, 1e6);
+      if (j["weights"].contains("field")) s.weight_field = number(j["weights"]["field"], "weights.field", 0, 1e6);
+    }
+    if (j.contains("steps_per_frame")) s.steps_per_frame = integer(j["steps_per_frame"], "steps_per_frame", 1, 1000);
+    if (j.contains("avoidance")) {
+      keys(j["avoidance"], "avoidance", avoidance_keys);
+      if (!j["avoidance"].contains("distance")) fail("avoidance", "needs distance (the least distance between agents)");
+      s.separation = number(j["avoidance"]["distance"], "avoidance.distance", 0, 1e12);
+    }
+  }
+
 };
 
 // Reads the crowd file `path` through the one JSON reader (syntax errors name their line

@@ -60,19 +60,7 @@ SurfaceCrowdSpec load_surface_crowd_spec(const std::string& path) {
     const Reader r{{path}};
     r.keys(j, "", {"agents", "speed", "weights", "steps_per_frame", "seed", "avoidance", "start", "goals", "obstacles"});
     SurfaceCrowdSpec s;
-    if (j.contains("agents")) s.agents = r.integer(j["agents"], "agents", 1, 100000);
-    if (j.contains("speed")) s.speed = r.number(j["speed"], "speed", 0, 1e12);
-    if (j.contains("weights")) {
-      r.keys(j["weights"], "weights", {"goal", "field"});
-      if (j["weights"].contains("goal")) s.weight_goal = r.number(j["weights"]["goal"], "weights.goal", 0, 1e6);
-      if (j["weights"].contains("field")) s.weight_field = r.number(j["weights"]["field"], "weights.field", 0, 1e6);
-    }
-    if (j.contains("steps_per_frame")) s.steps_per_frame = r.integer(j["steps_per_frame"], "steps_per_frame", 1, 1000);
-    if (j.contains("avoidance")) {
-      r.keys(j["avoidance"], "avoidance", {"distance"});
-      if (!j["avoidance"].contains("distance")) r.fail("avoidance", "needs distance (the least distance between agents)");
-      s.separation = r.number(j["avoidance"]["distance"], "avoidance.distance", 0, 1e12);
-    }
+    r.shared_keys(j, s, {"distance"});
     if (j.contains("seed")) s.seed = static_cast<std::uint64_t>(r.integer(j["seed"], "seed", 0, 1'000'000'000));
     if (!j.contains("start")) r.fail("start", "missing: give the regions the agents start in");
     if (!j.contains("goals")) r.fail("goals", "missing: give at least one goal region");
