@@ -56,39 +56,40 @@ void check_texture_options(TextureOptions& o, int max_size) {
 
 namespace {
 
-// Bilinear sample of a w × h row-major image at (x, y) in pixel-centre coordinates
-// (pixel (i, j) is at (i, j)); clamped to the edge.
-inline float bilinear(const float* img, int w, int h, float x, float y) {
+// The cell and weights of a bilinear sample of a w × h row-major image at (x, y) in
+// pixel-centre coordinates (pixel (i, j) is at (i, j)); clamped to the edge.
+struct BilinearCell {
+  size_t i00, i01, i10, i11;  // the corners' indices (row y0 or y1, column x0 or x1)
+  float fx, fy;
+};
+inline BilinearCell bilinear_cell(int w, int h, float x, float y) {
   x = std::clamp(x, 0.0f, static_cast<float>(w - 1));
   y = std::clamp(y, 0.0f, static_cast<float>(h - 1));
   const int x0 = std::min(static_cast<int>(x), w - 2 < 0 ? 0 : w - 2);
   const int y0 = std::min(static_cast<int>(y), h - 2 < 0 ? 0 : h - 2);
   const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
-  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-  const float* r0 = img + static_cast<size_t>(y0) * static_cast<size_t>(w);
-  const float* r1 = img + static_cast<size_t>(y1) * static_cast<size_t>(w);
-  const float a = r0[x0] + fx * (r0[x1] - r0[x0]);
-  const float b = r1[x0] + fx * (r1[x1] - r1[x0]);
-  return a + fy * (b - a);
+  const size_t r0 = static_cast<size_t>(y0) * static_cast<size_t>(w);
+  const size_t r1 = static_cast<size_t>(y1) * static_cast<size_t>(w);
+  return {r0 + static_cast<size_t>(x0), r0 + static_cast<size_t>(x1), r1 + static_cast<size_t>(x0),
+          r1 + static_cast<size_t>(x1), x - static_cast<float>(x0), y - static_cast<float>(y0)};
+}
+inline float bilinear_at(const float* img, const BilinearCell& c) {
+  const float a = img[c.i00] + c.fx * (img[c.i01] - img[c.i00]);
+  const float b = img[c.i10] + c.fx * (img[c.i11] - img[c.i10]);
+  return a + c.fy * (b - a);
+}
+
+// Bilinear sample of one image.
+inline float bilinear(const float* img, int w, int h, float x, float y) {
+  return bilinear_at(img, bilinear_cell(w, h, x, y));
 }
 
 // The same bilinear sample of two images of the same size (the two velocity components):
 // the weights and addresses computed once.
 inline void bilinear2(const float* a, const float* b, int w, int h, float x, float y, float& va, float& vb) {
-  x = std::clamp(x, 0.0f, static_cast<float>(w - 1));
-  y = std::clamp(y, 0.0f, static_cast<float>(h - 1));
-  const int x0 = std::min(static_cast<int>(x), w - 2 < 0 ? 0 : w - 2);
-  const int y0 = std::min(static_cast<int>(y), h - 2 < 0 ? 0 : h - 2);
-  const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
-  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-  const size_t i00 = static_cast<size_t>(y0) * static_cast<size_t>(w) + static_cast<size_t>(x0);
-  const size_t i01 = static_cast<size_t>(y0) * static_cast<size_t>(w) + static_cast<size_t>(x1);
-  const size_t i10 = static_cast<size_t>(y1) * static_cast<size_t>(w) + static_cast<size_t>(x0);
-  const size_t i11 = static_cast<size_t>(y1) * static_cast<size_t>(w) + static_cast<size_t>(x1);
-  const float a0 = a[i00] + fx * (a[i01] - a[i00]), a1 = a[i10] + fx * (a[i11] - a[i10]);
-  const float b0 = b[i00] + fx * (b[i01] - b[i00]), b1 = b[i10] + fx * (b[i11] - b[i10]);
-  va = a0 + fy * (a1 - a0);
-  vb = b0 + fy * (b1 - b0);
+  const BilinearCell c = bilinear_cell(w, h, x, y);
+  va = bilinear_at(a, c);
+  vb = bilinear_at(b, c);
 }
 
 // The LIC's walks: at most 6 Euler steps each way, of lic / steps pixels.
