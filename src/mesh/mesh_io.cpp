@@ -17,6 +17,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <charconv>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +32,25 @@ namespace tvf {
 namespace fs = std::filesystem;
 
 namespace {
+
+// A decimal number as the mesh formats write them ("1", "-0.5", "+2e-3"), the whole word:
+// std::from_chars rather than strtod, which also takes hexadecimal ("0x1p3") and follows
+// the locale; the three readers then accept the same numbers ("inf" and "nan" still parse,
+// and the callers refuse what is not finite).
+bool parse_decimal(const std::string& word, double& x) {
+  const char* first = word.data();
+  const char* last = first + word.size();
+  if (first != last && *first == '+') {  // from_chars takes a minus sign only
+    ++first;
+    if (first != last && (*first == '+' || *first == '-')) return false;
+  }
+  const auto [end, error] = std::from_chars(first, last, x, std::chars_format::general);
+  if (end != last || first == last) return false;
+  // Out of range ("1e999", "1e-999"): a decimal all the same; strtod gives its value
+  // (± infinity, which the callers refuse, or a number rounded towards 0).
+  if (error == std::errc::result_out_of_range) x = std::strtod(std::string(first, last).c_str(), nullptr);
+  return error == std::errc();
+}
 
 using Kernel = CGAL::Simple_cartesian<double>;
 using Point = Kernel::Point_3;
@@ -100,9 +120,8 @@ std::string diagnose_obj(const std::string& path) {
       int coordinates = 0;
       std::string word;
       for (; coordinates < 3 && words >> word; ++coordinates) {
-        char* end = nullptr;
-        const double x = std::strtod(word.c_str(), &end);
-        if (end != word.c_str() + word.size() || !std::isfinite(x)) break;
+        double x = 0;
+        if (!parse_decimal(word, x) || !std::isfinite(x)) break;
       }
       if (coordinates < 3)
         return fmt::format("line {}: the vertex '{}' does not have three finite coordinates",
@@ -245,9 +264,8 @@ public:
   }
   // A finite number, or an error naming `what` (a vertex, a face).
   double number_of(const std::string& word, const std::string& what) const {
-    char* end = nullptr;
-    const double x = std::strtod(word.c_str(), &end);
-    if (word.empty() || end != word.c_str() + word.size())
+    double x = 0;
+    if (!parse_decimal(word, x))
       fail(fmt::format("{}: '{:.40}' is not a number", what, word));
     if (!std::isfinite(x)) fail(fmt::format("{}: '{:.40}' is not a finite number", what, word));
     return x;
@@ -509,16 +527,15 @@ void check_ply_body(const std::string& path, std::istream& in, const PlyLayout& 
       for (long long item = 0; item < e.count; ++item) {
         for (const PlyProperty& p : e.properties) {
           if (!(in >> word)) truncated(e, item, "the file ends inside it");
-          char* end = nullptr;
-          const double x = std::strtod(word.c_str(), &end);
-          if (end != word.c_str() + word.size()) truncated(e, item, fmt::format("'{:.40}' is not a number", word));
+          double x = 0;
+          if (!parse_decimal(word, x)) truncated(e, item, fmt::format("'{:.40}' is not a number", word));
           if (!p.list) continue;
           if (!(x >= 0) || x != std::floor(x) || x > static_cast<double>(file_size))
             truncated(e, item, fmt::format("the list count {:.40} is not a count the file can hold", word));
           for (long long k = 0; k < static_cast<long long>(x); ++k) {
             if (!(in >> word)) truncated(e, item, "the file ends inside a list");
-            static_cast<void>(std::strtod(word.c_str(), &end));
-            if (end != word.c_str() + word.size())
+            double entry = 0;
+            if (!parse_decimal(word, entry))
               truncated(e, item, fmt::format("'{:.40}' is not a number", word));
           }
         }

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -527,6 +528,35 @@ TEST(MeshIo, TextOffIsReadStrictlyWithEveryErrorOnItsLine) {
   EXPECT_EQ(load_mesh(off.string()).mesh.num_faces(), 2);
   write_text(off, "OFF\n4 2 0\n" + vertices + "3 0 1 2\n3 0 2 3\nend\n");
   expect_error(off, "line 9: after the 2 faces: 'end' is not a number");
+}
+
+// The three text readers take the same numbers: decimals with an optional sign (a plus
+// sign too) and exponent, never C's hexadecimal floats.
+TEST(MeshIo, TextReadersAcceptDecimalsAndRefuseHexadecimalFloats) {
+  TempDir dir;
+  const std::string ply_head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const char* word : {"0x1p0", "0X1P0", "-0x1p0", "0x1"}) {
+    write_text(dir / "hex.off", fmt::format("OFF\n3 1 0\n0 0 0\n{} 0 0\n0 1 0\n3 0 1 2\n", word));
+    expect_error(dir / "hex.off", fmt::format("line 4: OFF vertex 1: '{}' is not a number", word));
+    write_text(dir / "hex.obj", fmt::format("v 0 0 0\nv {} 0 0\nv 0 1 0\nf 1 2 3\n", word));
+    expect_error(dir / "hex.obj", fmt::format("line 2: the vertex 'v {} 0 0' does not have three", word));
+    write_text(dir / "hex.ply", ply_head + fmt::format("0 0 0\n{} 0 0\n0 1 0\n3 0 1 2\n", word));
+    expect_error(dir / "hex.ply", fmt::format("'{}' is not a number", word));
+  }
+  for (const char* word : {"+1", "1.", "+.5e1", "2E+0"}) {
+    const double x = std::strtod(word, nullptr);
+    write_text(dir / "ok.off", fmt::format("OFF\n3 1 0\n0 0 0\n{} 0 0\n0 1 0\n3 0 1 2\n", word));
+    write_text(dir / "ok.obj", fmt::format("v 0 0 0\nv {} 0 0\nv 0 1 0\nf 1 2 3\n", word));
+    write_text(dir / "ok.ply", ply_head + fmt::format("0 0 0\n{} 0 0\n0 1 0\n3 0 1 2\n", word));
+    for (const char* name : {"ok.off", "ok.obj"})
+      EXPECT_EQ(load_mesh((dir / name).string()).mesh.position(1), Vec3(x, 0, 0)) << name << " " << word;
+    EXPECT_FLOAT_EQ(static_cast<float>(load_mesh((dir / "ok.ply").string()).mesh.position(1).x()),
+                    static_cast<float>(x));
+  }
+  write_text(dir / "sign.off", "OFF\n3 1 0\n0 0 0\n+-1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error(dir / "sign.off", "line 4: OFF vertex 1: '+-1' is not a number");
 }
 
 TEST(MeshIo, TruncatedFilesNeverCrash) {
