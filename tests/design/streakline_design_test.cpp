@@ -246,7 +246,7 @@ TEST(StreaklineDesign, TheBasisGeneratorWarnsThatItLeavesTheStreaklineOut) {
 // On a surface (the designer's Streakline tool draws on meshes too): an S-shaped sketch on
 // the unit sphere's front, nine points of (x, −1, z) normalised, x from −0.6 to 0.6,
 // z = 0.2 + 0.25 sin 2πu, released over [0.2, 0.8], beside a centre at the north. The
-// traced dye lies on it as on the plane (measured: Hausdorff 0.32 h, mean 0.08 h, h the
+// traced dye lies on it as on the plane (measured: Hausdorff 0.31 h, mean 0.08 h, h the
 // mean edge length ≈ 0.075 at 4 subdivisions); without it, far off.
 std::vector<Vec3> sphere_sketch() {
   std::vector<Vec3> p;
