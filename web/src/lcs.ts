@@ -1,11 +1,13 @@
-// The designer's Lagrangian overlays on the planar view (docs/user_guide.md, "The
-// designer's LCS overlay"): the finite-time Lyapunov exponent at the current time
-// (GET /api/ftle, forward: repelling LCS, backward: attracting) as a magma colour map
-// with its legend; dye: streaklines released from clicked seeds since the field's first
-// time, drawn at the current time (POST /api/streakline); and timelines: segments drawn
-// at some time, carried by the flow to the current time (POST /api/timeline). All are
-// fetched again when the time or the field changes; a request overtaken by a newer one
-// is dropped.
+// The designer's Lagrangian overlays (docs/user_guide.md, "The designer's LCS overlay"):
+// the finite-time Lyapunov exponent at the current time (GET /api/ftle, forward:
+// repelling LCS, backward: attracting) as a magma colour map with its legend; dye:
+// streaklines released from clicked seeds since the field's first time, drawn at the
+// current time (POST /api/streakline); and timelines: segments drawn at some time,
+// carried by the flow to the current time (POST /api/timeline). All are fetched again
+// when the time or the field changes; a request overtaken by a newer one is dropped.
+// On the planar view this class draws them on the canvas; on a surface the page hands
+// vertexColors() and the curves (curveRuns()) to the surface view and drawLegend() to a
+// small canvas over it.
 import { ApiError } from "./api";
 import type { View } from "./view";
 
@@ -77,6 +79,8 @@ export function magma(s: number): [number, number, number] {
 }
 
 export const DYE_COLOR = "#16a34a";
+// Where σ is undefined (the particle left the domain), as tvf ftle's pictures.
+const NAN_GREY: [number, number, number] = [154, 154, 154];
 export const TIMELINE_COLOR = "#0ea5e9";
 
 export interface Grid {
@@ -108,6 +112,8 @@ export class LcsOverlay {
   ) {}
 
   // The current time or field changed (or the settings): fetch what is shown again.
+  // `grid`: the planar domain's grid (the FTLE becomes a picture over it); undefined on a
+  // surface (the values are per vertex, coloured by vertexColors()).
   async update(t: number, t0: number, grid: Grid | undefined) {
     await Promise.all([this.updateFtle(t, grid), this.updateDye(t, t0)]);
   }
@@ -134,7 +140,7 @@ export class LcsOverlay {
 
   private async fetchFtle(t: number, grid: Grid | undefined) {
     const ticket = ++this.ticket;
-    if (this.direction === "off" || !grid) {
+    if (this.direction === "off") {
       this.ftle = undefined;
       this.image = undefined;
       this.onChange();
@@ -145,7 +151,7 @@ export class LcsOverlay {
       const a = await lcsApi.ftle(t, this.horizon, this.direction);
       if (ticket !== this.ticket) return;
       this.ftle = a;
-      this.image = picture(a, grid);
+      this.image = grid ? picture(a, grid) : undefined;
       this.lastUpdateMs = performance.now() - start;
       this.error = "";
     } catch (e) {
@@ -196,13 +202,13 @@ export class LcsOverlay {
     ctx.lineWidth = 2.5;
     for (const d of [...this.dye, ...this.timelines]) {
       ctx.strokeStyle = this.dye.includes(d) ? DYE_COLOR : TIMELINE_COLOR;
-      const gaps = new Set(d.gaps);
       ctx.beginPath();
-      d.points.forEach((p, i) => {
-        const [x, y] = v.toCanvas(p);
-        if (i === 0 || gaps.has(i)) ctx.moveTo(x, y);
-        else ctx.lineTo(x, y);
-      });
+      for (const run of curveRuns(d))
+        run.forEach((p, i) => {
+          const [x, y] = v.toCanvas(p);
+          if (i === 0) ctx.moveTo(x, y);
+          else ctx.lineTo(x, y);
+        });
       ctx.stroke();
     }
     for (const s of this.seeds) {
@@ -215,8 +221,44 @@ export class LcsOverlay {
       ctx.fill();
       ctx.stroke();
     }
-    if (this.ftle) legend(ctx, this.ftle);
+    if (this.ftle) drawLegend(ctx, this.ftle);
   }
+
+  // The dye's curves, streaklines first: each an unbroken run of points with its colour
+  // (for the surface view).
+  curves(): { points: number[][]; color: string }[] {
+    const out: { points: number[][]; color: string }[] = [];
+    for (const d of this.dye) for (const points of curveRuns(d)) out.push({ points, color: DYE_COLOR });
+    for (const d of this.timelines) for (const points of curveRuns(d)) out.push({ points, color: TIMELINE_COLOR });
+    return out;
+  }
+}
+
+// A streakline or timeline cut where particles left the domain (its `gaps`: the indices
+// of the points that start a new piece): the unbroken runs of points, in order. A run
+// may have a single point.
+export function curveRuns(c: { points: number[][]; gaps: number[] }): number[][][] {
+  const gaps = new Set(c.gaps);
+  const runs: number[][][] = [];
+  c.points.forEach((p, i) => {
+    if (i === 0 || gaps.has(i)) runs.push([]);
+    runs[runs.length - 1].push(p);
+  });
+  return runs;
+}
+
+// The FTLE's colour at each vertex (a surface's overlay): magma over the answer's colour
+// range, r, g, b in [0, 1] per vertex (3 numbers each); grey where σ is undefined, as in
+// the planar picture and tvf ftle.
+export function vertexColors(a: FtleAnswer): Float32Array {
+  const out = new Float32Array(3 * a.values.length);
+  const [lo, hi] = a.range;
+  const scale = hi > lo ? 1 / (hi - lo) : 0;
+  a.values.forEach((v, i) => {
+    const c = v === null ? NAN_GREY : magma((v - lo) * scale);
+    for (let k = 0; k < 3; ++k) out[3 * i + k] = c[k] / 255;
+  });
+  return out;
 }
 
 // One pixel per grid vertex, the image's rows top (max y) down; NaN grey as in tvf ftle.
@@ -233,7 +275,7 @@ function picture(a: FtleAnswer, grid: Grid): HTMLCanvasElement {
     for (let ix = 0; ix < nx; ++ix) {
       const v = a.values[iy * nx + ix];
       const k = 4 * ((ny - 1 - iy) * nx + ix);
-      const [r, gg, b] = v === null ? [154, 154, 154] : magma((v - lo) * scale);
+      const [r, gg, b] = v === null ? NAN_GREY : magma((v - lo) * scale);
       img.data[k] = r;
       img.data[k + 1] = gg;
       img.data[k + 2] = b;
@@ -244,7 +286,7 @@ function picture(a: FtleAnswer, grid: Grid): HTMLCanvasElement {
 }
 
 // The colour bar in the lower left corner: the range, the direction and the horizon.
-function legend(ctx: CanvasRenderingContext2D, a: FtleAnswer) {
+export function drawLegend(ctx: CanvasRenderingContext2D, a: FtleAnswer) {
   const x = 10;
   const y = ctx.canvas.height - 46;
   const w = 160;
@@ -255,12 +297,22 @@ function legend(ctx: CanvasRenderingContext2D, a: FtleAnswer) {
     ctx.fillStyle = `rgb(${r},${g},${b})`;
     ctx.fillRect(x + i, y, 1, 12);
   }
+  const labels = legendLabels(a);
   ctx.fillStyle = "#111827";
   ctx.font = "11px sans-serif";
   ctx.textAlign = "left";
-  ctx.fillText(`FTLE ${a.direction}, T = ${a.span < a.horizon ? `${a.span.toFixed(3)} (cut)` : a.horizon}`, x, y - 5);
-  ctx.fillText(a.range[0].toPrecision(3), x, y + 26);
+  ctx.fillText(labels.title, x, y - 5);
+  ctx.fillText(labels.low, x, y + 26);
   ctx.textAlign = "right";
-  ctx.fillText(a.range[1].toPrecision(3), x + w, y + 26);
+  ctx.fillText(labels.high, x + w, y + 26);
   ctx.textAlign = "left";
+}
+
+// The legend's words: the direction and horizon, and the colour range's ends.
+export function legendLabels(a: FtleAnswer): { title: string; low: string; high: string } {
+  return {
+    title: `FTLE ${a.direction}, T = ${a.span < a.horizon ? `${a.span.toFixed(3)} (cut)` : a.horizon}`,
+    low: a.range[0].toPrecision(3),
+    high: a.range[1].toPrecision(3),
+  };
 }

@@ -23,7 +23,7 @@ import { bifurcationAt, boundingRadius, surfaceHandleAt as handleOnSurface } fro
 import { TimeStrip } from "./surface/timestrip";
 import { resample } from "./stroke";
 import { rounded, View } from "./view";
-import { LcsOverlay } from "./lcs";
+import { DYE_COLOR, drawLegend, LcsOverlay, vertexColors } from "./lcs";
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -77,14 +77,34 @@ const spacetime = new SpaceTimeView($("spacetime"));
 const coherence = new CoherencePlot($("coherence"));
 const strip = new TimeStrip($<HTMLCanvasElement>("timestrip"));
 let surface: SurfaceView | undefined;
-// FTLE and dye over the planar view (lcs.ts).
+// FTLE and dye over the planar view or on the surface (lcs.ts).
 const lcs = new LcsOverlay(
-  () => redraw(),
+  () => {
+    redraw();
+    showLcsOnSurface();
+  },
   (m) => say(m, true),
 );
 function refreshLcs() {
-  if (state.resultRevision < 0 || !state.mesh?.grid || !state.analysis) return;
+  if (state.resultRevision < 0 || !state.mesh || !state.analysis) return;
   void lcs.update(currentTime(), state.analysis.times[0], state.mesh.grid);
+}
+// On a surface: the FTLE as the mesh's colours (values per vertex) with the legend in a
+// small canvas over the view's corner, and the dye as curves on the mesh.
+const surfaceLegend = $<HTMLCanvasElement>("surface-legend");
+function showLcsOnSurface() {
+  if (!surface || !state.mesh || state.mesh.planar) return;
+  const a = lcs.ftle;
+  const n = state.mesh.vertices.length / 3;
+  const shown = a && a.values.length === n ? a : undefined;
+  surface.setFtle(shown ? vertexColors(shown) : undefined);
+  surfaceLegend.hidden = !shown;
+  if (shown) {
+    const g = surfaceLegend.getContext("2d")!;
+    g.clearRect(0, 0, surfaceLegend.width, surfaceLegend.height);
+    drawLegend(g, shown);
+  }
+  surface.setDye(lcs.curves(), lcs.seeds, DYE_COLOR);
 }
 
 function say(text: string, error = false) {
@@ -149,6 +169,9 @@ function showDesignCurves() {
     const lines: { points: number[][]; color: string; dashed?: boolean }[] = pathlines.map((points) => ({ points, color: PATHLINE_COLOR }));
     // Singular elements' paths with their control points (the Select tool moves them).
     for (const e of s.elements ?? []) if (e.kind === "singular" && e.path.length > 1) lines.push({ points: e.path, color: "#0f172a", dashed: true });
+    // Sketched streaklines: solid at their time t, dashed otherwise (as on the plane).
+    const t = currentTime();
+    for (const e of s.elements ?? []) if (e.kind === "streakline") lines.push({ points: e.points, color: STREAKLINE_COLOR, dashed: Math.abs(e.t - t) >= 0.02 });
     for (const k of s.keyframes ?? [])
       if (S.frameOf(s, k.t) === j) for (const sl of k.streamlines ?? []) lines.push({ points: sl.points, color: STREAMLINE_COLOR });
     surface.setDesign(lines);
@@ -312,7 +335,15 @@ async function loadResult(revision: number) {
   state.resultRevision = revision;
   state.frames.clear();
   state.analysis = analysis;
-  const key = JSON.stringify(mesh.grid ?? mesh.vertices.length);
+  const key = JSON.stringify(mesh.grid ?? [mesh.vertices.length, mesh.vertices.slice(0, 3)]);
+  if (key !== state.meshKey) {
+    // Dye placed on another domain means nothing on this one.
+    if (state.meshKey !== undefined && (lcs.seeds.length || lcs.lines.length)) {
+      lcs.seeds = [];
+      lcs.lines = [];
+      say("the domain changed: the dye seeds and timelines were removed");
+    }
+  }
   if (key !== state.meshKey || !mesh.planar) {
     state.mesh = mesh;
     state.meshKey = key;
@@ -339,7 +370,7 @@ async function loadResult(revision: number) {
 function setupDomainView() {
   const isPlanar = state.mesh!.planar;
   canvas.hidden = !isPlanar;
-  $("lcs-controls").hidden = !isPlanar;
+  surfaceLegend.hidden = true;
   const host = $("surface");
   host.hidden = isPlanar;
   if (!isPlanar) {
@@ -352,6 +383,7 @@ function setupDomainView() {
     }
     surface.setMesh(state.mesh!);
     showDesignCurves();
+    showLcsOnSurface();
   }
 }
 
@@ -738,6 +770,12 @@ function surfacePick(p: number[]) {
     const b = state.analysis?.bifurcations[state.selectedBifurcation];
     if (!b) return say("pick a bifurcation first: press go to in the list", true);
     void edit(S.moveBifurcationEdit(rounded(b.position.slice(0, 3)), b.t, at, t));
+  } else if (state.tool === "dye") {
+    lcs.seeds.push(at);
+    refreshLcs();
+    say(`dye seed at (${at.join(", ")}): its streakline follows the time slider (drag on the surface for a timeline)`);
+  } else if (state.tool === "streakline") {
+    say("drag on the surface from the seed to draw the streakline the dye should form at the current time", true);
   } else if (state.tool === "pathline" || state.tool === "streamline") {
     say(`drag on the surface to draw a ${state.tool}`, true);
   } else if (state.tool === "deform") {
@@ -756,7 +794,7 @@ function surfaceHandleAt(p: number[]): S.Handle | undefined {
 // Whether a left drag from p on the surface is the tool's (else it orbits the camera):
 // the drawing tools own every drag on the surface; the Select tool a drag from a handle.
 function surfaceGrab(p: number[]): boolean {
-  if (["pathline", "streamline", "deform", "singular", "bifurcation"].includes(state.tool)) return true;
+  if (["pathline", "streamline", "streakline", "deform", "singular", "bifurcation", "dye"].includes(state.tool)) return true;
   if (state.tool === "select") {
     state.selected = surfaceHandleAt(p);
     return state.selected !== undefined;
@@ -816,7 +854,15 @@ function surfaceStroke(points: number[][]) {
       void change((s) => S.addPathline(s, resample(points, 8), ts, te), `pathline on the surface from t = ${ts} to ${te}`);
     else if (state.tool === "streamline")
       void change((s) => S.addKeyframeStreamline(s, t, resample(points, 10)), `streamline on the surface in the key frame at t = ${t}`);
-    else if (state.tool === "deform") void surfaceDeform(points, t);
+    else if (state.tool === "streakline")
+      void change((s) => S.addStreakline(s, resample(points, 12).map(rounded), t), `streakline sketched on the surface at t = ${t}`);
+    else if (state.tool === "dye") {
+      // A timeline: the segment from the drag's start to its end (snapped to the surface
+      // by the server), a material line at the current time.
+      lcs.lines.push({ line: [rounded(points[0]), rounded(points[points.length - 1])], t: currentTime() });
+      refreshLcs();
+      say("timeline drawn: it is carried by the flow as the time slider moves");
+    } else if (state.tool === "deform") void surfaceDeform(points, t);
     else if (state.tool === "bifurcation") void surfaceBifurcation(points, t);
   } catch (err) {
     say((err as Error).message, true);
@@ -1016,6 +1062,7 @@ document.addEventListener("keydown", (e) => {
   spacetime: (p: number[]) => spacetime.toScreen(p),
   spacetimeLabels: () => spacetime.timeLabels(),
   surface: (p: number[]) => surface?.toScreen(p),
+  surfaceVisible: (p: number[]) => surface?.visible(p) ?? false,
   // The moving preview: paused, it steps only when asked (the tests compare two pictures
   // a known number of steps apart); ringMotion measures the motion between two pictures.
   preview: {

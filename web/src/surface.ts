@@ -7,7 +7,9 @@
 // to the tool when `grab` says so for its first point (drawing tools; the Select tool on
 // a control point): every pointer position is picked on the surface, and the stroke's
 // points go to onStroke. Other drags orbit; a right drag (or Alt + left drag) always
-// orbits, Shift + left drag pans, the wheel zooms.
+// orbits, Shift + left drag pans, the wheel zooms. The LCS overlay (lcs.ts) colours the
+// mesh per vertex by the FTLE (setFtle; it replaces the moving texture while on) and draws
+// the dye's streaklines and timelines as thin tubes on the mesh (setDye).
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import type { Analysis, Frame, MeshData } from "./api";
@@ -17,6 +19,24 @@ import { SurfaceTexture } from "./surface/preview";
 
 // What the surface shows of the field: the moving texture, arrows, or both.
 export type SurfaceMode = "texture" | "arrows" | "both";
+
+// The FTLE overlay: each vertex's colour (attribute `ftle`, r, g, b in [0, 1]), shaded
+// gently by the normal so the shape still reads (the colour's hue and order unchanged).
+const ftleVertex = /* glsl */ `
+attribute vec3 ftle;
+varying vec3 vColor;
+varying vec3 vNormal;
+void main() {
+  vColor = ftle;
+  vNormal = normalize(normalMatrix * normal);
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+}`;
+const ftleFragment = /* glsl */ `
+varying vec3 vColor;
+varying vec3 vNormal;
+void main() {
+  gl_FragColor = vec4(vColor * (0.75 + 0.25 * abs(normalize(vNormal).z)), 1.0);
+}`;
 
 export class SurfaceView {
   private readonly renderer: THREE.WebGLRenderer;
@@ -34,6 +54,9 @@ export class SurfaceView {
   private readonly paths = new THREE.Group();
   private readonly plain = new THREE.MeshStandardMaterial({ color: 0xe8edf3, roughness: 0.9, side: THREE.DoubleSide });
   private readonly texture: SurfaceTexture;
+  private readonly ftleMaterial = new THREE.ShaderMaterial({ vertexShader: ftleVertex, fragmentShader: ftleFragment, side: THREE.DoubleSide });
+  private ftleOn = false;
+  private readonly dye = new THREE.Group();
   private mode: SurfaceMode = "texture";
   private frame: Frame | undefined;
   private markers: number[][] = [];
@@ -68,6 +91,7 @@ export class SurfaceView {
     this.scene.add(this.overlay);
     this.scene.add(this.design);
     this.scene.add(this.paths);
+    this.scene.add(this.dye);
     this.strokeLine = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0xf97316, depthTest: false }));
     this.strokeLine.renderOrder = 2;
     this.scene.add(this.strokeLine);
@@ -192,7 +216,9 @@ export class SurfaceView {
     const s = g.boundingSphere!;
     this.radius = s.radius;
     this.texture.setGeometry(g, s.radius);
-    this.surface = new THREE.Mesh(g, this.mode === "arrows" ? this.plain : this.texture.material);
+    g.setAttribute("ftle", new THREE.BufferAttribute(new Float32Array(this.positions.length), 3));
+    this.ftleOn = false;
+    this.surface = new THREE.Mesh(g, this.material());
     this.scene.add(this.surface);
     this.controls.target.copy(s.center);
     this.camera.position.copy(s.center).add(new THREE.Vector3(0.2, -1, 0.6).normalize().multiplyScalar(3 * s.radius));
@@ -203,9 +229,63 @@ export class SurfaceView {
   // Texture, arrows or both.
   setMode(mode: SurfaceMode) {
     this.mode = mode;
-    if (this.surface) this.surface.material = mode === "arrows" ? this.plain : this.texture.material;
+    if (this.surface) this.surface.material = this.material();
     if (this.frame) this.setFrame(this.frame, this.markers);
     this.render();
+  }
+
+  // The surface's material: the FTLE colours while the overlay is on, else the mode's.
+  private material(): THREE.Material {
+    return this.ftleOn ? this.ftleMaterial : this.mode === "arrows" ? this.plain : this.texture.material;
+  }
+
+  // The FTLE overlay: r, g, b in [0, 1] per vertex (lcs.ts vertexColors), or undefined to
+  // show the field again. Colours of another length than the mesh's are not shown.
+  setFtle(colors: Float32Array | undefined) {
+    const attr = this.surface?.geometry.getAttribute("ftle") as THREE.BufferAttribute | undefined;
+    this.ftleOn = !!colors && !!attr && colors.length === attr.array.length;
+    if (this.ftleOn) {
+      (attr!.array as Float32Array).set(colors!);
+      attr!.needsUpdate = true;
+    }
+    if (this.surface) this.surface.material = this.material();
+    this.render();
+  }
+
+  // The dye: curves of [x, y, z] points on the mesh (each an unbroken run) drawn as thin
+  // tubes through them, and the seeds as balls.
+  setDye(curves: { points: number[][]; color: string }[], seeds: number[][], seedColor: string) {
+    for (const c of [...this.dye.children]) {
+      this.dye.remove(c);
+      (c as THREE.Mesh).geometry?.dispose();
+      ((c as THREE.Mesh).material as THREE.Material | undefined)?.dispose();
+    }
+    for (const c of curves) {
+      if (c.points.length < 2) continue;
+      const pts = c.points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
+      const curve = new THREE.CatmullRomCurve3(pts, false, "centripetal");
+      const segments = Math.min(4000, Math.max(8, 3 * pts.length));
+      this.dye.add(new THREE.Mesh(new THREE.TubeGeometry(curve, segments, 0.006 * this.radius, 5, false), new THREE.MeshBasicMaterial({ color: c.color })));
+    }
+    for (const p of seeds) {
+      const ball = new THREE.Mesh(new THREE.SphereGeometry(0.016 * this.radius, 12, 8), new THREE.MeshBasicMaterial({ color: seedColor }));
+      ball.position.set(p[0], p[1], p[2]);
+      this.dye.add(ball);
+    }
+    this.render();
+  }
+
+  // Whether the world point p (on the mesh) is seen by the camera: the first surface hit
+  // on the ray from the camera to p is p itself (for tests).
+  visible(p: number[]): boolean {
+    if (!this.surface) return false;
+    const q = new THREE.Vector3(p[0], p[1], p[2]);
+    const from = this.camera.position.clone();
+    const dir = q.clone().sub(from);
+    const d = dir.length();
+    const ray = new THREE.Raycaster(from, dir.normalize());
+    const hit = ray.intersectObject(this.surface)[0];
+    return !!hit && Math.abs(hit.distance - d) < 1e-3 * this.radius;
   }
 
   setFrame(frame: Frame, markers: number[][]) {
@@ -267,7 +347,7 @@ export class SurfaceView {
 
   // Steps the moving texture by n and draws at once (the page's ticker calls it).
   animate(n = 1) {
-    if (!this.surface || this.mode === "arrows") return;
+    if (!this.surface || this.mode === "arrows" || this.ftleOn) return;
     this.texture.step(this.camera, n);
     this.renderer.render(this.scene, this.camera);
   }

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { magma } from "../src/lcs";
+import { curveRuns, legendLabels, magma, vertexColors, type FtleAnswer } from "../src/lcs";
 
 // The overlay's colours are tvf ftle's (render/lcs_pictures.cpp's magma stops).
 describe("magma", () => {
@@ -18,5 +18,45 @@ describe("magma", () => {
       expect(r + g + b).toBeGreaterThanOrEqual(last); // monotone in brightness (the e2e test relies on it)
       last = r + g + b;
     }
+  });
+});
+
+function answer(values: (number | null)[], range: [number, number], extra: Partial<FtleAnswer> = {}): FtleAnswer {
+  return { revision: 1, t: 0, horizon: 1, direction: "forward", span: 1, cut: false, left: 0, min: null, max: null, range, values, seconds: 0, ...extra };
+}
+
+// The surface overlay's colours: one magma colour per vertex over the answer's range.
+describe("vertexColors", () => {
+  it("maps the range's ends to magma's ends and clamps beyond them", () => {
+    const c = vertexColors(answer([1, 3, 2, 0, 9], [1, 3]));
+    const rgb = (i: number) => Array.from(c.slice(3 * i, 3 * i + 3), (x) => Math.round(x * 255));
+    expect(c.length).toBe(15);
+    expect(rgb(0)).toEqual(magma(0));
+    expect(rgb(1)).toEqual(magma(1));
+    expect(rgb(2)).toEqual(magma(0.5));
+    expect(rgb(3)).toEqual(magma(0)); // below the range
+    expect(rgb(4)).toEqual(magma(1)); // above it
+  });
+  it("colours undefined values grey, and a flat field with the range's low end", () => {
+    const c = vertexColors(answer([null, 2], [2, 2]));
+    expect(Array.from(c.slice(0, 3), (x) => Math.round(x * 255))).toEqual([154, 154, 154]);
+    expect(Array.from(c.slice(3, 6), (x) => Math.round(x * 255))).toEqual(magma(0));
+  });
+});
+
+// Streaklines and timelines are cut where particles left the domain.
+describe("curveRuns", () => {
+  it("splits the points at the gaps, in order", () => {
+    const points = [[0], [1], [2], [3], [4], [5]];
+    expect(curveRuns({ points, gaps: [] })).toEqual([points]);
+    expect(curveRuns({ points, gaps: [2, 5] })).toEqual([[[0], [1]], [[2], [3], [4]], [[5]]]);
+    expect(curveRuns({ points: [], gaps: [] })).toEqual([]);
+  });
+});
+
+describe("legendLabels", () => {
+  it("names the direction, the horizon (cut where the window was shortened) and the range", () => {
+    expect(legendLabels(answer([], [0.0123456, 2.5]))).toEqual({ title: "FTLE forward, T = 1", low: "0.0123", high: "2.50" });
+    expect(legendLabels(answer([], [0, 1], { direction: "backward", horizon: 2, span: 0.75, cut: true })).title).toBe("FTLE backward, T = 0.750 (cut)");
   });
 });
