@@ -53,6 +53,10 @@ RenderCommand::RenderCommand(CLI::App& app) {
                        "Inject dye at X,Y (planar domains) or X,Y,Z (surfaces: a point on or near the surface) from "
                        "the start of the animation and draw its streakline in every picture (give it again for more "
                        "seeds)");
+  texture_->add_option("--time-scale", time_scale_,
+                       "How far the field carries the --streakline dye: it travels as the field would carry it over "
+                       "this many times its time range while the field itself changes at its own pace")
+      ->capture_default_str();
   texture_->add_option("--alpha", alpha_, "Weight of the fresh noise per frame (shorter streaks when larger)")
       ->capture_default_str();
   texture_->add_option("--noise-scale", noise_scale_, "Noise cell size in pixels (default: size/256)");
@@ -449,6 +453,7 @@ int RenderCommand::run_texture() {
 
   RenderInput in = load_render_input(input_, progress, "texture", true);
   options.streakline_seeds = parse_dye_seeds(streaklines_, in.mesh);
+  options.dye_time_scale = time_scale_;
   const std::vector<std::string>& warnings = in.warnings;
   const Field& field = in.field;
   const TangentBundle bundle(in.mesh);

@@ -715,7 +715,9 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
   // The texture in image space (SurfaceImageAnimator); the renderer draws the mesh once in
   // white and once in black (shading and anti-aliased silhouettes, composited with the
   // texture), and per frame only when overlays are asked for.
-  std::optional<DyeInjector> dye = texture_dye(bundle, field, options, total);  // refuses bad seeds first
+  const std::optional<Field> dye_field = texture_dye_field(field, options);
+  std::optional<DyeInjector> dye =
+      texture_dye(bundle, dye_field ? *dye_field : field, options, total);  // refuses bad seeds first
   SurfaceImageAnimator animator(bundle, field, options.texture, options.surface);
   MeshRenderer renderer;
   renderer.set_mesh(bundle.mesh());

@@ -577,14 +577,24 @@ void draw_streamlines(Image& image, const TextureAnimator& animator, const Tange
   cairo_surface_destroy(surface);
 }
 
-std::optional<DyeInjector> texture_dye(const TangentBundle& bundle, const Field& field,
+std::optional<Field> texture_dye_field(const Field& field, const TextureAnimationOptions& options) {
+  check_option(std::isfinite(options.dye_time_scale) && options.dye_time_scale > 0, "dye time scale",
+               fmt::format("{} is not a positive number", options.dye_time_scale));
+  std::optional<Field> scaled;
+  if (options.streakline_seeds.empty() || options.dye_time_scale == 1.0) return scaled;
+  scaled.emplace(field);
+  for (cplx& z : scaled->data()) z *= options.dye_time_scale;
+  return scaled;
+}
+
+std::optional<DyeInjector> texture_dye(const TangentBundle& bundle, const Field& carried,
                                        const TextureAnimationOptions& options, int pictures) {
   std::optional<DyeInjector> dye;
   if (options.streakline_seeds.empty()) return dye;
-  const TimeSampling& ts = field.time();
+  const TimeSampling& ts = carried.time();
   DyeOptions o;
   if (pictures > 1) o.release_spacing = 0.25 * (ts.t1 - ts.t0) / (pictures - 1);
-  dye.emplace(bundle, field, options.streakline_seeds, ts.t0, o);
+  dye.emplace(bundle, carried, options.streakline_seeds, ts.t0, o);
   return dye;
 }
 
@@ -615,7 +625,8 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
                "orbits are drawn on planar domains only (their points are in tvf analyze's JSON on surfaces)");
   if (!bundle.is_flat()) return write_surface_texture_animation(bundle, field, options, first, last, total);
   TextureAnimator animator(bundle, field, options.texture);
-  std::optional<DyeInjector> dye = texture_dye(bundle, field, options, total);
+  const std::optional<Field> dye_field = texture_dye_field(field, options);
+  std::optional<DyeInjector> dye = texture_dye(bundle, dye_field ? *dye_field : field, options, total);
   Topology topology;
   if (options.overlay_paths || options.overlay_orbits) topology = analyze_topology(bundle, field);
   PeriodicOrbits orbits;
