@@ -50,8 +50,13 @@ RenderCommand::RenderCommand(CLI::App& app) {
                        "several at once as --overlay singularities paths")
       ->check(CLI::IsMember({"singularities", "paths", "streamlines", "orbits"}));
   texture_->add_option("--streakline", streaklines_,
-                       "Planar domains: inject dye at X,Y from the start of the animation and draw its streakline in "
-                       "every picture (give it again for more seeds)");
+                       "Inject dye at X,Y (planar domains) or X,Y,Z (surfaces: a point on or near the surface) from "
+                       "the start of the animation and draw its streakline in every picture (give it again for more "
+                       "seeds)");
+  texture_->add_option("--time-scale", time_scale_,
+                       "How far the field carries the --streakline dye: it travels as the field would carry it over "
+                       "this many times its time range while the field itself changes at its own pace")
+      ->capture_default_str();
   texture_->add_option("--alpha", alpha_, "Weight of the fresh noise per frame (shorter streaks when larger)")
       ->capture_default_str();
   texture_->add_option("--noise-scale", noise_scale_, "Noise cell size in pixels (default: size/256)");
@@ -134,6 +139,10 @@ RenderCommand::RenderCommand(CLI::App& app) {
                          "(default: random per leaf)");
   particles_->add_option("-s,--size", app_size_, "Pixels on the long side of the domain")->capture_default_str();
   time_scale(particles_, "leaves");
+  particles_->add_option("--streakline", streaklines_,
+                         "Inject dye at X,Y (planar domains) or X,Y,Z (surfaces: a point on or near the surface) from "
+                         "the start of the animation, carried with the leaves and drawn as fading smoke in every "
+                         "picture (give it again for more seeds)");
   particles_->add_option("--view", view_, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default 1,-0.6,0.5)")
       ->delimiter(',')
       ->expected(3);
@@ -209,6 +218,29 @@ void print_report(const char* what, int frames, int width, int height, double se
   std::printf("rendered %d %s frames of %d×%d pixels in %.2f s; wrote", frames, what, width, height, seconds);
   for (const auto& f : files) std::printf(" %s", fs::absolute(f).lexically_normal().c_str());
   std::printf("\n");
+}
+
+}  // namespace
+
+namespace {
+
+// The --streakline seeds: X,Y on a planar domain (a Z is allowed there and ignored, as
+// everywhere on planar domains), X,Y,Z on a surface.
+std::vector<Vec3> parse_dye_seeds(const std::vector<std::string>& texts, const Mesh& mesh) {
+  const bool planar = mesh.is_planar_xy();
+  std::vector<Vec3> seeds;
+  for (const auto& text : texts) {
+    double x = 0, y = 0, z = 0;
+    char c1 = 0, c2 = 0, extra = 0;
+    const int n = std::sscanf(text.c_str(), "%lf %c %lf %c %lf %c", &x, &c1, &y, &c2, &z, &extra);
+    const bool two = n == 3 && c1 == ',', three = n == 5 && c1 == ',' && c2 == ',';
+    if (planar && !two && !three)
+      throw Error(fmt::format("--streakline {}: expected X,Y (a point of the planar domain)", text));
+    if (!planar && !three)
+      throw Error(fmt::format("--streakline {}: expected X,Y,Z (a point on or near the surface)", text));
+    seeds.push_back(Vec3(x, y, three ? z : 0.0));
+  }
+  return seeds;
 }
 
 }  // namespace
@@ -328,6 +360,7 @@ int RenderCommand::run_particles() {
   if (!up_.empty()) options.surface.up = Vec3(up_[0], up_[1], up_[2]);
   options.surface.fov = fov_;
   RenderInput in = load_render_input(input_, progress, "particles", true);
+  options.dye_seeds = parse_dye_seeds(streaklines_, in.mesh);
   const TangentBundle bundle(in.mesh);
   progress.note("rendering");
   options.progress = [&](int done, int total) { progress.update(done, total); };
@@ -419,16 +452,8 @@ int RenderCommand::run_texture() {
   options.surface.spacing = spacing_;
 
   RenderInput in = load_render_input(input_, progress, "texture", true);
-  for (const auto& text : streaklines_) {
-    double x = 0, y = 0;
-    char comma = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%lf %c %lf %c", &x, &comma, &y, &extra) != 3 || comma != ',')
-      throw Error(fmt::format("--streakline {}: expected X,Y (a point of the planar domain)", text));
-    if (!in.mesh.is_planar_xy())
-      throw Error(fmt::format("--streakline {}: streaklines in the texture are drawn on planar domains only "
-                              "(`tvf streaklines` traces them on surfaces)", text));
-    options.streakline_seeds.push_back(Vec3(x, y, 0));
-  }
+  options.streakline_seeds = parse_dye_seeds(streaklines_, in.mesh);
+  options.dye_time_scale = time_scale_;
   const std::vector<std::string>& warnings = in.warnings;
   const Field& field = in.field;
   const TangentBundle bundle(in.mesh);

@@ -51,7 +51,7 @@ private:
   bool quiet_ = false;
   bool physical_ = false;
   std::vector<double> view_, up_;  // surfaces
-  std::vector<std::string> streaklines_;  // X,Y seeds (planar)
+  std::vector<std::string> streaklines_;  // dye seeds: X,Y (planar) or X,Y,Z (surfaces)
   double fov_ = 30, spacing_ = 1.0;
   // painterly
   std::string image_, mask_;

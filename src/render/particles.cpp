@@ -4,6 +4,7 @@
 
 #include "tvf/core/error.h"
 #include "tvf/integrate/pathline.h"
+#include "tvf/render/dye_pictures.h"
 #include "tvf/render/frame_output.h"
 #include "tvf/render/surface_particles.h"
 
@@ -205,6 +206,19 @@ int ParticleSystem::width() const { return impl_->view.width; }
 int ParticleSystem::height() const { return impl_->view.height; }
 Image ParticleSystem::picture() const { return impl_->picture(); }
 
+std::optional<DyeInjector> particle_dye(const TangentBundle& bundle, const Field& carried,
+                                        const ParticleAnimationOptions& options, int pictures) {
+  std::optional<DyeInjector> dye;
+  if (options.dye_seeds.empty()) return dye;
+  const TimeSampling& ts = carried.time();
+  DyeOptions o;
+  o.release_spacing = options.dye_release_spacing != 0.0 ? options.dye_release_spacing
+                      : pictures > 1                     ? 0.25 * (ts.t1 - ts.t0) / (pictures - 1)
+                                                         : 0.0;
+  dye.emplace(bundle, carried, options.dye_seeds, ts.t0, o);
+  return dye;
+}
+
 AnimationReport write_particle_animation(const TangentBundle& bundle, const Field& field,
                                          const ParticleAnimationOptions& options) {
   if (!bundle.is_flat()) return write_surface_particle_animation(bundle, field, options);
@@ -221,11 +235,25 @@ AnimationReport write_particle_animation(const TangentBundle& bundle, const Fiel
     for (cplx& z : scaled->data()) z *= options.time_scale;
   }
   ParticleSystem system(bundle, scaled ? *scaled : field, options.particles);
-  FrameOutput out(options.frames_dir, options.video, system.width(), system.height(), options.fps);
+  std::optional<DyeInjector> dye = particle_dye(bundle, scaled ? *scaled : field, options, total);
+  const detail::PlanarView view = detail::PlanarView::fit(bundle.mesh(), options.particles.image_size);
   const TimeSampling& ts = field.time();
+  DyeStyle style;
+  style.width = std::max(2.0, options.particles.image_size / 300.0);
+  style.fade = 0.7;
+  style.fade_age = ts.t1 > ts.t0 ? ts.t1 - ts.t0 : 1.0;
+  style.halo = true;
+  style.max_gap = 24.0 / std::min(view.sx(), view.sy());  // 24 pixels
+  FrameOutput out(options.frames_dir, options.video, system.width(), system.height(), options.fps);
   for (int k = 0; k < total; ++k) {
-    system.advance(total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0);
-    out.add(system.picture());
+    const double t = total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0;
+    system.advance(t);
+    Image picture = system.picture();
+    if (dye) {
+      dye->advance(t);
+      draw_dye(picture, *dye, [&](const Vec2& x) { return view.to_pixel(x); }, style);
+    }
+    out.add(picture);
     if (options.progress) options.progress(k + 1, total);
   }
   AnimationReport report;

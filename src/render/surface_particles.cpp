@@ -2,6 +2,7 @@
 
 #include "tvf/core/error.h"
 #include "tvf/integrate/pathline.h"
+#include "tvf/render/dye_pictures.h"
 #include "tvf/render/frame_output.h"
 
 #include <fmt/format.h>
@@ -148,6 +149,7 @@ AnimationReport write_surface_particle_animation(const TangentBundle& bundle, co
     for (cplx& z : scaled->data()) z *= options.time_scale;
   }
   SurfaceParticleSystem system(bundle, scaled ? *scaled : field, options.particles, options.surface);
+  std::optional<DyeInjector> dye = particle_dye(bundle, scaled ? *scaled : field, options, total);
   MeshRenderer renderer;
   renderer.set_mesh(bundle.mesh());
   // The ground: the particles' background colour, lit by the headlight.
@@ -160,9 +162,22 @@ AnimationReport write_surface_particle_animation(const TangentBundle& bundle, co
   ro.ambient = 0.5;
   FrameOutput out(options.frames_dir, options.video, ro.width, ro.height, options.fps);
   const TimeSampling& ts = field.time();
+  DyeStyle style;
+  style.width = std::max(2.0, options.particles.image_size / 300.0);
+  style.fade = 0.7;
+  style.fade_age = ts.t1 > ts.t0 ? ts.t1 - ts.t0 : 1.0;
+  style.ground = options.particles.background;
+  style.max_gap = 24.0 / system.pixels_per_unit();  // 24 pixels at the framed distance
   for (int k = 0; k < total; ++k) {
-    system.advance(total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0);
-    out.add(renderer.render(system.camera(), ro, system.leaf_lines()));
+    const double t = total > 1 ? ts.t0 + (ts.t1 - ts.t0) * k / (total - 1) : ts.t0;
+    system.advance(t);
+    std::vector<RenderLine> lines = system.leaf_lines();
+    std::vector<RenderMarker> markers;
+    if (dye) {
+      dye->advance(t);
+      dye_overlay(*dye, style, lines, markers);
+    }
+    out.add(renderer.render(system.camera(), ro, lines, markers));
     if (options.progress) options.progress(k + 1, total);
   }
   AnimationReport report;

@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <random>
 #include <tuple>
 #include <utility>
@@ -714,6 +715,9 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
   // The texture in image space (SurfaceImageAnimator); the renderer draws the mesh once in
   // white and once in black (shading and anti-aliased silhouettes, composited with the
   // texture), and per frame only when overlays are asked for.
+  const std::optional<Field> dye_field = texture_dye_field(field, options);
+  std::optional<DyeInjector> dye =
+      texture_dye(bundle, dye_field ? *dye_field : field, options, total);  // refuses bad seeds first
   SurfaceImageAnimator animator(bundle, field, options.texture, options.surface);
   MeshRenderer renderer;
   renderer.set_mesh(bundle.mesh());
@@ -728,7 +732,8 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
   const Image dark = renderer.render(animator.camera(), ro);
   renderer.set_colors(std::vector<std::uint32_t>(nv, 0xFFFFFFu));
   const Image lit = renderer.render(animator.camera(), ro);
-  const bool overlays = options.overlay_streamlines || options.overlay_paths || options.overlay_singularities;
+  const bool overlays =
+      options.overlay_streamlines || options.overlay_paths || options.overlay_singularities || dye.has_value();
   Topology topology;
   if (options.overlay_paths) topology = analyze_topology(bundle, field);
   FrameOutput out(options.frames_dir, options.video, ro.width, ro.height, options.fps, options.on_picture);
@@ -762,6 +767,10 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
         }
         if (options.overlay_singularities)
           markers = singularity_markers(bundle, field, t, std::max(3.5, animator.width() / 110.0));
+        if (dye) {
+          dye->advance(t);
+          dye_overlay(*dye, texture_dye_style(animator.width(), animator.height(), animator.pixels_per_unit()), lines, markers);
+        }
         if (overlays && (!lines.empty() || !markers.empty())) {
           // The overlays drawn over the white mesh: wherever that picture differs from the
           // plain white one, it is an overlay's pixel.

@@ -5,7 +5,6 @@
 #include "tvf/core/error.h"
 #include "tvf/integrate/evenly_spaced.h"
 #include "tvf/integrate/periodic_orbits.h"
-#include "tvf/integrate/streakline.h"
 #include "tvf/integrate/streamline.h"
 #include "tvf/render/lcs_pictures.h"
 #include "tvf/render/frame_output.h"
@@ -23,6 +22,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <random>
 
 namespace tvf {
@@ -577,6 +577,35 @@ void draw_streamlines(Image& image, const TextureAnimator& animator, const Tange
   cairo_surface_destroy(surface);
 }
 
+std::optional<Field> texture_dye_field(const Field& field, const TextureAnimationOptions& options) {
+  check_option(std::isfinite(options.dye_time_scale) && options.dye_time_scale > 0, "dye time scale",
+               fmt::format("{} is not a positive number", options.dye_time_scale));
+  std::optional<Field> scaled;
+  if (options.streakline_seeds.empty() || options.dye_time_scale == 1.0) return scaled;
+  scaled.emplace(field);
+  for (cplx& z : scaled->data()) z *= options.dye_time_scale;
+  return scaled;
+}
+
+std::optional<DyeInjector> texture_dye(const TangentBundle& bundle, const Field& carried,
+                                       const TextureAnimationOptions& options, int pictures) {
+  std::optional<DyeInjector> dye;
+  if (options.streakline_seeds.empty()) return dye;
+  const TimeSampling& ts = carried.time();
+  DyeOptions o;
+  if (pictures > 1) o.release_spacing = 0.25 * (ts.t1 - ts.t0) / (pictures - 1);
+  dye.emplace(bundle, carried, options.streakline_seeds, ts.t0, o);
+  return dye;
+}
+
+DyeStyle texture_dye_style(int width, int height, double pixels_per_unit) {
+  DyeStyle style;
+  style.width = std::max(1.5, std::max(width, height) / 300.0);
+  style.max_gap = 24.0 / pixels_per_unit;
+  style.casing = true;
+  return style;
+}
+
 TextureAnimationReport write_texture_animation(const TangentBundle& bundle, const Field& field,
                                                const TextureAnimationOptions& options) {
   using clock = std::chrono::steady_clock;
@@ -596,6 +625,8 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
                "orbits are drawn on planar domains only (their points are in tvf analyze's JSON on surfaces)");
   if (!bundle.is_flat()) return write_surface_texture_animation(bundle, field, options, first, last, total);
   TextureAnimator animator(bundle, field, options.texture);
+  const std::optional<Field> dye_field = texture_dye_field(field, options);
+  std::optional<DyeInjector> dye = texture_dye(bundle, dye_field ? *dye_field : field, options, total);
   Topology topology;
   if (options.overlay_paths || options.overlay_orbits) topology = analyze_topology(bundle, field);
   PeriodicOrbits orbits;
@@ -633,18 +664,9 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
         (k == first ? warmup_seconds : texture_seconds) += std::chrono::duration<double>(clock::now() - t0).count();
         if (options.overlay_streamlines) draw_streamlines(img, animator, bundle, field, t);
         if (options.overlay_paths) draw_singularity_paths(img, animator, topology, t);
-        if (!options.streakline_seeds.empty()) {
-          std::vector<std::vector<Vec3>> streaks;
-          StreaklineOptions so;
-          so.t0 = std::min(time_of(0), t);
-          so.t1 = std::max(time_of(0), t);
-          for (const Vec3& seed : options.streakline_seeds) {
-            std::vector<Vec3> line;
-            for (const StreakPoint& p : trace_streakline(bundle, field, seed, so).points) line.push_back(p.position);
-            streaks.push_back(std::move(line));
-          }
-          draw_curves(img, animator, streaks, options.streakline_seeds, 0xE8402A,
-                      std::max(1.5, std::max(img.width, img.height) / 300.0), false);
+        if (dye) {
+          dye->advance(t);
+          draw_dye(img, *dye, [&](const Vec2& x) { return animator.to_pixel(x); }, texture_dye_style(img.width, img.height, animator.pixels_per_unit()));
         }
         if (options.overlay_singularities) draw_singularities(img, animator, bundle, field, t);
         if (options.overlay_orbits) draw_orbits(img, animator, orbits, field, t);  // rings round the dots

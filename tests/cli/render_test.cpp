@@ -1,6 +1,7 @@
 // `tvf render texture INPUT -o OUT…` as a user meets it: PNG frames and MP4 from a scene or
 // a generated folder, surfaces from a camera, a clear sentence for bad options, and no partial output.
 #include "support/test_paths.h"
+#include "tvf/render/image.h"
 
 #include <gtest/gtest.h>
 
@@ -92,6 +93,54 @@ TEST(CliRender, SurfaceTextureFromACamera) {
   EXPECT_EQ(count_lines(p.output), 1) << p.output;
   EXPECT_NE(p.output.find("sphere.json"), std::string::npos) << p.output;
   EXPECT_NE(p.output.find("planar domains only"), std::string::npos) << p.output;
+}
+
+TEST(CliRender, DyeInParticlesAndSurfaceTextures) {
+  // --streakline injects dye: in the particle renderer (planar and surface) and in the
+  // surface texture; each seed's colour (red, then blue) shows in the last picture.
+  TempDir dir;
+  test::write_text(dir / "scene.json", kSmallScene);
+  test::write_text(dir / "sphere.json", R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 2}},
+    "time": {"frames": 3}, "elements": [{"kind": "singular", "type": "ccw_center", "path": [[0, 0, 1, 0]]}]})");
+  auto count = [](const fs::path& png, bool want_blue) {
+    const Image img = read_png(png.string());
+    int n = 0;
+    for (const std::uint32_t c : img.pixels) {
+      const int r = static_cast<int>((c >> 16) & 0xFF), g = static_cast<int>((c >> 8) & 0xFF),
+                b = static_cast<int>(c & 0xFF);
+      n += want_blue ? b > r + 80 && b > g + 40 : r > g + 80 && r > b + 80;
+    }
+    return n;
+  };
+  const auto p = run_tvf("render particles " + quoted(dir / "scene.json") + " -o " + quoted(dir / "leaves") +
+                         " --streakline 0.3,0.2 --streakline -0.5,-0.5,0 --count 1 --particle-size 1 --size 96 -q");
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  EXPECT_GT(count(dir / "leaves" / "frame_00005.png", false), 20);
+  EXPECT_GT(count(dir / "leaves" / "frame_00005.png", true), 20);
+  const auto s = run_tvf("render texture " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "tex") +
+                         " --streakline 0.6,0,0.8 --size 64 --view 0.3,0.3,1 -q");
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_GT(count(dir / "tex" / "frame_00002.png", false), 10);
+  const auto q = run_tvf("render particles " + quoted(dir / "sphere.json") + " -o " + quoted(dir / "sleaves") +
+                         " --streakline 0.6,0,0.8 --count 1 --size 64 --view 0.3,0.3,1 -q");
+  ASSERT_EQ(q.exit_code, 0) << q.output;
+  EXPECT_GT(count(dir / "sleaves" / "frame_00002.png", false), 10);
+  // Bad seeds: one sentence, nothing written.
+  const std::pair<std::string, std::string> cases[] = {
+      {"particles " + quoted(dir / "scene.json") + " --streakline 3,0", "the dye seed (3, 0) is outside the domain"},
+      {"particles " + quoted(dir / "scene.json") + " --streakline 0.3", "--streakline 0.3: expected X,Y"},
+      {"texture " + quoted(dir / "scene.json") + " --streakline 0,-1.5", "the dye seed (0, -1.5) is outside the domain"},
+      {"texture " + quoted(dir / "sphere.json") + " --streakline 0,0", "--streakline 0,0: expected X,Y,Z"},
+      {"texture " + quoted(dir / "sphere.json") + " --streakline 0,0,3", "the dye seed (0, 0, 3) is 2"},
+      {"particles " + quoted(dir / "sphere.json") + " --streakline 0,0,-3", "from the surface, farther than"},
+  };
+  for (const auto& [args, message] : cases) {
+    const auto r = run_tvf("render " + args + " -q --size 32 -o " + quoted(dir / "bad"));
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_EQ(count_lines(r.output), 1) << args << ": " << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << args << ": " << r.output;
+    EXPECT_FALSE(fs::exists(dir / "bad")) << args;
+  }
 }
 
 TEST(CliRender, BadOptionsAreOneSentenceAndLeaveNothing) {

@@ -295,6 +295,24 @@ def test_pictures_and_files_at_once_and_progress(tmp_path):
     assert calls[-1] == (3, 3)
 
 
+def test_render_texture_injects_dye(tmp_path):
+    """streaklines: dye released at each seed from the first picture, drawn in red (the
+    first seed's colour) over the gray texture; a seed outside the domain is a ValueError."""
+    v, f = planar_grid(9)
+    field = tvf.generate(GRID_SCENE, vertices=v, faces=f)
+
+    def reds(p):
+        p = p.astype(int)
+        return int(((p[..., 0] > p[..., 1] + 80) & (p[..., 0] > p[..., 2] + 80)).sum())
+
+    assert reds(tvf.render_texture(field, 64, frames=5)) == 0
+    assert reds(tvf.render_texture(field, 64, frames=5, streaklines=[[0.3, 0.2]], time_scale=5)) > 10
+    with pytest.raises(ValueError, match=r"the dye seed \(3, 0\) is outside the domain"):
+        tvf.render_texture(field, 64, frames=5, streaklines=[[3, 0]])
+    with pytest.raises(ValueError, match="streaklines seed"):
+        tvf.render_texture(field, 64, frames=5, streaklines=[[0.3]])
+
+
 def test_render_stops_between_pictures_and_leaves_no_output(tmp_path):
     """progress returning False (tvf.Cancelled) or raising KeyboardInterrupt stops the
     animation before its next picture: no frame folder, no video, no temporaries."""

@@ -2,6 +2,7 @@
 // singularity overlay in the paper's colours, and frames written all or nothing.
 #include "tvf/render/texture_animation.h"
 
+#include "support/test_fields.h"
 #include "support/test_paths.h"
 #include "tvf/analysis/singularities.h"
 #include "tvf/core/error.h"
@@ -323,6 +324,33 @@ TEST(TextureAnimation, WritesEveryFrameOrNothing) {
   o.frames_dir = dir.path().string() + "/new/";  // a trailing slash names the folder itself
   write_texture_animation(bundle, field, o);
   EXPECT_TRUE(fs::exists(dir / "new" / "frame_00001.png"));
+}
+
+TEST(TextureAnimation, DyeIsCarriedByTheFieldTimesItsTimeScale) {
+  // A uniform flow (0.2, 0) over t ∈ [0, 1]: with dye_time_scale 3 the dye released at t = 0
+  // is 0.6 downstream of its seed at t = 1; a scale of 1 carries it with the field itself.
+  const Mesh grid = make_grid(GridSpec{21, 21, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = test::field_from(bundle, TimeSampling{0, 1, 5}, [](const Vec3&, double) { return Vec3(0.2, 0, 0); });
+  TextureAnimationOptions o;
+  o.streakline_seeds = {Vec3(-0.5, 0.1, 0)};
+  o.dye_time_scale = 3;
+  const std::optional<Field> scaled = texture_dye_field(field, o);
+  ASSERT_TRUE(scaled.has_value());
+  std::optional<DyeInjector> dye = texture_dye(bundle, *scaled, o, 5);
+  ASSERT_TRUE(dye.has_value());
+  EXPECT_DOUBLE_EQ(dye->release_spacing(), 0.0625);  // a quarter of the pictures' spacing
+  dye->advance(1.0);
+  const Streakline line = dye->streakline(0);
+  ASSERT_EQ(line.points.size(), 17u);
+  EXPECT_NEAR((line.points.front().position - Vec3(0.1, 0.1, 0)).norm(), 0.0, 1e-9);
+  o.dye_time_scale = 1;
+  EXPECT_FALSE(texture_dye_field(field, o).has_value());
+  o.dye_time_scale = 0;
+  EXPECT_NE(test::error_of([&] { texture_dye_field(field, o); }).find("dye time scale"), std::string::npos);
+  o.streakline_seeds.clear();
+  o.dye_time_scale = 1;
+  EXPECT_FALSE(texture_dye(bundle, field, o, 5).has_value());
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 // coarse grid, so the count stays constant and the picture evenly covered.
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
+#include "tvf/integrate/dye.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
 #include "tvf/render/painterly.h"
@@ -18,6 +19,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -73,8 +75,22 @@ struct ParticleAnimationOptions {
   // while the field itself still changes at its own pace. > 0.
   double time_scale = 1.0;
   SurfaceView surface;            // surfaces only (render/surface_particles.h): the camera
+  // Dye injected at each seed from the first picture on (integrate/dye.h: released every
+  // dye_release_spacing, carried frame to frame by the same time-scaled field as the
+  // leaves, dropped when it leaves the domain) and drawn over the leaves in every picture
+  // as smoke in the seed's colour, fading with age (render/dye_pictures.h). Planar
+  // domains: x, y in the domain (z ignored); surfaces: a point on or near the surface
+  // (within three edge lengths), moved onto it. tvf::Error before anything is written
+  // otherwise.
+  std::vector<Vec3> dye_seeds;
+  double dye_release_spacing = 0.0;  // time; 0: a quarter of the pictures' spacing
   std::function<void(int done, int total)> progress;
 };
+
+// The dye of a particle animation of `pictures` pictures (nothing without seeds): the
+// injector write_particle_animation uses, for callers that draw their own pictures.
+std::optional<DyeInjector> particle_dye(const TangentBundle& bundle, const Field& carried,
+                                        const ParticleAnimationOptions& options, int pictures);
 
 // On a surface domain the leaves are carried on the surface (render/surface_particles.h).
 AnimationReport write_particle_animation(const TangentBundle& bundle, const Field& field,

@@ -25,12 +25,15 @@
 #include "tvf/analysis/topology.h"
 #include "tvf/core/error.h"
 #include "tvf/field/field.h"
+#include "tvf/integrate/dye.h"
 #include "tvf/mesh/tangent_bundle.h"
+#include "tvf/render/dye_pictures.h"
 #include "tvf/render/image.h"
 
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -171,10 +174,18 @@ struct TextureAnimationOptions {
   // (integrate/periodic_orbits.h; attracting orange, repelling teal) and each Hopf event
   // as a black diamond outline within two frame steps of its time.
   bool overlay_orbits = false;
-  // Planar domains: dye released continuously from each seed since the start of the
-  // animation (picture 0, whatever first is), drawn in each picture as its streakline (integrate/streakline.h; a red line with
-  // the seed as a white disc): smoke injected into the flow.
+  // Dye released continuously from each seed since the start of the animation (picture 0,
+  // whatever first is; a release every quarter of the pictures' spacing), carried from
+  // picture to picture (integrate/dye.h) and drawn in each picture as its streakline, a
+  // line in the seed's colour (red, blue, green, … : dye_colour) with a dark casing, the
+  // seed a disc (render/dye_pictures.h): smoke injected into the flow. Planar domains: x, y
+  // in the domain (z ignored); surfaces: a point on or near the surface (within three edge
+  // lengths), moved onto it, the dye drawn on the surface (hidden behind it).
   std::vector<Vec3> streakline_seeds;
+  // How far the field carries the dye (> 0): its velocities times this, as the particle
+  // renderer's time_scale (designed fields are often slow; the texture itself moves at
+  // its own speed, TextureOptions::pixels_per_frame).
+  double dye_time_scale = 1.0;
   std::string frames_dir;         // PNG frames frame_00000.png … (empty: none)
   std::string video;              // MP4 file (empty: none)
   // Every picture also handed here, in order (k, the picture), from whichever thread
@@ -190,6 +201,19 @@ struct TextureAnimationOptions {
   // nothing is written (the PNG folder is staged, a partial MP4 removed).
   const std::atomic<bool>* cancel = nullptr;
 };
+
+// The dye of a texture animation of `pictures` pictures (TextureAnimationOptions::
+// streakline_seeds; empty without seeds), released from the field's first time and
+// carried by `carried` (the field, its velocities times dye_time_scale), and how
+// it is drawn on pictures width × height pixels (pixels_per_unit: world to pixels at the
+// framed distance; the line is broken where particles are over 24 pixels apart). Throws
+// tvf::Error on a seed outside the domain or too far from the surface.
+std::optional<DyeInjector> texture_dye(const TangentBundle& bundle, const Field& carried,
+                                       const TextureAnimationOptions& options, int pictures);
+// The field times options.dye_time_scale, when there are seeds and the scale is not 1
+// (tvf::Error on a scale that is not a positive number).
+std::optional<Field> texture_dye_field(const Field& field, const TextureAnimationOptions& options);
+DyeStyle texture_dye_style(int width, int height, double pixels_per_unit);
 
 // Thrown by write_texture_animation when TextureAnimationOptions::cancel became true.
 class RenderCancelled : public Error {

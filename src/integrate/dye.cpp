@@ -1,0 +1,139 @@
+#include "tvf/integrate/dye.h"
+
+#include "tvf/core/error.h"
+#include "tvf/field/point_locator.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace tvf {
+
+namespace {
+
+void check_time(const Field& field, double t, const char* what) {
+  const TimeSampling& time = field.time();
+  const double lo = std::min(time.t0, time.t1), hi = std::max(time.t0, time.t1);
+  const double slack = 1e-12 * std::max(1.0, hi - lo);
+  if (!std::isfinite(t) || t < lo - slack || t > hi + slack)
+    throw Error(fmt::format("{} {} is outside the field's time range [{}, {}]", what, t, lo, hi));
+}
+
+}  // namespace
+
+DyeInjector::DyeInjector(const TangentBundle& bundle, const Field& field, std::span<const Vec3> seeds, double t0,
+                         const DyeOptions& options)
+    : bundle_(bundle), flow_(bundle, field, options.flow), t0_(t0), t_(t0) {
+  check_time(field, t0, "the dye's start time");
+  const TimeSampling& time = field.time();
+  const double span = std::abs(time.t1 - time.t0);
+  const double frame_dt = time.frames > 1 ? span / (time.frames - 1) : 1.0;
+  if (!(options.release_spacing >= 0) || !std::isfinite(options.release_spacing))
+    throw Error(fmt::format("dye release spacing {} must be a positive time", options.release_spacing));
+  spacing_ = options.release_spacing > 0 ? options.release_spacing : 0.25 * frame_dt;
+  if (!(spacing_ > 0)) spacing_ = 1.0;
+  if (span / spacing_ > 1e6)
+    throw Error(fmt::format("dye release spacing {} would release more than a million particles per seed over the "
+                            "field's time range [{}, {}]",
+                            spacing_, std::min(time.t0, time.t1), std::max(time.t0, time.t1)));
+  if (!(options.max_seed_distance >= 0) || !std::isfinite(options.max_seed_distance))
+    throw Error(fmt::format("dye seed distance {} must be a positive length", options.max_seed_distance));
+
+  const Mesh& mesh = bundle.mesh();
+  if (mesh.num_faces() == 0) throw_input_error(mesh.source(), "", "the domain has no faces");
+  const PointLocator locator(mesh);
+  const double reach = options.max_seed_distance > 0 ? options.max_seed_distance : 3.0 * mesh.mean_edge_length();
+  for (const Vec3& x : seeds) {
+    if (!x.allFinite()) throw Error("a dye seed must have finite coordinates");
+    const SurfacePoint p = locator.closest(x);
+    const Vec3 on = surface_position(mesh, p);
+    if (bundle.is_flat()) {
+      // As trace_streakline: only x and y count on a planar domain.
+      if ((on - x).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
+        throw Error(fmt::format("the dye seed ({}, {}) is outside the domain", x.x(), x.y()));
+    } else {
+      const double d = (on - x).norm();
+      if (!(d <= reach))
+        throw Error(fmt::format("the dye seed ({}, {}, {}) is {:.3g} from the surface, farther than {:.3g}{}: give a "
+                                "point on or near the surface",
+                                x.x(), x.y(), x.z(), d, reach,
+                                options.max_seed_distance > 0 ? "" : " (three edge lengths)"));
+    }
+    seeds_.push_back(p);
+  }
+  dye_.resize(seeds_.size());
+  advance(t0);
+}
+
+Vec3 DyeInjector::seed_position(size_t s) const { return surface_position(bundle_.mesh(), seeds_[s]); }
+
+void DyeInjector::advance(double t) {
+  check_time(flow_.field(), t, "dye time");
+  if (t < t_) throw Error(fmt::format("dye goes forward in time only: {} is before its time {}", t, t_));
+  // Releases t0 + kΔ for k up to ⌊(t − t0)/Δ + 1e-9⌋, as trace_streakline counts them; one a
+  // hair after t waits at the seed (trace_streakline clamps it to t) and is carried from its
+  // own release time by the next advance.
+  const long last = static_cast<long>(std::floor((t - t0_) / spacing_ + 1e-9));
+  const Mesh& mesh = bundle_.mesh();
+  for (; next_ <= last; ++next_) {
+    const double r = t0_ + spacing_ * static_cast<double>(next_);
+    for (size_t s = 0; s < seeds_.size(); ++s)
+      dye_[s].push_back({seeds_[s], surface_position(mesh, seeds_[s]), r, r, false});
+  }
+  t_ = t;
+  std::vector<Particle*> moving;
+  for (auto& line : dye_)
+    for (Particle& p : line)
+      if (!p.left && p.time < t) moving.push_back(&p);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, moving.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      Particle& p = *moving[i];
+      const FlowMapResult m = flow_.advect(p.where, p.time, t);
+      p.where = m.where;
+      p.position = surface_position(mesh, m.where);
+      p.time = t;
+      p.left = m.left;
+    }
+  });
+}
+
+Streakline DyeInjector::streakline(size_t s) const {
+  const std::vector<Particle>& line = dye_.at(s);
+  Streakline out;
+  out.t = t_;
+  out.released = static_cast<int>(line.size());
+  bool gap = false;
+  for (const Particle& p : line) {
+    if (p.left) {
+      ++out.left;
+      gap = !out.points.empty();
+      continue;
+    }
+    out.points.push_back({p.position, p.where, std::min(p.release, t_), gap});
+    gap = false;
+  }
+  // The particle released at t itself, still at the seed, when t is not a release time.
+  const double last = line.empty() ? -INFINITY : line.back().release;
+  if (last < t_ - 1e-12 * std::max(1.0, std::abs(t_))) {
+    ++out.released;
+    out.points.push_back({seed_position(s), seeds_[s], t_, gap});
+  }
+  return out;
+}
+
+long DyeInjector::released() const {
+  long n = 0;
+  for (size_t s = 0; s < dye_.size(); ++s) n += streakline(s).released;
+  return n;
+}
+
+long DyeInjector::alive() const {
+  long n = 0;
+  for (size_t s = 0; s < dye_.size(); ++s) n += static_cast<long>(streakline(s).points.size());
+  return n;
+}
+
+}  // namespace tvf
