@@ -585,6 +585,48 @@ TEST(SpaceTime, LocalModesSolveMovingElementsLikeCG) {
   }
 }
 
+// modes_local with two segments of different kinds (a key frame at frame 0 and one in the
+// middle: Dirichlet–Dirichlet, then Dirichlet–Neumann up to the last frame), a disc moving
+// through both, and an element that stays put (in the segments' common fixed set).
+TEST(SpaceTime, LocalModesHandleSeveralSegmentsAndElementsThatStay) {
+  const Mesh grid = make_grid(GridSpec{25, 25, {-1.0, -1.0}, {1.0, 1.0}});
+  const TangentBundle bundle(grid);
+  const ConnectionLaplacian l = connection_laplacian(bundle);
+  const int nf = 30, middle = 14;
+  const auto n = static_cast<size_t>(grid.num_vertices());
+  std::vector<char> fixed(n * nf, 0);
+  std::vector<cplx> values(n * nf, cplx(0, 0));
+  for (int j = 0; j < nf; ++j)
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3 x = grid.position(static_cast<int>(i));
+      const Vec3 c(-0.7 + 1.4 * j / (nf - 1), 0.2 * std::sin(0.3 * j), 0);
+      const size_t k = static_cast<size_t>(j) * n + i;
+      if (j == 0 || j == middle) {
+        fixed[k] = 1, values[k] = j == 0 ? cplx(1, 0.5 * x.y()) : cplx(-x.y(), x.x());
+      } else if ((x - c).norm() < 0.25) {
+        fixed[k] = 1, values[k] = cplx(0, 1) * cplx(x.x() - c.x(), x.y() - c.y());
+      } else if ((x - Vec3(0.5, -0.6, 0)).norm() < 0.2) {
+        fixed[k] = 1, values[k] = cplx(x.x() - 0.5, x.y() + 0.6);
+      }
+    }
+  const SpaceTimeSolver solver(l, nf, 30.0);
+  ASSERT_TRUE(solver.local_modes_apply(fixed));
+  const std::vector<cplx> ref = reference_solve(solver, MovingDisc{fixed, values});
+  std::vector<cplx> z(n * nf, cplx(0, 0));
+  solver.interpolate_in_time(fixed, values, z);
+  const SolveReport r = solver.solve(fixed, values, z);
+  ASSERT_TRUE(r.success) << r.method;
+  EXPECT_NE(r.method.find("local solves at the moving constraints"), std::string::npos) << r.method;
+  EXPECT_EQ(r.method.find("finished by"), std::string::npos) << r.method;
+  EXPECT_LE(r.residual, 1e-10);
+  const Eigen::SparseMatrix<cplx> a = assembled(l, nf, 30.0);
+  EXPECT_LT(relative_residual(a, fixed, z), 2e-10);
+  double scale = 0;
+  const double diff = max_difference(ref, z, scale);
+  EXPECT_LT(diff, 1e-8 * scale);
+  std::printf("two segments: %s\n", r.method.c_str());
+}
+
 // The rounds of modes_local depend on how much of the constraints' response the local
 // solves take (their rings), not on the mesh: the same design on grids from 33² to 129²
 // (the disc covering 4 to 16 grid spacings) takes about the same number of rounds.
