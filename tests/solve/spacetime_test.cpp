@@ -13,6 +13,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <tuple>
 
 namespace tvf {
 namespace {
@@ -298,30 +299,43 @@ TEST(SpaceTime, ReportedResidualStaysExactOverManyWarmResolves) {
   }
 }
 
-// A fixed set that moves in time (a moving element) couples the modes: automatic takes
-// CG, and asking for the modes is refused.
-TEST(SpaceTime, MovingConstraintsTakeCG) {
+// A fixed set that moves in time (a moving element) couples the modes: asking for the modes
+// is refused; automatic takes the modes with local solves where there is a key frame, and
+// CG where there is none (the lowest temporal mode then has no shift: its response reaches
+// too far for local solves).
+TEST(SpaceTime, MovingConstraintsTakeLocalModesOrCG) {
   const Mesh& grid = test::grid_mesh();
   const TangentBundle bundle(grid);
   const ConnectionLaplacian l = connection_laplacian(bundle);
   const int nf = 6;
   const auto n = static_cast<size_t>(grid.num_vertices());
-  std::vector<char> fixed(n * nf, 0);
-  std::vector<cplx> values(n * nf, cplx(0, 0)), z(n * nf, cplx(0, 0));
-  for (size_t i = 0; i < n; ++i) fixed[i] = 1, values[i] = cplx(1, 0);
-  for (int j = 1; j < nf; ++j) {
-    const size_t k = static_cast<size_t>(j) * n + static_cast<size_t>(j);  // vertex j at frame j
-    fixed[k] = 1;
-    values[k] = cplx(0, 1);
+  for (const bool key_frame : {true, false}) {
+    std::vector<char> fixed(n * nf, 0);
+    std::vector<cplx> values(n * nf, cplx(0, 0)), z(n * nf, cplx(0, 0));
+    for (size_t i = 0; i < n && key_frame; ++i) fixed[i] = 1, values[i] = cplx(1, 0);
+    for (int j = 1; j < nf; ++j) {
+      const size_t k = static_cast<size_t>(j) * n + static_cast<size_t>(j);  // vertex j at frame j
+      fixed[k] = 1;
+      values[k] = cplx(0, 1);
+    }
+    fixed[2] = 1, values[2] = cplx(0.5, 0);  // frame 0 fixed at one vertex at least
+    SpaceTimeSolver solver(l, nf, 30.0);
+    EXPECT_FALSE(solver.modes_apply(fixed));
+    EXPECT_EQ(solver.local_modes_apply(fixed), key_frame);
+    const SolveReport r = solver.solve(fixed, values, z);
+    EXPECT_TRUE(r.success);
+    if (key_frame)
+      EXPECT_NE(r.method.find("local solves at the moving constraints"), std::string::npos) << r.method;
+    else
+      EXPECT_EQ(r.method.find("preconditioned CG"), 0u) << r.method;
+    SpaceTimeOptions modes;
+    modes.method = SpaceTimeMethod::modes;
+    EXPECT_THROW(solver.solve(fixed, values, z, modes), InternalError);  // a caller's mistake
+    if (!key_frame) {
+      modes.method = SpaceTimeMethod::modes_local;
+      EXPECT_THROW(solver.solve(fixed, values, z, modes), InternalError);
+    }
   }
-  SpaceTimeSolver solver(l, nf, 30.0);
-  EXPECT_FALSE(solver.modes_apply(fixed));
-  const SolveReport r = solver.solve(fixed, values, z);
-  EXPECT_TRUE(r.success);
-  EXPECT_NE(r.method.find("CG"), std::string::npos) << r.method;
-  SpaceTimeOptions modes;
-  modes.method = SpaceTimeMethod::modes;
-  EXPECT_THROW(solver.solve(fixed, values, z, modes), InternalError);  // a caller's mistake
 }
 
 // Replay is bit for bit on any machine (issue 16: 2,327 of 507,000 doubles differed between
@@ -473,6 +487,228 @@ TEST(SpaceTime, LocalSolveNearAMovingElementSavesIterations) {
   std::printf("two-level CG: %d iterations; with the local solve: %d (%s)\n", before.iterations, local.iterations,
               local.method.c_str());
   EXPECT_LT(local.iterations, before.iterations);
+}
+
+// A disc of radius `radius` around c(j) fixed at the frames between two key frames (frame
+// 0 and the last), on any mesh: a moving element's constraints as the generator makes them.
+struct MovingDisc {
+  std::vector<char> fixed;
+  std::vector<cplx> values;
+};
+template <class Centre, class Value>
+MovingDisc moving_disc(const Mesh& mesh, int nf, double radius, Centre centre, Value value) {
+  const auto n = static_cast<size_t>(mesh.num_vertices());
+  MovingDisc d{std::vector<char>(n * nf, 0), std::vector<cplx>(n * nf, cplx(0, 0))};
+  for (int j = 0; j < nf; ++j)
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3 x = mesh.position(static_cast<int>(i));
+      const size_t k = static_cast<size_t>(j) * n + i;
+      if (j == 0) {
+        d.fixed[k] = 1, d.values[k] = cplx(1, 0.5 * x.y());
+      } else if (j == nf - 1) {
+        d.fixed[k] = 1, d.values[k] = cplx(-x.y(), x.x() + 0.3 * x.z());
+      } else if ((x - centre(j)).norm() < radius) {
+        d.fixed[k] = 1, d.values[k] = value(x, centre(j));
+      }
+    }
+  return d;
+}
+
+// The reference: the two-level CG to 1e-11.
+std::vector<cplx> reference_solve(const SpaceTimeSolver& solver, const MovingDisc& d) {
+  std::vector<cplx> z(d.values.size(), cplx(0, 0));
+  solver.interpolate_in_time(d.fixed, d.values, z);
+  SpaceTimeOptions o;
+  o.method = SpaceTimeMethod::cg;
+  o.tolerance = 1e-11;
+  EXPECT_TRUE(solver.solve(d.fixed, d.values, z, o).success);
+  return z;
+}
+
+double max_difference(const std::vector<cplx>& a, const std::vector<cplx>& b, double& scale) {
+  scale = 0;
+  double d = 0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    scale = std::max(scale, std::abs(a[k]));
+    d = std::max(d, std::abs(a[k] - b[k]));
+  }
+  return d;
+}
+
+// Issue 15, third step: a moving element's constraints imposed on the temporal modes of
+// the key frames' fixed set by local solves (SpaceTimeMethod::modes_local, what automatic
+// takes for them): the field the reference CG finds, to the tolerance, on a grid and on a
+// sphere where the disc crosses many frames; the fixed entries kept exactly.
+TEST(SpaceTime, LocalModesSolveMovingElementsLikeCG) {
+  const Mesh grid = make_grid(GridSpec{33, 33, {-1.0, -1.0}, {1.0, 1.0}});
+  const int nf = 40;
+  const MovingDisc on_grid = moving_disc(
+      grid, nf, 0.2, [&](int j) { return Vec3(-0.6 + 1.2 * j / (nf - 1), 0.1, 0); },
+      [](const Vec3& x, const Vec3& c) { return cplx(0, 1) * cplx(x.x() - c.x(), x.y() - c.y()); });
+  const Mesh& sphere = test::icosphere_mesh();
+  // A vortex along the equator, from (0, −1, 0) over (−1, 0, 0) to (0, 1, 0): its field is
+  // the tangent e_z × (x − c) expressed in the tangent bundle below.
+  const MovingDisc on_sphere = moving_disc(
+      sphere, nf, 0.35,
+      [&](int j) {
+        const double a = -kPi / 2 - kPi * j / (nf - 1);
+        return Vec3(std::cos(a), std::sin(a), 0);
+      },
+      [](const Vec3& x, const Vec3& c) { return cplx(x.z() - c.z(), (x - c).norm()); });
+  for (const auto& [name, mesh, d] : {std::tuple{"grid", &grid, &on_grid}, std::tuple{"sphere", &sphere, &on_sphere}}) {
+    const TangentBundle bundle(*mesh);
+    const ConnectionLaplacian l = connection_laplacian(bundle);
+    const SpaceTimeSolver solver(l, nf, 30.0);
+    ASSERT_FALSE(solver.modes_apply(d->fixed)) << name;
+    ASSERT_TRUE(solver.local_modes_apply(d->fixed)) << name;
+    const std::vector<cplx> ref = reference_solve(solver, *d);
+    for (const auto method : {SpaceTimeMethod::modes_local, SpaceTimeMethod::automatic}) {
+      std::vector<cplx> z(d->values.size(), cplx(0, 0));
+      solver.interpolate_in_time(d->fixed, d->values, z);
+      SpaceTimeOptions o;
+      o.method = method;
+      const SolveReport r = solver.solve(d->fixed, d->values, z, o);
+      ASSERT_TRUE(r.success) << name << " " << r.method;
+      EXPECT_LE(r.residual, 1e-10) << name;
+      EXPECT_NE(r.method.find("local solves at the moving constraints"), std::string::npos) << r.method;
+      EXPECT_EQ(r.method.find("finished by"), std::string::npos) << r.method;
+      for (size_t k = 0; k < z.size(); ++k) {
+        if (d->fixed[k]) {
+          ASSERT_EQ(z[k], d->values[k]) << name << " " << k;
+        }
+      }
+      double scale = 0;
+      const double diff = max_difference(ref, z, scale);
+      EXPECT_LT(diff, 1e-8 * scale) << name;
+      std::printf("%s: %s\n", name, r.method.c_str());
+    }
+  }
+}
+
+// modes_local with two segments of different kinds (a key frame at frame 0 and one in the
+// middle: Dirichlet–Dirichlet, then Dirichlet–Neumann up to the last frame), a disc moving
+// through both, and an element that stays put (in the segments' common fixed set).
+TEST(SpaceTime, LocalModesHandleSeveralSegmentsAndElementsThatStay) {
+  const Mesh grid = make_grid(GridSpec{25, 25, {-1.0, -1.0}, {1.0, 1.0}});
+  const TangentBundle bundle(grid);
+  const ConnectionLaplacian l = connection_laplacian(bundle);
+  const int nf = 30, middle = 14;
+  const auto n = static_cast<size_t>(grid.num_vertices());
+  std::vector<char> fixed(n * nf, 0);
+  std::vector<cplx> values(n * nf, cplx(0, 0));
+  for (int j = 0; j < nf; ++j)
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3 x = grid.position(static_cast<int>(i));
+      const Vec3 c(-0.7 + 1.4 * j / (nf - 1), 0.2 * std::sin(0.3 * j), 0);
+      const size_t k = static_cast<size_t>(j) * n + i;
+      if (j == 0 || j == middle) {
+        fixed[k] = 1, values[k] = j == 0 ? cplx(1, 0.5 * x.y()) : cplx(-x.y(), x.x());
+      } else if ((x - c).norm() < 0.25) {
+        fixed[k] = 1, values[k] = cplx(0, 1) * cplx(x.x() - c.x(), x.y() - c.y());
+      } else if ((x - Vec3(0.5, -0.6, 0)).norm() < 0.2) {
+        fixed[k] = 1, values[k] = cplx(x.x() - 0.5, x.y() + 0.6);
+      }
+    }
+  const SpaceTimeSolver solver(l, nf, 30.0);
+  ASSERT_TRUE(solver.local_modes_apply(fixed));
+  const std::vector<cplx> ref = reference_solve(solver, MovingDisc{fixed, values});
+  std::vector<cplx> z(n * nf, cplx(0, 0));
+  solver.interpolate_in_time(fixed, values, z);
+  const SolveReport r = solver.solve(fixed, values, z);
+  ASSERT_TRUE(r.success) << r.method;
+  EXPECT_NE(r.method.find("local solves at the moving constraints"), std::string::npos) << r.method;
+  EXPECT_EQ(r.method.find("finished by"), std::string::npos) << r.method;
+  EXPECT_LE(r.residual, 1e-10);
+  const Eigen::SparseMatrix<cplx> a = assembled(l, nf, 30.0);
+  EXPECT_LT(relative_residual(a, fixed, z), 2e-10);
+  double scale = 0;
+  const double diff = max_difference(ref, z, scale);
+  EXPECT_LT(diff, 1e-8 * scale);
+  std::printf("two segments: %s\n", r.method.c_str());
+}
+
+// The rounds of modes_local depend on how much of the constraints' response the local
+// solves take (their rings), not on the mesh: the same design on grids from 33² to 129²
+// (the disc covering 4 to 16 grid spacings) takes about the same number of rounds.
+TEST(SpaceTime, LocalModesRoundsStayFlatUnderRefinement) {
+  std::vector<int> rounds;
+  for (const int side : {33, 65, 129}) {
+    const Mesh grid = make_grid(GridSpec{side, side, {-1.0, -1.0}, {1.0, 1.0}});
+    const int nf = 40;
+    const MovingDisc d = moving_disc(
+        grid, nf, 0.2, [&](int j) { return Vec3(-0.6 + 1.2 * j / (nf - 1), 0.1, 0); },
+        [](const Vec3& x, const Vec3& c) { return cplx(0, 1) * cplx(x.x() - c.x(), x.y() - c.y()); });
+    const TangentBundle bundle(grid);
+    const ConnectionLaplacian l = connection_laplacian(bundle);
+    const SpaceTimeSolver solver(l, nf, 30.0);
+    std::vector<cplx> z(d.values.size(), cplx(0, 0));
+    solver.interpolate_in_time(d.fixed, d.values, z);
+    SpaceTimeOptions o;
+    o.method = SpaceTimeMethod::modes_local;
+    const SolveReport r = solver.solve(d.fixed, d.values, z, o);
+    ASSERT_TRUE(r.success) << side << " " << r.method;
+    EXPECT_LE(r.residual, 1e-10);
+    std::printf("%d²: %s\n", side, r.method.c_str());
+    rounds.push_back(r.iterations);
+  }
+  EXPECT_LE(rounds[2], rounds[0] + 2) << rounds[0] << " " << rounds[1] << " " << rounds[2];
+  EXPECT_LE(rounds[1], rounds[0] + 2) << rounds[0] << " " << rounds[1] << " " << rounds[2];
+}
+
+// Replay is bit for bit (see ResultsDoNotDependOnTheThreadCount) with modes_local too, and
+// a warm re-solve after an edit of a key frame is what a fresh solve finds.
+TEST(SpaceTime, LocalModesAreThreadCountIndependentAndResolveWarm) {
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1.0, -1.0}, {1.0, 1.0}});
+  const int nf = 24;
+  const MovingDisc d = moving_disc(
+      grid, nf, 0.15, [&](int j) { return Vec3(0.3 - 0.04 * j, -0.5, 0); },
+      [](const Vec3& x, const Vec3& c) { return std::conj(cplx(x.x() - c.x(), x.y() - c.y())); });
+  const TangentBundle bundle(grid);
+  const ConnectionLaplacian l = connection_laplacian(bundle);
+  // A fresh solver for each (a solver keeps its last solve's modes and multipliers: the
+  // same calls in the same order give the same bits).
+  auto solve = [&](bool parallel) {
+    const SpaceTimeSolver solver(l, nf, 30.0);
+    std::vector<cplx> z(d.values.size(), cplx(0, 0));
+    solver.interpolate_in_time(d.fixed, d.values, z);
+    SpaceTimeOptions o;
+    o.method = SpaceTimeMethod::modes_local;
+    o.parallel = parallel;
+    EXPECT_TRUE(solver.solve(d.fixed, d.values, z, o).success);
+    return z;
+  };
+  const std::vector<cplx> serial = solve(false);
+  for (int threads : {1, 2, 4}) {
+    tbb::task_arena arena(threads);
+    const std::vector<cplx> z = arena.execute([&] { return solve(true); });
+    EXPECT_EQ(std::memcmp(z.data(), serial.data(), z.size() * sizeof(cplx)), 0) << threads << " threads";
+  }
+  // Edit key frame 0 near (0.5, 0.5), re-solve warm to 1e-6 from the last result, against a
+  // fresh solver.
+  const auto n = static_cast<size_t>(grid.num_vertices());
+  std::vector<cplx> edited = d.values;
+  for (size_t i = 0; i < n; ++i)
+    if ((grid.position(static_cast<int>(i)) - Vec3(0.5, 0.5, 0)).norm() < 0.2) edited[i] *= std::polar(1.0, 0.3);
+  const SpaceTimeSolver solver(l, nf, 30.0);
+  std::vector<cplx> warm = serial;
+  SpaceTimeOptions o;
+  ASSERT_TRUE(solver.solve(d.fixed, d.values, warm, o).success);
+  o.tolerance = 1e-6;
+  const SolveReport r = solver.solve(d.fixed, edited, warm, o);
+  ASSERT_TRUE(r.success) << r.method;
+  EXPECT_NE(r.method.find("local solves"), std::string::npos) << r.method;
+  const SpaceTimeSolver fresh(l, nf, 30.0);
+  std::vector<cplx> cold(d.values.size(), cplx(0, 0));
+  SpaceTimeOptions tight;
+  tight.tolerance = 1e-11;
+  ASSERT_TRUE(fresh.solve(d.fixed, edited, cold, tight).success);
+  double scale = 0;
+  const double diff = max_difference(cold, warm, scale);
+  EXPECT_LT(diff, 1e-4 * scale);
+  // The reported residual is the measured one.
+  const Eigen::SparseMatrix<cplx> a = assembled(l, nf, 30.0);
+  EXPECT_NEAR(relative_residual(a, d.fixed, warm), r.residual, 0.05 * r.residual + 1e-12);
+  std::printf("warm re-solve: %s, residual %.2e\n", r.method.c_str(), r.residual);
 }
 
 TEST(SpaceTime, InterpolationInTimeIsTheFirstGuess) {

@@ -15,7 +15,14 @@
 //   shift b·λ_k makes all but the lowest few modes nearly diagonal, so the whole solve
 //   costs a few dozen spatial sweeps instead of a few dozen space-time ones. Q is
 //   orthogonal, so the residuals of the modes add up to the residual of the whole.
-// * Matrix-free CG (anything else: moving element constraints). The preconditioner solves
+// * Temporal modes with local solves (a moving element between key frames): the modes of
+//   each segment's common fixed set (the vertices fixed at all its frames), in rounds; after
+//   each round's mode solves, a local constrained solve on the vertices whose temporal line
+//   the moving constraints cut (and `moving_rings` rings around them) sets the solution to
+//   its fixed values there, and only those rows are transformed between frames and modes.
+//   The constraints' multipliers join the modes' right-hand side; what the local solve
+//   leaks out is the next round's residual. 6–10 rounds, flat in the mesh size.
+// * Matrix-free CG (anything else: moving constraints without a key frame). The preconditioner solves
 //   every vertex's temporal line exactly (a real tridiagonal system, fixed entries
 //   splitting it): with b = 30 the time couplings carry about 60/61 of each diagonal
 //   (DESIGN §5: ~60 iterations, independent of mesh size). What it leaves is the low
@@ -42,9 +49,15 @@
 namespace tvf {
 
 enum class SpaceTimeMethod {
-  automatic,  // temporal modes where the fixed set allows it (segments up to 1024 frames), else CG
+  automatic,  // temporal modes where the fixed set allows it (segments up to 1024 frames), else the
+              // modes with local solves where those apply, else CG
   modes,      // temporal modes, or an error where the fixed set does not allow it
   cg,         // matrix-free CG with temporal line solves
+  // Temporal modes with a local solve where the fixed set moves (a moving element): the
+  // modes of the fixed set common to a segment's frames, alternating with a local
+  // constrained solve on the moving constraints' vertices and a few rings around them, or
+  // an error where it does not apply (see local_modes_apply).
+  modes_local,
   // The paper's kind of method, kept as the baseline of the benchmarks: the assembled
   // sparse system, BiCGStab with a Jacobi preconditioner, one thread.
   bicgstab_jacobi,
@@ -71,6 +84,12 @@ struct SpaceTimeOptions {
   // ring measured the same outer iterations for more work). Negative: none (the two-level
   // method before it, kept as the benchmarks' baseline).
   int local_rings = 0;
+
+  // modes_local only: the local solve near a moving constraint covers the vertices whose
+  // temporal line it cuts and this many rings of neighbours around them (Dirichlet zero
+  // beyond). More rings: fewer rounds, more work per round (docs/benchmarks.md: 4 rings took
+  // 6 rounds where 2 took 9–10, as fast on the 65² grid and 14 % faster on the sphere).
+  int moving_rings = 4;
 };
 
 class SpaceTimeSolver {
@@ -91,6 +110,11 @@ public:
 
   // Whether the temporal-mode method applies to this fixed set (see above).
   bool modes_apply(std::span<const char> fixed) const;
+  // Whether the temporal modes with local solves apply: every segment between key frames
+  // ends at a key frame on at least one side, at most a quarter of the vertices have a
+  // temporal line that the fixed set cuts (fixed at some of the segment's frames but not
+  // all), and no segment is longer than the modes take.
+  bool local_modes_apply(std::span<const char> fixed) const;
 
   int frames() const { return frames_; }
   int vertices() const { return static_cast<int>(laplacian_.matrix.rows()); }
@@ -109,7 +133,7 @@ private:
   SolveReport solve_bicgstab(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
                              double bnorm, const SpaceTimeOptions& options) const;
   SolveReport solve_modes(std::span<const char> fixed, std::span<const cplx> rhs, std::span<cplx> x,
-                          double bnorm, const SpaceTimeOptions& options) const;
+                          double bnorm, const SpaceTimeOptions& options, bool local = false) const;
 
   const ConnectionLaplacian& laplacian_;
   int frames_;
