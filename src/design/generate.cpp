@@ -179,7 +179,7 @@ constexpr double constraint_ramp_edges = 2.0;
 // fixed blocks of this many, so that the field does not depend on the thread or rank count.
 // Measured (docs/benchmarks.md, issue 15): fewer frames share too little, more make the
 // changing set, whose Schur complement every frame factors, too large.
-constexpr int frames_per_block = 10;
+constexpr int frames_per_block = 25;
 
 namespace {
 

@@ -1,7 +1,13 @@
 #include "tvf/solve/dirichlet_frames.h"
 
 #include "tvf/core/error.h"
+#include "solve/one_blas_thread.h"
 
+// GCC 12 sees a null outer-index pointer in the Ref that Eigen's CholmodSupport makes of a
+// compressed matrix (viewAsCholmod), which cannot occur (as in connection_laplacian.cpp).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+#include <Eigen/CholmodSupport>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
 
@@ -61,8 +67,8 @@ using Dense = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
 template <class Scalar>
 class Block {
 public:
-  Block(const SpMat<Scalar>& l, const Eigen::VectorXd& diagonal, std::span<const Frame> frames)
-      : l_(l), diagonal_(diagonal), frames_(frames), n_(static_cast<int>(l.rows())) {}
+  Block(const SpMat<Scalar>& l, const Eigen::VectorXd& diagonal, std::span<const Frame> frames, bool cholmod)
+      : l_(l), diagonal_(diagonal), frames_(frames), n_(static_cast<int>(l.rows())), cholmod_(cholmod) {}
 
   // The trailing set of the block: K (status differs between its problems) and the free
   // vertices next to K. Its size, to decide whether to split.
@@ -162,23 +168,22 @@ public:
     }
     SpMat<Scalar> a(n_, n_);
     a.setFromTriplets(t.begin(), t.end());
-    big_.compute(a);
-    if (big_.info() != Eigen::Success) return false;
+    if (!(cholmod_ && factor_cholmod(a)) && !factor_simplicial(a)) return false;
 
     // C = L_TI D_I L_TIᴴ on the border (L_KI = 0: K meets I only through the border).
-    const SpMat<Scalar>& lf = big_.matrixL().nestedExpression();
-    const auto& d = big_.vectorD();
     Dense<Scalar> c = Dense<Scalar>::Zero(nb, nb);
     std::vector<std::pair<int, Scalar>> col;
     for (int j = 0; j < ni_; ++j) {
       col.clear();
-      for (typename SpMat<Scalar>::InnerIterator it(lf, j); it; ++it)
-        if (it.row() >= ni_) {
-          TVF_CHECK(it.row() < ni_ + nb, "a leading column reaches the changing set");
-          col.emplace_back(static_cast<int>(it.row()) - ni_, it.value());
-        }
+      for (int p = fp_[static_cast<size_t>(j)]; p < fp_[static_cast<size_t>(j) + 1]; ++p) {
+        const int row = fi_[static_cast<size_t>(p)];
+        const Scalar x = fx_[static_cast<size_t>(p)];
+        if (row < ni_ || x == Scalar(0)) continue;  // (CHOLMOD's relaxed supernodes store zeros)
+        TVF_CHECK(row < ni_ + nb, "a leading column reaches the changing set");
+        col.emplace_back(row - ni_, x);
+      }
       for (const auto& [ra, va] : col)
-        for (const auto& [rb, vb] : col) c(ra, rb) += va * Scalar(d[j]) * conj_of(vb);
+        for (const auto& [rb, vb] : col) c(ra, rb) += va * Scalar(fd_[static_cast<size_t>(j)]) * conj_of(vb);
     }
 
     // The trailing pattern: L's entries among T, the border's dense block, the diagonal.
@@ -240,11 +245,10 @@ public:
 
     // Forward through the leading columns; the trailing entries then hold the reduced
     // right-hand side b_T − L_TI y_I.
-    const SpMat<Scalar>& lf = big_.matrixL().nestedExpression();
-    const auto& d = big_.vectorD();
-    const int* lp = lf.outerIndexPtr();
-    const int* li = lf.innerIndexPtr();
-    const Scalar* lx = lf.valuePtr();
+    const int* lp = fp_.data();
+    const int* li = fi_.data();
+    const Scalar* lx = fx_.data();
+    const double* d = fd_.data();
     for (int j = 0; j < ni_; ++j) {
       const cplx yj = y[static_cast<size_t>(j)];
       if (yj == cplx(0, 0)) continue;
@@ -302,6 +306,67 @@ public:
   }
 
 private:
+  // Eigen's up-looking simplicial LDLᴴ, in the given order.
+  bool factor_simplicial(const SpMat<Scalar>& a) {
+    Eigen::SimplicialLDLT<SpMat<Scalar>, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt(a);
+    if (ldlt.info() != Eigen::Success) return false;
+    const SpMat<Scalar>& lf = ldlt.matrixL().nestedExpression();
+    fp_.assign(lf.outerIndexPtr(), lf.outerIndexPtr() + n_ + 1);
+    fi_.assign(lf.innerIndexPtr(), lf.innerIndexPtr() + lf.nonZeros());
+    fx_.assign(lf.valuePtr(), lf.valuePtr() + lf.nonZeros());
+    fd_.resize(static_cast<size_t>(n_));
+    for (int j = 0; j < n_; ++j) fd_[static_cast<size_t>(j)] = std::real(ldlt.vectorD()[j]);
+    return true;
+  }
+
+  // CHOLMOD's supernodal factorization (BLAS kernels on the supernodes, one BLAS thread)
+  // in the given order (natural, no postordering), turned into a simplicial LDLᴴ to read
+  // its columns. False (and Eigen's then) if anything differs from that.
+  bool factor_cholmod(SpMat<Scalar>& a) {
+    cholmod_common c;
+    cholmod_start(&c);
+    c.print = 0;
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_NATURAL;
+    c.postorder = 0;
+    c.supernodal = CHOLMOD_SUPERNODAL;
+    cholmod_sparse view = Eigen::viewAsCholmod(Eigen::Ref<SpMat<Scalar>>(a));
+    view.stype = -1;  // the lower triangle
+    bool ok = false;
+    cholmod_factor* f = cholmod_analyze(&view, &c);
+    if (f && c.status == CHOLMOD_OK) {
+      const detail::OneBlasThread one_thread;
+      ok = cholmod_factorize(&view, f, &c) && c.status == CHOLMOD_OK && f->minor == f->n &&
+           cholmod_change_factor(f->xtype, false, false, true, true, f, &c) && !f->is_super && !f->is_ll;
+    }
+    if (ok) {
+      const auto* perm = static_cast<const int*>(f->Perm);
+      for (int j = 0; j < n_ && ok; ++j) ok = perm[j] == j;
+    }
+    if (ok) {
+      const auto* p = static_cast<const int*>(f->p);
+      const auto* i = static_cast<const int*>(f->i);
+      const auto* x = static_cast<const Scalar*>(f->x);
+      fp_.assign(static_cast<size_t>(n_) + 1, 0);
+      fi_.clear();
+      fx_.clear();
+      fd_.resize(static_cast<size_t>(n_));
+      for (int j = 0; j < n_ && ok; ++j) {
+        // Column j: D_j first (the diagonal of an LDLᴴ factor holds D), then L below it.
+        ok = i[p[j]] == j;
+        fd_[static_cast<size_t>(j)] = std::real(x[p[j]]);
+        for (int q = p[j] + 1; q < p[j + 1]; ++q) {
+          fi_.push_back(i[q]);
+          fx_.push_back(x[q]);
+        }
+        fp_[static_cast<size_t>(j) + 1] = static_cast<int>(fi_.size());
+      }
+    }
+    cholmod_free_factor(&f, &c);
+    cholmod_finish(&c);
+    return ok;
+  }
+
   void solve_trailing(const std::vector<cplx>& y, std::vector<cplx>& z) {
     const auto off = static_cast<size_t>(ni_);
     if constexpr (std::is_same_v<Scalar, double>) {
@@ -328,7 +393,12 @@ private:
   std::vector<int> border_, changing_;
   std::vector<int> position_;  // vertex → its row in the block's ordering
   std::vector<int> vertex_;    // row → vertex
-  Eigen::SimplicialLDLT<SpMat<Scalar>, Eigen::Lower, Eigen::NaturalOrdering<int>> big_;
+  bool cholmod_;
+  // The block's factor: D, and L strictly below its diagonal (column j: rows
+  // fi_[fp_[j] … fp_[j + 1]), in increasing order, values fx_).
+  std::vector<int> fp_, fi_;
+  std::vector<Scalar> fx_;
+  std::vector<double> fd_;
   SpMat<Scalar> sigma_;
   std::vector<Scalar> entry_l_, entry_c_;
   std::vector<int> entry_row_;
@@ -339,15 +409,15 @@ template <class Scalar>
 void solve_frames(const SpMat<Scalar>& l, const Eigen::VectorXd& diagonal, double max_trailing,
                   std::span<const Frame> frames, std::span<const std::span<cplx>> out, std::span<SolveReport> reports,
                   DirichletFrames::Statistics& stats, const std::function<void(size_t)>& after_each,
-                  size_t first) {
-  Block<Scalar> block(l, diagonal, frames);
+                  size_t first, bool cholmod) {
+  Block<Scalar> block(l, diagonal, frames, cholmod);
   const int nt = block.trailing();
   if (frames.size() > 1 && nt > max_trailing * static_cast<double>(l.rows())) {
     const size_t half = frames.size() / 2;
     solve_frames(l, diagonal, max_trailing, frames.first(half), out.first(half), reports.first(half), stats,
-                 after_each, first);
+                 after_each, first, cholmod);
     solve_frames(l, diagonal, max_trailing, frames.subspan(half), out.subspan(half), reports.subspan(half), stats,
-                 after_each, first + half);
+                 after_each, first + half, cholmod);
     return;
   }
   ++stats.blocks;
@@ -410,12 +480,13 @@ std::vector<SolveReport> DirichletFrames::solve(std::span<const DirichletProblem
     frames.push_back(effective(problems[k], component_, num_components_));
   }
   Statistics stats;
+  const bool cholmod = static_cast<int>(n) >= options_.cholmod_from;
   if (real_)
     solve_frames<double>(real_matrix_, laplacian_.weight_sum, options_.max_trailing_fraction, frames, out, reports,
-                         stats, after_each, 0);
+                         stats, after_each, 0, cholmod);
   else
     solve_frames<cplx>(laplacian_.matrix, laplacian_.weight_sum, options_.max_trailing_fraction, frames, out, reports,
-                       stats, after_each, 0);
+                       stats, after_each, 0, cholmod);
   const char* method = real_ ? "sparse Cholesky (real LDLᵀ shared by a block of frames, changing vertices last)"
                              : "sparse Cholesky (LDLᴴ shared by a block of frames, changing vertices last)";
   for (size_t k = 0; k < reports.size(); ++k) {
@@ -431,3 +502,5 @@ std::vector<SolveReport> DirichletFrames::solve(std::span<const DirichletProblem
 }
 
 }  // namespace tvf
+
+#pragma GCC diagnostic pop

@@ -63,39 +63,44 @@ Frames moving_discs(const Mesh& mesh, const ConnectionLaplacian& l, int frames, 
 
 // Every frame of a shared block is the frame solved alone by DirichletSolver, to rounding,
 // and its fixed vertices hold their values exactly; on every mesh of the catalogue (grids:
-// a real factorization; curved meshes: a complex one).
+// a real factorization; curved meshes: a complex one), with the block factored by Eigen's
+// simplicial LDLᴴ and by CHOLMOD's supernodal one.
 TEST(DirichletFrames, ABlockOfMovingConstraintsGivesEachFramesOwnSolution) {
   for (const auto& [name, mesh] : test::all_meshes()) {
     const TangentBundle bundle(*mesh);
     const ConnectionLaplacian l = connection_laplacian(bundle);
     const Frames f = moving_discs(*mesh, l, 7, 3 * mesh->mean_edge_length());
     const auto n = static_cast<size_t>(mesh->num_vertices());
-    std::vector<std::vector<cplx>> out(f.fixed.size(), std::vector<cplx>(n));
-    std::vector<std::span<cplx>> spans(out.begin(), out.end());
-    DirichletFramesOptions o;
-    o.max_trailing_fraction = 1.0;  // never split
-    const DirichletFrames frames(l, o);
-    DirichletFrames::Statistics stats;
-    const std::vector<DirichletProblem> problems = f.problems();
-    const std::vector<SolveReport> reports = frames.solve(problems, spans, &stats);
-    EXPECT_EQ(stats.blocks, 1) << name;  // one factorization for the seven frames
-    EXPECT_GT(stats.largest_trailing, 0) << name;
-    EXPECT_EQ(frames.real(), bundle.is_flat()) << name;
     DirichletSolver alone(l, DirichletFactorization::simplicial);
-    for (size_t k = 0; k < f.fixed.size(); ++k) {
-      ASSERT_TRUE(reports[k].success) << name << " " << reports[k].failure;
-      EXPECT_LT(reports[k].residual, 1e-12) << name << " frame " << k;
-      std::vector<cplx> expected(n);
-      ASSERT_TRUE(alone.solve(f.fixed[k], f.values[k], expected, f.penalty[k]).success);
-      double worst = 0, largest = 0;
-      for (size_t v = 0; v < n; ++v) {
-        worst = std::max(worst, std::abs(out[k][v] - expected[v]));
-        largest = std::max(largest, std::abs(expected[v]));
-        if (f.fixed[k][v]) {
-          EXPECT_EQ(out[k][v], f.values[k][v]) << name << " frame " << k << " vertex " << v;
+    for (const int cholmod_from : {0, 1 << 30}) {
+      const std::string what = name + (cholmod_from == 0 ? " (CHOLMOD)" : " (simplicial)");
+      std::vector<std::vector<cplx>> out(f.fixed.size(), std::vector<cplx>(n));
+      std::vector<std::span<cplx>> spans(out.begin(), out.end());
+      DirichletFramesOptions o;
+      o.max_trailing_fraction = 1.0;  // never split
+      o.cholmod_from = cholmod_from;
+      const DirichletFrames frames(l, o);
+      DirichletFrames::Statistics stats;
+      const std::vector<DirichletProblem> problems = f.problems();
+      const std::vector<SolveReport> reports = frames.solve(problems, spans, &stats);
+      EXPECT_EQ(stats.blocks, 1) << what;  // one factorization for the seven frames
+      EXPECT_GT(stats.largest_trailing, 0) << what;
+      EXPECT_EQ(frames.real(), bundle.is_flat()) << what;
+      for (size_t k = 0; k < f.fixed.size(); ++k) {
+        ASSERT_TRUE(reports[k].success) << what << " " << reports[k].failure;
+        EXPECT_LT(reports[k].residual, 1e-12) << what << " frame " << k;
+        std::vector<cplx> expected(n);
+        ASSERT_TRUE(alone.solve(f.fixed[k], f.values[k], expected, f.penalty[k]).success);
+        double worst = 0, largest = 0;
+        for (size_t v = 0; v < n; ++v) {
+          worst = std::max(worst, std::abs(out[k][v] - expected[v]));
+          largest = std::max(largest, std::abs(expected[v]));
+          if (f.fixed[k][v]) {
+            EXPECT_EQ(out[k][v], f.values[k][v]) << what << " frame " << k << " vertex " << v;
+          }
         }
+        EXPECT_LT(worst, 1e-11 * largest) << what << " frame " << k;
       }
-      EXPECT_LT(worst, 1e-11 * largest) << name << " frame " << k;
     }
   }
 }

@@ -39,6 +39,9 @@ struct DirichletFramesOptions {
   // A block whose trailing set T would exceed this fraction of the vertices is split in
   // two (down to single problems, which need no trailing set).
   double max_trailing_fraction = 0.25;
+  // From this many vertices the block's factorization is CHOLMOD's supernodal one (BLAS
+  // on the supernodes, as DirichletSolver's automatic choice), below Eigen's simplicial.
+  int cholmod_from = 8000;
 };
 
 // solve() is const and keeps nothing between calls: one object serves every thread.
