@@ -356,6 +356,7 @@ private:
         ok = i[p[j]] == j;
         fd_[static_cast<size_t>(j)] = std::real(x[p[j]]);
         for (int q = p[j] + 1; q < p[j + 1]; ++q) {
+          if (x[q] == Scalar(0)) continue;  // the relaxed supernodes' padding
           fi_.push_back(i[q]);
           fx_.push_back(x[q]);
         }
