@@ -186,10 +186,9 @@ namespace {
 // The constraints of frame j (issue 15's smooth ramps, and streaklines).
 void frame_constraints(const DesignSpace& space, const Scene& scene, const std::vector<CompiledElement>& elements,
                        const ConnectionLaplacian& laplacian, const StreaklineConstraints& streaklines, int j,
-                       SmoothConstraints& c, std::vector<KeptChart>* kept = nullptr) {
+                       double ramp, SmoothConstraints& c, std::vector<KeptChart>* kept = nullptr) {
   const double d = scene.falloff / (space.diameter() * space.diameter());
   const double t = scene.time.time(j);
-  const double ramp = constraint_ramp_edges * space.mesh().mean_edge_length();
   constrain_elements_smoothly(space, scene, elements, t, d, laplacian.weight_sum, ramp, c, kept);
   streaklines.constrain(t, c.fixed, c.values);
 }
@@ -206,6 +205,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   std::unique_ptr<ConnectionLaplacian> own_laplacian;
   const ConnectionLaplacian& laplacian = laplacian_for(space, scene.solver.weights, options.cache, own_laplacian);
   const StreaklineConstraints streaklines(space, scene);
+  const double ramp = constraint_ramp_edges * mesh.mean_edge_length();
   Field field(scene.time, nv);
   std::mutex report_mutex;
   double worst_residual = 0;
@@ -251,7 +251,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
       std::vector<KeptChart> kept;  // a static element's log map made once a block
       for (int k = 0; k < count; ++k) {
         SmoothConstraints& ck = c[static_cast<size_t>(k)];
-        frame_constraints(space, scene, elements, laplacian, streaklines, j0 + k, ck, &kept);
+        frame_constraints(space, scene, elements, laplacian, streaklines, j0 + k, ramp, ck, &kept);
         problems.push_back({ck.fixed, ck.values, ck.penalty});
         out.push_back(field.frame(j0 + k));
       }
@@ -303,7 +303,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
     for_each_frame(frames, options, [&](int j) {
       if (!distributed_owns_frame(j)) return;  // another rank's, under mpirun (solve/distributed.h)
       SmoothConstraints c;
-      frame_constraints(space, scene, elements, laplacian, streaklines, j, c);
+      frame_constraints(space, scene, elements, laplacian, streaklines, j, ramp, c);
       record(j, solvers.local().solve(c.fixed, c.values, field.frame(j), c.penalty));
     });
   }
