@@ -180,6 +180,10 @@ constexpr double constraint_ramp_edges = 2.0;
 // Measured (docs/benchmarks.md, issue 15): fewer frames share too little, more make the
 // changing set, whose Schur complement every frame factors, too large.
 constexpr int frames_per_block = 25;
+// A block holds its frames' constraints twice while it is solved (the generator's and
+// DirichletFrames' own, about 50 bytes a vertex a frame): on large meshes fewer frames a
+// block keep that under this many bytes (25 frames up to 160,000 vertices; 4 at 10⁶).
+constexpr double block_constraint_bytes = 200e6;
 
 namespace {
 
@@ -227,7 +231,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
 
   if (laplacian.hermitian) {
     // Blocks of consecutive frames sharing one factorization (solve/dirichlet_frames.h).
-    block = frames_per_block;
+    block = std::clamp(static_cast<int>(block_constraint_bytes / (50.0 * nv)), 1, frames_per_block);
     std::unique_ptr<DirichletFrames> own_frames;
     const DirichletFrames* solver = nullptr;
     if (options.cache) {
