@@ -254,6 +254,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
       std::vector<std::span<cplx>> out;
       std::vector<KeptChart> kept;  // a static element's log map made once a block
       for (int k = 0; k < count; ++k) {
+        if (k > 0) check_cancelled(options);
         SmoothConstraints& ck = c[static_cast<size_t>(k)];
         frame_constraints(space, scene, elements, laplacian, streaklines, j0 + k, ramp, ck, &kept);
         problems.push_back({ck.fixed, ck.values, ck.penalty});
