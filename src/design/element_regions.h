@@ -27,8 +27,15 @@ struct ElementOnDomain {
   SurfacePoint at;  // the face holding p(t) (surfaces only)
 };
 
+// A log map kept with the point it is for: placing an element at the same point again
+// (a static element, frame after frame) reuses it instead of three solves.
+struct KeptChart {
+  LocalChart chart;
+  SurfacePoint at;  // face −1: none yet
+};
+
 inline void place_state(const DesignSpace& space, ElementState st, double d, LocalChart& chart,
-                 ElementOnDomain& out) {
+                 ElementOnDomain& out, KeptChart* kept = nullptr) {
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   out.value.resize(nv);
@@ -46,18 +53,27 @@ inline void place_state(const DesignSpace& space, ElementState st, double d, Loc
   }
   if (st.field.kind == LocalField::Kind::regular)
     st.field.velocity = space.bundle().world_to_face(out.at.face, st.velocity);
-  space.log_map().compute(out.at, chart);
+  const LocalChart* used = &chart;
+  if (kept) {
+    if (kept->at.face != out.at.face || kept->at.bary != out.at.bary) {
+      space.log_map().compute(out.at, kept->chart);
+      kept->at = out.at;
+    }
+    used = &kept->chart;
+  } else {
+    space.log_map().compute(out.at, chart);
+  }
   for (size_t v = 0; v < nv; ++v) {
-    const cplx w = chart.coords[v];
+    const cplx w = used->coords[v];
     const double fall = std::exp(-d * std::norm(w));
-    out.value[v] = fall < 1e-300 ? cplx(0, 0) : fall * st.field(w) * chart.frame[v];
+    out.value[v] = fall < 1e-300 ? cplx(0, 0) : fall * st.field(w) * used->frame[v];
     out.distance[v] = std::abs(w);
   }
 }
 
 inline void place_element(const DesignSpace& space, const CompiledElement& el, double t, double d,
-                   LocalChart& chart, ElementOnDomain& out) {
-  place_state(space, el.at(t), d, chart, out);
+                   LocalChart& chart, ElementOnDomain& out, KeptChart* kept = nullptr) {
+  place_state(space, el.at(t), d, chart, out, kept);
 }
 
 // Imposes a placed element's own field on its region (DESIGN §5.2): the vertices within
@@ -115,6 +131,8 @@ inline void constrain_elements(const DesignSpace& space, const Scene& scene,
 // 70° per frame at 65² for a steadily moving vortex); the ramp makes every frame's
 // constraints, and so its field, a continuous function of the element's position.
 // Overlaps add as in constrain_region: where ramps meet, the values are averaged by ψ.
+// `kept` (one per element), when given, keeps each element's last log map for the next
+// call (a static element's is then made once).
 struct SmoothConstraints {
   std::vector<char> fixed;
   std::vector<cplx> values;
@@ -123,7 +141,8 @@ struct SmoothConstraints {
 
 inline void constrain_elements_smoothly(const DesignSpace& space, const Scene& scene,
                                         const std::vector<CompiledElement>& elements, double t, double d,
-                                        const Eigen::VectorXd& diagonal, double ramp, SmoothConstraints& out) {
+                                        const Eigen::VectorXd& diagonal, double ramp, SmoothConstraints& out,
+                                        std::vector<KeptChart>* kept = nullptr) {
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   std::vector<double> psi(nv, 0.0);
@@ -132,9 +151,11 @@ inline void constrain_elements_smoothly(const DesignSpace& space, const Scene& s
   LocalChart chart;
   ElementOnDomain placed;
   std::vector<char> near(nv, 0);
-  for (const CompiledElement& el : elements) {
+  if (kept) kept->resize(elements.size());
+  for (size_t e = 0; e < elements.size(); ++e) {
+    const CompiledElement& el = elements[e];
     if (!el.active(t)) continue;
-    place_element(space, el, t, d, chart, placed);
+    place_element(space, el, t, d, chart, placed, kept ? &(*kept)[e] : nullptr);
     const double radius = region_radius(scene, el);
     // However small the radius, the element's face's corners and their neighbours are in
     // its core, so that the constraints enclose its singularity (as constrain_region).

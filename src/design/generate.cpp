@@ -8,6 +8,7 @@
 #include "tvf/design/streakline_design.h"
 #include "tvf/edit/field_editor.h"
 #include "tvf/solve/connection_laplacian.h"
+#include "tvf/solve/dirichlet_frames.h"
 #include "tvf/solve/distributed.h"
 #include "tvf/solve/spacetime.h"
 
@@ -31,6 +32,7 @@ struct GenerateCache::State {
   std::unique_ptr<ConnectionLaplacian> laplacian;
   std::unique_ptr<DirichletSolver> prototype;
   std::unique_ptr<tbb::enumerable_thread_specific<DirichletSolver>> dirichlet;
+  std::unique_ptr<DirichletFrames> frame_blocks;
   int frames = 0;
   double temporal_weight = 0;
   std::unique_ptr<SpaceTimeSolver> spacetime;
@@ -41,6 +43,7 @@ struct GenerateCache::State {
     spacetime.reset();
     dirichlet.reset();
     prototype.reset();
+    frame_blocks.reset();
     laplacian.reset();
     last.clear();
     has_domain = false;
@@ -172,6 +175,30 @@ Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
 // enough that a vertex fades in over more than one frame's step of a steadily moving element.
 constexpr double constraint_ramp_edges = 2.0;
 
+// Frames solved with one shared factorization (DirichletFrames): consecutive frames in
+// fixed blocks of this many, so that the field does not depend on the thread or rank count.
+// Measured (docs/benchmarks.md, issue 15): fewer frames share too little, more make the
+// changing set, whose Schur complement every frame factors, too large.
+constexpr int frames_per_block = 25;
+// A block holds its frames' constraints twice while it is solved (the generator's and
+// DirichletFrames' own, about 50 bytes a vertex a frame): on large meshes fewer frames a
+// block keep that under this many bytes (25 frames up to 160,000 vertices; 4 at 10⁶).
+constexpr double block_constraint_bytes = 200e6;
+
+namespace {
+
+// The constraints of frame j (issue 15's smooth ramps, and streaklines).
+void frame_constraints(const DesignSpace& space, const Scene& scene, const std::vector<CompiledElement>& elements,
+                       const ConnectionLaplacian& laplacian, const StreaklineConstraints& streaklines, int j,
+                       double ramp, SmoothConstraints& c, std::vector<KeptChart>* kept = nullptr) {
+  const double d = scene.falloff / (space.diameter() * space.diameter());
+  const double t = scene.time.time(j);
+  constrain_elements_smoothly(space, scene, elements, t, d, laplacian.weight_sum, ramp, c, kept);
+  streaklines.constrain(t, c.fixed, c.values);
+}
+
+}  // namespace
+
 Field generate_constrained(const DesignSpace& space, const Scene& scene,
                            const GenerateOptions& options, GenerateReport* report) {
   const auto start = std::chrono::steady_clock::now();
@@ -179,42 +206,17 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
   const int nv = mesh.num_vertices();
   check_field_memory(scene, nv);
   const std::vector<CompiledElement> elements = compile(scene);
-  const double d = scene.falloff / (space.diameter() * space.diameter());
   std::unique_ptr<ConnectionLaplacian> own_laplacian;
   const ConnectionLaplacian& laplacian = laplacian_for(space, scene.solver.weights, options.cache, own_laplacian);
-  // The per-thread solvers (symbolic factorization done): the cache's, or this call's.
-  std::unique_ptr<DirichletSolver> own_prototype;
-  std::unique_ptr<tbb::enumerable_thread_specific<DirichletSolver>> own_solvers;
-  tbb::enumerable_thread_specific<DirichletSolver>* kept = nullptr;
-  if (options.cache) {
-    GenerateCache::State& c = options.cache->state();
-    if (!c.dirichlet) {
-      c.prototype = std::make_unique<DirichletSolver>(laplacian);
-      c.dirichlet = std::make_unique<tbb::enumerable_thread_specific<DirichletSolver>>(*c.prototype);
-    }
-    kept = c.dirichlet.get();
-  } else {
-    own_prototype = std::make_unique<DirichletSolver>(laplacian);
-    own_solvers = std::make_unique<tbb::enumerable_thread_specific<DirichletSolver>>(*own_prototype);
-    kept = own_solvers.get();
-  }
-  tbb::enumerable_thread_specific<DirichletSolver>& solvers = *kept;
-
+  const StreaklineConstraints streaklines(space, scene);
+  const double ramp = constraint_ramp_edges * mesh.mean_edge_length();
   Field field(scene.time, nv);
   std::mutex report_mutex;
   double worst_residual = 0;
   bool all_ok = true;
   std::string method, failure;
   int failed_frame = -1;
-  const double ramp = constraint_ramp_edges * mesh.mean_edge_length();
-  const StreaklineConstraints streaklines(space, scene);
-  for_each_frame(scene.time.frames, options, [&](int j) {
-    if (!distributed_owns_frame(j)) return;  // another rank's, under mpirun (solve/distributed.h)
-    const double t = scene.time.time(j);
-    SmoothConstraints c;
-    constrain_elements_smoothly(space, scene, elements, t, d, laplacian.weight_sum, ramp, c);
-    streaklines.constrain(t, c.fixed, c.values);
-    const SolveReport r = solvers.local().solve(c.fixed, c.values, field.frame(j), c.penalty);
+  auto record = [&](int j, const SolveReport& r) {
     std::lock_guard lock(report_mutex);
     worst_residual = std::max(worst_residual, r.residual);
     if (!r.success && (failed_frame < 0 || j < failed_frame)) {
@@ -223,12 +225,98 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
     }
     all_ok = all_ok && r.success;
     method = r.method;
-  });
+  };
+  const int frames = scene.time.frames;
+  int block = 1;  // frames a rank's unit of work holds (distributed_share_frames)
+
+  if (laplacian.hermitian) {
+    // Blocks of consecutive frames sharing one factorization (solve/dirichlet_frames.h).
+    block = std::clamp(static_cast<int>(block_constraint_bytes / (50.0 * nv)), 1, frames_per_block);
+    std::unique_ptr<DirichletFrames> own_frames;
+    const DirichletFrames* solver = nullptr;
+    if (options.cache) {
+      GenerateCache::State& c = options.cache->state();
+      if (!c.frame_blocks) c.frame_blocks = std::make_unique<DirichletFrames>(laplacian);
+      solver = c.frame_blocks.get();
+    } else {
+      own_frames = std::make_unique<DirichletFrames>(laplacian);
+      solver = own_frames.get();
+    }
+    const int blocks = (frames + block - 1) / block;
+    std::mutex progress_mutex;
+    int done = 0;
+    auto run = [&](int b) {
+      if (!distributed_owns_frame(b)) return;  // another rank's block, under mpirun
+      check_cancelled(options);
+      const int j0 = b * block, count = std::min(block, frames - j0);
+      std::vector<SmoothConstraints> c(static_cast<size_t>(count));
+      std::vector<DirichletProblem> problems;
+      std::vector<std::span<cplx>> out;
+      std::vector<KeptChart> kept;  // a static element's log map made once a block
+      for (int k = 0; k < count; ++k) {
+        if (k > 0) check_cancelled(options);
+        SmoothConstraints& ck = c[static_cast<size_t>(k)];
+        frame_constraints(space, scene, elements, laplacian, streaklines, j0 + k, ramp, ck, &kept);
+        problems.push_back({ck.fixed, ck.values, ck.penalty});
+        out.push_back(field.frame(j0 + k));
+      }
+      // Progress as each frame is solved; a cancellation stops the block there.
+      auto solved = [&](size_t) {
+        if (options.progress) {
+          std::lock_guard lock(progress_mutex);
+          options.progress(++done, frames);
+        }
+        check_cancelled(options);
+      };
+      const std::vector<SolveReport> r = solver->solve(problems, out, nullptr, solved);
+      for (int k = 0; k < count; ++k) {
+        if (r[static_cast<size_t>(k)].success) {
+          record(j0 + k, r[static_cast<size_t>(k)]);
+          continue;
+        }
+        // Not expected (every frame's matrix is positive definite); the frame alone then,
+        // with its own factorization, which says why if it fails too.
+        DirichletSolver alone(laplacian);
+        const SmoothConstraints& ck = c[static_cast<size_t>(k)];
+        record(j0 + k, alone.solve(ck.fixed, ck.values, field.frame(j0 + k), ck.penalty));
+      }
+    };
+    if (options.parallel) {
+      tbb::parallel_for(0, blocks, run);
+    } else {
+      for (int b = 0; b < blocks; ++b) run(b);
+    }
+  } else {
+    // Mean-value weights: one LU factorization per frame (per-thread solvers, symbolic
+    // analysis done once: the cache's, or this call's).
+    std::unique_ptr<DirichletSolver> own_prototype;
+    std::unique_ptr<tbb::enumerable_thread_specific<DirichletSolver>> own_solvers;
+    tbb::enumerable_thread_specific<DirichletSolver>* kept = nullptr;
+    if (options.cache) {
+      GenerateCache::State& c = options.cache->state();
+      if (!c.dirichlet) {
+        c.prototype = std::make_unique<DirichletSolver>(laplacian);
+        c.dirichlet = std::make_unique<tbb::enumerable_thread_specific<DirichletSolver>>(*c.prototype);
+      }
+      kept = c.dirichlet.get();
+    } else {
+      own_prototype = std::make_unique<DirichletSolver>(laplacian);
+      own_solvers = std::make_unique<tbb::enumerable_thread_specific<DirichletSolver>>(*own_prototype);
+      kept = own_solvers.get();
+    }
+    tbb::enumerable_thread_specific<DirichletSolver>& solvers = *kept;
+    for_each_frame(frames, options, [&](int j) {
+      if (!distributed_owns_frame(j)) return;  // another rank's, under mpirun (solve/distributed.h)
+      SmoothConstraints c;
+      frame_constraints(space, scene, elements, laplacian, streaklines, j, ramp, c);
+      record(j, solvers.local().solve(c.fixed, c.values, field.frame(j), c.penalty));
+    });
+  }
   if (!distributed_all(all_ok))
     throw_input_error(scene.label(), "generator",
                       all_ok ? std::string("the constrained solve of a frame failed on another rank")
                              : fmt::format("the constrained solve of frame {} failed: {}", failed_frame, failure));
-  distributed_share_frames(field.data(), static_cast<size_t>(nv), scene.time.frames);
+  distributed_share_frames(field.data(), static_cast<size_t>(nv), frames, block);
   worst_residual = distributed_max(worst_residual);
   if (report) {
     report->method = "constrained optimization per frame, " + method;

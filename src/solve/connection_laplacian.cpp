@@ -2,6 +2,7 @@
 
 #include "tvf/core/error.h"
 #include "tvf/mesh/intrinsic_triangulation.h"
+#include "solve/one_blas_thread.h"
 
 // GCC 12 sees a null outer-index pointer in the Ref that Eigen's CholmodSupport makes of a
 // compressed matrix (viewAsCholmod), which cannot occur: DirichletSolver's matrix is L's
@@ -12,8 +13,6 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
-
-#include <cblas.h>
 
 #include <algorithm>
 #include <cmath>
@@ -122,36 +121,6 @@ DirichletFactorization resolve(const ConnectionLaplacian& laplacian, DirichletFa
             "CHOLMOD's LLᴴ needs Hermitian (cotan or uniform) weights");
   return f;
 }
-
-// OpenBLAS (the pthreads build) runs a large BLAS call on its own threads, which spin
-// while they wait for work. The generators factor frames in parallel, a solver per TBB
-// worker, and CHOLMOD's supernodal kernels called from both workers at once then had
-// OpenBLAS's threads fight the workers for the two cores: 3× the CPU time of the same
-// factorizations with OpenBLAS on one thread (measured, docs/benchmarks.md). So while any
-// CHOLMOD factorization or solve runs, OpenBLAS is held to one thread, and the last one to
-// finish gives it back its threads (the space-time solver's dense products use them). A
-// BLAS call made elsewhere meanwhile runs on one thread: slower, never wrong.
-class OneBlasThread {
-public:
-  OneBlasThread() {
-    std::lock_guard lock(mutex_);
-    if (users_++ == 0) {
-      saved_ = openblas_get_num_threads();
-      if (saved_ != 1) openblas_set_num_threads(1);
-    }
-  }
-  ~OneBlasThread() {
-    std::lock_guard lock(mutex_);
-    if (--users_ == 0 && saved_ != 1) openblas_set_num_threads(saved_);
-  }
-  OneBlasThread(const OneBlasThread&) = delete;
-  OneBlasThread& operator=(const OneBlasThread&) = delete;
-
-private:
-  static inline std::mutex mutex_;
-  static inline int users_ = 0;
-  static inline int saved_ = 1;
-};
 
 }  // namespace
 
@@ -299,7 +268,7 @@ SolveReport DirichletSolver::solve(std::span<const char> constrained, std::span<
 
   Eigen::VectorXcd z;
   if (factorization_ == DirichletFactorization::cholmod) {
-    const OneBlasThread one_thread;
+    const detail::OneBlasThread one_thread;
     impl_->cholmod->factorize(a);
     if (impl_->cholmod->info() != Eigen::Success)
       return failed(impl_->cholmod->cholmod().status == CHOLMOD_NOT_POSDEF

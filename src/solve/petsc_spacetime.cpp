@@ -72,7 +72,7 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian&, int, double, std::
   return {};
 }
 
-void distributed_share_frames(std::span<cplx>, size_t, int) {}
+void distributed_share_frames(std::span<cplx>, size_t, int, int) {}
 bool distributed_all(bool ok) { return ok; }
 double distributed_max(double x) { return x; }
 std::string distributed_broadcast(const std::string& s) { return s; }
@@ -108,13 +108,13 @@ DistributedSession::DistributedSession() {
   active_ = g_active = true;
 }
 
-void distributed_share_frames(std::span<cplx> data, size_t vertices_per_frame, int frames) {
+void distributed_share_frames(std::span<cplx> data, size_t vertices_per_frame, int frames, int frames_per_block) {
   if (!g_active || g_ranks == 1) return;
   TVF_CHECK(data.size() == vertices_per_frame * static_cast<size_t>(frames), "{} values for {} frames of {}",
             data.size(), frames, vertices_per_frame);
   for (int j = 0; j < frames; ++j)
     MPI_Bcast(data.data() + static_cast<size_t>(j) * vertices_per_frame, static_cast<int>(2 * vertices_per_frame),
-              MPI_DOUBLE, j % g_ranks, PETSC_COMM_WORLD);
+              MPI_DOUBLE, (j / std::max(1, frames_per_block)) % g_ranks, PETSC_COMM_WORLD);
 }
 
 bool distributed_all(bool ok) {

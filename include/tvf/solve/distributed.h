@@ -52,11 +52,13 @@ bool distributed_active();
 
 // Generators whose frames are independent (the per-frame `constrained` generator) share
 // them: frame j is computed by rank j mod K. Without a session every frame is this
-// process's.
+// process's. (Frames in blocks of B, as the constrained generator solves them: block b,
+// frames bB … bB + B − 1, by rank b mod K; pass b.)
 bool distributed_owns_frame(int frame);
 // After every rank computed its frames: each frame sent from its rank to all (data is
-// frames × vertices_per_frame, frame-major). Collective; nothing without a session.
-void distributed_share_frames(std::span<cplx> data, size_t vertices_per_frame, int frames);
+// frames × vertices_per_frame, frame-major); frames_per_block B as above. Collective;
+// nothing without a session.
+void distributed_share_frames(std::span<cplx> data, size_t vertices_per_frame, int frames, int frames_per_block = 1);
 // Whether `ok` holds on every rank (collective; `ok` itself without a session).
 bool distributed_all(bool ok);
 // The largest of x over the ranks (collective; x itself without a session).
