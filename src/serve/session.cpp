@@ -34,17 +34,30 @@ namespace tvf::serve {
 
 namespace {
 
-// A result as the readers get it: what the Design made for one scene (its field, domain,
-// report, topology and periodic orbits: complete, immutable once published), the
-// revision and scene it belongs to, and the seconds it took.
+// A result as the readers get it: what the Design made for one scene (its field, domain and
+// report: complete, immutable once published), the revision and scene it belongs to, and
+// the seconds it took. The field is published as soon as it is made; its analysis
+// (topology and periodic orbits) follows on the analysis thread, which publishes a copy of
+// the Result with `analysis` set (an edit's result comes with its analysis at once).
+struct Analysis {
+  Topology topology;
+  PeriodicOrbits orbits;
+  double seconds = 0;
+};
 struct Result {
   long long revision = 0;
   Scene scene;
   std::shared_ptr<const DesignResult> made;
   double seconds = 0;
+  long long domain = 0;  // changes when the domain (mesh) does: GET /api/mesh again
+  std::shared_ptr<const Analysis> analysis;  // the analysis thread's
+  std::string analysis_error;                // the analysis failed (a non-finite value, say)
   const DesignSpace& space() const { return *made->space; }
   const Field& field() const { return made->field; }
-  const Topology& topology() const { return *made->topology; }
+  // The analysis is there: the analysis thread's, or the one an edit's result carries.
+  bool analysed() const { return analysis || (made->topology && made->orbits); }
+  const Topology& topology() const { return analysis ? analysis->topology : *made->topology; }
+  const PeriodicOrbits& orbits() const { return analysis ? analysis->orbits : *made->orbits; }
 };
 
 bool inside(const fs::path& root, const fs::path& p) {
@@ -132,7 +145,11 @@ struct Session::State {
   int done = 0, total = 0;
   long long cancelled = 0;  // solves stopped because a newer change came
   std::shared_ptr<const Result> result;
+  long long domains = 0;           // domains the results have lived on so far (Result::domain)
+  long long analysed_revision = 0;  // the revision of the last analysis published
   std::thread worker;
+  std::condition_variable analysis_work;  // a result without its analysis was published
+  std::thread analyst;
 
   bool interrupted = false;  // interrupt(): waits end at once
   // Counts the changes of status() that GET /api/events pushes: the revision, the
@@ -213,7 +230,7 @@ struct Session::State {
           done = d;
           total = t;
         };
-        job.run(go, true);
+        job.run(go, false);  // the field only: the analysis thread follows
       } catch (const GenerationCancelled&) {
         stopped = true;
       } catch (const std::bad_alloc&) {
@@ -238,12 +255,61 @@ struct Session::State {
         published->made = job.result();
         published->seconds = seconds;
         design->adopt(std::move(job));
-        result = std::move(published);
+        publish(std::move(published));
         state = "ready";
       } else if (!failure.empty()) {
         state = "failed";
         error = failure;
       }
+      touch();
+    }
+  }
+
+  // Makes `r` the result readers get (caller holds `mutex`): its domain id (a new one when
+  // the mesh changed) and, when it has no analysis yet, a job for the analysis thread.
+  void publish(std::shared_ptr<Result> r) {
+    if (!result || &result->space() != &r->space()) ++domains;
+    r->domain = domains;
+    if (r->analysed()) analysed_revision = r->revision;
+    result = std::move(r);
+    if (!result->analysed()) analysis_work.notify_one();
+  }
+
+  // The analysis thread: the topology and periodic orbits of the newest result, made while
+  // the worker solves the next change (a change never waits for the analysis of the one
+  // before), published as a copy of the Result with them. An analysis overtaken by a newer
+  // result is dropped.
+  void run_analyst() {
+    std::unique_lock lock(mutex);
+    for (;;) {
+      analysis_work.wait(lock, [&] { return stop || (result && !result->analysed() && result->analysis_error.empty()); });
+      if (stop) return;
+      const std::shared_ptr<const Result> r = result;
+      lock.unlock();
+      auto made = std::make_shared<Analysis>();
+      std::string failure;
+      const auto start = std::chrono::steady_clock::now();
+      try {
+        TopologyOptions to;
+        to.parallel = options.parallel;
+        made->topology = analyze_topology(r->space().bundle(), r->field(), to);
+        made->orbits = find_periodic_orbits(r->space().bundle(), r->field(), made->topology);
+      } catch (const std::bad_alloc&) {
+        failure = "the analysis needs more memory than this machine has";
+      } catch (const std::exception& e) {
+        failure = e.what();
+      }
+      made->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      lock.lock();
+      if (result != r) continue;  // a newer result (or an edit) came meanwhile
+      auto next = std::make_shared<Result>(*r);
+      if (failure.empty()) {
+        next->analysis = std::move(made);
+        analysed_revision = next->revision;
+      } else {
+        next->analysis_error = failure;
+      }
+      result = std::move(next);
       touch();
     }
   }
@@ -328,6 +394,7 @@ Session::Session(SessionOptions options) : s_(std::make_unique<State>()) {
   remove_stale_temporaries(s_->dir);
   if (path.parent_path() != s_->dir) remove_stale_temporaries(path.parent_path());
   s_->worker = std::thread([this] { s_->run_worker(); });
+  s_->analyst = std::thread([this] { s_->run_analyst(); });
   std::lock_guard lock(s_->mutex);
   s_->schedule();
 }
@@ -339,9 +406,11 @@ Session::~Session() {
     s_->interrupted = true;
     if (s_->cancel) s_->cancel->store(true);
     s_->work.notify_all();
+    s_->analysis_work.notify_all();
     s_->changed.notify_all();
   }
   if (s_->worker.joinable()) s_->worker.join();
+  if (s_->analyst.joinable()) s_->analyst.join();
 }
 
 const fs::path& Session::dir() const { return s_->dir; }
@@ -412,7 +481,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   const auto start = std::chrono::steady_clock::now();
   EditReport report;
   try {
-    report = job->run(r->made, true);
+    report = job->run(r->made, false);  // its analysis follows on the analysis thread
   } catch (const EditRefused& refused) {
     throw RequestError(422, fmt::format("refused to {}: {}; the scene is unchanged", describe(job->edit()),
                                         refused.what()));
@@ -429,7 +498,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   s_->design->adopt(std::move(*job));  // saves the scene first (before_change)
   made->revision = s_->design->revision();
   if (s_->cancel) s_->cancel->store(true);
-  s_->result = std::move(made);
+  s_->publish(std::move(made));
   s_->state = "ready";
   s_->error.clear();
   s_->touch();
@@ -463,10 +532,16 @@ json Session::status() const {
             {"error", s_->error},
             {"cancelled", s_->cancelled}};
   if (s_->result) {
-    j["warnings"] = s_->result->made->report.warnings;
-    j["method"] = s_->result->made->report.method;
-    j["seconds"] = s_->result->seconds;
+    const Result& r = *s_->result;
+    j["warnings"] = r.made->report.warnings;
+    j["method"] = r.made->report.method;
+    j["seconds"] = r.seconds;
+    j["domain"] = r.domain;
+    j["analysis"] = r.analysed() ? "ready" : r.analysis_error.empty() ? "running" : "failed";
+    if (!r.analysis_error.empty()) j["analysis_error"] = r.analysis_error;
+    if (r.analysis) j["analysis_seconds"] = r.analysis->seconds;
   }
+  j["analysis_revision"] = s_->analysed_revision;
   return j;
 }
 
@@ -495,7 +570,7 @@ json Session::mesh() const {
   std::vector<int> f;
   f.reserve(static_cast<size_t>(m.num_faces()) * 3);
   for (const Face& face : m.faces()) f.insert(f.end(), face.begin(), face.end());
-  json j = {{"revision", r->revision}, {"planar", planar}, {"vertices", compact(v)}, {"faces", f}};
+  json j = {{"revision", r->revision}, {"domain", r->domain}, {"planar", planar}, {"vertices", compact(v)}, {"faces", f}};
   if (planar) {
     const GridSpec& g = *r->scene.domain.grid;
     j["grid"] = {{"size", {g.nx, g.ny}}, {"min", {g.min.x(), g.min.y()}}, {"max", {g.max.x(), g.max.y()}}};
@@ -510,12 +585,16 @@ json Session::frame(int j) const {
     throw RequestError(400, fmt::format("frame: {} is outside [0, {}]", j, frames - 1));
   const bool planar = r->scene.domain.is_planar();
   json sing = json::array();
-  const auto& list = r->topology().singularities[static_cast<size_t>(j)];
+  // The frame's singularities: the analysis's, with their paths; before it is there, found
+  // for this frame alone (the same list: topology.h), with "path" −1.
+  const std::vector<Singularity> own =
+      r->analysed() ? std::vector<Singularity>() : find_singularities(r->space().bundle(), r->field(), j);
+  const auto& list = r->analysed() ? r->topology().singularities[static_cast<size_t>(j)] : own;
   for (size_t k = 0; k < list.size(); ++k)
     sing.push_back({{"position", vec3(list[k].position, planar)},
                     {"type", to_string(list[k].type)},
                     {"index", list[k].index},
-                    {"path", r->topology().singularity_path[static_cast<size_t>(j)][k]}});
+                    {"path", r->analysed() ? r->topology().singularity_path[static_cast<size_t>(j)][k] : -1}});
   return {{"revision", r->revision},
           {"frame", j},
           {"frames", frames},
@@ -525,9 +604,26 @@ json Session::frame(int j) const {
 }
 
 json Session::analysis() const {
-  const auto r = s_->current_result();
+  // The analysis of the current result, waiting for it (it follows the field) up to
+  // field_wait_seconds; a newer result while waiting: its analysis.
+  std::shared_ptr<const Result> r = s_->current_result();
+  {
+    std::unique_lock lock(s_->mutex);
+    s_->changed.wait_until(lock, s_->wait_deadline(), [&] {
+      r = s_->result;
+      return s_->interrupted || r->analysed() || !r->analysis_error.empty();
+    });
+    if (s_->interrupted) throw RequestError(503, "analysis: the server is stopping");
+  }
+  if (!r->analysis_error.empty())
+    throw RequestError(409, fmt::format("analysis: the field of revision {} could not be analysed: {}", r->revision,
+                                        r->analysis_error));
+  if (!r->analysed())
+    throw RequestError(409, fmt::format("analysis: the analysis of revision {} is still running; try again when "
+                                        "/api/status says its analysis is ready",
+                                        r->revision));
   json j = topology_to_json(r->topology());
-  add_periodic_orbits_to_json(j, *r->made->orbits);
+  add_periodic_orbits_to_json(j, r->orbits());
   j["revision"] = r->revision;
   return j;
 }

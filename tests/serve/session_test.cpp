@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -75,6 +76,56 @@ TEST(ServeSession, StartsFromTheInitialSceneSavesItAndGeneratesIt) {
   const json a = s.analysis();
   EXPECT_EQ(a["frames"], 21);
   EXPECT_FALSE(a["paths"].empty());
+}
+
+// Issue 15: the field is published before its analysis, which follows on its own thread:
+// a frame read before the analysis has the same singularities (found for that frame alone,
+// "path" −1), the analysis then arrives for that revision, and the domain id stays while
+// the mesh does (the page downloads the mesh again only when it changes).
+TEST(ServeSession, TheFieldIsPublishedFirstAndItsAnalysisFollows) {
+  test::TempDir dir;
+  Session s(options_in(dir));
+  ASSERT_TRUE(s.wait_idle(60));
+  const json first = s.analysis();  // waits for the analysis of the current result
+  json st = s.status();
+  EXPECT_EQ(st["analysis"], "ready");
+  EXPECT_EQ(st["analysis_revision"], st["result_revision"]);
+  EXPECT_EQ(first["revision"], st["result_revision"]);
+  const long long domain = st["domain"];
+  EXPECT_EQ(s.mesh()["domain"], domain);
+
+  json next = s.scene()["scene"];
+  next["elements"][2]["path"][0][0] = 0.25;  // the source moves: same domain
+  s.put_scene(next);
+  ASSERT_TRUE(s.wait_idle(60));
+  st = s.status();
+  EXPECT_EQ(st["domain"], domain);
+  // Whether or not the analysis is there yet, a frame's singularities are the analysis's.
+  const json frame = s.frame(10);
+  const json a = s.analysis();
+  EXPECT_EQ(a["revision"], st["result_revision"]);
+  EXPECT_EQ(s.status()["analysis_revision"], st["result_revision"]);
+  std::vector<std::array<double, 2>> from_frame, from_analysis;
+  for (const auto& x : frame["singularities"])
+    from_frame.push_back({x["position"][0].get<double>(), x["position"][1].get<double>()});
+  for (const auto& x : a["singularities"])
+    if (x["frame"] == 10) from_analysis.push_back({x["position"][0].get<double>(), x["position"][1].get<double>()});
+  std::sort(from_frame.begin(), from_frame.end());
+  std::sort(from_analysis.begin(), from_analysis.end());
+  ASSERT_EQ(from_frame.size(), from_analysis.size());
+  ASSERT_FALSE(from_frame.empty());
+  for (size_t k = 0; k < from_frame.size(); ++k) {
+    EXPECT_NEAR(from_frame[k][0], from_analysis[k][0], 1e-12);
+    EXPECT_NEAR(from_frame[k][1], from_analysis[k][1], 1e-12);
+  }
+  // Read after the analysis: the singularities name their paths.
+  for (const auto& x : s.frame(10)["singularities"]) EXPECT_GE(x["path"].get<int>(), 0);
+
+  next["domain"]["grid"]["size"] = {25, 25};  // another mesh: another domain id
+  s.put_scene(next);
+  ASSERT_TRUE(s.wait_idle(60));
+  EXPECT_NE(s.status()["domain"], domain);
+  EXPECT_EQ(s.mesh()["vertices"].size(), 25u * 25u * 3u);
 }
 
 TEST(ServeSession, RefusedScenesChangeNothingAndUndoRedoWalkTheHistory) {
