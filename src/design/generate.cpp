@@ -162,7 +162,7 @@ Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
       place_element(space, el, t, d, chart, placed);
       for (size_t v = 0; v < out.size(); ++v) out[v] += placed.value[v];
     }
-  });
+  }, &field);
   if (report) report->method = "basis field summation";
   finish_report(report, scene, nv, start);
   return field;
@@ -223,7 +223,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
     }
     all_ok = all_ok && r.success;
     method = r.method;
-  });
+  }, &field);
   if (!distributed_all(all_ok))
     throw_input_error(scene.label(), "generator",
                       all_ok ? std::string("the constrained solve of a frame failed on another rank")
@@ -408,7 +408,10 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
 
 Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                GenerateReport* report) {
-  Field field = generate_unedited(space, scene, options, report);
+  // The first frame's values are final only when nothing changes frames afterwards.
+  GenerateOptions o = options;
+  if (!scene.edits.empty() || scene.incompressible) o.first_frame_done = nullptr;
+  Field field = generate_unedited(space, scene, o, report);
   check_cancelled(options);
   // The scene's edits, in order, on the generated field (DESIGN §7; edit/field_editor.h).
   const auto start = std::chrono::steady_clock::now();

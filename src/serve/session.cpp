@@ -25,7 +25,9 @@
 
 #include <cerrno>
 #include <csignal>
+#include <sys/resource.h>
 #include <sys/types.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -44,6 +46,17 @@ struct Analysis {
   PeriodicOrbits orbits;
   double seconds = 0;
 };
+// The frame a viewer shows, made first by a per-frame generator while the other frames
+// are still being solved (GenerateOptions::first_frame): GET /api/preview.
+struct Preview {
+  long long revision = 0;
+  int frame = 0, frames = 0;
+  double t = 0;
+  bool planar = true;
+  std::shared_ptr<const DesignSpace> space;
+  std::vector<cplx> values;  // |V|, each in its vertex basis
+};
+
 struct Result {
   long long revision = 0;
   Scene scene;
@@ -147,6 +160,8 @@ struct Session::State {
   std::shared_ptr<const Result> result;
   long long domains = 0;           // domains the results have lived on so far (Result::domain)
   long long analysed_revision = 0;  // the revision of the last analysis published
+  int focus_frame = 0;                       // the frame asked for last: made first
+  std::shared_ptr<const Preview> preview;    // that frame of a solve under way
   std::thread worker;
   std::condition_variable analysis_work;  // a result without its analysis was published
   std::thread analyst;
@@ -216,6 +231,7 @@ struct Session::State {
       if (stop) return;
       pending = false;
       Design::Solve job = design->prepare_solve();
+      const int first_frame = focus_frame;
       auto flag = std::make_shared<std::atomic<bool>>(false);
       cancel = flag;
       lock.unlock();
@@ -225,6 +241,21 @@ struct Session::State {
       try {
         GenerateOptions go;
         go.cancel = flag.get();
+        go.first_frame = first_frame;
+        go.first_frame_done = [this, &job](int frame, std::span<const cplx> values) {
+          auto p = std::make_shared<Preview>();
+          p->revision = job.revision();
+          p->frame = frame;
+          p->t = job.scene().time.time(frame);
+          p->frames = job.scene().time.frames;
+          p->planar = job.scene().domain.is_planar();
+          p->space = job.space();
+          p->values.assign(values.begin(), values.end());
+          std::lock_guard preview_lock(mutex);
+          if (p->revision != design->revision() || !p->space) return;  // already superseded
+          preview = std::move(p);
+          touch();
+        };
         go.progress = [this](int d, int t) {
           std::lock_guard progress_lock(mutex);
           done = d;
@@ -278,8 +309,11 @@ struct Session::State {
   // The analysis thread: the topology and periodic orbits of the newest result, made while
   // the worker solves the next change (a change never waits for the analysis of the one
   // before), published as a copy of the Result with them. An analysis overtaken by a newer
-  // result is dropped.
+  // result is dropped. It runs on this thread alone (not TBB's workers) at a lower
+  // priority (nice 10): on a busy machine the next solve and the requests for the new
+  // picture go first.
   void run_analyst() {
+    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);  // best effort: a failure changes nothing
     std::unique_lock lock(mutex);
     for (;;) {
       analysis_work.wait(lock, [&] { return stop || (result && !result->analysed() && result->analysis_error.empty()); });
@@ -291,9 +325,11 @@ struct Session::State {
       const auto start = std::chrono::steady_clock::now();
       try {
         TopologyOptions to;
-        to.parallel = options.parallel;
+        to.parallel = false;
         made->topology = analyze_topology(r->space().bundle(), r->field(), to);
-        made->orbits = find_periodic_orbits(r->space().bundle(), r->field(), made->topology);
+        PeriodicOrbitOptions po;
+        po.parallel = false;
+        made->orbits = find_periodic_orbits(r->space().bundle(), r->field(), made->topology, po);
       } catch (const std::bad_alloc&) {
         failure = "the analysis needs more memory than this machine has";
       } catch (const std::exception& e) {
@@ -542,6 +578,11 @@ json Session::status() const {
     if (r.analysis) j["analysis_seconds"] = r.analysis->seconds;
   }
   j["analysis_revision"] = s_->analysed_revision;
+  // The shown frame of the solve under way, ready before the other frames: GET /api/preview.
+  if (s_->preview && (!s_->result || s_->preview->revision > s_->result->revision)) {
+    j["preview_revision"] = s_->preview->revision;
+    j["preview_frame"] = s_->preview->frame;
+  }
   return j;
 }
 
@@ -583,6 +624,10 @@ json Session::frame(int j) const {
   const int frames = r->field().frames();
   if (j < 0 || j >= frames)
     throw RequestError(400, fmt::format("frame: {} is outside [0, {}]", j, frames - 1));
+  {
+    std::lock_guard lock(s_->mutex);
+    s_->focus_frame = j;  // the next solve makes this frame first (preview())
+  }
   const bool planar = r->scene.domain.is_planar();
   json sing = json::array();
   // The frame's singularities: the analysis's, with their paths; before it is there, found
@@ -600,6 +645,38 @@ json Session::frame(int j) const {
           {"frames", frames},
           {"t", r->field().time().time(j)},
           {"vectors", compact(world_vectors_f32(r->space().bundle(), r->field(), j))},
+          {"singularities", sing}};
+}
+
+json Session::preview() const {
+  std::shared_ptr<const Preview> p;
+  long long result_revision = 0;
+  {
+    std::lock_guard lock(s_->mutex);
+    p = s_->preview;
+    result_revision = s_->result ? s_->result->revision : 0;
+  }
+  if (!p || p->revision <= result_revision)
+    throw RequestError(404, "preview: no solve under way has its first frame ready; read GET /api/frame/J");
+  json sing = json::array();
+  for (const Singularity& x : find_singularities(p->space->bundle(), p->values))
+    sing.push_back({{"position", vec3(x.position, p->planar)},
+                    {"type", to_string(x.type)},
+                    {"index", x.index},
+                    {"path", -1}});
+  std::vector<float> world;
+  world.reserve(p->values.size() * 3);
+  const TangentBundle& bundle = p->space->bundle();
+  for (size_t v = 0; v < p->values.size(); ++v) {
+    const Vec3 w = bundle.vertex_to_world(static_cast<int>(v), p->values[v]);
+    for (int k = 0; k < 3; ++k) world.push_back(static_cast<float>(w[k]));
+  }
+  return {{"revision", p->revision},
+          {"frame", p->frame},
+          {"frames", p->frames},
+          {"t", p->t},
+          {"preview", true},
+          {"vectors", compact(world)},
           {"singularities", sing}};
 }
 

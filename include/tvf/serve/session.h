@@ -135,6 +135,14 @@ public:
   // still running (the singularities are found for this frame alone then: the same list).
   // Frame in [0, frames − 1]. RequestError(409) before the first result.
   nlohmann::json frame(int frame) const;
+  // The frame a client shows, ready before the rest of a solve under way (issue 15): the
+  // frame asked for last (frame()) is made first by the generators that solve frame by
+  // frame (basis, constrained, deform; not spacetime, and not for scenes with edits or an
+  // incompressible projection), and published here as soon as it is solved, with status's
+  // "preview_revision" and "preview_frame". The same JSON as frame() plus "preview": true,
+  // singularities found for the frame alone ("path" −1); its values are the final field's.
+  // RequestError(404) when no solve under way has one newer than the last result.
+  nlohmann::json preview() const;
   // The analysis JSON of DESIGN §9 of the last result, plus "revision". Waits for it (it
   // follows the field; a newer result meanwhile: the newer one's) up to
   // field_wait_seconds: RequestError(409) when it is not there by then or failed.
