@@ -133,7 +133,8 @@ public:
   // [x, y, z] per vertex, flattened, "singularities": [{"position", "type", "index",
   // "path"}]}: "path" is the id in the analysis, −1 while the analysis of the result is
   // still running (the singularities are found for this frame alone then: the same list).
-  // Frame in [0, frames − 1]. RequestError(409) before the first result.
+  // Frame in [0, frames − 1]. RequestError(409) before the first result. The frame read
+  // last is the one the next solve makes first (preview()).
   nlohmann::json frame(int frame) const;
   // The frame a client shows, ready before the rest of a solve under way (issue 15): the
   // frame asked for last (frame()) is made first by the generators that solve frame by
