@@ -252,7 +252,9 @@ struct Session::State {
           p->space = job.space();
           p->values.assign(values.begin(), values.end());
           std::lock_guard preview_lock(mutex);
-          if (p->revision != design->revision() || !p->space) return;  // already superseded
+          // Superseded already, or on another domain than the result's (a client would
+          // draw it on the mesh it has): no preview.
+          if (p->revision != design->revision() || !p->space || !result || &result->space() != p->space.get()) return;
           preview = std::move(p);
           touch();
         };

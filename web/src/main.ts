@@ -64,7 +64,6 @@ interface State {
   // per-frame generators make the shown frame first: GET /api/preview).
   preview?: Frame;
   shownRevision: number; // the revision of the field drawn now
-
   frames: Map<number, Frame>;
   frame: number;
   tool: string;

@@ -138,9 +138,10 @@ public:
   nlohmann::json frame(int frame) const;
   // The frame a client shows, ready before the rest of a solve under way (issue 15): the
   // frame asked for last (frame()) is made first by the generators that solve frame by
-  // frame (basis, constrained, deform; not spacetime, and not for scenes with edits or an
-  // incompressible projection), and published here as soon as it is solved, with status's
-  // "preview_revision" and "preview_frame". The same JSON as frame() plus "preview": true,
+  // frame (basis, constrained, deform; not spacetime, not for scenes with edits or an
+  // incompressible projection, nor on another domain than the last result's), and
+  // published here as soon as it is solved, with status's "preview_revision" and
+  // "preview_frame". The same JSON as frame() plus "preview": true,
   // singularities found for the frame alone ("path" −1); its values are the final field's.
   // RequestError(404) when no solve under way has one newer than the last result.
   nlohmann::json preview() const;
