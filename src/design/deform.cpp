@@ -128,7 +128,7 @@ Field generate_deform(const DesignSpace& space, const Scene& scene, const Genera
     worst = std::max(worst, r.residual);
     if (!r.success && failure.empty()) failure = r.failure;
     ok = ok && r.success;
-  });
+  }, &field);
   if (!ok) throw_input_error(scene.label(), "deform", "a frame's constrained solve failed: " + failure);
   if (report) {
     report->method = deformation.size() == 0 ? "time-varying transformation V(t) = M(t) V(t0)"

@@ -196,7 +196,7 @@ inline void constrain_elements_smoothly(const DesignSpace& space, const Scene& s
 
 // Runs solve_frame(j) for every frame, in parallel or not, reporting progress.
 template <class F>
-void for_each_frame(int frames, const GenerateOptions& options, F&& solve_frame) {
+void for_each_frame(int frames, const GenerateOptions& options, F&& solve_frame, const Field* field = nullptr) {
   std::mutex progress_mutex;
   int done = 0;
   auto run = [&](int j) {
@@ -207,10 +207,23 @@ void for_each_frame(int frames, const GenerateOptions& options, F&& solve_frame)
       options.progress(++done, frames);
     }
   };
+  // The frame a viewer shows first (GenerateOptions::first_frame), when the caller gives
+  // the field the frames are written to.
+  const int first = field && options.first_frame_done && options.first_frame >= 0 && options.first_frame < frames
+                        ? options.first_frame
+                        : -1;
+  if (first >= 0) {
+    run(first);
+    check_cancelled(options);
+    options.first_frame_done(first, field->frame(first));
+  }
+  auto rest = [&](int j) {
+    if (j != first) run(j);
+  };
   if (options.parallel) {
-    tbb::parallel_for(0, frames, run);
+    tbb::parallel_for(0, frames, rest);
   } else {
-    for (int j = 0; j < frames; ++j) run(j);
+    for (int j = 0; j < frames; ++j) rest(j);
   }
 }
 

@@ -165,7 +165,7 @@ Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
       place_element(space, el, t, d, chart, placed);
       for (size_t v = 0; v < out.size(); ++v) out[v] += placed.value[v];
     }
-  });
+  }, &field);
   if (report) report->method = "basis field summation";
   finish_report(report, scene, nv, start);
   return field;
@@ -243,6 +243,9 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
       solver = own_frames.get();
     }
     const int blocks = (frames + block - 1) / block;
+    const int first = options.first_frame_done && options.first_frame >= 0 && options.first_frame < frames
+                          ? options.first_frame
+                          : -1;
     std::mutex progress_mutex;
     int done = 0;
     auto run = [&](int b) {
@@ -261,12 +264,13 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
         out.push_back(field.frame(j0 + k));
       }
       // Progress as each frame is solved; a cancellation stops the block there.
-      auto solved = [&](size_t) {
+      auto solved = [&](size_t k) {
         if (options.progress) {
           std::lock_guard lock(progress_mutex);
           options.progress(++done, frames);
         }
         check_cancelled(options);
+        if (j0 + static_cast<int>(k) == first) options.first_frame_done(first, field.frame(first));
       };
       const std::vector<SolveReport> r = solver->solve(problems, out, nullptr, solved);
       for (int k = 0; k < count; ++k) {
@@ -281,10 +285,17 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
         record(j0 + k, alone.solve(ck.fixed, ck.values, field.frame(j0 + k), ck.penalty));
       }
     };
+    // The block holding the frame a viewer shows first (GenerateOptions::first_frame) runs
+    // before the others, and that frame is published as soon as it is solved; the blocks'
+    // bounds stay the same, so the field does not depend on which frame is shown.
+    if (first >= 0) run(first / block);
+    auto rest = [&](int b) {
+      if (first < 0 || b != first / block) run(b);
+    };
     if (options.parallel) {
-      tbb::parallel_for(0, blocks, run);
+      tbb::parallel_for(0, blocks, rest);
     } else {
-      for (int b = 0; b < blocks; ++b) run(b);
+      for (int b = 0; b < blocks; ++b) rest(b);
     }
   } else {
     // Mean-value weights: one LU factorization per frame (per-thread solvers, symbolic
@@ -310,7 +321,7 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
       SmoothConstraints c;
       frame_constraints(space, scene, elements, laplacian, streaklines, j, ramp, c);
       record(j, solvers.local().solve(c.fixed, c.values, field.frame(j), c.penalty));
-    });
+    }, &field);
   }
   if (!distributed_all(all_ok))
     throw_input_error(scene.label(), "generator",
@@ -496,7 +507,10 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
 
 Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                GenerateReport* report) {
-  Field field = generate_unedited(space, scene, options, report);
+  // The first frame's values are final only when nothing changes frames afterwards.
+  GenerateOptions o = options;
+  if (!scene.edits.empty() || scene.incompressible) o.first_frame_done = nullptr;
+  Field field = generate_unedited(space, scene, o, report);
   check_cancelled(options);
   // The scene's edits, in order, on the generated field (DESIGN §7; edit/field_editor.h).
   const auto start = std::chrono::steady_clock::now();

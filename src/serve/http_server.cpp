@@ -555,6 +555,7 @@ struct HttpServer::Impl {
                  send_json(res, s.frame(std::stoi(req.matches[1].str())));
                }));
     server.Get("/api/analysis", wrap([&s](const auto&, auto& res) { send_json(res, s.analysis()); }));
+    server.Get("/api/preview", wrap([&s](const auto&, auto& res) { send_json(res, s.preview()); }));
     server.Post("/api/export", wrap_body([&s](const auto& req, auto& res, const std::string& text) {
                   send_json(res, s.export_field(parse_json(text), if_match(req)));
                 }));

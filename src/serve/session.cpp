@@ -25,7 +25,9 @@
 
 #include <cerrno>
 #include <csignal>
+#include <sys/resource.h>
 #include <sys/types.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -34,17 +36,41 @@ namespace tvf::serve {
 
 namespace {
 
-// A result as the readers get it: what the Design made for one scene (its field, domain,
-// report, topology and periodic orbits: complete, immutable once published), the
-// revision and scene it belongs to, and the seconds it took.
+// A result as the readers get it: what the Design made for one scene (its field, domain and
+// report: complete, immutable once published), the revision and scene it belongs to, and
+// the seconds it took. The field is published as soon as it is made; its analysis
+// (topology and periodic orbits) follows on the analysis thread, which publishes a copy of
+// the Result with `analysis` set (an edit's result comes with its analysis at once).
+struct Analysis {
+  Topology topology;
+  PeriodicOrbits orbits;
+  double seconds = 0;
+};
+// The frame a viewer shows, made first by a per-frame generator while the other frames
+// are still being solved (GenerateOptions::first_frame): GET /api/preview.
+struct Preview {
+  long long revision = 0;
+  int frame = 0, frames = 0;
+  double t = 0;
+  bool planar = true;
+  std::shared_ptr<const DesignSpace> space;
+  std::vector<cplx> values;  // |V|, each in its vertex basis
+};
+
 struct Result {
   long long revision = 0;
   Scene scene;
   std::shared_ptr<const DesignResult> made;
   double seconds = 0;
+  long long domain = 0;  // changes when the domain (mesh) does: GET /api/mesh again
+  std::shared_ptr<const Analysis> analysis;  // the analysis thread's
+  std::string analysis_error;                // the analysis failed (a non-finite value, say)
   const DesignSpace& space() const { return *made->space; }
   const Field& field() const { return made->field; }
-  const Topology& topology() const { return *made->topology; }
+  // The analysis is there: the analysis thread's, or the one an edit's result carries.
+  bool analysed() const { return analysis || (made->topology && made->orbits); }
+  const Topology& topology() const { return analysis ? analysis->topology : *made->topology; }
+  const PeriodicOrbits& orbits() const { return analysis ? analysis->orbits : *made->orbits; }
 };
 
 bool inside(const fs::path& root, const fs::path& p) {
@@ -132,7 +158,13 @@ struct Session::State {
   int done = 0, total = 0;
   long long cancelled = 0;  // solves stopped because a newer change came
   std::shared_ptr<const Result> result;
+  long long domains = 0;           // domains the results have lived on so far (Result::domain)
+  long long analysed_revision = 0;  // the revision of the last analysis published
+  int focus_frame = 0;                       // the frame asked for last: made first
+  std::shared_ptr<const Preview> preview;    // that frame of a solve under way
   std::thread worker;
+  std::condition_variable analysis_work;  // a result without its analysis was published
+  std::thread analyst;
 
   bool interrupted = false;  // interrupt(): waits end at once
   // Counts the changes of status() that GET /api/events pushes: the revision, the
@@ -199,6 +231,7 @@ struct Session::State {
       if (stop) return;
       pending = false;
       Design::Solve job = design->prepare_solve();
+      const int first_frame = focus_frame;
       auto flag = std::make_shared<std::atomic<bool>>(false);
       cancel = flag;
       lock.unlock();
@@ -208,12 +241,29 @@ struct Session::State {
       try {
         GenerateOptions go;
         go.cancel = flag.get();
+        go.first_frame = first_frame;
+        go.first_frame_done = [this, &job](int frame, std::span<const cplx> values) {
+          auto p = std::make_shared<Preview>();
+          p->revision = job.revision();
+          p->frame = frame;
+          p->t = job.scene().time.time(frame);
+          p->frames = job.scene().time.frames;
+          p->planar = job.scene().domain.is_planar();
+          p->space = job.space();
+          p->values.assign(values.begin(), values.end());
+          std::lock_guard preview_lock(mutex);
+          // Superseded already, or on another domain than the result's (a client would
+          // draw it on the mesh it has): no preview.
+          if (p->revision != design->revision() || !p->space || !result || &result->space() != p->space.get()) return;
+          preview = std::move(p);
+          touch();
+        };
         go.progress = [this](int d, int t) {
           std::lock_guard progress_lock(mutex);
           done = d;
           total = t;
         };
-        job.run(go, true);
+        job.run(go, false);  // the field only: the analysis thread follows
       } catch (const GenerationCancelled&) {
         stopped = true;
       } catch (const std::bad_alloc&) {
@@ -238,12 +288,66 @@ struct Session::State {
         published->made = job.result();
         published->seconds = seconds;
         design->adopt(std::move(job));
-        result = std::move(published);
+        publish(std::move(published));
         state = "ready";
       } else if (!failure.empty()) {
         state = "failed";
         error = failure;
       }
+      touch();
+    }
+  }
+
+  // Makes `r` the result readers get (caller holds `mutex`): its domain id (a new one when
+  // the mesh changed) and, when it has no analysis yet, a job for the analysis thread.
+  void publish(std::shared_ptr<Result> r) {
+    if (!result || &result->space() != &r->space()) ++domains;
+    r->domain = domains;
+    if (r->analysed()) analysed_revision = r->revision;
+    result = std::move(r);
+    if (!result->analysed()) analysis_work.notify_one();
+  }
+
+  // The analysis thread: the topology and periodic orbits of the newest result, made while
+  // the worker solves the next change (a change never waits for the analysis of the one
+  // before), published as a copy of the Result with them. An analysis overtaken by a newer
+  // result is dropped. It runs on this thread alone (not TBB's workers) at a lower
+  // priority (nice 10): on a busy machine the next solve and the requests for the new
+  // picture go first.
+  void run_analyst() {
+    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);  // best effort: a failure changes nothing
+    std::unique_lock lock(mutex);
+    for (;;) {
+      analysis_work.wait(lock, [&] { return stop || (result && !result->analysed() && result->analysis_error.empty()); });
+      if (stop) return;
+      const std::shared_ptr<const Result> r = result;
+      lock.unlock();
+      auto made = std::make_shared<Analysis>();
+      std::string failure;
+      const auto start = std::chrono::steady_clock::now();
+      try {
+        TopologyOptions to;
+        to.parallel = false;
+        made->topology = analyze_topology(r->space().bundle(), r->field(), to);
+        PeriodicOrbitOptions po;
+        po.parallel = false;
+        made->orbits = find_periodic_orbits(r->space().bundle(), r->field(), made->topology, po);
+      } catch (const std::bad_alloc&) {
+        failure = "the analysis needs more memory than this machine has";
+      } catch (const std::exception& e) {
+        failure = e.what();
+      }
+      made->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      lock.lock();
+      if (result != r) continue;  // a newer result (or an edit) came meanwhile
+      auto next = std::make_shared<Result>(*r);
+      if (failure.empty()) {
+        next->analysis = std::move(made);
+        analysed_revision = next->revision;
+      } else {
+        next->analysis_error = failure;
+      }
+      result = std::move(next);
       touch();
     }
   }
@@ -328,6 +432,7 @@ Session::Session(SessionOptions options) : s_(std::make_unique<State>()) {
   remove_stale_temporaries(s_->dir);
   if (path.parent_path() != s_->dir) remove_stale_temporaries(path.parent_path());
   s_->worker = std::thread([this] { s_->run_worker(); });
+  s_->analyst = std::thread([this] { s_->run_analyst(); });
   std::lock_guard lock(s_->mutex);
   s_->schedule();
 }
@@ -339,9 +444,11 @@ Session::~Session() {
     s_->interrupted = true;
     if (s_->cancel) s_->cancel->store(true);
     s_->work.notify_all();
+    s_->analysis_work.notify_all();
     s_->changed.notify_all();
   }
   if (s_->worker.joinable()) s_->worker.join();
+  if (s_->analyst.joinable()) s_->analyst.join();
 }
 
 const fs::path& Session::dir() const { return s_->dir; }
@@ -412,7 +519,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   const auto start = std::chrono::steady_clock::now();
   EditReport report;
   try {
-    report = job->run(r->made, true);
+    report = job->run(r->made, false);  // its analysis follows on the analysis thread
   } catch (const EditRefused& refused) {
     throw RequestError(422, fmt::format("refused to {}: {}; the scene is unchanged", describe(job->edit()),
                                         refused.what()));
@@ -429,7 +536,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   s_->design->adopt(std::move(*job));  // saves the scene first (before_change)
   made->revision = s_->design->revision();
   if (s_->cancel) s_->cancel->store(true);
-  s_->result = std::move(made);
+  s_->publish(std::move(made));
   s_->state = "ready";
   s_->error.clear();
   s_->touch();
@@ -463,9 +570,20 @@ json Session::status() const {
             {"error", s_->error},
             {"cancelled", s_->cancelled}};
   if (s_->result) {
-    j["warnings"] = s_->result->made->report.warnings;
-    j["method"] = s_->result->made->report.method;
-    j["seconds"] = s_->result->seconds;
+    const Result& r = *s_->result;
+    j["warnings"] = r.made->report.warnings;
+    j["method"] = r.made->report.method;
+    j["seconds"] = r.seconds;
+    j["domain"] = r.domain;
+    j["analysis"] = r.analysed() ? "ready" : r.analysis_error.empty() ? "running" : "failed";
+    if (!r.analysis_error.empty()) j["analysis_error"] = r.analysis_error;
+    if (r.analysis) j["analysis_seconds"] = r.analysis->seconds;
+  }
+  j["analysis_revision"] = s_->analysed_revision;
+  // The shown frame of the solve under way, ready before the other frames: GET /api/preview.
+  if (s_->preview && (!s_->result || s_->preview->revision > s_->result->revision)) {
+    j["preview_revision"] = s_->preview->revision;
+    j["preview_frame"] = s_->preview->frame;
   }
   return j;
 }
@@ -495,7 +613,7 @@ json Session::mesh() const {
   std::vector<int> f;
   f.reserve(static_cast<size_t>(m.num_faces()) * 3);
   for (const Face& face : m.faces()) f.insert(f.end(), face.begin(), face.end());
-  json j = {{"revision", r->revision}, {"planar", planar}, {"vertices", compact(v)}, {"faces", f}};
+  json j = {{"revision", r->revision}, {"domain", r->domain}, {"planar", planar}, {"vertices", compact(v)}, {"faces", f}};
   if (planar) {
     const GridSpec& g = *r->scene.domain.grid;
     j["grid"] = {{"size", {g.nx, g.ny}}, {"min", {g.min.x(), g.min.y()}}, {"max", {g.max.x(), g.max.y()}}};
@@ -508,14 +626,22 @@ json Session::frame(int j) const {
   const int frames = r->field().frames();
   if (j < 0 || j >= frames)
     throw RequestError(400, fmt::format("frame: {} is outside [0, {}]", j, frames - 1));
+  {
+    std::lock_guard lock(s_->mutex);
+    s_->focus_frame = j;  // the next solve makes this frame first (preview())
+  }
   const bool planar = r->scene.domain.is_planar();
   json sing = json::array();
-  const auto& list = r->topology().singularities[static_cast<size_t>(j)];
+  // The frame's singularities: the analysis's, with their paths; before it is there, found
+  // for this frame alone (the same list: topology.h), with "path" −1.
+  const std::vector<Singularity> own =
+      r->analysed() ? std::vector<Singularity>() : find_singularities(r->space().bundle(), r->field(), j);
+  const auto& list = r->analysed() ? r->topology().singularities[static_cast<size_t>(j)] : own;
   for (size_t k = 0; k < list.size(); ++k)
     sing.push_back({{"position", vec3(list[k].position, planar)},
                     {"type", to_string(list[k].type)},
                     {"index", list[k].index},
-                    {"path", r->topology().singularity_path[static_cast<size_t>(j)][k]}});
+                    {"path", r->analysed() ? r->topology().singularity_path[static_cast<size_t>(j)][k] : -1}});
   return {{"revision", r->revision},
           {"frame", j},
           {"frames", frames},
@@ -524,10 +650,59 @@ json Session::frame(int j) const {
           {"singularities", sing}};
 }
 
+json Session::preview() const {
+  std::shared_ptr<const Preview> p;
+  long long result_revision = 0;
+  {
+    std::lock_guard lock(s_->mutex);
+    p = s_->preview;
+    result_revision = s_->result ? s_->result->revision : 0;
+  }
+  if (!p || p->revision <= result_revision)
+    throw RequestError(404, "preview: no solve under way has its first frame ready; read GET /api/frame/J");
+  json sing = json::array();
+  for (const Singularity& x : find_singularities(p->space->bundle(), p->values))
+    sing.push_back({{"position", vec3(x.position, p->planar)},
+                    {"type", to_string(x.type)},
+                    {"index", x.index},
+                    {"path", -1}});
+  std::vector<float> world;
+  world.reserve(p->values.size() * 3);
+  const TangentBundle& bundle = p->space->bundle();
+  for (size_t v = 0; v < p->values.size(); ++v) {
+    const Vec3 w = bundle.vertex_to_world(static_cast<int>(v), p->values[v]);
+    for (int k = 0; k < 3; ++k) world.push_back(static_cast<float>(w[k]));
+  }
+  return {{"revision", p->revision},
+          {"frame", p->frame},
+          {"frames", p->frames},
+          {"t", p->t},
+          {"preview", true},
+          {"vectors", compact(world)},
+          {"singularities", sing}};
+}
+
 json Session::analysis() const {
-  const auto r = s_->current_result();
+  // The analysis of the current result, waiting for it (it follows the field) up to
+  // field_wait_seconds; a newer result while waiting: its analysis.
+  std::shared_ptr<const Result> r = s_->current_result();
+  {
+    std::unique_lock lock(s_->mutex);
+    s_->changed.wait_until(lock, s_->wait_deadline(), [&] {
+      r = s_->result;
+      return s_->interrupted || r->analysed() || !r->analysis_error.empty();
+    });
+    if (s_->interrupted) throw RequestError(503, "analysis: the server is stopping");
+  }
+  if (!r->analysis_error.empty())
+    throw RequestError(409, fmt::format("analysis: the field of revision {} could not be analysed: {}", r->revision,
+                                        r->analysis_error));
+  if (!r->analysed())
+    throw RequestError(409, fmt::format("analysis: the analysis of revision {} is still running; try again when "
+                                        "/api/status says its analysis is ready",
+                                        r->revision));
   json j = topology_to_json(r->topology());
-  add_periodic_orbits_to_json(j, *r->made->orbits);
+  add_periodic_orbits_to_json(j, r->orbits());
   j["revision"] = r->revision;
   return j;
 }

@@ -13,6 +13,8 @@
 #include <atomic>
 #include <cmath>
 #include <numbers>
+#include <span>
+#include <vector>
 
 namespace tvf {
 namespace {
@@ -173,6 +175,50 @@ TEST(Generate, StopsWhenCancelled) {
     cancel = true;
     EXPECT_THROW(generate(*space, s, o), GenerationCancelled) << to_string(g);
   }
+}
+
+// Issue 15: the frame a viewer shows comes first, for the generators that solve frame by
+// frame; its values are exactly the finished field's frame, and no other frame is done
+// before it. Not for spacetime (one solve of all frames) nor for a scene whose edits change
+// frames afterwards.
+TEST(Generate, MakesTheShownFrameFirstWithItsFinalValues) {
+  Scene s = grid_scene(17, 1.0, 12);
+  s.elements.push_back(singular(SingularType::source, {{Vec3(-0.3, 0.2, 0), 0}, {Vec3(0.3, -0.1, 0), 1}}));
+  s.elements.push_back(singular(SingularType::ccw_center, {{Vec3(0.4, 0.5, 0), 0}}));
+  const auto space = make_design_space(s);
+  for (Generator g : {Generator::basis, Generator::constrained}) {
+    for (bool parallel : {false, true}) {
+      s.generator = g;
+      GenerateOptions o;
+      o.parallel = parallel;
+      o.first_frame = 7;
+      int calls = 0, done_before = -1, done = 0;
+      std::vector<cplx> first;
+      o.progress = [&](int d, int) { done = d; };
+      o.first_frame_done = [&](int frame, std::span<const cplx> values) {
+        ++calls;
+        EXPECT_EQ(frame, 7);
+        done_before = done;
+        first.assign(values.begin(), values.end());
+      };
+      const Field f = generate(*space, s, o);
+      EXPECT_EQ(calls, 1) << to_string(g);
+      EXPECT_EQ(done_before, 1) << to_string(g) << ": only the shown frame was done when it was handed out";
+      ASSERT_EQ(first.size(), static_cast<size_t>(f.num_vertices()));
+      const auto frame = f.frame(7);
+      for (size_t v = 0; v < first.size(); ++v) ASSERT_EQ(first[v], frame[v]) << to_string(g) << " vertex " << v;
+    }
+  }
+  int calls = 0;
+  GenerateOptions o;
+  o.first_frame = 3;
+  o.first_frame_done = [&](int, std::span<const cplx>) { ++calls; };
+  s.generator = Generator::spacetime;
+  generate(*space, s, o);
+  s.generator = Generator::basis;
+  s.edits = {SmoothEdit{0.5}};
+  generate(*space, s, o);
+  EXPECT_EQ(calls, 0);
 }
 
 TEST(Generate, RefusesFieldsThatWouldNotFitInMemory) {

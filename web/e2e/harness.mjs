@@ -106,7 +106,7 @@ export class Designer {
     return this.page.evaluate(() => fetch("api/status").then((r) => r.json()));
   }
   // Waits until the server has solved the newest scene and the page shows that result
-  // with the current frame loaded. The bound is generous: under AddressSanitizer on a
+  // with the current frame loaded and its analysis (which follows the field: issue 15). The bound is generous: under AddressSanitizer on a
   // loaded 2-core machine one solve of the drawing test's scene took over 30 s (the
   // latency these tests report is measured separately, not bounded here).
   async settled(timeout = 120000) {
@@ -114,10 +114,11 @@ export class Designer {
     for (;;) {
       const st = await this.status();
       if (st.state === "failed") throw new Error(`generation failed: ${st.error}`);
-      if (st.state === "ready" && st.result_revision === st.revision) {
+      if (st.analysis === "failed") throw new Error(`analysis failed: ${st.analysis_error}`);
+      if (st.state === "ready" && st.result_revision === st.revision && st.analysis_revision === st.revision) {
         const shown = await this.page.evaluate((rev) => {
           const s = window.tvf.state;
-          return s.resultRevision === rev && s.frames.has(s.frame);
+          return s.resultRevision === rev && s.frames.has(s.frame) && s.analysisRevision === rev;
         }, st.revision);
         if (shown) return st;
       }

@@ -62,6 +62,16 @@ export interface Status {
   warnings?: string[];
   method?: string;
   seconds?: number;
+  // The result's domain id (changes when the mesh does: GET /api/mesh again), its
+  // analysis state, and the revision of the last analysis made (issue 15: the field is
+  // published first, its analysis follows).
+  domain?: number;
+  analysis?: "running" | "ready" | "failed";
+  analysis_error?: string;
+  analysis_revision?: number;
+  // The shown frame of a solve under way, ready before its other frames (GET /api/preview).
+  preview_revision?: number;
+  preview_frame?: number;
 }
 export interface FrameSingularity {
   position: number[];
@@ -76,9 +86,11 @@ export interface Frame {
   t: number;
   vectors: number[];
   singularities: FrameSingularity[];
+  preview?: boolean; // GET /api/preview: one frame of a solve under way
 }
 export interface MeshData {
   revision: number;
+  domain?: number;
   planar: boolean;
   grid?: { size: [number, number]; min: [number, number]; max: [number, number] };
   vertices: number[];
@@ -106,6 +118,7 @@ export const api = {
   mesh: () => call<MeshData>("GET", "api/mesh"),
   frame: (j: number) => call<Frame>("GET", `api/frame/${j}`),
   analysis: () => call<Analysis>("GET", "api/analysis"),
+  preview: () => call<Frame>("GET", "api/preview"),
   // The deformation key's translate that moves a streamline's seed to `to` (on surfaces in
   // the log-map chart around the seed, computed by the library).
   seedTranslation: (seed: number[], to: number[]) => call<{ translate: number[] }>("POST", "api/seed_translation", { seed, to }),

@@ -27,6 +27,14 @@ import { DYE_COLOR, drawLegend, LcsOverlay, vertexColors } from "./lcs";
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
 
+// Where a change's time goes (window.tvf.marks; the latency test reads it): the last 64
+// steps as [what, performance.now()].
+const marks: [string, number][] = [];
+function mark(what: string) {
+  marks.push([what, performance.now()]);
+  if (marks.length > 64) marks.shift();
+}
+
 const canvas = $<HTMLCanvasElement>("field");
 const ctx = canvas.getContext("2d")!;
 const slider = $<HTMLInputElement>("time");
@@ -38,7 +46,7 @@ const planarPreview = new PlanarPreview(256);
 const ticker = new Ticker((n) => {
   if (!state.scene) return;
   if (planar()) {
-    if (state.mesh?.grid && state.frames.get(state.frame)) {
+    if (state.mesh?.grid && shownFrame()) {
       planarPreview.step(n);
       redraw();
     }
@@ -48,9 +56,14 @@ const ticker = new Ticker((n) => {
 interface State {
   scene?: SceneState;
   mesh?: MeshData;
-  meshKey?: string;
+  meshDomain?: number; // the server's id of the mesh's domain (status.domain)
   resultRevision: number;
-  analysis?: Analysis;
+  analysis?: Analysis; // of analysisRevision: it follows the field, so it can be older
+  analysisRevision: number;
+  // The current frame of a solve under way, shown before its result is complete (the
+  // per-frame generators make the shown frame first: GET /api/preview).
+  preview?: Frame;
+  shownRevision: number; // the revision of the field drawn now
   frames: Map<number, Frame>;
   frame: number;
   tool: string;
@@ -64,6 +77,8 @@ interface State {
 }
 const state: State = {
   resultRevision: -1,
+  analysisRevision: -1,
+  shownRevision: -1,
   frames: new Map(),
   frame: 0,
   tool: "select",
@@ -180,7 +195,12 @@ function showDesignCurves() {
 
 const queue = new ChangeQueue({
   current: () => state.scene,
-  put: (s, revision) => api.putScene(s, revision),
+  put: async (s, revision) => {
+    mark("put");
+    const r = await api.putScene(s, revision);
+    mark(`put answered ${r.revision}`);
+    return r;
+  },
   reload: () => api.scene(),
   show: showScene,
 });
@@ -262,6 +282,9 @@ async function edit(entry: unknown) {
 // The server's status, as pushed by GET /api/events (or polled): shown one at a time, the
 // newest waiting while one is being shown (loading a result takes a few requests).
 async function showStatus(st: Status) {
+  mark(`status ${st.revision} ${st.state} result ${st.result_revision} analysis ${st.analysis_revision}`);
+  // The server started again (its revision is behind the page's): its results start over.
+  const restarted = !!state.scene && st.revision < state.scene.revision;
   const label = $("status");
   label.dataset.state = st.state;
   lastState = st.state;
@@ -277,7 +300,15 @@ async function showStatus(st: Status) {
       say(`${otherClient(fresh.revision)}: the page shows it`);
     }
   }
-  if (st.result_revision !== state.resultRevision && st.result_revision > 0) await loadResult(st.result_revision);
+  const preview = st.preview_revision ?? 0;
+  if (preview > state.resultRevision && st.preview_frame === state.frame && preview !== state.preview?.revision) await loadPreview();
+  // Results only move forward (a polled answer can arrive after a newer pushed one), unless
+  // the server started again (its revision is behind the page's).
+  if (st.result_revision > 0 && (st.result_revision > state.resultRevision || (restarted && st.result_revision !== state.resultRevision))) await loadResult(st);
+  // The analysis follows the field: loaded beside it, not waited for.
+  const analysed = st.analysis_revision === undefined || st.analysis_revision === state.resultRevision;
+  if (analysed && state.analysisRevision !== state.resultRevision && state.resultRevision > 0) void loadAnalysis(state.resultRevision);
+  if (st.analysis === "failed" && st.result_revision === state.resultRevision) say(`the analysis failed: ${st.analysis_error ?? ""}`, true);
 }
 
 let nextStatus: Status | null = null;
@@ -330,26 +361,87 @@ async function poll() {
   setTimeout(poll, streaming() ? 500 : state.playing ? 400 : 200);
 }
 
-async function loadResult(revision: number) {
-  const [analysis, mesh] = await Promise.all([api.analysis(), api.mesh()]);
+// A new result: the current frame first (the picture), the mesh only when the domain
+// changed; the analysis (paths, bifurcations, coherence) follows when the server has it.
+async function loadResult(st: Status) {
+  const revision = st.result_revision;
+  const j = state.frame;
+  const frame = api.frame(j);
+  frame.catch(() => undefined); // a failed frame is asked for again by showFrame
+  const needMesh = !state.mesh || st.domain === undefined || st.domain !== state.meshDomain;
+  const mesh = needMesh ? await api.mesh() : undefined;
+  let f: Frame | undefined;
+  try {
+    f = await frame;
+    mark(`frame ${f.revision}`);
+  } catch {
+    // showFrame asks again and says why
+  }
+  // The page moves to the new result at once, with its frame (no empty picture between).
   state.resultRevision = revision;
   state.frames.clear();
-  state.analysis = analysis;
-  const key = JSON.stringify(mesh.grid ?? [mesh.vertices.length, mesh.vertices.slice(0, 3)]);
-  if (key !== state.meshKey) {
+  if (f && f.revision === revision) state.frames.set(j, f);
+  if (mesh) {
     // Dye placed on another domain means nothing on this one.
-    if (state.meshKey !== undefined && (lcs.seeds.length || lcs.lines.length)) {
+    if (state.meshDomain !== undefined && mesh.domain !== state.meshDomain && (lcs.seeds.length || lcs.lines.length)) {
       lcs.seeds = [];
       lcs.lines = [];
       say("the domain changed: the dye seeds and timelines were removed");
     }
-  }
-  if (key !== state.meshKey || !mesh.planar) {
     state.mesh = mesh;
-    state.meshKey = key;
+    state.meshDomain = mesh.domain;
     setupDomainView();
   }
-  const g = mesh.grid;
+  await showFrame(state.frame);
+  mark(`shown ${revision}`);
+}
+
+// The shown frame of a solve under way, drawn at once.
+async function loadPreview() {
+  try {
+    const f = await api.preview();
+    mark(`preview ${f.revision}`);
+    if (f.revision <= state.resultRevision || f.frame !== state.frame) return;
+    state.preview = f;
+    if (!planar() && surface) {
+      surface.setFrame(f, markers());
+      state.shownRevision = f.revision;
+    }
+    redraw();
+  } catch (e) {
+    if (!(e instanceof ApiError && e.status === 404)) throw e; // 404: the result came first
+  }
+}
+
+// The field drawn for the current frame: the newer preview, else the result's frame.
+function shownFrame(): Frame | undefined {
+  const p = state.preview;
+  const f = state.frames.get(state.frame);
+  if (p && p.frame === state.frame && (p.revision > state.resultRevision || (p.revision === state.resultRevision && !f))) return p;
+  return f;
+}
+
+let analysisLoading = -1;
+async function loadAnalysis(revision: number) {
+  if (analysisLoading === revision) return;
+  analysisLoading = revision;
+  try {
+    const analysis = await api.analysis();
+    // A newer result came meanwhile: its analysis comes with a later status.
+    if (analysis.revision !== state.resultRevision) return;
+    state.analysis = analysis;
+    state.analysisRevision = analysis.revision;
+    showAnalysis(analysis);
+    mark(`analysis shown ${analysis.revision}`);
+  } catch (e) {
+    if (!(e instanceof ApiError && e.status === 409)) say((e as Error).message, true);
+  } finally {
+    if (analysisLoading === revision) analysisLoading = -1;
+  }
+}
+
+function showAnalysis(analysis: Analysis) {
+  const g = state.mesh?.grid;
   // The space-time view is of planar domains (a surface × time has no picture in 3-D).
   $("spacetime").hidden = !g;
   $("spacetime-title").hidden = !g;
@@ -364,7 +456,10 @@ async function loadResult(revision: number) {
   }
   coherence.set(analysis.times, analysis.coherence);
   listBifurcations();
-  await showFrame(state.frame);
+  spacetime.setTime(currentTime());
+  coherence.setTime(currentTime());
+  strip.setTime(currentTime());
+  refreshLcs();
 }
 
 function setupDomainView() {
@@ -409,6 +504,7 @@ async function showFrame(j: number) {
     if (f.frame !== state.frame) return;
     if (!planar() && surface) {
       surface.setFrame(f, markers());
+      state.shownRevision = f.revision;
       showDesignCurves();
     }
   } catch (e) {
@@ -496,7 +592,8 @@ function redraw() {
   const t = currentTime();
   ctx.fillStyle = "#fff";
   ctx.fillRect(0, 0, canvas.width, canvas.height);
-  const f = state.frames.get(state.frame);
+  const f = shownFrame();
+  state.shownRevision = f?.revision ?? -1;
   const mode = $<HTMLSelectElement>("preview-mode").value;
   if (f && state.mesh?.grid) {
     const g = state.mesh.grid;
@@ -1058,6 +1155,7 @@ document.addEventListener("keydown", (e) => {
 // For the end-to-end test and the curious: the state, read-only.
 (window as unknown as { tvf: unknown }).tvf = {
   state,
+  marks,
   view: () => (planar() ? view() : undefined),
   spacetime: (p: number[]) => spacetime.toScreen(p),
   spacetimeLabels: () => spacetime.timeLabels(),

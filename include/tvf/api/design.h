@@ -187,6 +187,9 @@ public:
     void run(GenerateOptions options = {}, bool analyze = false);
     // What run() made (null before).
     std::shared_ptr<const DesignResult> result() const { return made_; }
+    // The domain it generates on: the Design's when it had it, else built by run() (null
+    // until then; set before the generation starts, so GenerateOptions' callbacks see it).
+    std::shared_ptr<const DesignSpace> space() const { return space_; }
 
   private:
     friend class Design;

@@ -19,6 +19,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,15 @@ struct GenerateOptions {
   // When set, the solver set-up and the last space-time solution are kept here between
   // calls (see GenerateCache). Null: everything is built for this call alone.
   GenerateCache* cache = nullptr;
+  // The frame a viewer shows (the designer's current frame), made first: generators that
+  // solve frame by frame (basis, constrained, deform) make frame `first_frame` before the
+  // others and then call first_frame_done with its values (|V|, each in its vertex basis;
+  // valid during the call), from the generating thread, while the other frames are still
+  // to come. Those values are the final field's frame: generate() does not call it for a
+  // scene with edits or an "incompressible" projection, which change frames afterwards.
+  // The spacetime generator solves all frames at once and never calls it. −1: none.
+  int first_frame = -1;
+  std::function<void(int frame, std::span<const cplx> values)> first_frame_done;
 };
 
 // Thrown by generate*() when GenerateOptions::cancel became true; no field is returned.

@@ -9,7 +9,10 @@
 //   they were.
 // - The field is generated in a background thread. A newer change cancels the older
 //   solve (GenerateOptions::cancel); readers always get the last finished result, tagged
-//   with the revision of the scene that made it. The solver set-up (Laplacian, symbolic
+//   with the revision of the scene that made it. The field is published as soon as it is
+//   made; its analysis (topology, periodic orbits) follows on a second thread, while the
+//   worker is already free for the next change (issue 15: the picture does not wait for
+//   the analysis of all frames). The solver set-up (Laplacian, symbolic
 //   factorizations, the space-time solver and its temporal modes) and the last
 //   space-time solution are kept between solves (GenerateCache), so a re-solve after a
 //   small change starts warm.
@@ -110,7 +113,10 @@ public:
 
   // {"revision", "result_revision", "state": "running" | "ready" | "failed",
   //  "progress": [done, total], "error", "cancelled" (solves stopped by newer changes so
-  //  far), "warnings", "method", "seconds"}
+  //  far), "warnings", "method", "seconds" (the solve), "domain" (an id of the result's
+  //  domain: it changes when the mesh does), "analysis": "running" | "ready" | "failed" (of
+  //  the result; "analysis_error" says why it failed), "analysis_seconds",
+  //  "analysis_revision" (the revision of the last analysis made; 0 before the first)}
   nlohmann::json status() const;
   // The number of changes of status() so far that a client may be told of: a new
   // revision, the generation state (running, ready, failed) or a new result. It waits up
@@ -120,14 +126,28 @@ public:
   // Waits until the current revision has a result or failed; false on timeout.
   bool wait_idle(double seconds) const;
 
-  // The domain of the last result: {"revision", "planar", "grid": {"size", "min", "max"}
+  // The domain of the last result: {"revision", "domain" (status's id), "planar", "grid": {"size", "min", "max"}
   // (planar grids), "vertices": [x, y, z, ...], "faces": [i, j, k, ...]}.
   nlohmann::json mesh() const;
   // One frame of the last result: {"revision", "frame", "t", "frames", "vectors": world
   // [x, y, z] per vertex, flattened, "singularities": [{"position", "type", "index",
-  // "path"}]}. Frame in [0, frames − 1]. RequestError(409) before the first result.
+  // "path"}]}: "path" is the id in the analysis, −1 while the analysis of the result is
+  // still running (the singularities are found for this frame alone then: the same list).
+  // Frame in [0, frames − 1]. RequestError(409) before the first result. The frame read
+  // last is the one the next solve makes first (preview()).
   nlohmann::json frame(int frame) const;
-  // The analysis JSON of DESIGN §9 of the last result, plus "revision".
+  // The frame a client shows, ready before the rest of a solve under way (issue 15): the
+  // frame asked for last (frame()) is made first by the generators that solve frame by
+  // frame (basis, constrained, deform; not spacetime, not for scenes with edits or an
+  // incompressible projection, nor on another domain than the last result's), and
+  // published here as soon as it is solved, with status's "preview_revision" and
+  // "preview_frame". The same JSON as frame() plus "preview": true,
+  // singularities found for the frame alone ("path" −1); its values are the final field's.
+  // RequestError(404) when no solve under way has one newer than the last result.
+  nlohmann::json preview() const;
+  // The analysis JSON of DESIGN §9 of the last result, plus "revision". Waits for it (it
+  // follows the field; a newer result meanwhile: the newer one's) up to
+  // field_wait_seconds: RequestError(409) when it is not there by then or failed.
   nlohmann::json analysis() const;
 
   // Export and render write the field of the current revision (following newer changes
