@@ -269,20 +269,21 @@ struct LocalSystem {
   std::vector<char> ghost_fixed;            // nf × ng
 
   // The coarse correction (SpaceTimeOptions::coarse_modes > 0; solve/spacetime_coarse.h):
-  // each low temporal mode's spatial system E y = g, assembled in the real 2 × 2 block form
-  // over this rank's vertices and solved by a KSP (CG with GAMG by default, options prefix
-  // tvf_coarse_).
+  // the low temporal modes' spatial systems E_m y_m = g_m, assembled in the real 2 × 2 block
+  // form as one block-diagonal system over this rank's vertices (mode-major: the rank's
+  // rows of mode 0, then of mode 1, ...) and solved by one KSP (CG with GAMG by default,
+  // options prefix tvf_coarse_): one set of reductions and halo exchanges for all modes.
   struct Mode {
     size_t first = 0;
     Eigen::VectorXd q;  // over the segment's frames
-    Mat e = nullptr;
-    KSP ksp = nullptr;
-    Vec g = nullptr, y = nullptr;  // 2·nl reals: the restriction, the solution
-    Vec ghost_y = nullptr;         // 2·ng reals: y at the ghost vertices
   };
   std::vector<Mode> modes;
   std::vector<std::vector<std::pair<size_t, size_t>>> frame_modes;  // per frame: (mode, index in its segment)
-  VecScatter coarse_scatter = nullptr;                              // a mode's y → its ghost values
+  Mat coarse = nullptr;
+  KSP coarse_ksp = nullptr;
+  Vec coarse_g = nullptr, coarse_y = nullptr;  // modes × 2·nl reals: the restriction, the solution
+  Vec coarse_ghost = nullptr;                  // modes × 2·ng reals: y at the ghost vertices
+  VecScatter coarse_scatter = nullptr;         // coarse_y → coarse_ghost
   std::vector<cplx> prolonged;                                      // 3 frames of nl + ng
   long coarse_iterations = 0;
 
@@ -308,13 +309,11 @@ struct LocalSystem {
   } cut;
 
   ~LocalSystem() {
-    for (Mode& m : modes) {
-      KSPDestroy(&m.ksp);
-      MatDestroy(&m.e);
-      VecDestroy(&m.g);
-      VecDestroy(&m.y);
-      VecDestroy(&m.ghost_y);
-    }
+    KSPDestroy(&coarse_ksp);
+    MatDestroy(&coarse);
+    VecDestroy(&coarse_g);
+    VecDestroy(&coarse_y);
+    VecDestroy(&coarse_ghost);
     VecScatterDestroy(&coarse_scatter);
     KSPDestroy(&cut.ksp);
     MatDestroy(&cut.a);
@@ -476,34 +475,36 @@ PetscErrorCode apply_two_level(PC pc, Vec r, Vec out) {
   PetscCall(VecGetArrayRead(r, &ra));
   const auto* rs = reinterpret_cast<const cplx*>(ra);
   // Restriction: g_m = Σ_j q_m(j) r_j over the mode's segment (r is zero at fixed entries).
-  for (LocalSystem::Mode& m : s->modes) {
+  {
     PetscScalar* ga = nullptr;
-    PetscCall(VecGetArray(m.g, &ga));
-    auto* g = reinterpret_cast<cplx*>(ga);
-    std::fill(g, g + nl, cplx(0, 0));
-    for (Eigen::Index jj = 0; jj < m.q.size(); ++jj) {
-      const double q = m.q[jj];
-      const cplx* rj = rs + (m.first + static_cast<size_t>(jj)) * nl;
-      for (size_t i = 0; i < nl; ++i) g[i] += q * rj[i];
+    PetscCall(VecGetArray(s->coarse_g, &ga));
+    for (size_t mi = 0; mi < s->modes.size(); ++mi) {
+      const LocalSystem::Mode& m = s->modes[mi];
+      auto* g = reinterpret_cast<cplx*>(ga) + mi * nl;
+      std::fill(g, g + nl, cplx(0, 0));
+      for (Eigen::Index jj = 0; jj < m.q.size(); ++jj) {
+        const double q = m.q[jj];
+        const cplx* rj = rs + (m.first + static_cast<size_t>(jj)) * nl;
+        for (size_t i = 0; i < nl; ++i) g[i] += q * rj[i];
+      }
     }
-    PetscCall(VecRestoreArray(m.g, &ga));
+    PetscCall(VecRestoreArray(s->coarse_g, &ga));
   }
-  // The modes' spatial solves (to the one process's coarse tolerance), then their ghosts.
-  for (LocalSystem::Mode& m : s->modes) {
-    PetscCall(KSPSolve(m.ksp, m.g, m.y));
-    PetscInt it = 0;
-    PetscCall(KSPGetIterationNumber(m.ksp, &it));
-    s->coarse_iterations += it;
-    PetscCall(VecScatterBegin(s->coarse_scatter, m.y, m.ghost_y, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(s->coarse_scatter, m.y, m.ghost_y, INSERT_VALUES, SCATTER_FORWARD));
-  }
+  // The modes' spatial solves, together (to the one process's coarse tolerance), then the
+  // ghosts' values.
+  PetscCall(KSPSolve(s->coarse_ksp, s->coarse_g, s->coarse_y));
+  PetscInt coarse_it = 0;
+  PetscCall(KSPGetIterationNumber(s->coarse_ksp, &coarse_it));
+  s->coarse_iterations += coarse_it;
+  PetscCall(VecScatterBegin(s->coarse_scatter, s->coarse_y, s->coarse_ghost, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(s->coarse_scatter, s->coarse_y, s->coarse_ghost, INSERT_VALUES, SCATTER_FORWARD));
+  const PetscScalar *cya = nullptr, *cga = nullptr;
+  PetscCall(VecGetArrayRead(s->coarse_y, &cya));
+  PetscCall(VecGetArrayRead(s->coarse_ghost, &cga));
   std::vector<const cplx*> ys(s->modes.size()), gys(s->modes.size());
   for (size_t m = 0; m < s->modes.size(); ++m) {
-    const PetscScalar* ya = nullptr;
-    PetscCall(VecGetArrayRead(s->modes[m].y, &ya));
-    ys[m] = reinterpret_cast<const cplx*>(ya);
-    PetscCall(VecGetArrayRead(s->modes[m].ghost_y, &ya));
-    gys[m] = reinterpret_cast<const cplx*>(ya);
+    ys[m] = reinterpret_cast<const cplx*>(cya) + m * nl;
+    gys[m] = reinterpret_cast<const cplx*>(cga) + m * ng;
   }
   // Frame j of t = C r over the owned vertices, then the ghosts: Σ_m q_m(j) y_m, zero at
   // fixed entries.
@@ -607,12 +608,8 @@ PetscErrorCode apply_two_level(PC pc, Vec r, Vec out) {
     PetscCall(VecRestoreArrayRead(c.x, &xa));
   }
   PetscCall(VecRestoreArray(out, &oa));
-  for (size_t m = 0; m < s->modes.size(); ++m) {
-    const auto* ya = reinterpret_cast<const PetscScalar*>(ys[m]);
-    PetscCall(VecRestoreArrayRead(s->modes[m].y, &ya));
-    ya = reinterpret_cast<const PetscScalar*>(gys[m]);
-    PetscCall(VecRestoreArrayRead(s->modes[m].ghost_y, &ya));
-  }
+  PetscCall(VecRestoreArrayRead(s->coarse_ghost, &cga));
+  PetscCall(VecRestoreArrayRead(s->coarse_y, &cya));
   PetscCall(VecRestoreArrayRead(r, &ra));
   return 0;
 }
@@ -733,18 +730,15 @@ void set_up_cut(LocalSystem& s, const Distribution& d, const RowMatrix& rows, st
 }
 
 // The coarse correction's set-up: the low temporal modes of every segment between key
-// frames, each mode's E = S^½ L S^½ + T assembled over the rank's vertices (PETSc rows in
-// the rank's vertex order, complex entries as real 2 × 2 blocks [[a, −b], [b, a]], so E's
-// real form is symmetric positive definite), a KSP for it, and the scatter of a mode's
-// solution to the ghost vertices.
+// frames, their systems E_m = S^½ L S^½ + T assembled as one block-diagonal matrix over the
+// rank's vertices (PETSc rows mode-major in the rank's vertex order, complex entries as real
+// 2 × 2 blocks [[a, −b], [b, a]], so the real form is symmetric positive definite), its KSP,
+// and the scatter of the solution to the ghost vertices. One system rather than one per
+// mode: the same iterations and one set of synchronisations (docs/benchmarks.md).
 void set_up_coarse(LocalSystem& s, const Distribution& d, const RowMatrix& rows, const ConnectionLaplacian& laplacian,
                    std::span<const char> fixed, int coarse_modes, MPI_Comm comm) {
   const auto n = static_cast<size_t>(rows.rows());
   const size_t nl = s.nl, ng = s.ng, nf = s.nf;
-  std::vector<PetscInt> vfirst(static_cast<size_t>(d.size), 0);  // per rank: its first vertex in PETSc's order
-  for (size_t r = 1; r < vfirst.size(); ++r) vfirst[r] = vfirst[r - 1] + d.count[r - 1];
-  auto block = [&](size_t v) { return vfirst[static_cast<size_t>(d.owner[v])] + d.local[v]; };
-
   const Segments segs = find_segments(fixed, n, nf);
   s.frame_modes.assign(nf, {});
   for (const auto& [first, count] : segs.segments) {
@@ -759,33 +753,52 @@ void set_up_coarse(LocalSystem& s, const Distribution& d, const RowMatrix& rows,
       s.modes.push_back(std::move(m));
     }
   }
+  const size_t nm = s.modes.size();
+  if (nm == 0) return;
+  // Block (complex) row of mode m at vertex v: the modes' rows of the ranks before v's, then
+  // v's rank's rows of the modes before m, then v's index there.
+  std::vector<PetscInt> first_row(static_cast<size_t>(d.size), 0);
+  for (size_t r = 1; r < first_row.size(); ++r)
+    first_row[r] = first_row[r - 1] + static_cast<PetscInt>(nm) * d.count[r - 1];
+  auto block = [&](size_t m, size_t v) {
+    const auto r = static_cast<size_t>(d.owner[v]);
+    return first_row[r] + static_cast<PetscInt>(m) * d.count[r] + d.local[v];
+  };
 
-  // The scatter of a mode's vector to the ghosts (the same layout for every mode).
+  // The scatter of the modes' solution to the ghosts.
+  check(VecCreateSeq(PETSC_COMM_SELF, static_cast<PetscInt>(2 * ng * nm), &s.coarse_ghost), "VecCreateSeq");
+  check(VecCreateMPI(comm, static_cast<PetscInt>(2 * nl * nm), PETSC_DETERMINE, &s.coarse_y), "VecCreateMPI");
+  check(VecDuplicate(s.coarse_y, &s.coarse_g), "VecDuplicate");
   {
-    Vec proto = nullptr, ghost = nullptr;
-    check(VecCreateMPI(comm, static_cast<PetscInt>(2 * nl), PETSC_DETERMINE, &proto), "VecCreateMPI");
-    check(VecCreateSeq(PETSC_COMM_SELF, static_cast<PetscInt>(2 * ng), &ghost), "VecCreateSeq");
-    std::vector<PetscInt> from(2 * ng);
-    for (size_t g = 0; g < ng; ++g) {
-      const PetscInt at = 2 * block(static_cast<size_t>(d.ghosts[g]));
-      from[2 * g] = at;
-      from[2 * g + 1] = at + 1;
-    }
+    std::vector<PetscInt> from(2 * ng * nm);
+    for (size_t m = 0; m < nm; ++m)
+      for (size_t g = 0; g < ng; ++g) {
+        const PetscInt at = 2 * block(m, static_cast<size_t>(d.ghosts[g]));
+        from[2 * (m * ng + g)] = at;
+        from[2 * (m * ng + g) + 1] = at + 1;
+      }
     IS is = nullptr;
     check(ISCreateGeneral(PETSC_COMM_SELF, static_cast<PetscInt>(from.size()), from.data(), PETSC_COPY_VALUES, &is),
           "ISCreateGeneral");
-    check(VecScatterCreate(proto, is, ghost, nullptr, &s.coarse_scatter), "VecScatterCreate");
+    check(VecScatterCreate(s.coarse_y, is, s.coarse_ghost, nullptr, &s.coarse_scatter), "VecScatterCreate");
     ISDestroy(&is);
-    VecDestroy(&ghost);
-    VecDestroy(&proto);
   }
 
-  // The block rows' counts in the diagonal and off-diagonal parts (the graph of L).
-  std::vector<PetscInt> dnz(nl, 1), onz(nl, 0);
-  for (size_t i = 0; i < nl; ++i)
-    for (int e = s.row_start[i]; e < s.row_start[i + 1]; ++e) ++(s.column[static_cast<size_t>(e)] >= 0 ? dnz[i] : onz[i]);
+  // The block rows' counts in the diagonal and off-diagonal parts (the graph of L, per mode).
+  std::vector<PetscInt> dnz(nl * nm, 1), onz(nl * nm, 0);
+  for (size_t m = 0; m < nm; ++m)
+    for (size_t i = 0; i < nl; ++i)
+      for (int e = s.row_start[i]; e < s.row_start[i + 1]; ++e)
+        ++(s.column[static_cast<size_t>(e)] >= 0 ? dnz[m * nl + i] : onz[m * nl + i]);
+  check(MatCreate(comm, &s.coarse), "MatCreate");
+  check(MatSetSizes(s.coarse, static_cast<PetscInt>(2 * nl * nm), static_cast<PetscInt>(2 * nl * nm), PETSC_DETERMINE,
+                    PETSC_DETERMINE),
+        "MatSetSizes");
+  check(MatSetType(s.coarse, MATAIJ), "MatSetType");
+  check(MatXAIJSetPreallocation(s.coarse, 2, dnz.data(), onz.data(), nullptr, nullptr), "MatXAIJSetPreallocation");
   std::vector<double> scale(n, 0.0), shift(nl, 0.0);
-  for (LocalSystem::Mode& m : s.modes) {
+  for (size_t mi = 0; mi < nm; ++mi) {
+    const LocalSystem::Mode& m = s.modes[mi];
     // √s_i at the owned and ghost vertices, T_ii at the owned ones.
     for (size_t i = 0; i < nl; ++i) {
       const auto v = static_cast<size_t>(d.owned[i]);
@@ -796,48 +809,40 @@ void set_up_coarse(LocalSystem& s, const Distribution& d, const RowMatrix& rows,
     for (const int v : d.ghosts)
       scale[static_cast<size_t>(v)] =
           coarse_weight(m.q, m.first, fixed, n, nf, static_cast<size_t>(v), s.b * laplacian.weight_sum[v]).scale;
-    check(MatCreate(comm, &m.e), "MatCreate");
-    check(MatSetSizes(m.e, static_cast<PetscInt>(2 * nl), static_cast<PetscInt>(2 * nl), PETSC_DETERMINE,
-                      PETSC_DETERMINE),
-          "MatSetSizes");
-    check(MatSetType(m.e, MATAIJ), "MatSetType");
-    check(MatXAIJSetPreallocation(m.e, 2, dnz.data(), onz.data(), nullptr, nullptr), "MatXAIJSetPreallocation");
     for (size_t i = 0; i < nl; ++i) {
       const auto v = static_cast<size_t>(d.owned[i]);
-      const PetscInt row = block(v);
+      const PetscInt row = block(mi, v);
       const double si = scale[v];
       // A vertex out of the coarse space (fixed at every frame of the segment): identity row,
       // its right-hand side is zero.
       const double dg = si == 0 ? 1.0 : si * si * s.diagonal[i] + shift[i];
       const PetscScalar diag[4] = {dg, 0, 0, dg};
-      check(MatSetValuesBlocked(m.e, 1, &row, 1, &row, diag, INSERT_VALUES), "MatSetValuesBlocked");
+      check(MatSetValuesBlocked(s.coarse, 1, &row, 1, &row, diag, INSERT_VALUES), "MatSetValuesBlocked");
       if (si == 0) continue;
       for (RowMatrix::InnerIterator it(rows, static_cast<Eigen::Index>(v)); it; ++it) {
         const auto c = static_cast<size_t>(it.col());
         if (c == v || scale[c] == 0) continue;
         const cplx a = si * scale[c] * it.value();
         const PetscScalar entry[4] = {a.real(), -a.imag(), a.imag(), a.real()};
-        const PetscInt col = block(c);
-        check(MatSetValuesBlocked(m.e, 1, &row, 1, &col, entry, INSERT_VALUES), "MatSetValuesBlocked");
+        const PetscInt col = block(mi, c);
+        check(MatSetValuesBlocked(s.coarse, 1, &row, 1, &col, entry, INSERT_VALUES), "MatSetValuesBlocked");
       }
     }
-    check(MatAssemblyBegin(m.e, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
-    check(MatAssemblyEnd(m.e, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
-    check(MatSetOption(m.e, MAT_SPD, PETSC_TRUE), "MatSetOption");
-    check(MatCreateVecs(m.e, &m.y, &m.g), "MatCreateVecs");
-    check(VecCreateSeq(PETSC_COMM_SELF, static_cast<PetscInt>(2 * ng), &m.ghost_y), "VecCreateSeq");
-    check(KSPCreate(comm, &m.ksp), "KSPCreate");
-    check(KSPSetOperators(m.ksp, m.e, m.e), "KSPSetOperators");
-    check(KSPSetType(m.ksp, KSPCG), "KSPSetType");
-    PC pc = nullptr;
-    check(KSPGetPC(m.ksp, &pc), "KSPGetPC");
-    check(PCSetType(pc, PCGAMG), "PCSetType");
-    check(KSPSetNormType(m.ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
-    check(KSPSetTolerances(m.ksp, kCoarseTolerance, 0.0, 1e300, kCoarseIterations), "KSPSetTolerances");
-    check(KSPSetOptionsPrefix(m.ksp, "tvf_coarse_"), "KSPSetOptionsPrefix");
-    check(KSPSetFromOptions(m.ksp), "KSPSetFromOptions");
-    check(KSPSetUp(m.ksp), "KSPSetUp");
   }
+  check(MatAssemblyBegin(s.coarse, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
+  check(MatAssemblyEnd(s.coarse, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
+  check(MatSetOption(s.coarse, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  check(KSPCreate(comm, &s.coarse_ksp), "KSPCreate");
+  check(KSPSetOperators(s.coarse_ksp, s.coarse, s.coarse), "KSPSetOperators");
+  check(KSPSetType(s.coarse_ksp, KSPCG), "KSPSetType");
+  PC pc = nullptr;
+  check(KSPGetPC(s.coarse_ksp, &pc), "KSPGetPC");
+  check(PCSetType(pc, PCGAMG), "PCSetType");
+  check(KSPSetNormType(s.coarse_ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
+  check(KSPSetTolerances(s.coarse_ksp, kCoarseTolerance, 0.0, 1e300, kCoarseIterations), "KSPSetTolerances");
+  check(KSPSetOptionsPrefix(s.coarse_ksp, "tvf_coarse_"), "KSPSetOptionsPrefix");
+  check(KSPSetFromOptions(s.coarse_ksp), "KSPSetFromOptions");
+  check(KSPSetUp(s.coarse_ksp), "KSPSetUp");
 }
 
 }  // namespace
@@ -1002,7 +1007,7 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
     // orthogonalising against the last direction only (the one process's Polak–Ribière
     // CG). The line solves alone: plain CG.
     if (options.coarse_modes > 0) set_up_coarse(s, d, rows, laplacian, fixed, options.coarse_modes, comm);
-    const bool two_level = !s.modes.empty();
+    const bool two_level = s.coarse_ksp != nullptr;
     if (two_level && options.local_rings >= 0) set_up_cut(s, d, rows, fixed, options.local_rings, comm);
     KSP ksp = nullptr;
     check(KSPCreate(comm, &ksp), "KSPCreate");
@@ -1038,9 +1043,10 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
     if (two_level) {
       PC mode_pc = nullptr;
       PCType mode_type = nullptr;
-      check(KSPGetPC(s.modes.front().ksp, &mode_pc), "KSPGetPC");
+      check(KSPGetPC(s.coarse_ksp, &mode_pc), "KSPGetPC");
       check(PCGetType(mode_pc, &mode_type), "PCGetType");
-      coarse = fmt::format(" with {} low temporal modes as coarse correction ({} on each; {} spatial iterations in all)",
+      coarse = fmt::format(" with {} low temporal modes as coarse correction ({} on their block-diagonal spatial "
+                           "system; {} iterations of it in all)",
                            s.modes.size(), mode_type, s.coarse_iterations);
       if (s.cut.ksp != nullptr) {
         long cut_vertices = static_cast<long>(s.cut.count);
