@@ -464,7 +464,8 @@ PetscErrorCode apply_cut_lines(PC pc, Vec r, Vec out) {
 
 // The two-level preconditioner, the one process's (solve/spacetime.cpp, solve_cg):
 // out = C r + M⁻¹ (r − A C r), C the coarse correction (restriction to the low temporal
-// modes, their spatial solves, prolongation), M⁻¹ the line solves. C r is never stored
+// modes, their spatial solves, prolongation), M⁻¹ the line solves, with the local solve δ
+// on the cut lines between them (below). C r is never stored
 // whole: its frames are prolonged from the modes' solutions where used (three at a time
 // for the product), so the preconditioner needs no space-time vector beside out.
 PetscErrorCode apply_two_level(PC pc, Vec r, Vec out) {
