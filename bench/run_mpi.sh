@@ -7,7 +7,9 @@
 # the largest difference from the first run's field (relative to its largest vector).
 # Usage: bench/run_mpi.sh [build-dir] [N ...]   (default build/release, N = 141 317 707 1000;
 #        RUNS="one;mpirun -n 2" picks the runs, default one, mpirun -n 1 and mpirun -n 2; the
-#        first is the reference; FREE_CHECK=1 prints the available memory before each run)
+#        first is the reference; FREE_CHECK=1 prints the available memory before each run;
+#        KEYFRAMES=0: no key frames, the same two singularities held fixed at every frame
+#        instead, beside the moving vortex; PETSC_OPTIONS reaches the ranks as usual)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build/release}
@@ -34,10 +36,18 @@ for n in "${sizes[@]}"; do
  "generator": "spacetime",
  "solver": {"region_radius": 0.1},
  "falloff": 40,
+$(if [ "${KEYFRAMES:-1}" = 0 ]; then cat <<'KF'
+ "elements": [{"kind": "singular", "type": "saddle", "path": [[-0.25, 0, 0]]},
+              {"kind": "singular", "type": "source", "path": [[0.25, 0, 0]]},
+              {"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]}]}
+KF
+else cat <<'KF'
  "keyframes": [{"t": 0, "elements": [{"kind": "singular", "type": "saddle", "at": [-0.25, 0]},
                                      {"kind": "singular", "type": "source", "at": [0.25, 0]}]},
                {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0, 0.5]}]}],
  "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]}]}
+KF
+fi)
 EOF
   IFS=';' read -r -a runs <<<"${RUNS:-one;mpirun -n 1;mpirun -n 2}"
   for run in "${runs[@]}"; do
@@ -68,7 +78,8 @@ largest = max(np.hypot(*ref[j].T).max() for j in range(ref.shape[0]))
 for run in runs:
     log = open(name(run) + ".log").read()
     gen = re.search(r"generated (\d+) frames × (\d+) vertices by (.*) in ([0-9.]+) s", log)
-    its = re.search(r"(\d+) iterations", gen.group(3))
+    its = re.search(r"(\d+) iterations, \d+ ranks?,", gen.group(3))  # the outer CG's
+    print(f"{n}², {run}: {gen.group(3)}", file=sys.stderr)
     halo = re.search(r"halo (\d+) vertices", gen.group(3))
     ranks = [(int(p), float(u) + float(s), float(w))
              for p, u, s, w in re.findall(r"peak (\d+) cpu ([0-9.]+) ([0-9.]+) wall ([0-9.]+)", log)]

@@ -1,5 +1,6 @@
 #include "solve/petsc_spacetime.h"
 
+#include "solve/spacetime_coarse.h"
 #include "tvf/core/error.h"
 #include "tvf/solve/distributed.h"
 
@@ -151,6 +152,15 @@ namespace {
 
 using RowMatrix = Eigen::SparseMatrix<cplx, Eigen::RowMajor>;
 
+// The coarse correction's spatial solves: to the one process's relative residual (solve/
+// spacetime.cpp: kCoarseTolerance), or this many iterations.
+constexpr double kCoarseTolerance = 1e-2;
+constexpr int kCoarseIterations = 200;
+// The local solve on the cut lines: to the one process's kLocalTolerance, or this many
+// iterations.
+constexpr double kLocalTolerance = 1e-1;
+constexpr int kLocalIterations = 50;
+
 // Which rank owns each vertex, from PETSc's partitioner on L's graph (PT-Scotch in
 // Debian's PETSc; PETSC_OPTIONS=-mat_partitioning_type ... picks another).
 struct Distribution {
@@ -256,6 +266,64 @@ struct LocalSystem {
   }
   Vec ghost = nullptr;                      // nf × ng ghost values (sequential)
   VecScatter scatter = nullptr;             // global → ghost
+  std::vector<char> ghost_fixed;            // nf × ng
+
+  // The coarse correction (SpaceTimeOptions::coarse_modes > 0; solve/spacetime_coarse.h):
+  // the low temporal modes' spatial systems E_m y_m = g_m, assembled in the real 2 × 2 block
+  // form as one block-diagonal system over this rank's vertices (mode-major: the rank's
+  // rows of mode 0, then of mode 1, ...) and solved by one KSP (CG with GAMG by default,
+  // options prefix tvf_coarse_): one set of reductions and halo exchanges for all modes.
+  struct Mode {
+    size_t first = 0;
+    Eigen::VectorXd q;  // over the segment's frames
+  };
+  std::vector<Mode> modes;
+  std::vector<std::vector<std::pair<size_t, size_t>>> frame_modes;  // per frame: (mode, index in its segment)
+  Mat coarse = nullptr;
+  KSP coarse_ksp = nullptr;
+  Vec coarse_g = nullptr, coarse_y = nullptr;  // modes × 2·nl reals: the restriction, the solution
+  Vec coarse_ghost = nullptr;                  // modes × 2·ng reals: y at the ghost vertices
+  VecScatter coarse_scatter = nullptr;         // coarse_y → coarse_ghost
+  std::vector<cplx> prolonged;                                      // 3 frames of nl + ng
+  long coarse_iterations = 0;
+
+  // The local solve after the coarse correction (SpaceTimeOptions::local_rings ≥ 0): the
+  // vertices whose temporal line a moving constraint cuts (Ω, grown by local_rings rings),
+  // solved together over all frames, zero around them, by a KSP (CG with the line solves)
+  // on a vector of Ω's lines (vertex-major: the rank's Ω vertices' lines one after the other).
+  struct Cut {
+    size_t count = 0;                       // the rank's Ω vertices
+    size_t ghosts = 0;                      // other ranks' Ω vertices next to the rank's vertices
+    std::vector<int> vertex;                // per Ω vertex of the rank: its owned index
+    std::vector<int> start, column;         // its Ω neighbours: ≥ 0 the rank's, < 0 the ghost −c − 1
+    std::vector<cplx> value;
+    std::vector<int> touched;               // owned vertices outside Ω next to Ω: owned index
+    std::vector<int> touched_start, touched_column;  // their Ω neighbours (as column above)
+    std::vector<cplx> touched_value;
+    Mat a = nullptr;
+    KSP ksp = nullptr;
+    Vec r = nullptr, x = nullptr;           // 2·nf·count reals
+    Vec ghost = nullptr;                    // 2·nf·ghosts reals
+    VecScatter scatter = nullptr;
+    long iterations = 0;
+  } cut;
+
+  ~LocalSystem() {
+    KSPDestroy(&coarse_ksp);
+    MatDestroy(&coarse);
+    VecDestroy(&coarse_g);
+    VecDestroy(&coarse_y);
+    VecDestroy(&coarse_ghost);
+    VecScatterDestroy(&coarse_scatter);
+    KSPDestroy(&cut.ksp);
+    MatDestroy(&cut.a);
+    VecDestroy(&cut.r);
+    VecDestroy(&cut.x);
+    VecDestroy(&cut.ghost);
+    VecScatterDestroy(&cut.scatter);
+    VecScatterDestroy(&scatter);
+    VecDestroy(&ghost);
+  }
 };
 
 PetscErrorCode apply_operator(Mat a, Vec x, Vec y) {
@@ -299,31 +367,483 @@ PetscErrorCode apply_operator(Mat a, Vec x, Vec y) {
 }
 
 // Every owned vertex's temporal line solved exactly (Thomas), fixed entries splitting it:
-// the one process's preconditioner, with no communication.
-PetscErrorCode apply_preconditioner(PC pc, Vec r, Vec out) {
+// the one process's preconditioner, with no communication. os may be rs (in place).
+void line_solve(const LocalSystem& s, const cplx* rs, cplx* os) {
+  const size_t nl = s.nl, nf = s.nf;
+  for (size_t i = 0; i < nl; ++i) os[i] = rs[i] * s.pivot[i];
+  for (size_t j = 1; j < nf; ++j)
+    for (size_t i = 0; i < nl; ++i) {
+      const size_t k = j * nl + i;
+      os[k] = (rs[k] - s.lower(j, i) * os[k - nl]) * s.pivot[k];
+    }
+  for (size_t j = nf - 1; j-- > 0;)
+    for (size_t i = 0; i < nl; ++i) {
+      const size_t k = j * nl + i;
+      os[k] -= s.upper(j, i) * os[k + nl];
+    }
+}
+
+PetscErrorCode apply_line_solves(PC pc, Vec r, Vec out) {
   LocalSystem* s = nullptr;
   PetscCall(PCShellGetContext(pc, &s));
   const PetscScalar* ra = nullptr;
   PetscScalar* oa = nullptr;
   PetscCall(VecGetArrayRead(r, &ra));
   PetscCall(VecGetArray(out, &oa));
-  const auto* rs = reinterpret_cast<const cplx*>(ra);
-  auto* os = reinterpret_cast<cplx*>(oa);
-  const size_t nl = s->nl, nf = s->nf;
-  for (size_t i = 0; i < nl; ++i) os[i] = rs[i] * s->pivot[i];
-  for (size_t j = 1; j < nf; ++j)
-    for (size_t i = 0; i < nl; ++i) {
-      const size_t k = j * nl + i;
-      os[k] = (rs[k] - s->lower(j, i) * os[k - nl]) * s->pivot[k];
-    }
-  for (size_t j = nf - 1; j-- > 0;)
-    for (size_t i = 0; i < nl; ++i) {
-      const size_t k = j * nl + i;
-      os[k] -= s->upper(j, i) * os[k + nl];
-    }
+  line_solve(*s, reinterpret_cast<const cplx*>(ra), reinterpret_cast<cplx*>(oa));
   PetscCall(VecRestoreArray(out, &oa));
   PetscCall(VecRestoreArrayRead(r, &ra));
   return 0;
+}
+
+// y = A x on Ω's lines (Dirichlet zero around Ω): one vertex's line, xs the rank's Ω lines,
+// gs the ghosts' (nf each).
+void cut_row(const LocalSystem& s, const cplx* xs, const cplx* gs, size_t li, cplx* y) {
+  const LocalSystem::Cut& c = s.cut;
+  const size_t nf = s.nf, nl = s.nl;
+  const auto i = static_cast<size_t>(c.vertex[li]);
+  const double w = s.b * s.weight_sum[i];
+  const cplx* xi = xs + li * nf;
+  for (size_t j = 0; j < nf; ++j) {
+    cplx t = s.diagonal[i] * xi[j];
+    if (j > 0) t += w * (xi[j] - xi[j - 1]);
+    if (j + 1 < nf) t += w * (xi[j] - xi[j + 1]);
+    y[j] = t;
+  }
+  for (int e = c.start[li]; e < c.start[li + 1]; ++e) {
+    const int col = c.column[static_cast<size_t>(e)];
+    const cplx v = c.value[static_cast<size_t>(e)];
+    const cplx* xc = col >= 0 ? xs + static_cast<size_t>(col) * nf : gs + static_cast<size_t>(-col - 1) * nf;
+    for (size_t j = 0; j < nf; ++j) y[j] += v * xc[j];
+  }
+  for (size_t j = 0; j < nf; ++j)
+    if (s.fixed[j * nl + i]) y[j] = 0;
+}
+
+PetscErrorCode apply_cut_operator(Mat a, Vec x, Vec y) {
+  LocalSystem* s = nullptr;
+  PetscCall(MatShellGetContext(a, &s));
+  LocalSystem::Cut& c = s->cut;
+  PetscCall(VecScatterBegin(c.scatter, x, c.ghost, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(c.scatter, x, c.ghost, INSERT_VALUES, SCATTER_FORWARD));
+  const PetscScalar *xa = nullptr, *ga = nullptr;
+  PetscScalar* ya = nullptr;
+  PetscCall(VecGetArrayRead(x, &xa));
+  PetscCall(VecGetArrayRead(c.ghost, &ga));
+  PetscCall(VecGetArray(y, &ya));
+  for (size_t li = 0; li < c.count; ++li)
+    cut_row(*s, reinterpret_cast<const cplx*>(xa), reinterpret_cast<const cplx*>(ga), li,
+            reinterpret_cast<cplx*>(ya) + li * s->nf);
+  PetscCall(VecRestoreArray(y, &ya));
+  PetscCall(VecRestoreArrayRead(c.ghost, &ga));
+  PetscCall(VecRestoreArrayRead(x, &xa));
+  return 0;
+}
+
+// The line solves on Ω's lines (the global ones' rows).
+PetscErrorCode apply_cut_lines(PC pc, Vec r, Vec out) {
+  LocalSystem* s = nullptr;
+  PetscCall(PCShellGetContext(pc, &s));
+  const PetscScalar* ra = nullptr;
+  PetscScalar* oa = nullptr;
+  PetscCall(VecGetArrayRead(r, &ra));
+  PetscCall(VecGetArray(out, &oa));
+  const size_t nf = s->nf, nl = s->nl;
+  for (size_t li = 0; li < s->cut.count; ++li) {
+    const auto i = static_cast<size_t>(s->cut.vertex[li]);
+    const auto* rs = reinterpret_cast<const cplx*>(ra) + li * nf;
+    auto* os = reinterpret_cast<cplx*>(oa) + li * nf;
+    os[0] = rs[0] * s->pivot[i];
+    for (size_t j = 1; j < nf; ++j) os[j] = (rs[j] - s->lower(j, i) * os[j - 1]) * s->pivot[j * nl + i];
+    for (size_t j = nf - 1; j-- > 0;) os[j] -= s->upper(j, i) * os[j + 1];
+  }
+  PetscCall(VecRestoreArray(out, &oa));
+  PetscCall(VecRestoreArrayRead(r, &ra));
+  return 0;
+}
+
+// The two-level preconditioner, the one process's (solve/spacetime.cpp, solve_cg):
+// out = C r + M⁻¹ (r − A C r), C the coarse correction (restriction to the low temporal
+// modes, their spatial solves, prolongation), M⁻¹ the line solves, with the local solve δ
+// on the cut lines between them (below). C r is never stored
+// whole: its frames are prolonged from the modes' solutions where used (three at a time
+// for the product), so the preconditioner needs no space-time vector beside out.
+PetscErrorCode apply_two_level(PC pc, Vec r, Vec out) {
+  LocalSystem* s = nullptr;
+  PetscCall(PCShellGetContext(pc, &s));
+  const size_t nl = s->nl, ng = s->ng, nf = s->nf;
+  const PetscScalar* ra = nullptr;
+  PetscCall(VecGetArrayRead(r, &ra));
+  const auto* rs = reinterpret_cast<const cplx*>(ra);
+  // Restriction: g_m = Σ_j q_m(j) r_j over the mode's segment (r is zero at fixed entries).
+  {
+    PetscScalar* ga = nullptr;
+    PetscCall(VecGetArray(s->coarse_g, &ga));
+    for (size_t mi = 0; mi < s->modes.size(); ++mi) {
+      const LocalSystem::Mode& m = s->modes[mi];
+      auto* g = reinterpret_cast<cplx*>(ga) + mi * nl;
+      std::fill(g, g + nl, cplx(0, 0));
+      for (Eigen::Index jj = 0; jj < m.q.size(); ++jj) {
+        const double q = m.q[jj];
+        const cplx* rj = rs + (m.first + static_cast<size_t>(jj)) * nl;
+        for (size_t i = 0; i < nl; ++i) g[i] += q * rj[i];
+      }
+    }
+    PetscCall(VecRestoreArray(s->coarse_g, &ga));
+  }
+  // The modes' spatial solves, together (to the one process's coarse tolerance), then the
+  // ghosts' values.
+  PetscCall(KSPSolve(s->coarse_ksp, s->coarse_g, s->coarse_y));
+  PetscInt coarse_it = 0;
+  PetscCall(KSPGetIterationNumber(s->coarse_ksp, &coarse_it));
+  s->coarse_iterations += coarse_it;
+  PetscCall(VecScatterBegin(s->coarse_scatter, s->coarse_y, s->coarse_ghost, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(s->coarse_scatter, s->coarse_y, s->coarse_ghost, INSERT_VALUES, SCATTER_FORWARD));
+  const PetscScalar *cya = nullptr, *cga = nullptr;
+  PetscCall(VecGetArrayRead(s->coarse_y, &cya));
+  PetscCall(VecGetArrayRead(s->coarse_ghost, &cga));
+  std::vector<const cplx*> ys(s->modes.size()), gys(s->modes.size());
+  for (size_t m = 0; m < s->modes.size(); ++m) {
+    ys[m] = reinterpret_cast<const cplx*>(cya) + m * nl;
+    gys[m] = reinterpret_cast<const cplx*>(cga) + m * ng;
+  }
+  // Frame j of t = C r over the owned vertices, then the ghosts: Σ_m q_m(j) y_m, zero at
+  // fixed entries.
+  const size_t width = nl + ng;
+  auto prolong = [&](size_t j, cplx* t) {
+    std::fill(t, t + width, cplx(0, 0));
+    for (const auto& [m, jj] : s->frame_modes[j]) {
+      const double q = s->modes[m].q[static_cast<Eigen::Index>(jj)];
+      for (size_t i = 0; i < nl; ++i) t[i] += q * ys[m][i];
+      for (size_t g = 0; g < ng; ++g) t[nl + g] += q * gys[m][g];
+    }
+    for (size_t i = 0; i < nl; ++i)
+      if (s->fixed[j * nl + i]) t[i] = 0;
+    for (size_t g = 0; g < ng; ++g)
+      if (s->ghost_fixed[j * ng + g]) t[nl + g] = 0;
+  };
+  PetscScalar* oa = nullptr;
+  PetscCall(VecGetArray(out, &oa));
+  auto* os = reinterpret_cast<cplx*>(oa);
+  // out = r − A t, the operator's row formula on three prolonged frames.
+  s->prolonged.resize(3 * width);
+  cplx* prev = s->prolonged.data();
+  cplx* cur = prev + width;
+  cplx* next = cur + width;
+  prolong(0, cur);
+  if (nf > 1) prolong(1, next);
+  for (size_t j = 0; j < nf; ++j) {
+    for (size_t i = 0; i < nl; ++i) {
+      const size_t k = j * nl + i;
+      if (s->fixed[k]) {
+        os[k] = 0;
+        continue;
+      }
+      cplx acc = s->diagonal[i] * cur[i];
+      for (int e = s->row_start[i]; e < s->row_start[i + 1]; ++e) {
+        const int c = s->column[static_cast<size_t>(e)];
+        acc += s->value[static_cast<size_t>(e)] * cur[c >= 0 ? static_cast<size_t>(c) : nl + static_cast<size_t>(-c - 1)];
+      }
+      cplx t(0, 0);
+      if (j > 0) t += cur[i] - prev[i];
+      if (j + 1 < nf) t += cur[i] - next[i];
+      os[k] = rs[k] - (acc + s->b * s->weight_sum[i] * t);
+    }
+    std::swap(prev, cur);
+    std::swap(cur, next);
+    if (j + 2 < nf) prolong(j + 2, next);
+  }
+  // The local solve: δ ≈ A_ΩΩ⁻¹ (r − A t)_Ω, then out = r − A (t + δ).
+  LocalSystem::Cut& c = s->cut;
+  if (c.ksp != nullptr) {
+    PetscScalar* ca = nullptr;
+    PetscCall(VecGetArray(c.r, &ca));
+    auto* cr = reinterpret_cast<cplx*>(ca);
+    for (size_t li = 0; li < c.count; ++li)
+      for (size_t j = 0; j < nf; ++j) cr[li * nf + j] = os[j * nl + static_cast<size_t>(c.vertex[li])];
+    PetscCall(VecRestoreArray(c.r, &ca));
+    PetscCall(KSPSolve(c.ksp, c.r, c.x));
+    PetscInt it = 0;
+    PetscCall(KSPGetIterationNumber(c.ksp, &it));
+    c.iterations += it;
+    PetscCall(VecScatterBegin(c.scatter, c.x, c.ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(c.scatter, c.x, c.ghost, INSERT_VALUES, SCATTER_FORWARD));
+    const PetscScalar *xa = nullptr, *ga = nullptr;
+    PetscCall(VecGetArrayRead(c.x, &xa));
+    PetscCall(VecGetArrayRead(c.ghost, &ga));
+    const auto* xs = reinterpret_cast<const cplx*>(xa);
+    const auto* gs = reinterpret_cast<const cplx*>(ga);
+    std::vector<cplx> row(nf);
+    for (size_t li = 0; li < c.count; ++li) {
+      cut_row(*s, xs, gs, li, row.data());
+      const auto i = static_cast<size_t>(c.vertex[li]);
+      for (size_t j = 0; j < nf; ++j) os[j * nl + i] -= row[j];  // zero at fixed entries
+    }
+    for (size_t ti = 0; ti < c.touched.size(); ++ti) {
+      std::fill(row.begin(), row.end(), cplx(0, 0));
+      for (int e = c.touched_start[ti]; e < c.touched_start[ti + 1]; ++e) {
+        const int col = c.touched_column[static_cast<size_t>(e)];
+        const cplx v = c.touched_value[static_cast<size_t>(e)];
+        const cplx* xc = col >= 0 ? xs + static_cast<size_t>(col) * nf : gs + static_cast<size_t>(-col - 1) * nf;
+        for (size_t j = 0; j < nf; ++j) row[j] += v * xc[j];
+      }
+      const auto i = static_cast<size_t>(c.touched[ti]);
+      for (size_t j = 0; j < nf; ++j)
+        if (!s->fixed[j * nl + i]) os[j * nl + i] -= row[j];
+    }
+    PetscCall(VecRestoreArrayRead(c.ghost, &ga));
+    PetscCall(VecRestoreArrayRead(c.x, &xa));
+  }
+  // out = t + δ + M⁻¹ (r − A (t + δ)).
+  line_solve(*s, os, os);
+  for (size_t j = 0; j < nf; ++j) {
+    prolong(j, cur);
+    for (size_t i = 0; i < nl; ++i) os[j * nl + i] += cur[i];
+  }
+  if (c.ksp != nullptr) {
+    const PetscScalar* xa = nullptr;
+    PetscCall(VecGetArrayRead(c.x, &xa));
+    const auto* xs = reinterpret_cast<const cplx*>(xa);
+    for (size_t li = 0; li < c.count; ++li)
+      for (size_t j = 0; j < nf; ++j) os[j * nl + static_cast<size_t>(c.vertex[li])] += xs[li * nf + j];
+    PetscCall(VecRestoreArrayRead(c.x, &xa));
+  }
+  PetscCall(VecRestoreArray(out, &oa));
+  PetscCall(VecRestoreArrayRead(s->coarse_ghost, &cga));
+  PetscCall(VecRestoreArrayRead(s->coarse_y, &cya));
+  PetscCall(VecRestoreArrayRead(r, &ra));
+  return 0;
+}
+
+// The local solve's set-up (the one process's choice of Ω: vertices whose line has a fixed
+// entry outside the key frames and a free entry, grown by `rings` rings of neighbours).
+void set_up_cut(LocalSystem& s, const Distribution& d, const RowMatrix& rows, std::span<const char> fixed, int rings,
+                MPI_Comm comm) {
+  const auto n = static_cast<size_t>(rows.rows());
+  const size_t nf = s.nf;
+  const Segments segs = find_segments(fixed, n, nf);
+  std::vector<char> cut(n, 0), free_entry(n, 0), in(n, 0);
+  for (size_t j = 0; j < nf; ++j) {
+    const char* fj = fixed.data() + j * n;
+    for (size_t v = 0; v < n; ++v) {
+      if (!fj[v])
+        free_entry[v] = 1;
+      else if (!segs.key[j])
+        cut[v] = 1;
+    }
+  }
+  for (size_t v = 0; v < n; ++v) in[v] = cut[v] && free_entry[v];
+  for (int ring = 0; ring < rings; ++ring) {
+    std::vector<char> grown = in;
+    for (size_t v = 0; v < n; ++v)
+      if (in[v])
+        for (RowMatrix::InnerIterator it(rows, static_cast<Eigen::Index>(v)); it; ++it)
+          grown[static_cast<size_t>(it.col())] = 1;
+    in = std::move(grown);
+  }
+  if (std::find(in.begin(), in.end(), 1) == in.end()) return;
+  LocalSystem::Cut& c = s.cut;
+  // Ω's vertices per rank in the ranks' vertex order, their index there; the ghosts: other
+  // ranks' Ω vertices next to one of this rank's vertices.
+  std::vector<int> omega_index(n, -1);
+  std::vector<PetscInt> omega_count(static_cast<size_t>(d.size), 0);
+  // In each rank's vertex order (a rank's local indices increase with the vertex number).
+  for (size_t v = 0; v < n; ++v)
+    if (in[v]) omega_index[v] = static_cast<int>(omega_count[static_cast<size_t>(d.owner[v])]++);
+  std::vector<PetscInt> omega_first(static_cast<size_t>(d.size), 0);
+  for (size_t r = 1; r < omega_first.size(); ++r) omega_first[r] = omega_first[r - 1] + omega_count[r - 1];
+  std::vector<int> ghost_of(n, -1);
+  std::vector<int> ghost_vertex;
+  for (const int v : d.owned)
+    for (RowMatrix::InnerIterator it(rows, v); it; ++it) {
+      const auto col = static_cast<size_t>(it.col());
+      if (in[col] && d.owner[col] != d.rank && ghost_of[col] < 0) {
+        ghost_of[col] = 0;
+        ghost_vertex.push_back(static_cast<int>(col));
+      }
+    }
+  std::sort(ghost_vertex.begin(), ghost_vertex.end());
+  for (size_t g = 0; g < ghost_vertex.size(); ++g) ghost_of[static_cast<size_t>(ghost_vertex[g])] = static_cast<int>(g);
+  auto column_of = [&](size_t col) {
+    return d.owner[col] == d.rank ? omega_index[col] : -ghost_of[col] - 1;
+  };
+  c.start.push_back(0);
+  c.touched_start.push_back(0);
+  for (size_t i = 0; i < s.nl; ++i) {
+    const auto v = static_cast<size_t>(d.owned[i]);
+    bool near = false;
+    for (RowMatrix::InnerIterator it(rows, static_cast<Eigen::Index>(v)); it; ++it) {
+      const auto col = static_cast<size_t>(it.col());
+      if (col == v || !in[col]) continue;
+      near = true;
+      if (in[v]) {
+        c.column.push_back(column_of(col));
+        c.value.push_back(it.value());
+      } else {
+        c.touched_column.push_back(column_of(col));
+        c.touched_value.push_back(it.value());
+      }
+    }
+    if (in[v]) {
+      c.vertex.push_back(static_cast<int>(i));
+      c.start.push_back(static_cast<int>(c.column.size()));
+    } else if (near) {
+      c.touched.push_back(static_cast<int>(i));
+      c.touched_start.push_back(static_cast<int>(c.touched_column.size()));
+    }
+  }
+  c.count = c.vertex.size();
+  c.ghosts = ghost_vertex.size();
+  check(VecCreateMPI(comm, static_cast<PetscInt>(2 * nf * c.count), PETSC_DETERMINE, &c.x), "VecCreateMPI");
+  check(VecDuplicate(c.x, &c.r), "VecDuplicate");
+  check(VecCreateSeq(PETSC_COMM_SELF, static_cast<PetscInt>(2 * nf * c.ghosts), &c.ghost), "VecCreateSeq");
+  {
+    std::vector<PetscInt> from(2 * nf * c.ghosts);
+    for (size_t g = 0; g < c.ghosts; ++g) {
+      const auto v = static_cast<size_t>(ghost_vertex[g]);
+      const PetscInt at = static_cast<PetscInt>(2 * nf) *
+                          (omega_first[static_cast<size_t>(d.owner[v])] + omega_index[v]);
+      for (size_t q = 0; q < 2 * nf; ++q) from[2 * nf * g + q] = at + static_cast<PetscInt>(q);
+    }
+    IS is = nullptr;
+    check(ISCreateGeneral(PETSC_COMM_SELF, static_cast<PetscInt>(from.size()), from.data(), PETSC_COPY_VALUES, &is),
+          "ISCreateGeneral");
+    check(VecScatterCreate(c.x, is, c.ghost, nullptr, &c.scatter), "VecScatterCreate");
+    ISDestroy(&is);
+  }
+  const auto size = static_cast<PetscInt>(2 * nf * c.count);
+  check(MatCreateShell(comm, size, size, PETSC_DETERMINE, PETSC_DETERMINE, &s, &c.a), "MatCreateShell");
+  check(MatShellSetOperation(c.a, MATOP_MULT, reinterpret_cast<void (*)(void)>(apply_cut_operator)),
+        "MatShellSetOperation");
+  check(MatSetOption(c.a, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  check(KSPCreate(comm, &c.ksp), "KSPCreate");
+  check(KSPSetOperators(c.ksp, c.a, c.a), "KSPSetOperators");
+  check(KSPSetType(c.ksp, KSPCG), "KSPSetType");
+  PC pc = nullptr;
+  check(KSPGetPC(c.ksp, &pc), "KSPGetPC");
+  check(PCSetType(pc, PCSHELL), "PCSetType");
+  check(PCShellSetContext(pc, &s), "PCShellSetContext");
+  check(PCShellSetApply(pc, apply_cut_lines), "PCShellSetApply");
+  check(KSPSetNormType(c.ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
+  check(KSPSetTolerances(c.ksp, kLocalTolerance, 0.0, 1e300, kLocalIterations), "KSPSetTolerances");
+  check(KSPSetOptionsPrefix(c.ksp, "tvf_local_"), "KSPSetOptionsPrefix");
+  check(KSPSetFromOptions(c.ksp), "KSPSetFromOptions");
+}
+
+// The coarse correction's set-up: the low temporal modes of every segment between key
+// frames, their systems E_m = S^½ L S^½ + T assembled as one block-diagonal matrix over the
+// rank's vertices (PETSc rows mode-major in the rank's vertex order, complex entries as real
+// 2 × 2 blocks [[a, −b], [b, a]], so the real form is symmetric positive definite), its KSP,
+// and the scatter of the solution to the ghost vertices. One system rather than one per
+// mode: the same iterations and one set of synchronisations (docs/benchmarks.md).
+void set_up_coarse(LocalSystem& s, const Distribution& d, const RowMatrix& rows, const ConnectionLaplacian& laplacian,
+                   std::span<const char> fixed, int coarse_modes, MPI_Comm comm) {
+  const auto n = static_cast<size_t>(rows.rows());
+  const size_t nl = s.nl, ng = s.ng, nf = s.nf;
+  const Segments segs = find_segments(fixed, n, nf);
+  s.frame_modes.assign(nf, {});
+  for (const auto& [first, count] : segs.segments) {
+    Eigen::MatrixXd q;
+    Eigen::VectorXd lambda;
+    temporal_eigenbasis(static_cast<int>(count), first == 0, first + count == nf, coarse_modes, q, lambda);
+    for (Eigen::Index k = 0; k < q.cols(); ++k) {
+      LocalSystem::Mode m;
+      m.first = first;
+      m.q = q.col(k);
+      for (size_t jj = 0; jj < count; ++jj) s.frame_modes[first + jj].emplace_back(s.modes.size(), jj);
+      s.modes.push_back(std::move(m));
+    }
+  }
+  const size_t nm = s.modes.size();
+  if (nm == 0) return;
+  // Block (complex) row of mode m at vertex v: the modes' rows of the ranks before v's, then
+  // v's rank's rows of the modes before m, then v's index there.
+  std::vector<PetscInt> first_row(static_cast<size_t>(d.size), 0);
+  for (size_t r = 1; r < first_row.size(); ++r)
+    first_row[r] = first_row[r - 1] + static_cast<PetscInt>(nm) * d.count[r - 1];
+  auto block = [&](size_t m, size_t v) {
+    const auto r = static_cast<size_t>(d.owner[v]);
+    return first_row[r] + static_cast<PetscInt>(m) * d.count[r] + d.local[v];
+  };
+
+  // The scatter of the modes' solution to the ghosts.
+  check(VecCreateSeq(PETSC_COMM_SELF, static_cast<PetscInt>(2 * ng * nm), &s.coarse_ghost), "VecCreateSeq");
+  check(VecCreateMPI(comm, static_cast<PetscInt>(2 * nl * nm), PETSC_DETERMINE, &s.coarse_y), "VecCreateMPI");
+  check(VecDuplicate(s.coarse_y, &s.coarse_g), "VecDuplicate");
+  {
+    std::vector<PetscInt> from(2 * ng * nm);
+    for (size_t m = 0; m < nm; ++m)
+      for (size_t g = 0; g < ng; ++g) {
+        const PetscInt at = 2 * block(m, static_cast<size_t>(d.ghosts[g]));
+        from[2 * (m * ng + g)] = at;
+        from[2 * (m * ng + g) + 1] = at + 1;
+      }
+    IS is = nullptr;
+    check(ISCreateGeneral(PETSC_COMM_SELF, static_cast<PetscInt>(from.size()), from.data(), PETSC_COPY_VALUES, &is),
+          "ISCreateGeneral");
+    check(VecScatterCreate(s.coarse_y, is, s.coarse_ghost, nullptr, &s.coarse_scatter), "VecScatterCreate");
+    ISDestroy(&is);
+  }
+
+  // The block rows' counts in the diagonal and off-diagonal parts (the graph of L, per mode).
+  std::vector<PetscInt> dnz(nl * nm, 1), onz(nl * nm, 0);
+  for (size_t m = 0; m < nm; ++m)
+    for (size_t i = 0; i < nl; ++i)
+      for (int e = s.row_start[i]; e < s.row_start[i + 1]; ++e)
+        ++(s.column[static_cast<size_t>(e)] >= 0 ? dnz[m * nl + i] : onz[m * nl + i]);
+  check(MatCreate(comm, &s.coarse), "MatCreate");
+  check(MatSetSizes(s.coarse, static_cast<PetscInt>(2 * nl * nm), static_cast<PetscInt>(2 * nl * nm), PETSC_DETERMINE,
+                    PETSC_DETERMINE),
+        "MatSetSizes");
+  check(MatSetType(s.coarse, MATAIJ), "MatSetType");
+  check(MatXAIJSetPreallocation(s.coarse, 2, dnz.data(), onz.data(), nullptr, nullptr), "MatXAIJSetPreallocation");
+  std::vector<double> scale(n, 0.0), shift(nl, 0.0);
+  for (size_t mi = 0; mi < nm; ++mi) {
+    const LocalSystem::Mode& m = s.modes[mi];
+    // √s_i at the owned and ghost vertices, T_ii at the owned ones.
+    for (size_t i = 0; i < nl; ++i) {
+      const auto v = static_cast<size_t>(d.owned[i]);
+      const CoarseWeight w = coarse_weight(m.q, m.first, fixed, n, nf, v, s.b * s.weight_sum[i]);
+      scale[v] = w.scale;
+      shift[i] = w.shift;
+    }
+    for (const int v : d.ghosts)
+      scale[static_cast<size_t>(v)] =
+          coarse_weight(m.q, m.first, fixed, n, nf, static_cast<size_t>(v), s.b * laplacian.weight_sum[v]).scale;
+    for (size_t i = 0; i < nl; ++i) {
+      const auto v = static_cast<size_t>(d.owned[i]);
+      const PetscInt row = block(mi, v);
+      const double si = scale[v];
+      // A vertex out of the coarse space (fixed at every frame of the segment): identity row,
+      // its right-hand side is zero.
+      const double dg = si == 0 ? 1.0 : si * si * s.diagonal[i] + shift[i];
+      const PetscScalar diag[4] = {dg, 0, 0, dg};
+      check(MatSetValuesBlocked(s.coarse, 1, &row, 1, &row, diag, INSERT_VALUES), "MatSetValuesBlocked");
+      if (si == 0) continue;
+      for (RowMatrix::InnerIterator it(rows, static_cast<Eigen::Index>(v)); it; ++it) {
+        const auto c = static_cast<size_t>(it.col());
+        if (c == v || scale[c] == 0) continue;
+        const cplx a = si * scale[c] * it.value();
+        const PetscScalar entry[4] = {a.real(), -a.imag(), a.imag(), a.real()};
+        const PetscInt col = block(mi, c);
+        check(MatSetValuesBlocked(s.coarse, 1, &row, 1, &col, entry, INSERT_VALUES), "MatSetValuesBlocked");
+      }
+    }
+  }
+  check(MatAssemblyBegin(s.coarse, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
+  check(MatAssemblyEnd(s.coarse, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
+  check(MatSetOption(s.coarse, MAT_SPD, PETSC_TRUE), "MatSetOption");
+  check(KSPCreate(comm, &s.coarse_ksp), "KSPCreate");
+  check(KSPSetOperators(s.coarse_ksp, s.coarse, s.coarse), "KSPSetOperators");
+  check(KSPSetType(s.coarse_ksp, KSPCG), "KSPSetType");
+  PC pc = nullptr;
+  check(KSPGetPC(s.coarse_ksp, &pc), "KSPGetPC");
+  check(PCSetType(pc, PCGAMG), "PCSetType");
+  check(KSPSetNormType(s.coarse_ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
+  check(KSPSetTolerances(s.coarse_ksp, kCoarseTolerance, 0.0, 1e300, kCoarseIterations), "KSPSetTolerances");
+  check(KSPSetOptionsPrefix(s.coarse_ksp, "tvf_coarse_"), "KSPSetOptionsPrefix");
+  check(KSPSetFromOptions(s.coarse_ksp), "KSPSetFromOptions");
+  check(KSPSetUp(s.coarse_ksp), "KSPSetUp");
 }
 
 }  // namespace
@@ -396,6 +916,9 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
       const double denom = diag - (has_prev ? s.lower(j, i) * s.upper(j - 1, i) : 0.0);
       s.pivot[k] = 1.0 / denom;
     }
+  s.ghost_fixed.resize(s.ng * nf);
+  for (size_t j = 0; j < nf; ++j)
+    for (size_t g = 0; g < s.ng; ++g) s.ghost_fixed[j * s.ng + g] = fixed[j * n + static_cast<size_t>(d.ghosts[g])];
 
   // Vectors: this rank's block of 2·nf·nl reals; the ghosts' values in every frame.
   Vec x = nullptr, rhs = nullptr;
@@ -480,16 +1003,28 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
     check(MatShellSetOperation(a, MATOP_MULT, reinterpret_cast<void (*)(void)>(apply_operator)),
           "MatShellSetOperation");
     check(MatSetOption(a, MAT_SPD, PETSC_TRUE), "MatSetOption");
+    // The two-level preconditioner (options.coarse_modes > 0, the one process's default) is
+    // not symmetric (multiplicative) and not linear (inexact coarse solves): flexible CG,
+    // orthogonalising against the last direction only (the one process's Polak–Ribière
+    // CG). The line solves alone: plain CG.
+    if (options.coarse_modes > 0) set_up_coarse(s, d, rows, laplacian, fixed, options.coarse_modes, comm);
+    const bool two_level = s.coarse_ksp != nullptr;
+    if (two_level && options.local_rings >= 0) set_up_cut(s, d, rows, fixed, options.local_rings, comm);
     KSP ksp = nullptr;
     check(KSPCreate(comm, &ksp), "KSPCreate");
     check(KSPSetOperators(ksp, a, a), "KSPSetOperators");
-    check(KSPSetType(ksp, KSPCG), "KSPSetType");
+    check(KSPSetType(ksp, two_level ? KSPFCG : KSPCG), "KSPSetType");
+    if (two_level) {
+      check(KSPFCGSetMmax(ksp, 1), "KSPFCGSetMmax");
+      check(KSPFCGSetNprealloc(ksp, 2), "KSPFCGSetNprealloc");
+    }
     PC pc = nullptr;
     check(KSPGetPC(ksp, &pc), "KSPGetPC");
     check(PCSetType(pc, PCSHELL), "PCSetType");
     check(PCShellSetContext(pc, &s), "PCShellSetContext");
-    check(PCShellSetApply(pc, apply_preconditioner), "PCShellSetApply");
-    check(PCShellSetName(pc, "temporal line solves"), "PCShellSetName");
+    check(PCShellSetApply(pc, two_level ? apply_two_level : apply_line_solves), "PCShellSetApply");
+    check(PCShellSetName(pc, two_level ? "low temporal modes, then temporal line solves" : "temporal line solves"),
+          "PCShellSetName");
     // The one process's test: ‖b − A x‖ ≤ tolerance · ‖b‖ (PETSc's default test measures
     // against ‖b‖ when the first guess is non-zero), the true residual's norm.
     check(KSPSetNormType(ksp, KSP_NORM_UNPRECONDITIONED), "KSPSetNormType");
@@ -502,9 +1037,29 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
     check(KSPGetIterationNumber(ksp, &iterations), "KSPGetIterationNumber");
     PetscReal rnorm = 0;
     check(KSPGetResidualNorm(ksp, &rnorm), "KSPGetResidualNorm");
+    KSPType ksp_type = nullptr;
+    check(KSPGetType(ksp, &ksp_type), "KSPGetType");
+    const std::string type = ksp_type;  // KSPDestroy frees ksp_type
+    std::string coarse;
+    if (two_level) {
+      PC mode_pc = nullptr;
+      PCType mode_type = nullptr;
+      check(KSPGetPC(s.coarse_ksp, &mode_pc), "KSPGetPC");
+      check(PCGetType(mode_pc, &mode_type), "PCGetType");
+      coarse = fmt::format(" with {} low temporal modes as coarse correction ({} on their block-diagonal spatial "
+                           "system; {} iterations of it in all)",
+                           s.modes.size(), mode_type, s.coarse_iterations);
+      if (s.cut.ksp != nullptr) {
+        long cut_vertices = static_cast<long>(s.cut.count);
+        MPI_Allreduce(MPI_IN_PLACE, &cut_vertices, 1, MPI_LONG, MPI_SUM, comm);
+        coarse += fmt::format(" and a local solve on the {} vertices near the moving constraints ({} iterations in all)",
+                              cut_vertices, s.cut.iterations);
+      }
+    }
     KSPDestroy(&ksp);
     MatDestroy(&a);
-    report.method = fmt::format("PETSc CG (temporal line solves), matrix-free, {} iterations, {}", iterations, where);
+    report.method = fmt::format("PETSc CG ({}; temporal line solves){}, matrix-free, {} iterations, {}", type, coarse,
+                                iterations, where);
     report.iterations = static_cast<int>(iterations);
     report.residual = rnorm / bnorm;
     report.success = reason > 0 && std::isfinite(report.residual) && report.residual <= options.tolerance;

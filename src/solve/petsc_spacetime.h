@@ -12,8 +12,11 @@ namespace tvf {
 // fixed, values and z, all replicated on every rank) on all ranks of the running session:
 // each rank owns a part of the vertices (PETSc's MatPartitioning on L's graph) with their
 // whole temporal lines; PETSc's CG on the matrix-free operator (real form, re and im
-// interleaved), preconditioned by the temporal line solves, to options.tolerance in the
-// one process's residual ‖b − A z‖ / ‖b‖ over the free entries. z receives the whole
+// interleaved), preconditioned as the one process's CG (options.coarse_modes > 0: the low
+// temporal modes' spatial systems by CG + GAMG, the local solve on the cut lines when
+// options.local_rings ≥ 0, the temporal line solves; flexible CG; coarse_modes = 0: the
+// line solves alone, plain CG), to options.tolerance in the one process's residual
+// ‖b − A z‖ / ‖b‖ over the free entries. z receives the whole
 // result on every rank. values may be z itself (its fixed entries holding the fixed
 // values): the generator passes it so, to hold one replicated field less per rank.
 // Collective: every rank must call it with the same arguments.

@@ -1,6 +1,7 @@
 #include "tvf/solve/spacetime.h"
 
 #include "solve/petsc_spacetime.h"
+#include "solve/spacetime_coarse.h"
 #include "tvf/core/error.h"
 #include "tvf/solve/distributed.h"
 
@@ -356,13 +357,8 @@ struct ModeSystem {
   }
 };
 
-// One low temporal mode q of a segment as a coarse space for CG when the fixed set moves:
-// the space-time vectors w_i(j) = q(j)·[(j, i) free] for every vertex i. Its Galerkin
-// matrix wᵢᴴ A wᵢ' is approximated by the separable
-//   E = S^½ L S^½ + T,  s_i = Σ_j q(j)² [(j, i) free],  T_ii = wᵢᴴ (b·D ⊗ T_time) wᵢ,
-// exact at every vertex the fixed set leaves alone in the segment (s_i = 1, T_ii = b·λ·d_i:
-// the temporal-mode method's system) and Hermitian positive definite everywhere; vertices
-// fixed at every frame of the segment (s_i = 0) are left out.
+// One low temporal mode q of a segment as a coarse space for CG when the fixed set moves
+// (solve/spacetime_coarse.h: coarse_weight).
 struct CoarseMode {
   size_t first = 0, count = 0;  // the segment's frames
   Eigen::VectorXd q;            // the mode over them
@@ -523,14 +519,6 @@ void SpaceTimeSolver::interpolate_in_time(std::span<const char> fixed, std::span
   }
 }
 
-namespace {
-
-// Whole fixed frames (key frames) and the runs of other frames between them.
-struct Segments {
-  std::vector<char> key;                            // per frame
-  std::vector<std::pair<size_t, size_t>> segments;  // [first, first + count)
-};
-
 Segments find_segments(std::span<const char> fixed, size_t n, size_t nf) {
   Segments s;
   s.key.assign(nf, 0);
@@ -549,6 +537,8 @@ Segments find_segments(std::span<const char> fixed, size_t n, size_t nf) {
   }
   return s;
 }
+
+namespace {
 
 // The modes with local solves (SpaceTimeMethod::modes_local): one segment's moving
 // constraints. The modes take the segment's common fixed set (`base`: vertices fixed at
@@ -806,6 +796,57 @@ struct LocalSolve {
 
 }  // namespace
 
+void temporal_eigenbasis(int count, bool left_open, bool right_open, int modes, Eigen::MatrixXd& q,
+                         Eigen::VectorXd& lambda) {
+  // The eigenvectors are the discrete sine/cosine bases of the ends (j = 0 … m−1,
+  // k = 0 … m−1):
+  //   Dirichlet–Dirichlet  sin(π(k+1)(j+1)/(m+1)),   λ = 2 − 2cos(π(k+1)/(m+1))
+  //   Neumann–Dirichlet    cos(π(2k+1)(j+½)/(2m+1)), λ = 2 − 2cos(π(2k+1)/(2m+1))
+  //   Neumann–Neumann      cos(πk(j+½)/m),           λ = 2 − 2cos(πk/m)
+  // (Dirichlet–Neumann: the second, mirrored), normalised here.
+  const int m = count;
+  modes = std::min(modes, m);
+  q.resize(m, modes);
+  lambda.resize(modes);
+  for (int k = 0; k < modes; ++k) {
+    double angle = 0;  // of λ = 2 − 2cos(angle)
+    for (int j = 0; j < m; ++j) {
+      double v = 0;
+      if (!left_open && !right_open) {
+        angle = kPi * (k + 1) / (m + 1);
+        v = std::sin(angle * (j + 1));
+      } else if (left_open != right_open) {
+        angle = kPi * (2 * k + 1) / (2 * m + 1);
+        const int jj = left_open ? j : m - 1 - j;
+        v = std::cos(angle * (jj + 0.5));
+      } else {
+        angle = kPi * k / m;
+        v = std::cos(angle * (j + 0.5));
+      }
+      q(j, k) = v;
+    }
+    q.col(k).normalize();
+    lambda[k] = 2.0 - 2.0 * std::cos(angle);
+  }
+}
+
+CoarseWeight coarse_weight(const Eigen::VectorXd& q, size_t first, std::span<const char> fixed, size_t n, size_t nf,
+                           size_t i, double c) {
+  const auto count = static_cast<size_t>(q.size());
+  double mass = 0, t = 0;
+  for (size_t jj = 0; jj < count; ++jj) {
+    const size_t j = first + jj;
+    if (fixed[j * n + i]) continue;
+    const double qj = q[static_cast<Eigen::Index>(jj)];
+    const double neighbours = (j > 0 ? 1.0 : 0.0) + (j + 1 < nf ? 1.0 : 0.0);
+    mass += qj * qj;
+    t += c * neighbours * qj * qj;
+    if (jj + 1 < count && !fixed[(j + 1) * n + i]) t -= 2 * c * qj * q[static_cast<Eigen::Index>(jj + 1)];
+  }
+  if (!(mass > 1e-12)) return {};
+  return {std::sqrt(mass), std::max(t, 0.0)};
+}
+
 // The transforms cost 6·m flops per entry for a segment of m frames (three products with
 // the m × m basis), a CG iteration about 40: past this length CG is cheaper.
 constexpr size_t kMostModeFrames = 1024;
@@ -891,42 +932,15 @@ bool SpaceTimeSolver::local_modes_apply(std::span<const char> fixed) const {
 const SpaceTimeSolver::TemporalBasis& SpaceTimeSolver::temporal_basis(int first, int count) const {
   // The segment's temporal matrix depends only on its length and on whether it touches
   // the first or last frame (those have one temporal neighbour, a free "Neumann" end;
-  // a key frame beyond the end makes it a "Dirichlet" end). Its eigenvectors are the
-  // discrete sine/cosine bases of those ends (j = 0 … m−1, k = 0 … m−1):
-  //   Dirichlet–Dirichlet  sin(π(k+1)(j+1)/(m+1)),   λ = 2 − 2cos(π(k+1)/(m+1))
-  //   Neumann–Dirichlet    cos(π(2k+1)(j+½)/(2m+1)), λ = 2 − 2cos(π(2k+1)/(2m+1))
-  //   Neumann–Neumann      cos(πk(j+½)/m),           λ = 2 − 2cos(πk/m)
-  // (Dirichlet–Neumann: the second, mirrored), normalised here. The tests solve all four
-  // kinds of segment against CG.
+  // a key frame beyond the end makes it a "Dirichlet" end): temporal_eigenbasis. The tests
+  // solve all four kinds of segment against CG.
   const bool left_open = first == 0, right_open = first + count == frames_;
   const int ends = (left_open ? 1 : 0) + (right_open ? 2 : 0);
   std::lock_guard lock(bases_mutex_);
   auto& slot = bases_[{count, ends}];
   if (!slot) {
     auto basis = std::make_shared<TemporalBasis>();
-    const int m = count;
-    basis->q.resize(m, m);
-    basis->lambda.resize(m);
-    for (int k = 0; k < m; ++k) {
-      double angle = 0;  // of λ = 2 − 2cos(angle)
-      for (int j = 0; j < m; ++j) {
-        double q = 0;
-        if (!left_open && !right_open) {
-          angle = kPi * (k + 1) / (m + 1);
-          q = std::sin(angle * (j + 1));
-        } else if (left_open != right_open) {
-          angle = kPi * (2 * k + 1) / (2 * m + 1);
-          const int jj = left_open ? j : m - 1 - j;
-          q = std::cos(angle * (jj + 0.5));
-        } else {
-          angle = kPi * k / m;
-          q = std::cos(angle * (j + 0.5));
-        }
-        basis->q(j, k) = q;
-      }
-      basis->q.col(k).normalize();
-      basis->lambda[k] = 2.0 - 2.0 * std::cos(angle);
-    }
+    temporal_eigenbasis(count, left_open, right_open, count, basis->q, basis->lambda);
     slot = std::move(basis);
   }
   return *slot;
@@ -1504,21 +1518,9 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
     blocks(n, par, [&](size_t i0, size_t i1) {
       for (CoarseMode& m : coarse)
         for (size_t i = i0; i < i1; ++i) {
-          const double c = b_ * op.weight_sum[i];
-          double mass = 0, t = 0;
-          for (size_t jj = 0; jj < m.count; ++jj) {
-            const size_t j = m.first + jj;
-            if (fixed[j * n + i]) continue;
-            const double q = m.q[static_cast<Eigen::Index>(jj)];
-            const double neighbours = (j > 0 ? 1.0 : 0.0) + (j + 1 < nf ? 1.0 : 0.0);
-            mass += q * q;
-            t += c * neighbours * q * q;
-            if (jj + 1 < m.count && !fixed[(j + 1) * n + i])
-              t -= 2 * c * q * m.q[static_cast<Eigen::Index>(jj + 1)];
-          }
-          const bool in = mass > 1e-12;
-          m.scale[i] = in ? std::sqrt(mass) : 0.0;
-          m.shift[i] = in ? std::max(t, 0.0) : 0.0;
+          const CoarseWeight w = coarse_weight(m.q, m.first, fixed, n, nf, i, b_ * op.weight_sum[i]);
+          m.scale[i] = w.scale;
+          m.shift[i] = w.shift;
         }
     });
   }

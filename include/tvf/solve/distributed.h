@@ -4,7 +4,9 @@
 // Every rank runs the whole program on the whole scene (domain, Laplacian, constraints:
 // replicated, cheap beside the solve); the spatio-temporal solve itself is distributed
 // (solve/petsc_spacetime.cpp: vertices partitioned across ranks with whole temporal lines
-// each, a PETSc CG on the matrix-free operator, temporal line solves as preconditioner).
+// each, PETSc's flexible CG on the matrix-free operator, preconditioned as one process's
+// CG: low temporal modes whose spatial systems GAMG solves, a local solve on the lines a
+// moving constraint cuts, then the temporal line solves).
 // Its result is gathered to every rank, so what follows (edits, analysis) is the one
 // process's. Rank 0 writes the assembled outputs (npy, native, csv, json); with K > 1 ranks
 // each rank writes its own piece of every VTK frame (field_NNNN_pR.vtu) and rank 0 the

@@ -69,7 +69,7 @@ struct SpaceTimeOptions {
   bool parallel = true;
   SpaceTimeMethod method = SpaceTimeMethod::automatic;
   // Under `mpirun -n K` (any K ≥ 1, solve/distributed.h): solve on all ranks with the PETSc
-  // back end (CG with temporal line solves, whatever `method` says but bicgstab_jacobi) and
+  // back end (CG preconditioned as below, whatever `method` says but bicgstab_jacobi) and
   // gather the result to every rank. Every rank must then make the same solve() calls in
   // the same order. Off: the solve stays in this process (edit windows, tests' references).
   bool distributed = false;
