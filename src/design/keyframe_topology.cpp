@@ -60,10 +60,11 @@ int stability(SingularityType t) {
   }
 }
 
-// The detour's profile along a path: 0 at both ends, 1 at `peak` (in (0, 1)), smoothstep
-// on each side, so the path stays C¹ and its ends keep their zero speed.
-double bump(double s, double peak) {
-  return s < peak ? smoothstep(s / peak) : smoothstep((1 - s) / (1 - peak));
+// The detour's profile along a path: 0 at both ends, 1 over [rise, fall] (inside (0, 1)),
+// smoothstep up before it and down after, so the path stays C¹ and its ends keep their
+// zero speed.
+double bump(double s, double rise, double fall) {
+  return s < rise ? smoothstep(s / rise) : s > fall ? smoothstep((1 - s) / (1 - fall)) : 1.0;
 }
 
 }  // namespace
@@ -77,9 +78,9 @@ struct KeyframeTopologyPlan::Track {
   Vec3 ref_e1 = Vec3::UnitX();  // the first axis of the reference frame, world
   SingularityType type = SingularityType::source;
   int group = -1;  // ≥ 0: one of a created or cancelled pair (the two are meant to meet)
-  // A detour bent into the path (route_interval, below): amplitude · bump(s, peak) · dir.
+  // A detour bent into the path (PathRouter, below): amplitude · bump(s, rise, fall) · dir.
   struct Bend {
-    double peak = 0.5, amplitude = 0;
+    double rise = 0.5, fall = 0.5, amplitude = 0;
     Vec3 dir = Vec3::Zero();  // unit, world, tangent to the domain where the paths meet
   };
   std::vector<Bend> bends;  // empty: the straight segment
@@ -90,7 +91,7 @@ struct KeyframeTopologyPlan::Track {
   // is placed). Without bends exactly the straight segment's point.
   Vec3 raw(double s) const {
     Vec3 p = p0 + s * (p1 - p0);
-    for (const Bend& b : bends) p += b.amplitude * bump(s, b.peak) * b.dir;
+    for (const Bend& b : bends) p += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
     return p;
   }
 };
@@ -172,8 +173,8 @@ std::string describe_point(const Vec3& p, bool planar, double unit) {
 
 // Keeps the singularities carried through one key-frame interval `separation` apart: two
 // paths that come closer at the same time (paths that cross, or pass close) get a detour,
-// a bump perpendicular to their relative motion at the closest approach, peaking there and
-// vanishing at the key frames (ends and times kept). Distances are straight-line (chord)
+// a bump perpendicular to their relative motion at the closest approach, full over the
+// time they are too close and vanishing at the key frames (ends and times kept). Distances are straight-line (chord)
 // distances between the points on the domain: on a surface never more than the geodesic
 // distance, so a chord separation of D keeps the geodesic one ≥ D too.
 class PathRouter {
@@ -192,29 +193,54 @@ public:
     return space_.planar() ? raw : surface_position(space_.mesh(), space_.locate(raw));
   }
 
-  // Over the two tracks' common time: the smallest distance, its time, and the distance
-  // they must keep (the separation, or less where the key frames hold them closer).
+  // The distance two tracks must keep at time t of their common time [from, to]: the
+  // separation, eased near the two ends (over the first and last fifth, by a smoothstep)
+  // down to what their straight paths hold there, so that two singularities a key frame
+  // holds closer than the separation need only part from there as they would anyway.
+  double required(const Track& a, const Track& b, double t, double from, double to) const {
+    const double u = (t - from) / (to - from);
+    const double ease = smoothstep(std::min(u, 1 - u) / 0.2);
+    Track sa = a, sb = b;
+    sa.bends.clear();
+    sb.bends.clear();
+    const double straight = (at(sa, t) - at(sb, t)).norm();
+    return std::min(separation_, std::max(straight, ease * separation_));
+  }
+
+  // Over the two tracks' common time: where they come closest relative to what they must
+  // keep (the smallest distance / required), with the distance and the requirement there.
   struct Approach {
-    double distance = 0, t = 0, required = 0, from = 0, to = 0;
+    double ratio = 0, distance = 0, required = 0, t = 0, from = 0, to = 0;
   };
   std::optional<Approach> approach(const Track& a, const Track& b) const {
     const double from = std::max(std::min(a.t0, a.t1), std::min(b.t0, b.t1));
     const double to = std::min(std::max(a.t0, a.t1), std::max(b.t0, b.t1));
     if (!(to > from)) return std::nullopt;
-    Approach out{std::numeric_limits<double>::infinity(), from, 0, from, to};
-    double ends[2] = {0, 0};
+    Approach out{std::numeric_limits<double>::infinity(), 0, 0, from, from, to};
     for (int k = 0; k <= kSamples; ++k) {
       const double t = from + (to - from) * k / kSamples;
       const double dist = (at(a, t) - at(b, t)).norm();
-      if (k == 0) ends[0] = dist;
-      if (k == kSamples) ends[1] = dist;
-      if (dist < out.distance) out.distance = dist, out.t = t;
+      const double req = required(a, b, t, from, to);
+      if (req <= 0) continue;
+      if (dist / req < out.ratio) out.ratio = dist / req, out.distance = dist, out.required = req, out.t = t;
     }
-    out.required = std::min({separation_, ends[0], ends[1]});
     return out;
   }
 
-  // Bends a's and b's paths apart so that they keep `ap.required`; false when no detour
+  // The smallest distance between two tracks over their common time (infinite without one).
+  double closest(const Track& a, const Track& b) const {
+    const double from = std::max(std::min(a.t0, a.t1), std::min(b.t0, b.t1));
+    const double to = std::min(std::max(a.t0, a.t1), std::max(b.t0, b.t1));
+    double out = std::numeric_limits<double>::infinity();
+    if (!(to > from)) return out;
+    for (int k = 0; k <= kSamples; ++k) {
+      const double t = from + (to - from) * k / kSamples;
+      out = std::min(out, (at(a, t) - at(b, t)).norm());
+    }
+    return out;
+  }
+
+  // Bends a's and b's paths apart so that they keep what they must; false when no detour
   // (either side, shared by length or taken by one path alone) stays inside the domain.
   bool separate(Track& a, Track& b, const Approach& ap) const {
     const double dt = (ap.to - ap.from) / kSamples;
@@ -234,20 +260,45 @@ public:
     if (la + lb > 0) shares.emplace_back(la / (la + lb), lb / (la + lb));  // the shortest pair of paths
     shares.emplace_back(1.0, 0.0);
     shares.emplace_back(0.0, 1.0);
-    const double peak_a = std::clamp(a.param(ap.t), 0.15, 0.85), peak_b = std::clamp(b.param(ap.t), 0.15, 0.85);
+    std::pair<int, int> window{0, kSamples};
+    {
+      auto too_close = [&](int k) {
+        const double t = ap.from + (ap.to - ap.from) * k / kSamples;
+        return (at(a, t) - at(b, t)).norm() < required(a, b, t, ap.from, ap.to) * (1 - 1e-9);
+      };
+      const int k0 = static_cast<int>(std::lround((ap.t - ap.from) / (ap.to - ap.from) * kSamples));
+      window = {k0, k0};
+      while (window.first > 0 && too_close(window.first - 1)) --window.first;
+      while (window.second < kSamples && too_close(window.second + 1)) ++window.second;
+    }
+    // Each path's detour is full over the encounter (its own path parameters there).
+    auto span = [&](const Track& x) {
+      const double s0 = x.param(ap.from + (ap.to - ap.from) * window.first / kSamples);
+      const double s1 = x.param(ap.from + (ap.to - ap.from) * window.second / kSamples);
+      return std::pair{std::clamp(std::min(s0, s1), 0.15, 0.85), std::clamp(std::max(s0, s1), 0.15, 0.85)};
+    };
+    const auto [rise_a, fall_a] = span(a);
+    const auto [rise_b, fall_b] = span(b);
     double best_cost = std::numeric_limits<double>::infinity();
     std::optional<std::pair<Track, Track>> best;
     for (const double sign : {side, -side})
       for (const auto& [wa, wb] : shares) {
         auto bent = [&](double c) {
           std::pair<Track, Track> out{a, b};
-          if (wa > 0) out.first.bends.push_back({peak_a, c * wa, sign * n});
-          if (wb > 0) out.second.bends.push_back({peak_b, c * wb, -sign * n});
+          if (wa > 0) out.first.bends.push_back({rise_a, fall_a, c * wa, sign * n});
+          if (wb > 0) out.second.bends.push_back({rise_b, fall_b, c * wb, -sign * n});
           return out;
         };
+        // Apart over this encounter (the samples around the closest approach that are too
+        // close now): another encounter of the same two, on the other side, is the next
+        // round's.
         auto apart = [&](double c) {
           const auto [x, y] = bent(c);
-          return approach(x, y)->distance >= ap.required * (1 - 1e-9);
+          for (int k = window.first; k <= window.second; ++k) {
+            const double t = ap.from + (ap.to - ap.from) * k / kSamples;
+            if ((at(x, t) - at(y, t)).norm() < required(x, y, t, ap.from, ap.to) * (1 - 1e-9)) return false;
+          }
+          return true;
         };
         double hi = ap.required;
         while (!apart(hi) && hi < 2 * space_.diameter()) hi *= 2;
@@ -259,7 +310,10 @@ public:
         if (!apart(c)) c = hi;
         auto candidate = bent(c);
         if ((wa > 0 && !inside(candidate.first, a)) || (wb > 0 && !inside(candidate.second, b))) continue;
-        const double cost = length(candidate.first) - length(a) + length(candidate.second) - length(b);
+        // Detours that keep the two apart over their whole common time first.
+        const bool everywhere = approach(candidate.first, candidate.second)->ratio >= 1 - 1e-9;
+        const double cost = length(candidate.first) - length(a) + length(candidate.second) - length(b) +
+                            (everywhere ? 0.0 : 4 * space_.diameter());
         if (cost < best_cost) best_cost = cost, best = std::move(candidate);
       }
     if (!best) return false;
@@ -286,8 +340,7 @@ public:
         for (size_t j = i + 1; j < last; ++j) {
           if (tracks[i].group >= 0 && tracks[i].group == tracks[j].group) continue;
           const auto ap = approach(tracks[i], tracks[j]);
-          if (!ap || ap->required <= 0) continue;
-          if (ap->distance / ap->required < worst) worst = ap->distance / ap->required, wi = i, wj = j, wap = *ap;
+          if (ap && ap->ratio < worst) worst = ap->ratio, wi = i, wj = j, wap = *ap;
         }
       if (worst >= 1 - 1e-6) return std::nullopt;
       const char* why = round >= rounds                           ? "no set of detours tried"
@@ -525,8 +578,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     for (size_t i = first_track; i < tracks_.size(); ++i)
       for (size_t j = i + 1; j < tracks_.size(); ++j)
         if (tracks_[i].group < 0 || tracks_[i].group != tracks_[j].group)
-          if (const auto ap = router.approach(tracks_[i], tracks_[j]))
-            rep.closest_approach = std::min(rep.closest_approach, ap->distance);
+          rep.closest_approach = std::min(rep.closest_approach, router.closest(tracks_[i], tracks_[j]));
     intervals_.push_back(std::move(rep));
   }
 }

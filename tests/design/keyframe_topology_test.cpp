@@ -163,8 +163,9 @@ TEST(KeyframeTopology, UnmatchedPairsAreCancelledAndCreatedAtTheSetTime) {
 }
 
 // Links override the nearest match. Sources A (−0.6, 0) and B (0, 0) go to C (0.2, 0) and
-// D (0.8, 0): nearest first takes B → C, then A → D, whose path runs through B's (a
-// collision the analysis shows); linking A → C and B → D moves both right side by side.
+// D (0.8, 0): nearest first takes B → C, then A → D, whose path runs through B's (bent
+// around it, yet the analysis shows bifurcations: docs/architecture.md); linking A → C and
+// B → D moves both right side by side.
 TEST(KeyframeTopology, LinksChooseThePairs) {
   auto scene = [](const std::string& links) {
     return R"({"tvf": 1, "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},

@@ -20,8 +20,10 @@
 //  5. keeps every two singularities carried at the same time solver.path_separation apart
 //     (default twice region_radius, so their constraint regions never overlap): where two
 //     paths come closer (paths that cross), one or both are bent around the other by a
-//     smooth bump perpendicular to their relative motion, peaking at the closest approach
-//     and vanishing at the key frames (ends and times kept), shared between the two in
+//     smooth bump perpendicular to their relative motion at the closest approach, full
+//     while they are too close and vanishing at the key frames (ends and times kept; near
+//     a key frame that holds them closer, the separation eases to what their straight
+//     paths keep), shared between the two in
 //     proportion to their lengths (the shortest pair of paths) unless that leaves the
 //     domain or comes nearer its boundary than half the separation, when the other side
 //     or one path alone is taken; when no detour fits, the interval's paths stay straight
