@@ -104,13 +104,16 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
     if (report.residual > 0) std::printf(" (worst relative residual %.1e)", report.residual);
     std::printf("\n");
     for (const auto& e : report.edits) std::printf("  edit: %s\n", e.c_str());
-    for (const auto& k : report.keyframe_intervals)
-      std::printf("  key frames %d → %d (t %g → %g): %zu matched, %zu pairs created and %zu cancelled at t = %g%s\n",
-                  k.from_keyframe, k.to_keyframe, k.t0, k.t1, k.matched.size(), k.created.size(), k.cancelled.size(),
-                  k.bifurcation_t,
+    for (const auto& k : report.keyframe_intervals) {
+      const auto bent = std::count_if(k.matched.begin(), k.matched.end(), [](const auto& m) { return m.detour > 0; });
+      std::printf("  key frames %d → %d (t %g → %g): %zu matched%s, %zu pairs created and %zu cancelled at t = %g%s\n",
+                  k.from_keyframe, k.to_keyframe, k.t0, k.t1, k.matched.size(),
+                  bent == 0 ? "" : fmt::format(" ({} bent to keep {:g} apart)", bent, k.separation).c_str(),
+                  k.created.size(), k.cancelled.size(), k.bifurcation_t,
                   k.unpaired_first.empty() && k.unpaired_second.empty()
                       ? ""
                       : fmt::format(", {} left unpaired", k.unpaired_first.size() + k.unpaired_second.size()).c_str());
+    }
     if (const auto& inc = report.incompressible)
       std::printf("  incompressible (%s boundary): RMS divergence %.3g before, %.2g after (worst frame; "
                   "divergence.json has every frame)\n",

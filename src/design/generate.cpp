@@ -502,6 +502,9 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
     report->keyframe_intervals = std::move(intervals);
   }
   finish_report(report, scene, nv, start);
+  if (report)
+    for (const KeyframeIntervalReport& k : report->keyframe_intervals)
+      if (!k.collision.empty()) report->warnings.push_back(k.collision);
   return field;
 }
 

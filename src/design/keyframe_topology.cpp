@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <optional>
+#include <string>
 
 namespace tvf {
 
@@ -57,6 +60,13 @@ int stability(SingularityType t) {
   }
 }
 
+// The detour's profile along a path: 0 at both ends, 1 over [rise, fall] (inside (0, 1)),
+// smoothstep up before it and down after, so the path stays C¹ and its ends keep their
+// zero speed.
+double bump(double s, double rise, double fall) {
+  return s < rise ? smoothstep(s / rise) : s > fall ? smoothstep((1 - s) / (1 - fall)) : 1.0;
+}
+
 }  // namespace
 
 // One singularity carried from (p0, t0) to (p1, t1), present for t0 < t < t1. Its linear
@@ -66,6 +76,24 @@ struct KeyframeTopologyPlan::Track {
   double t0 = 0, t1 = 0;
   Linear j0, j1;
   Vec3 ref_e1 = Vec3::UnitX();  // the first axis of the reference frame, world
+  SingularityType type = SingularityType::source;
+  int group = -1;  // ≥ 0: one of a created or cancelled pair (the two are meant to meet)
+  // A detour bent into the path (PathRouter, below): amplitude · bump(s, rise, fall) · dir.
+  struct Bend {
+    double rise = 0.5, fall = 0.5, amplitude = 0;
+    Vec3 dir = Vec3::Zero();  // unit, world, tangent to the domain where the paths meet
+  };
+  std::vector<Bend> bends;  // empty: the straight segment
+
+  // Path parameter at time t: smoothstep in time from the key frame's end.
+  double param(double t) const { return smoothstep((t - t0) / (t1 - t0)); }
+  // The constraint's position at path parameter s (world; snapped to the domain where it
+  // is placed). Without bends exactly the straight segment's point.
+  Vec3 raw(double s) const {
+    Vec3 p = p0 + s * (p1 - p0);
+    for (const Bend& b : bends) p += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
+    return p;
+  }
 };
 
 struct KeyframeTopologyPlan::Template {
@@ -134,6 +162,263 @@ std::vector<std::pair<size_t, size_t>> pair_unmatched(const std::vector<Singular
   return out;
 }
 
+using Track = KeyframeTopologyPlan::Track;
+
+// "(x, y)" or "(x, y, z)" to three digits, without "-0" or 1e-17 for a zero.
+std::string describe_point(const Vec3& p, bool planar, double unit) {
+  auto c = [&](double x) { return std::abs(x) < 1e-9 * unit ? 0.0 : x; };
+  return planar ? fmt::format("({:.3g}, {:.3g})", c(p.x()), c(p.y()))
+                : fmt::format("({:.3g}, {:.3g}, {:.3g})", c(p.x()), c(p.y()), c(p.z()));
+}
+
+// Keeps the singularities carried through one key-frame interval `separation` apart: two
+// paths that come closer at the same time (paths that cross, or pass close) get a detour,
+// a bump perpendicular to their relative motion at the closest approach, full over the
+// time they are too close and vanishing at the key frames (ends and times kept). Distances are straight-line (chord)
+// distances between the points on the domain: on a surface never more than the geodesic
+// distance, so a chord separation of D keeps the geodesic one ≥ D too.
+class PathRouter {
+public:
+  static constexpr int kSamples = 256;
+
+  PathRouter(const DesignSpace& space, double separation) : space_(space), separation_(separation) {
+    const Mesh& mesh = space.mesh();
+    for (int h = 0; h < mesh.num_halfedges(); ++h)
+      if (mesh.is_boundary_halfedge(h)) boundary_.emplace_back(mesh.position(mesh.tail(h)), mesh.position(mesh.head(h)));
+  }
+
+  // The carried singularity's point on the domain at time t.
+  Vec3 at(const Track& tr, double t) const {
+    const Vec3 raw = tr.raw(tr.param(t));
+    return space_.planar() ? raw : surface_position(space_.mesh(), space_.locate(raw));
+  }
+
+  // The distance two tracks must keep at time t of their common time [from, to]: the
+  // separation, eased near the two ends (over the first and last fifth, by a smoothstep)
+  // down to what their straight paths hold there, so that two singularities a key frame
+  // holds closer than the separation need only part from there as they would anyway.
+  double required(const Track& a, const Track& b, double t, double from, double to) const {
+    const double u = (t - from) / (to - from);
+    const double ease = smoothstep(std::min(u, 1 - u) / 0.2);
+    Track sa = a, sb = b;
+    sa.bends.clear();
+    sb.bends.clear();
+    const double straight = (at(sa, t) - at(sb, t)).norm();
+    return std::min(separation_, std::max(straight, ease * separation_));
+  }
+
+  // Over the two tracks' common time: where they come closest relative to what they must
+  // keep (the smallest distance / required), with the distance and the requirement there.
+  struct Approach {
+    double ratio = 0, distance = 0, required = 0, t = 0, from = 0, to = 0;
+  };
+  std::optional<Approach> approach(const Track& a, const Track& b) const {
+    const double from = std::max(std::min(a.t0, a.t1), std::min(b.t0, b.t1));
+    const double to = std::min(std::max(a.t0, a.t1), std::max(b.t0, b.t1));
+    if (!(to > from)) return std::nullopt;
+    Approach out{std::numeric_limits<double>::infinity(), 0, 0, from, from, to};
+    for (int k = 0; k <= kSamples; ++k) {
+      const double t = from + (to - from) * k / kSamples;
+      const double dist = (at(a, t) - at(b, t)).norm();
+      const double req = required(a, b, t, from, to);
+      if (req <= 0) continue;
+      if (dist / req < out.ratio) out.ratio = dist / req, out.distance = dist, out.required = req, out.t = t;
+    }
+    return out;
+  }
+
+  // The smallest distance between two tracks over their common time (infinite without one).
+  double closest(const Track& a, const Track& b) const {
+    const double from = std::max(std::min(a.t0, a.t1), std::min(b.t0, b.t1));
+    const double to = std::min(std::max(a.t0, a.t1), std::max(b.t0, b.t1));
+    double out = std::numeric_limits<double>::infinity();
+    if (!(to > from)) return out;
+    for (int k = 0; k <= kSamples; ++k) {
+      const double t = from + (to - from) * k / kSamples;
+      out = std::min(out, (at(a, t) - at(b, t)).norm());
+    }
+    return out;
+  }
+
+  // Bends a's and b's paths apart so that they keep what they must; false when no detour
+  // (either side, shared by length or taken by one path alone) stays inside the domain.
+  bool separate(Track& a, Track& b, const Approach& ap) const {
+    const double dt = (ap.to - ap.from) / kSamples;
+    const double ta = std::max(ap.from, ap.t - dt), tb = std::min(ap.to, ap.t + dt);
+    const Vec3 pa = at(a, ap.t), pb = at(b, ap.t);
+    const Vec3 v = (at(a, tb) - at(a, ta)) - (at(b, tb) - at(b, ta));  // relative motion
+    const Vec3 normal = space_.planar() ? Vec3::UnitZ() : space_.bundle().face_normal(space_.locate(pa).face);
+    Vec3 n = normal.cross(v);
+    const Vec3 r = pa - pb;
+    if (n.norm() <= 1e-12 * space_.diameter()) n = r - r.dot(normal) * normal;  // no relative motion: push apart
+    if (n.norm() <= 1e-12 * space_.diameter()) n = space_.bundle().face_e1(space_.locate(pa).face);
+    n.normalize();
+    // The side the two already pass on (the left of the relative motion when they meet head on).
+    const double side = r.dot(n) < -1e-12 * separation_ ? -1.0 : 1.0;
+    const double la = (a.p1 - a.p0).norm(), lb = (b.p1 - b.p0).norm();
+    std::vector<std::pair<double, double>> shares;
+    if (la + lb > 0) shares.emplace_back(la / (la + lb), lb / (la + lb));  // the shortest pair of paths
+    shares.emplace_back(1.0, 0.0);
+    shares.emplace_back(0.0, 1.0);
+    std::pair<int, int> window{0, kSamples};
+    {
+      auto too_close = [&](int k) {
+        const double t = ap.from + (ap.to - ap.from) * k / kSamples;
+        return (at(a, t) - at(b, t)).norm() < required(a, b, t, ap.from, ap.to) * (1 - 1e-9);
+      };
+      const int k0 = static_cast<int>(std::lround((ap.t - ap.from) / (ap.to - ap.from) * kSamples));
+      window = {k0, k0};
+      while (window.first > 0 && too_close(window.first - 1)) --window.first;
+      while (window.second < kSamples && too_close(window.second + 1)) ++window.second;
+    }
+    // Each path's detour is full over the encounter (its own path parameters there).
+    auto span = [&](const Track& x) {
+      const double s0 = x.param(ap.from + (ap.to - ap.from) * window.first / kSamples);
+      const double s1 = x.param(ap.from + (ap.to - ap.from) * window.second / kSamples);
+      return std::pair{std::clamp(std::min(s0, s1), 0.15, 0.85), std::clamp(std::max(s0, s1), 0.15, 0.85)};
+    };
+    const auto [rise_a, fall_a] = span(a);
+    const auto [rise_b, fall_b] = span(b);
+    double best_cost = std::numeric_limits<double>::infinity();
+    std::optional<std::pair<Track, Track>> best;
+    for (const double sign : {side, -side})
+      for (const auto& [wa, wb] : shares) {
+        auto bent = [&](double c) {
+          std::pair<Track, Track> out{a, b};
+          if (wa > 0) out.first.bends.push_back({rise_a, fall_a, c * wa, sign * n});
+          if (wb > 0) out.second.bends.push_back({rise_b, fall_b, c * wb, -sign * n});
+          return out;
+        };
+        // Apart over this encounter (the samples around the closest approach that are too
+        // close now): another encounter of the same two, on the other side, is the next
+        // round's.
+        auto apart = [&](double c) {
+          const auto [x, y] = bent(c);
+          for (int k = window.first; k <= window.second; ++k) {
+            const double t = ap.from + (ap.to - ap.from) * k / kSamples;
+            if ((at(x, t) - at(y, t)).norm() < required(x, y, t, ap.from, ap.to) * (1 - 1e-9)) return false;
+          }
+          return true;
+        };
+        double hi = ap.required;
+        while (!apart(hi) && hi < 2 * space_.diameter()) hi *= 2;
+        if (!apart(hi)) continue;
+        double lo = 0;
+        for (int it = 0; it < 40; ++it) (apart(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+        // A margin of 2 % of the detour, so that frames between the samples keep it too.
+        double c = 1.02 * hi;
+        if (!apart(c)) c = hi;
+        auto candidate = bent(c);
+        if ((wa > 0 && !inside(candidate.first, a)) || (wb > 0 && !inside(candidate.second, b))) continue;
+        // Detours that keep the two apart over their whole common time first.
+        const bool everywhere = approach(candidate.first, candidate.second)->ratio >= 1 - 1e-9;
+        const double cost = length(candidate.first) - length(a) + length(candidate.second) - length(b) +
+                            (everywhere ? 0.0 : 4 * space_.diameter());
+        if (cost < best_cost) best_cost = cost, best = std::move(candidate);
+      }
+    if (!best) return false;
+    a = std::move(best->first);
+    b = std::move(best->second);
+    return true;
+  }
+
+  // Routes the tracks [first, last) of one interval. When two paths cannot be kept apart,
+  // leaves the interval's paths straight and returns why, in one sentence naming `where`.
+  std::optional<std::string> route(std::vector<Track>& tracks, size_t first, size_t last, const Scene& scene,
+                                   const std::string& where, const std::string& interval) const {
+    if (separation_ <= 0) return std::nullopt;
+    const std::vector<Track> before(tracks.begin() + static_cast<std::ptrdiff_t>(first),
+                                    tracks.begin() + static_cast<std::ptrdiff_t>(last));
+    const size_t n = last - first;
+    const int rounds = 8 * static_cast<int>(n * n) + 8;
+    for (int round = 0;; ++round) {
+      // The pair that comes closest relative to what it must keep, first.
+      double worst = 1 - 1e-6;
+      size_t wi = 0, wj = 0;
+      Approach wap;
+      for (size_t i = first; i < last; ++i)
+        for (size_t j = i + 1; j < last; ++j) {
+          if (tracks[i].group >= 0 && tracks[i].group == tracks[j].group) continue;
+          const auto ap = approach(tracks[i], tracks[j]);
+          if (ap && ap->ratio < worst) worst = ap->ratio, wi = i, wj = j, wap = *ap;
+        }
+      if (worst >= 1 - 1e-6) return std::nullopt;
+      const char* why = round >= rounds                           ? "no set of detours tried"
+                        : separate(tracks[wi], tracks[wj], wap) ? nullptr
+                                                                  : "no detour inside the domain";
+      if (!why) continue;
+      const Track a = tracks[wi], b = tracks[wj];
+      std::copy(before.begin(), before.end(), tracks.begin() + static_cast<std::ptrdiff_t>(first));
+      const bool planar = space_.planar();
+      const double unit = space_.diameter();
+      return fmt::format(
+          "{}: {}: {} the paths of the {} from {} to {} and the {} from {} to {} come {:.3g} apart at t = {:.3g}, and {} "
+          "keeps them {:.3g} apart, so the paths stay straight and the singularities meet; set a smaller "
+          "solver.path_separation, link them differently (solver.links) or add a key frame between",
+          scene.label(), where, interval, to_string(a.type), describe_point(a.p0, planar, unit),
+          describe_point(a.p1, planar, unit), to_string(b.type), describe_point(b.p0, planar, unit),
+          describe_point(b.p1, planar, unit), wap.distance, wap.t, why, wap.required);
+    }
+  }
+
+  // Largest distance of a track's path from its straight segment (0 when straight).
+  double detour(const Track& tr) const {
+    double out = 0;
+    for (int k = 0; k <= kSamples; ++k) {
+      const double s = static_cast<double>(k) / kSamples;
+      out = std::max(out, (tr.raw(s) - (tr.p0 + s * (tr.p1 - tr.p0))).norm());
+    }
+    return out;
+  }
+
+private:
+  double length(const Track& tr) const {
+    double out = 0;
+    Vec3 prev = at(tr, tr.t0);
+    for (int k = 1; k <= kSamples; ++k) {
+      const Vec3 p = at(tr, tr.t0 + (tr.t1 - tr.t0) * k / kSamples);
+      out += (p - prev).norm();
+      prev = p;
+    }
+    return out;
+  }
+
+  // Distance from p to the domain's boundary (infinite on a closed surface).
+  double boundary_distance(const Vec3& p) const {
+    double out = std::numeric_limits<double>::infinity();
+    for (const auto& [x, y] : boundary_) {
+      const Vec3 e = y - x;
+      const double u = std::clamp((p - x).dot(e) / e.squaredNorm(), 0.0, 1.0);
+      out = std::min(out, (p - (x + u * e)).norm());
+    }
+    return out;
+  }
+
+  // A bent path stays in the domain, no nearer its boundary than half the separation (or
+  // than the straight path already comes).
+  bool inside(const Track& bent, const Track& before) const {
+    if (boundary_.empty()) return true;
+    Track straight = before;
+    straight.bends.clear();
+    double margin = 0.5 * separation_;
+    for (int k = 0; k <= kSamples; ++k) {
+      const Vec3 raw = straight.raw(static_cast<double>(k) / kSamples);
+      margin = std::min(margin, boundary_distance(surface_position(space_.mesh(), space_.locate(raw))));
+    }
+    for (int k = 0; k <= kSamples; ++k) {
+      const Vec3 raw = bent.raw(static_cast<double>(k) / kSamples);
+      const Vec3 on = surface_position(space_.mesh(), space_.locate(raw));
+      if (space_.planar() && (on - raw).norm() > 1e-9 * space_.diameter()) return false;
+      if (boundary_distance(on) < margin * (1 - 1e-9)) return false;
+    }
+    return true;
+  }
+
+  const DesignSpace& space_;
+  double separation_;
+  std::vector<std::pair<Vec3, Vec3>> boundary_;
+};
+
 }  // namespace
 
 KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene& scene,
@@ -166,8 +451,10 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   };
 
   auto add_track = [&](const Singularity& a, const Vec3& p1, double t0, double t1, const Linear& j1_in_face,
-                       int face1) {
+                       int face1, int group = -1) {
     Track tr;
+    tr.type = a.type;
+    tr.group = group;
     tr.p0 = a.position;
     tr.p1 = p1;
     tr.t0 = t0;
@@ -178,7 +465,11 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     tracks_.push_back(tr);
   };
 
+  const double separation = scene.solver.path_separation.value_or(2 * scene.solver.region_radius);
+  const PathRouter router(space, separation);
+  int groups = 0;
   for (size_t k = 0; k + 1 < nk; ++k) {
+    const size_t first_track = tracks_.size();
     const std::vector<Singularity>& A = sing[k];
     const std::vector<Singularity>& B = sing[k + 1];
     KeyframeIntervalReport rep;
@@ -261,19 +552,33 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         const Linear j_saddle{cplx(sign * -0.5, 0), sign * -1.5 * rot};
         KeyframeIntervalReport::Pair pr{saddle.type, node.type, saddle.position, node.position, mid, tc};
         if (side == 0) {
-          add_track(saddle, saddle_end, rep.t0, tc - tau, j_saddle, face);
-          add_track(node, node_end, rep.t0, tc - tau, j_node, face);
+          add_track(saddle, saddle_end, rep.t0, tc - tau, j_saddle, face, groups);
+          add_track(node, node_end, rep.t0, tc - tau, j_node, face, groups);
           rep.cancelled.push_back(pr);
         } else {
           // Carried backwards in time: from the key frame at t1 to the template's zeros at t_c + τ.
-          add_track(saddle, saddle_end, rep.t1, tc + tau, j_saddle, face);
-          add_track(node, node_end, rep.t1, tc + tau, j_node, face);
+          add_track(saddle, saddle_end, rep.t1, tc + tau, j_saddle, face, groups);
+          add_track(node, node_end, rep.t1, tc + tau, j_node, face, groups);
           rep.created.push_back(pr);
         }
+        ++groups;
       }
       for (size_t i = 0; i < S.size(); ++i)
         if (matched[i] < 0 && !paired[i]) (side == 0 ? rep.unpaired_first : rep.unpaired_second).push_back(S[i].position);
     }
+
+    // Paths that would come closer than the separation are bent around each other.
+    const std::string where =
+        scene.solver.path_separation ? "solver.path_separation" : "solver.keyframe_topology";
+    if (auto why = router.route(tracks_, first_track, tracks_.size(), scene, where,
+                                fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1)))
+      rep.collision = std::move(*why);
+    rep.separation = separation;
+    for (size_t m = 0; m < rep.matched.size(); ++m) rep.matched[m].detour = router.detour(tracks_[first_track + m]);
+    for (size_t i = first_track; i < tracks_.size(); ++i)
+      for (size_t j = i + 1; j < tracks_.size(); ++j)
+        if (tracks_[i].group < 0 || tracks_[i].group != tracks_[j].group)
+          rep.closest_approach = std::min(rep.closest_approach, router.closest(tracks_[i], tracks_[j]));
     intervals_.push_back(std::move(rep));
   }
 }
@@ -288,7 +593,7 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
     const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
     ElementState st;
     st.active = true;
-    st.position = tr.p0 + s * (tr.p1 - tr.p0);
+    st.position = tr.raw(s);
     const SurfacePoint at = space.locate(st.position);
     Linear j{blend(tr.j0.alpha, tr.j1.alpha, s), blend(tr.j0.beta, tr.j1.beta, s)};
     // From the reference frame into the frame at p(t) (the face holding it).
@@ -306,6 +611,13 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
   }
 }
 
+std::vector<Vec3> KeyframeTopologyPlan::carried(double t) const {
+  std::vector<Vec3> out;
+  for (const Track& tr : tracks_)
+    if (t > std::min(tr.t0, tr.t1) && t < std::max(tr.t0, tr.t1)) out.push_back(tr.raw(tr.param(t)));
+  return out;
+}
+
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals) {
   using nlohmann::json;
   auto xyz = [](const Vec3& p) { return json::array({p.x(), p.y(), p.z()}); };
@@ -317,7 +629,11 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
     j["bifurcation_t"] = r.bifurcation_t;
     j["matched"] = json::array();
     for (const auto& m : r.matched)
-      j["matched"].push_back({{"type", to_string(m.type)}, {"from", xyz(m.from)}, {"to", xyz(m.to)}, {"linked", m.linked}});
+      j["matched"].push_back({{"type", to_string(m.type)},
+                              {"from", xyz(m.from)},
+                              {"to", xyz(m.to)},
+                              {"linked", m.linked},
+                              {"detour", m.detour}});
     for (const char* key : {"created", "cancelled"}) {
       j[key] = json::array();
       for (const auto& p : std::string(key) == "created" ? r.created : r.cancelled)
@@ -327,6 +643,9 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
                           {"node", xyz(p.node)},
                           {"node_type", to_string(p.node_type)}});
     }
+    j["separation"] = r.separation;
+    if (std::isfinite(r.closest_approach)) j["closest_approach"] = r.closest_approach;
+    if (!r.collision.empty()) j["collision"] = r.collision;
     j["unpaired"] = json::array();
     for (const auto& p : r.unpaired_first) j["unpaired"].push_back(xyz(p));
     for (const auto& p : r.unpaired_second) j["unpaired"].push_back(xyz(p));

@@ -72,7 +72,7 @@ int key_rank(const std::string& key) {
       "size", "min", "max", "subdivisions", "radius", "nu", "nv", "major_radius",
       "minor_radius", "time", "frames", "range", "generator", "solver", "weights",
       "temporal_weight", "tolerance", "region_radius", "method", "keyframe_topology", "links",
-      "bifurcation_times", "falloff", "base", "type", "jacobian",
+      "bifurcation_times", "path_separation", "falloff", "base", "type", "jacobian",
       "at", "from", "to", "vector", "path", "pathline", "attach", "elements", "keyframes", "matrix",
       "m", "transform", "sx", "sy", "theta", "translate", "rotate", "scale", "time_scale",
       "angle", "streamlines", "seed", "keys", "points", "speed", "field", "deform", "edits",
@@ -538,8 +538,8 @@ json deform_json(const Deform& d, bool planar) {
 }
 
 // The solver block: every key of SolverSettings, written here and read by Reader::solver.
-// The key-frame topology keys (solver.keyframe_topology, links, bifurcation_times) are
-// read by Reader::keyframe_topology once the key frames are known.
+// The key-frame topology keys (solver.keyframe_topology, links, bifurcation_times,
+// path_separation) are read by Reader::keyframe_topology once the key frames are known.
 json solver_json(const SolverSettings& s) {
   json j = {{"weights", to_string(s.weights)},
             {"temporal_weight", s.temporal_weight},
@@ -553,6 +553,7 @@ json solver_json(const SolverSettings& s) {
       links.push_back({{"from", {l.from_keyframe, l.from_element}}, {"to", {l.to_keyframe, l.to_element}}});
     if (!links.empty()) j["links"] = links;
     if (!s.bifurcation_times.empty()) j["bifurcation_times"] = s.bifurcation_times;
+    if (s.path_separation) j["path_separation"] = *s.path_separation;
   }
   return j;
 }
@@ -695,7 +696,7 @@ TimeSampling Reader::time(const json& j) const {
 SolverSettings Reader::solver(const json& j) const {
   check_keys(j, "solver", "solver settings",
              {"weights", "temporal_weight", "tolerance", "region_radius", "method", "keyframe_topology", "links",
-              "bifurcation_times"});
+              "bifurcation_times", "path_separation"});
   SolverSettings s;
   if (const json* v = get(j, "weights")) s.weights = enumeration(*v, "solver.weights", kWeights, "weights");
   if (const json* v = get(j, "temporal_weight")) {
@@ -905,7 +906,7 @@ void Reader::keyframe_topology(const json& solver, Scene& s) const {
   if (const json* v = get(solver, "keyframe_topology"))
     s.solver.keyframe_topology = enumeration(*v, "solver.keyframe_topology", kinds, "key-frame topology");
   const bool matched = s.solver.keyframe_topology == KeyframeTopology::matched;
-  for (const char* key : {"links", "bifurcation_times"})
+  for (const char* key : {"links", "bifurcation_times", "path_separation"})
     if (get(solver, key) && !matched)
       fail(join_key("solver", key), "applies only with \"keyframe_topology\": \"matched\"");
   if (!matched) return;
@@ -980,6 +981,8 @@ void Reader::keyframe_topology(const json& solver, Scene& s) const {
       s.solver.bifurcation_times.push_back(t);
     }
   }
+  if (const json* v = get(solver, "path_separation"))
+    s.solver.path_separation = non_negative(*v, "solver.path_separation");
 }
 
 Deform Reader::deform(const json& j) const {

@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <filesystem>
+#include <array>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <vector>
 
 namespace tvf {
 namespace {
@@ -64,6 +66,41 @@ TEST(CliKeyframeTopology, Example24ReportsItsIntervalAndTheAnalysisAgrees) {
   ASSERT_EQ(fa.exit_code, 0) << fa.output;
   std::ifstream fin(dir / "f.json");
   EXPECT_GE(nlohmann::json::parse(fin).at("bifurcations").size(), 3u);
+}
+
+// Example 26's crossing.json: a source and a sink trading places. `tvf generate` says it
+// bent both paths, keyframe_topology.json gives their detours and closest approach, and
+// the analysis finds the two paths alone, kept apart at every frame.
+TEST(CliKeyframeTopology, Example26CrossingPathsAreBentApart) {
+  test::TempDir dir;
+  const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/crossing.json";
+  const auto g = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+  EXPECT_NE(g.output.find("key frames 0 → 1 (t 0 → 1): 2 matched (2 bent to keep 0.3 apart), 0 pairs created and 0 "
+                          "cancelled at t = 0.5"),
+            std::string::npos)
+      << g.output;
+  EXPECT_EQ(g.output.find("warning"), std::string::npos) << g.output;
+  std::ifstream in(dir / "out" / "keyframe_topology.json");
+  const nlohmann::json i = nlohmann::json::parse(in).at("intervals").at(0);
+  EXPECT_EQ(i.at("separation"), 0.3);
+  EXPECT_GE(i.at("closest_approach").get<double>(), 0.3);
+  EXPECT_FALSE(i.contains("collision"));
+  for (const auto& m : i.at("matched")) EXPECT_GT(m.at("detour").get<double>(), 0.15);
+
+  const auto a = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json"));
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  std::ifstream ain(dir / "a.json");
+  const nlohmann::json analysis = nlohmann::json::parse(ain);
+  EXPECT_EQ(analysis.at("paths").size(), 2u);
+  EXPECT_TRUE(analysis.at("bifurcations").empty());
+  std::vector<std::vector<std::array<double, 2>>> frames(60);
+  for (const auto& s : analysis.at("singularities"))
+    frames.at(s.at("frame").get<size_t>()).push_back({s["position"][0].get<double>(), s["position"][1].get<double>()});
+  for (size_t f = 0; f < frames.size(); ++f) {
+    ASSERT_EQ(frames[f].size(), 2u) << f;
+    EXPECT_GE(std::hypot(frames[f][0][0] - frames[f][1][0], frames[f][0][1] - frames[f][1][1]), 0.3 - 1e-6) << f;
+  }
 }
 
 }  // namespace

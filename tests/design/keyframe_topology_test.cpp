@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 namespace tvf {
@@ -162,8 +163,9 @@ TEST(KeyframeTopology, UnmatchedPairsAreCancelledAndCreatedAtTheSetTime) {
 }
 
 // Links override the nearest match. Sources A (−0.6, 0) and B (0, 0) go to C (0.2, 0) and
-// D (0.8, 0): nearest first takes B → C, then A → D, whose path runs through B's (a
-// collision the analysis shows); linking A → C and B → D moves both right side by side.
+// D (0.8, 0): nearest first takes B → C, then A → D, whose path runs through B's (bent
+// around it, yet the analysis shows bifurcations: docs/architecture.md); linking A → C and
+// B → D moves both right side by side.
 TEST(KeyframeTopology, LinksChooseThePairs) {
   auto scene = [](const std::string& links) {
     return R"({"tvf": 1, "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
@@ -228,6 +230,162 @@ TEST(KeyframeTopology, OnASphereTheMatchedPathsHaveNoBifurcation) {
   EXPECT_LT(worst_mean_turn(g, 3 * h), 0.25);
 }
 
+// A source and a sink trading places across the domain: matched by type, their straight
+// paths meet head on half way.
+std::string swap_scene(int n, int frames, const std::string& solver_extra = "") {
+  return R"({"tvf": 1, "domain": {"grid": {"size": [)" + std::to_string(n) + ", " + std::to_string(n) +
+         R"(], "min": [-1, -1], "max": [1, 1]}},
+  "time": {"frames": )" + std::to_string(frames) +
+         R"(, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+  "solver": {"region_radius": 0.15, "keyframe_topology": "matched")" +
+         solver_extra + R"(},
+  "keyframes": [
+    {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
+                          {"kind": "singular", "type": "sink", "at": [0.5, 0]}]},
+    {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]},
+                          {"kind": "singular", "type": "sink", "at": [-0.5, 0]}]}]})";
+}
+
+// The smallest distance between two singularities of one frame of the analysed field.
+double closest_pair(const std::vector<Singularity>& frame) {
+  double out = std::numeric_limits<double>::infinity();
+  for (size_t a = 0; a < frame.size(); ++a)
+    for (size_t b = a + 1; b < frame.size(); ++b) out = std::min(out, (frame[a].position - frame[b].position).norm());
+  return out;
+}
+
+// Every frame of the analysed field holds the key frames' singularities, by index, and
+// keeps them at least `separation` apart; the paths run from the first frame to the last,
+// from where the first key frame has them to where the second does.
+void expect_kept_apart(const Generated& g, double separation, double tol, const std::string& what) {
+  SCOPED_TRACE(what);
+  const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+  EXPECT_EQ(g.topology.bifurcations.size(), 0u);
+  auto indices = [](const std::vector<Singularity>& frame) {
+    std::vector<int> out;
+    for (const Singularity& s : frame) out.push_back(s.index);
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  const std::vector<int> first = indices(g.topology.singularities.front());
+  EXPECT_EQ(first.size(), r.matched.size());
+  double worst = std::numeric_limits<double>::infinity();
+  for (size_t f = 0; f < g.topology.singularities.size(); ++f) {
+    EXPECT_EQ(indices(g.topology.singularities[f]), first) << "frame " << f;
+    worst = std::min(worst, closest_pair(g.topology.singularities[f]));
+  }
+  std::printf("  %s: closest two singularities of any frame %.4f apart (separation %.3g, planned %.4f)\n",
+              what.c_str(), worst, separation, r.closest_approach);
+  EXPECT_GE(worst, separation - tol);
+  EXPECT_GE(r.closest_approach, separation * (1 - 1e-9));
+  ASSERT_EQ(g.topology.paths.size(), r.matched.size());
+  for (const SingularityPath& p : g.topology.paths) {
+    EXPECT_EQ(p.birth, 0.0);
+    EXPECT_EQ(p.death, 1.0);
+    const auto& m = *std::min_element(r.matched.begin(), r.matched.end(), [&](const auto& x, const auto& y) {
+      return (x.from - p.points.front().position).norm() < (y.from - p.points.front().position).norm();
+    });
+    EXPECT_LT((m.from - p.points.front().position).norm(), 1e-9);
+    EXPECT_LT((m.to - p.points.back().position).norm(), 1e-9);
+    EXPECT_GT(m.detour, 0.0);
+  }
+}
+
+TEST(KeyframeTopology, CrossingPathsAreBentAroundEachOther) {
+  // 32 frames: none at t = 0.5 exactly, where the field far from the two is zero by
+  // symmetry (the key frames are each other's negatives), so its zeros there are rounding.
+  for (const auto& [n, frames] : {std::pair{33, 32}, std::pair{65, 32}, std::pair{129, 32}}) {
+    const Generated g = run(swap_scene(n, frames));
+    const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+    ASSERT_EQ(r.matched.size(), 2u) << n;
+    EXPECT_EQ(r.separation, 0.3);  // twice region_radius
+    // Shared by length (both paths are 1 long): each bends half the separation out, to
+    // opposite sides, and the 2 % margin.
+    for (const auto& m : r.matched) EXPECT_NEAR(m.detour, 0.5 * 0.3 * 1.02, 1e-3) << n;
+    // Planar constraints are exact (the linear field's zero is the carried point), so the
+    // analysed singularities keep the separation to rounding.
+    expect_kept_apart(g, 0.3, 1e-6, std::to_string(n) + "²");
+  }
+  // Straight paths (path_separation 0): the two meet half way and the analysis shows it.
+  const Generated straight = run(swap_scene(33, 32, R"(, "path_separation": 0)"));
+  double worst = std::numeric_limits<double>::infinity();
+  for (const auto& frame : straight.topology.singularities) worst = std::min(worst, closest_pair(frame));
+  const bool collided = worst < 0.3 || !straight.topology.bifurcations.empty() || straight.topology.paths.size() != 2;
+  std::printf("  straight: closest %.4f, %zu bifurcations, %zu paths\n", worst, straight.topology.bifurcations.size(),
+              straight.topology.paths.size());
+  EXPECT_TRUE(collided);
+  EXPECT_EQ(straight.report.keyframe_intervals.at(0).matched.at(0).detour, 0.0);
+  // A separation the scene sets.
+  const Generated wide = run(swap_scene(33, 32, R"(, "path_separation": 0.5)"));
+  expect_kept_apart(wide, 0.5, 1e-6, "33², separation 0.5");
+}
+
+TEST(KeyframeTopology, CrossingPathsOnASphereAreBentAroundEachOther) {
+  const std::string text = R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 4, "radius": 1}},
+    "time": {"frames": 32, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.15, "keyframe_topology": "matched"},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [0.6, 0.0, 0.8]},
+                            {"kind": "singular", "type": "sink", "at": [-0.6, 0.0, 0.8]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [-0.6, 0.0, 0.8]},
+                            {"kind": "singular", "type": "sink", "at": [0.6, 0.0, 0.8]}]}]})";
+  const Generated g = run(text);
+  ASSERT_EQ(g.report.keyframe_intervals.at(0).matched.size(), 2u);
+  // On a surface the zero of the constrained field is found within the face holding it.
+  expect_kept_apart(g, 0.3, 0.5 * g.space->mesh().mean_edge_length(), "sphere");
+}
+
+// Paths that do not come near each other are left exactly as they were.
+TEST(KeyframeTopology, PathsThatDoNotMeetStayStraightBitForBit) {
+  const Scene a = parse_scene(move_scene(33, R"(, "keyframe_topology": "matched")", 17), "a.json");
+  const Scene b = parse_scene(move_scene(33, R"(, "keyframe_topology": "matched", "path_separation": 0)", 17), "b.json");
+  const auto space = make_design_space(a);
+  const ConnectionLaplacian lap = connection_laplacian(space->bundle(), LaplacianWeights::cotan);
+  std::vector<std::vector<cplx>> keys;
+  for (size_t k = 0; k < a.keyframes.size(); ++k) keys.push_back(keyframe_field(*space, a, k, lap));
+  const KeyframeTopologyPlan pa(*space, a, keys), pb(*space, b, keys);
+  const KeyframeIntervalReport& r = pa.intervals().at(0);
+  ASSERT_GE(r.matched.size(), 2u);
+  EXPECT_GE(r.closest_approach, r.separation);
+  for (const auto& m : r.matched) EXPECT_EQ(m.detour, 0.0);
+  for (int j = 1; j + 1 < a.time.frames; ++j) {
+    const double t = a.time.time(j);
+    const std::vector<Vec3> ca = pa.carried(t), cb = pb.carried(t);
+    ASSERT_EQ(ca.size(), r.matched.size());
+    ASSERT_EQ(ca.size(), cb.size());
+    // The straight segment's point at the smoothstep of time, to the bit.
+    const double u = t, s = u * u * (3 - 2 * u);
+    for (size_t i = 0; i < ca.size(); ++i) {
+      EXPECT_EQ(ca[i], cb[i]);
+      EXPECT_EQ(ca[i], r.matched[i].from + s * (r.matched[i].to - r.matched[i].from));
+    }
+  }
+  EXPECT_EQ(run(scene_to_text(a)).field.data(), run(scene_to_text(b)).field.data());
+}
+
+// A strip too narrow to pass: the paths stay straight, and the report and a warning say
+// so in one sentence naming the two paths.
+TEST(KeyframeTopology, CrossingPathsWithNoRoomAreReported) {
+  const std::string text = R"({"tvf": 1, "domain": {"grid": {"size": [65, 9], "min": [-1, -0.125], "max": [1, 0.125]}},
+    "time": {"frames": 17, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.1, "keyframe_topology": "matched"},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
+                            {"kind": "singular", "type": "sink", "at": [0.5, 0]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]},
+                            {"kind": "singular", "type": "sink", "at": [-0.5, 0]}]}]})";
+  const Generated g = run(text);
+  const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+  EXPECT_EQ(r.collision,
+            "scene: solver.keyframe_topology: between keyframes[0] and keyframes[1] the paths of the source from "
+            "(-0.5, 0) to (0.5, 0) and the sink from (0.5, 0) to (-0.5, 0) come 0 apart at t = 0.5, and no detour "
+            "inside the domain keeps them 0.2 apart, so the paths stay straight and the singularities meet; set a "
+            "smaller solver.path_separation, link them differently (solver.links) or add a key frame between");
+  EXPECT_NE(std::find(g.report.warnings.begin(), g.report.warnings.end(), r.collision), g.report.warnings.end());
+  for (const auto& m : r.matched) EXPECT_EQ(m.detour, 0.0);
+  EXPECT_EQ(keyframe_intervals_json(g.report.keyframe_intervals)[0]["collision"], r.collision);
+}
+
 TEST(KeyframeTopology, BadLinksAndTimesAreRefusedInOneSentence) {
   auto err = [](const std::string& solver_extra) {
     return test::error_of([&] { parse_scene(move_scene(17, solver_extra), "scene.json"); });
@@ -253,6 +411,10 @@ TEST(KeyframeTopology, BadLinksAndTimesAreRefusedInOneSentence) {
   EXPECT_EQ(err(R"(, "keyframe_topology": "matched", "bifurcation_times": [0.2, 0.4])"),
             "scene.json: solver.bifurcation_times: needs one time per interval between consecutive key frames (1), "
             "got 2");
+  EXPECT_EQ(err(R"(, "path_separation": 0.2)"),
+            "scene.json: solver.path_separation: applies only with \"keyframe_topology\": \"matched\"");
+  EXPECT_NE(err(R"(, "keyframe_topology": "matched", "path_separation": -1)").find("scene.json: solver.path_separation: "),
+            std::string::npos);
   // One line each.
   EXPECT_EQ(test::count_lines(err(R"(, "keyframe_topology": "matched", "bifurcation_times": [1.5])")), 0);
 }
@@ -266,6 +428,10 @@ TEST(KeyframeTopology, ReportAndSceneRoundTripAsJson) {
   EXPECT_EQ(back.solver.links[0].from_element, 1);
   EXPECT_EQ(back.solver.links[0].to_keyframe, 1);
   EXPECT_EQ(back.solver.bifurcation_times, std::vector<double>{0.4});
+  EXPECT_FALSE(back.solver.path_separation);
+  EXPECT_EQ(parse_scene(scene_to_text(parse_scene(move_scene(17, extra + R"(, "path_separation": 0.25)"), "s")), "s")
+                .solver.path_separation,
+            0.25);
   const Generated g = run(scene_to_text(s));
   const nlohmann::json j = keyframe_intervals_json(g.report.keyframe_intervals);
   ASSERT_EQ(j.size(), 1u);
@@ -275,6 +441,9 @@ TEST(KeyframeTopology, ReportAndSceneRoundTripAsJson) {
   int linked = 0;
   for (const auto& m : j[0]["matched"]) linked += m["linked"].get<bool>();
   EXPECT_EQ(linked, 1);
+  EXPECT_EQ(j[0]["separation"], 0.3);
+  EXPECT_TRUE(j[0].contains("closest_approach"));
+  for (const auto& m : j[0]["matched"]) EXPECT_EQ(m["detour"], 0.0);
 }
 
 }  // namespace

@@ -17,6 +17,18 @@
 //     two, at the interval's bifurcation time (solver.bifurcation_times, default
 //     mid-interval): the two are carried to the template's zeros at t_c − τ (cancellation)
 //     or from them at t_c + τ (creation), and the template holds [t_c − τ, t_c + τ].
+//  5. keeps every two singularities carried at the same time solver.path_separation apart
+//     (default twice region_radius, so their constraint regions never overlap): where two
+//     paths come closer (paths that cross), one or both are bent around the other by a
+//     smooth bump perpendicular to their relative motion at the closest approach, full
+//     while they are too close and vanishing at the key frames (ends and times kept; near
+//     a key frame that holds them closer, the separation eases to what their straight
+//     paths keep), shared between the two in
+//     proportion to their lengths (the shortest pair of paths) unless that leaves the
+//     domain or comes nearer its boundary than half the separation, when the other side
+//     or one path alone is taken; when no detour fits, the interval's paths stay straight
+//     and its report (and a warning) names the two paths that meet.
+//     Distances are chord distances on surfaces (never more than the geodesic ones).
 // Key frames themselves are unchanged. What could not be paired (an odd singularity out,
 // e.g. one that must leave through the boundary) is left to the solve and reported.
 #include "tvf/analysis/singularities.h"
@@ -25,7 +37,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <limits>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace tvf {
@@ -39,6 +53,7 @@ struct KeyframeIntervalReport {
     SingularityType type = SingularityType::source;  // at the first key frame
     Vec3 from = Vec3::Zero(), to = Vec3::Zero();
     bool linked = false;  // named by solver.links
+    double detour = 0;    // largest distance of its path from the straight segment (0: straight)
   };
   struct Pair {
     SingularityType saddle_type = SingularityType::saddle, node_type = SingularityType::source;
@@ -49,6 +64,15 @@ struct KeyframeIntervalReport {
   std::vector<Match> matched;
   std::vector<Pair> created, cancelled;
   std::vector<Vec3> unpaired_first, unpaired_second;  // left to the solve
+  // The distance the carried singularities keep (solver.path_separation, or twice
+  // region_radius), and the smallest distance between two of them that the plan reaches
+  // (sampled at 257 times; infinite with fewer than two).
+  double separation = 0;
+  double closest_approach = std::numeric_limits<double>::infinity();
+  // Not empty when two paths could not be kept apart (the domain too narrow for a detour,
+  // or no set of detours found): why, in one sentence; the interval's paths then stay
+  // straight. The generator also gives it as a warning.
+  std::string collision;
 };
 
 // The constraints that keep the topology between key frames, planned once per generation.
@@ -66,6 +90,9 @@ public:
                  std::span<cplx> values) const;
 
   const std::vector<KeyframeIntervalReport>& intervals() const { return intervals_; }
+  // Where the plan puts the singularities it carries at time t (world, one per path
+  // present at t; on a surface the point before constrain() snaps it to the surface).
+  std::vector<Vec3> carried(double t) const;
 
   struct Track;     // one singularity carried between two times
   struct Template;  // one saddle–node template
@@ -79,8 +106,9 @@ private:
 };
 
 // {"interval": [t0, t1], "keyframes": [k0, k1], "bifurcation_t", "matched": [{"type",
-// "from", "to", "linked"}], "created": [{"t", "at", "saddle", "node", "node_type"}],
-// "cancelled": [same], "unpaired": [[x, y, z], ...]} per interval.
+// "from", "to", "linked", "detour"}], "created": [{"t", "at", "saddle", "node",
+// "node_type"}], "cancelled": [same], "separation", "closest_approach" (when two or more
+// are carried), "collision" (when not empty), "unpaired": [[x, y, z], ...]} per interval.
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals);
 
 }  // namespace tvf

@@ -169,6 +169,10 @@ struct SolverSettings {
   // One time per interval between consecutive key frames, inside it: when its unmatched
   // singularities are created or cancelled. Empty: the middle of each interval.
   std::vector<double> bifurcation_times{};
+  // "matched" only: how far apart (world units) two carried singularities stay at every
+  // time; matched paths that would come closer are bent around each other. Unset: twice
+  // region_radius (the two constraint regions never overlap); 0: paths stay straight.
+  std::optional<double> path_separation{};
 };
 
 // Meshes made in code (tvf additions to the format, so examples need no mesh files).
