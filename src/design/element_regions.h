@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <span>
 #include <vector>
@@ -32,10 +33,16 @@ struct ElementOnDomain {
 struct KeptChart {
   LocalChart chart;
   SurfacePoint at;  // face −1: none yet
+  double extent = 0;
 };
 
+// `extent`: where the caller reads the placed element (its value and distance) at most;
+// finite, the log map is made on a patch around the element only (LogMap::compute_local,
+// issue 15), and beyond it the distance is +∞ and the value 0. The basis summation reads
+// the falloff everywhere and keeps the default, the whole mesh's chart.
 inline void place_state(const DesignSpace& space, ElementState st, double d, LocalChart& chart,
-                 ElementOnDomain& out, KeptChart* kept = nullptr) {
+                 ElementOnDomain& out, KeptChart* kept = nullptr,
+                 double extent = std::numeric_limits<double>::infinity()) {
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   out.value.resize(nv);
@@ -55,16 +62,22 @@ inline void place_state(const DesignSpace& space, ElementState st, double d, Loc
     st.field.velocity = space.bundle().world_to_face(out.at.face, st.velocity);
   const LocalChart* used = &chart;
   if (kept) {
-    if (kept->at.face != out.at.face || kept->at.bary != out.at.bary) {
-      space.log_map().compute(out.at, kept->chart);
+    if (kept->at.face != out.at.face || kept->at.bary != out.at.bary || kept->extent != extent) {
+      space.log_map().compute_local(out.at, extent, kept->chart);
       kept->at = out.at;
+      kept->extent = extent;
     }
     used = &kept->chart;
   } else {
-    space.log_map().compute(out.at, chart);
+    space.log_map().compute_local(out.at, extent, chart);
   }
   for (size_t v = 0; v < nv; ++v) {
     const cplx w = used->coords[v];
+    if (!std::isfinite(w.real())) {  // beyond compute_local's patch
+      out.value[v] = cplx(0, 0);
+      out.distance[v] = std::numeric_limits<double>::infinity();
+      continue;
+    }
     const double fall = std::exp(-d * std::norm(w));
     out.value[v] = fall < 1e-300 ? cplx(0, 0) : fall * st.field(w) * used->frame[v];
     out.distance[v] = std::abs(w);
@@ -72,8 +85,9 @@ inline void place_state(const DesignSpace& space, ElementState st, double d, Loc
 }
 
 inline void place_element(const DesignSpace& space, const CompiledElement& el, double t, double d,
-                   LocalChart& chart, ElementOnDomain& out, KeptChart* kept = nullptr) {
-  place_state(space, el.at(t), d, chart, out, kept);
+                   LocalChart& chart, ElementOnDomain& out, KeptChart* kept = nullptr,
+                   double extent = std::numeric_limits<double>::infinity()) {
+  place_state(space, el.at(t), d, chart, out, kept, extent);
 }
 
 // Imposes a placed element's own field on its region (DESIGN §5.2): the vertices within
@@ -116,8 +130,9 @@ inline void constrain_elements(const DesignSpace& space, const Scene& scene,
   ElementOnDomain placed;
   for (const CompiledElement& el : elements) {
     if (!el.active(t)) continue;
-    place_element(space, el, t, d, chart, placed);
-    constrain_region(space.mesh(), placed, region_radius(scene, el), fixed, values);
+    const double radius = region_radius(scene, el);
+    place_element(space, el, t, d, chart, placed, nullptr, radius);
+    constrain_region(space.mesh(), placed, radius, fixed, values);
   }
 }
 
@@ -155,8 +170,8 @@ inline void constrain_elements_smoothly(const DesignSpace& space, const Scene& s
   for (size_t e = 0; e < elements.size(); ++e) {
     const CompiledElement& el = elements[e];
     if (!el.active(t)) continue;
-    place_element(space, el, t, d, chart, placed, kept ? &(*kept)[e] : nullptr);
     const double radius = region_radius(scene, el);
+    place_element(space, el, t, d, chart, placed, kept ? &(*kept)[e] : nullptr, radius + ramp);
     // However small the radius, the element's face's corners and their neighbours are in
     // its core, so that the constraints enclose its singularity (as constrain_region).
     std::fill(near.begin(), near.end(), 0);

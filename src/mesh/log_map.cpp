@@ -10,6 +10,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <queue>
+#include <utility>
 
 namespace tvf {
 
@@ -17,21 +19,12 @@ namespace {
 using SpMat = Eigen::SparseMatrix<double>;
 using SpCMat = Eigen::SparseMatrix<cplx>;
 
-// Gradient of the linear interpolant of vertex values u in face f, up to the positive
-// factor 1/(2·area): Σ_c u_c · n × e_c, e_c the edge opposite corner c (counter-clockwise).
-// Only its direction is used.
-Vec3 face_gradient(const TangentBundle& bundle, int f, const Eigen::VectorXd& u) {
-  const Mesh& mesh = bundle.mesh();
-  const Face& t = mesh.face(f);
-  const Vec3& n = bundle.face_normal(f);
-  Vec3 grad = Vec3::Zero();
-  for (int c = 0; c < 3; ++c) {
-    const Vec3 e = mesh.position(t[static_cast<size_t>((c + 2) % 3)]) -
-                   mesh.position(t[static_cast<size_t>((c + 1) % 3)]);
-    grad += u[t[static_cast<size_t>(c)]] * n.cross(e);
-  }
-  return grad;
-}
+// compute_local's patch: the vertices within this edge-path distance of p, for a chart
+// needed within `radius` (h the mean edge length). Measured (docs/benchmarks.md, issue 15,
+// the local log map): with it the coordinates within `radius` are the whole mesh's to
+// 0.4–1.3 % of the radius on the sphere, a torus and the bunny, the frames to 1e-7;
+// 16h instead of 8h halves that and costs 30 % more.
+double patch_radius(double radius, double h) { return 1.5 * radius + 8 * h; }
 
 }  // namespace
 
@@ -55,7 +48,16 @@ struct HeatSolvers {
 };
 
 
-struct LogMap::Solvers : HeatSolvers {
+// For LogMap::compute_local's patches: per intrinsic halfedge its twin (−1 on the
+// boundary), its edge's (clamped) cotan weight and the transport T_tail → T_head.
+struct LogMapPatchData {
+  std::vector<int> twin;
+  std::vector<double> weight;
+  std::vector<cplx> transport;
+  double t = 0;  // the diffusion time
+};
+
+struct LogMap::Solvers : HeatSolvers, LogMapPatchData {
   Eigen::SimplicialLDLT<SpCMat> vector_heat;         // M + t L∇
 };
 
@@ -66,7 +68,7 @@ namespace {
 // Assembles and factors the scalar systems on the intrinsic Delaunay triangulation (and
 // the vector heat system's triplets when ct is given); t = time_factor · h².
 void build_heat(const TangentBundle& bundle, double time_factor, HeatSolvers* s,
-                std::vector<Eigen::Triplet<cplx>>* ct) {
+                std::vector<Eigen::Triplet<cplx>>* ct, LogMapPatchData* ls = nullptr) {
   const Mesh& mesh = bundle.mesh();
   const int nv = mesh.num_vertices();
   s->h = mesh.mean_edge_length();
@@ -95,6 +97,18 @@ void build_heat(const TangentBundle& bundle, double time_factor, HeatSolvers* s,
   }
   s->cot.resize(static_cast<size_t>(idt.num_halfedges()));
   for (int h = 0; h < idt.num_halfedges(); ++h) s->cot[static_cast<size_t>(h)] = idt.cot_opposite(h);
+  if (ls) {
+    ls->t = t;
+    const auto nh = static_cast<size_t>(idt.num_halfedges());
+    ls->twin.resize(nh);
+    ls->weight.resize(nh);
+    ls->transport.resize(nh);
+    for (int h = 0; h < idt.num_halfedges(); ++h) {
+      ls->twin[static_cast<size_t>(h)] = idt.twin(h);
+      ls->weight[static_cast<size_t>(h)] = idt.edge_weight(h);
+      ls->transport[static_cast<size_t>(h)] = idt.transport(h);
+    }
+  }
 
   std::vector<Eigen::Triplet<double>> rt, ht;
   if (ct) ct->reserve(static_cast<size_t>(nv + 4 * mesh.num_edges()));
@@ -169,7 +183,7 @@ LogMap::LogMap(const TangentBundle& bundle, LogMapOptions options)
   const int nv = bundle.mesh().num_vertices();
   auto s = std::make_unique<Solvers>();
   std::vector<Eigen::Triplet<cplx>> ct;
-  build_heat(bundle, options_.time_factor, s.get(), &ct);
+  build_heat(bundle, options_.time_factor, s.get(), &ct, s.get());
   SpCMat a(nv, nv);
   a.setFromTriplets(ct.begin(), ct.end());
   s->vector_heat.compute(a);
@@ -294,6 +308,82 @@ std::vector<double> HeatDistance::distance(std::span<const SurfacePoint> sources
   return out;
 }
 
+namespace {
+
+// Steps 4–5 of the log map, shared by compute (the whole mesh) and compute_local (a
+// patch): from the distance φ and the transported frame y on the vertices `verts` (their
+// local indices; local[v] the index of mesh vertex v, −1 where it is not among them), the
+// chart's coordinates and frames there. in_faces: the input faces with all three corners
+// among them; reached: per local index, whether it is in p's connected component; far:
+// the distance given to the others.
+void finish_chart(const TangentBundle& bundle, const SurfacePoint& p, const Vec3& x, double h,
+                  const std::vector<int>& verts, const std::vector<int>& local, const std::vector<int>& in_faces,
+                  const std::vector<char>& reached, double far, const Eigen::VectorXd& phi,
+                  const Eigen::VectorXcd& y, LocalChart& chart) {
+  const Mesh& mesh = bundle.mesh();
+  const int n = static_cast<int>(verts.size());
+  const Face& pf = mesh.face(p.face);
+  auto at = [&](int v) { return local[static_cast<size_t>(v)]; };
+  // Geodesic direction at the vertices: ∇φ (the gradient field closest to X, smoother
+  // than X itself), area-weighted over the faces around each vertex and carried into T_v.
+  Eigen::VectorXcd radial = Eigen::VectorXcd::Zero(n);
+  for (int f : in_faces) {
+    const Face& t = mesh.face(f);
+    const Vec3& nf = bundle.face_normal(f);
+    Vec3 grad = Vec3::Zero();
+    for (int c = 0; c < 3; ++c) {
+      const Vec3 e = mesh.position(t[static_cast<size_t>((c + 2) % 3)]) -
+                     mesh.position(t[static_cast<size_t>((c + 1) % 3)]);
+      grad += phi[at(t[static_cast<size_t>(c)])] * nf.cross(e);
+    }
+    const cplx g = normalized(bundle.world_to_face(f, grad)) * mesh.face_area(f);
+    for (int c = 0; c < 3; ++c)
+      radial[at(t[static_cast<size_t>(c)])] += std::conj(bundle.corner_to_face(3 * f + c)) * g;
+  }
+
+  // φ is known up to a constant. Its value at p itself is too high (the heat method
+  // rounds the distance cone's tip over about an edge length), so the constant is fitted
+  // instead on the vertices around p, where the geodesic distance is the chord to O(h³).
+  double offset = 0;
+  int count = 0;
+  auto fit = [&](int v) {
+    offset += phi[at(v)] - (mesh.position(v) - x).norm();
+    ++count;
+  };
+  for (int c : pf) {
+    fit(c);
+    for (int hh : mesh.outgoing(c)) fit(mesh.head(hh));
+  }
+  offset /= count;
+
+  for (int i = 0; i < n; ++i) {
+    const auto v = static_cast<size_t>(verts[static_cast<size_t>(i)]);
+    const cplx fr = normalized(y[i]);
+    const cplx dir = normalized(radial[i] * std::conj(fr));
+    // Another component is out of reach: far beyond any element's falloff.
+    const double dist = reached[static_cast<size_t>(i)] ? std::max(0.0, phi[i] - offset) : far;
+    chart.coords[v] = dist * dir;
+    chart.frame[v] = fr;
+  }
+  // Near p the heat gradient's direction error is O(h / r), while the projection onto p's
+  // tangent plane agrees with the log map to second order in r. Use the projection within
+  // 3h and blend to the heat-method coordinates by 6h (they agree there to ~1 %, so the
+  // blend leaves no seam).
+  const double r_in = 3 * h, r_out = 6 * h;
+  for (int i = 0; i < n; ++i) {
+    const auto v = static_cast<size_t>(verts[static_cast<size_t>(i)]);
+    const cplx heat = chart.coords[v];
+    const double dist = std::abs(heat);
+    if (dist >= r_out) continue;
+    const cplx chord = bundle.world_to_face(p.face, mesh.position(static_cast<int>(v)) - x);
+    const double w = dist <= r_in ? 0.0 : (dist - r_in) / (r_out - r_in);
+    const double blend = w * w * (3 - 2 * w);  // smoothstep
+    chart.coords[v] = (1 - blend) * chord + blend * heat;
+  }
+}
+
+}  // namespace
+
 void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
   const Mesh& mesh = bundle_.mesh();
   const int nv = mesh.num_vertices();
@@ -329,55 +419,197 @@ void LogMap::compute(const SurfacePoint& p, LocalChart& chart) const {
   Eigen::VectorXd u0 = Eigen::VectorXd::Zero(nv);
   for (int c = 0; c < 3; ++c) u0[pf[static_cast<size_t>(c)]] += p.bary[c];
   const Eigen::VectorXd phi = heat_distance(s, u0);
-  // Geodesic direction at the vertices: ∇φ (the gradient field closest to X, smoother
-  // than X itself), area-weighted over the faces around each vertex and carried into T_v.
-  Eigen::VectorXcd radial = Eigen::VectorXcd::Zero(nv);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Face& t = mesh.face(f);
-    const cplx g = normalized(bundle_.world_to_face(f, face_gradient(bundle_, f, phi))) * mesh.face_area(f);
-    for (int c = 0; c < 3; ++c)
-      radial[t[static_cast<size_t>(c)]] += std::conj(bundle_.corner_to_face(3 * f + c)) * g;
-  }
 
-  // φ is known up to a constant. Its value at p itself is too high (the heat method
-  // rounds the distance cone's tip over about an edge length), so the constant is fitted
-  // instead on the vertices around p, where the geodesic distance is the chord to O(h³).
-  double offset = 0;
-  int count = 0;
-  auto fit = [&](int v) {
-    offset += phi[v] - (mesh.position(v) - x).norm();
-    ++count;
+  std::vector<int> all(static_cast<size_t>(nv));
+  for (int v = 0; v < nv; ++v) all[static_cast<size_t>(v)] = v;
+  std::vector<int> faces(static_cast<size_t>(mesh.num_faces()));
+  for (int f = 0; f < mesh.num_faces(); ++f) faces[static_cast<size_t>(f)] = f;
+  std::vector<char> reached(static_cast<size_t>(nv));
+  for (int v = 0; v < nv; ++v)
+    reached[static_cast<size_t>(v)] = s.component[static_cast<size_t>(v)] == s.component[static_cast<size_t>(pf[0])];
+  finish_chart(bundle_, p, x, s.h, all, all, faces, reached, s.far, phi, y, chart);
+}
+
+void LogMap::compute_local(const SurfacePoint& p, double radius, LocalChart& chart) const {
+  if (!solvers_ || !(radius < std::numeric_limits<double>::infinity())) {
+    compute(p, chart);
+    return;
+  }
+  const Solvers& s = *solvers_;
+  const Mesh& mesh = bundle_.mesh();
+  const int nv = mesh.num_vertices();
+  const Face& pf = mesh.face(p.face);
+  const Vec3 x = p.bary[0] * mesh.position(pf[0]) + p.bary[1] * mesh.position(pf[1]) +
+                 p.bary[2] * mesh.position(pf[2]);
+
+  // The patch: the vertices within edge-path distance R of p (Dijkstra from p's corners).
+  // Edge paths are longer than geodesics, so it holds every vertex geodesically within R
+  // / (their ratio, 1.0–1.2 on reasonable meshes) of p.
+  const double reach = patch_radius(radius, s.h);
+  std::vector<double> dist(static_cast<size_t>(nv), std::numeric_limits<double>::infinity());
+  std::vector<int> in_ball;
+  {
+    using Item = std::pair<double, int>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+    for (int c : pf) {
+      const double d = (mesh.position(c) - x).norm();
+      if (d < dist[static_cast<size_t>(c)]) {
+        dist[static_cast<size_t>(c)] = d;
+        queue.emplace(d, c);
+      }
+    }
+    const size_t limit = static_cast<size_t>(nv) / 4;
+    while (!queue.empty()) {
+      const auto [d, v] = queue.top();
+      queue.pop();
+      if (d > dist[static_cast<size_t>(v)]) continue;
+      in_ball.push_back(v);
+      if (in_ball.size() > limit) {
+        // The patch would hold a good part of the mesh: the whole mesh's solves are cheaper.
+        compute(p, chart);
+        return;
+      }
+      for (int h : mesh.outgoing(v)) {
+        for (int w : {mesh.head(h), mesh.tail(Mesh::prev(h))}) {
+          const double nd = d + (mesh.position(w) - mesh.position(v)).norm();
+          if (nd <= reach && nd < dist[static_cast<size_t>(w)]) {
+            dist[static_cast<size_t>(w)] = nd;
+            queue.emplace(nd, w);
+          }
+        }
+      }
+    }
+  }
+  std::vector<char> ball(static_cast<size_t>(nv), 0);
+  for (int v : in_ball) ball[static_cast<size_t>(v)] = 1;
+
+  // The intrinsic faces with all corners in the ball, and the vertices they use (local
+  // indices in order of first use).
+  std::vector<int> local(static_cast<size_t>(nv), -1), verts;
+  std::vector<int> ifaces;
+  HeatSolvers ls;
+  const int nif = static_cast<int>(s.faces.size());
+  std::vector<char> face_in(static_cast<size_t>(nif), 0);
+  for (int f = 0; f < nif; ++f) {
+    const Face& t = s.faces[static_cast<size_t>(f)];
+    if (!ball[static_cast<size_t>(t[0])] || !ball[static_cast<size_t>(t[1])] || !ball[static_cast<size_t>(t[2])]) continue;
+    face_in[static_cast<size_t>(f)] = 1;
+    ifaces.push_back(f);
+    Face lf;
+    for (int c = 0; c < 3; ++c) {
+      int& l = local[static_cast<size_t>(t[static_cast<size_t>(c)])];
+      if (l < 0) {
+        l = static_cast<int>(verts.size());
+        verts.push_back(t[static_cast<size_t>(c)]);
+      }
+      lf[static_cast<size_t>(c)] = l;
+    }
+    ls.faces.push_back(lf);
+    ls.corners.push_back(s.corners[static_cast<size_t>(f)]);
+    ls.normals.push_back(s.normals[static_cast<size_t>(f)]);
+    for (int c = 0; c < 3; ++c) ls.cot.push_back(s.cot[static_cast<size_t>(3 * f + c)]);
+  }
+  for (int c : pf)
+    for (int h : mesh.outgoing(c))
+      if (local[static_cast<size_t>(mesh.head(h))] < 0 || local[static_cast<size_t>(c)] < 0) {
+        compute(p, chart);  // p's neighbourhood is not covered (a patch too small to matter)
+        return;
+      }
+  const int n = static_cast<int>(verts.size());
+  ls.h = s.h;
+  ls.far = s.far;
+  ls.mass.resize(n);
+  for (int i = 0; i < n; ++i) ls.mass[i] = s.mass[verts[static_cast<size_t>(i)]];
+
+  // The patch's systems, assembled from its own faces (Neumann boundary): an edge inside
+  // has the whole mesh's weight and transport, an edge on the patch's boundary the half
+  // of its one face here.
+  const double t = s.t;
+  std::vector<Eigen::Triplet<cplx>> ct;
+  std::vector<Eigen::Triplet<double>> ht, rt;
+  for (int i = 0; i < n; ++i) {
+    ct.emplace_back(i, i, ls.mass[i]);
+    ht.emplace_back(i, i, ls.mass[i]);
+  }
+  std::vector<int> parent(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) parent[static_cast<size_t>(i)] = i;
+  auto root = [&](int a) {
+    while (parent[static_cast<size_t>(a)] != a) a = parent[static_cast<size_t>(a)] = parent[static_cast<size_t>(parent[static_cast<size_t>(a)])];
+    return a;
   };
-  for (int c : pf) {
-    fit(c);
-    for (int h : mesh.outgoing(c)) fit(mesh.head(h));
+  for (int f : ifaces) {
+    for (int c = 0; c < 3; ++c) {
+      const int h = 3 * f + c;
+      const int tw = s.twin[static_cast<size_t>(h)];
+      const bool inner = tw >= 0 && face_in[static_cast<size_t>(tw / 3)];
+      if (inner && tw < h) continue;  // each edge once
+      const double w = inner || tw < 0 ? s.weight[static_cast<size_t>(h)] : std::max(0.0, 0.5 * s.cot[static_cast<size_t>(h)]);
+      const int i = local[static_cast<size_t>(s.faces[static_cast<size_t>(f)][static_cast<size_t>(c)])];
+      const int j = local[static_cast<size_t>(s.faces[static_cast<size_t>(f)][static_cast<size_t>((c + 1) % 3)])];
+      const cplx rij = s.transport[static_cast<size_t>(h)];
+      ct.emplace_back(i, i, t * w);
+      ct.emplace_back(j, j, t * w);
+      ct.emplace_back(j, i, -t * w * rij);
+      ct.emplace_back(i, j, -t * w * std::conj(rij));
+      ht.emplace_back(i, i, t * w);
+      ht.emplace_back(j, j, t * w);
+      ht.emplace_back(i, j, -t * w);
+      ht.emplace_back(j, i, -t * w);
+      rt.emplace_back(i, i, w);
+      rt.emplace_back(j, j, w);
+      rt.emplace_back(i, j, -w);
+      rt.emplace_back(j, i, -w);
+      parent[static_cast<size_t>(root(i))] = root(j);
+    }
   }
-  offset /= count;
+  // Connected components of the patch (through its faces), one pinned vertex each.
+  ls.component.assign(static_cast<size_t>(n), -1);
+  {
+    std::vector<int> id_of(static_cast<size_t>(n), -1);
+    for (int i = 0; i < n; ++i) {
+      const int r = root(i);
+      if (id_of[static_cast<size_t>(r)] < 0) {
+        id_of[static_cast<size_t>(r)] = ls.num_components++;
+        rt.emplace_back(i, i, 1.0);
+      }
+      ls.component[static_cast<size_t>(i)] = id_of[static_cast<size_t>(r)];
+    }
+  }
+  SpCMat a(n, n);
+  a.setFromTriplets(ct.begin(), ct.end());
+  Eigen::SimplicialLDLT<SpCMat> vector_heat(a);
+  TVF_CHECK(vector_heat.info() == Eigen::Success, "vector heat factorization failed");
+  SpMat hs(n, n);
+  hs.setFromTriplets(ht.begin(), ht.end());
+  ls.scalar_heat.compute(hs);
+  TVF_CHECK(ls.scalar_heat.info() == Eigen::Success, "scalar heat factorization failed");
+  SpMat l(n, n);
+  l.setFromTriplets(rt.begin(), rt.end());
+  ls.poisson.compute(l);
+  TVF_CHECK(ls.poisson.info() == Eigen::Success, "Poisson factorization failed");
 
-  for (int v = 0; v < nv; ++v) {
-    const cplx fr = normalized(y[v]);
-    const cplx dir = normalized(radial[v] * std::conj(fr));
-    // Another component is out of reach: far beyond any element's falloff.
-    const double dist = s.component[static_cast<size_t>(v)] == s.component[static_cast<size_t>(pf[0])]
-                            ? std::max(0.0, phi[v] - offset)
-                            : s.far;
-    chart.coords[static_cast<size_t>(v)] = dist * dir;
-    chart.frame[static_cast<size_t>(v)] = fr;
+  Eigen::VectorXcd y0 = Eigen::VectorXcd::Zero(n);
+  Eigen::VectorXd u0 = Eigen::VectorXd::Zero(n);
+  for (int c = 0; c < 3; ++c) {
+    const int i = local[static_cast<size_t>(pf[static_cast<size_t>(c)])];
+    y0[i] += p.bary[c] * std::conj(bundle_.corner_to_face(3 * p.face + c));
+    u0[i] += p.bary[c];
   }
-  // Near p the heat gradient's direction error is O(h / r), while the projection onto p's
-  // tangent plane agrees with the log map to second order in r. Use the projection within
-  // 3h and blend to the heat-method coordinates by 6h (they agree there to ~1 %, so the
-  // blend leaves no seam).
-  const double r_in = 3 * s.h, r_out = 6 * s.h;
-  for (int v = 0; v < nv; ++v) {
-    const cplx heat = chart.coords[static_cast<size_t>(v)];
-    const double dist = std::abs(heat);
-    if (dist >= r_out) continue;
-    const cplx chord = bundle_.world_to_face(p.face, mesh.position(v) - x);
-    const double w = dist <= r_in ? 0.0 : (dist - r_in) / (r_out - r_in);
-    const double blend = w * w * (3 - 2 * w);  // smoothstep
-    chart.coords[static_cast<size_t>(v)] = (1 - blend) * chord + blend * heat;
+  const Eigen::VectorXcd y = vector_heat.solve(y0);
+  const Eigen::VectorXd phi = heat_distance(ls, u0);
+
+  std::vector<int> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Face& tf = mesh.face(f);
+    if (local[static_cast<size_t>(tf[0])] >= 0 && local[static_cast<size_t>(tf[1])] >= 0 && local[static_cast<size_t>(tf[2])] >= 0)
+      faces.push_back(f);
   }
+  std::vector<char> reached(static_cast<size_t>(n));
+  const int pc = ls.component[static_cast<size_t>(local[static_cast<size_t>(pf[0])])];
+  for (int i = 0; i < n; ++i) reached[static_cast<size_t>(i)] = ls.component[static_cast<size_t>(i)] == pc;
+  chart.coords.assign(static_cast<size_t>(nv), cplx(std::numeric_limits<double>::infinity(), 0));
+  chart.frame.assign(static_cast<size_t>(nv), cplx(1, 0));
+  finish_chart(bundle_, p, x, s.h, verts, local, faces, reached, s.far, phi, y, chart);
 }
 
 }  // namespace tvf
