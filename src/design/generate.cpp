@@ -272,7 +272,9 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
         check_cancelled(options);
         if (j0 + static_cast<int>(k) == first) options.first_frame_done(first, field.frame(first));
       };
-      const std::vector<SolveReport> r = solver->solve(problems, out, nullptr, solved);
+      const bool shown_here = first >= j0 && first < j0 + count;
+      const std::vector<SolveReport> r = solver->solve(problems, out, nullptr, solved,
+                                                       shown_here ? static_cast<size_t>(first - j0) : static_cast<size_t>(-1));
       for (int k = 0; k < count; ++k) {
         if (r[static_cast<size_t>(k)].success) {
           record(j0 + k, r[static_cast<size_t>(k)]);

@@ -410,15 +410,27 @@ template <class Scalar>
 void solve_frames(const SpMat<Scalar>& l, const Eigen::VectorXd& diagonal, double max_trailing,
                   std::span<const Frame> frames, std::span<const std::span<cplx>> out, std::span<SolveReport> reports,
                   DirichletFrames::Statistics& stats, const std::function<void(size_t)>& after_each,
-                  size_t first, bool cholmod) {
+                  size_t first, bool cholmod, size_t solve_first) {
   Block<Scalar> block(l, diagonal, frames, cholmod);
   const int nt = block.trailing();
   if (frames.size() > 1 && nt > max_trailing * static_cast<double>(l.rows())) {
     const size_t half = frames.size() / 2;
-    solve_frames(l, diagonal, max_trailing, frames.first(half), out.first(half), reports.first(half), stats,
-                 after_each, first, cholmod);
-    solve_frames(l, diagonal, max_trailing, frames.subspan(half), out.subspan(half), reports.subspan(half), stats,
-                 after_each, first + half, cholmod);
+    auto lower = [&] {
+      solve_frames(l, diagonal, max_trailing, frames.first(half), out.first(half), reports.first(half), stats,
+                   after_each, first, cholmod, solve_first);
+    };
+    auto upper = [&] {
+      solve_frames(l, diagonal, max_trailing, frames.subspan(half), out.subspan(half), reports.subspan(half), stats,
+                   after_each, first + half, cholmod, solve_first);
+    };
+    // The half holding solve_first goes first (the halves' results do not depend on it).
+    if (solve_first >= first + half && solve_first < first + frames.size()) {
+      upper();
+      lower();
+    } else {
+      lower();
+      upper();
+    }
     return;
   }
   ++stats.blocks;
@@ -431,10 +443,16 @@ void solve_frames(const SpMat<Scalar>& l, const Eigen::VectorXd& diagonal, doubl
     }
     return;
   }
-  for (size_t k = 0; k < frames.size(); ++k) {
+  // Each frame is solved on its own with the block's factorization: the order only says
+  // which is ready first.
+  const size_t lead = solve_first >= first && solve_first < first + frames.size() ? solve_first - first : frames.size();
+  auto one = [&](size_t k) {
     block.solve(static_cast<int>(k), out[k], reports[k]);
     if (after_each) after_each(first + k);
-  }
+  };
+  if (lead < frames.size()) one(lead);
+  for (size_t k = 0; k < frames.size(); ++k)
+    if (k != lead) one(k);
 }
 
 }  // namespace
@@ -469,7 +487,8 @@ DirichletFrames::DirichletFrames(const ConnectionLaplacian& laplacian, Dirichlet
 
 std::vector<SolveReport> DirichletFrames::solve(std::span<const DirichletProblem> problems,
                                                 std::span<const std::span<cplx>> out, Statistics* statistics,
-                                                const std::function<void(size_t)>& after_each) const {
+                                                const std::function<void(size_t)>& after_each,
+                                                size_t solve_first) const {
   TVF_CHECK(problems.size() == out.size(), "{} problems, {} outputs", problems.size(), out.size());
   std::vector<SolveReport> reports(problems.size());
   if (problems.empty()) return reports;
@@ -484,10 +503,10 @@ std::vector<SolveReport> DirichletFrames::solve(std::span<const DirichletProblem
   const bool cholmod = static_cast<int>(n) >= options_.cholmod_from;
   if (real_)
     solve_frames<double>(real_matrix_, laplacian_.weight_sum, options_.max_trailing_fraction, frames, out, reports,
-                         stats, after_each, 0, cholmod);
+                         stats, after_each, 0, cholmod, solve_first);
   else
     solve_frames<cplx>(laplacian_.matrix, laplacian_.weight_sum, options_.max_trailing_fraction, frames, out, reports,
-                       stats, after_each, 0, cholmod);
+                       stats, after_each, 0, cholmod, solve_first);
   const char* method = real_ ? "sparse Cholesky (real LDLᵀ shared by a block of frames, changing vertices last)"
                              : "sparse Cholesky (LDLᴴ shared by a block of frames, changing vertices last)";
   for (size_t k = 0; k < reports.size(); ++k) {

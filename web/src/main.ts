@@ -288,6 +288,7 @@ async function showStatus(st: Status) {
   const label = $("status");
   label.dataset.state = st.state;
   lastState = st.state;
+  lastStatus = st;
   if (st.state === "running") label.textContent = `rev ${st.revision} · solving ${st.progress[0]}/${st.progress[1]}…`;
   else if (st.state === "failed") label.textContent = `rev ${st.revision} · failed: ${st.error}`;
   else label.textContent = `rev ${st.revision} · ready in ${(st.seconds ?? 0).toFixed(2)} s`;
@@ -305,6 +306,10 @@ async function showStatus(st: Status) {
   // Results only move forward (a polled answer can arrive after a newer pushed one), unless
   // the server started again (its revision is behind the page's).
   if (st.result_revision > 0 && (st.result_revision > state.resultRevision || (restarted && st.result_revision !== state.resultRevision))) await loadResult(st);
+  // The current frame of the shown result, when its download failed (a 409 while the
+  // server replaced its result, a busy server): asked for again.
+  if (st.result_revision === state.resultRevision && state.resultRevision > 0 && !state.frames.has(state.frame))
+    await showFrame(state.frame);
   // The analysis follows the field: loaded beside it, not waited for.
   const analysed = st.analysis_revision === undefined || st.analysis_revision === state.resultRevision;
   if (analysed && state.analysisRevision !== state.resultRevision && state.resultRevision > 0) void loadAnalysis(state.resultRevision);
@@ -314,6 +319,16 @@ async function showStatus(st: Status) {
 let nextStatus: Status | null = null;
 let showing = false;
 let lastState: Status["state"] | "" = "";
+let lastStatus: Status | null = null;
+// Whether the page is behind the last status it saw (an event it could not follow up, a
+// download that failed under load): then it asks for the status again, even when results
+// are pushed, until it has caught up.
+function behind(): boolean {
+  const st = lastStatus;
+  if (!st || st.state !== "ready" || st.result_revision <= 0) return false;
+  if (state.resultRevision < st.result_revision || !state.frames.has(state.frame)) return true;
+  return st.analysis !== "failed" && st.analysis_revision === state.resultRevision && state.analysisRevision !== state.resultRevision;
+}
 async function applyStatus(st: Status) {
   nextStatus = st;
   if (showing) return;
@@ -351,7 +366,7 @@ const streaming = () => stream !== null && stream.readyState === EventSource.OPE
 
 // The fallback, and the solve's progress (not pushed: only its state is).
 async function poll() {
-  if (!streaming() || lastState === "running") {
+  if (!streaming() || lastState === "running" || behind()) {
     try {
       await applyStatus(await api.status());
     } catch (e) {

@@ -64,9 +64,12 @@ public:
   // DirichletSolver. Problems whose constraints differ on many vertices cost more than
   // DirichletSolver; the caller groups consecutive frames. after_each(k), if given, is
   // called as soon as problem k is solved (progress; it may throw to cancel the rest).
+  // Problem solve_first, if in range, is solved before the others (a viewer's frame); the
+  // results do not depend on the order, which only says when each is ready.
   std::vector<SolveReport> solve(std::span<const DirichletProblem> problems, std::span<const std::span<cplx>> out,
                                  Statistics* statistics = nullptr,
-                                 const std::function<void(size_t)>& after_each = {}) const;
+                                 const std::function<void(size_t)>& after_each = {},
+                                 size_t solve_first = static_cast<size_t>(-1)) const;
 
   // Whether L is real (a flat connection), so that the factorizations are real.
   bool real() const { return real_; }
