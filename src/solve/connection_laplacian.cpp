@@ -134,30 +134,35 @@ DirichletSolver::DirichletSolver(const DirichletSolver& other)
   analyze();
 }
 
-DirichletSolver::~DirichletSolver() = default;
-
-void DirichletSolver::analyze() {
-  impl_->a = laplacian_.matrix;
-  // Connected components of L's graph (breadth first over its pattern).
-  const Eigen::Index n = laplacian_.matrix.rows();
-  component_.assign(static_cast<size_t>(n), -1);
-  num_components_ = 0;
+int graph_components(const ConnectionLaplacian& laplacian, std::vector<int>& component) {
+  // Breadth first over the pattern (L's columns: the pattern is symmetric).
+  const Eigen::Index n = laplacian.matrix.rows();
+  component.assign(static_cast<size_t>(n), -1);
+  int count = 0;
   std::vector<Eigen::Index> queue;
   for (Eigen::Index s = 0; s < n; ++s) {
-    if (component_[static_cast<size_t>(s)] >= 0) continue;
-    component_[static_cast<size_t>(s)] = num_components_;
+    if (component[static_cast<size_t>(s)] >= 0) continue;
+    component[static_cast<size_t>(s)] = count;
     queue.assign(1, s);
     while (!queue.empty()) {
       const Eigen::Index c = queue.back();
       queue.pop_back();
-      for (Eigen::SparseMatrix<cplx>::InnerIterator it(laplacian_.matrix, c); it; ++it) {
-        if (component_[static_cast<size_t>(it.row())] >= 0) continue;
-        component_[static_cast<size_t>(it.row())] = num_components_;
+      for (Eigen::SparseMatrix<cplx>::InnerIterator it(laplacian.matrix, c); it; ++it) {
+        if (component[static_cast<size_t>(it.row())] >= 0) continue;
+        component[static_cast<size_t>(it.row())] = count;
         queue.push_back(it.row());
       }
     }
-    ++num_components_;
+    ++count;
   }
+  return count;
+}
+
+DirichletSolver::~DirichletSolver() = default;
+
+void DirichletSolver::analyze() {
+  impl_->a = laplacian_.matrix;
+  num_components_ = graph_components(laplacian_, component_);
   if (factorization_ == DirichletFactorization::cholmod) {
     impl_->cholmod = std::make_unique<Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<cplx>, Eigen::Lower>>();
     // Failures come back through info() and the report; CHOLMOD prints nothing.

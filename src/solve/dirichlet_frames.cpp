@@ -461,28 +461,11 @@ DirichletFrames::DirichletFrames(const ConnectionLaplacian& laplacian, Dirichlet
     : laplacian_(laplacian), options_(options) {
   TVF_CHECK(laplacian.hermitian, "DirichletFrames needs Hermitian (cotan or uniform) weights");
   const SpMat<cplx>& l = laplacian.matrix;
-  const Eigen::Index n = l.rows();
   real_ = true;
   for (Eigen::Index k = 0; k < l.nonZeros() && real_; ++k) real_ = l.valuePtr()[k].imag() == 0;
   if (real_) real_matrix_ = l.real();
   // Connected components of L's graph, as DirichletSolver finds them.
-  component_.assign(static_cast<size_t>(n), -1);
-  std::vector<Eigen::Index> queue;
-  for (Eigen::Index s = 0; s < n; ++s) {
-    if (component_[static_cast<size_t>(s)] >= 0) continue;
-    component_[static_cast<size_t>(s)] = num_components_;
-    queue.assign(1, s);
-    while (!queue.empty()) {
-      const Eigen::Index c = queue.back();
-      queue.pop_back();
-      for (SpMat<cplx>::InnerIterator it(l, c); it; ++it) {
-        if (component_[static_cast<size_t>(it.row())] >= 0) continue;
-        component_[static_cast<size_t>(it.row())] = num_components_;
-        queue.push_back(it.row());
-      }
-    }
-    ++num_components_;
-  }
+  num_components_ = graph_components(laplacian, component_);
 }
 
 std::vector<SolveReport> DirichletFrames::solve(std::span<const DirichletProblem> problems,

@@ -48,6 +48,11 @@ struct ConnectionLaplacian {
 ConnectionLaplacian connection_laplacian(const TangentBundle& bundle,
                                          LaplacianWeights weights = LaplacianWeights::cotan);
 
+// The connected components of L's graph (its sparsity pattern): component[v] for every
+// vertex, numbered from 0 in the order of their first vertex; returns their number. A
+// component without any constraint gets zero in a Dirichlet solve.
+int graph_components(const ConnectionLaplacian& laplacian, std::vector<int>& component);
+
 // The result of a linear solve: what was done and how well (STYLE 5).
 struct SolveReport {
   std::string method;      // e.g. "sparse Cholesky (LDLᵀ)", "sparse LU"
