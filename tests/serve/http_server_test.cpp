@@ -535,8 +535,12 @@ TEST(ServeHttp, EventStreamsAreLimitedAndStopEndsThemPromptly) {
     readers.emplace_back([&] {
       httplib::Client c("127.0.0.1", f.server->port());
       c.set_read_timeout(60, 0);
+      // Each stream counted once, at its first bytes: a stream that gets two events before
+      // the other has connected (seen under ASan) must not count as two.
+      bool counted = false;
       (void)c.Get("/api/events", [&](const char*, size_t) {
-        opened.fetch_add(1);
+        if (!counted) opened.fetch_add(1);
+        counted = true;
         return true;
       });
     });
