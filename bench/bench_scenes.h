@@ -2,13 +2,44 @@
 // The designs the benchmarks share.
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
+#include "tvf/field/field.h"
+#include "tvf/mesh/grid.h"
+#include "tvf/mesh/tangent_bundle.h"
 #include "tvf/scene/scene.h"
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <ctime>
+#include <numbers>
 
 namespace tvf::bench {
+
+// The double gyre (Shadden, Lekien & Marsden 2005) on a 65² grid over [0, 2] × [0, 1],
+// 100 frames on [0, 20]: the FTLE and dye benchmarks' field (made once).
+struct DoubleGyre {
+  Mesh grid = make_grid(GridSpec{65, 65, {0, 0}, {2, 1}});
+  TangentBundle bundle{grid};
+  Field field{TimeSampling{0, 20, 100}, grid.num_vertices()};
+  DoubleGyre() {
+    constexpr double A = 0.1, eps = 0.25, omega = 2 * std::numbers::pi / 10, pi = std::numbers::pi;
+    for (int j = 0; j < field.frames(); ++j) {
+      const double t = field.time().time(j);
+      const double a = eps * std::sin(omega * t), b = 1 - 2 * a;
+      for (int v = 0; v < grid.num_vertices(); ++v) {
+        const double x = grid.position(v).x(), y = grid.position(v).y();
+        const double f = a * x * x + b * x, df = 2 * a * x + b;
+        // On a planar grid each vertex's tangent basis is world x, y.
+        field.at(j, v) = {-pi * A * std::sin(pi * f) * std::cos(pi * y), pi * A * std::cos(pi * f) * std::sin(pi * y) * df};
+      }
+    }
+  }
+};
+
+inline const DoubleGyre& double_gyre() {
+  static const DoubleGyre g;
+  return g;
+}
 
 // A moving center, a source, a bifurcation and a regular element with attachment (the
 // demo's kind of design); the domain is left for the caller.

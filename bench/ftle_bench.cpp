@@ -25,33 +25,11 @@
 namespace tvf {
 namespace {
 
-struct Gyre {
-  Mesh grid = make_grid(GridSpec{65, 65, {0, 0}, {2, 1}});
-  TangentBundle bundle{grid};
-  Field field{TimeSampling{0, 20, 100}, grid.num_vertices()};
-  Gyre() {
-    constexpr double A = 0.1, eps = 0.25, omega = 2 * std::numbers::pi / 10, pi = std::numbers::pi;
-    for (int j = 0; j < field.frames(); ++j) {
-      const double t = field.time().time(j);
-      const double a = eps * std::sin(omega * t), b = 1 - 2 * a;
-      for (int v = 0; v < grid.num_vertices(); ++v) {
-        const double x = grid.position(v).x(), y = grid.position(v).y();
-        const double f = a * x * x + b * x, df = 2 * a * x + b;
-        // On a planar grid each vertex's tangent basis is world x, y.
-        field.at(j, v) = {-pi * A * std::sin(pi * f) * std::cos(pi * y), pi * A * std::cos(pi * f) * std::sin(pi * y) * df};
-      }
-    }
-  }
-};
-
-const Gyre& gyre() {
-  static const Gyre g;
-  return g;
-}
+using bench::DoubleGyre;
 
 // Frame 40 (t ≈ 8.1): both windows of T = 10 fit.
 void one_frame(benchmark::State& state, bool walk) {
-  const Gyre& g = gyre();
+  const DoubleGyre& g = bench::double_gyre();
   FtleOptions o;
   o.horizon = 10;
   o.frames = {40};
@@ -70,7 +48,7 @@ void BM_FtleOneFrameWalk(benchmark::State& state) { one_frame(state, true); }
 BENCHMARK(BM_FtleOneFrameWalk)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 void series(benchmark::State& state, bool compose) {
-  const Gyre& g = gyre();
+  const DoubleGyre& g = bench::double_gyre();
   FtleOptions o;
   o.horizon = 10;
   o.compose = compose;
