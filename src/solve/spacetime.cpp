@@ -75,6 +75,36 @@ namespace {
 
 using Vec = std::vector<cplx>;
 
+// CG preconditioned by `precondition` (z = M⁻¹ r, returning r·z) on a small system whose
+// product is `apply` (ap = A p, returning p·Ap): x += the correction, r updated, from the
+// residual norm² rr down to tau2 or max_iterations. Returns the iterations. The two local
+// solves near moving constraints use it.
+template <class Apply, class Precondition>
+int local_pcg(Vec& x, Vec& r, Vec& z, Vec& p, Vec& ap, double rr, double tau2, int max_iterations, Apply&& apply,
+              Precondition&& precondition) {
+  double rz = precondition(r, z);
+  p = z;
+  int it = 0;
+  while (rr > tau2 && it < max_iterations) {
+    const double pap = apply(p, ap);
+    if (!(pap > 0)) break;
+    const double alpha = rz / pap;
+    rr = 0;
+    for (size_t q = 0; q < x.size(); ++q) {
+      x[q] += alpha * p[q];
+      r[q] -= alpha * ap[q];
+      rr += std::norm(r[q]);
+    }
+    ++it;
+    if (rr <= tau2) break;
+    const double rz_new = precondition(r, z);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    for (size_t q = 0; q < x.size(); ++q) p[q] = z[q] + beta * p[q];
+  }
+  return it;
+}
+
 // v with n entries, reusing its storage (contents unspecified: callers overwrite them).
 template <class T>
 std::vector<T>& sized(std::vector<T>& v, size_t n) {
@@ -770,27 +800,9 @@ struct LocalSolve {
       }
     }
     const double tau2 = tolerance * tolerance * rr;
-    double rz = lines(r, z);
-    p = z;
-    int it = 0;
-    while (rr > tau2 && it < max_iterations) {
-      const double pap = apply(p, ap);
-      if (!(pap > 0)) break;
-      const double alpha = rz / pap;
-      rr = 0;
-      for (size_t q = 0; q < nq; ++q) {
-        u[q] += alpha * p[q];  // p is zero at the constraint entries
-        r[q] -= alpha * ap[q];
-        rr += std::norm(r[q]);
-      }
-      ++it;
-      if (rr <= tau2) break;
-      const double rz_new = lines(r, z);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      for (size_t q = 0; q < nq; ++q) p[q] = z[q] + beta * p[q];
-    }
-    return it;
+    // p stays zero at the constraint entries, so u keeps them.
+    return local_pcg(u, r, z, p, ap, rr, tau2, max_iterations, [&](const Vec& x, Vec& y) { return apply(x, y); },
+                     [&](const Vec& x, Vec& y) { return lines(x, y); });
   }
 };
 
@@ -1651,25 +1663,8 @@ SolveReport SpaceTimeSolver::solve_cg(std::span<const char> fixed, std::span<con
       }
     std::fill(local_x.begin(), local_x.end(), cplx(0, 0));
     const double tau2 = kLocalTolerance * kLocalTolerance * rr;
-    double rz = local_lines(local_r, local_z);
-    local_p = local_z;
-    for (int it = 0; it < kLocalIterations && rr > tau2; ++it) {
-      const double pap = local_apply(local_p, local_ap);
-      if (!(pap > 0)) break;
-      const double alpha = rz / pap;
-      rr = 0;
-      for (size_t q = 0; q < nq; ++q) {
-        local_x[q] += alpha * local_p[q];
-        local_r[q] -= alpha * local_ap[q];
-        rr += std::norm(local_r[q]);
-      }
-      ++local_iterations;
-      if (rr <= tau2) break;
-      const double rz_new = local_lines(local_r, local_z);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      for (size_t q = 0; q < nq; ++q) local_p[q] = local_z[q] + beta * local_p[q];
-    }
+    local_iterations += local_pcg(local_x, local_r, local_z, local_p, local_ap, rr, tau2, kLocalIterations, local_apply,
+                                  local_lines);
     // res −= A δ on the local vertices and their neighbours (δ = local_x, zero elsewhere).
     for (size_t ti = 0; ti < touched.size(); ++ti) {
       const auto i = static_cast<size_t>(touched[ti]);
