@@ -274,7 +274,8 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
       };
       const bool shown_here = first >= j0 && first < j0 + count;
       const std::vector<SolveReport> r = solver->solve(problems, out, nullptr, solved,
-                                                       shown_here ? static_cast<size_t>(first - j0) : static_cast<size_t>(-1));
+                                                       shown_here ? static_cast<size_t>(first - j0) : static_cast<size_t>(-1),
+                                                       options.parallel);
       for (int k = 0; k < count; ++k) {
         if (r[static_cast<size_t>(k)].success) {
           record(j0 + k, r[static_cast<size_t>(k)]);
