@@ -90,6 +90,10 @@ struct SpaceTimeOptions {
   // beyond). More rings: fewer rounds, more work per round (docs/benchmarks.md: 4 rings took
   // 6 rounds where 2 took 9–10, as fast on the 65² grid and 14 % faster on the sphere).
   int moving_rings = 4;
+  // modes_local only: after this many rounds (or two rounds in a row that each leave more
+  // than 0.7 of the last one's residual) the rounds stop and CG finishes the solve from
+  // where they are (the report's method then says "finished by").
+  int most_rounds = 40;
 };
 
 class SpaceTimeSolver {
