@@ -785,8 +785,9 @@ struct LocalSolve {
   // zl = the temporal line solves of rl on omega's lines; returns Re <rl, zl>. A line's
   // substitutions are chains of dependent multiply-adds, so kGroup lines go side by side
   // (independent chains keep the pipeline busy); each entry's arithmetic is that of one
-  // line alone. With the partial sums in local_pcg: the local CG 11.5 → 10.2 ms a round
-  // (65² grid, moving vortex, 12 iterations; one run each at load 20).
+  // line alone. With the partial sums in local_pcg a small gain, within the noise of the
+  // loaded machine it was measured on (the local CG 11–12 ms a round before, 10–12 after:
+  // 65² grid, moving vortex, 12 iterations).
   double lines(const std::vector<cplx>& rl, std::vector<cplx>& zl) const {
     constexpr size_t kGroup = 4;
     const size_t nl = m.omega.size();

@@ -21,7 +21,7 @@
 //   the moving constraints cut (and `moving_rings` rings around them) sets the solution to
 //   its fixed values there, and only those rows are transformed between frames and modes.
 //   The constraints' multipliers join the modes' right-hand side; what the local solve
-//   leaks out is the next round's residual. 6–10 rounds, flat in the mesh size.
+//   leaks out is the next round's residual. 4–6 rounds, flat in the mesh size.
 // * Matrix-free CG (anything else: moving constraints without a key frame). The preconditioner solves
 //   every vertex's temporal line exactly (a real tridiagonal system, fixed entries
 //   splitting it): with b = 30 the time couplings carry about 60/61 of each diagonal
