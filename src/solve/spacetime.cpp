@@ -923,11 +923,13 @@ constexpr int kLocalIterations = 50;
 // out of omega), and takes out all but 1–6 % of the last round's (the local solves' leak:
 // 6 % with two rings, 1–2 % with four; 65² grid × 100, moving vortex). So each round solves
 // the modes to this fraction of the last round's residual (solved fully every round, the
-// rounds took the same number: the leak, not the modes, sets the pace), and the local solve
-// to this relative residual (1e-2: one or two rounds more; 1e-1 stalls). A round that
-// leaves more than kRoundStall of the last one's residual twice in a row, or more than
-// SpaceTimeOptions::most_rounds rounds, hands the rest to CG.
-constexpr double kRoundReduction = 0.002;
+// rounds took the same number: the leak, not the modes, sets the pace; 0.005 rather than
+// 0.002 saved ~5 % of the 20k sphere's solve and 3 % of the 65² grid's, 0.001 nothing;
+// docs/benchmarks.md), and the local solve to this relative residual (1e-2: one or two
+// rounds more; 1e-1 stalls). A round that leaves more than kRoundStall of the last one's
+// residual twice in a row, or more than SpaceTimeOptions::most_rounds rounds, hands the
+// rest to CG.
+constexpr double kRoundReduction = 0.005;
 constexpr double kMovingLocalTolerance = 1e-3;
 constexpr int kMovingLocalIterations = 100;
 constexpr double kRoundStall = 0.7;
