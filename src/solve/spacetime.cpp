@@ -89,12 +89,21 @@ int local_pcg(Vec& x, Vec& r, Vec& z, Vec& p, Vec& ap, double rr, double tau2, i
     const double pap = apply(p, ap);
     if (!(pap > 0)) break;
     const double alpha = rz / pap;
-    rr = 0;
-    for (size_t q = 0; q < x.size(); ++q) {
+    // Four partial sums (a single one is a chain of dependent adds), added in a fixed order.
+    double part[4] = {0, 0, 0, 0};
+    const size_t nq = x.size(), n4 = nq - nq % 4;
+    for (size_t q = 0; q < n4; q += 4)
+      for (size_t g = 0; g < 4; ++g) {
+        x[q + g] += alpha * p[q + g];
+        r[q + g] -= alpha * ap[q + g];
+        part[g] += std::norm(r[q + g]);
+      }
+    for (size_t q = n4; q < nq; ++q) {
       x[q] += alpha * p[q];
       r[q] -= alpha * ap[q];
-      rr += std::norm(r[q]);
+      part[q - n4] += std::norm(r[q]);
     }
+    rr = (part[0] + part[1]) + (part[2] + part[3]);
     ++it;
     if (rr <= tau2) break;
     const double rz_new = precondition(r, z);
@@ -764,28 +773,58 @@ struct LocalSolve {
     double dot = 0;
     for (size_t li = 0; li < m.omega.size(); ++li) {
       product(u.data(), li, y.data() + li * count);
+      double part[2] = {0, 0};
       for (size_t q = li * count; q < (li + 1) * count; ++q) {
         if (m.moving[q]) y[q] = 0;
-        dot += u[q].real() * y[q].real() + u[q].imag() * y[q].imag();
+        part[q & 1] += u[q].real() * y[q].real() + u[q].imag() * y[q].imag();
       }
+      dot += part[0] + part[1];
     }
     return dot;
   }
+  // zl = the temporal line solves of rl on omega's lines; returns Re <rl, zl>. A line's
+  // substitutions are chains of dependent multiply-adds, so kGroup lines go side by side
+  // (independent chains keep the pipeline busy); each entry's arithmetic is that of one
+  // line alone. With the partial sums in local_pcg a small gain, within the noise of the
+  // loaded machine it was measured on (the local CG 11–12 ms a round before, 10–12 after:
+  // 65² grid, moving vortex, 12 iterations).
   double lines(const std::vector<cplx>& rl, std::vector<cplx>& zl) const {
+    constexpr size_t kGroup = 4;
+    const size_t nl = m.omega.size();
+    const double *lower = m.lower.data(), *pivot = m.pivot.data(), *upper = m.upper.data();
+    const cplx* rs = rl.data();
+    cplx* zs = zl.data();
     double dot = 0;
-    for (size_t li = 0; li < m.omega.size(); ++li) {
-      const size_t q0 = li * count;
-      zl[q0] = rl[q0] * m.pivot[q0];
-      for (size_t q = q0 + 1; q < q0 + count; ++q) zl[q] = (rl[q] - m.lower[q] * zl[q - 1]) * m.pivot[q];
-      for (size_t q = q0 + count; q-- > q0;) {
-        if (q + 1 < q0 + count) zl[q] -= m.upper[q] * zl[q + 1];
-        dot += rl[q].real() * zl[q].real() + rl[q].imag() * zl[q].imag();
+    auto group = [&]<size_t G>(size_t li) {
+      size_t q0[G];
+      double part[G];
+      for (size_t g = 0; g < G; ++g) q0[g] = (li + g) * count, part[g] = 0;
+      for (size_t g = 0; g < G; ++g) zs[q0[g]] = rs[q0[g]] * pivot[q0[g]];
+      for (size_t jj = 1; jj < count; ++jj)
+        for (size_t g = 0; g < G; ++g) {
+          const size_t q = q0[g] + jj;
+          zs[q] = (rs[q] - lower[q] * zs[q - 1]) * pivot[q];
+        }
+      for (size_t g = 0; g < G; ++g) {
+        const size_t q = q0[g] + count - 1;
+        part[g] += rs[q].real() * zs[q].real() + rs[q].imag() * zs[q].imag();
       }
-    }
+      for (size_t jj = count - 1; jj-- > 0;)
+        for (size_t g = 0; g < G; ++g) {
+          const size_t q = q0[g] + jj;
+          zs[q] -= upper[q] * zs[q + 1];
+          part[g] += rs[q].real() * zs[q].real() + rs[q].imag() * zs[q].imag();
+        }
+      for (size_t g = 0; g < G; ++g) dot += part[g];
+    };
+    size_t li = 0;
+    for (; li + kGroup <= nl; li += kGroup) group.template operator()<kGroup>(li);
+    for (; li < nl; ++li) group.template operator()<1>(li);
     return dot;
   }
-  // u holds −ε at the constraint entries and anything elsewhere on entry.
-  int solve(std::vector<cplx>& u, double tolerance, int max_iterations) {
+  // u holds −ε at the constraint entries and anything elsewhere on entry. CG until the
+  // residual is `tolerance` of its start or below √floor2 (what the round's budget needs).
+  int solve(std::vector<cplx>& u, double tolerance, double floor2, int max_iterations) {
     const size_t nq = u.size();
     r.resize(nq), z.resize(nq), p.resize(nq), ap.resize(nq);
     for (size_t q = 0; q < nq; ++q)
@@ -799,7 +838,7 @@ struct LocalSolve {
         rr += std::norm(r[q]);
       }
     }
-    const double tau2 = tolerance * tolerance * rr;
+    const double tau2 = std::max(tolerance * tolerance * rr, floor2);
     // p stays zero at the constraint entries, so u keeps them.
     return local_pcg(u, r, z, p, ap, rr, tau2, max_iterations, [&](const Vec& x, Vec& y) { return apply(x, y); },
                      [&](const Vec& x, Vec& y) { return lines(x, y); });
@@ -884,15 +923,20 @@ constexpr int kLocalIterations = 50;
 // out of omega), and takes out all but 1–6 % of the last round's (the local solves' leak:
 // 6 % with two rings, 1–2 % with four; 65² grid × 100, moving vortex). So each round solves
 // the modes to this fraction of the last round's residual (solved fully every round, the
-// rounds took the same number: the leak, not the modes, sets the pace), and the local solve
-// to this relative residual (1e-2: one or two rounds more; 1e-1 stalls). A round that
-// leaves more than kRoundStall of the last one's residual twice in a row, or more than
-// kMostRounds rounds, hands the rest to CG.
-constexpr double kRoundReduction = 0.002;
+// rounds took the same number: the leak, not the modes, sets the pace; 0.005 rather than
+// 0.002 saved ~5 % of the 20k sphere's solve and 3 % of the 65² grid's, 0.001 nothing;
+// docs/benchmarks.md), and the local solve to this relative residual (1e-2: one or two
+// rounds more; 1e-1 stalls). A round that leaves more than kRoundStall of the last one's
+// residual twice in a row, or more than SpaceTimeOptions::most_rounds rounds, hands the
+// rest to CG.
+constexpr double kRoundReduction = 0.005;
 constexpr double kMovingLocalTolerance = 1e-3;
 constexpr int kMovingLocalIterations = 100;
 constexpr double kRoundStall = 0.7;
-constexpr int kMostRounds = 40;
+// The rounds' target, as a fraction of the tolerance, and how far below it a local solve's
+// own residual must go (it is part of the next round's residual).
+constexpr double kMovingShare = 0.9;
+constexpr double kLocalFloor = 0.25;
 
 // Tolerances from which the temporal-mode method reports the residual its modes add up
 // to instead of measuring it with another sweep over all frames.
@@ -1237,21 +1281,32 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   for (size_t si = 0; si < moving.size(); ++si)
     local_solves.push_back({*op_, moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {}, {}, {}});
   std::vector<double> rr_delta;
+  // What the local solves add to x on omega's rows and to the multipliers on the cut rows,
+  // kept in frames (omega × count, cut × count per segment) and transformed into the modes
+  // once after the rounds: the modes' solves need neither (they work on the residual), and
+  // the rounds read x at the cut rows only (the modes' rows plus these).
+  std::vector<std::vector<cplx>> x_local(nseg), lambda_local(nseg);
+  for (size_t si = 0; si < moving.size(); ++si) {
+    x_local[si].assign(moving[si].omega.size() * segs.segments[si].second, cplx(0, 0));
+    lambda_local[si].assign(moving[si].cut.size() * segs.segments[si].second, cplx(0, 0));
+  }
+  double local_floor2 = 0;  // the local solves stop below this squared residual (set below)
   auto local_round = [&]() {
     for (size_t si = 0; si < nseg; ++si) {
       if (moving[si].cut.empty()) continue;
       const MovingSegment& m = moving[si];
       const auto [first, count] = segs.segments[si];
       const Eigen::MatrixXd& q = bases[si]->q;
+      std::vector<cplx>& xl = x_local[si];
       rows_to_frames(w.x_hat[si], n, m.cut, q, cut_values);
       u.assign(m.omega.size() * count, cplx(0, 0));
       for (size_t r = 0; r < m.cut.size(); ++r) {
         const auto li = static_cast<size_t>(m.cut_local[r]);
         for (size_t jj = 0; jj < count; ++jj)
-          if (m.moving[li * count + jj]) u[li * count + jj] = -cut_values[r * count + jj];
+          if (m.moving[li * count + jj]) u[li * count + jj] = -(cut_values[r * count + jj] + xl[li * count + jj]);
       }
       LocalSolve& solve = local_solves[si];
-      local_iterations += solve.solve(u, kMovingLocalTolerance, kMovingLocalIterations);
+      local_iterations += solve.solve(u, kMovingLocalTolerance, local_floor2, kMovingLocalIterations);
       y_omega.resize(u.size());
       for (size_t li = 0; li < m.omega.size(); ++li) solve.product(u.data(), li, y_omega.data() + li * count);
       y_outer.assign(m.outer.size() * count, cplx(0, 0));
@@ -1261,7 +1316,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
           const cplx* uc = u.data() + static_cast<size_t>(m.outer_column[static_cast<size_t>(e)]) * count;
           for (size_t jj = 0; jj < count; ++jj) y_outer[oi * count + jj] += v * uc[jj];
         }
-      add_frames_to_rows(w.x_hat[si], n, m.omega, q, u, nullptr);
+      for (size_t k = 0; k < u.size(); ++k) xl[k] += u[k];
       // The residual's change on omega's and outer's rows together (one product).
       rr_delta.assign(count, 0.0);
       delta.resize(u.size() + y_outer.size());
@@ -1269,15 +1324,14 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       for (size_t k = 0; k < y_outer.size(); ++k) delta[u.size() + k] = -y_outer[k];
       add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data());
       // The multipliers, on the cut vertices' rows (the only ones with constraint entries).
-      delta.resize(m.cut.size() * count);
+      std::vector<cplx>& ll = lambda_local[si];
       for (size_t r = 0; r < m.cut.size(); ++r) {
         const auto li = static_cast<size_t>(m.cut_local[r]);
         for (size_t jj = 0; jj < count; ++jj) {
           const size_t qi = li * count + jj;
-          delta[r * count + jj] = m.moving[qi] ? y_omega[qi] : cplx(0, 0);
+          if (m.moving[qi]) ll[r * count + jj] += y_omega[qi];
         }
       }
-      add_frames_to_rows(w.r_hat[si], n, m.cut, q, delta, nullptr);
       for (size_t k = 0; k < count; ++k) {
         Mode& mode = modes[mode_offset[si] + k];
         mode.rr = std::max(mode.rr + rr_delta[k], 0.0);
@@ -1301,21 +1355,35 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   if (!has_moving) {
     solve_round(budget);
   } else {
+    // The rounds stop at kMovingShare of the tolerance, also where the residual is then
+    // measured (tolerances below kModeResidualTolerance): theta is the modes' exact sum less
+    // the constraint rows, up to the transforms' rounding (~1e-14 relative), so the measure
+    // agrees; the modes' share of 0.5 for that case often cost one more round.
+    const double moving_budget = std::max(budget, std::pow(kMovingShare * options.tolerance * bnorm, 2));
+    // A local solve's own residual is part of the next theta: below this it need not go.
+    local_floor2 = moving_budget * kLocalFloor * kLocalFloor;
     for (const Mode& mode : modes) theta += mode.rr;
     theta = std::sqrt(theta);
     int slow_rounds = 0;
     for (;;) {
-      solve_round(std::max(budget, std::pow(kRoundReduction * theta, 2)));
+      solve_round(std::max(moving_budget, std::pow(kRoundReduction * theta, 2)));
       ++rounds;
       const double now = local_round();
       slow_rounds = now > kRoundStall * theta ? slow_rounds + 1 : 0;
       theta = now;
-      if (theta * theta <= budget) break;
-      if (failed || rounds >= kMostRounds || slow_rounds >= 2) {
+      if (theta * theta <= moving_budget) break;
+      if (failed || rounds >= options.most_rounds || slow_rounds >= 2) {
         stalled = true;
         break;
       }
     }
+  }
+
+  // What the local solves added to x and to the multipliers, into the modes.
+  for (size_t si = 0; si < moving.size(); ++si) {
+    if (moving[si].cut.empty()) continue;
+    add_frames_to_rows(w.x_hat[si], n, moving[si].omega, bases[si]->q, x_local[si], nullptr);
+    add_frames_to_rows(w.r_hat[si], n, moving[si].cut, bases[si]->q, lambda_local[si], nullptr);
   }
 
   // Back from the modes.

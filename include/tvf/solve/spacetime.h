@@ -21,7 +21,7 @@
 //   the moving constraints cut (and `moving_rings` rings around them) sets the solution to
 //   its fixed values there, and only those rows are transformed between frames and modes.
 //   The constraints' multipliers join the modes' right-hand side; what the local solve
-//   leaks out is the next round's residual. 6–10 rounds, flat in the mesh size.
+//   leaks out is the next round's residual. 4–6 rounds, flat in the mesh size.
 // * Matrix-free CG (anything else: moving constraints without a key frame). The preconditioner solves
 //   every vertex's temporal line exactly (a real tridiagonal system, fixed entries
 //   splitting it): with b = 30 the time couplings carry about 60/61 of each diagonal
@@ -90,6 +90,10 @@ struct SpaceTimeOptions {
   // beyond). More rings: fewer rounds, more work per round (docs/benchmarks.md: 4 rings took
   // 6 rounds where 2 took 9–10, as fast on the 65² grid and 14 % faster on the sphere).
   int moving_rings = 4;
+  // modes_local only: after this many rounds (or two rounds in a row that each leave more
+  // than 0.7 of the last one's residual) the rounds stop and CG finishes the solve from
+  // where they are (the report's method then says "finished by").
+  int most_rounds = 40;
 };
 
 class SpaceTimeSolver {
