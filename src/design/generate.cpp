@@ -550,10 +550,10 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
   check_spacetime_scene(scene, nv);
   std::unique_ptr<ConnectionLaplacian> own_laplacian;
   const ConnectionLaplacian& laplacian = laplacian_for(space, scene.solver.weights, options.cache, own_laplacian);
-  // Under mpirun (solve/distributed.h) each rank builds and keeps its share only; the
-  // "modes" method (whose applicability is a check on the whole fixed set) and bicgstab
-  // take the replicated path below.
-  if (distributed_active() && !options.cache &&
+  // Under mpirun (solve/distributed.h) each rank builds and keeps its share only (no warm
+  // start: a `tvf generate` solves once); the "modes" method (whose applicability is a
+  // check on the whole fixed set) and bicgstab take the replicated path below.
+  if (distributed_active() &&
       (scene.solver.method == SolverMethod::automatic || scene.solver.method == SolverMethod::cg))
     return generate_spacetime_shares(space, scene, laplacian, options, report, start);
   SpaceTimeProblem problem;  // its laplacian stays empty: `laplacian` is used
