@@ -148,12 +148,16 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
   };
   try {
     step("field.npy");
-    const std::vector<float> world = world_vectors_f32(space.bundle(), field);
-    if (!std::all_of(world.begin(), world.end(), [](float x) { return std::isfinite(x); }))
-      throw_input_error(scene.label(), "",
-                        "the computed field's vectors exceed the range of field.npy's 32-bit floats (the design's "
-                        "numbers are too extreme); nothing was written");
-    write_npy(stage.file("field.npy").string(), {n, nv, 3}, world.data());
+    // Frame by frame: the 32-bit world vectors of one frame at a time (not 12 more bytes
+    // per vertex-frame beside the field).
+    write_npy_parts(stage.file("field.npy").string(), {n, nv, 3}, n, [&](size_t j) {
+      std::vector<float> world = world_vectors_f32(space.bundle(), field, static_cast<int>(j));
+      if (!std::all_of(world.begin(), world.end(), [](float x) { return std::isfinite(x); }))
+        throw_input_error(scene.label(), "",
+                          "the computed field's vectors exceed the range of field.npy's 32-bit floats (the design's "
+                          "numbers are too extreme); nothing was written");
+      return world;
+    });
 
     step("vertices.npy, faces.npy, times.npy");
     std::vector<double> verts(nv * 3);
