@@ -4,6 +4,8 @@
 // its own process, and compares.
 #include "solve/petsc_spacetime.h"
 #include "support/test_meshes.h"
+#include "tvf/api/design.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/mesh/grid.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/solve/distributed.h"
@@ -374,6 +376,31 @@ TEST(DistributedSpaceTime, SharesOfTheProblemAndOfTheResult) {
         const cplx expected = cplx(0, 1) * one[j * n + v] + cplx(static_cast<double>((j * n + v) % 7), 0);
         EXPECT_NEAR(std::abs(read[j * points.size() + q] - expected), 0, 1e-7);
       }
+  }
+}
+
+// `tvf generate`'s path (a Design, as the CLI makes it): under mpirun the field comes back
+// whole on rank 0 and empty on the others, which keep their shares; the shares read back
+// at every vertex are rank 0's field.
+TEST(DistributedSpaceTime, TheGeneratorGathersOnRankZeroAlone) {
+  Design design(parse_scene(R"({"tvf": 1,
+    "domain": {"grid": {"size": [25, 25], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 9, "range": [0, 1]},
+    "generator": "spacetime",
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]}],
+    "keyframes": [{"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [0, 0.5]}]}]})",
+                            "gather test"));
+  const Field& field = design.generate();
+  const int n = design.space().mesh().num_vertices();
+  EXPECT_NE(design.report().method.find("2 ranks"), std::string::npos) << design.report().method;
+  ASSERT_EQ(field.num_vertices(), distributed_rank() == 0 ? n : 0);
+  EXPECT_EQ(field.frames(), 9);
+  ASSERT_TRUE(distributed_has_share());
+  std::vector<int> all(static_cast<size_t>(n));
+  for (int v = 0; v < n; ++v) all[static_cast<size_t>(v)] = v;
+  const std::vector<cplx> read = distributed_share_values(all);
+  if (distributed_rank() == 0) {
+    EXPECT_TRUE(std::equal(read.begin(), read.end(), field.data().begin()));
   }
 }
 
