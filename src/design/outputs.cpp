@@ -113,6 +113,7 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
   const Mesh& mesh = space.mesh();
   const std::vector<int> owners = pieces ? distributed_vertex_owners(mesh.num_vertices()) : std::vector<int>();
   std::vector<cplx> piece_values;  // this rank's piece, from the ranks' shares (not rank 0's)
+  bool from_shares = false;
   if (ranks > 1) {
     stage_path = distributed_broadcast(stage_path);
     if (failure) std::rethrow_exception(failure);
@@ -120,14 +121,17 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
     // Where the field is rank 0's alone, the other ranks write their pieces from their
     // shares: first made current where rank 0 changed the field after the solve (edits, the
     // projection), then each rank's halo vertices received from their ranks.
-    if (pieces && distributed_has_share()) {
+    // (Agreed by all ranks: some rank holds no whole field.)
+    from_shares = pieces && !distributed_all(field.num_vertices() == mesh.num_vertices());
+    if (from_shares) {
+      TVF_CHECK(distributed_has_share(), "a rank holds neither the field nor its share");
       if (!scene.edits.empty() || scene.incompressible) distributed_refresh_share(field);
       piece_values = distributed_share_values(root ? std::vector<int>() : vtk_piece_points(mesh, owners, rank));
     }
     if (!root) {
       // This rank's pieces of the VTK series; rank 0 commits them when every rank wrote its own.
       try {
-        if (pieces && distributed_has_share())
+        if (from_shares)
           write_vtk_series_piece(stage_path, "field", space.bundle(), field.time(), owners, rank, piece_values);
         else if (pieces)
           write_vtk_series_piece(stage_path, "field", space.bundle(), field, owners, rank);
