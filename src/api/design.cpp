@@ -429,7 +429,9 @@ void Design::Solve::run(GenerateOptions options, bool analyze) {
   // one a new edit acts on, is kept (generate()'s last step, as generate.cpp does it).
   options.project = false;
   r->field = tvf::generate(*r->space, scene_, options, &r->report);
-  if (scene_.incompressible) {
+  // Under mpirun the field may be rank 0's alone (solve/distributed.h): the others project
+  // nothing.
+  if (scene_.incompressible && r->field.num_vertices() == r->space->mesh().num_vertices()) {
     check_cancelled(options);
     r->unprojected = r->field;
     project_result(*r, scene_, parallel_);

@@ -11,6 +11,7 @@
 #include "tvf/solve/dirichlet_frames.h"
 #include "tvf/solve/distributed.h"
 #include "tvf/solve/spacetime.h"
+#include "solve/petsc_spacetime.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -18,6 +19,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <mutex>
 
 namespace tvf {
@@ -384,54 +386,171 @@ SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
 
 namespace {
 
+// The space-time system's constraints frame by frame: key frames (whole frames held
+// fixed), then at every other frame the elements' regions, the matched topology's moving
+// constraints and the streaklines. Built once (the key frames' fields, the plan), then
+// frame(j) is safe to call from several threads.
+class SpaceTimeConstraints {
+public:
+  SpaceTimeConstraints(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
+                       std::vector<KeyframeIntervalReport>* intervals)
+      : space_(space), scene_(scene), key_of_(static_cast<size_t>(scene.time.frames), -1),
+        elements_(compile(scene)), d_(scene.falloff / (space.diameter() * space.diameter())),
+        streaklines_(space, scene) {
+    for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+      const auto j = static_cast<size_t>(keyframe_frame(scene, scene.keyframes[k].t));
+      if (key_of_[j] >= 0)
+        throw_input_error(scene.label(), fmt::format("keyframes[{}].t", k),
+                          fmt::format("t = {} falls on frame {}, which another key frame already holds; "
+                                      "use more frames or move the key frame",
+                                      scene.keyframes[k].t, j));
+      key_of_[j] = static_cast<int>(k);
+      key_fields_.push_back(keyframe_field(space, scene, k, laplacian));
+    }
+    // Topology kept between key frames (keyframe_topology.h): moving constraints and
+    // templates, added at every other frame.
+    if (scene.solver.keyframe_topology == KeyframeTopology::matched) {
+      plan_.emplace(space, scene, key_fields_);
+      if (intervals) *intervals = plan_->intervals();
+    }
+  }
+
+  // Frame j's fixed marks and values, |V| each, zero on entry.
+  void frame(int j, std::span<char> fixed, std::span<cplx> values) const {
+    if (const int k = key_of_[static_cast<size_t>(j)]; k >= 0) {
+      std::fill(fixed.begin(), fixed.end(), char{1});
+      const std::vector<cplx>& key = key_fields_[static_cast<size_t>(k)];
+      std::copy(key.begin(), key.end(), values.begin());
+      return;
+    }
+    const double t = scene_.time.time(j);
+    constrain_elements(space_, scene_, elements_, t, d_, fixed, values);
+    if (plan_) plan_->constrain(space_, scene_, t, d_, fixed, values);
+    streaklines_.constrain(t, fixed, values);
+  }
+
+private:
+  const DesignSpace& space_;
+  const Scene& scene_;
+  std::vector<int> key_of_;  // per frame: the key frame there, or −1
+  std::vector<std::vector<cplx>> key_fields_;
+  std::optional<KeyframeTopologyPlan> plan_;
+  std::vector<CompiledElement> elements_;
+  double d_;
+  StreaklineConstraints streaklines_;
+};
+
 void spacetime_constraints(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
                            const GenerateOptions& options, std::vector<char>& fixed, std::vector<cplx>& values,
                            std::vector<KeyframeIntervalReport>* intervals) {
-  const int nv = space.mesh().num_vertices();
-  const auto n = static_cast<size_t>(nv);
+  const auto n = static_cast<size_t>(space.mesh().num_vertices());
   const auto frames = static_cast<size_t>(scene.time.frames);
+  const SpaceTimeConstraints constraints(space, scene, laplacian, intervals);
   fixed.assign(n * frames, 0);
   values.assign(n * frames, cplx(0, 0));
-
-  // Key frames: whole frames held fixed.
-  std::vector<char> is_key(frames, 0);
-  const bool matched = scene.solver.keyframe_topology == KeyframeTopology::matched;
-  std::vector<std::vector<cplx>> key_fields(matched ? scene.keyframes.size() : 0);
-  for (size_t k = 0; k < scene.keyframes.size(); ++k) {
-    const auto j = static_cast<size_t>(keyframe_frame(scene, scene.keyframes[k].t));
-    if (is_key[j])
-      throw_input_error(scene.label(), fmt::format("keyframes[{}].t", k),
-                        fmt::format("t = {} falls on frame {}, which another key frame already holds; "
-                                    "use more frames or move the key frame",
-                                    scene.keyframes[k].t, j));
-    is_key[j] = 1;
-    const std::vector<cplx> key = keyframe_field(space, scene, k, laplacian);
-    std::fill_n(fixed.begin() + static_cast<std::ptrdiff_t>(j * n), n, char{1});
-    std::copy(key.begin(), key.end(), values.begin() + static_cast<std::ptrdiff_t>(j * n));
-    if (matched) key_fields[k] = key;
-  }
-  // Topology kept between key frames (keyframe_topology.h): moving constraints and
-  // templates, added at every other frame below.
-  std::optional<KeyframeTopologyPlan> plan;
-  if (matched) {
-    plan.emplace(space, scene, key_fields);
-    if (intervals) *intervals = plan->intervals();
-  }
-
-  // Element regions at every other frame (key frames and elements combine in one solve).
-  const std::vector<CompiledElement> elements = compile(scene);
-  const double d = scene.falloff / (space.diameter() * space.diameter());
-  const StreaklineConstraints streaklines(space, scene);
   GenerateOptions quiet = options;
   quiet.progress = nullptr;
   for_each_frame(scene.time.frames, quiet, [&](int j) {
-    if (is_key[static_cast<size_t>(j)]) return;
-    const std::span<char> f(fixed.data() + static_cast<size_t>(j) * n, n);
-    const std::span<cplx> v(values.data() + static_cast<size_t>(j) * n, n);
-    constrain_elements(space, scene, elements, scene.time.time(j), d, f, v);
-    if (plan) plan->constrain(space, scene, scene.time.time(j), d, f, v);
-    streaklines.constrain(scene.time.time(j), f, v);
+    constraints.frame(j, std::span<char>(fixed.data() + static_cast<size_t>(j) * n, n),
+                      std::span<cplx>(values.data() + static_cast<size_t>(j) * n, n));
   });
+}
+
+// The spacetime generator under mpirun (solve/distributed.h), method cg or auto: no rank
+// holds the whole problem. The vertices are partitioned first (the solve's partition);
+// the constraints are evaluated by frames, rank r taking its turn of `chunk` frames at a
+// time, and each evaluated frame is sent out in shares (petsc_scatter_frame); every rank
+// interpolates its own lines in time (the first guess) and solves on its shares; the
+// result is gathered on rank 0 alone (the assembled outputs need it whole), and with
+// K > 1 ranks each keeps its share for its pieces of the VTK series. Ranks other than 0
+// return a field of no vertices.
+Field generate_spacetime_shares(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
+                                const GenerateOptions& options, GenerateReport* report,
+                                std::chrono::steady_clock::time_point start) {
+  const int nv = space.mesh().num_vertices();
+  const auto n = static_cast<size_t>(nv);
+  const auto nf = static_cast<size_t>(scene.time.frames);
+  std::vector<KeyframeIntervalReport> intervals;
+  const SpaceTimeConstraints constraints(space, scene, laplacian, &intervals);
+  VertexShares shares = petsc_vertex_shares(laplacian);
+  const size_t nl = shares.owned.size();
+  const auto ranks = static_cast<size_t>(shares.ranks), rank = static_cast<size_t>(shares.rank);
+  std::vector<char> fixed(nl * nf, 0);
+  std::vector<cplx> z(nl * nf, cplx(0, 0));
+  {
+    // Frames evaluated `chunk` at a time per rank (in parallel on its threads), a scratch of
+    // chunk whole frames; rank r evaluates frames base + r·chunk … of each round.
+    constexpr size_t kScratchEntries = size_t{1} << 22;
+    const size_t chunk = std::clamp<size_t>(kScratchEntries / std::max<size_t>(n, 1), 1, 16);
+    std::vector<char> f(chunk * n);
+    std::vector<cplx> v(chunk * n);
+    for (size_t base = 0; base < nf; base += ranks * chunk) {
+      check_cancelled(options);
+      std::exception_ptr failure;
+      auto evaluate = [&](size_t c) {
+        const size_t j = base + rank * chunk + c;
+        if (j >= nf) return;
+        const std::span<char> fj(f.data() + c * n, n);
+        const std::span<cplx> vj(v.data() + c * n, n);
+        std::fill(fj.begin(), fj.end(), char{0});
+        std::fill(vj.begin(), vj.end(), cplx(0, 0));
+        constraints.frame(static_cast<int>(j), fj, vj);
+      };
+      try {
+        if (options.parallel)
+          tbb::parallel_for(size_t{0}, chunk, evaluate);
+        else
+          for (size_t c = 0; c < chunk; ++c) evaluate(c);
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      // Every rank must reach the frames' scatter, or none: one that failed stops all.
+      if (!distributed_all(!failure)) {
+        if (failure) std::rethrow_exception(failure);
+        throw Error(fmt::format("{}: the constraints of a frame could not be evaluated on another rank",
+                                scene.label()));
+      }
+      for (size_t q = 0; q < ranks * chunk && base + q < nf; ++q) {
+        const size_t j = base + q, c = q % chunk;
+        petsc_scatter_frame(shares, static_cast<int>(q / chunk), std::span<const char>(f.data() + c * n, n),
+                            std::span<const cplx>(v.data() + c * n, n), std::span<char>(fixed.data() + j * nl, nl),
+                            std::span<cplx>(z.data() + j * nl, nl));
+      }
+    }
+  }
+  // The first guess on the rank's own lines, the fixed values kept in it (the solve reads
+  // them from there).
+  interpolate_lines_in_time(fixed, z, z, nl, nf);
+  SpaceTimeOptions st;
+  st.tolerance = scene.solver.tolerance;
+  st.parallel = options.parallel;
+  st.distributed = true;
+  st.method = scene.solver.method == SolverMethod::cg ? SpaceTimeMethod::cg : SpaceTimeMethod::automatic;
+  check_cancelled(options);
+  const SolveReport r = petsc_spacetime_solve_shares(laplacian, shares, scene.time.frames,
+                                                     scene.solver.temporal_weight, fixed, z, st);
+  std::vector<char>().swap(fixed);
+  if (!r.success)
+    throw_input_error(scene.label(), "solver.tolerance",
+                      fmt::format("the space-time solve stopped at relative residual {:.2e} after {} "
+                                  "iterations, short of the tolerance {:.1e}",
+                                  r.residual, r.iterations, scene.solver.tolerance));
+  // The gather step: the whole field on rank 0 only.
+  Field field(scene.time, rank == 0 ? nv : 0);
+  petsc_gather_to_root(shares, z, scene.time.frames, field.data());
+  if (ranks > 1) petsc_keep_share(std::move(shares), std::move(z), scene.time.frames);
+  if (options.progress) options.progress(scene.time.frames, scene.time.frames);
+  if (report) {
+    report->method = "spatio-temporal optimization, " + r.method;
+    report->residual = r.residual;
+    report->iterations = r.iterations;
+    report->keyframe_intervals = std::move(intervals);
+  }
+  finish_report(report, scene, nv, start);
+  if (report)
+    for (const KeyframeIntervalReport& k : report->keyframe_intervals)
+      if (!k.collision.empty()) report->warnings.push_back(k.collision);
+  return field;
 }
 
 }  // namespace
@@ -443,6 +562,12 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
   check_spacetime_scene(scene, nv);
   std::unique_ptr<ConnectionLaplacian> own_laplacian;
   const ConnectionLaplacian& laplacian = laplacian_for(space, scene.solver.weights, options.cache, own_laplacian);
+  // Under mpirun (solve/distributed.h) each rank builds and keeps its share only (no warm
+  // start: a `tvf generate` solves once); the "modes" method (whose applicability is a
+  // check on the whole fixed set) and bicgstab take the replicated path below.
+  if (distributed_active() &&
+      (scene.solver.method == SolverMethod::automatic || scene.solver.method == SolverMethod::cg))
+    return generate_spacetime_shares(space, scene, laplacian, options, report, start);
   SpaceTimeProblem problem;  // its laplacian stays empty: `laplacian` is used
   std::vector<KeyframeIntervalReport> intervals;
   spacetime_constraints(space, scene, laplacian, options, problem.fixed, problem.values, &intervals);
@@ -529,6 +654,9 @@ Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptio
   if (!scene.edits.empty() || scene.incompressible) o.first_frame_done = nullptr;
   Field field = generate_unedited(space, scene, o, report);
   check_cancelled(options);
+  // Under mpirun the spacetime generator leaves the field whole on rank 0 alone (the
+  // others keep their shares: solve/distributed.h): the edits and the projection are rank 0's.
+  if (field.num_vertices() != space.mesh().num_vertices()) return field;
   // The scene's edits, in order, on the generated field (DESIGN §7; edit/field_editor.h).
   const auto start = std::chrono::steady_clock::now();
   const std::vector<EditReport> edits = apply_scene_edits(space, scene, field);

@@ -73,25 +73,31 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
   std::error_code same_ec;
   const bool input_scene_here =
       !scene.source_path.empty() && std::filesystem::equivalent(dir / "scene.json", scene.source_path, same_ec);
-  // Nothing non-finite is written (the formats have no NaN): such a field means the
-  // design's numbers were too extreme to compute with.
-  for (size_t k = 0; k < field.data().size(); ++k) {
-    const cplx z = field.data()[k];
-    if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
-      throw_input_error(scene.label(), "",
-                        fmt::format("the computed field is not finite at frame {}, vertex {} (the design's numbers "
-                                    "are too extreme to compute with); nothing was written",
-                                    k / static_cast<size_t>(field.num_vertices()),
-                                    k % static_cast<size_t>(field.num_vertices())));
-  }
   // Under mpirun with K > 1 ranks (solve/distributed.h) every rank comes here: rank 0 stages
   // and writes the assembled outputs (by default the same as one process); with
   // options.vtk_pieces every rank writes its pieces of the VTK frames into rank 0's staging
-  // folder (a folder all ranks see), and rank 0 commits once all did.
+  // folder (a folder all ranks see), and rank 0 commits once all did. After the spacetime
+  // generator rank 0 alone holds the whole field and each rank its share.
   const int ranks = distributed_ranks();
   const int rank = distributed_rank();
   const bool root = rank == 0;
   const bool pieces = ranks > 1 && options.vtk && options.vtk_pieces;
+  // Nothing non-finite is written (the formats have no NaN): such a field means the
+  // design's numbers were too extreme to compute with. (The ranks agree, so that all stop.)
+  size_t bad = field.data().size();
+  for (size_t k = 0; k < field.data().size() && bad == field.data().size(); ++k) {
+    const cplx z = field.data()[k];
+    if (!std::isfinite(z.real()) || !std::isfinite(z.imag())) bad = k;
+  }
+  const bool finite = bad == field.data().size();
+  if (!(ranks > 1 ? distributed_all(finite) : finite)) {
+    if (finite) throw Error(fmt::format("{}: the computed field is not finite on rank 0; nothing was written", scene.label()));
+    throw_input_error(scene.label(), "",
+                      fmt::format("the computed field is not finite at frame {}, vertex {} (the design's numbers "
+                                  "are too extreme to compute with); nothing was written",
+                                  bad / static_cast<size_t>(field.num_vertices()),
+                                  bad % static_cast<size_t>(field.num_vertices())));
+  }
   std::optional<OutputStage> staged;
   std::exception_ptr failure;
   std::string stage_path;
@@ -104,16 +110,31 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
       failure = std::current_exception();
     }
   }
+  const Mesh& mesh = space.mesh();
+  const std::vector<int> owners = pieces ? distributed_vertex_owners(mesh.num_vertices()) : std::vector<int>();
+  std::vector<cplx> piece_values;  // this rank's piece, from the ranks' shares (not rank 0's)
+  bool from_shares = false;
   if (ranks > 1) {
     stage_path = distributed_broadcast(stage_path);
     if (failure) std::rethrow_exception(failure);
     if (stage_path.empty()) return {};  // rank 0 reports why
+    // Where the field is rank 0's alone, the other ranks write their pieces from their
+    // shares: first made current where rank 0 changed the field after the solve (edits, the
+    // projection), then each rank's halo vertices received from their ranks.
+    // (Agreed by all ranks: some rank holds no whole field.)
+    from_shares = pieces && !distributed_all(field.num_vertices() == mesh.num_vertices());
+    if (from_shares) {
+      TVF_CHECK(distributed_has_share(), "a rank holds neither the field nor its share");
+      if (!scene.edits.empty() || scene.incompressible) distributed_refresh_share(field);
+      piece_values = distributed_share_values(root ? std::vector<int>() : vtk_piece_points(mesh, owners, rank));
+    }
     if (!root) {
       // This rank's pieces of the VTK series; rank 0 commits them when every rank wrote its own.
       try {
-        if (pieces)
-          write_vtk_series_piece(stage_path, "field", space.bundle(), field,
-                                 distributed_vertex_owners(field.num_vertices()), rank);
+        if (from_shares)
+          write_vtk_series_piece(stage_path, "field", space.bundle(), field.time(), owners, rank, piece_values);
+        else if (pieces)
+          write_vtk_series_piece(stage_path, "field", space.bundle(), field, owners, rank);
       } catch (...) {
         failure = std::current_exception();
       }
@@ -123,7 +144,6 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
     }
   }
   OutputStage& stage = *staged;
-  const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   const auto nf = static_cast<size_t>(mesh.num_faces());
   const auto n = static_cast<size_t>(field.frames());
@@ -132,12 +152,16 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
   };
   try {
     step("field.npy");
-    const std::vector<float> world = world_vectors_f32(space.bundle(), field);
-    if (!std::all_of(world.begin(), world.end(), [](float x) { return std::isfinite(x); }))
-      throw_input_error(scene.label(), "",
-                        "the computed field's vectors exceed the range of field.npy's 32-bit floats (the design's "
-                        "numbers are too extreme); nothing was written");
-    write_npy(stage.file("field.npy").string(), {n, nv, 3}, world.data());
+    // Frame by frame: the 32-bit world vectors of one frame at a time (not 12 more bytes
+    // per vertex-frame beside the field).
+    write_npy_parts(stage.file("field.npy").string(), {n, nv, 3}, n, [&](size_t j) {
+      std::vector<float> world = world_vectors_f32(space.bundle(), field, static_cast<int>(j));
+      if (!std::all_of(world.begin(), world.end(), [](float x) { return std::isfinite(x); }))
+        throw_input_error(scene.label(), "",
+                          "the computed field's vectors exceed the range of field.npy's 32-bit floats (the design's "
+                          "numbers are too extreme); nothing was written");
+      return world;
+    });
 
     step("vertices.npy, faces.npy, times.npy");
     std::vector<double> verts(nv * 3);
@@ -187,8 +211,7 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
         write_vtk_series(stage.stage().string(), "field", space.bundle(), field);
       } else {
         step("field.pvd + field_NNNN.pvtu + field_NNNN_pR.vtu");
-        write_vtk_series_piece(stage.stage().string(), "field", space.bundle(), field,
-                               distributed_vertex_owners(field.num_vertices()), rank);
+        write_vtk_series_piece(stage.stage().string(), "field", space.bundle(), field, owners, rank);
       }
     }
   } catch (...) {

@@ -198,6 +198,23 @@ void write_npy(const std::string& path, const std::vector<size_t>& shape, const 
 void write_npy(const std::string& path, const std::vector<size_t>& shape, const double* data) {
   write_array(path, "<f8", shape, data);
 }
+void write_npy_parts(const std::string& path, const std::vector<size_t>& shape, size_t parts,
+                     const std::function<std::vector<float>(size_t)>& part) {
+  const auto count = element_count(shape, sizeof(float));
+  if (!count) fail(path, "array shape is too large");
+  TVF_CHECK(parts > 0 ? *count % parts == 0 : *count == 0, "{} elements in {} parts", *count, parts);
+  const size_t each = parts > 0 ? *count / parts : 0;
+  const std::string header = npy_header(path, "<f4", shape);
+  write_file_atomically(fs::path(path), [&](std::ostream& out) {
+    out.write(header.data(), static_cast<std::streamsize>(header.size()));
+    for (size_t k = 0; k < parts; ++k) {
+      const std::vector<float> values = part(k);
+      TVF_CHECK(values.size() == each, "part {} has {} values, not {}", k, values.size(), each);
+      out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(each * sizeof(float)));
+    }
+  });
+}
+
 void write_npy(const std::string& path, const std::vector<size_t>& shape, const std::int32_t* data) {
   write_array(path, "<i4", shape, data);
 }

@@ -245,43 +245,53 @@ void write_vtk_series(const std::string& dir, const std::string& stem, const Tan
   write_collection(folder, stem, field.time().times(), digits);
 }
 
-void write_vtk_series_piece(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
-                            const Field& field, std::span<const int> owner, int rank) {
-  const Mesh& mesh = bundle.mesh();
+namespace {
+
+// A rank's piece: its faces (those whose lowest vertex it owns) and points (its own
+// vertices and the halo vertices of its faces, in vertex order).
+struct PieceParts {
+  std::vector<int> points, faces;
+};
+
+PieceParts piece_parts(const Mesh& mesh, std::span<const int> owner, int rank) {
   const auto nv = static_cast<size_t>(mesh.num_vertices());
-  TVF_CHECK(field.num_vertices() == mesh.num_vertices() && owner.size() == nv,
-            "field has {} vertices, mesh {}, partition {}", field.num_vertices(), mesh.num_vertices(), owner.size());
-  // The rank's faces (those whose lowest vertex it owns) and points: its own vertices and
-  // the halo vertices of its faces, in vertex order.
+  TVF_CHECK(owner.size() == nv, "a partition of {} vertices for a mesh of {}", owner.size(), nv);
+  PieceParts p;
   std::vector<char> used(nv, 0);
   for (size_t v = 0; v < nv; ++v) used[v] = owner[v] == rank ? 1 : 0;
-  std::vector<int> faces;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const Face& face = mesh.face(f);
     const int lowest = std::min({face[0], face[1], face[2]});
     if (owner[static_cast<size_t>(lowest)] != rank) continue;
-    faces.push_back(f);
+    p.faces.push_back(f);
     for (int v : face) used[static_cast<size_t>(v)] = 1;
   }
-  std::vector<int> points, local(nv, -1);
   for (size_t v = 0; v < nv; ++v)
-    if (used[v] != 0) {
-      local[v] = static_cast<int>(points.size());
-      points.push_back(static_cast<int>(v));
-    }
-  const Geometry g = make_geometry(mesh, points, faces, local);
-  const int digits = frame_digits(static_cast<size_t>(field.frames()));
+    if (used[v] != 0) p.points.push_back(static_cast<int>(v));
+  return p;
+}
+
+// value(j, i): the field at frame j at the piece's point i.
+template <class Value>
+void write_pieces(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
+                  const TimeSampling& time, std::span<const int> owner, int rank, const PieceParts& parts,
+                  const Value& value) {
+  const Mesh& mesh = bundle.mesh();
+  const std::vector<int>& points = parts.points;
+  std::vector<int> local(static_cast<size_t>(mesh.num_vertices()), -1);
+  for (size_t i = 0; i < points.size(); ++i) local[static_cast<size_t>(points[i])] = static_cast<int>(i);
+  const Geometry g = make_geometry(mesh, points, parts.faces, local);
+  const int digits = frame_digits(static_cast<size_t>(time.frames));
   const fs::path folder(dir);
   const auto np = static_cast<std::uint64_t>(points.size());
-  tbb::parallel_for(0, field.frames(), [&](int j) {
+  tbb::parallel_for(0, time.frames, [&](int j) {
     Appended a;
     const std::uint64_t base = g.appended.size();
-    const auto values = field.frame(j);
     const std::uint64_t vector = base + a.begin(np * 3 * sizeof(float));
     std::vector<float> magnitude(points.size());
     for (size_t i = 0; i < points.size(); ++i) {
       const int v = points[i];
-      const Vec3 w = bundle.vertex_to_world(v, values[static_cast<size_t>(v)]);
+      const Vec3 w = bundle.vertex_to_world(v, value(j, i));
       for (int k = 0; k < 3; ++k) a.put(static_cast<float>(w[k]));
       magnitude[i] = static_cast<float>(w.norm());
     }
@@ -298,9 +308,37 @@ void write_vtk_series_piece(const std::string& dir, const std::string& stem, con
         "        <DataArray type=\"Int32\" Name=\"vertex\" format=\"appended\" offset=\"{}\"/>\n"
         "        <DataArray type=\"UInt8\" Name=\"vtkGhostType\" format=\"appended\" offset=\"{}\"/>\n",
         vector, mag, vertex, ghost);
-    write_piece(folder / piece_name(stem, j, digits, rank), field.time().time(j), g,
+    write_piece(folder / piece_name(stem, j, digits, rank), time.time(j), g,
                 "Vectors=\"vector\" Scalars=\"magnitude\"", data_arrays, a);
   });
+}
+
+}  // namespace
+
+void write_vtk_series_piece(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
+                            const Field& field, std::span<const int> owner, int rank) {
+  const Mesh& mesh = bundle.mesh();
+  TVF_CHECK(field.num_vertices() == mesh.num_vertices() && owner.size() == static_cast<size_t>(mesh.num_vertices()),
+            "field has {} vertices, mesh {}, partition {}", field.num_vertices(), mesh.num_vertices(), owner.size());
+  const PieceParts parts = piece_parts(mesh, owner, rank);
+  write_pieces(dir, stem, bundle, field.time(), owner, rank, parts, [&](int j, size_t i) {
+    return field.frame(j)[static_cast<size_t>(parts.points[i])];
+  });
+}
+
+std::vector<int> vtk_piece_points(const Mesh& mesh, std::span<const int> owner, int rank) {
+  return piece_parts(mesh, owner, rank).points;
+}
+
+void write_vtk_series_piece(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
+                            const TimeSampling& time, std::span<const int> owner, int rank,
+                            std::span<const cplx> values) {
+  const PieceParts parts = piece_parts(bundle.mesh(), owner, rank);
+  const size_t np = parts.points.size();
+  TVF_CHECK(values.size() == np * static_cast<size_t>(time.frames), "{} values for {} frames × {} points",
+            values.size(), time.frames, np);
+  write_pieces(dir, stem, bundle, time, owner, rank, parts,
+               [&](int j, size_t i) { return values[static_cast<size_t>(j) * np + i]; });
 }
 
 void write_vtk_parallel_series(const std::string& dir, const std::string& stem, const std::vector<double>& times,

@@ -50,7 +50,21 @@ bool distributed_owns_frame(int frame) { return frame % g_ranks == g_rank; }
 namespace {
 // The partition of the last distributed space-time solve (distributed_vertex_owners).
 std::vector<int> g_last_owner;
+// This rank's share of the generated field (petsc_keep_share): frames × its owned vertices.
+VertexShares g_shares;
+std::vector<cplx> g_share;
+size_t g_share_frames = 0;
+bool g_has_share = false;
 }  // namespace
+
+bool distributed_has_share() { return g_has_share; }
+
+void petsc_keep_share(VertexShares shares, std::vector<cplx> share, int frames) {
+  g_shares = std::move(shares);
+  g_share = std::move(share);
+  g_share_frames = static_cast<size_t>(frames);
+  g_has_share = true;
+}
 
 std::vector<int> distributed_vertex_owners(int vertices) {
   if (g_ranks > 1 && g_last_owner.size() == static_cast<size_t>(vertices)) return g_last_owner;
@@ -70,6 +84,32 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian&, int, double, std::
                                   std::span<const cplx>, std::span<cplx>, const SpaceTimeOptions&) {
   TVF_CHECK(false, "this build has no distributed solve (configure with -DTVF_MPI=ON; needs petsc-dev and "
                    "libopenmpi-dev)");
+  return {};
+}
+
+VertexShares petsc_vertex_shares(const ConnectionLaplacian&) {
+  TVF_CHECK(false, "this build has no distributed solve");
+  return {};
+}
+
+SolveReport petsc_spacetime_solve_shares(const ConnectionLaplacian&, const VertexShares&, int, double,
+                                         std::span<const char>, std::span<cplx>, const SpaceTimeOptions&) {
+  TVF_CHECK(false, "this build has no distributed solve");
+  return {};
+}
+
+void petsc_gather_to_root(const VertexShares&, std::span<const cplx>, int, std::span<cplx>) {
+  TVF_CHECK(false, "this build has no distributed solve");
+}
+
+void petsc_scatter_frame(const VertexShares&, int, std::span<const char>, std::span<const cplx>, std::span<char>,
+                         std::span<cplx>) {
+  TVF_CHECK(false, "this build has no distributed solve");
+}
+
+void distributed_refresh_share(const Field&) {}
+std::vector<cplx> distributed_share_values(std::span<const int>) {
+  TVF_CHECK(false, "this build has no distributed solve");
   return {};
 }
 
@@ -161,27 +201,22 @@ constexpr int kCoarseIterations = 200;
 constexpr double kLocalTolerance = 1e-1;
 constexpr int kLocalIterations = 50;
 
-// Which rank owns each vertex, from PETSc's partitioner on L's graph (PT-Scotch in
-// Debian's PETSc; PETSC_OPTIONS=-mat_partitioning_type ... picks another).
-struct Distribution {
-  int rank = 0, size = 1;
-  std::vector<int> owner;       // per vertex
-  std::vector<int> local;       // per vertex: its index among its owner's vertices
-  std::vector<int> count;       // per rank: its vertices
+// Which rank owns each vertex (VertexShares, from PETSc's partitioner on L's graph:
+// PT-Scotch in Debian's PETSc; PETSC_OPTIONS=-mat_partitioning_type ... picks another), and
+// what the solve derives from it for `nf` frames.
+struct Distribution : VertexShares {
+  int size = 1;                 // = ranks
   std::vector<PetscInt> first;  // per rank: its first row of the global vector
-  std::vector<int> owned;       // this rank's vertices, in local order
   std::vector<int> ghosts;      // other ranks' vertices next to this rank's, ascending
-  long cut_edges = 0;           // edges of L's graph between two ranks
-  std::string partitioner;
 };
 
-Distribution distribute(const RowMatrix& rows, size_t nf, MPI_Comm comm) {
-  Distribution d;
+VertexShares partition_vertices(const RowMatrix& rows, MPI_Comm comm) {
+  VertexShares d;
   MPI_Comm_rank(comm, &d.rank);
-  MPI_Comm_size(comm, &d.size);
+  MPI_Comm_size(comm, &d.ranks);
   const auto n = static_cast<PetscInt>(rows.rows());
   // The adjacency graph, rows split evenly in the input's order for the partitioner.
-  const PetscInt lo = n * d.rank / d.size, hi = n * (d.rank + 1) / d.size;
+  const PetscInt lo = n * d.rank / d.ranks, hi = n * (d.rank + 1) / d.ranks;
   PetscInt* ia = nullptr;
   PetscInt* ja = nullptr;
   PetscInt nnz = 0;
@@ -201,7 +236,7 @@ Distribution distribute(const RowMatrix& rows, size_t nf, MPI_Comm comm) {
   MatPartitioning part = nullptr;
   check(MatPartitioningCreate(comm, &part), "MatPartitioningCreate");
   check(MatPartitioningSetAdjacency(part, adj), "MatPartitioningSetAdjacency");
-  check(MatPartitioningSetType(part, d.size > 1 ? MATPARTITIONINGPTSCOTCH : MATPARTITIONINGCURRENT),
+  check(MatPartitioningSetType(part, d.ranks > 1 ? MATPARTITIONINGPTSCOTCH : MATPARTITIONINGCURRENT),
         "MatPartitioningSetType");
   check(MatPartitioningSetFromOptions(part), "MatPartitioningSetFromOptions");
   MatPartitioningType type = nullptr;
@@ -219,27 +254,39 @@ Distribution distribute(const RowMatrix& rows, size_t nf, MPI_Comm comm) {
   MatPartitioningDestroy(&part);
   MatDestroy(&adj);
 
-  d.count.assign(static_cast<size_t>(d.size), 0);
+  d.count.assign(static_cast<size_t>(d.ranks), 0);
   d.local.resize(static_cast<size_t>(n));
   for (PetscInt v = 0; v < n; ++v) {
     const auto r = static_cast<size_t>(d.owner[static_cast<size_t>(v)]);
     d.local[static_cast<size_t>(v)] = d.count[r]++;
     if (static_cast<int>(r) == d.rank) d.owned.push_back(static_cast<int>(v));
   }
+  for (PetscInt v = 0; v < n; ++v)
+    for (RowMatrix::InnerIterator it(rows, v); it; ++it)
+      if (it.col() > v && d.owner[static_cast<size_t>(it.col())] != d.owner[static_cast<size_t>(v)]) ++d.cut_edges;
+  return d;
+}
+
+Distribution distribution_of(const VertexShares& shares, const RowMatrix& rows, size_t nf) {
+  Distribution d;
+  static_cast<VertexShares&>(d) = shares;
+  d.size = d.ranks;
+  const auto n = static_cast<PetscInt>(rows.rows());
+  TVF_CHECK(d.owner.size() == static_cast<size_t>(n), "a partition of {} vertices for {}", d.owner.size(), n);
   d.first.assign(static_cast<size_t>(d.size), 0);
   for (size_t r = 1; r < d.first.size(); ++r)
     d.first[r] = d.first[r - 1] + static_cast<PetscInt>(2 * nf) * d.count[r - 1];
   std::vector<char> ghost(static_cast<size_t>(n), 0);
-  for (PetscInt v = 0; v < n; ++v)
-    for (RowMatrix::InnerIterator it(rows, v); it; ++it) {
-      const auto c = static_cast<size_t>(it.col());
-      if (d.owner[c] == d.owner[static_cast<size_t>(v)]) continue;
-      if (it.col() > v) ++d.cut_edges;
-      if (d.owner[static_cast<size_t>(v)] == d.rank) ghost[c] = 1;
-    }
+  for (const int v : d.owned)
+    for (RowMatrix::InnerIterator it(rows, v); it; ++it)
+      if (d.owner[static_cast<size_t>(it.col())] != d.rank) ghost[static_cast<size_t>(it.col())] = 1;
   for (PetscInt v = 0; v < n; ++v)
     if (ghost[static_cast<size_t>(v)]) d.ghosts.push_back(static_cast<int>(v));
   return d;
+}
+
+Distribution distribute(const RowMatrix& rows, size_t nf, MPI_Comm comm) {
+  return distribution_of(partition_vertices(rows, comm), rows, nf);
 }
 
 // This rank's part of the space-time operator A_FF (and of its preconditioner): local
@@ -617,22 +664,24 @@ PetscErrorCode apply_two_level(PC pc, Vec r, Vec out) {
 
 // The local solve's set-up (the one process's choice of Ω: vertices whose line has a fixed
 // entry outside the key frames and a free entry, grown by `rings` rings of neighbours).
-void set_up_cut(LocalSystem& s, const Distribution& d, const RowMatrix& rows, std::span<const char> fixed, int rings,
+void set_up_cut(LocalSystem& s, const Distribution& d, const RowMatrix& rows, const Segments& segs, int rings,
                 MPI_Comm comm) {
   const auto n = static_cast<size_t>(rows.rows());
-  const size_t nf = s.nf;
-  const Segments segs = find_segments(fixed, n, nf);
-  std::vector<char> cut(n, 0), free_entry(n, 0), in(n, 0);
+  const size_t nf = s.nf, nl = s.nl;
+  // The cut lines: each rank marks its own vertices' (from its share of the fixed marks),
+  // then the marks (one byte per vertex) are combined on every rank.
+  std::vector<char> cut(nl, 0), free_entry(nl, 0), in(n, 0);
   for (size_t j = 0; j < nf; ++j) {
-    const char* fj = fixed.data() + j * n;
-    for (size_t v = 0; v < n; ++v) {
-      if (!fj[v])
-        free_entry[v] = 1;
+    const char* fj = s.fixed.data() + j * nl;
+    for (size_t i = 0; i < nl; ++i) {
+      if (!fj[i])
+        free_entry[i] = 1;
       else if (!segs.key[j])
-        cut[v] = 1;
+        cut[i] = 1;
     }
   }
-  for (size_t v = 0; v < n; ++v) in[v] = cut[v] && free_entry[v];
+  for (size_t i = 0; i < nl; ++i) in[static_cast<size_t>(d.owned[i])] = cut[i] && free_entry[i];
+  MPI_Allreduce(MPI_IN_PLACE, in.data(), static_cast<int>(n), MPI_UNSIGNED_CHAR, MPI_MAX, comm);
   for (int ring = 0; ring < rings; ++ring) {
     std::vector<char> grown = in;
     for (size_t v = 0; v < n; ++v)
@@ -737,10 +786,9 @@ void set_up_cut(LocalSystem& s, const Distribution& d, const RowMatrix& rows, st
 // and the scatter of the solution to the ghost vertices. One system rather than one per
 // mode: the same iterations and one set of synchronisations (docs/benchmarks.md).
 void set_up_coarse(LocalSystem& s, const Distribution& d, const RowMatrix& rows, const ConnectionLaplacian& laplacian,
-                   std::span<const char> fixed, int coarse_modes, MPI_Comm comm) {
+                   const Segments& segs, int coarse_modes, MPI_Comm comm) {
   const auto n = static_cast<size_t>(rows.rows());
   const size_t nl = s.nl, ng = s.ng, nf = s.nf;
-  const Segments segs = find_segments(fixed, n, nf);
   s.frame_modes.assign(nf, {});
   for (const auto& [first, count] : segs.segments) {
     Eigen::MatrixXd q;
@@ -803,13 +851,15 @@ void set_up_coarse(LocalSystem& s, const Distribution& d, const RowMatrix& rows,
     // √s_i at the owned and ghost vertices, T_ii at the owned ones.
     for (size_t i = 0; i < nl; ++i) {
       const auto v = static_cast<size_t>(d.owned[i]);
-      const CoarseWeight w = coarse_weight(m.q, m.first, fixed, n, nf, v, s.b * s.weight_sum[i]);
+      const CoarseWeight w = coarse_weight(m.q, m.first, s.fixed, nl, nf, i, s.b * s.weight_sum[i]);
       scale[v] = w.scale;
       shift[i] = w.shift;
     }
-    for (const int v : d.ghosts)
+    for (size_t g = 0; g < ng; ++g) {
+      const int v = d.ghosts[g];
       scale[static_cast<size_t>(v)] =
-          coarse_weight(m.q, m.first, fixed, n, nf, static_cast<size_t>(v), s.b * laplacian.weight_sum[v]).scale;
+          coarse_weight(m.q, m.first, s.ghost_fixed, ng, nf, g, s.b * laplacian.weight_sum[v]).scale;
+    }
     for (size_t i = 0; i < nl; ++i) {
       const auto v = static_cast<size_t>(d.owned[i]);
       const PetscInt row = block(mi, v);
@@ -859,22 +909,28 @@ PetscPartition petsc_partition(const ConnectionLaplacian& laplacian) {
   return p;
 }
 
-SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int frames, double temporal_weight,
-                                  std::span<const char> fixed, std::span<const cplx> values, std::span<cplx> z,
-                                  const SpaceTimeOptions& options) {
-  const MPI_Comm comm = PETSC_COMM_WORLD;
-  const RowMatrix rows = laplacian.matrix;
-  const auto n = static_cast<size_t>(rows.rows());
-  const auto nf = static_cast<size_t>(frames);
-  const double b = temporal_weight;
-  TVF_CHECK(fixed.size() == n * nf && values.size() == n * nf && z.size() == n * nf,
-            "distributed space-time sizes {} {} {} for {} entries", fixed.size(), values.size(), z.size(), n * nf);
-  // PETSc's index type (32 bits in Debian's build) must count the real unknowns.
+namespace {
+
+// PETSc's index type (32 bits in Debian's build) must count the real unknowns.
+void check_index_range(size_t n, size_t nf) {
   if (static_cast<double>(2 * n * nf) > static_cast<double>(std::numeric_limits<PetscInt>::max()))
     throw Error(fmt::format("the distributed solve's {} real unknowns (2 · {} vertices · {} frames) exceed what "
                             "this PETSc indexes ({}); it needs a PETSc built with 64-bit indices",
                             2 * n * nf, n, nf, std::numeric_limits<PetscInt>::max()));
-  const Distribution d = distribute(rows, nf, comm);
+}
+
+SolveReport solve_shares(const RowMatrix& rows, const ConnectionLaplacian& laplacian, const VertexShares& shares,
+                         int frames, double temporal_weight, std::span<const char> fixed, std::span<cplx> z,
+                         const SpaceTimeOptions& options) {
+  const MPI_Comm comm = PETSC_COMM_WORLD;
+  const auto n = static_cast<size_t>(rows.rows());
+  const auto nf = static_cast<size_t>(frames);
+  const double b = temporal_weight;
+  check_index_range(n, nf);
+  const Distribution d = distribution_of(shares, rows, nf);
+  TVF_CHECK(fixed.size() == d.owned.size() * nf && z.size() == d.owned.size() * nf,
+            "distributed space-time shares {} {} for {} owned vertices × {} frames", fixed.size(), z.size(),
+            d.owned.size(), nf);
   g_last_owner = d.owner;  // the per-rank VTK pieces follow it (distributed_vertex_owners)
 
   // This rank's rows: the spatial operator with columns renumbered, fixed set, lines.
@@ -902,9 +958,7 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
     s.weight_sum.push_back(laplacian.weight_sum[v]);
   }
   const size_t nlf = s.nl * nf;
-  s.fixed.resize(nlf);
-  for (size_t j = 0; j < nf; ++j)
-    for (size_t i = 0; i < s.nl; ++i) s.fixed[j * s.nl + i] = fixed[j * n + static_cast<size_t>(d.owned[i])];
+  s.fixed.assign(fixed.begin(), fixed.end());
   s.pivot.assign(nlf, 0);
   for (size_t j = 0; j < nf; ++j)
     for (size_t i = 0; i < s.nl; ++i) {
@@ -916,10 +970,6 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
       const double denom = diag - (has_prev ? s.lower(j, i) * s.upper(j - 1, i) : 0.0);
       s.pivot[k] = 1.0 / denom;
     }
-  s.ghost_fixed.resize(s.ng * nf);
-  for (size_t j = 0; j < nf; ++j)
-    for (size_t g = 0; g < s.ng; ++g) s.ghost_fixed[j * s.ng + g] = fixed[j * n + static_cast<size_t>(d.ghosts[g])];
-
   // Vectors: this rank's block of 2·nf·nl reals; the ghosts' values in every frame.
   Vec x = nullptr, rhs = nullptr;
   check(VecCreateMPI(comm, static_cast<PetscInt>(2 * nlf), PETSC_DETERMINE, &x), "VecCreateMPI");
@@ -944,38 +994,71 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
     ISDestroy(&is);
   }
 
+  // The ghosts' fixed marks and values (the right-hand side needs the fixed ones): one
+  // exchange each, through x.
+  s.ghost_fixed.resize(s.ng * nf);
+  {
+    PetscScalar* xa = nullptr;
+    check(VecGetArray(x, &xa), "VecGetArray");
+    for (size_t k = 0; k < nlf; ++k) {
+      xa[2 * k] = s.fixed[k] ? 1.0 : 0.0;
+      xa[2 * k + 1] = 0;
+    }
+    check(VecRestoreArray(x, &xa), "VecRestoreArray");
+    check(VecScatterBegin(s.scatter, x, s.ghost, INSERT_VALUES, SCATTER_FORWARD), "VecScatterBegin");
+    check(VecScatterEnd(s.scatter, x, s.ghost, INSERT_VALUES, SCATTER_FORWARD), "VecScatterEnd");
+    const PetscScalar* ga = nullptr;
+    check(VecGetArrayRead(s.ghost, &ga), "VecGetArrayRead");
+    for (size_t k = 0; k < s.ng * nf; ++k) s.ghost_fixed[k] = ga[2 * k] != 0 ? 1 : 0;
+    check(VecRestoreArrayRead(s.ghost, &ga), "VecRestoreArrayRead");
+    check(VecGetArray(x, &xa), "VecGetArray");
+    std::copy(z.begin(), z.end(), reinterpret_cast<cplx*>(xa));
+    check(VecRestoreArray(x, &xa), "VecRestoreArray");
+    check(VecScatterBegin(s.scatter, x, s.ghost, INSERT_VALUES, SCATTER_FORWARD), "VecScatterBegin");
+    check(VecScatterEnd(s.scatter, x, s.ghost, INSERT_VALUES, SCATTER_FORWARD), "VecScatterEnd");
+  }
+
   // The right-hand side −A_FC v_C and the first guess (z's free entries), fixed entries 0.
   {
     PetscScalar *ra = nullptr, *xa = nullptr;
+    const PetscScalar* ga = nullptr;
     check(VecGetArray(rhs, &ra), "VecGetArray");
     check(VecGetArray(x, &xa), "VecGetArray");
+    check(VecGetArrayRead(s.ghost, &ga), "VecGetArrayRead");
     auto* rs = reinterpret_cast<cplx*>(ra);
     auto* xs = reinterpret_cast<cplx*>(xa);
+    const auto* gs = reinterpret_cast<const cplx*>(ga);
+    const size_t nl = s.nl, ng = s.ng;
     for (size_t j = 0; j < nf; ++j) {
-      const cplx* vj = values.data() + j * n;
-      const char* fj = fixed.data() + j * n;
-      for (size_t i = 0; i < s.nl; ++i) {
-        const size_t k = j * s.nl + i;
-        const auto v = static_cast<size_t>(d.owned[i]);
-        if (fj[v]) {
+      const char* fj = s.fixed.data() + j * nl;
+      const cplx* zj = z.data() + j * nl;
+      const char* gfj = s.ghost_fixed.data() + j * ng;
+      const cplx* gj = gs + j * ng;
+      for (size_t i = 0; i < nl; ++i) {
+        const size_t k = j * nl + i;
+        if (fj[i]) {
           rs[k] = xs[k] = 0;
           continue;
         }
+        // L's row in its stored order (the diagonal left out), as the one process sums it.
         cplx acc(0, 0);
-        for (RowMatrix::InnerIterator it(rows, static_cast<Eigen::Index>(v)); it; ++it) {
-          const auto c = static_cast<size_t>(it.col());
-          if (c != v && fj[c]) acc -= it.value() * vj[c];
+        for (int e = s.row_start[i]; e < s.row_start[i + 1]; ++e) {
+          const int c = s.column[static_cast<size_t>(e)];
+          if (c >= 0) {
+            if (fj[c]) acc -= s.value[static_cast<size_t>(e)] * zj[c];
+          } else if (gfj[-c - 1]) {
+            acc -= s.value[static_cast<size_t>(e)] * gj[-c - 1];
+          }
         }
         const double c = b * s.weight_sum[i];
-        // The temporal neighbours indexed from the array's start: fj[v − n] with v < n adds a
-        // wrapped unsigned offset to the pointer (undefined behaviour; UBSan's pointer-overflow
-        // check, found by fuzz_session).
-        if (j > 0 && fixed[(j - 1) * n + v]) acc += c * values[(j - 1) * n + v];
-        if (j + 1 < nf && fixed[(j + 1) * n + v]) acc += c * values[(j + 1) * n + v];
+        // The temporal neighbours indexed from the array's start (no pointer before it).
+        if (j > 0 && s.fixed[k - nl]) acc += c * z[k - nl];
+        if (j + 1 < nf && s.fixed[k + nl]) acc += c * z[k + nl];
         rs[k] = acc;
-        xs[k] = z[j * n + v];
+        xs[k] = z[k];
       }
     }
+    check(VecRestoreArrayRead(s.ghost, &ga), "VecRestoreArrayRead");
     check(VecRestoreArray(x, &xa), "VecRestoreArray");
     check(VecRestoreArray(rhs, &ra), "VecRestoreArray");
   }
@@ -1003,13 +1086,24 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
     check(MatShellSetOperation(a, MATOP_MULT, reinterpret_cast<void (*)(void)>(apply_operator)),
           "MatShellSetOperation");
     check(MatSetOption(a, MAT_SPD, PETSC_TRUE), "MatSetOption");
+    // The key frames (whole frames fixed) and the segments between them: each rank's share
+    // of a frame, then all ranks' (one number per frame).
+    std::vector<int> key(nf, 1);
+    for (size_t j = 0; j < nf; ++j)
+      key[j] = std::all_of(s.fixed.begin() + static_cast<std::ptrdiff_t>(j * s.nl),
+                           s.fixed.begin() + static_cast<std::ptrdiff_t>((j + 1) * s.nl),
+                           [](char f) { return f != 0; })
+                   ? 1
+                   : 0;
+    MPI_Allreduce(MPI_IN_PLACE, key.data(), static_cast<int>(nf), MPI_INT, MPI_MIN, comm);
+    const Segments segs = segments_between(std::vector<char>(key.begin(), key.end()));
     // The two-level preconditioner (options.coarse_modes > 0, the one process's default) is
     // not symmetric (multiplicative) and not linear (inexact coarse solves): flexible CG,
     // orthogonalising against the last direction only (the one process's Polak–Ribière
     // CG). The line solves alone: plain CG.
-    if (options.coarse_modes > 0) set_up_coarse(s, d, rows, laplacian, fixed, options.coarse_modes, comm);
+    if (options.coarse_modes > 0) set_up_coarse(s, d, rows, laplacian, segs, options.coarse_modes, comm);
     const bool two_level = s.coarse_ksp != nullptr;
-    if (two_level && options.local_rings >= 0) set_up_cut(s, d, rows, fixed, options.local_rings, comm);
+    if (two_level && options.local_rings >= 0) set_up_cut(s, d, rows, segs, options.local_rings, comm);
     KSP ksp = nullptr;
     check(KSPCreate(comm, &ksp), "KSPCreate");
     check(KSPSetOperators(ksp, a, a), "KSPSetOperators");
@@ -1065,19 +1159,14 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
     report.success = reason > 0 && std::isfinite(report.residual) && report.residual <= options.tolerance;
   }
 
-  // The gather: every rank's entries into z on every rank, frame by frame (a sum in which
-  // each entry has one non-zero term, so exact).
+  // The rank's share of the result: the solution at its free entries, the fixed values
+  // (already in z) at the others.
   {
     const PetscScalar* xa = nullptr;
     check(VecGetArrayRead(x, &xa), "VecGetArrayRead");
     const auto* xs = reinterpret_cast<const cplx*>(xa);
-    std::vector<cplx> frame(n);
-    for (size_t j = 0; j < nf; ++j) {
-      std::fill(frame.begin(), frame.end(), cplx(0, 0));
-      for (size_t i = 0; i < s.nl; ++i) frame[static_cast<size_t>(d.owned[i])] = xs[j * s.nl + i];
-      MPI_Allreduce(MPI_IN_PLACE, frame.data(), static_cast<int>(2 * n), MPI_DOUBLE, MPI_SUM, comm);
-      for (size_t v = 0; v < n; ++v) z[j * n + v] = fixed[j * n + v] ? values[j * n + v] : frame[v];
-    }
+    for (size_t k = 0; k < nlf; ++k)
+      if (!s.fixed[k]) z[k] = xs[k];
     check(VecRestoreArrayRead(x, &xa), "VecRestoreArrayRead");
   }
   VecScatterDestroy(&s.scatter);
@@ -1085,6 +1174,195 @@ SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int fram
   VecDestroy(&rhs);
   VecDestroy(&x);
   return report;
+}
+
+}  // namespace
+
+VertexShares petsc_vertex_shares(const ConnectionLaplacian& laplacian) {
+  const RowMatrix rows = laplacian.matrix;
+  return partition_vertices(rows, PETSC_COMM_WORLD);
+}
+
+SolveReport petsc_spacetime_solve_shares(const ConnectionLaplacian& laplacian, const VertexShares& shares,
+                                         int frames, double temporal_weight, std::span<const char> fixed,
+                                         std::span<cplx> z, const SpaceTimeOptions& options) {
+  const RowMatrix rows = laplacian.matrix;
+  return solve_shares(rows, laplacian, shares, frames, temporal_weight, fixed, z, options);
+}
+
+SolveReport petsc_spacetime_solve(const ConnectionLaplacian& laplacian, int frames, double temporal_weight,
+                                  std::span<const char> fixed, std::span<const cplx> values, std::span<cplx> z,
+                                  const SpaceTimeOptions& options) {
+  const MPI_Comm comm = PETSC_COMM_WORLD;
+  const RowMatrix rows = laplacian.matrix;
+  const auto n = static_cast<size_t>(rows.rows());
+  const auto nf = static_cast<size_t>(frames);
+  TVF_CHECK(fixed.size() == n * nf && values.size() == n * nf && z.size() == n * nf,
+            "distributed space-time sizes {} {} {} for {} entries", fixed.size(), values.size(), z.size(), n * nf);
+  check_index_range(n, nf);
+  // Every rank's share of the replicated arrays (the fixed values in the first guess's
+  // fixed entries), the solve on the shares, then the whole result on every rank.
+  const VertexShares shares = partition_vertices(rows, comm);
+  const size_t nl = shares.owned.size();
+  std::vector<char> fs(nl * nf);
+  std::vector<cplx> zs(nl * nf);
+  for (size_t j = 0; j < nf; ++j)
+    for (size_t i = 0; i < nl; ++i) {
+      const size_t at = j * n + static_cast<size_t>(shares.owned[i]);
+      fs[j * nl + i] = fixed[at];
+      zs[j * nl + i] = fixed[at] ? values[at] : z[at];
+    }
+  const SolveReport report = solve_shares(rows, laplacian, shares, frames, temporal_weight, fs, zs, options);
+  // The gather: every rank's entries into z on every rank, frame by frame (a sum in which
+  // each entry has one non-zero term, so exact).
+  std::vector<cplx> frame(n);
+  for (size_t j = 0; j < nf; ++j) {
+    std::fill(frame.begin(), frame.end(), cplx(0, 0));
+    for (size_t i = 0; i < nl; ++i) frame[static_cast<size_t>(shares.owned[i])] = zs[j * nl + i];
+    MPI_Allreduce(MPI_IN_PLACE, frame.data(), static_cast<int>(2 * n), MPI_DOUBLE, MPI_SUM, comm);
+    for (size_t v = 0; v < n; ++v) z[j * n + v] = fixed[j * n + v] ? values[j * n + v] : frame[v];
+  }
+  return report;
+}
+
+namespace {
+
+// Where each rank's share of one frame starts in a frame laid out rank after rank (each
+// rank's vertices in its order): the layout of MPI_Gatherv and MPI_Scatterv below.
+std::vector<size_t> rank_starts(const VertexShares& shares) {
+  std::vector<size_t> start(static_cast<size_t>(shares.ranks), 0);
+  for (size_t r = 1; r < start.size(); ++r) start[r] = start[r - 1] + static_cast<size_t>(shares.count[r - 1]);
+  return start;
+}
+
+// Counts and displacements of `per_entry` items per vertex, for MPI's v-collectives.
+void counts_of(const VertexShares& shares, int per_entry, std::vector<int>& counts, std::vector<int>& displs) {
+  counts.assign(static_cast<size_t>(shares.ranks), 0);
+  displs.assign(static_cast<size_t>(shares.ranks), 0);
+  for (size_t r = 0; r < counts.size(); ++r) {
+    counts[r] = per_entry * shares.count[r];
+    if (r > 0) displs[r] = displs[r - 1] + counts[r - 1];
+  }
+}
+
+}  // namespace
+
+void petsc_gather_to_root(const VertexShares& shares, std::span<const cplx> share, int frames,
+                          std::span<cplx> field) {
+  const MPI_Comm comm = PETSC_COMM_WORLD;
+  const size_t n = shares.owner.size(), nf = static_cast<size_t>(frames), nl = shares.owned.size();
+  const bool root = shares.rank == 0;
+  TVF_CHECK(share.size() == nl * nf && field.size() == (root ? n * nf : 0), "gather of {} values into {}",
+            share.size(), field.size());
+  std::vector<int> counts, displs;
+  counts_of(shares, 2, counts, displs);
+  const std::vector<size_t> start = rank_starts(shares);
+  std::vector<cplx> frame(root ? n : 0);
+  for (size_t j = 0; j < nf; ++j) {
+    MPI_Gatherv(share.data() + j * nl, static_cast<int>(2 * nl), MPI_DOUBLE, frame.data(), counts.data(),
+                displs.data(), MPI_DOUBLE, 0, comm);
+    if (!root) continue;
+    cplx* out = field.data() + j * n;
+    for (size_t v = 0; v < n; ++v)
+      out[v] = frame[start[static_cast<size_t>(shares.owner[v])] + static_cast<size_t>(shares.local[v])];
+  }
+}
+
+void petsc_scatter_frame(const VertexShares& shares, int root, std::span<const char> fixed,
+                         std::span<const cplx> values, std::span<char> fixed_share, std::span<cplx> values_share) {
+  const MPI_Comm comm = PETSC_COMM_WORLD;
+  const size_t n = shares.owner.size(), nl = shares.owned.size();
+  TVF_CHECK(fixed_share.size() == nl && values_share.size() == nl, "a frame's share of {} for {} vertices",
+            values_share.size(), nl);
+  const bool sender = shares.rank == root;
+  TVF_CHECK(!sender || (fixed.size() == n && values.size() == n), "a frame of {} values for {} vertices",
+            values.size(), n);
+  std::vector<cplx> packed(sender ? n : 0);
+  std::string packed_fixed(sender ? n : 0, '\0');
+  if (sender) {
+    const std::vector<size_t> start = rank_starts(shares);
+    for (size_t v = 0; v < n; ++v) {
+      const size_t at = start[static_cast<size_t>(shares.owner[v])] + static_cast<size_t>(shares.local[v]);
+      packed[at] = values[v];
+      packed_fixed[at] = fixed[v];
+    }
+  }
+  std::vector<int> counts, displs;
+  counts_of(shares, 2, counts, displs);
+  MPI_Scatterv(packed.data(), counts.data(), displs.data(), MPI_DOUBLE, values_share.data(), static_cast<int>(2 * nl),
+               MPI_DOUBLE, root, comm);
+  counts_of(shares, 1, counts, displs);
+  MPI_Scatterv(packed_fixed.data(), counts.data(), displs.data(), MPI_CHAR, fixed_share.data(), static_cast<int>(nl),
+               MPI_CHAR, root, comm);
+}
+
+void distributed_refresh_share(const Field& field) {
+  if (!g_has_share) return;
+  const MPI_Comm comm = PETSC_COMM_WORLD;
+  const VertexShares& d = g_shares;
+  const size_t n = d.owner.size(), nl = d.owned.size();
+  const bool root = d.rank == 0;
+  TVF_CHECK(!root || (static_cast<size_t>(field.num_vertices()) == n &&
+                      static_cast<size_t>(field.frames()) == g_share_frames),
+            "a field of {} frames × {} vertices for a share of {} × {}", field.frames(), field.num_vertices(),
+            g_share_frames, n);
+  std::vector<int> counts, displs;
+  counts_of(d, 2, counts, displs);
+  const std::vector<size_t> start = rank_starts(d);
+  std::vector<cplx> packed(root ? n : 0);
+  for (size_t j = 0; j < g_share_frames; ++j) {
+    if (root) {
+      const auto frame = field.frame(static_cast<int>(j));
+      for (size_t v = 0; v < n; ++v)
+        packed[start[static_cast<size_t>(d.owner[v])] + static_cast<size_t>(d.local[v])] = frame[v];
+    }
+    MPI_Scatterv(packed.data(), counts.data(), displs.data(), MPI_DOUBLE, g_share.data() + j * nl,
+                 static_cast<int>(2 * nl), MPI_DOUBLE, 0, comm);
+  }
+}
+
+std::vector<cplx> distributed_share_values(std::span<const int> points) {
+  TVF_CHECK(g_has_share, "no share of a distributed field is kept");
+  const MPI_Comm comm = PETSC_COMM_WORLD;
+  const VertexShares& d = g_shares;
+  const size_t nl = d.owned.size(), np = points.size(), nf = g_share_frames;
+  std::vector<cplx> out(np * nf);
+  // One frame's scatter (every rank's share of the frame → these points), made once and
+  // applied to every frame's arrays in turn.
+  std::vector<PetscInt> first(static_cast<size_t>(d.ranks), 0);
+  for (size_t r = 1; r < first.size(); ++r) first[r] = first[r - 1] + 2 * static_cast<PetscInt>(d.count[r - 1]);
+  std::vector<PetscInt> from(2 * np);
+  for (size_t p = 0; p < np; ++p) {
+    const auto v = static_cast<size_t>(points[p]);
+    from[2 * p] = first[static_cast<size_t>(d.owner[v])] + 2 * static_cast<PetscInt>(d.local[v]);
+    from[2 * p + 1] = from[2 * p] + 1;
+  }
+  cplx none(0, 0);  // arrays for the vectors' creation when this rank has no entries
+  Vec share = nullptr, mine = nullptr;
+  check(VecCreateMPIWithArray(comm, 1, static_cast<PetscInt>(2 * nl), PETSC_DETERMINE,
+                              reinterpret_cast<PetscScalar*>(nl > 0 ? g_share.data() : &none), &share),
+        "VecCreateMPIWithArray");
+  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, static_cast<PetscInt>(2 * np),
+                              reinterpret_cast<PetscScalar*>(np > 0 ? out.data() : &none), &mine),
+        "VecCreateSeqWithArray");
+  IS is = nullptr;
+  check(ISCreateGeneral(PETSC_COMM_SELF, static_cast<PetscInt>(from.size()), from.data(), PETSC_COPY_VALUES, &is),
+        "ISCreateGeneral");
+  VecScatter scatter = nullptr;
+  check(VecScatterCreate(share, is, mine, nullptr, &scatter), "VecScatterCreate");
+  ISDestroy(&is);
+  for (size_t j = 0; j < nf; ++j) {
+    if (nl > 0) check(VecPlaceArray(share, reinterpret_cast<PetscScalar*>(g_share.data() + j * nl)), "VecPlaceArray");
+    if (np > 0) check(VecPlaceArray(mine, reinterpret_cast<PetscScalar*>(out.data() + j * np)), "VecPlaceArray");
+    check(VecScatterBegin(scatter, share, mine, INSERT_VALUES, SCATTER_FORWARD), "VecScatterBegin");
+    check(VecScatterEnd(scatter, share, mine, INSERT_VALUES, SCATTER_FORWARD), "VecScatterEnd");
+    if (nl > 0) check(VecResetArray(share), "VecResetArray");
+    if (np > 0) check(VecResetArray(mine), "VecResetArray");
+  }
+  VecScatterDestroy(&scatter);
+  VecDestroy(&mine);
+  VecDestroy(&share);
+  return out;
 }
 
 #endif

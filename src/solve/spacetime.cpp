@@ -528,8 +528,11 @@ SpaceTimeSolver::SpaceTimeSolver(const ConnectionLaplacian& laplacian, int frame
 
 void SpaceTimeSolver::interpolate_in_time(std::span<const char> fixed, std::span<const cplx> values,
                                           std::span<cplx> z) const {
-  const auto n = static_cast<size_t>(vertices());
-  const auto nf = static_cast<size_t>(frames_);
+  interpolate_lines_in_time(fixed, values, z, static_cast<size_t>(vertices()), static_cast<size_t>(frames_));
+}
+
+void interpolate_lines_in_time(std::span<const char> fixed, std::span<const cplx> values, std::span<cplx> z,
+                               size_t n, size_t nf) {
   for (size_t i = 0; i < n; ++i) {
     long last = -1;
     for (size_t j = 0; j <= nf; ++j) {
@@ -559,11 +562,17 @@ void SpaceTimeSolver::interpolate_in_time(std::span<const char> fixed, std::span
 }
 
 Segments find_segments(std::span<const char> fixed, size_t n, size_t nf) {
-  Segments s;
-  s.key.assign(nf, 0);
+  std::vector<char> key(nf, 0);
   for (size_t j = 0; j < nf; ++j)
-    s.key[j] = std::all_of(fixed.begin() + static_cast<std::ptrdiff_t>(j * n),
-                           fixed.begin() + static_cast<std::ptrdiff_t>((j + 1) * n), [](char c) { return c != 0; });
+    key[j] = std::all_of(fixed.begin() + static_cast<std::ptrdiff_t>(j * n),
+                         fixed.begin() + static_cast<std::ptrdiff_t>((j + 1) * n), [](char c) { return c != 0; });
+  return segments_between(std::move(key));
+}
+
+Segments segments_between(std::vector<char> key) {
+  Segments s;
+  s.key = std::move(key);
+  const size_t nf = s.key.size();
   for (size_t j = 0; j < nf;) {
     if (s.key[j]) {
       ++j;

@@ -20,6 +20,8 @@ struct Segments {
 
 // fixed is frames × n, frame-major.
 Segments find_segments(std::span<const char> fixed, size_t n, size_t nf);
+// The same from the key frames' marks (per frame: whether every vertex is fixed there).
+Segments segments_between(std::vector<char> key);
 
 // The eigenvectors (columns of q, normalised, ascending eigenvalue) and eigenvalues of the
 // path-graph Laplacian of a segment of `count` frames, its first `modes` of them; an open

@@ -91,6 +91,34 @@ TEST(Npy, RoundTripsEveryDtype) {
   EXPECT_TRUE(ea.values.empty());
 }
 
+// A float32 array written in parts (field.npy frame by frame) is write_npy's file byte for
+// byte; a part that fails leaves no file.
+TEST(Npy, WrittenInPartsIsTheWholeArraysFile) {
+  TempDir dir;
+  std::vector<float> f(4 * 3 * 2);
+  for (size_t k = 0; k < f.size(); ++k) f[k] = static_cast<float>(k) * 0.37f - 2.0f;
+  write_npy((dir / "whole.npy").string(), {4, 3, 2}, f.data());
+  std::vector<size_t> asked;
+  write_npy_parts((dir / "parts.npy").string(), {4, 3, 2}, 4, [&](size_t k) {
+    asked.push_back(k);
+    return std::vector<float>(f.begin() + static_cast<std::ptrdiff_t>(6 * k),
+                              f.begin() + static_cast<std::ptrdiff_t>(6 * k + 6));
+  });
+  EXPECT_EQ(asked, (std::vector<size_t>{0, 1, 2, 3}));
+  EXPECT_EQ(read_text(dir / "parts.npy"), read_text(dir / "whole.npy"));
+  const std::string message = error_of([&] {
+    write_npy_parts((dir / "failed.npy").string(), {4, 3, 2}, 4, [&](size_t k) {
+      if (k == 2) throw Error("part 2 is not finite");
+      return std::vector<float>(6, 1.0f);
+    });
+  });
+  EXPECT_EQ(message, "part 2 is not finite");
+  EXPECT_FALSE(fs::exists(dir / "failed.npy"));
+  size_t files = 0;  // no temporary file left either
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path())) ++files;
+  EXPECT_EQ(files, 2u);
+}
+
 TEST(Npy, ReadsVersion2Headers) {
   TempDir dir;
   std::string dict = "{'shape': (2,), 'fortran_order': False, 'descr': '<i4'}";

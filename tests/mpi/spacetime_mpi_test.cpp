@@ -4,6 +4,8 @@
 // its own process, and compares.
 #include "solve/petsc_spacetime.h"
 #include "support/test_meshes.h"
+#include "tvf/api/design.h"
+#include "tvf/scene/scene_json.h"
 #include "tvf/mesh/grid.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/solve/distributed.h"
@@ -262,6 +264,144 @@ TEST(DistributedSpaceTime, TwoLevelWithKeyFramesOnly) {
   EXPECT_NE(c.all.method.find("coarse correction"), std::string::npos) << c.all.method;
   EXPECT_EQ(c.all.method.find("local solve"), std::string::npos) << c.all.method;
   EXPECT_LT(2 * c.all.iterations, lines.all.iterations) << lines.all.method;
+}
+
+// What the spacetime generator runs under mpirun (design/generate.cpp): no rank holds the
+// whole problem. The partition first; each frame evaluated whole by one rank and sent out
+// in shares (petsc_scatter_frame); the first guess on each rank's own lines; the solve on
+// the shares; the result gathered on rank 0 alone; each rank's share kept for its VTK
+// pieces and read back at any vertices (distributed_share_values), also after rank 0
+// changed the field (distributed_refresh_share).
+TEST(DistributedSpaceTime, SharesOfTheProblemAndOfTheResult) {
+  const Mesh mesh = make_grid(GridSpec{31, 31, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(mesh);
+  const ConnectionLaplacian laplacian = connection_laplacian(bundle);
+  const int frames = 14;
+  const auto n = static_cast<size_t>(mesh.num_vertices());
+  const auto nf = static_cast<size_t>(frames);
+  const Problem p = moving_element(mesh, frames, Vec3(-0.8, -0.7, 0), Vec3(0.8, 0.7, 0), 0.2, true);
+  VertexShares shares = petsc_vertex_shares(laplacian);
+  ASSERT_EQ(shares.ranks, 2);
+  ASSERT_EQ(shares.owner.size(), n);
+  const size_t nl = shares.owned.size();
+  EXPECT_GT(nl, n / 4);
+  EXPECT_LT(nl, 3 * n / 4);
+  // Frame j evaluated by rank j mod 2 (here: read from the replicated problem there only).
+  std::vector<char> fixed(nl * nf, 0);
+  std::vector<cplx> z(nl * nf);
+  for (size_t j = 0; j < nf; ++j) {
+    const int root = static_cast<int>(j % 2);
+    const bool mine = root == shares.rank;
+    petsc_scatter_frame(shares, root,
+                        mine ? std::span<const char>(p.fixed.data() + j * n, n) : std::span<const char>(),
+                        mine ? std::span<const cplx>(p.values.data() + j * n, n) : std::span<const cplx>(),
+                        std::span<char>(fixed.data() + j * nl, nl), std::span<cplx>(z.data() + j * nl, nl));
+  }
+  // The shares are the replicated arrays' entries, and each rank's first guess on its lines
+  // is the replicated first guess's, exactly.
+  const SpaceTimeSolver solver(laplacian, frames, 30.0);
+  std::vector<cplx> guess(n * nf);
+  solver.interpolate_in_time(p.fixed, p.values, guess);
+  interpolate_lines_in_time(fixed, z, z, nl, nf);
+  size_t wrong = 0;
+  for (size_t j = 0; j < nf; ++j)
+    for (size_t i = 0; i < nl; ++i) {
+      const size_t at = j * n + static_cast<size_t>(shares.owned[i]);
+      wrong += fixed[j * nl + i] != p.fixed[at] || z[j * nl + i] != guess[at];
+    }
+  EXPECT_EQ(wrong, 0u);
+
+  SpaceTimeOptions options;
+  options.distributed = true;
+  const SolveReport r = petsc_spacetime_solve_shares(laplacian, shares, frames, 30.0, fixed, z, options);
+  ASSERT_TRUE(r.success) << r.method;
+  EXPECT_NE(r.method.find("2 ranks"), std::string::npos) << r.method;
+  const bool root = shares.rank == 0;
+  std::vector<cplx> field(root ? n * nf : 0);
+  petsc_gather_to_root(shares, z, frames, field);
+  // Rank 0's field is one process's to the tolerance, the fixed entries exactly.
+  std::vector<cplx> one = guess;
+  SpaceTimeOptions local;
+  local.parallel = false;
+  local.method = SpaceTimeMethod::cg;
+  ASSERT_TRUE(solver.solve(p.fixed, p.values, one, local).success);
+  if (root) {
+    double largest = 0, difference = 0;
+    size_t moved = 0;
+    for (size_t k = 0; k < one.size(); ++k) {
+      largest = std::max(largest, std::abs(one[k]));
+      difference = std::max(difference, std::abs(field[k] - one[k]));
+      moved += p.fixed[k] && field[k] != p.values[k];
+    }
+    EXPECT_GT(largest, 0.5);
+    EXPECT_LE(difference, 1e-8 * largest);
+    EXPECT_EQ(moved, 0u);
+  }
+
+  // The kept shares read back at every vertex (rank 0), at a few (rank 1): the gathered
+  // field's values, the other rank's received.
+  const std::vector<cplx> own = z;
+  petsc_keep_share(shares, z, frames);
+  ASSERT_TRUE(distributed_has_share());
+  std::vector<int> points;
+  if (root)
+    for (size_t v = 0; v < n; ++v) points.push_back(static_cast<int>(v));
+  else
+    points = {0, static_cast<int>(n / 2), static_cast<int>(n - 1)};
+  std::vector<cplx> read = distributed_share_values(points);
+  ASSERT_EQ(read.size(), points.size() * nf);
+  if (root) {
+    EXPECT_TRUE(std::equal(read.begin(), read.end(), field.begin()));
+  } else {
+    for (size_t j = 0; j < nf; ++j)
+      for (size_t q = 0; q < points.size(); ++q) {
+        const auto v = static_cast<size_t>(points[q]);
+        if (shares.owner[v] == shares.rank) {
+          EXPECT_EQ(read[j * points.size() + q], own[j * nl + static_cast<size_t>(shares.local[v])]);
+        }
+        EXPECT_NEAR(std::abs(read[j * points.size() + q] - one[j * n + v]), 0, 1e-7);
+      }
+  }
+  // Rank 0 changes its field; the shares follow.
+  Field changed(TimeSampling{0, 1, frames}, root ? static_cast<int>(n) : 0);
+  for (size_t k = 0; k < field.size(); ++k) changed.data()[k] = cplx(0, 1) * field[k] + cplx(static_cast<double>(k % 7), 0);
+  distributed_refresh_share(changed);
+  read = distributed_share_values(points);
+  if (root) {
+    EXPECT_TRUE(std::equal(read.begin(), read.end(), changed.data().begin()));
+  } else {
+    for (size_t j = 0; j < nf; ++j)
+      for (size_t q = 0; q < points.size(); ++q) {
+        const auto v = static_cast<size_t>(points[q]);
+        const cplx expected = cplx(0, 1) * one[j * n + v] + cplx(static_cast<double>((j * n + v) % 7), 0);
+        EXPECT_NEAR(std::abs(read[j * points.size() + q] - expected), 0, 1e-7);
+      }
+  }
+}
+
+// `tvf generate`'s path (a Design, as the CLI makes it): under mpirun the field comes back
+// whole on rank 0 and empty on the others, which keep their shares; the shares read back
+// at every vertex are rank 0's field.
+TEST(DistributedSpaceTime, TheGeneratorGathersOnRankZeroAlone) {
+  Design design(parse_scene(R"({"tvf": 1,
+    "domain": {"grid": {"size": [25, 25], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 9, "range": [0, 1]},
+    "generator": "spacetime",
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]}],
+    "keyframes": [{"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [0, 0.5]}]}]})",
+                            "gather test"));
+  const Field& field = design.generate();
+  const int n = design.space().mesh().num_vertices();
+  EXPECT_NE(design.report().method.find("2 ranks"), std::string::npos) << design.report().method;
+  ASSERT_EQ(field.num_vertices(), distributed_rank() == 0 ? n : 0);
+  EXPECT_EQ(field.frames(), 9);
+  ASSERT_TRUE(distributed_has_share());
+  std::vector<int> all(static_cast<size_t>(n));
+  for (int v = 0; v < n; ++v) all[static_cast<size_t>(v)] = v;
+  const std::vector<cplx> read = distributed_share_values(all);
+  if (distributed_rank() == 0) {
+    EXPECT_TRUE(std::equal(read.begin(), read.end(), field.data().begin()));
+  }
 }
 
 TEST(DistributedSpaceTime, NothingToSolveGivesZero) {

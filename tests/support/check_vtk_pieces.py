@@ -33,6 +33,15 @@ SCENES = {
       "generator": "spacetime",
       "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]}],
       "keyframes": [{"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [0, 0.5]}]}]}''',
+    # Projected after the solve: the field is rank 0's alone then, and the other ranks'
+    # shares are refreshed from it before they write their pieces.
+    'projected': '''{"tvf": 1,
+      "domain": {"grid": {"size": [25, 25], "min": [-1, -1], "max": [1, 1]}},
+      "time": {"frames": 6, "range": [0, 1]},
+      "generator": "spacetime",
+      "incompressible": true,
+      "elements": [{"kind": "singular", "type": "ccw_center", "path": [[-0.7, -0.6, 0], [0.7, 0.6, 1]]}],
+      "keyframes": [{"t": 0, "elements": [{"kind": "singular", "type": "ccw_center", "at": [0, 0.5]}]}]}''',
     # A closed surface mesh.
     'sphere': '''{"tvf": 1,
       "domain": {"sphere": {"subdivisions": 2, "radius": 1}},

@@ -26,6 +26,13 @@ void write_vtk_series(const std::string& dir, const std::string& stem, const Tan
 // 0 for the rank's own vertices, 1 = VTK's DUPLICATEPOINT for halo vertices).
 void write_vtk_series_piece(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
                             const Field& field, std::span<const int> owner, int rank);
+// The same from the piece's values alone (a rank that holds only its share of the field):
+// `values` is frames × the piece's points, frame-major, the points those that
+// vtk_piece_points gives (the rank's own vertices and its faces' halo vertices, ascending).
+std::vector<int> vtk_piece_points(const Mesh& mesh, std::span<const int> owner, int rank);
+void write_vtk_series_piece(const std::string& dir, const std::string& stem, const TangentBundle& bundle,
+                            const TimeSampling& time, std::span<const int> owner, int rank,
+                            std::span<const cplx> values);
 // Then one process writes DIR/<stem>_NNNN.pvtu (the `ranks` pieces of frame NNNN) and
 // DIR/<stem>.pvd listing the .pvtu files with their times.
 void write_vtk_parallel_series(const std::string& dir, const std::string& stem, const std::vector<double>& times,

@@ -1,15 +1,16 @@
 #pragma once
 // Running under MPI (issue 19, DESIGN §12 "MPI"): `mpirun -n K tvf generate SCENE -o DIR`.
 //
-// Every rank runs the whole program on the whole scene (domain, Laplacian, constraints:
-// replicated, cheap beside the solve); the spatio-temporal solve itself is distributed
-// (solve/petsc_spacetime.cpp: vertices partitioned across ranks with whole temporal lines
-// each, PETSc's flexible CG on the matrix-free operator, preconditioned as one process's
-// CG: low temporal modes whose spatial systems GAMG solves, a local solve on the lines a
-// moving constraint cuts, then the temporal line solves).
-// Its result is gathered to every rank, so what follows (edits, analysis) is the one
-// process's. Rank 0 writes the assembled outputs (npy, native, csv, json); with K > 1 ranks
-// each rank writes its own piece of every VTK frame (field_NNNN_pR.vtu) and rank 0 the
+// Every rank runs the whole program on the whole scene (domain, Laplacian: per vertex);
+// the spacetime generator's problem and solve are shared (design/generate.cpp,
+// solve/petsc_spacetime.cpp: vertices partitioned across ranks with whole temporal lines
+// each; the constraints evaluated by frames, each frame sent out in the ranks' shares;
+// PETSc's flexible CG on the matrix-free operator, preconditioned as one process's CG: low
+// temporal modes whose spatial systems GAMG solves, a local solve on the lines a moving
+// constraint cuts, then the temporal line solves). Its result is gathered on rank 0 alone,
+// where what follows (edits, projection) runs as in one process; the other ranks keep
+// their shares. Rank 0 writes the assembled outputs (npy, native, csv, json); with K > 1
+// ranks each rank writes its own piece of every VTK frame (field_NNNN_pR.vtu) and rank 0 the
 // .pvtu files that join them (docs/architecture.md, "Running on a cluster").
 //
 // MPI and PETSc are started only where the process was launched by an MPI launcher
@@ -17,6 +18,7 @@
 // module and `tvf serve` never touch MPI.
 
 #include "tvf/core/types.h"
+#include "tvf/field/field.h"
 
 #include <cstddef>
 #include <span>
@@ -67,6 +69,21 @@ bool distributed_all(bool ok);
 double distributed_max(double x);
 // Rank 0's `s` on every rank (collective; `s` itself without a session).
 std::string distributed_broadcast(const std::string& s);
+
+// The spacetime generator under mpirun leaves the field whole on rank 0 alone (the gather
+// step: the assembled outputs need it) and each rank its own share, the vertices it owns in
+// the solve's partition (distributed_vertex_owners) at every frame. Whether such a share is
+// kept on every rank (after that generator ran; false without a session):
+bool distributed_has_share();
+// After rank 0 changed the field (the scene's edits, the incompressible projection): its
+// values sent back into every rank's share, frame by frame. Collective; `field` is read on
+// rank 0 only.
+void distributed_refresh_share(const Field& field);
+// The field's values at `points` (any vertices, e.g. a VTK piece's own and halo vertices),
+// frames × points.size(), frame-major, from the ranks' shares: each rank's own from its
+// share, the others' received from their ranks (a PETSc VecScatter). Collective; every
+// rank passes its own points (possibly none).
+std::vector<cplx> distributed_share_values(std::span<const int> points);
 
 // Which rank owns each of `vertices` vertices, for the per-rank VTK pieces: the partition
 // of this process's last distributed space-time solve where it had that many vertices,

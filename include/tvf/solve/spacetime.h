@@ -151,4 +151,11 @@ private:
   mutable std::map<std::tuple<int, int>, std::shared_ptr<const TemporalBasis>> bases_;
 };
 
+// SpaceTimeSolver::interpolate_in_time on `lines` temporal lines of `frames` entries each
+// (frames × lines, frame-major: a field's vertices, or one rank's share of them under
+// mpirun). z may be values itself (fixed entries are read before they are written, and
+// written with themselves).
+void interpolate_lines_in_time(std::span<const char> fixed, std::span<const cplx> values, std::span<cplx> z,
+                               size_t lines, size_t frames);
+
 }  // namespace tvf
