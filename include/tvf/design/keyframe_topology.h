@@ -73,6 +73,10 @@ struct KeyframeIntervalReport {
   // or no set of detours found): why, in one sentence; the interval's paths then stay
   // straight. The generator also gives it as a warning.
   std::string collision;
+  // How the paths were kept apart: "straight" (none came too close, or they could not be
+  // kept apart: see collision), "pairwise" (bent one pair at a time) or "joint" (all the
+  // interval's paths bent at once, keeping clear of its saddle–node templates too).
+  std::string routing = "straight";
 };
 
 // The constraints that keep the topology between key frames, planned once per generation.
