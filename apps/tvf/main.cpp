@@ -108,7 +108,9 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
       const auto bent = std::count_if(k.matched.begin(), k.matched.end(), [](const auto& m) { return m.detour > 0; });
       std::printf("  key frames %d → %d (t %g → %g): %zu matched%s, %zu pairs created and %zu cancelled at t = %g%s\n",
                   k.from_keyframe, k.to_keyframe, k.t0, k.t1, k.matched.size(),
-                  bent == 0 ? "" : fmt::format(" ({} bent to keep {:g} apart)", bent, k.separation).c_str(),
+                  bent == 0 ? "" : fmt::format(" ({} bent{} to keep {:g} apart)", bent,
+                                                          k.routing == "joint" ? " together" : "", k.separation)
+                                                  .c_str(),
                   k.created.size(), k.cancelled.size(), k.bifurcation_t,
                   k.unpaired_first.empty() && k.unpaired_second.empty()
                       ? ""

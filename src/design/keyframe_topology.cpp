@@ -6,6 +6,8 @@
 #include "tvf/design/element_field.h"
 #include "tvf/field/field_sampler.h"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -67,6 +69,13 @@ double bump(double s, double rise, double fall) {
   return s < rise ? smoothstep(s / rise) : s > fall ? smoothstep((1 - s) / (1 - fall)) : 1.0;
 }
 
+// The joint detour's shapes: sin(πs) sin(kπs), k = 1, 2, …: zero with zero slope at both
+// ends (the key frames keep their positions and the zero speed there), k = 1 a bump, the
+// higher ones moving it earlier or later and sharpening it.
+double wave_shape(int k, double s) {
+  return std::sin(std::numbers::pi * s) * std::sin(k * std::numbers::pi * s);
+}
+
 }  // namespace
 
 // One singularity carried from (p0, t0) to (p1, t1), present for t0 < t < t1. Its linear
@@ -77,6 +86,7 @@ struct KeyframeTopologyPlan::Track {
   Linear j0, j1;
   Vec3 ref_e1 = Vec3::UnitX();  // the first axis of the reference frame, world
   SingularityType type = SingularityType::source;
+  int index = 0;   // +1 or −1 (0: a template standing in the router's way)
   int group = -1;  // ≥ 0: one of a created or cancelled pair (the two are meant to meet)
   // A detour bent into the path (PathRouter, below): amplitude · bump(s, rise, fall) · dir.
   struct Bend {
@@ -84,6 +94,13 @@ struct KeyframeTopologyPlan::Track {
     Vec3 dir = Vec3::Zero();  // unit, world, tangent to the domain where the paths meet
   };
   std::vector<Bend> bends;  // empty: the straight segment
+  // A joint detour (PathRouter::joint, below): Σ_k wave[k] · wave_shape(k + 1, s), world
+  // vectors; empty when the pairwise bends sufficed.
+  std::vector<Vec3> wave;
+  // How far the singularity's neighbourhood has turned since the track's first end, as the
+  // doubled angle of its neighbours' directions (unwrapped), at u = k / (turn.size() − 1)
+  // of the track's time; empty: the Jacobian is interpolated between the two ends alone.
+  std::vector<double> turn;
 
   // Path parameter at time t: smoothstep in time from the key frame's end.
   double param(double t) const { return smoothstep((t - t0) / (t1 - t0)); }
@@ -92,7 +109,15 @@ struct KeyframeTopologyPlan::Track {
   Vec3 raw(double s) const {
     Vec3 p = p0 + s * (p1 - p0);
     for (const Bend& b : bends) p += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
+    for (size_t k = 0; k < wave.size(); ++k) p += wave_shape(static_cast<int>(k) + 1, s) * wave[k];
     return p;
+  }
+  // The neighbourhood's turn at time t (linear between the samples; 0 without).
+  double turned(double t) const {
+    if (turn.empty()) return 0;
+    const double x = std::clamp((t - t0) / (t1 - t0), 0.0, 1.0) * static_cast<double>(turn.size() - 1);
+    const size_t k = std::min(static_cast<size_t>(x), turn.size() - 2);
+    return turn[k] + (x - static_cast<double>(k)) * (turn[k + 1] - turn[k]);
   }
 };
 
@@ -322,35 +347,81 @@ public:
     return true;
   }
 
-  // Routes the tracks [first, last) of one interval. When two paths cannot be kept apart,
+  // Routes the tracks [first, last) of one interval, keeping them apart from each other and
+  // from `obstacles` (the interval's saddle–node templates, as tracks that stay put while
+  // the template holds; a template's own pair is not kept from it). First one pair at a
+  // time (separate(), closest first); when that does not settle, or leaves a path too near
+  // a template, all the interval's paths at once (joint()). When neither keeps them apart,
   // leaves the interval's paths straight and returns why, in one sentence naming `where`.
-  std::optional<std::string> route(std::vector<Track>& tracks, size_t first, size_t last, const Scene& scene,
-                                   const std::string& where, const std::string& interval) const {
+  // `how` says which routing held: "straight" (nothing came too close), "pairwise" or "joint".
+  std::optional<std::string> route(std::vector<Track>& tracks, size_t first, size_t last,
+                                   const std::vector<Track>& obstacles, const Scene& scene, const std::string& where,
+                                   const std::string& interval, std::string& how) const {
+    how = "straight";
     if (separation_ <= 0) return std::nullopt;
     const std::vector<Track> before(tracks.begin() + static_cast<std::ptrdiff_t>(first),
                                     tracks.begin() + static_cast<std::ptrdiff_t>(last));
     const size_t n = last - first;
     const int rounds = 8 * static_cast<int>(n * n) + 8;
+    const char* why = nullptr;
+    size_t wi = 0, wj = 0;
+    Approach wap;
     for (int round = 0;; ++round) {
       // The pair that comes closest relative to what it must keep, first.
       double worst = 1 - 1e-6;
-      size_t wi = 0, wj = 0;
-      Approach wap;
       for (size_t i = first; i < last; ++i)
         for (size_t j = i + 1; j < last; ++j) {
           if (tracks[i].group >= 0 && tracks[i].group == tracks[j].group) continue;
           const auto ap = approach(tracks[i], tracks[j]);
           if (ap && ap->ratio < worst) worst = ap->ratio, wi = i, wj = j, wap = *ap;
         }
-      if (worst >= 1 - 1e-6) return std::nullopt;
-      const char* why = round >= rounds                           ? "no set of detours tried"
-                        : separate(tracks[wi], tracks[wj], wap) ? nullptr
-                                                                  : "no detour inside the domain";
-      if (!why) continue;
-      const Track a = tracks[wi], b = tracks[wj];
-      std::copy(before.begin(), before.end(), tracks.begin() + static_cast<std::ptrdiff_t>(first));
-      const bool planar = space_.planar();
-      const double unit = space_.diameter();
+      if (worst >= 1 - 1e-6) break;
+      if (round == 0) how = "pairwise";
+      why = round >= rounds                           ? "no set of detours tried"
+            : separate(tracks[wi], tracks[wj], wap) ? nullptr
+                                                      : "no detour inside the domain";
+      if (why) break;
+    }
+    // The templates: the worst path that comes too near one, if any.
+    size_t oi = 0, oj = 0;
+    double o_worst = 1 - 1e-6;
+    Approach oap;
+    if (!why)
+      for (size_t i = first; i < last; ++i)
+        for (size_t j = 0; j < obstacles.size(); ++j) {
+          if (tracks[i].group >= 0 && tracks[i].group == obstacles[j].group) continue;
+          const auto ap = approach(tracks[i], obstacles[j]);
+          if (ap && ap->ratio < o_worst) o_worst = ap->ratio, oi = i, oj = j, oap = *ap;
+        }
+    if (!why && o_worst >= 1 - 1e-6) {
+      // Apart, but the +1 singularities' phases may drift a turn apart (three or more
+      // passing each other): then the field needs bifurcations to join them. Routed together
+      // when that keeps the drift smaller.
+      if (how == "straight") return std::nullopt;
+      const double drift = interval_phase_error(tracks, first, last);
+      if (drift <= 0.5 * std::numbers::pi) return std::nullopt;
+      const std::vector<Track> pairwise(tracks.begin() + static_cast<std::ptrdiff_t>(first),
+                                        tracks.begin() + static_cast<std::ptrdiff_t>(last));
+      if (joint(tracks, first, last, obstacles) && interval_phase_error(tracks, first, last) < drift) {
+        how = "joint";
+        return std::nullopt;
+      }
+      std::copy(pairwise.begin(), pairwise.end(), tracks.begin() + static_cast<std::ptrdiff_t>(first));
+      return std::nullopt;
+    }
+    // Jointly, from the pairwise bends when they held, else from the straight paths.
+    const Track a = tracks[why ? wi : oi];
+    const Track b = why ? tracks[wj] : obstacles[oj];
+    if (why) std::copy(before.begin(), before.end(), tracks.begin() + static_cast<std::ptrdiff_t>(first));
+    if (joint(tracks, first, last, obstacles)) {
+      how = "joint";
+      return std::nullopt;
+    }
+    how = "straight";
+    std::copy(before.begin(), before.end(), tracks.begin() + static_cast<std::ptrdiff_t>(first));
+    const bool planar = space_.planar();
+    const double unit = space_.diameter();
+    if (why)
       return fmt::format(
           "{}: {}: {} the paths of the {} from {} to {} and the {} from {} to {} come {:.3g} apart at t = {:.3g}, and {} "
           "keeps them {:.3g} apart, so the paths stay straight and the singularities meet; set a smaller "
@@ -358,6 +429,403 @@ public:
           scene.label(), where, interval, to_string(a.type), describe_point(a.p0, planar, unit),
           describe_point(a.p1, planar, unit), to_string(b.type), describe_point(b.p0, planar, unit),
           describe_point(b.p1, planar, unit), wap.distance, wap.t, why, wap.required);
+    return fmt::format(
+        "{}: {}: {} the path of the {} from {} to {} comes {:.3g} from the saddle–node template at {} at t = {:.3g}, and "
+        "no set of detours keeps it {:.3g} away, so the paths stay straight; set a smaller solver.path_separation, "
+        "another solver.bifurcation_times or add a key frame between",
+        scene.label(), where, interval, to_string(a.type), describe_point(a.p0, planar, unit),
+        describe_point(a.p1, planar, unit), oap.distance, describe_point(b.p0, planar, unit), oap.t, oap.required);
+  }
+
+  // All the interval's paths at once: each track of [first, last) gets a joint detour
+  // Σ_k c_k · wave_shape(k, s) (kWaves shapes; c_k in the tangent plane at the path's
+  // middle), chosen by Levenberg–Marquardt to minimise the bending Σ k⁴ |c_k|² (weighted
+  // 1e-3) plus the squared shortfall of every pair (tracks and obstacles, at 257 times of
+  // the interval) from 1.03 × what it must keep, and of every path from 1.02 × its
+  // boundary margin (as inside()). Started from each choice of side for the moving paths
+  // (each bent by the separation to its left or right; all of them up to 5 moving, else
+  // four patterns) and from no detour; of the results that keep every pair apart at 257
+  // times of its common time (approach()) and stay inside (inside()), the one that adds
+  // least length is kept. False, tracks unchanged, when none does.
+  static constexpr int kWaves = 4;
+  bool joint(std::vector<Track>& tracks, size_t first, size_t last, const std::vector<Track>& obstacles) const {
+    const size_t n = last - first;
+    if (n == 0) return false;
+    std::vector<Track> items(tracks.begin() + static_cast<std::ptrdiff_t>(first),
+                             tracks.begin() + static_cast<std::ptrdiff_t>(last));
+    for (Track& tr : items) tr.wave.clear();
+    items.insert(items.end(), obstacles.begin(), obstacles.end());
+    const size_t m = items.size();
+    const int nv = 2 * kWaves;  // variables per moving track
+    const int N = nv * static_cast<int>(n);
+    // Tangent axes at each path's middle and the side each may be bent to.
+    std::vector<Vec3> ax1(n), ax2(n), left(n, Vec3::Zero());
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3 mid = at(items[i], 0.5 * (items[i].t0 + items[i].t1));
+      const int f = space_.locate(mid).face;
+      const Vec3 normal = space_.planar() ? Vec3::UnitZ() : space_.bundle().face_normal(f);
+      ax1[i] = space_.planar() ? Vec3::UnitX() : space_.bundle().face_e1(f);
+      ax2[i] = normal.cross(ax1[i]);
+      const Vec3 d = items[i].p1 - items[i].p0;
+      const Vec3 l = normal.cross(d);
+      if (l.norm() > 1e-9 * space_.diameter()) left[i] = l.normalized();
+    }
+    // One time grid for the interval.
+    double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin;
+    for (const Track& tr : items) tmin = std::min({tmin, tr.t0, tr.t1}), tmax = std::max({tmax, tr.t0, tr.t1});
+    std::vector<double> grid(kSamples + 1);
+    for (int g = 0; g <= kSamples; ++g) grid[static_cast<size_t>(g)] = tmin + (tmax - tmin) * g / kSamples;
+    auto present = [&](const Track& tr, double t) { return t >= std::min(tr.t0, tr.t1) && t <= std::max(tr.t0, tr.t1); };
+    struct Sample {
+      size_t i, j;
+      int g;
+      double required;
+    };
+    std::vector<Sample> samples;
+    for (size_t i = 0; i < m; ++i)
+      for (size_t j = i + 1; j < m; ++j) {
+        if (i >= n && j >= n) continue;
+        if (items[i].group >= 0 && items[i].group == items[j].group) continue;
+        const double from = std::max(std::min(items[i].t0, items[i].t1), std::min(items[j].t0, items[j].t1));
+        const double to = std::min(std::max(items[i].t0, items[i].t1), std::max(items[j].t0, items[j].t1));
+        if (!(to > from)) continue;
+        for (int g = 0; g <= kSamples; ++g) {
+          const double t = grid[static_cast<size_t>(g)];
+          if (t < from || t > to) continue;
+          const double req = required(items[i], items[j], t, from, to);
+          if (req > 0) samples.push_back({i, j, g, req});
+        }
+      }
+    std::vector<double> margin(n, 0.5 * separation_);
+    if (!boundary_.empty())
+      for (size_t i = 0; i < n; ++i) {
+        Track straight = items[i];
+        straight.bends.clear();
+        for (int k = 0; k <= kSamples; k += 4) {
+          const Vec3 raw = straight.raw(static_cast<double>(k) / kSamples);
+          margin[i] = std::min(margin[i], boundary_distance(surface_position(space_.mesh(), space_.locate(raw))));
+        }
+      }
+    auto apply = [&](const Eigen::VectorXd& x, std::vector<Track>& out) {
+      for (size_t i = 0; i < n; ++i) {
+        out[i].wave.assign(kWaves, Vec3::Zero());
+        for (int k = 0; k < kWaves; ++k)
+          out[i].wave[static_cast<size_t>(k)] = x(static_cast<int>(i) * nv + 2 * k) * ax1[i] +
+                                                x(static_cast<int>(i) * nv + 2 * k + 1) * ax2[i];
+      }
+    };
+    const double lambda = 1e-3;
+    const std::vector<size_t> whole = whole_tracks(items, n, tmin, tmax);
+    std::vector<size_t> plus;
+    for (const size_t i : whole)
+      if (items[i].index > 0) plus.push_back(i);
+    // Residuals and their Jacobian (sparse rows: the variables of at most two tracks).
+    auto evaluate = [&](const Eigen::VectorXd& x, double target, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) {
+      std::vector<Track> cur = items;
+      apply(x, cur);
+      std::vector<std::vector<Vec3>> pos(m, std::vector<Vec3>(kSamples + 1, Vec3::Zero()));
+      for (size_t i = 0; i < m; ++i)
+        for (int g = 0; g <= kSamples; ++g)
+          if (present(cur[i], grid[static_cast<size_t>(g)]))
+            pos[i][static_cast<size_t>(g)] = at(cur[i], grid[static_cast<size_t>(g)]);
+      double cost = 0;
+      if (jtj) jtj->setZero(N, N), jtr->setZero(N);
+      auto add_row = [&](double r, const std::vector<std::pair<int, double>>& row) {
+        cost += r * r;
+        if (!jtj) return;
+        for (const auto& [a, va] : row) {
+          (*jtr)(a) += va * r;
+          for (const auto& [b, vb] : row) (*jtj)(a, b) += va * vb;
+        }
+      };
+      std::vector<std::pair<int, double>> row;
+      auto grad = [&](size_t i, double s, const Vec3& dir, double sign) {
+        if (i >= n) return;
+        for (int k = 0; k < kWaves; ++k) {
+          const double w = sign * wave_shape(k + 1, s);
+          row.emplace_back(static_cast<int>(i) * nv + 2 * k, w * ax1[i].dot(dir));
+          row.emplace_back(static_cast<int>(i) * nv + 2 * k + 1, w * ax2[i].dot(dir));
+        }
+      };
+      for (const Sample& sm : samples) {
+        const Vec3 d = pos[sm.i][static_cast<size_t>(sm.g)] - pos[sm.j][static_cast<size_t>(sm.g)];
+        const double dist = d.norm();
+        const double r = target * sm.required - dist;
+        if (r <= 0) continue;
+        row.clear();
+        const Vec3 u = dist > 0 ? Vec3(d / dist) : left[std::min(sm.i, n - 1)];
+        const double t = grid[static_cast<size_t>(sm.g)];
+        grad(sm.i, cur[sm.i].param(t), u, -1.0);
+        grad(sm.j, cur[sm.j].param(t), u, 1.0);
+        add_row(r, row);
+      }
+      if (!boundary_.empty())
+        for (size_t i = 0; i < n; ++i)
+          for (int k = 0; k <= kSamples; k += 4) {
+            const double s = static_cast<double>(k) / kSamples;
+            const Vec3 raw = cur[i].raw(s);
+            const Vec3 on = surface_position(space_.mesh(), space_.locate(raw));
+            const auto [dist, near] = boundary_nearest(on);
+            const bool out = space_.planar() && (on - raw).norm() > 1e-9 * space_.diameter();
+            const double r = 1.02 * margin[i] - (out ? -(on - raw).norm() : dist);
+            if (r <= 0) continue;
+            Vec3 dir = out ? Vec3(on - raw) : Vec3(on - near);
+            if (dir.norm() == 0) continue;
+            dir.normalize();
+            row.clear();
+            grad(i, s, dir, -1.0);
+            add_row(r, row);
+          }
+      if (plus.size() >= 2) {
+        std::vector<std::vector<double>> phi;
+        std::vector<std::vector<std::vector<Vec3>>> dphi;
+        phases(cur, whole, pos, phi, jtj ? &dphi : nullptr);
+        auto drift = [&](size_t i, size_t g) {
+          double mean = 0;
+          for (const size_t k : plus) mean += phi[k][g] - phi[k][0];
+          return phi[i][g] - phi[i][0] - mean / static_cast<double>(plus.size());
+        };
+        const double wph = 0.05 * separation_;
+        for (const size_t i : plus) {
+          const double end_drift = std::remainder(drift(i, kSamples), 2 * std::numbers::pi);
+          for (size_t g = 4; g < static_cast<size_t>(kSamples); g += 4) {
+            const double r = wph * (drift(i, g) - smoothstep(static_cast<double>(g) / kSamples) * end_drift);
+            row.clear();
+            if (jtj)
+              for (const size_t j : whole) {
+                Vec3 v = dphi[i][g][j];
+                for (const size_t k : plus) v -= dphi[k][g][j] / static_cast<double>(plus.size());
+                grad(j, cur[j].param(grid[g]), wph * v, 1.0);
+              }
+            add_row(r, row);
+          }
+        }
+      }
+      for (size_t i = 0; i < n; ++i)
+        for (int k = 0; k < kWaves; ++k)
+          for (int c = 0; c < 2; ++c) {
+            const int v = static_cast<int>(i) * nv + 2 * k + c;
+            const double w = std::sqrt(lambda) * (k + 1) * (k + 1);
+            row.assign(1, {v, w});
+            add_row(w * x(v), row);
+          }
+      return cost;
+    };
+    // Seeds: each moving path to one side (or none).
+    std::vector<size_t> moving;
+    for (size_t i = 0; i < n; ++i)
+      if (left[i].norm() > 0) moving.push_back(i);
+    std::vector<std::vector<double>> patterns;
+    if (moving.size() <= 5) {
+      for (unsigned bits = 0; bits < (1u << moving.size()); ++bits) {
+        std::vector<double> p;
+        for (size_t q = 0; q < moving.size(); ++q) p.push_back(bits >> q & 1u ? -1.0 : 1.0);
+        patterns.push_back(p);
+      }
+    } else {
+      for (int kind = 0; kind < 4; ++kind) {
+        std::vector<double> p;
+        for (size_t q = 0; q < moving.size(); ++q)
+          p.push_back(kind == 0 ? 1.0 : kind == 1 ? -1.0 : (q % 2 == static_cast<size_t>(kind - 2)) ? 1.0 : -1.0);
+        patterns.push_back(p);
+      }
+    }
+    patterns.emplace_back();  // no detour to start from
+    double best_cost = std::numeric_limits<double>::infinity();
+    std::optional<std::vector<Track>> best;
+    for (const double target : {1.03, 1.1}) {
+      for (const std::vector<double>& pattern : patterns) {
+        Eigen::VectorXd x = Eigen::VectorXd::Zero(N);
+        for (size_t q = 0; q < pattern.size(); ++q) {
+          const size_t i = moving[q];
+          x(static_cast<int>(i) * nv) = pattern[q] * separation_ * left[i].dot(ax1[i]);
+          x(static_cast<int>(i) * nv + 1) = pattern[q] * separation_ * left[i].dot(ax2[i]);
+        }
+        Eigen::MatrixXd jtj(N, N);
+        Eigen::VectorXd jtr(N);
+        double cost = evaluate(x, target, &jtj, &jtr);
+        double mu = 1e-3;
+        for (int it = 0; it < 200 && mu < 1e12; ++it) {
+          Eigen::MatrixXd a = jtj;
+          for (int v = 0; v < N; ++v) a(v, v) += mu * (jtj(v, v) + 1e-9);
+          const Eigen::VectorXd step = a.ldlt().solve(-jtr);
+          const Eigen::VectorXd y = x + step;
+          const double next = evaluate(y, target, nullptr, nullptr);
+          if (next < cost) {
+            const bool done = cost - next < 1e-12 * cost;
+            x = y;
+            cost = evaluate(x, target, &jtj, &jtr);
+            mu = std::max(mu / 3, 1e-9);
+            if (done) break;
+          } else {
+            mu *= 4;
+          }
+        }
+        std::vector<Track> cand = items;
+        apply(x, cand);
+        bool ok = true;
+        for (size_t i = 0; i < n && ok; ++i) ok = inside(cand[i], items[i]);
+        for (size_t i = 0; i < n && ok; ++i)
+          for (size_t j = i + 1; j < m && ok; ++j) {
+            if (cand[i].group >= 0 && cand[i].group == cand[j].group) continue;
+            const auto ap = approach(cand[i], cand[j]);
+            ok = !ap || ap->ratio >= 1 - 1e-9;
+          }
+        if (!ok) continue;
+        // The least bending and phase drift (the objective; the shortfall is within the margin).
+        if (cost < best_cost) best_cost = cost, best = std::move(cand);
+      }
+      if (best) break;
+    }
+    if (!best) return false;
+    std::copy(best->begin(), best->begin() + static_cast<std::ptrdiff_t>(n),
+              tracks.begin() + static_cast<std::ptrdiff_t>(first));
+    return true;
+  }
+
+  // The phases of an interval's tracks in the product model of a field with their
+  // singularities, f(z) = c(t) Π_j g_j(z), g_j = z − p_j for index +1 and conj(z − p_j) for
+  // −1 (only the tracks that span the whole interval, `whole`): at singularity i the field
+  // is c · e^{iΦ_i} · g_i(z − p_i) with Φ_i = Σ_{j≠i} ind_j arg(p_i − p_j) (directions in
+  // the tangent plane, in i's reference frame). A node, focus or center keeps its type only
+  // if c e^{iΦ_i} keeps its argument; c is free (the far field may turn), so what matters is
+  // each Φ_i's drift from the others' mean. `pos[i][g]`: track i at the grid's sample g.
+  // Fills phi[i][g] (unwrapped along g) for the tracks of `whole`; with `grad`, also
+  // dphi[i][g][j] = ∂Φ_i/∂p_j (world vectors, tangent).
+  double arg_from(const Track& tr, const Vec3& p, const Vec3& d, Vec3* grad) const {
+    if (space_.planar()) {
+      if (grad) *grad = Vec3(-d.y(), d.x(), 0) / d.squaredNorm();
+      return std::atan2(d.y(), d.x());
+    }
+    const int face = space_.locate(p).face;
+    const TangentBundle& bundle = space_.bundle();
+    const cplx c = bundle.world_to_face(face, tr.ref_e1);
+    const cplx cu = std::abs(c) > 0 ? c / std::abs(c) : cplx(1, 0);
+    if (grad) *grad = bundle.face_normal(face).cross(d) / d.squaredNorm();
+    return std::arg(bundle.world_to_face(face, d) * std::conj(cu));
+  }
+  void phases(const std::vector<Track>& items, const std::vector<size_t>& whole,
+              const std::vector<std::vector<Vec3>>& pos, std::vector<std::vector<double>>& phi,
+              std::vector<std::vector<std::vector<Vec3>>>* dphi) const {
+    const size_t G = pos.empty() ? 0 : pos[0].size();
+    phi.assign(items.size(), std::vector<double>(G, 0.0));
+    if (dphi) dphi->assign(items.size(), std::vector<std::vector<Vec3>>(G, std::vector<Vec3>(items.size(), Vec3::Zero())));
+    for (const size_t i : whole)
+      for (size_t g = 0; g < G; ++g) {
+        double sum = 0;
+        for (const size_t j : whole) {
+          if (j == i) continue;
+          const Vec3 d = pos[i][g] - pos[j][g];
+          if (d.norm() <= 1e-12 * space_.diameter()) continue;
+          Vec3 gr;
+          sum += items[j].index * arg_from(items[i], pos[i][g], d, dphi ? &gr : nullptr);
+          if (dphi) {
+            (*dphi)[i][g][i] += items[j].index * gr;
+            (*dphi)[i][g][j] -= items[j].index * gr;
+          }
+        }
+        phi[i][g] = g == 0 ? sum : phi[i][g - 1] + std::remainder(sum - phi[i][g - 1], 2 * std::numbers::pi);
+      }
+  }
+  // The tracks of items[0, n) that span the whole interval [tmin, tmax].
+  // Only on planar domains (on a closed surface the directions to far singularities in one
+  // tangent plane do not make the product model: left to the solve there).
+  std::vector<size_t> whole_tracks(const std::vector<Track>& items, size_t n, double tmin, double tmax) const {
+    std::vector<size_t> out;
+    if (!space_.planar()) return out;
+    for (size_t i = 0; i < n; ++i)
+      if (std::min(items[i].t0, items[i].t1) <= tmin && std::max(items[i].t0, items[i].t1) >= tmax) out.push_back(i);
+    return out;
+  }
+  // The drift of the +1 tracks' phases from their mean (D_i(g) = Φ_i(g) − Φ_i(0) −
+  // mean_k(Φ_k(g) − Φ_k(0))) beyond what the key frames need (u(g) · remainder(D_i(end),
+  // 2π), u the smoothstep of time): the largest over the +1 tracks of `whole` and the samples.
+  double phase_error(const std::vector<Track>& items, const std::vector<size_t>& whole,
+                     const std::vector<std::vector<Vec3>>& pos) const {
+    std::vector<size_t> plus;
+    for (const size_t i : whole)
+      if (items[i].index > 0) plus.push_back(i);
+    if (plus.size() < 2) return 0;
+    std::vector<std::vector<double>> phi;
+    phases(items, whole, pos, phi, nullptr);
+    const size_t G = pos[0].size();
+    auto drift = [&](size_t i, size_t g) {
+      double mean = 0;
+      for (const size_t k : plus) mean += phi[k][g] - phi[k][0];
+      return phi[i][g] - phi[i][0] - mean / static_cast<double>(plus.size());
+    };
+    double out = 0;
+    for (const size_t i : plus) {
+      const double target = std::remainder(drift(i, G - 1), 2 * std::numbers::pi);
+      for (size_t g = 0; g < G; ++g)
+        out = std::max(out, std::abs(drift(i, g) - smoothstep(static_cast<double>(g) / (G - 1)) * target));
+    }
+    return out;
+  }
+  // Positions of tracks [first, last) on the interval's grid of kSamples + 1 times.
+  std::vector<std::vector<Vec3>> on_grid(const std::vector<Track>& items, double tmin, double tmax) const {
+    std::vector<std::vector<Vec3>> pos(items.size(), std::vector<Vec3>(kSamples + 1, Vec3::Zero()));
+    for (size_t i = 0; i < items.size(); ++i)
+      for (int g = 0; g <= kSamples; ++g) {
+        const double t = tmin + (tmax - tmin) * g / kSamples;
+        if (t >= std::min(items[i].t0, items[i].t1) && t <= std::max(items[i].t0, items[i].t1))
+          pos[i][static_cast<size_t>(g)] = at(items[i], t);
+      }
+    return pos;
+  }
+  static std::pair<double, double> span_of(const std::vector<Track>& items) {
+    double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin;
+    for (const Track& tr : items) tmin = std::min({tmin, tr.t0, tr.t1}), tmax = std::max({tmax, tr.t0, tr.t1});
+    return {tmin, tmax};
+  }
+  // The interval's phase error (phase_error) as routed now.
+  double interval_phase_error(const std::vector<Track>& tracks, size_t first, size_t last) const {
+    const std::vector<Track> items(tracks.begin() + static_cast<std::ptrdiff_t>(first),
+                                   tracks.begin() + static_cast<std::ptrdiff_t>(last));
+    if (items.empty()) return 0;
+    const auto [tmin, tmax] = span_of(items);
+    return phase_error(items, whole_tracks(items, items.size(), tmin, tmax), on_grid(items, tmin, tmax));
+  }
+
+  // Fills the `turn` of each saddle that spans the whole interval: in the product model
+  // its β is c · e^{iΦ_s}, so it turns by Φ_s's change plus c's, c's taken as minus the
+  // mean change of the +1 tracks' Φ (which keeps their types). A saddle between two
+  // neighbours that move round it keeps its axes towards them, instead of keeping the key
+  // frames' axes.
+  void turn_with_neighbours(std::vector<Track>& tracks, size_t first, size_t last) const {
+    const std::vector<Track> items(tracks.begin() + static_cast<std::ptrdiff_t>(first),
+                                   tracks.begin() + static_cast<std::ptrdiff_t>(last));
+    if (items.size() < 2) return;
+    const auto [tmin, tmax] = span_of(items);
+    const std::vector<size_t> whole = whole_tracks(items, items.size(), tmin, tmax);
+    const std::vector<std::vector<Vec3>> pos = on_grid(items, tmin, tmax);
+    std::vector<std::vector<double>> phi;
+    phases(items, whole, pos, phi, nullptr);
+    std::vector<size_t> plus;
+    for (const size_t i : whole)
+      if (items[i].index > 0) plus.push_back(i);
+    for (const size_t i : whole) {
+      if (items[i].index >= 0 || whole.size() < 2) continue;
+      Track& tr = tracks[first + i];
+      tr.turn.assign(kSamples + 1, 0.0);
+      for (size_t g = 0; g <= static_cast<size_t>(kSamples); ++g) {
+        double mean = 0;
+        for (const size_t k : plus) mean += phi[k][g] - phi[k][0];
+        if (!plus.empty()) mean /= static_cast<double>(plus.size());
+        // Sampled from the track's first end (t0, the key frame it leaves).
+        const size_t at_g = tr.t0 <= tr.t1 ? g : static_cast<size_t>(kSamples) - g;
+        tr.turn[g] = phi[i][at_g] - phi[i][tr.t0 <= tr.t1 ? 0 : static_cast<size_t>(kSamples)] - mean;
+      }
+      if (tr.t0 > tr.t1) {
+        // mean was taken at the grid's g, not at_g: redo in the track's direction.
+        for (size_t g = 0; g <= static_cast<size_t>(kSamples); ++g) {
+          const size_t at_g = static_cast<size_t>(kSamples) - g;
+          double mean = 0;
+          for (const size_t k : plus) mean += phi[k][at_g] - phi[k][static_cast<size_t>(kSamples)];
+          if (!plus.empty()) mean /= static_cast<double>(plus.size());
+          tr.turn[g] = phi[i][at_g] - phi[i][static_cast<size_t>(kSamples)] - mean;
+        }
+      }
     }
   }
 
@@ -379,6 +847,18 @@ private:
       const Vec3 p = at(tr, tr.t0 + (tr.t1 - tr.t0) * k / kSamples);
       out += (p - prev).norm();
       prev = p;
+    }
+    return out;
+  }
+
+  // Distance from p to the domain's boundary and its nearest point there.
+  std::pair<double, Vec3> boundary_nearest(const Vec3& p) const {
+    std::pair<double, Vec3> out{std::numeric_limits<double>::infinity(), p};
+    for (const auto& [x, y] : boundary_) {
+      const Vec3 e = y - x;
+      const double u = std::clamp((p - x).dot(e) / e.squaredNorm(), 0.0, 1.0);
+      const Vec3 q = x + u * e;
+      if ((p - q).norm() < out.first) out = {(p - q).norm(), q};
     }
     return out;
   }
@@ -454,6 +934,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
                        int face1, int group = -1) {
     Track tr;
     tr.type = a.type;
+    tr.index = a.index;
     tr.group = group;
     tr.p0 = a.position;
     tr.p1 = p1;
@@ -470,6 +951,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   int groups = 0;
   for (size_t k = 0; k + 1 < nk; ++k) {
     const size_t first_track = tracks_.size();
+    std::vector<Track> obstacles;  // the interval's templates, for the router
     const std::vector<Singularity>& A = sing[k];
     const std::vector<Singularity>& B = sing[k + 1];
     KeyframeIntervalReport rep;
@@ -541,6 +1023,15 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         b.time_scale = tau;
         b.angle = std::arg(axis);
         templates_.push_back({CompiledElement(b), tc - tau, tc + tau, std::max(scene.solver.region_radius, 2 * s)});
+        {
+          Track ob;
+          ob.p0 = ob.p1 = mid;
+          ob.t0 = tc - tau;
+          ob.t1 = tc + tau;
+          ob.type = saddle.type;
+          ob.group = groups;
+          obstacles.push_back(ob);
+        }
         // The template's zeros at |t′| = 1 (node on +axis, saddle on −axis) and its
         // Jacobians there: R diag(±2, ±1) Rᵀ in the frame of `face`.
         const Vec3 off = s * bundle.face_to_world(face, axis);
@@ -570,9 +1061,11 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     // Paths that would come closer than the separation are bent around each other.
     const std::string where =
         scene.solver.path_separation ? "solver.path_separation" : "solver.keyframe_topology";
-    if (auto why = router.route(tracks_, first_track, tracks_.size(), scene, where,
-                                fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1)))
+    if (auto why = router.route(tracks_, first_track, tracks_.size(), obstacles, scene, where,
+                                fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1), rep.routing))
       rep.collision = std::move(*why);
+    // Where paths were bent, each Jacobian turns with its neighbourhood.
+    if (rep.routing != "straight") router.turn_with_neighbours(tracks_, first_track, tracks_.size());
     rep.separation = separation;
     for (size_t m = 0; m < rep.matched.size(); ++m) rep.matched[m].detour = router.detour(tracks_[first_track + m]);
     for (size_t i = first_track; i < tracks_.size(); ++i)
@@ -596,6 +1089,19 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
     st.position = tr.raw(s);
     const SurfacePoint at = space.locate(st.position);
     Linear j{blend(tr.j0.alpha, tr.j1.alpha, s), blend(tr.j0.beta, tr.j1.beta, s)};
+    if (!tr.turn.empty()) {
+      // β's argument follows the neighbourhood's turn, plus the shorter-arc remainder
+      // that brings it to the second end's, spread linearly like blend().
+      const double total = tr.turn.back();
+      const double pa = std::abs(tr.j0.beta) > 0   ? std::arg(tr.j0.beta)
+                        : std::abs(tr.j1.beta) > 0 ? std::arg(tr.j1.beta) - total
+                                                   : 0.0;
+      const double pb = std::abs(tr.j1.beta) > 0 ? std::arg(tr.j1.beta) : pa + total;
+      const double rest = std::remainder(pb - pa - total, 2 * std::numbers::pi);
+      const double r = (1 - s) * std::abs(tr.j0.beta) + s * std::abs(tr.j1.beta);
+      j.beta = std::polar(r, pa + tr.turned(t) + s * rest);
+
+    }
     // From the reference frame into the frame at p(t) (the face holding it).
     const cplx c = space.bundle().world_to_face(at.face, tr.ref_e1);
     if (std::abs(c) > 0) j.beta *= (c / std::abs(c)) * (c / std::abs(c));
@@ -646,6 +1152,7 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
     j["separation"] = r.separation;
     if (std::isfinite(r.closest_approach)) j["closest_approach"] = r.closest_approach;
     if (!r.collision.empty()) j["collision"] = r.collision;
+    j["routing"] = r.routing;
     j["unpaired"] = json::array();
     for (const auto& p : r.unpaired_first) j["unpaired"].push_back(xyz(p));
     for (const auto& p : r.unpaired_second) j["unpaired"].push_back(xyz(p));

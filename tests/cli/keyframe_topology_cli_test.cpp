@@ -5,10 +5,13 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <string>
 #include <vector>
 
 namespace tvf {
@@ -100,6 +103,53 @@ TEST(CliKeyframeTopology, Example26CrossingPathsAreBentApart) {
   for (size_t f = 0; f < frames.size(); ++f) {
     ASSERT_EQ(frames[f].size(), 2u) << f;
     EXPECT_GE(std::hypot(frames[f][0][0] - frames[f][1][0], frames[f][0][1] - frames[f][1][1]), 0.3 - 1e-6) << f;
+  }
+}
+
+// Example 26's knot.json: three knotted paths. `tvf generate` says it bent them together,
+// keyframe_topology.json says "routing": "joint" with no collision, and the analysis finds
+// the three designed singularities (a source, a center and the saddle) in every frame, 0.3
+// or more apart (the extra pairs it also finds are docs/architecture.md's).
+TEST(CliKeyframeTopology, Example26KnotIsRoutedTogether) {
+  test::TempDir dir;
+  const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/knot.json";
+  const auto g = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+  EXPECT_NE(g.output.find("3 matched (3 bent together to keep 0.3 apart)"), std::string::npos) << g.output;
+  EXPECT_EQ(g.output.find("warning"), std::string::npos) << g.output;
+  std::ifstream in(dir / "out" / "keyframe_topology.json");
+  const nlohmann::json i = nlohmann::json::parse(in).at("intervals").at(0);
+  EXPECT_EQ(i.at("routing"), "joint");
+  EXPECT_FALSE(i.contains("collision"));
+  EXPECT_GE(i.at("closest_approach").get<double>(), 0.3);
+  const auto a = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json"));
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  std::ifstream ain(dir / "a.json");
+  const nlohmann::json analysis = nlohmann::json::parse(ain);
+  // Per frame: a source, a center and a saddle among the found ones, pairwise 0.3 apart
+  // (the first of each type nearest to the previous frame's).
+  std::map<std::string, std::array<double, 2>> prev;
+  std::vector<std::map<std::string, std::vector<std::array<double, 2>>>> frames(60);
+  for (const auto& s : analysis.at("singularities"))
+    frames.at(s.at("frame").get<size_t>())[s.at("type").get<std::string>()].push_back(
+        {s["position"][0].get<double>(), s["position"][1].get<double>()});
+  prev = {{"source", {-0.5, 0}}, {"center", {0.5, 0}}, {"saddle", {0, 0.29}}};
+  for (size_t f = 0; f < frames.size(); ++f) {
+    std::map<std::string, std::array<double, 2>> cur;
+    for (const auto& [type, last] : prev) {
+      const auto& found = frames[f][type];
+      ASSERT_FALSE(found.empty()) << type << " at frame " << f;
+      cur[type] = *std::min_element(found.begin(), found.end(), [&](const auto& x, const auto& y) {
+        return std::hypot(x[0] - last[0], x[1] - last[1]) < std::hypot(y[0] - last[0], y[1] - last[1]);
+      });
+      EXPECT_LT(std::hypot(cur[type][0] - last[0], cur[type][1] - last[1]), 0.1) << type << " at frame " << f;
+    }
+    for (const auto& [ta, pa] : cur)
+      for (const auto& [tb, pb] : cur)
+        if (ta < tb) {
+          EXPECT_GE(std::hypot(pa[0] - pb[0], pa[1] - pb[1]), 0.3 - 1e-4) << ta << " " << tb << " at frame " << f;
+        }
+    prev = cur;
   }
 }
 

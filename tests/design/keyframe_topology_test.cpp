@@ -164,7 +164,7 @@ TEST(KeyframeTopology, UnmatchedPairsAreCancelledAndCreatedAtTheSetTime) {
 
 // Links override the nearest match. Sources A (−0.6, 0) and B (0, 0) go to C (0.2, 0) and
 // D (0.8, 0): nearest first takes B → C, then A → D, whose path runs through B's (bent
-// around it, yet the analysis shows bifurcations: docs/architecture.md); linking A → C and
+// around it, yet the analysis shows extra pairs: docs/architecture.md); linking A → C and
 // B → D moves both right side by side.
 TEST(KeyframeTopology, LinksChooseThePairs) {
   auto scene = [](const std::string& links) {
@@ -198,6 +198,9 @@ TEST(KeyframeTopology, LinksChooseThePairs) {
               linked.topology.bifurcations.size());
   EXPECT_EQ(linked.topology.bifurcations.size(), 0u);
   EXPECT_EQ(linked.topology.paths.size(), linked.report.keyframe_intervals[0].matched.size());
+  // Nearest first, the saddle between the two sources turns its axes with them (26
+  // bifurcations when it kept the key frames' axes, 14 now; not 0 yet: docs/architecture.md).
+  EXPECT_LE(nearest.topology.bifurcations.size(), 18u);
 }
 
 TEST(KeyframeTopology, OnASphereTheMatchedPathsHaveNoBifurcation) {
@@ -444,6 +447,143 @@ TEST(KeyframeTopology, ReportAndSceneRoundTripAsJson) {
   EXPECT_EQ(j[0]["separation"], 0.3);
   EXPECT_TRUE(j[0].contains("closest_approach"));
   for (const auto& m : j[0]["matched"]) EXPECT_EQ(m["detour"], 0.0);
+}
+
+// A knot of three paths: a source and a center trading places across the saddle the
+// static solve puts between them (matched by type: the saddle stays, the other two cross
+// it and each other half way).
+std::string knot_scene(int n, int frames, const std::string& solver_extra = "") {
+  return R"({"tvf": 1, "domain": {"grid": {"size": [)" + std::to_string(n) + ", " + std::to_string(n) +
+         R"(], "min": [-1, -1], "max": [1, 1]}},
+  "time": {"frames": )" + std::to_string(frames) +
+         R"(, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+  "solver": {"region_radius": 0.15, "keyframe_topology": "matched")" +
+         solver_extra + R"(},
+  "keyframes": [
+    {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
+                          {"kind": "singular", "type": "ccw_center", "at": [0.5, 0]}]},
+    {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]},
+                          {"kind": "singular", "type": "ccw_center", "at": [-0.5, 0]}]}]})";
+}
+
+// The plan of a scene's key-frame topology (the generator makes the same one).
+struct Planned {
+  Scene scene;
+  std::unique_ptr<DesignSpace> space;
+  std::unique_ptr<KeyframeTopologyPlan> plan;
+};
+Planned plan_of(const std::string& text) {
+  Planned p{parse_scene(text, "s"), nullptr, nullptr};
+  p.space = make_design_space(p.scene);
+  const ConnectionLaplacian lap = connection_laplacian(p.space->bundle(), LaplacianWeights::cotan);
+  std::vector<std::vector<cplx>> keys;
+  for (size_t k = 0; k < p.scene.keyframes.size(); ++k) keys.push_back(keyframe_field(*p.space, p.scene, k, lap));
+  p.plan = std::make_unique<KeyframeTopologyPlan>(*p.space, p.scene, keys);
+  return p;
+}
+
+// Over the frames between the key frames: the farthest a carried singularity is from the
+// analysed field's nearest singularity, and the closest two of those nearest ones come.
+std::pair<double, double> followed(const Generated& g, const Planned& p) {
+  double worst = 0, closest = std::numeric_limits<double>::infinity();
+  for (int f = 1; f + 1 < g.field.frames(); ++f) {
+    const auto& frame = g.topology.singularities[static_cast<size_t>(f)];
+    std::vector<Vec3> found;
+    for (const Vec3& c : p.plan->carried(p.scene.time.time(f))) {
+      double best = std::numeric_limits<double>::infinity();
+      Vec3 at = c;
+      for (const Singularity& s : frame)
+        if ((s.position - c).norm() < best) best = (s.position - c).norm(), at = s.position;
+      worst = std::max(worst, best);
+      found.push_back(at);
+    }
+    for (size_t a = 0; a < found.size(); ++a)
+      for (size_t b = a + 1; b < found.size(); ++b) closest = std::min(closest, (found[a] - found[b]).norm());
+  }
+  return {worst, closest};
+}
+
+// Routed one pair at a time the bends chase each other (at 33², 65² and 129² the paths
+// stayed straight with a warning and the source and the center merged on the saddle);
+// routed together, the source passes below the saddle and the center above, the three
+// turning round each other like a rigid body (the phases of the product model kept), and
+// every frame of the analysed field has the three where the plan carries them, 0.3 apart.
+// (Extra pairs still appear between them: docs/architecture.md.)
+TEST(KeyframeTopology, AKnotOfThreePathsIsRoutedTogether) {
+  for (const int n : {33, 65, 129}) {
+    const std::string text = knot_scene(n, 32);
+    const Generated g = run(text);
+    const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+    ASSERT_EQ(r.matched.size(), 3u) << n;
+    EXPECT_EQ(r.collision, "") << n;
+    EXPECT_EQ(r.routing, "joint") << n;
+    EXPECT_TRUE(g.report.warnings.empty()) << n;
+    EXPECT_GE(r.closest_approach, 0.3 * (1 - 1e-9)) << n;
+    for (const auto& m : r.matched) EXPECT_GT(m.detour, 0.05) << n;
+    const Planned p = plan_of(text);
+    const auto [worst, closest] = followed(g, p);
+    std::printf("  knot %d²: routed %s, carried singularities found within %.2g, kept %.4f apart; %zu bifurcations, "
+                "%zu paths\n",
+                n, r.routing.c_str(), worst, closest, g.topology.bifurcations.size(), g.topology.paths.size());
+    // Planar constraints are exact: the linear field's zero is the carried point (found by
+    // the analysis to within its interpolation, h = 2 / (n − 1)).
+    EXPECT_LT(worst, 1e-4) << n;
+    EXPECT_GE(closest, 0.3 - 1e-4) << n;
+    // The paths start and end on the key frames' singularities.
+    for (const Singularity& s : g.topology.singularities.front()) {
+      double d = 1e9;
+      for (const auto& m : r.matched) d = std::min(d, (m.from - s.position).norm());
+      EXPECT_LT(d, 1e-9) << n;
+    }
+  }
+  // Straight, the source and the center run into the saddle and the analysis shows it.
+  const Generated straight = run(knot_scene(33, 32, R"(, "path_separation": 0)"));
+  double worst = std::numeric_limits<double>::infinity();
+  for (const auto& frame : straight.topology.singularities) worst = std::min(worst, closest_pair(frame));
+  std::printf("  knot straight: closest %.4f, %zu bifurcations, %zu paths\n", worst,
+              straight.topology.bifurcations.size(), straight.topology.paths.size());
+  EXPECT_LT(worst, 0.3);
+}
+
+// A sink crossing the place where a saddle and a source are cancelled, while the template
+// holds: the template is an obstacle, so the sink's path goes round it (pairwise routing
+// knew only paths, and led the sink through the template).
+TEST(KeyframeTopology, PathsGoRoundTheTemplatesOfCancelledPairs) {
+  const std::string text = R"({"tvf": 1, "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 41, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.15, "keyframe_topology": "matched"},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "sink", "at": [0, -0.7]},
+                            {"kind": "singular", "type": "saddle", "at": [-0.2, 0]},
+                            {"kind": "singular", "type": "source", "at": [0.2, 0]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "sink", "at": [0, 0.7]}]}]})";
+  const Generated g = run(text);
+  const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+  ASSERT_EQ(r.cancelled.size(), 1u);
+  EXPECT_EQ(r.collision, "");
+  EXPECT_EQ(r.routing, "joint");
+  const Vec3 at = r.cancelled[0].at;
+  const double tau = 0.25 * 0.5;
+  // The plan: every path that is not the pair's keeps the separation from the template's
+  // centre while it holds.
+  const Planned p = plan_of(text);
+  double planned = std::numeric_limits<double>::infinity();
+  for (int k = 0; k <= 64; ++k) {
+    const double t = 0.5 - tau + 2 * tau * k / 64.0;
+    for (const Vec3& c : p.plan->carried(t)) planned = std::min(planned, (c - at).norm());
+  }
+  double found = std::numeric_limits<double>::infinity();
+  for (size_t f = 0; f < g.topology.singularities.size(); ++f) {
+    const double t = p.scene.time.time(static_cast<int>(f));
+    if (t < 0.5 - tau || t > 0.5 + tau) continue;
+    for (const Singularity& s : g.topology.singularities[f])
+      if (s.type == SingularityType::sink) found = std::min(found, (s.position - at).norm());
+  }
+  std::printf("  template obstacle: planned %.4f, nearest sink found %.4f from the template, %zu bifurcations (%zu "
+              "planned)\n",
+              planned, found, g.topology.bifurcations.size(), r.cancelled.size());
+  EXPECT_GE(planned, 0.3 * (1 - 1e-6));
+  EXPECT_GE(r.closest_approach, 0.25);
 }
 
 }  // namespace

@@ -29,6 +29,15 @@
 //     or one path alone is taken; when no detour fits, the interval's paths stay straight
 //     and its report (and a warning) names the two paths that meet.
 //     Distances are chord distances on surfaces (never more than the geodesic ones).
+//  6. when bending one pair after the other does not settle (three or more paths
+//     knotted), leaves a path nearer than the separation to a saddle–node template while
+//     it holds, or (planar domains) lets the nodes' phases in the product model
+//     c Π_j g_j(z) drift half a turn apart, routes all the interval's paths at once: smooth
+//     detours (sin(πs) sin(kπs), k = 1..4) that bend least under the separation, the
+//     boundary margin and the phase drift (Levenberg–Marquardt from each choice of sides);
+//     when that fails too, the paths stay straight with the warning of 5.
+//  7. in a routed interval, turns each saddle's axes with its neighbours (its β follows
+//     the product model's phase) instead of keeping the key frames' axes.
 // Key frames themselves are unchanged. What could not be paired (an odd singularity out,
 // e.g. one that must leave through the boundary) is left to the solve and reported.
 #include "tvf/analysis/singularities.h"
@@ -73,6 +82,10 @@ struct KeyframeIntervalReport {
   // or no set of detours found): why, in one sentence; the interval's paths then stay
   // straight. The generator also gives it as a warning.
   std::string collision;
+  // How the paths were kept apart: "straight" (none came too close, or they could not be
+  // kept apart: see collision), "pairwise" (bent one pair at a time) or "joint" (all the
+  // interval's paths bent at once, keeping clear of its saddle–node templates too).
+  std::string routing = "straight";
 };
 
 // The constraints that keep the topology between key frames, planned once per generation.
