@@ -9,7 +9,11 @@
 #        RUNS="one;mpirun -n 2" picks the runs, default one, mpirun -n 1 and mpirun -n 2; the
 #        first is the reference; FREE_CHECK=1 prints the available memory before each run;
 #        KEYFRAMES=0: no key frames, the same two singularities held fixed at every frame
-#        instead, beside the moving vortex; PETSC_OPTIONS reaches the ranks as usual)
+#        instead, beside the moving vortex; PETSC_OPTIONS reaches the ranks as usual;
+#        KEEP=DIR: the runs' outputs and logs kept in DIR/N/ instead of a removed temporary
+#        folder; REFERENCE=FILE: the differences taken from that field.tvff (a run kept
+#        earlier) instead of the first run's — for sizes whose runs do not fit in memory at
+#        once or in one session)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build/release}
@@ -19,8 +23,13 @@ sizes=("$@")
 tvf="$build/tvf"
 [ -x "$tvf" ] || { echo "run_mpi.sh: $tvf is missing (cmake --build $build --target tvf_cli)" >&2; exit 1; }
 mpirun=(mpirun --oversubscribe --allow-run-as-root --bind-to none)
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
+if [ -n "${KEEP:-}" ]; then
+  mkdir -p "$KEEP"
+  dir=$(cd "$KEEP" && pwd)
+else
+  dir=$(mktemp -d)
+  trap 'rm -rf "$dir"' EXIT
+fi
 cpu=$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')
 echo "Machine: $cpu, $(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GiB; $(date -u +%Y-%m-%d)"
 echo
@@ -28,7 +37,10 @@ echo "Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg)"
 echo
 echo "| grid | vertices | frames | run | generation | wall | CPU (all ranks) | iterations | peak RSS per rank | halo | max difference from the first run |"
 echo "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|"
+top=$dir
 for n in "${sizes[@]}"; do
+  dir=$top
+  if [ -n "${KEEP:-}" ]; then dir=$top/$n; mkdir -p "$dir"; fi
   cat >"$dir/scene.json" <<EOF
 {"tvf": 1,
  "domain": {"grid": {"size": [$n, $n], "min": [-1, -1], "max": [1, 1]}},
@@ -61,8 +73,8 @@ EOF
     "${cmd[@]}" generate "$dir/scene.json" -o "$out" --no-vtk >"$out.log" 2>&1 || { cat "$out.log" >&2; exit 1; }
   done
   # The rows, each field compared with the first run's (the reference).
-  /usr/bin/python3 - "$dir" "$n" "${runs[@]}" <<'PY'
-import json, re, struct, sys
+  REFERENCE=${REFERENCE:-} /usr/bin/python3 - "$dir" "$n" "${runs[@]}" <<'PY'
+import json, os, re, struct, sys
 import numpy as np
 folder, n, runs = sys.argv[1], sys.argv[2], sys.argv[3:]
 def field(path):  # field.tvff's values (docs/file_formats.md), mapped
@@ -73,7 +85,7 @@ def field(path):  # field.tvff's values (docs/file_formats.md), mapped
     v, fc, nf = head["vertices"], head["faces"], head["frames"]
     return np.memmap(path, dtype="<f8", mode="r", offset=20 + h + v * 24 + fc * 12, shape=(nf, v, 2))
 def name(run): return f"{folder}/{run.replace(' ', '_')}"
-ref = field(name(runs[0]) + "/field.tvff")
+ref = field(os.environ.get("REFERENCE") or name(runs[0]) + "/field.tvff")
 largest = max(np.hypot(*ref[j].T).max() for j in range(ref.shape[0]))
 for run in runs:
     log = open(name(run) + ".log").read()
@@ -92,5 +104,5 @@ for run in runs:
           f"{cpu:.0f} s | {its.group(1) if its else ''} | {peaks} GiB | {halo.group(1) if halo else ''} | "
           f"{diff / largest:.1e} |")
 PY
-  rm -rf "$dir"/one "$dir"/mpirun_* "$dir"/*.log
+  [ -n "${KEEP:-}" ] || rm -rf "$dir"/one "$dir"/mpirun_* "$dir"/*.log
 done

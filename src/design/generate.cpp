@@ -253,13 +253,24 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
       check_cancelled(options);
       const int j0 = b * block, count = std::min(block, frames - j0);
       std::vector<SmoothConstraints> c(static_cast<size_t>(count));
+      // The frames' constraints (on surfaces mostly log maps), at once when parallel; a
+      // static element's log map made once a block and thread (a chart made again for
+      // the same point is the same chart, so the values do not depend on the threads).
+      tbb::enumerable_thread_specific<std::vector<KeptChart>> kept;
+      auto gather = [&](int k) {
+        if (k > 0) check_cancelled(options);
+        frame_constraints(space, scene, elements, laplacian, streaklines, j0 + k, ramp, c[static_cast<size_t>(k)],
+                          &kept.local());
+      };
+      if (options.parallel) {
+        tbb::parallel_for(0, count, gather);
+      } else {
+        for (int k = 0; k < count; ++k) gather(k);
+      }
       std::vector<DirichletProblem> problems;
       std::vector<std::span<cplx>> out;
-      std::vector<KeptChart> kept;  // a static element's log map made once a block
       for (int k = 0; k < count; ++k) {
-        if (k > 0) check_cancelled(options);
-        SmoothConstraints& ck = c[static_cast<size_t>(k)];
-        frame_constraints(space, scene, elements, laplacian, streaklines, j0 + k, ramp, ck, &kept);
+        const SmoothConstraints& ck = c[static_cast<size_t>(k)];
         problems.push_back({ck.fixed, ck.values, ck.penalty});
         out.push_back(field.frame(j0 + k));
       }
@@ -274,7 +285,8 @@ Field generate_constrained(const DesignSpace& space, const Scene& scene,
       };
       const bool shown_here = first >= j0 && first < j0 + count;
       const std::vector<SolveReport> r = solver->solve(problems, out, nullptr, solved,
-                                                       shown_here ? static_cast<size_t>(first - j0) : static_cast<size_t>(-1));
+                                                       shown_here ? static_cast<size_t>(first - j0) : static_cast<size_t>(-1),
+                                                       options.parallel);
       for (int k = 0; k < count; ++k) {
         if (r[static_cast<size_t>(k)].success) {
           record(j0 + k, r[static_cast<size_t>(k)]);

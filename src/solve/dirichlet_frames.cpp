@@ -11,8 +11,12 @@
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace tvf {
 
@@ -216,12 +220,25 @@ public:
         if (r < nb && k < nb) entry_c_[p] = c(r, k);
       }
     }
-    if (nt_ > 0) small_.analyzePattern(sigma_);
     return true;
   }
 
+  // What one problem's solve changes: the trailing Schur complement's values and their
+  // factorization. The rest of the block is only read, so problems may be solved at once,
+  // each thread with its own Scratch (the same ordering: the same arithmetic).
+  struct Scratch {
+    SpMat<Scalar> sigma;
+    Eigen::SimplicialLDLT<SpMat<Scalar>, Eigen::Lower, Eigen::AMDOrdering<int>> small;
+  };
+  std::unique_ptr<Scratch> scratch() const {
+    auto s = std::make_unique<Scratch>();
+    s->sigma = sigma_;
+    if (nt_ > 0) s->small.analyzePattern(s->sigma);
+    return s;
+  }
+
   // Solves problem k into out; fills the report (not the method).
-  void solve(int k, std::span<cplx> out, SolveReport& report) {
+  void solve(int k, std::span<cplx> out, SolveReport& report, Scratch& scratch) const {
     const Frame& f = frames_[static_cast<size_t>(k)];
     const auto n = static_cast<size_t>(n_);
     // b: c at fixed vertices; μ c − Σ_{w fixed} L_vw c_w at free ones.
@@ -259,7 +276,7 @@ public:
     std::vector<cplx> z(n);
     if (nt_ > 0) {
       // The trailing Schur complement of this problem: A_TT − C.
-      SpMat<Scalar>& s = sigma_;
+      SpMat<Scalar>& s = scratch.sigma;
       Scalar* sx = s.valuePtr();
       for (int kk = 0; kk < nt_; ++kk) {
         const auto v = static_cast<size_t>(vertex_[static_cast<size_t>(ni_ + kk)]);
@@ -275,13 +292,13 @@ public:
           }
         }
       }
-      small_.factorize(s);
-      if (small_.info() != Eigen::Success) {
+      scratch.small.factorize(s);
+      if (scratch.small.info() != Eigen::Success) {
         report.success = false;
         report.failure = "a zero pivot in the changing vertices' Schur complement";
         return;
       }
-      solve_trailing(y, z);
+      solve_trailing(y, z, scratch.small);
     }
     // Backward through the leading columns.
     for (int j = ni_ - 1; j >= 0; --j) {
@@ -368,7 +385,8 @@ private:
     return ok;
   }
 
-  void solve_trailing(const std::vector<cplx>& y, std::vector<cplx>& z) {
+  template <class Small>
+  void solve_trailing(const std::vector<cplx>& y, std::vector<cplx>& z, const Small& small) const {
     const auto off = static_cast<size_t>(ni_);
     if constexpr (std::is_same_v<Scalar, double>) {
       Eigen::MatrixXd r(nt_, 2);
@@ -376,12 +394,12 @@ private:
         r(k, 0) = y[off + static_cast<size_t>(k)].real();
         r(k, 1) = y[off + static_cast<size_t>(k)].imag();
       }
-      const Eigen::MatrixXd x = small_.solve(r);
+      const Eigen::MatrixXd x = small.solve(r);
       for (int k = 0; k < nt_; ++k) z[off + static_cast<size_t>(k)] = cplx(x(k, 0), x(k, 1));
     } else {
       Eigen::VectorXcd r(nt_);
       for (int k = 0; k < nt_; ++k) r[k] = y[off + static_cast<size_t>(k)];
-      const Eigen::VectorXcd x = small_.solve(r);
+      const Eigen::VectorXcd x = small.solve(r);
       for (int k = 0; k < nt_; ++k) z[off + static_cast<size_t>(k)] = x[k];
     }
   }
@@ -403,25 +421,24 @@ private:
   SpMat<Scalar> sigma_;
   std::vector<Scalar> entry_l_, entry_c_;
   std::vector<int> entry_row_;
-  Eigen::SimplicialLDLT<SpMat<Scalar>, Eigen::Lower, Eigen::AMDOrdering<int>> small_;
 };
 
 template <class Scalar>
 void solve_frames(const SpMat<Scalar>& l, const Eigen::VectorXd& diagonal, double max_trailing,
                   std::span<const Frame> frames, std::span<const std::span<cplx>> out, std::span<SolveReport> reports,
                   DirichletFrames::Statistics& stats, const std::function<void(size_t)>& after_each,
-                  size_t first, bool cholmod, size_t solve_first) {
+                  size_t first, bool cholmod, size_t solve_first, bool parallel) {
   Block<Scalar> block(l, diagonal, frames, cholmod);
   const int nt = block.trailing();
   if (frames.size() > 1 && nt > max_trailing * static_cast<double>(l.rows())) {
     const size_t half = frames.size() / 2;
     auto lower = [&] {
       solve_frames(l, diagonal, max_trailing, frames.first(half), out.first(half), reports.first(half), stats,
-                   after_each, first, cholmod, solve_first);
+                   after_each, first, cholmod, solve_first, parallel);
     };
     auto upper = [&] {
       solve_frames(l, diagonal, max_trailing, frames.subspan(half), out.subspan(half), reports.subspan(half), stats,
-                   after_each, first + half, cholmod, solve_first);
+                   after_each, first + half, cholmod, solve_first, parallel);
     };
     // The half holding solve_first goes first (the halves' results do not depend on it).
     if (solve_first >= first + half && solve_first < first + frames.size()) {
@@ -444,15 +461,28 @@ void solve_frames(const SpMat<Scalar>& l, const Eigen::VectorXd& diagonal, doubl
     return;
   }
   // Each frame is solved on its own with the block's factorization: the order only says
-  // which is ready first.
+  // which is ready first (solve_first alone, then the others, at once when `parallel`:
+  // otherwise a machine with more cores than blocks of frames would leave them idle).
+  using Scratch = typename Block<Scalar>::Scratch;
   const size_t lead = solve_first >= first && solve_first < first + frames.size() ? solve_first - first : frames.size();
-  auto one = [&](size_t k) {
-    block.solve(static_cast<int>(k), out[k], reports[k]);
+  auto one = [&](size_t k, Scratch& s) {
+    block.solve(static_cast<int>(k), out[k], reports[k], s);
     if (after_each) after_each(first + k);
   };
-  if (lead < frames.size()) one(lead);
-  for (size_t k = 0; k < frames.size(); ++k)
-    if (k != lead) one(k);
+  const std::unique_ptr<Scratch> own = block.scratch();
+  if (lead < frames.size()) one(lead, *own);
+  if (!parallel) {
+    for (size_t k = 0; k < frames.size(); ++k)
+      if (k != lead) one(k, *own);
+    return;
+  }
+  tbb::enumerable_thread_specific<std::unique_ptr<Scratch>> scratches;
+  tbb::parallel_for(size_t(0), frames.size(), [&](size_t k) {
+    if (k == lead) return;
+    std::unique_ptr<Scratch>& s = scratches.local();
+    if (!s) s = block.scratch();
+    one(k, *s);
+  });
 }
 
 }  // namespace
@@ -471,7 +501,7 @@ DirichletFrames::DirichletFrames(const ConnectionLaplacian& laplacian, Dirichlet
 std::vector<SolveReport> DirichletFrames::solve(std::span<const DirichletProblem> problems,
                                                 std::span<const std::span<cplx>> out, Statistics* statistics,
                                                 const std::function<void(size_t)>& after_each,
-                                                size_t solve_first) const {
+                                                size_t solve_first, bool parallel) const {
   TVF_CHECK(problems.size() == out.size(), "{} problems, {} outputs", problems.size(), out.size());
   std::vector<SolveReport> reports(problems.size());
   if (problems.empty()) return reports;
@@ -486,10 +516,10 @@ std::vector<SolveReport> DirichletFrames::solve(std::span<const DirichletProblem
   const bool cholmod = static_cast<int>(n) >= options_.cholmod_from;
   if (real_)
     solve_frames<double>(real_matrix_, laplacian_.weight_sum, options_.max_trailing_fraction, frames, out, reports,
-                         stats, after_each, 0, cholmod, solve_first);
+                         stats, after_each, 0, cholmod, solve_first, parallel);
   else
     solve_frames<cplx>(laplacian_.matrix, laplacian_.weight_sum, options_.max_trailing_fraction, frames, out, reports,
-                       stats, after_each, 0, cholmod, solve_first);
+                       stats, after_each, 0, cholmod, solve_first, parallel);
   const char* method = real_ ? "sparse Cholesky (real LDLᵀ shared by a block of frames, changing vertices last)"
                              : "sparse Cholesky (LDLᴴ shared by a block of frames, changing vertices last)";
   for (size_t k = 0; k < reports.size(); ++k) {

@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <random>
 
 namespace tvf {
@@ -101,6 +103,48 @@ TEST(DirichletFrames, ABlockOfMovingConstraintsGivesEachFramesOwnSolution) {
         }
         EXPECT_LT(worst, 1e-11 * largest) << what << " frame " << k;
       }
+    }
+  }
+}
+
+// The frames of a block solved at once on TBB's threads: the same results bit for bit as
+// one after the other (each thread its own Schur complement; the block's factor only
+// read), the viewer's frame still first, and after_each called once for every frame.
+TEST(DirichletFrames, FramesSolvedAtOnceEqualThemSolvedInTurn) {
+  for (const bool cholmod : {false, true}) {
+    const Mesh& mesh = test::icosphere_mesh();
+    const TangentBundle bundle(mesh);
+    const ConnectionLaplacian l = connection_laplacian(bundle);
+    const Frames f = moving_discs(mesh, l, 12, 3 * mesh.mean_edge_length());
+    const auto n = static_cast<size_t>(mesh.num_vertices());
+    DirichletFramesOptions o;
+    o.max_trailing_fraction = 1.0;
+    o.cholmod_from = cholmod ? 0 : 1 << 30;
+    const DirichletFrames frames(l, o);
+    const std::vector<DirichletProblem> problems = f.problems();
+    auto run = [&](bool parallel, std::vector<std::vector<cplx>>& out, std::vector<size_t>& order) {
+      out.assign(f.fixed.size(), std::vector<cplx>(n));
+      std::vector<std::span<cplx>> spans(out.begin(), out.end());
+      std::mutex m;
+      const auto after = [&](size_t k) {
+        std::lock_guard lock(m);
+        order.push_back(k);
+      };
+      return frames.solve(problems, spans, nullptr, after, 5, parallel);
+    };
+    std::vector<std::vector<cplx>> in_turn, at_once;
+    std::vector<size_t> order_in_turn, order_at_once;
+    const auto r1 = run(false, in_turn, order_in_turn);
+    const auto r2 = run(true, at_once, order_at_once);
+    ASSERT_EQ(order_at_once.size(), f.fixed.size());
+    EXPECT_EQ(order_in_turn.front(), 5u);
+    EXPECT_EQ(order_at_once.front(), 5u);  // the viewer's frame before the others start
+    std::sort(order_at_once.begin(), order_at_once.end());
+    for (size_t k = 0; k < order_at_once.size(); ++k) EXPECT_EQ(order_at_once[k], k);
+    for (size_t k = 0; k < f.fixed.size(); ++k) {
+      ASSERT_TRUE(r1[k].success && r2[k].success) << k;
+      EXPECT_EQ(r1[k].residual, r2[k].residual) << k;
+      for (size_t v = 0; v < n; ++v) ASSERT_EQ(in_turn[k][v], at_once[k][v]) << "frame " << k << " vertex " << v;
     }
   }
 }

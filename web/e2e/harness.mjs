@@ -122,7 +122,24 @@ export class Designer {
         }, st.revision);
         if (shown) return st;
       }
-      if (Date.now() - start > timeout) throw new Error(`not settled after ${timeout} ms: ${JSON.stringify(st)}`);
+      if (Date.now() - start > timeout) {
+        // What the page was doing: its state, its status handling and its last steps.
+        const page = await this.page
+          .evaluate(() => {
+            const s = window.tvf.state;
+            const now = performance.now();
+            return JSON.stringify({
+              resultRevision: s.resultRevision,
+              analysisRevision: s.analysisRevision,
+              frame: s.frame,
+              frames: [...s.frames.keys()],
+              pending: window.tvf.pending(),
+              marks: window.tvf.marks.slice(-24).map(([what, at]) => `${what} (${((at - now) / 1000).toFixed(2)} s)`),
+            });
+          })
+          .catch((e) => `unreadable: ${e.message}`);
+        throw new Error(`not settled after ${timeout} ms: ${JSON.stringify(st)}; the page: ${page}`);
+      }
       await this.page.waitForTimeout(50);
     }
   }

@@ -23,15 +23,28 @@ export class ApiError extends Error {
 
 // `revision`: the scene revision a change was made on, sent as If-Match (the server
 // answers 412 when the scene has moved on since: another tab or client changed it).
-async function call<T>(method: string, path: string, body?: unknown, revision?: number): Promise<T> {
+// `timeout`: seconds after which the request is given up (ApiError 0), for the reads the
+// page's status handling waits on: a connection that never answers (a lost packet, a
+// stalled proxy) must not freeze the page, which then asks again. Renders and uploads,
+// which may take minutes, have none.
+async function call<T>(method: string, path: string, body?: unknown, revision?: number, timeout?: number): Promise<T> {
   const init: RequestInit = { method };
+  if (timeout !== undefined) init.signal = AbortSignal.timeout(timeout * 1000);
   const headers: Record<string, string> = {};
   if (body !== undefined) init.body = JSON.stringify(body);
   if (method !== "GET") headers["Content-Type"] = "application/json";
   if (revision !== undefined) headers["If-Match"] = `"${revision}"`;
   init.headers = headers;
-  const res = await fetch(path, init);
-  const text = await res.text();
+  let res: Response;
+  let text: string;
+  try {
+    res = await fetch(path, init);
+    text = await res.text();
+  } catch (e) {
+    if (e instanceof DOMException && e.name === "TimeoutError")
+      throw new ApiError(0, `${method} ${path}: no answer within ${timeout} s`);
+    throw e;
+  }
   let json: unknown;
   try {
     json = JSON.parse(text);
@@ -69,10 +82,19 @@ export function parseBinaryFrame(bytes: ArrayBuffer): Frame {
   return frame;
 }
 
-async function frameCall(path: string): Promise<Frame> {
-  const res = await fetch(path);
-  if (res.ok) return parseBinaryFrame(await res.arrayBuffer());
-  const text = await res.text();
+// A binary frame, given up after `timeout` seconds (ApiError 0) as call's reads.
+async function frameCall(path: string, timeout: number): Promise<Frame> {
+  let res: Response;
+  let bytes: ArrayBuffer;
+  try {
+    res = await fetch(path, { signal: AbortSignal.timeout(timeout * 1000) });
+    bytes = await res.arrayBuffer();
+  } catch (e) {
+    if (e instanceof DOMException && e.name === "TimeoutError") throw new ApiError(0, `GET ${path}: no answer within ${timeout} s`);
+    throw e;
+  }
+  if (res.ok) return parseBinaryFrame(bytes);
+  const text = new TextDecoder().decode(bytes);
   let error: string | undefined;
   try {
     error = (JSON.parse(text) as { error?: string }).error;
@@ -145,17 +167,21 @@ export interface Analysis {
   periodic_orbits?: { frame: number; t: number; center: number[]; radius: number; stability: string; points: number[][]; id: number }[];
 }
 
+// The longest a read may take: the server itself waits up to 20 s for a field or an
+// analysis being made (field_wait_seconds), then answers 409.
+const READ_TIMEOUT = 60;
+
 export const api = {
-  scene: () => call<SceneState>("GET", "api/scene"),
+  scene: () => call<SceneState>("GET", "api/scene", undefined, undefined, READ_TIMEOUT),
   putScene: (scene: Scene, revision?: number) => call<SceneState>("PUT", "api/scene", scene, revision),
   edit: (edit: unknown, revision?: number) => call<{ revision: number; summary: string }>("POST", "api/edit", edit, revision),
   undo: (revision?: number) => call<SceneState>("POST", "api/undo", undefined, revision),
   redo: (revision?: number) => call<SceneState>("POST", "api/redo", undefined, revision),
-  status: () => call<Status>("GET", "api/status"),
-  mesh: () => call<MeshData>("GET", "api/mesh"),
-  frame: (j: number) => frameCall(`api/frame/${j}?format=f32`),
-  analysis: () => call<Analysis>("GET", "api/analysis"),
-  preview: () => frameCall("api/preview?format=f32"),
+  status: () => call<Status>("GET", "api/status", undefined, undefined, READ_TIMEOUT),
+  mesh: () => call<MeshData>("GET", "api/mesh", undefined, undefined, READ_TIMEOUT),
+  frame: (j: number) => frameCall(`api/frame/${j}?format=f32`, READ_TIMEOUT),
+  analysis: () => call<Analysis>("GET", "api/analysis", undefined, undefined, READ_TIMEOUT),
+  preview: () => frameCall("api/preview?format=f32", READ_TIMEOUT),
   // The deformation key's translate that moves a streamline's seed to `to` (on surfaces in
   // the log-map chart around the seed, computed by the library).
   seedTranslation: (seed: number[], to: number[]) => call<{ translate: number[] }>("POST", "api/seed_translation", { seed, to }),

@@ -340,6 +340,7 @@ async function applyStatus(st: Status) {
       await showStatus(s);
     }
   } catch (e) {
+    mark(`status not shown: ${(e as Error).message}`);
     $("status").textContent = `server unreachable (${(e as Error).message})`;
   } finally {
     showing = false;
@@ -384,7 +385,9 @@ async function loadResult(st: Status) {
   const frame = api.frame(j);
   frame.catch(() => undefined); // a failed frame is asked for again by showFrame
   const needMesh = !state.mesh || st.domain === undefined || st.domain !== state.meshDomain;
+  mark(`result ${revision}: frame ${j} asked${needMesh ? ", mesh asked" : ""}`);
   const mesh = needMesh ? await api.mesh() : undefined;
+  if (mesh) mark(`mesh ${mesh.domain}`);
   let f: Frame | undefined;
   try {
     f = await frame;
@@ -1185,6 +1188,8 @@ document.addEventListener("keydown", (e) => {
 (window as unknown as { tvf: unknown }).tvf = {
   state,
   marks,
+  // What the status handling is doing (the e2e harness prints it when a page never settles).
+  pending: () => ({ showing, nextStatus, lastStatus, analysisLoading }),
   view: () => (planar() ? view() : undefined),
   spacetime: (p: number[]) => spacetime.toScreen(p),
   spacetimeLabels: () => spacetime.timeLabels(),

@@ -65,11 +65,13 @@ public:
   // DirichletSolver; the caller groups consecutive frames. after_each(k), if given, is
   // called as soon as problem k is solved (progress; it may throw to cancel the rest).
   // Problem solve_first, if in range, is solved before the others (a viewer's frame); the
-  // results do not depend on the order, which only says when each is ready.
+  // results do not depend on the order, which only says when each is ready. `parallel`:
+  // the problems sharing a factorization are solved at once on TBB's threads (the same
+  // results, bit for bit); after_each must then be safe to call from several threads.
   std::vector<SolveReport> solve(std::span<const DirichletProblem> problems, std::span<const std::span<cplx>> out,
                                  Statistics* statistics = nullptr,
                                  const std::function<void(size_t)>& after_each = {},
-                                 size_t solve_first = static_cast<size_t>(-1)) const;
+                                 size_t solve_first = static_cast<size_t>(-1), bool parallel = false) const;
 
   // Whether L is real (a flat connection), so that the factorizations are real.
   bool real() const { return real_; }
