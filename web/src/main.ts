@@ -327,6 +327,9 @@ function behind(): boolean {
   const st = lastStatus;
   if (!st || st.state !== "ready" || st.result_revision <= 0) return false;
   if (state.resultRevision < st.result_revision || !state.frames.has(state.frame)) return true;
+  // The shown result's analysis still to come: asked for too, not only waited for as a
+  // push (a pushed event was seen not to arrive under load, the page then stuck without it).
+  if (st.analysis === "running" && st.result_revision === state.resultRevision) return true;
   return st.analysis !== "failed" && st.analysis_revision === state.resultRevision && state.analysisRevision !== state.resultRevision;
 }
 async function applyStatus(st: Status) {
