@@ -541,6 +541,15 @@ json Session::put_scene(const json& j, long long on_revision) {
     check_revision(on_revision, s_->design->revision(), "scene");
   }
   Scene next = s_->parse(j);
+  if (!s_->options.solve_while_saving) {
+    // Saved first (before_change), then the solve is scheduled.
+    std::lock_guard change(s_->change_mutex);
+    std::lock_guard lock(s_->mutex);
+    check_revision(on_revision, s_->design->revision(), "scene");
+    s_->design->set_scene(std::move(next));
+    s_->schedule();
+    return s_->scene_json();
+  }
   // The new scene's solve starts at once, while the scene is saved (the durable save,
   // two fsyncs, takes 10–60 ms on a busy disk; issue 15); the answer, the new revision and
   // everything the solve makes (its shown frame, its field) only once the save succeeded.

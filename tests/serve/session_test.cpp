@@ -211,8 +211,12 @@ TEST(ServeSession, TheBinaryFrameHoldsTheJsonFramesValues) {
 // A new scene's solve starts while the scene is saved; when the save fails nothing
 // changes: the revision, the file, and the field of the current scene, which is still made.
 TEST(ServeSession, ASceneThatCannotBeSavedChangesNothingAndTheFieldGoesOn) {
+  for (const bool overlap : {true, false}) {
+  SCOPED_TRACE(overlap ? "solve while saving" : "save, then solve");
   test::TempDir dir;
-  Session s(options_in(dir));
+  SessionOptions o = options_in(dir);
+  o.solve_while_saving = overlap;
+  Session s(o);
   const long long r0 = s.revision();
   json next = s.scene()["scene"];
   next["falloff"] = 12.0;
@@ -238,6 +242,7 @@ TEST(ServeSession, ASceneThatCannotBeSavedChangesNothingAndTheFieldGoesOn) {
   st = s.status();
   EXPECT_EQ(st["state"], "ready");
   EXPECT_EQ(st["result_revision"], r0 + 1);
+  }
 }
 
 TEST(ServeSession, RefusedScenesChangeNothingAndUndoRedoWalkTheHistory) {

@@ -67,6 +67,12 @@ struct SessionOptions {
   // asked for (the running solve) before answering 409 "still being generated". The
   // wait holds no lock: status, reads and other changes go on meanwhile.
   double field_wait_seconds = 20;
+  // put_scene starts the new scene's solve while the scene is being saved (its fsyncs),
+  // publishing nothing of it before the save succeeded (issue 15). Off by default: it saves
+  // the save's 10–60 ms only in theory on a loaded machine (docs/benchmarks.md, "The save
+  // overlapped"), and with it on the designer's page missed pushed analysis events in
+  // latency runs (cause not found); `tvf serve --solve-while-saving` turns it on.
+  bool solve_while_saving = false;
 };
 
 // The revision a change was made on (HTTP If-Match): kAnyRevision accepts the change on
