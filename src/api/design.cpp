@@ -414,6 +414,16 @@ std::shared_ptr<const DesignResult> Design::last_result() const { return s_->las
 
 Design::Solve Design::prepare_solve() const { return s_->prepare_solve(); }
 
+Design::Solve Design::prepare_solve(Scene next) const {
+  s_->need_scene();  // a Design opened from a field file without a scene does not generate
+  Solve job = s_->prepare_solve();
+  job.scene_ = std::move(next);
+  job.revision_ = s_->revision + 1;
+  job.space_key_ = domain_key(job.scene_);
+  job.space_ = s_->space && s_->space_key == job.space_key_ ? s_->space : nullptr;
+  return job;
+}
+
 bool Design::adopt(Solve&& solve) { return s_->adopt(solve); }
 
 void Design::Solve::run(GenerateOptions options, bool analyze) {

@@ -40,6 +40,18 @@ namespace {
 // takes microseconds, while its Brotli (quality 11) takes half a second for a frame.
 constexpr const char* kJson = "application/json; charset=utf-8";
 
+// Binary frames (GET /api/frame/J?format=f32): cpp-httplib does not compress this type.
+constexpr const char* kBinary = "application/octet-stream";
+
+// ?format=f32 asks for the binary form of a frame; no format (or "json") for JSON.
+bool binary_format(const httplib::Request& req) {
+  if (!req.has_param("format")) return false;
+  const std::string f = req.get_param_value("format");
+  if (f == "f32") return true;
+  if (f == "json") return false;
+  throw RequestError(400, fmt::format("format: \"{:.40}\" is not one of json, f32", f));
+}
+
 void send_json(httplib::Response& res, const json& body, int status = 200) {
   res.status = status;
   // Invalid UTF-8 (bytes of a user's file quoted in a message) is replaced, not thrown on.
@@ -551,11 +563,18 @@ struct HttpServer::Impl {
                  });
                }));
     server.Get("/api/mesh", wrap([&s](const auto&, auto& res) { send_json(res, s.mesh()); }));
+    // A frame (and the preview) as JSON, or with ?format=f32 in binary (docs/serve_api.md,
+    // "Binary frames": float32 vectors after a JSON head; errors are JSON either way).
     server.Get(R"(/api/frame/(-?\d{1,9}))", wrap([&s](const auto& req, auto& res) {
-                 send_json(res, s.frame(std::stoi(req.matches[1].str())));
+                 const int j = std::stoi(req.matches[1].str());
+                 if (binary_format(req)) res.set_content(s.frame_f32(j), kBinary);
+                 else send_json(res, s.frame(j));
                }));
     server.Get("/api/analysis", wrap([&s](const auto&, auto& res) { send_json(res, s.analysis()); }));
-    server.Get("/api/preview", wrap([&s](const auto&, auto& res) { send_json(res, s.preview()); }));
+    server.Get("/api/preview", wrap([&s](const auto& req, auto& res) {
+                 if (binary_format(req)) res.set_content(s.preview_f32(), kBinary);
+                 else send_json(res, s.preview());
+               }));
     server.Post("/api/export", wrap_body([&s](const auto& req, auto& res, const std::string& text) {
                   send_json(res, s.export_field(parse_json(text), if_match(req)));
                 }));

@@ -15,7 +15,9 @@
 #include <atomic>
 #include <cctype>
 #include <chrono>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <condition_variable>
 #include <mutex>
 #include <new>
@@ -99,6 +101,28 @@ std::vector<double> compact(const std::vector<float>& values) {
   return out;
 }
 
+// The binary form of a frame (docs/serve_api.md, "Binary frames"): a 4-byte little-endian
+// length n, n bytes of JSON (the frame's JSON without "vectors", plus "count", the number
+// of floats; padded with spaces so that the floats start at a multiple of 4), then
+// `count` float32 values, little-endian: x, y, z per vertex.
+std::string binary_frame(json head, const std::vector<float>& values) {
+  static_assert(sizeof(float) == 4);
+  head["count"] = values.size();
+  std::string text = head.dump(-1, ' ', false, json::error_handler_t::replace);
+  text.append((4 - text.size() % 4) % 4, ' ');
+  std::string out(4 + text.size() + 4 * values.size(), '\0');
+  const auto n = static_cast<std::uint32_t>(text.size());
+  for (int k = 0; k < 4; ++k) out[static_cast<size_t>(k)] = static_cast<char>((n >> (8 * k)) & 0xff);
+  std::memcpy(out.data() + 4, text.data(), text.size());
+  unsigned char* f = reinterpret_cast<unsigned char*>(out.data()) + 4 + text.size();
+  for (const float v : values) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &v, 4);
+    for (int k = 0; k < 4; ++k) *f++ = static_cast<unsigned char>((bits >> (8 * k)) & 0xff);
+  }
+  return out;
+}
+
 // A change made on `on_revision` while the scene is at `current`: refused (412).
 void check_revision(long long on_revision, long long current, const char* what) {
   if (on_revision != kAnyRevision && on_revision != current)
@@ -163,6 +187,24 @@ struct Session::State {
   int focus_frame = 0;                       // the frame asked for last: made first
   std::shared_ptr<const Preview> preview;    // that frame of a solve under way
   std::thread worker;
+  // Changes (a new scene, an edit's commit, undo, redo) one at a time, each with its save:
+  // the scene file always holds the current scene. Taken before `mutex`, never after it;
+  // a new scene is saved holding this one only, so status and reads go on meanwhile.
+  std::mutex change_mutex;
+  // A new scene's solve starts while the scene is being saved (put_scene): `upcoming` is
+  // the revision it will have once saved (0: none), `next_job` its solve for the worker.
+  // What that solve makes before the scene is saved waits here and is published at the
+  // commit (nothing of a revision is shown before its scene is on disk).
+  long long upcoming = 0;
+  std::optional<Design::Solve> next_job;
+  struct Early {
+    std::optional<Design::Solve> job;
+    double seconds = 0;
+    std::string failure;
+  };
+  std::optional<Early> early;             // the upcoming revision's solve, finished
+  std::shared_ptr<const Preview> held_preview;  // the upcoming revision's shown frame
+  bool saved_already = false;  // before_change: the scene about to be set is on disk
   std::condition_variable analysis_work;  // a result without its analysis was published
   std::thread analyst;
 
@@ -230,7 +272,9 @@ struct Session::State {
       work.wait(lock, [&] { return pending || stop; });
       if (stop) return;
       pending = false;
-      Design::Solve job = design->prepare_solve();
+      // The solve of a new scene being saved (put_scene), or of the current scene.
+      Design::Solve job = next_job ? std::move(*next_job) : design->prepare_solve();
+      next_job.reset();
       const int first_frame = focus_frame;
       auto flag = std::make_shared<std::atomic<bool>>(false);
       cancel = flag;
@@ -254,7 +298,12 @@ struct Session::State {
           std::lock_guard preview_lock(mutex);
           // Superseded already, or on another domain than the result's (a client would
           // draw it on the mesh it has): no preview.
-          if (p->revision != design->revision() || !p->space || !result || &result->space() != p->space.get()) return;
+          if (!p->space || !result || &result->space() != p->space.get()) return;
+          if (p->revision == upcoming) {
+            held_preview = std::move(p);  // published once its scene is saved (put_scene)
+            return;
+          }
+          if (p->revision != design->revision()) return;
           preview = std::move(p);
           touch();
         };
@@ -280,22 +329,34 @@ struct Session::State {
       lock.lock();
       if (stopped) ++cancelled;
       const long long job_revision = job.revision();
-      if (job_revision != design->revision()) continue;  // superseded: its successor is pending
-      if (job.result()) {
-        auto published = std::make_shared<Result>();
-        published->revision = job_revision;
-        published->scene = job.scene();
-        published->made = job.result();
-        published->seconds = seconds;
-        design->adopt(std::move(job));
-        publish(std::move(published));
-        state = "ready";
-      } else if (!failure.empty()) {
-        state = "failed";
-        error = failure;
+      if (job_revision != design->revision()) {
+        // The solve of a new scene that is still being saved: kept for put_scene, which
+        // publishes it once the scene is on disk. Otherwise superseded: its successor is
+        // pending.
+        if (job_revision == upcoming && !stopped) early = Early{std::move(job), seconds, failure};
+        continue;
       }
-      touch();
+      finish(job, seconds, failure);
     }
+  }
+
+  // Publishes what a solve of the current revision made (caller holds `mutex`): its
+  // field, or its failure; a cancelled solve changes nothing but the change count.
+  void finish(Design::Solve& job, double seconds, const std::string& failure) {
+    if (job.result()) {
+      auto published = std::make_shared<Result>();
+      published->revision = job.revision();
+      published->scene = job.scene();
+      published->made = job.result();
+      published->seconds = seconds;
+      design->adopt(std::move(job));
+      publish(std::move(published));
+      state = "ready";
+    } else if (!failure.empty()) {
+      state = "failed";
+      error = failure;
+    }
+    touch();
   }
 
   // Makes `r` the result readers get (caller holds `mutex`): its domain id (a new one when
@@ -426,8 +487,11 @@ Session::Session(SessionOptions options) : s_(std::make_unique<State>()) {
   design_options.parallel = s_->options.parallel;
   design_options.history = s_->options.history;
   design_options.kept_fields = 0;
-  // Every change is saved first, so that one that cannot be saved is not made.
-  design_options.before_change = [path](const Scene& next) { save_scene(next, path.string()); };
+  // Every change is saved first, so that one that cannot be saved is not made (put_scene
+  // saves its scene itself, before set_scene, holding only change_mutex).
+  design_options.before_change = [path, state = s_.get()](const Scene& next) {
+    if (!state->saved_already) save_scene(next, path.string());
+  };
   s_->design.emplace(std::move(scene), std::move(design_options));
   remove_stale_temporaries(s_->dir);
   if (path.parent_path() != s_->dir) remove_stale_temporaries(path.parent_path());
@@ -477,10 +541,57 @@ json Session::put_scene(const json& j, long long on_revision) {
     check_revision(on_revision, s_->design->revision(), "scene");
   }
   Scene next = s_->parse(j);
+  if (!s_->options.solve_while_saving) {
+    // Saved first (before_change), then the solve is scheduled.
+    std::lock_guard change(s_->change_mutex);
+    std::lock_guard lock(s_->mutex);
+    check_revision(on_revision, s_->design->revision(), "scene");
+    s_->design->set_scene(std::move(next));
+    s_->schedule();
+    return s_->scene_json();
+  }
+  // The new scene's solve starts at once, while the scene is saved (the durable save,
+  // two fsyncs, takes 10–60 ms on a busy disk; issue 15); the answer, the new revision and
+  // everything the solve makes (its shown frame, its field) only once the save succeeded.
+  // A failed save changes nothing: the solve is dropped and the current one goes on.
+  std::lock_guard change(s_->change_mutex);
+  {
+    std::lock_guard lock(s_->mutex);
+    check_revision(on_revision, s_->design->revision(), "scene");
+    if (s_->cancel) s_->cancel->store(true);
+    s_->next_job.emplace(s_->design->prepare_solve(next));
+    s_->upcoming = s_->next_job->revision();
+    s_->early.reset();
+    s_->held_preview.reset();
+    s_->pending = true;
+    s_->work.notify_one();
+  }
+  try {
+    save_scene(next, s_->scene_path().string());
+  } catch (...) {
+    std::lock_guard lock(s_->mutex);
+    s_->upcoming = 0;
+    s_->next_job.reset();
+    s_->early.reset();
+    s_->held_preview.reset();
+    if (s_->cancel) s_->cancel->store(true);
+    // The current revision's solve may have been cancelled for the new one: again.
+    if (!(s_->result && s_->result->revision == s_->design->revision()) && s_->state != "failed") s_->schedule();
+    throw;
+  }
   std::lock_guard lock(s_->mutex);
-  check_revision(on_revision, s_->design->revision(), "scene");
+  s_->saved_already = true;
   s_->design->set_scene(std::move(next));
-  s_->schedule();
+  s_->saved_already = false;
+  s_->upcoming = 0;
+  s_->state = "running";
+  s_->error.clear();
+  s_->total = s_->design->scene().time.frames;
+  if (s_->held_preview && s_->held_preview->revision == s_->design->revision()) s_->preview = std::move(s_->held_preview);
+  s_->held_preview.reset();
+  if (s_->early && s_->early->job->revision() == s_->design->revision()) s_->finish(*s_->early->job, s_->early->seconds, s_->early->failure);
+  s_->early.reset();
+  s_->touch();
   return s_->scene_json();
 }
 
@@ -531,6 +642,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
   made->made = job->result();
   made->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+  std::lock_guard change(s_->change_mutex);
   std::lock_guard lock(s_->mutex);
   check_revision(job->revision(), s_->design->revision(), "edit");
   s_->design->adopt(std::move(*job));  // saves the scene first (before_change)
@@ -544,6 +656,7 @@ json Session::edit_on(const json& entry, long long on_revision, std::chrono::ste
 }
 
 json Session::undo(long long on_revision) {
+  std::lock_guard change(s_->change_mutex);
   std::lock_guard lock(s_->mutex);
   check_revision(on_revision, s_->design->revision(), "undo");
   if (!s_->design->can_undo()) throw RequestError(409, "nothing to undo");
@@ -553,6 +666,7 @@ json Session::undo(long long on_revision) {
 }
 
 json Session::redo(long long on_revision) {
+  std::lock_guard change(s_->change_mutex);
   std::lock_guard lock(s_->mutex);
   check_revision(on_revision, s_->design->revision(), "redo");
   if (!s_->design->can_redo()) throw RequestError(409, "nothing to redo");
@@ -622,6 +736,30 @@ json Session::mesh() const {
 }
 
 json Session::frame(int j) const {
+  std::vector<float> vectors;
+  json out = frame_parts(j, vectors);
+  out["vectors"] = compact(vectors);
+  return out;
+}
+
+std::string Session::frame_f32(int j) const {
+  std::vector<float> vectors;
+  return binary_frame(frame_parts(j, vectors), vectors);
+}
+
+json Session::preview() const {
+  std::vector<float> vectors;
+  json out = preview_parts(vectors);
+  out["vectors"] = compact(vectors);
+  return out;
+}
+
+std::string Session::preview_f32() const {
+  std::vector<float> vectors;
+  return binary_frame(preview_parts(vectors), vectors);
+}
+
+json Session::frame_parts(int j, std::vector<float>& vectors) const {
   const auto r = s_->current_result();
   const int frames = r->field().frames();
   if (j < 0 || j >= frames)
@@ -642,15 +780,15 @@ json Session::frame(int j) const {
                     {"type", to_string(list[k].type)},
                     {"index", list[k].index},
                     {"path", r->analysed() ? r->topology().singularity_path[static_cast<size_t>(j)][k] : -1}});
+  vectors = world_vectors_f32(r->space().bundle(), r->field(), j);
   return {{"revision", r->revision},
           {"frame", j},
           {"frames", frames},
           {"t", r->field().time().time(j)},
-          {"vectors", compact(world_vectors_f32(r->space().bundle(), r->field(), j))},
           {"singularities", sing}};
 }
 
-json Session::preview() const {
+json Session::preview_parts(std::vector<float>& world) const {
   std::shared_ptr<const Preview> p;
   long long result_revision = 0;
   {
@@ -666,7 +804,7 @@ json Session::preview() const {
                     {"type", to_string(x.type)},
                     {"index", x.index},
                     {"path", -1}});
-  std::vector<float> world;
+  world.clear();
   world.reserve(p->values.size() * 3);
   const TangentBundle& bundle = p->space->bundle();
   for (size_t v = 0; v < p->values.size(); ++v) {
@@ -678,7 +816,6 @@ json Session::preview() const {
           {"frames", p->frames},
           {"t", p->t},
           {"preview", true},
-          {"vectors", compact(world)},
           {"singularities", sing}};
 }
 

@@ -76,6 +76,18 @@ TEST(ServeHttp, SceneFrameAnalysisAndEditsOverHttp) {
   auto plain = f.client->Get("/api/frame/3", httplib::Headers{{"Accept-Encoding", "br, gzip"}});
   ASSERT_TRUE(plain);
   EXPECT_EQ(plain->get_header_value("Content-Encoding"), "");
+  // The binary frame (docs/serve_api.md, "Binary frames"): the session's bytes, as they are.
+  auto binary = f.client->Get("/api/frame/3?format=f32", httplib::Headers{{"Accept-Encoding", "br, gzip"}});
+  ASSERT_TRUE(binary);
+  EXPECT_EQ(binary->status, 200);
+  EXPECT_EQ(binary->get_header_value("Content-Type"), "application/octet-stream");
+  EXPECT_EQ(binary->get_header_value("Content-Encoding"), "");
+  EXPECT_EQ(binary->body, f.session->frame_f32(3));
+  EXPECT_EQ(binary->body.size() % 4, 0u);
+  EXPECT_LT(binary->body.size(), 33u * 33u * 3u * 4u + 1000u);
+  EXPECT_EQ(body(f.client->Get("/api/frame/3?format=json"), 200)["frame"], 3);
+  EXPECT_NE(body(f.client->Get("/api/frame/3?format=png"), 400)["error"].get<std::string>().find("format"), std::string::npos);
+  EXPECT_EQ(body(f.client->Get("/api/preview?format=f32"), 404)["error"].get<std::string>().substr(0, 8), "preview:");
   EXPECT_FALSE(body(f.client->Get("/api/analysis"), 200)["paths"].empty());
 
   scene["scene"]["falloff"] = 15;

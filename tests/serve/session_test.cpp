@@ -15,6 +15,8 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <future>
 #include <thread>
 #include <fstream>
@@ -172,6 +174,75 @@ TEST(ServeSession, TheShownFrameOfASolveUnderWayIsPublishedFirst) {
   const json final_frame = s.frame(5);
   EXPECT_EQ(preview["vectors"], final_frame["vectors"]);  // the finished field's frame
   EXPECT_EQ(preview["singularities"].size(), final_frame["singularities"].size());
+}
+
+// GET /api/frame/J?format=f32: a 4-byte little-endian length, the frame's JSON without
+// "vectors" (with "count"), padded so that the floats start at a multiple of 4, then the
+// vectors as float32: the JSON frame's values (which print each float to 7 digits).
+TEST(ServeSession, TheBinaryFrameHoldsTheJsonFramesValues) {
+  test::TempDir dir;
+  Session s(options_in(dir));
+  ASSERT_TRUE(s.wait_idle(120));
+  const json frame = s.frame(7);
+  const std::string bytes = s.frame_f32(7);
+  ASSERT_GE(bytes.size(), 4u);
+  uint32_t n = 0;
+  for (int k = 3; k >= 0; --k) n = (n << 8) | static_cast<unsigned char>(bytes[static_cast<size_t>(k)]);
+  EXPECT_EQ((4 + n) % 4, 0u);
+  ASSERT_LE(4 + n, bytes.size());
+  const json head = json::parse(bytes.substr(4, n));
+  EXPECT_FALSE(head.contains("vectors"));
+  for (const char* key : {"revision", "frame", "frames", "t", "singularities"}) EXPECT_EQ(head[key], frame[key]) << key;
+  const size_t count = head["count"];
+  ASSERT_EQ(count, frame["vectors"].size());
+  ASSERT_EQ(bytes.size(), 4 + n + 4 * count);
+  double largest = 0;
+  for (size_t k = 0; k < count; ++k) {
+    float v = 0;
+    std::memcpy(&v, bytes.data() + 4 + n + 4 * k, 4);  // the machine is little-endian (x86, ARM)
+    const double j = frame["vectors"][k].get<double>();
+    EXPECT_NEAR(v, j, 1e-6 * std::max(1.0, std::abs(j))) << k;
+    largest = std::max(largest, std::abs(j));
+  }
+  EXPECT_GT(largest, 0.1);  // a real field, not zeros
+  EXPECT_EQ(status_of([&] { s.frame_f32(500); }), 400);
+}
+
+// A new scene's solve starts while the scene is saved; when the save fails nothing
+// changes: the revision, the file, and the field of the current scene, which is still made.
+TEST(ServeSession, ASceneThatCannotBeSavedChangesNothingAndTheFieldGoesOn) {
+  for (const bool overlap : {true, false}) {
+  SCOPED_TRACE(overlap ? "solve while saving" : "save, then solve");
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.solve_while_saving = overlap;
+  Session s(o);
+  const long long r0 = s.revision();
+  json next = s.scene()["scene"];
+  next["falloff"] = 12.0;
+  // The scene file cannot be replaced: a folder with a file in it stands in its place.
+  const std::string before = test::read_text(dir / "scene.json");
+  fs::remove(dir / "scene.json");
+  fs::create_directories(dir / "scene.json");
+  { std::ofstream(dir / "scene.json" / "keep") << "x"; }
+  EXPECT_THROW(s.put_scene(next), Error);  // right after start: its first solve is under way
+  EXPECT_EQ(s.revision(), r0);
+  ASSERT_TRUE(s.wait_idle(120));
+  json st = s.status();
+  EXPECT_EQ(st["state"], "ready");
+  EXPECT_EQ(st["result_revision"], r0);
+  EXPECT_FALSE(st.contains("preview_revision"));
+  EXPECT_EQ(s.scene()["scene"]["falloff"], 20.0);
+  // Saved again once the file can be written: the next revision is this change's.
+  fs::remove_all(dir / "scene.json");
+  { std::ofstream(dir / "scene.json") << before; }
+  EXPECT_EQ(s.put_scene(next)["revision"].get<long long>(), r0 + 1);
+  EXPECT_EQ(load_scene((dir / "scene.json").string()).falloff, 12.0);
+  ASSERT_TRUE(s.wait_idle(120));
+  st = s.status();
+  EXPECT_EQ(st["state"], "ready");
+  EXPECT_EQ(st["result_revision"], r0 + 1);
+  }
 }
 
 TEST(ServeSession, RefusedScenesChangeNothingAndUndoRedoWalkTheHistory) {

@@ -58,6 +58,52 @@ async function call<T>(method: string, path: string, body?: unknown, revision?: 
   return json as T;
 }
 
+// A frame in binary (GET /api/frame/J?format=f32, docs/serve_api.md "Binary frames"): a
+// 4-byte little-endian length n, n bytes of JSON (the frame without "vectors", with
+// "count"), then `count` little-endian float32 values. A quarter of the JSON's bytes,
+// and the vectors need no parsing. Errors are JSON, as for every call.
+export function parseBinaryFrame(bytes: ArrayBuffer): Frame {
+  const view = new DataView(bytes);
+  const n = view.getUint32(0, true);
+  const head = JSON.parse(new TextDecoder().decode(new Uint8Array(bytes, 4, n))) as Omit<Frame, "vectors"> & { count: number };
+  const start = 4 + n;
+  if (start % 4 !== 0 || start + 4 * head.count > bytes.byteLength) throw new Error("a binary frame of the wrong length");
+  // Little-endian floats read in place on little-endian machines (every browser's), else one by one.
+  const little = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
+  let vectors: Float32Array;
+  if (little) vectors = new Float32Array(bytes, start, head.count);
+  else {
+    vectors = new Float32Array(head.count);
+    for (let k = 0; k < head.count; ++k) vectors[k] = view.getFloat32(start + 4 * k, true);
+  }
+  const frame = head as unknown as Frame & { count?: number };
+  delete frame.count;
+  frame.vectors = vectors;
+  return frame;
+}
+
+// A binary frame, given up after `timeout` seconds (ApiError 0) as call's reads.
+async function frameCall(path: string, timeout: number): Promise<Frame> {
+  let res: Response;
+  let bytes: ArrayBuffer;
+  try {
+    res = await fetch(path, { signal: AbortSignal.timeout(timeout * 1000) });
+    bytes = await res.arrayBuffer();
+  } catch (e) {
+    if (e instanceof DOMException && e.name === "TimeoutError") throw new ApiError(0, `GET ${path}: no answer within ${timeout} s`);
+    throw e;
+  }
+  if (res.ok) return parseBinaryFrame(bytes);
+  const text = new TextDecoder().decode(bytes);
+  let error: string | undefined;
+  try {
+    error = (JSON.parse(text) as { error?: string }).error;
+  } catch {
+    throw new ApiError(res.status, `GET ${path}: the server answered ${res.status} without JSON`);
+  }
+  throw new ApiError(res.status, error ?? `HTTP ${res.status}`);
+}
+
 export interface SceneState {
   revision: number;
   scene: Scene;
@@ -97,7 +143,7 @@ export interface Frame {
   frame: number;
   frames: number;
   t: number;
-  vectors: number[];
+  vectors: ArrayLike<number>; // world x, y, z per vertex (a Float32Array from the binary frame)
   singularities: FrameSingularity[];
   preview?: boolean; // GET /api/preview: one frame of a solve under way
 }
@@ -133,9 +179,9 @@ export const api = {
   redo: (revision?: number) => call<SceneState>("POST", "api/redo", undefined, revision),
   status: () => call<Status>("GET", "api/status", undefined, undefined, READ_TIMEOUT),
   mesh: () => call<MeshData>("GET", "api/mesh", undefined, undefined, READ_TIMEOUT),
-  frame: (j: number) => call<Frame>("GET", `api/frame/${j}`, undefined, undefined, READ_TIMEOUT),
+  frame: (j: number) => frameCall(`api/frame/${j}?format=f32`, READ_TIMEOUT),
   analysis: () => call<Analysis>("GET", "api/analysis", undefined, undefined, READ_TIMEOUT),
-  preview: () => call<Frame>("GET", "api/preview", undefined, undefined, READ_TIMEOUT),
+  preview: () => frameCall("api/preview?format=f32", READ_TIMEOUT),
   // The deformation key's translate that moves a streamline's seed to `to` (on surfaces in
   // the log-map chart around the seed, computed by the library).
   seedTranslation: (seed: number[], to: number[]) => call<{ translate: number[] }>("POST", "api/seed_translation", { seed, to }),

@@ -327,6 +327,9 @@ function behind(): boolean {
   const st = lastStatus;
   if (!st || st.state !== "ready" || st.result_revision <= 0) return false;
   if (state.resultRevision < st.result_revision || !state.frames.has(state.frame)) return true;
+  // The shown result's analysis still to come: asked for too, not only waited for as a
+  // push (a pushed event was seen not to arrive under load, the page then stuck without it).
+  if (st.analysis === "running" && st.result_revision === state.resultRevision) return true;
   return st.analysis !== "failed" && st.analysis_revision === state.resultRevision && state.analysisRevision !== state.resultRevision;
 }
 async function applyStatus(st: Status) {
@@ -819,6 +822,7 @@ canvas.addEventListener("pointerup", (e) => {
   const isClick = stroke.length < 2 || Math.hypot(p[0] - stroke[0][0], p[1] - stroke[0][1]) < view().worldLength(6);
   const t = Number(currentTime().toFixed(4));
   const [ts, te] = lifeSpan();
+  if (deformIgnores(state.tool === "singular" ? selectedType() : state.tool)) return redraw();
   try {
     const type = selectedType();
     if (state.tool === "singular") {
@@ -856,8 +860,19 @@ canvas.addEventListener("pointerup", (e) => {
   redraw();
 });
 
+// The deform generator turns its base design (deform.base: the elements placed before the
+// field was deformed) and ignores the scene's elements and key frames, so the tools that
+// would add one there say so and add nothing (true). `what`: the thing not added.
+const ADDS_ELEMENTS = ["singular", "pathline", "streakline", "streamline", "bifurcation"];
+function deformIgnores(what: string): boolean {
+  if (!state.scene || scene().generator !== "deform" || !ADDS_ELEMENTS.includes(state.tool)) return false;
+  say(`not added: the deform generator ignores new elements and key frames (it turns its base design), so this ${what} would change nothing; choose another generator to design with it`, true);
+  return true;
+}
+
 function surfacePick(p: number[]) {
   if (!state.scene) return;
+  if (deformIgnores(state.tool === "singular" ? selectedType() : state.tool)) return;
   const at = rounded(p);
   const t = Number(currentTime().toFixed(4));
   const type = selectedType();
@@ -954,6 +969,7 @@ function surfaceStroke(points: number[][]) {
   if (!state.scene) return;
   const t = Number(currentTime().toFixed(4));
   const [ts, te] = lifeSpan();
+  if (deformIgnores(state.tool === "singular" ? selectedType() : state.tool)) return;
   try {
     if (points.length < 2) return say(`drag on the surface to draw a ${state.tool}`, true);
     if (state.tool === "singular") {
@@ -987,6 +1003,7 @@ function surfaceStroke(points: number[][]) {
 // A stroke drawn in the space-time view: [x, y, t] points (spacetime_draw.ts).
 spacetime.onStroke = (points) => {
   if (!state.scene || !planar()) return;
+  if (deformIgnores("pathline")) return;
   try {
     const g = scene().domain.grid!;
     const line = spaceTimePathline(points, { min: [g.min[0], g.min[1]], max: [g.max[0], g.max[1]], range: [scene().time.range[0], scene().time.range[1]] });

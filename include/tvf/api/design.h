@@ -204,6 +204,12 @@ public:
   };
   // The generation of the current scene (throws tvf::Error without a scene).
   Solve prepare_solve() const;
+  // The generation of `next`, the scene that a change about to be made will make current
+  // (revision() + 1), so that it can run while the change is still being saved (tvf
+  // serve's session starts the solve before the scene file is durable). adopt() takes its
+  // result only once set_scene(next) has made that revision, and the caller makes sure
+  // that no other change comes between (the session serialises its changes).
+  Solve prepare_solve(Scene next) const;
   // Makes solve's result the current scene's when the Design is still at its revision
   // (true), and keeps the domain it built; false (nothing changes but the kept domain)
   // when a change came since.

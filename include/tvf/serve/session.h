@@ -33,6 +33,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace tvf {
 class TangentBundle;
@@ -66,6 +67,12 @@ struct SessionOptions {
   // asked for (the running solve) before answering 409 "still being generated". The
   // wait holds no lock: status, reads and other changes go on meanwhile.
   double field_wait_seconds = 20;
+  // put_scene starts the new scene's solve while the scene is being saved (its fsyncs),
+  // publishing nothing of it before the save succeeded (issue 15). Off by default: it saves
+  // the save's 10–60 ms only in theory on a loaded machine (docs/benchmarks.md, "The save
+  // overlapped"), and with it on the designer's page missed pushed analysis events in
+  // latency runs (cause not found); `tvf serve --solve-while-saving` turns it on.
+  bool solve_while_saving = false;
 };
 
 // The revision a change was made on (HTTP If-Match): kAnyRevision accepts the change on
@@ -136,6 +143,11 @@ public:
   // Frame in [0, frames − 1]. RequestError(409) before the first result. The frame read
   // last is the one the next solve makes first (preview()).
   nlohmann::json frame(int frame) const;
+  // The same frame in binary (docs/serve_api.md, "Binary frames": GET /api/frame/J?format=f32):
+  // a 4-byte little-endian length n, n bytes of the JSON above without "vectors" and with
+  // "count" (the number of floats), then the vectors as `count` little-endian float32
+  // values. A quarter of the JSON's bytes on a 65² grid, and nothing to print or parse.
+  std::string frame_f32(int frame) const;
   // The frame a client shows, ready before the rest of a solve under way (issue 15): the
   // frame asked for last (frame()) is made first by the generators that solve frame by
   // frame (basis, constrained, deform; not spacetime, not for scenes with edits or an
@@ -145,6 +157,7 @@ public:
   // singularities found for the frame alone ("path" −1); its values are the final field's.
   // RequestError(404) when no solve under way has one newer than the last result.
   nlohmann::json preview() const;
+  std::string preview_f32() const;  // the same in binary, as frame_f32
   // The analysis JSON of DESIGN §9 of the last result, plus "revision". Waits for it (it
   // follows the field; a newer result meanwhile: the newer one's) up to
   // field_wait_seconds: RequestError(409) when it is not there by then or failed.
@@ -220,6 +233,9 @@ private:
     long long revision = 0;
   };
   FieldView current_field() const;
+  // A frame's (or the preview's) JSON without "vectors", and the vectors.
+  nlohmann::json frame_parts(int frame, std::vector<float>& vectors) const;
+  nlohmann::json preview_parts(std::vector<float>& vectors) const;
 };
 
 }  // namespace tvf::serve
