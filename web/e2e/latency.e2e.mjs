@@ -15,7 +15,7 @@
 // the page. Writes latency.json and, after each generator's changes with pushed results,
 // a screenshot latency_GENERATOR.png to --out.
 // Usage: node e2e/latency.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH] [--changes N]
-//        [--generators basis,spacetime] [--modes push] [--sphere basis,spacetime|none] [--steps]
+//        [--generators basis,spacetime] [--modes push] [--sphere basis,spacetime|none] [--sphere-changes N] [--steps]
 // --steps prints, for every change, the page's steps (window.tvf.marks) in ms after the event.
 import fs from "node:fs";
 import path from "node:path";
@@ -30,6 +30,10 @@ const only = process.argv.indexOf("--generators");
 const generators = only > 0 ? process.argv[only + 1].split(",") : ["basis", "constrained", "spacetime", "deform"];
 const sphereAt = process.argv.indexOf("--sphere");
 const sphereGenerators = sphereAt > 0 ? process.argv[sphereAt + 1].split(",").filter((g) => g !== "none") : ["basis", "spacetime"];
+// Changes on the sphere (each one a whole 20k × 100 field and its analysis: seconds idle,
+// a minute or more on a loaded machine), and how long one may take to reach the page.
+const sphereChangesAt = process.argv.indexOf("--sphere-changes");
+const sphereChanges = sphereChangesAt > 0 ? Number(process.argv[sphereChangesAt + 1]) : n;
 const median = (v) => [...v].sort((x, y) => x - y)[Math.floor(v.length / 2)];
 
 // The geodesic sphere of the benchmarks (make_geodesic_sphere(45): each icosahedron face
@@ -93,7 +97,7 @@ const timeChange = (page, act) =>
     // page holds the new revision and its frame), then its analysis.
     let shown = -1;
     let whole = -1;
-    for (const end = t0 + 60000; performance.now() < end; await new Promise((r) => setTimeout(r, 2))) {
+    for (const end = t0 + (act.waitMs ?? 60000); performance.now() < end; await new Promise((r) => setTimeout(r, 2))) {
       const s = window.tvf.state;
       if (shown < 0 && s.shownRevision > before) shown = performance.now() - t0;
       if (whole < 0 && s.resultRevision > before && s.frames.has(s.frame)) whole = performance.now() - t0;
@@ -102,25 +106,31 @@ const timeChange = (page, act) =>
         return [shown, whole, performance.now() - t0, steps];
       }
     }
-    return [shown, whole, -1, []];
+    // Not there: what the page was doing (printed with the failure).
+    const s = window.tvf.state;
+    const steps = window.tvf.marks.filter(([, at]) => at >= t0).map(([what, at]) => `${what} @${Math.round(at - t0)}`);
+    steps.push(`page: result ${s.resultRevision}, analysis ${s.analysisRevision}, frame ${s.frame} ${s.frames.has(s.frame) ? "loaded" : "missing"}, ` +
+      `status handling ${JSON.stringify(window.tvf.pending())}`);
+    return [shown, whole, -1, steps];
   }, act);
 const results = [];
 let failed = false;
 let page;
 
 // `n` changes made by `actFor(k)` (timeChange's act), timed; prints and records a row.
-async function series(page, d, mode, generator, actFor) {
+async function series(page, d, mode, generator, actFor, count = n) {
   const times = [];
   const analysed = [];
   const wholes = [];
   const solves = [];
-  for (let k = 0; k < n; ++k) {
+  for (let k = 0; k < count; ++k) {
     const result = await timeChange(page, await actFor(k));
     const [ms, wholeMs, analysisMs, steps] = result;
     wholes.push(wholeMs);
     if (process.argv.includes("--steps")) console.log(`  ${mode} ${generator} change ${k + 1}: ${steps.join(", ")}`);
     analysed.push(analysisMs);
     check(ms >= 0, `${mode} · ${generator}: change ${k + 1} reached the page`);
+    if (analysisMs < 0) console.log(`  the page's steps: ${steps.join(", ")}`);
     check(analysisMs >= 0, `${mode} · ${generator}: the analysis of change ${k + 1} reached the page`);
     times.push(ms);
     solves.push(1000 * ((await d.status()).seconds ?? 0));
@@ -197,11 +207,11 @@ try {
         await page.selectOption("#singular-type", "source");
         const sb = await page.locator("#surface canvas").boundingBox();
         await series(page, d, mode, `sphere20k_${generator}`, async (k) => {
-          const q = [-0.6 + (1.2 * k) / Math.max(1, n - 1), -1, k % 2 ? 0.5 : 0.1];
+          const q = [-0.6 + (1.2 * k) / Math.max(1, sphereChanges - 1), -1, k % 2 ? 0.5 : 0.1];
           const r = Math.hypot(...q);
           const [x, y] = await page.evaluate((p) => window.tvf.surface(p), q.map((v) => v / r));
-          return { pointer: [sb.x + x, sb.y + y], selector: "#surface canvas" };
-        });
+          return { pointer: [sb.x + x, sb.y + y], selector: "#surface canvas", waitMs: 300000 };
+        }, sphereChanges);
       }
     }
     await context.close();
