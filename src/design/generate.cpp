@@ -456,6 +456,32 @@ void spacetime_constraints(const DesignSpace& space, const Scene& scene, const C
   });
 }
 
+// The space-time solve's end, in one process and on the ranks alike: a solve short of the
+// tolerance is the scene's error; the report names the method, its residual and
+// iterations, the key-frame intervals and their collisions as warnings.
+void require_converged(const Scene& scene, const SolveReport& r) {
+  if (!r.success)
+    throw_input_error(scene.label(), "solver.tolerance",
+                      fmt::format("the space-time solve stopped at relative residual {:.2e} after {} "
+                                  "iterations, short of the tolerance {:.1e}",
+                                  r.residual, r.iterations, scene.solver.tolerance));
+}
+
+void report_spacetime(GenerateReport* report, const Scene& scene, int nv, std::chrono::steady_clock::time_point start,
+                      const std::string& method, const SolveReport& r,
+                      std::vector<KeyframeIntervalReport> intervals) {
+  if (report) {
+    report->method = "spatio-temporal optimization, " + method;
+    report->residual = r.residual;
+    report->iterations = r.iterations;
+    report->keyframe_intervals = std::move(intervals);
+  }
+  finish_report(report, scene, nv, start);
+  if (report)
+    for (const KeyframeIntervalReport& k : report->keyframe_intervals)
+      if (!k.collision.empty()) report->warnings.push_back(k.collision);
+}
+
 // The spacetime generator under mpirun (solve/distributed.h), method cg or auto: no rank
 // holds the whole problem. The vertices are partitioned first (the solve's partition);
 // the constraints are evaluated by frames, rank r taking its turn of `chunk` frames at a
@@ -530,26 +556,13 @@ Field generate_spacetime_shares(const DesignSpace& space, const Scene& scene, co
   const SolveReport r = petsc_spacetime_solve_shares(laplacian, shares, scene.time.frames,
                                                      scene.solver.temporal_weight, fixed, z, st);
   std::vector<char>().swap(fixed);
-  if (!r.success)
-    throw_input_error(scene.label(), "solver.tolerance",
-                      fmt::format("the space-time solve stopped at relative residual {:.2e} after {} "
-                                  "iterations, short of the tolerance {:.1e}",
-                                  r.residual, r.iterations, scene.solver.tolerance));
+  require_converged(scene, r);
   // The gather step: the whole field on rank 0 only.
   Field field(scene.time, rank == 0 ? nv : 0);
   petsc_gather_to_root(shares, z, scene.time.frames, field.data());
   if (ranks > 1) petsc_keep_share(std::move(shares), std::move(z), scene.time.frames);
   if (options.progress) options.progress(scene.time.frames, scene.time.frames);
-  if (report) {
-    report->method = "spatio-temporal optimization, " + r.method;
-    report->residual = r.residual;
-    report->iterations = r.iterations;
-    report->keyframe_intervals = std::move(intervals);
-  }
-  finish_report(report, scene, nv, start);
-  if (report)
-    for (const KeyframeIntervalReport& k : report->keyframe_intervals)
-      if (!k.collision.empty()) report->warnings.push_back(k.collision);
+  report_spacetime(report, scene, nv, start, r.method, r, std::move(intervals));
   return field;
 }
 
@@ -628,22 +641,9 @@ Field generate_spacetime(const DesignSpace& space, const Scene& scene,
   const SolveReport r = solver.solve(problem.fixed, values, field.data(), st);
   check_cancelled(options);
   if (options.progress) options.progress(scene.time.frames, scene.time.frames);
-  if (!r.success)
-    throw_input_error(scene.label(), "solver.tolerance",
-                      fmt::format("the space-time solve stopped at relative residual {:.2e} after {} "
-                                  "iterations, short of the tolerance {:.1e}",
-                                  r.residual, r.iterations, scene.solver.tolerance));
+  require_converged(scene, r);
   if (options.cache) options.cache->state().last.assign(field.data().begin(), field.data().end());
-  if (report) {
-    report->method = "spatio-temporal optimization, " + r.method + (warm ? " (warm start)" : "");
-    report->residual = r.residual;
-    report->iterations = r.iterations;
-    report->keyframe_intervals = std::move(intervals);
-  }
-  finish_report(report, scene, nv, start);
-  if (report)
-    for (const KeyframeIntervalReport& k : report->keyframe_intervals)
-      if (!k.collision.empty()) report->warnings.push_back(k.collision);
+  report_spacetime(report, scene, nv, start, r.method + (warm ? " (warm start)" : ""), r, std::move(intervals));
   return field;
 }
 
