@@ -233,9 +233,8 @@ TEST(KeyframeTopology, OnASphereTheMatchedPathsHaveNoBifurcation) {
   EXPECT_LT(worst_mean_turn(g, 3 * h), 0.25);
 }
 
-// A source and a sink trading places across the domain: matched by type, their straight
-// paths meet head on half way.
-std::string swap_scene(int n, int frames, const std::string& solver_extra = "") {
+// A source and another singularity of `other` type trading places across the grid.
+std::string trading_scene(int n, int frames, const std::string& other, const std::string& solver_extra) {
   return R"({"tvf": 1, "domain": {"grid": {"size": [)" + std::to_string(n) + ", " + std::to_string(n) +
          R"(], "min": [-1, -1], "max": [1, 1]}},
   "time": {"frames": )" + std::to_string(frames) +
@@ -244,9 +243,15 @@ std::string swap_scene(int n, int frames, const std::string& solver_extra = "") 
          solver_extra + R"(},
   "keyframes": [
     {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
-                          {"kind": "singular", "type": "sink", "at": [0.5, 0]}]},
+                          {"kind": "singular", "type": ")" + other + R"(", "at": [0.5, 0]}]},
     {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]},
-                          {"kind": "singular", "type": "sink", "at": [-0.5, 0]}]}]})";
+                          {"kind": "singular", "type": ")" + other + R"(", "at": [-0.5, 0]}]}]})";
+}
+
+// A source and a sink trading places across the domain: matched by type, their straight
+// paths meet head on half way.
+std::string swap_scene(int n, int frames, const std::string& solver_extra = "") {
+  return trading_scene(n, frames, "sink", solver_extra);
 }
 
 // The smallest distance between two singularities of one frame of the analysed field.
@@ -453,17 +458,7 @@ TEST(KeyframeTopology, ReportAndSceneRoundTripAsJson) {
 // static solve puts between them (matched by type: the saddle stays, the other two cross
 // it and each other half way).
 std::string knot_scene(int n, int frames, const std::string& solver_extra = "") {
-  return R"({"tvf": 1, "domain": {"grid": {"size": [)" + std::to_string(n) + ", " + std::to_string(n) +
-         R"(], "min": [-1, -1], "max": [1, 1]}},
-  "time": {"frames": )" + std::to_string(frames) +
-         R"(, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
-  "solver": {"region_radius": 0.15, "keyframe_topology": "matched")" +
-         solver_extra + R"(},
-  "keyframes": [
-    {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
-                          {"kind": "singular", "type": "ccw_center", "at": [0.5, 0]}]},
-    {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]},
-                          {"kind": "singular", "type": "ccw_center", "at": [-0.5, 0]}]}]})";
+  return trading_scene(n, frames, "ccw_center", solver_extra);
 }
 
 // The plan of a scene's key-frame topology (the generator makes the same one).
