@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev          # dense/sparse linear algebra
   libsuitesparse-dev     # CHOLMOD sparse Cholesky
   libtbb-dev             # parallel frames
-  libopenblas-dev        # dense products of the space-time solver (run-time AVX dispatch)
+  libopenblas-dev        # BLAS of CHOLMOD's supernodal factorization (run-time AVX dispatch)
   nlohmann-json3-dev     # scene JSON
   libcli11-dev           # command line
   libfmt-dev libspdlog-dev
