@@ -203,9 +203,13 @@ int run_analyze(const AnalyzeArgs& args) {
                   orbits.hopf.size());
     }
     for (const auto& f : pictures) std::printf("  %s\n", f.c_str());
-    if (check)
-      std::printf("%s\n  %s\n", check->summary().c_str(), cli::design_check_path(args.out).c_str());
-    else
+    if (check) {
+      std::printf("%s\n", check->summary().c_str());
+      for (const auto& k : check->keyframe_intervals)
+        std::printf("  key frames %d → %d (t %g → %g): %d bifurcations planned, %zu not asked for\n", k.from_keyframe,
+                    k.to_keyframe, k.t0, k.t1, k.planned, k.extra_bifurcations.size());
+      std::printf("  %s\n", cli::design_check_path(args.out).c_str());
+    } else
       std::printf("no scene.json beside the field: nothing to check the design against\n");
   }
   return 0;

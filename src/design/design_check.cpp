@@ -297,6 +297,9 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     }
     const KeyframeTopologyPlan plan(space, scene, key_fields);
     for (const KeyframeIntervalReport& r : plan.intervals())
+      out.keyframe_intervals.push_back({r.from_keyframe, r.to_keyframe, r.t0, r.t1,
+                                        static_cast<int>(r.created.size() + r.cancelled.size()), {}});
+    for (const KeyframeIntervalReport& r : plan.intervals())
       for (int creation = 0; creation < 2; ++creation)
         for (const KeyframeIntervalReport::Pair& p : creation ? r.created : r.cancelled) {
           if (N < 2 || p.t <= topo.times.front() || p.t >= topo.times.back()) continue;
@@ -538,6 +541,16 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   }
   for (int p = 0; p < P; ++p)
     if (!is_claimed(p)) out.extra_paths.push_back(p);
+  for (const int i : out.extra_bifurcations) {
+    const double t = topo.bifurcations[static_cast<size_t>(i)].t;
+    for (size_t k = 0; k < out.keyframe_intervals.size(); ++k) {
+      DesignCheck::KeyframeInterval& ki = out.keyframe_intervals[k];
+      if ((t > ki.t0 || (k == 0 && t >= ki.t0)) && t <= ki.t1) {
+        ki.extra_bifurcations.push_back(i);
+        break;
+      }
+    }
+  }
 
   // Extra groups: union–find over extra paths joined by bifurcations and type changes.
   std::vector<int> parent(static_cast<size_t>(P));
@@ -722,12 +735,22 @@ nlohmann::json design_check_to_json(const DesignCheck& check) {
                       {"life", json::array({g.t_begin, g.t_end})},
                       {"center", vec3(g.center)},
                       {"description", g.description}});
-  return json{{"all_found", check.all_found()},
+  json out = json{{"all_found", check.all_found()},
               {"summary", check.summary(1 << 30)},
               {"tolerance", {{"position", check.position_tolerance}, {"time", check.time_tolerance}}},
               {"designed", std::move(designed)},
               {"implied_bifurcations", check.implied_bifurcations},
               {"extra", {{"paths", check.extra_paths}, {"bifurcations", check.extra_bifurcations}, {"groups", std::move(groups)}}}};
+  if (!check.keyframe_intervals.empty()) {
+    json intervals = json::array();
+    for (const DesignCheck::KeyframeInterval& k : check.keyframe_intervals)
+      intervals.push_back({{"keyframes", json::array({k.from_keyframe, k.to_keyframe})},
+                           {"interval", json::array({k.t0, k.t1})},
+                           {"planned_bifurcations", k.planned},
+                           {"extra_bifurcations", k.extra_bifurcations}});
+    out["keyframe_intervals"] = std::move(intervals);
+  }
+  return out;
 }
 
 }  // namespace tvf

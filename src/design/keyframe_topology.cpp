@@ -88,6 +88,7 @@ struct KeyframeTopologyPlan::Track {
   SingularityType type = SingularityType::source;
   int index = 0;   // +1 or −1 (0: a template standing in the router's way)
   int group = -1;  // ≥ 0: one of a created or cancelled pair (the two are meant to meet)
+  bool guided = false;  // its interval's guide field constrains the frames (Guide, below)
   // A detour bent into the path (PathRouter, below): amplitude · bump(s, rise, fall) · dir.
   struct Bend {
     double rise = 0.5, fall = 0.5, amplitude = 0;
@@ -125,6 +126,41 @@ struct KeyframeTopologyPlan::Template {
   CompiledElement element;
   double t0 = 0, t1 = 0;  // present for t0 ≤ t ≤ t1
   double radius = 0;
+  bool guided = false;  // its interval's guide field stands in for it
+};
+
+// One interval's guide field on a planar domain: G(z, t) = h(z, t) · Π_k g_k(z, t), every
+// free vertex of the frames strictly between the two key frames fixed to it. The factors
+// carry the plan's zeros: a matched track's own linear field α(z − p) + β conj(z − p)
+// (J(t) as its constraint has it), a created or cancelled pair's two linear factors while
+// its tracks hold (J blended from the key frame's to z − p for the node and conj(z − p)
+// for the saddle), and over [t_c − τ, t_c + τ] the pair's saddle–node factor
+// |w|² + μ(t) + 2is Im w, w = (z − mid) conj(axis), μ from −s² to s² (the two zeros ±√−μ
+// on the axis meet at t_c; the product of the two linear factors at t_c − τ). h has no
+// zero: h_k = F_k / Π g_k(t_k) at the two key frames, h(t) = h₀ exp(u(t) log(h₁/h₀)) with
+// the logarithm lifted continuously over the mesh and u the tracks' smoothstep in time. So
+// G's zeros are exactly the plan's, each of its index, and nothing else; G equals the key
+// frames at both ends. Near a matched node the phase h Π_{k≠j} g_k would turn its type
+// (a source into a centre): G is multiplied by exp(−Λ(z, t)), Λ the nodes' λ_j(t)
+// interpolated by Shepard's weights |z − p_j|⁻⁴ (λ_j = log c_j less its two ends' values
+// taken within (−π, π]; c_j: G's factor over the node's own linear field at its point,
+// tabled at kTable + 1 times and unwrapped), and within min(0.7 radius, 1.5 h) of a node
+// the value is the node's linear field itself (blended out to min(radius, 2.5 h)).
+// Saddles keep G's own phase (a saddle stays a saddle).
+struct KeyframeTopologyPlan::Guide {
+  static constexpr int kTable = 256;
+  size_t first = 0, last = 0;  // the interval's tracks
+  double t0 = 0, t1 = 0;
+  double radius = 0;
+  struct Pair {
+    size_t node = 0, saddle = 0;  // tracks
+    cplx mid{0, 0}, axis{1, 0};   // world plane; axis: unit, saddle towards node
+    double s = 0, tc = 0, tau = 0;
+    bool cancel = true;
+  };
+  std::vector<Pair> pairs;
+  std::vector<cplx> h0, log_q;           // per vertex
+  std::vector<std::vector<cplx>> lambda;  // per track of [first, last): λ at kTable + 1 times (empty: a pair's)
 };
 
 KeyframeTopologyPlan::~KeyframeTopologyPlan() = default;
@@ -189,11 +225,302 @@ std::vector<std::pair<size_t, size_t>> pair_unmatched(const std::vector<Singular
 
 using Track = KeyframeTopologyPlan::Track;
 
+// A track's linear field at time t in the frame of face `face` (the face holding its
+// point): |α| and |β| blended, their arguments along the shorter arc, β turned with the
+// neighbourhood where the track has a turn, then carried from the track's reference frame.
+Linear track_jacobian(const TangentBundle& bundle, const Track& tr, double t, int face) {
+  const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
+  Linear j{blend(tr.j0.alpha, tr.j1.alpha, s), blend(tr.j0.beta, tr.j1.beta, s)};
+  if (!tr.turn.empty()) {
+    // β's argument follows the neighbourhood's turn, plus the shorter-arc remainder
+    // that brings it to the second end's, spread linearly like blend().
+    const double total = tr.turn.back();
+    const double pa = std::abs(tr.j0.beta) > 0   ? std::arg(tr.j0.beta)
+                      : std::abs(tr.j1.beta) > 0 ? std::arg(tr.j1.beta) - total
+                                                 : 0.0;
+    const double pb = std::abs(tr.j1.beta) > 0 ? std::arg(tr.j1.beta) : pa + total;
+    const double rest = std::remainder(pb - pa - total, 2 * std::numbers::pi);
+    const double r = (1 - s) * std::abs(tr.j0.beta) + s * std::abs(tr.j1.beta);
+    j.beta = std::polar(r, pa + tr.turned(t) + s * rest);
+  }
+  // From the reference frame into the frame at p(t) (the face holding it).
+  const cplx c = bundle.world_to_face(face, tr.ref_e1);
+  if (std::abs(c) > 0) j.beta *= (c / std::abs(c)) * (c / std::abs(c));
+  return j;
+}
+
 // "(x, y)" or "(x, y, z)" to three digits, without "-0" or 1e-17 for a zero.
 std::string describe_point(const Vec3& p, bool planar, double unit) {
   auto c = [&](double x) { return std::abs(x) < 1e-9 * unit ? 0.0 : x; };
   return planar ? fmt::format("({:.3g}, {:.3g})", c(p.x()), c(p.y()))
                 : fmt::format("({:.3g}, {:.3g}, {:.3g})", c(p.x()), c(p.y()), c(p.z()));
+}
+
+using Guide = KeyframeTopologyPlan::Guide;
+
+cplx flat(const Vec3& w) { return {w.x(), w.y()}; }
+
+// A linear field given in face f's frame, in world (plane) terms.
+Linear world_linear(const TangentBundle& bundle, int face, const Linear& j) {
+  const Vec3 &e1 = bundle.face_e1(face), &e2 = bundle.face_e2(face);
+  Mat2 e;
+  e << e1.x(), e2.x(), e1.y(), e2.y();
+  return to_linear(e * to_matrix(j) * e.transpose());
+}
+
+// One factor of a guide: α(z − p) + β conj(z − p), or a pair's |w|² + μ + 2iσ Im w with
+// w = (z − mid) conj(axis).
+struct Factor {
+  bool pair = false;
+  cplx p{0, 0}, alpha{1, 0}, beta{0, 0};
+  cplx mid{0, 0}, axis{1, 0};
+  double mu = 0, sigma = 0;
+  int track = -1;  // a matched track's factor: its index from the guide's first; else −1
+  int index = 0;   // the matched track's index (+1 node, −1 saddle)
+  cplx operator()(cplx z) const {
+    if (!pair) {
+      const cplx w = z - p;
+      return alpha * w + beta * std::conj(w);
+    }
+    const cplx w = (z - mid) * std::conj(axis);
+    return {std::norm(w) + mu, 2 * sigma * w.imag()};
+  }
+};
+
+double smoothstep01(double t, double a, double b) { return smoothstep((t - a) / (b - a)); }
+
+std::vector<Factor> guide_factors(const DesignSpace& space, const std::vector<Track>& tracks, const Guide& g,
+                                  double t) {
+  const TangentBundle& bundle = space.bundle();
+  std::vector<char> in_pair(g.last - g.first, 0);
+  for (const Guide::Pair& pr : g.pairs) in_pair[pr.node - g.first] = in_pair[pr.saddle - g.first] = 1;
+  std::vector<Factor> out;
+  for (size_t i = g.first; i < g.last; ++i) {
+    if (in_pair[i - g.first]) continue;
+    const Track& tr = tracks[i];
+    const Vec3 p = tr.raw(tr.param(t));
+    const int face = space.locate(p).face;
+    const Linear j = world_linear(bundle, face, track_jacobian(bundle, tr, t, face));
+    Factor f;
+    f.p = flat(p);
+    f.alpha = j.alpha;
+    f.beta = j.beta;
+    f.track = static_cast<int>(i - g.first);
+    f.index = tr.index;
+    out.push_back(f);
+  }
+  for (const Guide::Pair& pr : g.pairs) {
+    const double a = pr.tc - pr.tau, b = pr.tc + pr.tau;
+    if (pr.cancel ? t <= a : t >= b) {
+      for (const size_t i : {pr.node, pr.saddle}) {
+        const Track& tr = tracks[i];
+        const double u = tr.param(t);
+        const Vec3 p0 = tr.raw(0);
+        const int f0 = space.locate(p0).face;
+        const Linear key = world_linear(bundle, f0, track_jacobian(bundle, tr, tr.t0, f0));
+        const bool node = tr.index > 0;
+        Factor f;
+        f.p = flat(tr.raw(u));
+        f.alpha = blend(key.alpha, node ? cplx(1, 0) : cplx(0, 0), u);
+        f.beta = blend(key.beta, node ? cplx(0, 0) : cplx(1, 0), u);
+        out.push_back(f);
+      }
+    } else {
+      const double u = smoothstep01(t, a, b);
+      Factor f;
+      f.pair = true;
+      f.mid = pr.mid;
+      f.axis = pr.axis;
+      f.sigma = pr.s;
+      f.mu = pr.s * pr.s * (pr.cancel ? 2 * u - 1 : 1 - 2 * u);
+      out.push_back(f);
+    }
+  }
+  return out;
+}
+
+// G's h at a point of face `at.face` (h₀ and log q interpolated linearly there).
+cplx guide_h(const Mesh& mesh, const Guide& g, const SurfacePoint& at, double u) {
+  cplx h0{0, 0}, lq{0, 0};
+  for (int k = 0; k < 3; ++k) {
+    const auto v = static_cast<size_t>(mesh.face(at.face)[static_cast<size_t>(k)]);
+    h0 += at.bary[k] * g.h0[v];
+    lq += at.bary[k] * g.log_q[v];
+  }
+  return h0 * std::exp(u * lq);
+}
+
+// Fills h₀, log q and λ of a guide whose tracks, pairs and times are set; false when a
+// key frame's field has a zero the factors do not (then the interval is left to the
+// regions and the solve).
+bool build_guide(const DesignSpace& space, const std::vector<Track>& tracks, const std::vector<cplx>& f0,
+                 const std::vector<cplx>& f1, Guide& g) {
+  const Mesh& mesh = space.mesh();
+  const TangentBundle& bundle = space.bundle();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  std::vector<std::vector<size_t>> nbr(nv);
+  for (int h = 0; h < mesh.num_halfedges(); ++h) {
+    const auto a = static_cast<size_t>(mesh.tail(h)), b = static_cast<size_t>(mesh.head(h));
+    nbr[a].push_back(b);
+    nbr[b].push_back(a);
+  }
+  const double tiny = 1e-9 * mesh.mean_edge_length();
+  std::vector<cplx> hk[2];
+  for (int e = 0; e < 2; ++e) {
+    const std::vector<cplx>& f = e == 0 ? f0 : f1;
+    const std::vector<Factor> factors = guide_factors(space, tracks, g, e == 0 ? g.t0 : g.t1);
+    std::vector<cplx>& h = hk[e];
+    h.assign(nv, cplx(0, 0));
+    std::vector<char> ok(nv, 0);
+    for (size_t v = 0; v < nv; ++v) {
+      const cplx z = flat(mesh.position(static_cast<int>(v)));
+      const cplx fv = flat(bundle.vertex_to_world(static_cast<int>(v), f[v]));
+      cplx prod{1, 0};
+      bool on_zero = false;
+      for (const Factor& fa : factors) {
+        on_zero = on_zero || (!fa.pair && std::abs(z - fa.p) <= tiny);
+        prod *= fa(z);
+      }
+      if (on_zero || std::abs(fv) == 0 || !(std::abs(prod) > 0) || !std::isfinite(std::abs(prod))) continue;
+      h[v] = fv / prod;
+      ok[v] = 1;
+    }
+    // A vertex on a zero: the mean of its neighbours' h (h is smooth there).
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (size_t v = 0; v < nv; ++v) {
+        if (ok[v]) continue;
+        cplx sum{0, 0};
+        int n = 0;
+        for (const size_t w : nbr[v])
+          if (ok[w] == 1) sum += h[w], ++n;
+        if (n == 0 || std::abs(sum) == 0) continue;
+        h[v] = sum / static_cast<double>(n);
+        ok[v] = 2;
+        changed = true;
+      }
+      for (char& o : ok) o = o ? char{1} : char{0};
+    }
+    for (size_t v = 0; v < nv; ++v)
+      if (!ok[v]) return false;
+  }
+  // log(h₁/h₀), its argument lifted continuously along the mesh's edges.
+  g.h0 = hk[0];
+  g.log_q.assign(nv, cplx(0, 0));
+  std::vector<char> seen(nv, 0);
+  double sum_arg = 0;
+  for (size_t root = 0; root < nv; ++root) {
+    if (seen[root]) continue;
+    std::vector<size_t> queue{root};
+    seen[root] = 1;
+    const cplx q0 = hk[1][root] / hk[0][root];
+    g.log_q[root] = {std::log(std::abs(q0)), std::arg(q0)};
+    for (size_t k = 0; k < queue.size(); ++k) {
+      const size_t v = queue[k];
+      const cplx qv = hk[1][v] / hk[0][v];
+      for (const size_t w : nbr[v]) {
+        if (seen[w]) continue;
+        seen[w] = 1;
+        const cplx qw = hk[1][w] / hk[0][w];
+        g.log_q[w] = {std::log(std::abs(qw)), g.log_q[v].imag() + std::arg(qw / qv)};
+        queue.push_back(w);
+      }
+    }
+  }
+  for (const cplx& l : g.log_q) sum_arg += l.imag();
+  // The far field turns the shorter way: the mean lifted argument within (−π, π].
+  const double shift = 2 * std::numbers::pi * std::round(sum_arg / static_cast<double>(nv) / (2 * std::numbers::pi));
+  for (cplx& l : g.log_q) l -= cplx(0, shift);
+  // λ of the matched tracks.
+  g.lambda.assign(g.last - g.first, {});
+  std::vector<std::vector<cplx>> logc(g.last - g.first);
+  for (int k = 0; k <= Guide::kTable; ++k) {
+    const double t = g.t0 + (g.t1 - g.t0) * k / Guide::kTable;
+    const double u = smoothstep01(t, g.t0, g.t1);
+    const std::vector<Factor> factors = guide_factors(space, tracks, g, t);
+    for (const Factor& fa : factors) {
+      if (fa.track < 0) continue;
+      const Vec3 p(fa.p.real(), fa.p.imag(), 0);
+      cplx c = guide_h(mesh, g, space.locate(p), u);
+      for (const Factor& other : factors)
+        if (&other != &fa) c *= other(fa.p);
+      if (!(std::abs(c) > 0) || !std::isfinite(std::abs(c))) return false;  // two zeros on one point
+      std::vector<cplx>& l = logc[static_cast<size_t>(fa.track)];
+      const double arg = l.empty() ? std::arg(c) : l.back().imag() + std::remainder(std::arg(c) - l.back().imag(), 2 * std::numbers::pi);
+      l.emplace_back(std::log(std::abs(c)), arg);
+    }
+  }
+  for (size_t i = 0; i < logc.size(); ++i) {
+    if (logc[i].empty()) continue;
+    std::vector<cplx>& lam = g.lambda[i];
+    for (int k = 0; k <= Guide::kTable; ++k) {
+      const double u = smoothstep(static_cast<double>(k) / Guide::kTable);
+      // The ends' values taken within (−π, π]: the whole turns in between are what the
+      // correction takes out (at the ends exp(−λ) is then 1).
+      const cplx a = logc[i].front(), b = logc[i].back();
+      const cplx a0(a.real(), std::remainder(a.imag(), 2 * std::numbers::pi));
+      const cplx b0(b.real(), std::remainder(b.imag(), 2 * std::numbers::pi));
+      lam.push_back(logc[i][static_cast<size_t>(k)] - ((1 - u) * a0 + u * b0));
+    }
+  }
+  return true;
+}
+
+// Fixes every free vertex of a frame at time t (strictly inside the guide's interval) to G.
+void apply_guide(const DesignSpace& space, const std::vector<Track>& tracks, const Guide& g, double t,
+                 std::span<char> fixed, std::span<cplx> values) {
+  const Mesh& mesh = space.mesh();
+  const TangentBundle& bundle = space.bundle();
+  const std::vector<Factor> factors = guide_factors(space, tracks, g, t);
+  const double u = smoothstep01(t, g.t0, g.t1);
+  const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * Guide::kTable;
+  const auto k = std::min(static_cast<size_t>(x), static_cast<size_t>(Guide::kTable - 1));
+  std::vector<cplx> lambda(factors.size(), cplx(0, 0));
+  for (size_t m = 0; m < factors.size(); ++m)
+    if (factors[m].track >= 0) {
+      const std::vector<cplx>& l = g.lambda[static_cast<size_t>(factors[m].track)];
+      lambda[m] = l[k] + (x - static_cast<double>(k)) * (l[k + 1] - l[k]);
+    }
+  // The tracks' own linear fields within `outer` (G's nonlinear terms matter farther out
+  // for a weak saddle): the whole face around the point inside `inner`.
+  const double h = mesh.mean_edge_length();
+  const double inner = std::min(0.7 * g.radius, 1.5 * h), outer = std::min(g.radius, 2.5 * h);
+  // Λ(z): the nodes' λ, interpolated by Shepard's weights |z − p|⁻⁴ (Λ(p_j) = λ_j with zero
+  // slope there). Saddles keep their type whatever the phase: G's own (their axes turn
+  // with the neighbourhood, and no linear region is blended in, which for a weak saddle
+  // made zeros where G's quadratic terms take over).
+  auto shepard = [&](cplx z) {
+    cplx num{0, 0};
+    double den = 0;
+    for (size_t m = 0; m < factors.size(); ++m) {
+      if (factors[m].track < 0 || factors[m].index <= 0) continue;
+      const double w = 1 / std::pow(std::max(std::abs(z - factors[m].p), 1e-12 * g.radius), 4);
+      num += w * lambda[m];
+      den += w;
+    }
+    return den > 0 ? num / den : cplx(0, 0);
+  };
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const auto vi = static_cast<size_t>(v);
+    if (fixed[vi]) continue;
+    const cplx z = flat(mesh.position(v));
+    cplx val = g.h0[vi] * std::exp(u * g.log_q[vi]);
+    size_t nearest = factors.size();
+    double rn = std::numeric_limits<double>::infinity();
+    for (size_t m = 0; m < factors.size(); ++m) {
+      val *= factors[m](z);
+      if (factors[m].track < 0) continue;
+      const double r = std::abs(z - factors[m].p);
+      if (r < rn) rn = r, nearest = m;
+    }
+    val *= std::exp(-shepard(z));
+    if (nearest < factors.size() && factors[nearest].index > 0 && rn < outer) {
+      const double w = rn <= inner ? 1.0 : smoothstep01(rn, outer, inner);
+      val = w * factors[nearest](z) + (1 - w) * val;
+    }
+    fixed[vi] = 1;
+    values[vi] = bundle.world_to_vertex(v, Vec3(val.real(), val.imag(), 0));
+  }
 }
 
 // Keeps the singularities carried through one key-frame interval `separation` apart: two
@@ -951,6 +1278,8 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   int groups = 0;
   for (size_t k = 0; k + 1 < nk; ++k) {
     const size_t first_track = tracks_.size();
+    const size_t first_template = templates_.size();
+    Guide guide;
     std::vector<Track> obstacles;  // the interval's templates, for the router
     const std::vector<Singularity>& A = sing[k];
     const std::vector<Singularity>& B = sing[k + 1];
@@ -1046,11 +1375,17 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
           add_track(saddle, saddle_end, rep.t0, tc - tau, j_saddle, face, groups);
           add_track(node, node_end, rep.t0, tc - tau, j_node, face, groups);
           rep.cancelled.push_back(pr);
+          guide.pairs.push_back({tracks_.size() - 1, tracks_.size() - 2, cplx(mid.x(), mid.y()),
+                                 cplx(bundle.face_to_world(face, axis).x(), bundle.face_to_world(face, axis).y()), s,
+                                 tc, tau, true});
         } else {
           // Carried backwards in time: from the key frame at t1 to the template's zeros at t_c + τ.
           add_track(saddle, saddle_end, rep.t1, tc + tau, j_saddle, face, groups);
           add_track(node, node_end, rep.t1, tc + tau, j_node, face, groups);
           rep.created.push_back(pr);
+          guide.pairs.push_back({tracks_.size() - 1, tracks_.size() - 2, cplx(mid.x(), mid.y()),
+                                 cplx(bundle.face_to_world(face, axis).x(), bundle.face_to_world(face, axis).y()), s,
+                                 tc, tau, false});
         }
         ++groups;
       }
@@ -1072,6 +1407,22 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       for (size_t j = i + 1; j < tracks_.size(); ++j)
         if (tracks_[i].group < 0 || tracks_[i].group != tracks_[j].group)
           rep.closest_approach = std::min(rep.closest_approach, router.closest(tracks_[i], tracks_[j]));
+    // Planar domains: the frames in between are the interval's guide field (Guide), whose
+    // zeros are the plan's alone; not with singularities left unpaired (the guide would
+    // need their zeros too) or nothing carried.
+    guide.first = first_track;
+    guide.last = tracks_.size();
+    guide.t0 = rep.t0;
+    guide.t1 = rep.t1;
+    guide.radius = scene.solver.region_radius;
+    if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
+        guide.last > guide.first &&
+        build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], guide)) {
+      for (size_t i = guide.first; i < guide.last; ++i) tracks_[i].guided = true;
+      for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
+      rep.guided = true;
+      guides_.push_back(std::move(guide));
+    }
     intervals_.push_back(std::move(rep));
   }
 }
@@ -1082,39 +1433,25 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
   detail::ElementOnDomain placed;
   for (const Track& tr : tracks_) {
     const double lo = std::min(tr.t0, tr.t1), hi = std::max(tr.t0, tr.t1);
-    if (!(t > lo && t < hi)) continue;
+    if (tr.guided || !(t > lo && t < hi)) continue;
     const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
     ElementState st;
     st.active = true;
     st.position = tr.raw(s);
     const SurfacePoint at = space.locate(st.position);
-    Linear j{blend(tr.j0.alpha, tr.j1.alpha, s), blend(tr.j0.beta, tr.j1.beta, s)};
-    if (!tr.turn.empty()) {
-      // β's argument follows the neighbourhood's turn, plus the shorter-arc remainder
-      // that brings it to the second end's, spread linearly like blend().
-      const double total = tr.turn.back();
-      const double pa = std::abs(tr.j0.beta) > 0   ? std::arg(tr.j0.beta)
-                        : std::abs(tr.j1.beta) > 0 ? std::arg(tr.j1.beta) - total
-                                                   : 0.0;
-      const double pb = std::abs(tr.j1.beta) > 0 ? std::arg(tr.j1.beta) : pa + total;
-      const double rest = std::remainder(pb - pa - total, 2 * std::numbers::pi);
-      const double r = (1 - s) * std::abs(tr.j0.beta) + s * std::abs(tr.j1.beta);
-      j.beta = std::polar(r, pa + tr.turned(t) + s * rest);
-
-    }
-    // From the reference frame into the frame at p(t) (the face holding it).
-    const cplx c = space.bundle().world_to_face(at.face, tr.ref_e1);
-    if (std::abs(c) > 0) j.beta *= (c / std::abs(c)) * (c / std::abs(c));
+    const Linear j = track_jacobian(space.bundle(), tr, t, at.face);
     st.field.kind = LocalField::Kind::linear;
     st.field.matrix = to_matrix(j);
     detail::place_state(space, st, d, chart, placed);
     detail::constrain_region(space.mesh(), placed, scene.solver.region_radius, fixed, values);
   }
   for (const Template& tp : templates_) {
-    if (t < tp.t0 || t > tp.t1) continue;
+    if (tp.guided || t < tp.t0 || t > tp.t1) continue;
     detail::place_element(space, tp.element, t, d, chart, placed);
     detail::constrain_region(space.mesh(), placed, tp.radius, fixed, values);
   }
+  for (const Guide& g : guides_)
+    if (t > g.t0 && t < g.t1) apply_guide(space, tracks_, g, t, fixed, values);
 }
 
 std::vector<Vec3> KeyframeTopologyPlan::carried(double t) const {
@@ -1153,6 +1490,7 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
     if (std::isfinite(r.closest_approach)) j["closest_approach"] = r.closest_approach;
     if (!r.collision.empty()) j["collision"] = r.collision;
     j["routing"] = r.routing;
+    j["guided"] = r.guided;
     j["unpaired"] = json::array();
     for (const auto& p : r.unpaired_first) j["unpaired"].push_back(xyz(p));
     for (const auto& p : r.unpaired_second) j["unpaired"].push_back(xyz(p));

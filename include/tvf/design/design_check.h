@@ -130,6 +130,16 @@ struct DesignCheck {
   std::vector<int> extra_paths;           // path ids
   std::vector<int> extra_bifurcations;    // indices into Topology::bifurcations
   std::vector<ExtraGroup> extras;
+  // With "keyframe_topology": "matched": per interval between consecutive key frames, the
+  // bifurcations the plan creates or cancels there and the extra ones (not asked for) the
+  // analysis finds in it (t0 < t ≤ t1; the first interval also takes t = t0).
+  struct KeyframeInterval {
+    int from_keyframe = 0, to_keyframe = 0;
+    double t0 = 0, t1 = 0;
+    int planned = 0;
+    std::vector<int> extra_bifurcations;  // indices into Topology::bifurcations
+  };
+  std::vector<KeyframeInterval> keyframe_intervals;
   double position_tolerance = 0;  // world units
   double time_tolerance = 0;      // time units
 

@@ -86,6 +86,10 @@ struct KeyframeIntervalReport {
   // kept apart: see collision), "pairwise" (bent one pair at a time) or "joint" (all the
   // interval's paths bent at once, keeping clear of its saddle–node templates too).
   std::string routing = "straight";
+  // The frames strictly between the two key frames are the interval's guide field
+  // (planar domains): a field whose zeros are the plan's alone (keyframe_topology.cpp,
+  // Guide), so the analysis finds no bifurcation but the planned ones.
+  bool guided = false;
 };
 
 // The constraints that keep the topology between key frames, planned once per generation.
@@ -109,12 +113,14 @@ public:
 
   struct Track;     // one singularity carried between two times
   struct Template;  // one saddle–node template
+  struct Guide;     // one interval's guide field (planar domains)
   ~KeyframeTopologyPlan();
   KeyframeTopologyPlan(KeyframeTopologyPlan&&) noexcept;
 
 private:
   std::vector<Track> tracks_;
   std::vector<Template> templates_;
+  std::vector<Guide> guides_;
   std::vector<KeyframeIntervalReport> intervals_;
 };
 
