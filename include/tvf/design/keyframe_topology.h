@@ -38,6 +38,12 @@
 //     when that fails too, the paths stay straight with the warning of 5.
 //  7. in a routed interval, turns each saddle's axes with its neighbours (its β follows
 //     the product model's phase) instead of keeping the key frames' axes.
+//  8. on planar domains, fixes every free vertex of the frames strictly between the two
+//     key frames to the interval's guide field (keyframe_topology.cpp, Guide): a field
+//     whose zeros are the carried singularities and the planned pairs alone, equal to the
+//     key frames at the ends, the matched nodes' types held; so the analysis finds no
+//     bifurcation but the planned ones. Not on surfaces, nor in an interval with a
+//     singularity left unpaired or paths that could not be kept apart.
 // Key frames themselves are unchanged. What could not be paired (an odd singularity out,
 // e.g. one that must leave through the boundary) is left to the solve and reported.
 #include "tvf/analysis/singularities.h"
