@@ -283,8 +283,9 @@ async function edit(entry: unknown) {
 // newest waiting while one is being shown (loading a result takes a few requests).
 async function showStatus(st: Status) {
   mark(`status ${st.revision} ${st.state} result ${st.result_revision} analysis ${st.analysis_revision}`);
-  // The server started again (its revision is behind the page's): its results start over.
-  const restarted = !!state.scene && st.revision < state.scene.revision;
+  // The server started again (another session than the shown result's): its results
+  // start over, and are shown even when their revision is not above the page's.
+  const restarted = resultSession !== undefined && st.session !== resultSession;
   const label = $("status");
   label.dataset.state = st.state;
   lastState = st.state;
@@ -303,8 +304,7 @@ async function showStatus(st: Status) {
   }
   const preview = st.preview_revision ?? 0;
   if (preview > state.resultRevision && st.preview_frame === state.frame && preview !== state.preview?.revision) await loadPreview();
-  // Results only move forward (a polled answer can arrive after a newer pushed one), unless
-  // the server started again (its revision is behind the page's).
+  // Results only move forward, unless the server started again.
   if (st.result_revision > 0 && (st.result_revision > state.resultRevision || (restarted && st.result_revision !== state.resultRevision))) await loadResult(st);
   // The current frame of the shown result, when its download failed (a 409 while the
   // server replaced its result, a busy server): asked for again.
@@ -318,6 +318,7 @@ async function showStatus(st: Status) {
 
 let nextStatus: Status | null = null;
 let showing = false;
+let resultSession: string | undefined; // the server session of the shown result
 let lastState: Status["state"] | "" = "";
 let lastStatus: Status | null = null;
 // Whether the page is behind the last status it saw (an event it could not follow up, a
@@ -327,12 +328,26 @@ function behind(): boolean {
   const st = lastStatus;
   if (!st || st.state !== "ready" || st.result_revision <= 0) return false;
   if (state.resultRevision < st.result_revision || !state.frames.has(state.frame)) return true;
-  // The shown result's analysis still to come: asked for too, not only waited for as a
-  // push (a pushed event was seen not to arrive under load, the page then stuck without it).
-  if (st.analysis === "running" && st.result_revision === state.resultRevision) return true;
+  // The shown result's analysis ready but not loaded (its download failed, say): asked again.
   return st.analysis !== "failed" && st.analysis_revision === state.resultRevision && state.analysisRevision !== state.resultRevision;
 }
+// Whether status `a` was made before `b` by the same server session. The page gets
+// statuses from two sources, the event stream and polls; a poll's answer can arrive after
+// newer pushed events (it was made before them, and waited for a core or a connection).
+// Taken in the order they arrive, such an answer replaced the newer event waiting to be
+// shown (the one saying the analysis was ready, say): the page then showed the older state
+// and, told of nothing newer, waited for an analysis it already could have (issue 15,
+// with the save overlapped). The server numbers its statuses (`sequence`): an older one is
+// dropped; one of the same number is shown again (a solve's progress, or a retry).
+function older(a: Status, b: Status): boolean {
+  return a.session === b.session && a.sequence !== undefined && b.sequence !== undefined && a.sequence < b.sequence;
+}
 async function applyStatus(st: Status) {
+  const newest = nextStatus ?? lastStatus;
+  if (newest && older(st, newest)) {
+    mark(`status ${st.sequence} dropped: older than ${newest.sequence}`);
+    return;
+  }
   nextStatus = st;
   if (showing) return;
   showing = true;
@@ -400,6 +415,7 @@ async function loadResult(st: Status) {
   }
   // The page moves to the new result at once, with its frame (no empty picture between).
   state.resultRevision = revision;
+  resultSession = st.session;
   state.frames.clear();
   if (f && f.revision === revision) state.frames.set(j, f);
   if (mesh) {

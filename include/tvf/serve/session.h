@@ -123,7 +123,10 @@ public:
   //  far), "warnings", "method", "seconds" (the solve), "domain" (an id of the result's
   //  domain: it changes when the mesh does), "analysis": "running" | "ready" | "failed" (of
   //  the result; "analysis_error" says why it failed), "analysis_seconds",
-  //  "analysis_revision" (the revision of the last analysis made; 0 before the first)}
+  //  "analysis_revision" (the revision of the last analysis made; 0 before the first),
+  //  "sequence" (wait_change's count when this status was read: statuses of one session
+  //  are ordered by it, whatever order they arrive in), "session" (an id of this Session:
+  //  another one after a restart)}
   nlohmann::json status() const;
   // The number of changes of status() so far that a client may be told of: a new
   // revision, the generation state (running, ready, failed) or a new result. It waits up
