@@ -41,10 +41,13 @@ const slider = $<HTMLInputElement>("time");
 const message = $<HTMLPreElement>("message");
 const sceneText = $<HTMLTextAreaElement>("scene-json");
 
-// The moving previews (preview/, surface/preview.ts), stepped about 30 times a second.
+// The moving previews (preview/, surface/preview.ts), stepped about 30 times a second,
+// except while a change of this page waits for its picture: the server solving it shares
+// the machine's cores with the page, and a step of the texture costs a core 5–30 ms (in a
+// browser without a GPU, most of one core at 30 steps a second; issue 15).
 const planarPreview = new PlanarPreview(256);
 const ticker = new Ticker((n) => {
-  if (!state.scene) return;
+  if (!state.scene || waitingForPicture()) return;
   if (planar()) {
     if (state.mesh?.grid && shownFrame()) {
       planarPreview.step(n);
@@ -314,6 +317,13 @@ async function showStatus(st: Status) {
   const analysed = st.analysis_revision === undefined || st.analysis_revision === state.resultRevision;
   if (analysed && state.analysisRevision !== state.resultRevision && state.resultRevision > 0) void loadAnalysis(state.resultRevision);
   if (st.analysis === "failed" && st.result_revision === state.resultRevision) say(`the analysis failed: ${st.analysis_error ?? ""}`, true);
+}
+
+// A change of this page under way (its request not answered yet), or its revision being
+// solved and not drawn yet.
+function waitingForPicture(): boolean {
+  if (queue.busy) return true;
+  return lastState === "running" && !!state.scene && state.shownRevision < state.scene.revision;
 }
 
 let nextStatus: Status | null = null;
