@@ -307,8 +307,9 @@ async function showStatus(st: Status) {
   }
   const preview = st.preview_revision ?? 0;
   if (preview > state.resultRevision && st.preview_frame === state.frame && preview !== state.preview?.revision) await loadPreview();
-  // Results only move forward, unless the server started again.
-  if (st.result_revision > 0 && (st.result_revision > state.resultRevision || (restarted && st.result_revision !== state.resultRevision))) await loadResult(st);
+  // Results only move forward, unless the server started again (its first result is
+  // loaded whatever its revision).
+  if (st.result_revision > 0 && (st.result_revision > state.resultRevision || restarted)) await loadResult(st);
   // The current frame of the shown result, when its download failed (a 409 while the
   // server replaced its result, a busy server): asked for again.
   if (st.result_revision === state.resultRevision && state.resultRevision > 0 && !state.frames.has(state.frame))
