@@ -37,9 +37,9 @@ ServeCommand::ServeCommand(CLI::App& app) {
   cmd_->add_option("--port", port_, "Port (default 8080; 0: any free port)")->check(CLI::Range(0, 65535));
   cmd_->add_option("--web", web_, "Folder of the built front end (default: the one this tvf was built with)");
   cmd_->add_flag("-q,--quiet", quiet_, "Print nothing but the address and errors");
-  cmd_->add_flag("--solve-while-saving", solve_while_saving_,
-                 "Start a new scene's solve while the scene is saved (published once saved; an experiment, "
-                 "docs/serve_api.md)");
+  cmd_->add_flag("--solve-while-saving,!--save-before-solve", solve_while_saving_,
+                 "Start a new scene's solve while the scene is saved, publishing nothing of it before the save "
+                 "succeeded (the default); --save-before-solve starts it only once saved (docs/serve_api.md)");
 }
 
 int ServeCommand::run() {

@@ -22,7 +22,7 @@ private:
   int port_ = 8080;
   std::string web_;
   bool quiet_ = false;
-  bool solve_while_saving_ = false;
+  bool solve_while_saving_ = true;
 };
 
 }  // namespace tvf::cli

@@ -210,8 +210,12 @@ struct Session::State {
 
   bool interrupted = false;  // interrupt(): waits end at once
   // Counts the changes of status() that GET /api/events pushes: the revision, the
-  // generation state, the field's readiness (Session::wait_change).
+  // generation state, the field's readiness (Session::wait_change). Each status carries
+  // it ("sequence"), read under the same lock as the rest, so that a client orders the
+  // statuses it gets from the event stream and from polls (a poll's answer can arrive
+  // after a newer pushed event) and never shows an older one after a newer one.
   long long changes = 1;
+  std::string id;  // status "session": tells a client that the server started again
   void touch() {
     ++changes;
     changed.notify_all();
@@ -467,6 +471,8 @@ Session::Session(SessionOptions options) : s_(std::make_unique<State>()) {
     throw Error(fmt::format("{}: cannot use this folder as the working folder: {}", s_->options.dir.string(),
                             ec ? ec.message() : "not a folder"));
   s_->dir = fs::canonical(s_->options.dir);
+  s_->id = fmt::format("{:x}-{:x}", static_cast<long>(::getpid()),
+                       std::chrono::system_clock::now().time_since_epoch().count());
   const fs::path rel(s_->options.scene);
   if (rel.empty() || rel.is_absolute() || !inside(s_->dir, fs::weakly_canonical(s_->dir / rel)))
     throw Error(fmt::format("{}: the scene must be a file inside the working folder {}", s_->options.scene,
@@ -699,6 +705,8 @@ json Session::status() const {
     j["preview_revision"] = s_->preview->revision;
     j["preview_frame"] = s_->preview->frame;
   }
+  j["sequence"] = s_->changes;
+  j["session"] = s_->id;
   return j;
 }
 

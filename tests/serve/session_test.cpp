@@ -13,11 +13,13 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <future>
+#include <mutex>
 #include <thread>
 #include <fstream>
 
@@ -174,6 +176,84 @@ TEST(ServeSession, TheShownFrameOfASolveUnderWayIsPublishedFirst) {
   const json final_frame = s.frame(5);
   EXPECT_EQ(preview["vectors"], final_frame["vectors"]);  // the finished field's frame
   EXPECT_EQ(preview["singularities"].size(), final_frame["singularities"].size());
+}
+
+// Issue 15: a client hears of the status from the event stream and from polls, and a
+// poll's answer can arrive after newer events. Each status carries the sequence of the
+// change it shows (wait_change's count, read under the same lock as the rest) and the
+// session's id: statuses of one session are ordered by it. Through a change (its solve
+// started while the scene is saved, or after), the result and the analysis that follows,
+// the sequence only grows, every state it shows has one, and a status of the same
+// sequence shows the same state.
+TEST(ServeSession, StatusesAreNumberedInTheOrderTheyAreMade) {
+  for (const bool overlap : {true, false}) {
+    SCOPED_TRACE(overlap ? "solve while saving" : "save, then solve");
+    test::TempDir dir;
+    SessionOptions o = options_in(dir);
+    o.solve_while_saving = overlap;
+    Session s(o);
+    ASSERT_TRUE(s.wait_idle(60));
+    s.analysis();  // the first result's analysis is there
+    const json first = s.status();
+    ASSERT_TRUE(first.contains("sequence") && first.contains("session"));
+    // What a client is shown, without the counts that change without a new sequence (the
+    // solve's progress, the solves cancelled).
+    const auto shown = [](json st) {
+      st.erase("progress");
+      st.erase("cancelled");
+      return st;
+    };
+    std::vector<json> seen{first};
+    std::mutex seen_mutex;
+    std::atomic<bool> done{false};
+    // A reader as GET /api/events is: every change of the count, then the status.
+    std::thread reader([&] {
+      long long count = first["sequence"].get<long long>();
+      while (!done) {
+        count = s.wait_change(count, 0.05);
+        if (count < 0) return;
+        json st = s.status();
+        std::lock_guard lock(seen_mutex);
+        seen.push_back(std::move(st));
+      }
+    });
+    json next = s.scene()["scene"];
+    next["elements"][2]["path"][0][0] = 0.25;
+    const long long revision = s.put_scene(next)["revision"];
+    ASSERT_TRUE(s.wait_idle(60));
+    s.analysis();
+    // The count the reader follows has reached the analysed result's status.
+    const json last = s.status();
+    const auto caught_up = [&] {
+      std::lock_guard lock(seen_mutex);
+      return seen.back()["sequence"] == last["sequence"];
+    };
+    for (int k = 0; k < 400 && !caught_up(); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    done = true;
+    reader.join();
+    EXPECT_EQ(last["analysis_revision"], revision);
+    EXPECT_EQ(last["session"], first["session"]);
+    EXPECT_GT(last["sequence"].get<long long>(), first["sequence"].get<long long>());
+    for (size_t k = 1; k < seen.size(); ++k) {
+      const json& a = seen[k - 1];
+      const json& b = seen[k];
+      ASSERT_LE(a["sequence"].get<long long>(), b["sequence"].get<long long>()) << a << "\n" << b;
+      if (a["sequence"] == b["sequence"]) {
+        EXPECT_EQ(shown(a), shown(b));
+      }
+      // Nothing of the new revision goes back once shown: its result, then its analysis.
+      if (a["result_revision"] == revision) {
+        EXPECT_EQ(b["result_revision"], revision);
+      }
+      if (a["analysis_revision"] == revision) {
+        EXPECT_EQ(b["analysis_revision"], revision);
+      }
+    }
+    EXPECT_EQ(shown(seen.back()), shown(last));
+    // Another session (a restarted server): another id.
+    Session other(options_in(dir));
+    EXPECT_NE(other.status()["session"], first["session"]);
+  }
 }
 
 // GET /api/frame/J?format=f32: a 4-byte little-endian length, the frame's JSON without

@@ -16,6 +16,7 @@
 // a screenshot latency_GENERATOR.png to --out.
 // Usage: node e2e/latency.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH] [--changes N]
 //        [--generators basis,spacetime] [--modes push] [--sphere basis,spacetime|none] [--sphere-changes N] [--steps]
+//        [--serve "--solve-while-saving ..."] (more options for tvf serve, space-separated)
 // --steps prints, for every change, the page's steps (window.tvf.marks) in ms after the event.
 import fs from "node:fs";
 import path from "node:path";
@@ -25,7 +26,8 @@ const a = args();
 const n = Number(process.argv[process.argv.indexOf("--changes") + 1]) || 5;
 const dir = tempDir("tvf-e2e-latency-");
 const browser = await launch(a.chromium);
-const server = await startServer(a.tvf, dir);
+const serveAt = process.argv.indexOf("--serve");
+const server = await startServer(a.tvf, dir, serveAt > 0 ? process.argv[serveAt + 1].split(" ").filter((x) => x) : []);
 const only = process.argv.indexOf("--generators");
 const generators = only > 0 ? process.argv[only + 1].split(",") : ["basis", "constrained", "spacetime", "deform"];
 const sphereAt = process.argv.indexOf("--sphere");

@@ -131,6 +131,8 @@ export interface Status {
   // The shown frame of a solve under way, ready before its other frames (GET /api/preview).
   preview_revision?: number;
   preview_frame?: number;
+  sequence?: number; // orders the statuses of one server session (pushed and polled alike)
+  session?: string; // the server's session: another one after a restart
 }
 export interface FrameSingularity {
   position: number[];

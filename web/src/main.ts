@@ -41,10 +41,13 @@ const slider = $<HTMLInputElement>("time");
 const message = $<HTMLPreElement>("message");
 const sceneText = $<HTMLTextAreaElement>("scene-json");
 
-// The moving previews (preview/, surface/preview.ts), stepped about 30 times a second.
+// The moving previews (preview/, surface/preview.ts), stepped about 30 times a second,
+// except while a change of this page waits for its picture: the server solving it shares
+// the machine's cores with the page, and a step of the texture costs a core 5–30 ms (in a
+// browser without a GPU, most of one core at 30 steps a second; issue 15).
 const planarPreview = new PlanarPreview(256);
 const ticker = new Ticker((n) => {
-  if (!state.scene) return;
+  if (!state.scene || waitingForPicture()) return;
   if (planar()) {
     if (state.mesh?.grid && shownFrame()) {
       planarPreview.step(n);
@@ -283,8 +286,9 @@ async function edit(entry: unknown) {
 // newest waiting while one is being shown (loading a result takes a few requests).
 async function showStatus(st: Status) {
   mark(`status ${st.revision} ${st.state} result ${st.result_revision} analysis ${st.analysis_revision}`);
-  // The server started again (its revision is behind the page's): its results start over.
-  const restarted = !!state.scene && st.revision < state.scene.revision;
+  // The server started again (another session than the shown result's): its results
+  // start over, and are shown even when their revision is not above the page's.
+  const restarted = resultSession !== undefined && st.session !== resultSession;
   const label = $("status");
   label.dataset.state = st.state;
   lastState = st.state;
@@ -303,9 +307,9 @@ async function showStatus(st: Status) {
   }
   const preview = st.preview_revision ?? 0;
   if (preview > state.resultRevision && st.preview_frame === state.frame && preview !== state.preview?.revision) await loadPreview();
-  // Results only move forward (a polled answer can arrive after a newer pushed one), unless
-  // the server started again (its revision is behind the page's).
-  if (st.result_revision > 0 && (st.result_revision > state.resultRevision || (restarted && st.result_revision !== state.resultRevision))) await loadResult(st);
+  // Results only move forward, unless the server started again (its first result is
+  // loaded whatever its revision).
+  if (st.result_revision > 0 && (st.result_revision > state.resultRevision || restarted)) await loadResult(st);
   // The current frame of the shown result, when its download failed (a 409 while the
   // server replaced its result, a busy server): asked for again.
   if (st.result_revision === state.resultRevision && state.resultRevision > 0 && !state.frames.has(state.frame))
@@ -316,8 +320,16 @@ async function showStatus(st: Status) {
   if (st.analysis === "failed" && st.result_revision === state.resultRevision) say(`the analysis failed: ${st.analysis_error ?? ""}`, true);
 }
 
+// A change of this page under way (its request not answered yet), or its revision being
+// solved and not drawn yet.
+function waitingForPicture(): boolean {
+  if (queue.busy) return true;
+  return lastState === "running" && !!state.scene && state.shownRevision < state.scene.revision;
+}
+
 let nextStatus: Status | null = null;
 let showing = false;
+let resultSession: string | undefined; // the server session of the shown result
 let lastState: Status["state"] | "" = "";
 let lastStatus: Status | null = null;
 // Whether the page is behind the last status it saw (an event it could not follow up, a
@@ -327,12 +339,26 @@ function behind(): boolean {
   const st = lastStatus;
   if (!st || st.state !== "ready" || st.result_revision <= 0) return false;
   if (state.resultRevision < st.result_revision || !state.frames.has(state.frame)) return true;
-  // The shown result's analysis still to come: asked for too, not only waited for as a
-  // push (a pushed event was seen not to arrive under load, the page then stuck without it).
-  if (st.analysis === "running" && st.result_revision === state.resultRevision) return true;
+  // The shown result's analysis ready but not loaded (its download failed, say): asked again.
   return st.analysis !== "failed" && st.analysis_revision === state.resultRevision && state.analysisRevision !== state.resultRevision;
 }
+// Whether status `a` was made before `b` by the same server session. The page gets
+// statuses from two sources, the event stream and polls; a poll's answer can arrive after
+// newer pushed events (it was made before them, and waited for a core or a connection).
+// Taken in the order they arrive, such an answer replaced the newer event waiting to be
+// shown (the one saying the analysis was ready, say): the page then showed the older state
+// and, told of nothing newer, waited for an analysis it already could have (issue 15,
+// with the save overlapped). The server numbers its statuses (`sequence`): an older one is
+// dropped; one of the same number is shown again (a solve's progress, or a retry).
+function older(a: Status, b: Status): boolean {
+  return a.session === b.session && a.sequence !== undefined && b.sequence !== undefined && a.sequence < b.sequence;
+}
 async function applyStatus(st: Status) {
+  const newest = nextStatus ?? lastStatus;
+  if (newest && older(st, newest)) {
+    mark(`status ${st.sequence} dropped: older than ${newest.sequence}`);
+    return;
+  }
   nextStatus = st;
   if (showing) return;
   showing = true;
@@ -400,6 +426,7 @@ async function loadResult(st: Status) {
   }
   // The page moves to the new result at once, with its frame (no empty picture between).
   state.resultRevision = revision;
+  resultSession = st.session;
   state.frames.clear();
   if (f && f.revision === revision) state.frames.set(j, f);
   if (mesh) {

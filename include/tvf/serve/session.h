@@ -67,12 +67,12 @@ struct SessionOptions {
   // asked for (the running solve) before answering 409 "still being generated". The
   // wait holds no lock: status, reads and other changes go on meanwhile.
   double field_wait_seconds = 20;
-  // put_scene starts the new scene's solve while the scene is being saved (its fsyncs),
-  // publishing nothing of it before the save succeeded (issue 15). Off by default: it saves
-  // the save's 10–60 ms only in theory on a loaded machine (docs/benchmarks.md, "The save
-  // overlapped"), and with it on the designer's page missed pushed analysis events in
-  // latency runs (cause not found); `tvf serve --solve-while-saving` turns it on.
-  bool solve_while_saving = false;
+  // put_scene starts the new scene's solve while the scene is being saved (its fsyncs:
+  // 10–400 ms on a busy disk), publishing nothing of it before the save succeeded (issue
+  // 15). On by default; `tvf serve --save-before-solve` turns it off. (It was off while
+  // the designer's page missed pushed analysis events with it: the page took a poll's late
+  // answer for newer than a pushed event; statuses now carry their `sequence`.)
+  bool solve_while_saving = true;
 };
 
 // The revision a change was made on (HTTP If-Match): kAnyRevision accepts the change on
@@ -123,7 +123,10 @@ public:
   //  far), "warnings", "method", "seconds" (the solve), "domain" (an id of the result's
   //  domain: it changes when the mesh does), "analysis": "running" | "ready" | "failed" (of
   //  the result; "analysis_error" says why it failed), "analysis_seconds",
-  //  "analysis_revision" (the revision of the last analysis made; 0 before the first)}
+  //  "analysis_revision" (the revision of the last analysis made; 0 before the first),
+  //  "sequence" (wait_change's count when this status was read: statuses of one session
+  //  are ordered by it, whatever order they arrive in), "session" (an id of this Session:
+  //  another one after a restart)}
   nlohmann::json status() const;
   // The number of changes of status() so far that a client may be told of: a new
   // revision, the generation state (running, ready, failed) or a new result. It waits up
