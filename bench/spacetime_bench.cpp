@@ -260,6 +260,106 @@ void BM_ResolveAfterEditSphere20k(benchmark::State& state) {
 }
 BENCHMARK(BM_ResolveAfterEditSphere20k)->ArgName("element")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
+// Issue 15's designer case on the 20,252-vertex sphere × 100 frames: elements that stay
+// put (a vortex and a source, fixed at every frame), with the two key frames of
+// sphere_scene (keyframes:1) or none (keyframes:0, the page's latency test's scene). The
+// whole generation (element regions, key-frame designs, the solve) by the designer's
+// path: warm:0 a generation from nothing (no cache); warm:1 the source moved (to the next
+// of kPlaces places, round and round: each time a fixed set the solver does not keep) and
+// the design generated again with the GenerateCache that made the last one (the solver
+// object, its last solution), as `tvf serve` does after a click.
+constexpr int kPlaces = 4;
+Scene fixed_elements_scene(bool keyframes, int place) {
+  Scene s = sphere_scene(false);
+  if (!keyframes) s.keyframes.clear();
+  SingularElement vortex, source;
+  vortex.type = SingularType::ccw_center;
+  vortex.jacobian = jacobian_of(*vortex.type);
+  vortex.path = {{Vec3(0.0, -0.8, 0.6).normalized(), 0}};
+  source.type = SingularType::source;
+  source.jacobian = jacobian_of(*source.type);
+  source.path = {{Vec3(-0.3 + 0.2 * place, -1, place % 2 ? 0.5 : 0.1).normalized(), 0}};
+  s.elements = {vortex, source};
+  return s;
+}
+
+void BM_FixedElementsSphere20k(benchmark::State& state) {
+  const auto space = sphere_space();
+  const bool keyframes = state.range(0) != 0, warm = state.range(1) != 0;
+  std::vector<Scene> scenes;
+  for (int place = 0; place < kPlaces; ++place) scenes.push_back(fixed_elements_scene(keyframes, place));
+  GenerateCache cache;
+  GenerateOptions options;
+  if (warm) {
+    options.cache = &cache;
+    generate(*space, scenes[0], options);
+  }
+  GenerateReport report;
+  double cpu = 0;
+  int k = 1;
+  for (auto _ : state) {
+    const double cpu0 = process_cpu_ms();
+    benchmark::DoNotOptimize(generate(*space, scenes[static_cast<size_t>(k)], options, &report).data().data());
+    cpu += process_cpu_ms() - cpu0;
+    if (warm) k = (k + 1) % kPlaces;
+  }
+  SolveReport r;
+  r.iterations = report.iterations;
+  r.residual = report.residual;
+  counters(state, space->mesh().num_vertices(), scenes[0].time.frames, r, cpu);
+  state.SetLabel(report.method);
+}
+BENCHMARK(BM_FixedElementsSphere20k)
+    ->ArgNames({"keyframes", "warm"})
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
+
+// The solve alone of the same designer's sequence, by the temporal modes with the slow
+// modes' sparse Cholesky factorizations (direct:1, SpaceTimeOptions::direct_shift's
+// default) or Jacobi-PCG for every mode (direct:0, the method before). warm:0 a new solver
+// from the interpolation in time; warm:1 the source moved and the last result (its fixed
+// entries replaced) the first guess, the solver object kept, as generate() with a cache.
+// direct:2 the modes with shifts below 0.3 factored (three with the key frames, not one).
+void BM_FixedElementsSphere20kSolve(benchmark::State& state) {
+  const auto space = sphere_space();
+  const bool keyframes = state.range(0) != 0, warm = state.range(1) != 0;
+  SpaceTimeOptions o;
+  if (state.range(2) == 0) o.direct_shift = 0;
+  if (state.range(2) == 2) o.direct_shift = 0.3;
+  std::vector<SpaceTimeProblem> p;
+  for (int place = 0; place < kPlaces; ++place) p.push_back(spacetime_problem(*space, fixed_elements_scene(keyframes, place)));
+  const int frames = 100;
+  auto solver = std::make_unique<SpaceTimeSolver>(p[0].laplacian, frames, 30.0);
+  std::vector<cplx> z(p[0].values.size());
+  solver->interpolate_in_time(p[0].fixed, p[0].values, z);
+  if (warm) solver->solve(p[0].fixed, p[0].values, z, o);
+  SolveReport r;
+  double cpu = 0;
+  int k = 1;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const SpaceTimeProblem& q = p[static_cast<size_t>(k)];
+    if (warm) {
+      for (size_t e = 0; e < z.size(); ++e)
+        if (q.fixed[e]) z[e] = q.values[e];
+    } else {
+      solver = std::make_unique<SpaceTimeSolver>(q.laplacian, frames, 30.0);
+      solver->interpolate_in_time(q.fixed, q.values, z);
+    }
+    const double cpu0 = process_cpu_ms();
+    state.ResumeTiming();
+    r = solver->solve(q.fixed, q.values, z, o);
+    cpu += process_cpu_ms() - cpu0;
+    if (warm) k = (k + 1) % kPlaces;
+  }
+  counters(state, space->mesh().num_vertices(), frames, r, cpu);
+  state.SetLabel(r.method);
+}
+BENCHMARK(BM_FixedElementsSphere20kSolve)
+    ->ArgNames({"keyframes", "warm", "direct"})
+    ->ArgsProduct({{0, 1}, {0, 1}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond);
+
 // 1M vertices × 100 frames: a 1000 × 1000 grid between two analytic key frames (a
 // wave and a vortex), the solve alone.
 void BM_SolveKeyframesGrid1M(benchmark::State& state) {

@@ -122,16 +122,20 @@ inline double region_radius(const Scene& scene, const CompiledElement& el) {
   return radius;
 }
 
-// All active elements' regions at time t.
+// All active elements' regions at time t. `kept` (one per element), when given, keeps each
+// element's last log map for the next call (a static element's is then made once instead
+// of at every frame).
 inline void constrain_elements(const DesignSpace& space, const Scene& scene,
                         const std::vector<CompiledElement>& elements, double t, double d,
-                        std::span<char> fixed, std::span<cplx> values) {
+                        std::span<char> fixed, std::span<cplx> values, std::vector<KeptChart>* kept = nullptr) {
   LocalChart chart;
   ElementOnDomain placed;
-  for (const CompiledElement& el : elements) {
+  if (kept) kept->resize(elements.size());
+  for (size_t e = 0; e < elements.size(); ++e) {
+    const CompiledElement& el = elements[e];
     if (!el.active(t)) continue;
     const double radius = region_radius(scene, el);
-    place_element(space, el, t, d, chart, placed, nullptr, radius);
+    place_element(space, el, t, d, chart, placed, kept ? &(*kept)[e] : nullptr, radius);
     constrain_region(space.mesh(), placed, radius, fixed, values);
   }
 }

@@ -424,7 +424,7 @@ public:
       return;
     }
     const double t = scene_.time.time(j);
-    constrain_elements(space_, scene_, elements_, t, d_, fixed, values);
+    constrain_elements(space_, scene_, elements_, t, d_, fixed, values, &charts_.local());
     if (plan_) plan_->constrain(space_, scene_, t, d_, fixed, values);
     streaklines_.constrain(t, fixed, values);
   }
@@ -436,6 +436,9 @@ private:
   std::vector<std::vector<cplx>> key_fields_;
   std::optional<KeyframeTopologyPlan> plan_;
   std::vector<CompiledElement> elements_;
+  // Each thread's last log map of every element: an element that stays put has the same
+  // chart at every frame (made once per thread instead of at each of the frames).
+  mutable tbb::enumerable_thread_specific<std::vector<KeptChart>> charts_;
   double d_;
   StreaklineConstraints streaklines_;
 };

@@ -1,10 +1,17 @@
 #include "tvf/solve/spacetime.h"
 
 #include "solve/petsc_spacetime.h"
+#include "solve/one_blas_thread.h"
 #include "solve/spacetime_coarse.h"
 #include "tvf/core/error.h"
 #include "tvf/solve/distributed.h"
 
+// GCC 12 sees a null outer-index pointer in the Ref that Eigen's CholmodSupport makes of a
+// compressed matrix (viewAsCholmod), which cannot occur (as in connection_laplacian.cpp).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+#include <Eigen/CholmodSupport>
+#pragma GCC diagnostic pop
 #include <Eigen/IterativeLinearSolvers>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -38,6 +45,18 @@ struct SpaceTimeSolver::Operator {
   }
 };
 
+namespace detail {
+// A slow temporal mode's spatial system L + s·D over a fixed set (fixed rows and columns
+// identity, so L's pattern whatever the set: the symbolic analysis is made once per
+// object), factored by CHOLMOD (supernodal LLᴴ).
+struct ModeFactor {
+  std::vector<char> fixed;  // |V|: the fixed set it is (or is to be) the factor for
+  double shift = 0;
+  bool analysed = false, factored = false;
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<cplx>, Eigen::Lower> llt;
+};
+}  // namespace detail
+
 // The vectors of a solve (each resized only when the problem's size changes).
 struct SpaceTimeSolver::Workspace {
   std::vector<cplx> rhs, x, r, p, ap, zp, t;
@@ -63,6 +82,9 @@ struct SpaceTimeSolver::Workspace {
   std::vector<std::vector<double>> r_hat, x_hat, res_hat;
   bool modes_kept = false;                         // r_hat, x_hat, res_hat belong to rhs, x
   bool same_fixed = false, same_guess = false;     // set by solve() for solve_modes()
+  // The slow modes' factorizations (SpaceTimeOptions::direct_shift), kept for the next
+  // solve: one with the same fixed set and shift is used as it is, another one refactored.
+  std::vector<std::unique_ptr<detail::ModeFactor>> factors;
 };
 
 // T_s = Q Λ Qᵀ for the frames of one segment.
@@ -391,6 +413,67 @@ struct ModeSystem {
       const double beta = rz_new / rz;
       rz = rz_new;
       for (size_t i = 0; i < n; ++i) p[i] = inverse[i] * res[i] + beta * p[i];
+    }
+    return it;
+  }
+
+  // As iterate, with the factorization f of this system (made here when f is not yet
+  // factored) as the preconditioner instead of Jacobi: exact up to rounding, so one or two
+  // iterations. `l` is L as a matrix (its pattern is f's). Returns −2 when the system
+  // cannot be factored (not definite: a part of the mesh without a fixed vertex on a flat
+  // connection), for Jacobi-PCG to take it.
+  int iterate_direct(cplx* y, cplx* res, double& rr, double tau2, int max_iterations, detail::ModeFactor& f,
+                     const ConnectionLaplacian& l, ModeScratch& w) const {
+    if (rr <= tau2) return 0;
+    const auto n = static_cast<size_t>(op.rows);
+    const detail::OneBlasThread one_thread;  // CHOLMOD's BLAS on this thread alone
+    if (!f.factored) {
+      Eigen::SparseMatrix<cplx> a = l.matrix;
+      for (Eigen::Index j = 0; j < a.outerSize(); ++j)
+        for (Eigen::SparseMatrix<cplx>::InnerIterator e(a, j); e; ++e) {
+          const auto i = static_cast<size_t>(e.row());
+          if (fixed[i] || fixed[static_cast<size_t>(j)])
+            e.valueRef() = e.row() == j ? cplx(1, 0) : cplx(0, 0);
+          else if (e.row() == j)
+            e.valueRef() += s * op.weight_sum[i];
+        }
+      f.llt.cholmod().print = 0;
+      if (!f.analysed) f.llt.analyzePattern(a);
+      f.analysed = f.llt.info() == Eigen::Success;
+      if (f.analysed) f.llt.factorize(a);
+      if (!f.analysed || f.llt.info() != Eigen::Success) return -2;  // singular (a part without a fixed vertex)
+      f.factored = true;
+    }
+    w.resize(n);
+    cplx *p = w.p.data(), *ap = w.ap.data();
+    Eigen::Map<Eigen::VectorXcd> r(res, static_cast<Eigen::Index>(n));
+    Eigen::VectorXcd z = f.llt.solve(r);
+    double rz = r.dot(z).real();
+    for (size_t i = 0; i < n; ++i) p[i] = z[static_cast<Eigen::Index>(i)];
+    int it = 0;
+    while (rr > tau2) {
+      if (it == max_iterations) return -1;
+      double pap = 0;
+      for (size_t i = 0; i < n; ++i) {
+        const cplx v = fixed[i] ? cplx(0, 0) : (op.diagonal[i] + s * op.weight_sum[i]) * p[i] + op.off(static_cast<int>(i), p);
+        ap[i] = v;
+        pap += p[i].real() * v.real() + p[i].imag() * v.imag();
+      }
+      if (!(pap > 0)) return -1;
+      const double alpha = rz / pap;
+      rr = 0;
+      for (size_t i = 0; i < n; ++i) {
+        y[i] += alpha * p[i];
+        res[i] -= alpha * ap[i];
+        rr += std::norm(res[i]);
+      }
+      ++it;
+      if (rr <= tau2) break;
+      z = f.llt.solve(r);
+      const double rz_new = r.dot(z).real();
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (size_t i = 0; i < n; ++i) p[i] = z[static_cast<Eigen::Index>(i)] + beta * p[i];
     }
     return it;
   }
@@ -1236,10 +1319,71 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   const double share = options.tolerance >= kModeResidualTolerance ? 0.95 : 0.5;
   const double budget = std::pow(share * options.tolerance * bnorm, 2);
   std::atomic<bool> failed{false};
+  std::atomic<int> factorizations{0};
   tbb::enumerable_thread_specific<ModeScratch> scratch;
+  // The slow modes' factorizations (options.direct_shift): kept ones where the fixed set
+  // and shift are the same, the others refactored (made in converge, where needed).
+  std::vector<detail::ModeFactor*> direct(modes.size(), nullptr);
+  if (options.direct_shift > 0) {
+    std::vector<size_t> wanted;
+    for (size_t m = 0; m < modes.size(); ++m)
+      if (modes[m].shift < options.direct_shift) wanted.push_back(m);
+    std::vector<char> taken(w.factors.size(), 0);
+    auto same = [&](const detail::ModeFactor& f, const Mode& mode) {
+      return f.shift == mode.shift && std::equal(f.fixed.begin(), f.fixed.end(), seg_fixed[mode.segment]);
+    };
+    std::vector<size_t> unmatched;
+    for (const size_t m : wanted) {
+      size_t k = 0;
+      while (k < w.factors.size() && (taken[k] || !w.factors[k]->factored || !same(*w.factors[k], modes[m]))) ++k;
+      if (k < w.factors.size()) {
+        taken[k] = 1;
+        direct[m] = w.factors[k].get();
+      } else {
+        unmatched.push_back(m);
+      }
+    }
+    // The others take new factors while the solver keeps fewer than twice as many as this
+    // solve wants (the last fixed set's stay for an undo), else the least recently used
+    // one that this solve does not use (its analysis is L's pattern's: refactored only).
+    const size_t most = 2 * wanted.size();
+    for (const size_t m : unmatched) {
+      size_t k = w.factors.size();  // none found: a new one
+      if (w.factors.size() >= most)
+        for (size_t j = w.factors.size(); j-- > 0;)
+          if (!taken[j]) {
+            k = j;
+            break;
+          }
+      if (k == w.factors.size()) {
+        w.factors.push_back(std::make_unique<detail::ModeFactor>());
+        taken.push_back(0);
+      }
+      taken[k] = 1;
+      detail::ModeFactor& f = *w.factors[k];
+      f.fixed.assign(seg_fixed[modes[m].segment], seg_fixed[modes[m].segment] + n);
+      f.shift = modes[m].shift;
+      f.factored = false;
+      direct[m] = &f;
+    }
+    // Most recently used first; at most `most` kept.
+    std::vector<std::unique_ptr<detail::ModeFactor>> order;
+    for (size_t j = 0; j < w.factors.size(); ++j)
+      if (taken[j]) order.push_back(std::move(w.factors[j]));
+    for (size_t j = 0; j < w.factors.size() && order.size() < most; ++j)
+      if (w.factors[j]) order.push_back(std::move(w.factors[j]));
+    if (!wanted.empty()) w.factors = std::move(order);
+  }
   auto converge = [&](Mode& mode, double tau2) {
-    const int it = system(mode).iterate(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
-                                        options.max_iterations, scratch.local());
+    detail::ModeFactor* f = direct[static_cast<size_t>(&mode - modes.data())];
+    const bool fresh = f && !f->factored;
+    int it = f ? system(mode).iterate_direct(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
+                                             options.max_iterations, *f, laplacian_, scratch.local())
+               : -2;
+    if (it == -2)
+      it = system(mode).iterate(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
+                                options.max_iterations, scratch.local());
+    if (fresh && f->factored) ++factorizations;
     if (it < 0) failed = true;
     mode.iterations += std::max(it, 0);
   };
@@ -1415,17 +1559,28 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     all += m.iterations;
     modes_rr += m.rr;
   }
+  size_t direct_modes = 0;
+  long direct_iterations = 0;
+  for (size_t m = 0; m < modes.size(); ++m)
+    if (direct[m] && direct[m]->factored) ++direct_modes, direct_iterations += modes[m].iterations;
+  const std::string by_cholesky =
+      direct_modes ? fmt::format(", {} slow modes preconditioned by their sparse Cholesky factorization ({} "
+                                 "iterations; {} made now, the others kept)",
+                                 direct_modes, direct_iterations, factorizations.load())
+                   : std::string();
   SolveReport report;
   if (has_moving) {
     report.method = fmt::format("temporal eigenmodes (direct in time) with Jacobi-PCG per mode and local solves at "
                                 "the moving constraints, {} modes, {} rounds, {} spatial iterations in all, "
                                 "local solves on {} vertices ({} iterations in all)",
-                                modes.size(), rounds, all, local_vertices, local_iterations);
+                                modes.size(), rounds, all, local_vertices, local_iterations) +
+                    by_cholesky;
     report.iterations = rounds;
   } else {
     report.method = fmt::format("temporal eigenmodes (direct in time) with Jacobi-PCG per mode, {} modes, "
                                 "{} spatial iterations in all",
-                                modes.size(), all);
+                                modes.size(), all) +
+                    by_cholesky;
     report.iterations = most;
   }
   // Q is orthogonal, so the modes' residuals add up to the whole one's, up to the

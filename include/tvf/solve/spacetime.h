@@ -94,6 +94,18 @@ struct SpaceTimeOptions {
   // than 0.7 of the last one's residual) the rounds stop and CG finishes the solve from
   // where they are (the report's method then says "finished by").
   int most_rounds = 40;
+
+  // The temporal-mode methods: modes whose shift b·λ_k is below this have their spatial
+  // system (L + b·λ_k·D on the free vertices) solved with a sparse Cholesky factorization
+  // (CHOLMOD supernodal LLᴴ) as CG's preconditioner: one or two iterations instead of the
+  // hundreds (thousands with no key frame: the lowest mode is then L alone) of Jacobi-PCG.
+  // A factorization is kept by the solver while its fixed set and shift are the same (a
+  // warm re-solve reuses it). On the 20k sphere one costs about what 200 Jacobi-PCG
+  // iterations do, so the default takes only modes with (nearly) no shift: the lowest of a
+  // segment without a key frame (500+ iterations there; 70 for the lowest with key frames,
+  // shift 0.03 at 100 frames: docs/benchmarks.md). 0: Jacobi-PCG for every mode (the
+  // method before, kept as the benchmarks' baseline).
+  double direct_shift = 0.005;
 };
 
 class SpaceTimeSolver {
