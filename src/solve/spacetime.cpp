@@ -62,6 +62,12 @@ struct SpaceTimeSolver::Workspace {
   // starts every mode from its kept residual instead of a sweep.
   std::vector<std::vector<double>> r_hat, x_hat, res_hat;
   bool modes_kept = false;                         // r_hat, x_hat, res_hat belong to rhs, x
+  // A warm re-solve with the kept residuals solves for the change alone (iterate_change):
+  // per segment, what it adds to x_hat and the part of res_hat it brought, zero between
+  // solves (allocated by the first such solve; change_zero false where a solve that
+  // stopped short may have left them otherwise).
+  std::vector<std::vector<double>> d_hat, e_hat;
+  bool change_zero = true;
   bool same_fixed = false, same_guess = false;     // set by solve() for solve_modes()
 };
 
@@ -394,6 +400,56 @@ struct ModeSystem {
     }
     return it;
   }
+
+  // The same CG run on the change only (a warm re-solve): e is the part of the residual res
+  // that this solve brought (res − e, what the last solve left, stays out of the Krylov
+  // space), d accumulates what it adds to y. Starting from e zero outside a region, p, d
+  // and e stay zero beyond one ring more per iteration: the change's response is local
+  // when few iterations suffice. rr = ‖res‖² is the stopping test, as above; the caller
+  // sees to it that ‖res − e‖² is well below tau2 (else it folds res − e into e).
+  int iterate_change(cplx* y, cplx* d, cplx* res, cplx* e, double& rr, double tau2, int max_iterations,
+                     ModeScratch& w) const {
+    if (rr <= tau2) return 0;
+    const auto n = static_cast<size_t>(op.rows);
+    w.resize(n);
+    cplx *p = w.p.data(), *ap = w.ap.data();
+    double *diagonal = w.diagonal.data(), *inverse = w.inverse.data();
+    double rz = 0;
+    for (size_t i = 0; i < n; ++i) {
+      diagonal[i] = fixed[i] ? 0.0 : op.diagonal[i] + s * op.weight_sum[i];
+      inverse[i] = fixed[i] ? 0.0 : 1.0 / diagonal[i];
+      p[i] = inverse[i] * e[i];
+      rz += inverse[i] * std::norm(e[i]);
+    }
+    int it = 0;
+    while (rr > tau2) {
+      if (it == max_iterations || !(rz > 0)) return -1;
+      double pap = 0;
+      for (size_t i = 0; i < n; ++i) {
+        const cplx v = fixed[i] ? cplx(0, 0) : diagonal[i] * p[i] + op.off(static_cast<int>(i), p);
+        ap[i] = v;
+        pap += p[i].real() * v.real() + p[i].imag() * v.imag();
+      }
+      if (!(pap > 0)) return -1;
+      const double alpha = rz / pap;
+      double rz_new = 0;
+      rr = 0;
+      for (size_t i = 0; i < n; ++i) {
+        const cplx step = alpha * p[i], change = alpha * ap[i];
+        y[i] += step;
+        d[i] += step;
+        e[i] -= change;
+        res[i] -= change;
+        rr += std::norm(res[i]);
+        rz_new += inverse[i] * std::norm(e[i]);
+      }
+      ++it;
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (size_t i = 0; i < n; ++i) p[i] = inverse[i] * e[i] + beta * p[i];
+    }
+    return it;
+  }
 };
 
 // One low temporal mode q of a segment as a coarse space for CG when the fixed set moves
@@ -648,9 +704,9 @@ void rows_to_frames(const std::vector<double>& hat, size_t n, const std::vector<
 }
 
 // hat's rows += values (vertex-major, count per row) · Q; rr[k] (‖column k‖²) updated when
-// given.
+// given, and the same added to also's rows when given.
 void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<int>& rows, const Eigen::MatrixXd& q,
-                        const std::vector<cplx>& values, double* rr) {
+                        const std::vector<cplx>& values, double* rr, std::vector<double>* also = nullptr) {
   const auto count = q.rows();
   Eigen::Map<Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
   Eigen::MatrixXd f(static_cast<Eigen::Index>(2 * rows.size()), count);
@@ -668,8 +724,92 @@ void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<in
         const double old = h(row, k), now = old + g(static_cast<Eigen::Index>(2 * r) + part, k);
         if (rr) rr[k] += now * now - old * old;
         h(row, k) = now;
+        if (also) (*also)[static_cast<size_t>(k * 2 * static_cast<Eigen::Index>(n) + row)] +=
+            g(static_cast<Eigen::Index>(2 * r) + part, k);
       }
     }
+}
+
+// A warm re-solve's change back into frames: x (a segment's frames, 2|V| × count real,
+// column-major as the modes) += d · Qᵀ, d the change of the segment's modes in this solve,
+// zero outside few rows in all but the slowest modes (iterate_change). Each mode's nonzero
+// rows are found by a scan; the modes, ordered by how many rows they reach, go in groups
+// whose rows (the union) are gathered and multiplied, 2|T| × g by g × count, instead of
+// all 2|V| rows by every mode. d and e (the change's residual) are left zero. The groups and
+// the row blocks do not depend on the thread count, nor does any row's sum. Returns the
+// rows reached, summed over the modes.
+size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size_t n, const Eigen::MatrixXd& q,
+                            double* x, bool parallel) {
+  const auto count = static_cast<size_t>(q.rows());
+  std::vector<std::vector<int>> reach(count);
+  auto scan = [&](size_t k) {
+    cplx* dk = reinterpret_cast<cplx*>(d.data() + 2 * n * k);
+    cplx* ek = reinterpret_cast<cplx*>(e.data() + 2 * n * k);
+    for (size_t i = 0; i < n; ++i) {
+      if (dk[i] != cplx(0, 0)) reach[k].push_back(static_cast<int>(i));
+      if (ek[i] != cplx(0, 0)) ek[i] = 0;
+    }
+  };
+  if (parallel)
+    tbb::parallel_for(size_t{0}, count, scan);
+  else
+    for (size_t k = 0; k < count; ++k) scan(k);
+  std::vector<size_t> order;
+  for (size_t k = 0; k < count; ++k)
+    if (!reach[k].empty()) order.push_back(k);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return reach[a].size() > reach[b].size(); });
+  std::vector<int> stamp(n, -1);
+  const Eigen::Map<const Eigen::MatrixXd> dm(d.data(), static_cast<Eigen::Index>(2 * n), static_cast<Eigen::Index>(count));
+  Eigen::Map<Eigen::MatrixXd> xm(x, static_cast<Eigen::Index>(2 * n), static_cast<Eigen::Index>(count));
+  constexpr size_t kGroup = 16;
+  for (size_t g0 = 0; g0 < order.size();) {
+    // Modes reaching at least half the rows of the group's first, at most kGroup of them.
+    size_t g1 = g0 + 1;
+    while (g1 < order.size() && g1 - g0 < kGroup && 2 * reach[order[g1]].size() >= reach[order[g0]].size()) ++g1;
+    const auto group = static_cast<int>(g0);
+    std::vector<int> rows;
+    for (size_t c = g0; c < g1; ++c)
+      for (const int i : reach[order[c]])
+        if (stamp[static_cast<size_t>(i)] != group) stamp[static_cast<size_t>(i)] = group, rows.push_back(i);
+    std::sort(rows.begin(), rows.end());
+    const auto g = static_cast<Eigen::Index>(g1 - g0);
+    Eigen::MatrixXd qg(static_cast<Eigen::Index>(count), g);
+    for (Eigen::Index c = 0; c < g; ++c) qg.col(c) = q.col(static_cast<Eigen::Index>(order[g0 + static_cast<size_t>(c)]));
+    // Fixed blocks of 1024 rows (vertices), each gathered, multiplied and added on one thread.
+    constexpr size_t kRowsPerBlock = 1024;
+    const size_t nblocks = (rows.size() + kRowsPerBlock - 1) / kRowsPerBlock;
+    auto block = [&](size_t b) {
+      const size_t t0 = b * kRowsPerBlock, nt = std::min(kRowsPerBlock, rows.size() - t0);
+      Eigen::MatrixXd gathered(static_cast<Eigen::Index>(2 * nt), g);
+      for (Eigen::Index c = 0; c < g; ++c) {
+        const auto k = static_cast<Eigen::Index>(order[g0 + static_cast<size_t>(c)]);
+        for (size_t t = 0; t < nt; ++t) {
+          const auto row = static_cast<Eigen::Index>(2 * rows[t0 + t]);
+          gathered(static_cast<Eigen::Index>(2 * t), c) = dm(row, k);
+          gathered(static_cast<Eigen::Index>(2 * t + 1), c) = dm(row + 1, k);
+        }
+      }
+      const Eigen::MatrixXd r = gathered * qg.transpose();
+      for (Eigen::Index jj = 0; jj < static_cast<Eigen::Index>(count); ++jj)
+        for (size_t t = 0; t < nt; ++t) {
+          const auto row = static_cast<Eigen::Index>(2 * rows[t0 + t]);
+          xm(row, jj) += r(static_cast<Eigen::Index>(2 * t), jj);
+          xm(row + 1, jj) += r(static_cast<Eigen::Index>(2 * t + 1), jj);
+        }
+    };
+    if (parallel && nblocks > 1)
+      tbb::parallel_for(size_t{0}, nblocks, block);
+    else
+      for (size_t b = 0; b < nblocks; ++b) block(b);
+    g0 = g1;
+  }
+  size_t reached = 0;
+  for (size_t k = 0; k < count; ++k) {
+    cplx* dk = reinterpret_cast<cplx*>(d.data() + 2 * n * k);
+    for (const int i : reach[k]) dk[i] = 0;
+    reached += reach[k].size();
+  }
+  return reached;
 }
 
 // The local solve's set-up for a segment whose common fixed set and cut vertices are in m.
@@ -956,6 +1096,11 @@ constexpr double kModeResidualTolerance = 1e-8;
 // left of the residual budget.
 constexpr double kSlowShift = 1.0;
 
+// Solving for the change (a warm re-solve): a mode whose residual left by the last solve is
+// above this fraction of its target takes its whole residual instead (the change alone
+// could not bring it below the target, or only with many more iterations).
+constexpr double kChangeFold = 0.5;
+
 size_t SpaceTimeSolver::longest_segment(std::span<const char> fixed) const {
   size_t most = 0;
   for (const auto& s : find_segments(fixed, static_cast<size_t>(vertices()), static_cast<size_t>(frames_)).segments)
@@ -1124,6 +1269,14 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   // The kept residuals of the modes are theirs when the first guess is the last result
   // and every change of the right-hand side is known.
   const bool residuals_kept = kept && w.same_guess && w.rhs_incremental;
+  // Then the modes' solves work on the change alone (iterate_change: what the last solve
+  // left stays out of their Krylov spaces), and the result goes back into frames as the
+  // last one plus the change, on the rows the change reaches (add_change_to_frames).
+  const bool change = residuals_kept;
+  if (change) {
+    w.d_hat.resize(nseg);
+    w.e_hat.resize(nseg);
+  }
   w.modes_kept = false;  // until this solve has left its own modes
   w.r_hat.resize(nseg);
   w.x_hat.resize(nseg);
@@ -1153,12 +1306,14 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   struct Mode {
     size_t segment, k;
     double shift;
-    double rr = 0;  // ‖residual‖²
+    double rr = 0;       // ‖residual‖²
+    double base_rr = 0;  // solving for the change: ‖residual − change‖², what the last solve left
     int iterations = 0;
   };
   std::vector<Mode> modes;
   std::vector<const TemporalBasis*> bases(nseg);
   std::vector<size_t> mode_offset(nseg);
+  std::vector<std::vector<int>> changed_rows(nseg);  // solving for the change: the rows it starts on
   auto column = [&](std::vector<std::vector<double>>& m, const Mode& mode) {
     return reinterpret_cast<cplx*>(m[mode.segment].data() + 2 * n * mode.k);
   };
@@ -1171,6 +1326,12 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     Eigen::Map<Eigen::MatrixXd> r_hat(sized(w.r_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
     Eigen::Map<Eigen::MatrixXd> x_hat(sized(w.x_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
     Eigen::Map<Eigen::MatrixXd> res_hat(sized(w.res_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
+    if (change) {
+      for (auto* v : {&w.d_hat[si], &w.e_hat[si]}) {
+        sized(*v, static_cast<size_t>(rows * cols));
+        if (!w.change_zero) std::fill(v->begin(), v->end(), 0.0);
+      }
+    }
     if (kept && w.rhs_incremental) {
       // r_hat (and the kept residuals) += Qᵀ Δ on the rows whose right-hand side changed
       // in this segment: Δ per vertex over the segment's frames.
@@ -1193,6 +1354,12 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
           res_hat.row(row) += re;
           res_hat.row(row + 1) += im;
         }
+        if (change) {
+          Eigen::Map<Eigen::MatrixXd> e_hat(w.e_hat[si].data(), rows, cols);
+          e_hat.row(row) += re;
+          e_hat.row(row + 1) += im;
+          changed_rows[si].push_back(static_cast<int>(i));
+        }
       }
     } else {
       multiply_rows(reinterpret_cast<const double*>(rhs.data() + first * n), basis.q, false, r_hat.data(), rows);
@@ -1208,6 +1375,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     else
       for (const size_t m : which) body(modes[m]);
   };
+  if (change) w.change_zero = false;  // until add_change_to_frames has cleared them
   std::vector<size_t> every(modes.size());
   for (size_t m = 0; m < modes.size(); ++m) every[m] = m;
   auto system = [&](const Mode& mode) {
@@ -1221,6 +1389,12 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       double rr = 0;
       for (size_t i = 0; i < n; ++i) rr += std::norm(res[i]);
       mode.rr = rr;
+      if (change) {
+        const cplx* e = column(w.e_hat, mode);
+        double base = rr;
+        for (const int i : changed_rows[mode.segment]) base += std::norm(res[i] - e[i]) - std::norm(res[i]);
+        mode.base_rr = std::max(base, 0.0);
+      }
     } else {
       mode.rr = system(mode).residual(column(w.r_hat, mode), column(w.x_hat, mode), res);
     }
@@ -1238,8 +1412,22 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   std::atomic<bool> failed{false};
   tbb::enumerable_thread_specific<ModeScratch> scratch;
   auto converge = [&](Mode& mode, double tau2) {
-    const int it = system(mode).iterate(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
-                                        options.max_iterations, scratch.local());
+    int it = 0;
+    if (change) {
+      // The change alone, unless what the last solve left is too close to this mode's
+      // target (or the mode is a slow one, whose response reaches every row anyway): then
+      // the whole residual.
+      cplx *res = column(w.res_hat, mode), *e = column(w.e_hat, mode);
+      if (mode.base_rr > kChangeFold * tau2 || (mode.base_rr > 0 && mode.shift < kSlowShift)) {
+        std::copy(res, res + n, e);
+        mode.base_rr = 0;
+      }
+      it = system(mode).iterate_change(column(w.x_hat, mode), column(w.d_hat, mode), res, e, mode.rr, tau2,
+                                       options.max_iterations, scratch.local());
+    } else {
+      it = system(mode).iterate(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
+                                options.max_iterations, scratch.local());
+    }
     if (it < 0) failed = true;
     mode.iterations += std::max(it, 0);
   };
@@ -1331,7 +1519,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       delta.resize(u.size() + y_outer.size());
       for (size_t k = 0; k < u.size(); ++k) delta[k] = m.moving[k] ? cplx(0, 0) : -y_omega[k];
       for (size_t k = 0; k < y_outer.size(); ++k) delta[u.size() + k] = -y_outer[k];
-      add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data());
+      add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data(), change ? &w.e_hat[si] : nullptr);
       // The multipliers, on the cut vertices' rows (the only ones with constraint entries).
       std::vector<cplx>& ll = lambda_local[si];
       for (size_t r = 0; r < m.cut.size(); ++r) {
@@ -1395,17 +1583,42 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     add_frames_to_rows(w.r_hat[si], n, moving[si].cut, bases[si]->q, lambda_local[si], nullptr);
   }
 
-  // Back from the modes.
+  // Back from the modes: the whole transform, or the last result plus the change (what
+  // the modes' solves added, and the local solves' part, kept in frames).
+  size_t reached = 0, mode_rows = 0;
   for (size_t si = 0; si < nseg; ++si) {
     const auto [first, count] = segs.segments[si];
-    const auto rows = static_cast<Eigen::Index>(2 * n);
-    multiply_rows(w.x_hat[si].data(), bases[si]->q, true, reinterpret_cast<double*>(x.data() + first * n), rows);
+    auto* x_seg = reinterpret_cast<double*>(x.data() + first * n);
+    if (!change) {
+      multiply_rows(w.x_hat[si].data(), bases[si]->q, true, x_seg, static_cast<Eigen::Index>(2 * n));
+      continue;
+    }
+    reached += add_change_to_frames(w.d_hat[si], w.e_hat[si], n, bases[si]->q, x_seg, par);
+    mode_rows += n * count;
+    if (local && !moving[si].cut.empty()) {
+      const MovingSegment& m = moving[si];
+      for (size_t li = 0; li < m.omega.size(); ++li)
+        for (size_t jj = 0; jj < count; ++jj)
+          x[(first + jj) * n + static_cast<size_t>(m.omega[li])] += x_local[si][li * count + jj];
+    }
   }
-  if (has_moving)  // the constraint entries: zero to rounding, exactly zero here (x is the free part)
+  if (change) w.change_zero = true;
+  // The constraint entries: zero to rounding, exactly zero here (x is the free part); in a
+  // segment they are on the cut vertices' rows only.
+  if (has_moving && change) {
+    for (size_t si = 0; si < nseg; ++si) {
+      const auto [first, count] = segs.segments[si];
+      if (local)
+        for (const int i : moving[si].cut)
+          for (size_t j = first; j < first + count; ++j)
+            if (fixed[j * n + static_cast<size_t>(i)]) x[j * n + static_cast<size_t>(i)] = 0;
+    }
+  } else if (has_moving) {
     blocks(n * nf, par, [&](size_t s0, size_t e0) {
       for (size_t k = s0; k < e0; ++k)
         if (fixed[k]) x[k] = 0;
     });
+  }
 
   int most = 0;
   long all = 0;
@@ -1428,6 +1641,9 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
                                 modes.size(), all);
     report.iterations = most;
   }
+  if (change)
+    report.method += fmt::format(", the change solved alone (it reached {:.1f} % of the modes' rows)",
+                                 100.0 * static_cast<double>(reached) / static_cast<double>(std::max<size_t>(mode_rows, 1)));
   // Q is orthogonal, so the modes' residuals add up to the whole one's, up to the
   // rounding of the transforms (~1e-14 relative). Where the tolerance leaves room for
   // that (a warm re-solve to 1e-6), that sum is the residual (with moving constraints,
