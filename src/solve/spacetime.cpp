@@ -324,6 +324,10 @@ struct SpaceTime {
 struct ModeScratch {
   Vec p, ap, res, sp;  // res, sp: the coarse solves' only
   std::vector<double> diagonal, inverse;
+  // ModeSystem::iterate_change's: zero (in, cp, cap) between its calls.
+  std::vector<char> in;
+  Vec cp, cap;
+  std::vector<double> cdiagonal, cinverse;
   void resize(size_t n) {
     if (p.size() == n) return;
     p.resize(n), ap.resize(n), diagonal.resize(n), inverse.resize(n);
@@ -403,52 +407,101 @@ struct ModeSystem {
 
   // The same CG run on the change only (a warm re-solve): e is the part of the residual res
   // that this solve brought (res − e, what the last solve left, stays out of the Krylov
-  // space), d accumulates what it adds to y. Starting from e zero outside a region, p, d
-  // and e stay zero beyond one ring more per iteration: the change's response is local
-  // when few iterations suffice. rr = ‖res‖² is the stopping test, as above; the caller
-  // sees to it that ‖res − e‖² is well below tau2 (else it folds res − e into e).
-  int iterate_change(cplx* y, cplx* d, cplx* res, cplx* e, double& rr, double tau2, int max_iterations,
-                     ModeScratch& w) const {
+  // space), d accumulates what it adds to y. e is zero outside the rows in `active` (free
+  // rows), and so are p and d: each iteration grows `active` by one ring of neighbours and
+  // works on those rows alone, so a mode that converges in a few iterations touches the
+  // rows near the change, not all |V|. rr = ‖res‖² is the stopping test, as above (the rows
+  // outside `active` keep what the last solve left: `outside`, their ‖res‖², summed by the caller
+  // and kept up to date here as rows join); the caller sees to it that ‖res − e‖² is
+  // well below tau2 (else it folds res − e into e and makes every free row active).
+  int iterate_change(cplx* y, cplx* d, cplx* res, cplx* e, double& rr, double& outside, double tau2,
+                     int max_iterations, std::vector<int>& active, ModeScratch& w) const {
     if (rr <= tau2) return 0;
     const auto n = static_cast<size_t>(op.rows);
-    w.resize(n);
-    cplx *p = w.p.data(), *ap = w.ap.data();
-    double *diagonal = w.diagonal.data(), *inverse = w.inverse.data();
+    if (w.in.size() != n) {  // zero between calls on the rows they used
+      w.in.assign(n, 0);
+      w.cp.assign(n, cplx(0, 0));
+      w.cap.assign(n, cplx(0, 0));
+      w.cinverse.assign(n, 0.0);
+      w.cdiagonal.assign(n, 0.0);
+    }
+    cplx *p = w.cp.data(), *ap = w.cap.data();
+    char* in = w.in.data();
+    double *diagonal = w.cdiagonal.data(), *inverse = w.cinverse.data();
+    auto join = [&](size_t i) {
+      in[i] = 1;
+      diagonal[i] = op.diagonal[i] + s * op.weight_sum[i];
+      inverse[i] = 1.0 / diagonal[i];
+    };
     double rz = 0;
-    for (size_t i = 0; i < n; ++i) {
-      diagonal[i] = fixed[i] ? 0.0 : op.diagonal[i] + s * op.weight_sum[i];
-      inverse[i] = fixed[i] ? 0.0 : 1.0 / diagonal[i];
+    for (const int a : active) {
+      const auto i = static_cast<size_t>(a);
+      join(i);
       p[i] = inverse[i] * e[i];
       rz += inverse[i] * std::norm(e[i]);
     }
-    int it = 0;
-    while (rr > tau2) {
-      if (it == max_iterations || !(rz > 0)) return -1;
+    size_t frontier = 0;                          // active[frontier, end): not yet grown from
+    int it = 0, result = 0;
+    for (;;) {
+      if (rr <= tau2) {
+        result = it;
+        break;
+      }
+      if (it == max_iterations || !(rz > 0)) {
+        result = -1;
+        break;
+      }
+      const size_t end = active.size();
+      for (size_t a = frontier; a < end; ++a) {
+        const auto i = static_cast<size_t>(active[a]);
+        for (int k = op.row_start[i]; k < op.row_start[i + 1]; ++k) {
+          const auto j = static_cast<size_t>(op.column[static_cast<size_t>(k)]);
+          if (in[j] || fixed[j]) continue;
+          join(j);
+          active.push_back(static_cast<int>(j));
+          outside -= std::norm(res[j]);
+        }
+      }
+      frontier = end;
       double pap = 0;
-      for (size_t i = 0; i < n; ++i) {
-        const cplx v = fixed[i] ? cplx(0, 0) : diagonal[i] * p[i] + op.off(static_cast<int>(i), p);
+      for (const int a : active) {
+        const auto i = static_cast<size_t>(a);
+        const cplx v = diagonal[i] * p[i] + op.off(a, p);
         ap[i] = v;
         pap += p[i].real() * v.real() + p[i].imag() * v.imag();
       }
-      if (!(pap > 0)) return -1;
+      if (!(pap > 0)) {
+        result = -1;
+        break;
+      }
       const double alpha = rz / pap;
-      double rz_new = 0;
-      rr = 0;
-      for (size_t i = 0; i < n; ++i) {
+      double rz_new = 0, inside = 0;
+      for (const int a : active) {
+        const auto i = static_cast<size_t>(a);
         const cplx step = alpha * p[i], change = alpha * ap[i];
         y[i] += step;
         d[i] += step;
         e[i] -= change;
         res[i] -= change;
-        rr += std::norm(res[i]);
-        rz_new += inverse[i] * std::norm(e[i]);
+        const double q = std::norm(e[i]);
+        inside += std::norm(res[i]);
+        rz_new += inverse[i] * q;
       }
+      rr = std::max(outside, 0.0) + inside;
       ++it;
       const double beta = rz_new / rz;
       rz = rz_new;
-      for (size_t i = 0; i < n; ++i) p[i] = inverse[i] * e[i] + beta * p[i];
+      for (const int a : active) {
+        const auto i = static_cast<size_t>(a);
+        p[i] = inverse[i] * e[i] + beta * p[i];
+      }
     }
-    return it;
+    for (const int a : active) {
+      const auto i = static_cast<size_t>(a);
+      in[i] = 0;
+      p[i] = ap[i] = 0;
+    }
+    return result;
   }
 };
 
@@ -732,32 +785,24 @@ void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<in
 
 // A warm re-solve's change back into frames: x (a segment's frames, 2|V| × count real,
 // column-major as the modes) += d · Qᵀ, d the change of the segment's modes in this solve,
-// zero outside few rows in all but the slowest modes (iterate_change). Each mode's nonzero
-// rows are found by a scan; the modes, ordered by how many rows they reach, go in groups
+// zero outside few rows in all but the slowest modes (iterate_change): outside the rows
+// reach_of[k] lists for mode k. The modes, ordered by how many rows they reach, go in groups
 // whose rows (the union) are gathered and multiplied, 2|T| × g by g × count, instead of
 // all 2|V| rows by every mode. d and e (the change's residual) are left zero. The groups and
 // the row blocks do not depend on the thread count, nor does any row's sum. Returns the
 // rows reached, summed over the modes.
 size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size_t n, const Eigen::MatrixXd& q,
-                            double* x, bool parallel) {
+                            const std::vector<const std::vector<int>*>& reach_of, double* x, bool parallel) {
   const auto count = static_cast<size_t>(q.rows());
-  std::vector<std::vector<int>> reach(count);
-  auto scan = [&](size_t k) {
-    cplx* dk = reinterpret_cast<cplx*>(d.data() + 2 * n * k);
+  auto reach = [&](size_t k) -> const std::vector<int>& { return *reach_of[k]; };
+  for (size_t k = 0; k < count; ++k) {
     cplx* ek = reinterpret_cast<cplx*>(e.data() + 2 * n * k);
-    for (size_t i = 0; i < n; ++i) {
-      if (dk[i] != cplx(0, 0)) reach[k].push_back(static_cast<int>(i));
-      if (ek[i] != cplx(0, 0)) ek[i] = 0;
-    }
-  };
-  if (parallel)
-    tbb::parallel_for(size_t{0}, count, scan);
-  else
-    for (size_t k = 0; k < count; ++k) scan(k);
+    for (const int i : reach(k)) ek[i] = 0;
+  }
   std::vector<size_t> order;
   for (size_t k = 0; k < count; ++k)
-    if (!reach[k].empty()) order.push_back(k);
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return reach[a].size() > reach[b].size(); });
+    if (!reach(k).empty()) order.push_back(k);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return reach(a).size() > reach(b).size(); });
   std::vector<int> stamp(n, -1);
   const Eigen::Map<const Eigen::MatrixXd> dm(d.data(), static_cast<Eigen::Index>(2 * n), static_cast<Eigen::Index>(count));
   Eigen::Map<Eigen::MatrixXd> xm(x, static_cast<Eigen::Index>(2 * n), static_cast<Eigen::Index>(count));
@@ -765,11 +810,11 @@ size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size
   for (size_t g0 = 0; g0 < order.size();) {
     // Modes reaching at least half the rows of the group's first, at most kGroup of them.
     size_t g1 = g0 + 1;
-    while (g1 < order.size() && g1 - g0 < kGroup && 2 * reach[order[g1]].size() >= reach[order[g0]].size()) ++g1;
+    while (g1 < order.size() && g1 - g0 < kGroup && 2 * reach(order[g1]).size() >= reach(order[g0]).size()) ++g1;
     const auto group = static_cast<int>(g0);
     std::vector<int> rows;
     for (size_t c = g0; c < g1; ++c)
-      for (const int i : reach[order[c]])
+      for (const int i : reach(order[c]))
         if (stamp[static_cast<size_t>(i)] != group) stamp[static_cast<size_t>(i)] = group, rows.push_back(i);
     std::sort(rows.begin(), rows.end());
     const auto g = static_cast<Eigen::Index>(g1 - g0);
@@ -806,8 +851,8 @@ size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size
   size_t reached = 0;
   for (size_t k = 0; k < count; ++k) {
     cplx* dk = reinterpret_cast<cplx*>(d.data() + 2 * n * k);
-    for (const int i : reach[k]) dk[i] = 0;
-    reached += reach[k].size();
+    for (const int i : reach(k)) dk[i] = 0;
+    reached += reach(k).size();
   }
   return reached;
 }
@@ -1307,7 +1352,9 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     size_t segment, k;
     double shift;
     double rr = 0;       // ‖residual‖²
-    double base_rr = 0;  // solving for the change: ‖residual − change‖², what the last solve left
+    double base_rr = 0;       // solving for the change: ‖residual − change‖², what the last solve left,
+    std::vector<int> active;  // and the rows the change may have reached (iterate_change),
+    double outside = 0;       // ‖residual‖² on the other rows
     int iterations = 0;
   };
   std::vector<Mode> modes;
@@ -1367,7 +1414,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     if (!kept || !w.same_guess) multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
     mode_offset[si] = modes.size();
     for (size_t k = 0; k < count; ++k)
-      modes.push_back({si, k, b_ * basis.lambda[static_cast<Eigen::Index>(k)]});
+      modes.push_back({si, k, b_ * basis.lambda[static_cast<Eigen::Index>(k)], 0, 0, {}, 0, 0});
   }
   auto each_mode = [&](const std::vector<size_t>& which, auto&& body) {
     if (par)
@@ -1375,7 +1422,24 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     else
       for (const size_t m : which) body(modes[m]);
   };
-  if (change) w.change_zero = false;  // until add_change_to_frames has cleared them
+  std::vector<std::vector<char>> start_on(change ? nseg : 0);
+  if (change) {
+    w.change_zero = false;  // until add_change_to_frames has cleared them
+    // The rows the change starts on: where the right-hand side changed, and with moving
+    // constraints omega and the ring around it (the local solves' leak goes there).
+    for (size_t si = 0; si < nseg; ++si) {
+      std::vector<char>& on = start_on[si];
+      on.assign(n, 0);
+      std::vector<int> start;
+      auto add = [&](int i) {
+        if (!on[static_cast<size_t>(i)] && !seg_fixed[si][i]) on[static_cast<size_t>(i)] = 1, start.push_back(i);
+      };
+      for (const int i : changed_rows[si]) add(i);
+      if (local)
+        for (const int i : moving[si].leak_rows) add(i);
+      for (size_t k = 0; k < segs.segments[si].second; ++k) modes[mode_offset[si] + k].active = start;
+    }
+  }
   std::vector<size_t> every(modes.size());
   for (size_t m = 0; m < modes.size(); ++m) every[m] = m;
   auto system = [&](const Mode& mode) {
@@ -1389,11 +1453,15 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       double rr = 0;
       for (size_t i = 0; i < n; ++i) rr += std::norm(res[i]);
       mode.rr = rr;
-      if (change) {
+      if (change) {  // summed apart (no difference of large sums: the change is far above the rest)
         const cplx* e = column(w.e_hat, mode);
-        double base = rr;
-        for (const int i : changed_rows[mode.segment]) base += std::norm(res[i] - e[i]) - std::norm(res[i]);
-        mode.base_rr = std::max(base, 0.0);
+        const char* on = start_on[mode.segment].data();
+        double outside = 0, base = 0;
+        for (size_t i = 0; i < n; ++i)
+          if (!on[i]) outside += std::norm(res[i]);
+        for (const int i : mode.active) base += std::norm(res[i] - e[i]);
+        mode.outside = outside;
+        mode.base_rr = outside + base;
       }
     } else {
       mode.rr = system(mode).residual(column(w.r_hat, mode), column(w.x_hat, mode), res);
@@ -1421,9 +1489,13 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       if (mode.base_rr > kChangeFold * tau2 || (mode.base_rr > 0 && mode.shift < kSlowShift)) {
         std::copy(res, res + n, e);
         mode.base_rr = 0;
+        mode.outside = 0;
+        mode.active.clear();
+        for (size_t i = 0; i < n; ++i)
+          if (!seg_fixed[mode.segment][i]) mode.active.push_back(static_cast<int>(i));
       }
-      it = system(mode).iterate_change(column(w.x_hat, mode), column(w.d_hat, mode), res, e, mode.rr, tau2,
-                                       options.max_iterations, scratch.local());
+      it = system(mode).iterate_change(column(w.x_hat, mode), column(w.d_hat, mode), res, e, mode.rr, mode.outside,
+                                       tau2, options.max_iterations, mode.active, scratch.local());
     } else {
       it = system(mode).iterate(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
                                 options.max_iterations, scratch.local());
@@ -1593,7 +1665,9 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       multiply_rows(w.x_hat[si].data(), bases[si]->q, true, x_seg, static_cast<Eigen::Index>(2 * n));
       continue;
     }
-    reached += add_change_to_frames(w.d_hat[si], w.e_hat[si], n, bases[si]->q, x_seg, par);
+    std::vector<const std::vector<int>*> reach_of(count);
+    for (size_t k = 0; k < count; ++k) reach_of[k] = &modes[mode_offset[si] + k].active;
+    reached += add_change_to_frames(w.d_hat[si], w.e_hat[si], n, bases[si]->q, reach_of, x_seg, par);
     mode_rows += n * count;
     if (local && !moving[si].cut.empty()) {
       const MovingSegment& m = moving[si];
