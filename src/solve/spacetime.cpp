@@ -761,18 +761,26 @@ void rows_to_frames(const std::vector<double>& hat, size_t n, const std::vector<
 void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<int>& rows, const Eigen::MatrixXd& q,
                         const std::vector<cplx>& values, double* rr, std::vector<double>* also = nullptr) {
   const auto count = q.rows();
+  const auto c = static_cast<size_t>(count);
   Eigen::Map<Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
-  Eigen::MatrixXd f(static_cast<Eigen::Index>(2 * rows.size()), count);
+  // Rows whose values are all zero add nothing: left out (a warm re-solve's local solves
+  // change few of omega's rows).
+  std::vector<size_t> some;
   for (size_t r = 0; r < rows.size(); ++r)
+    if (std::any_of(values.begin() + static_cast<std::ptrdiff_t>(r * c),
+                    values.begin() + static_cast<std::ptrdiff_t>((r + 1) * c), [](cplx v) { return v != cplx(0, 0); }))
+      some.push_back(r);
+  Eigen::MatrixXd f(static_cast<Eigen::Index>(2 * some.size()), count);
+  for (size_t t = 0; t < some.size(); ++t)
     for (Eigen::Index jj = 0; jj < count; ++jj) {
-      const cplx v = values[r * static_cast<size_t>(count) + static_cast<size_t>(jj)];
-      f(static_cast<Eigen::Index>(2 * r), jj) = v.real();
-      f(static_cast<Eigen::Index>(2 * r + 1), jj) = v.imag();
+      const cplx v = values[some[t] * c + static_cast<size_t>(jj)];
+      f(static_cast<Eigen::Index>(2 * t), jj) = v.real();
+      f(static_cast<Eigen::Index>(2 * t + 1), jj) = v.imag();
     }
   const Eigen::MatrixXd g = f * q;
-  for (size_t r = 0; r < rows.size(); ++r)
+  for (size_t r = 0; r < some.size(); ++r)
     for (int part = 0; part < 2; ++part) {
-      const Eigen::Index row = 2 * rows[r] + part;
+      const Eigen::Index row = 2 * rows[some[r]] + part;
       for (Eigen::Index k = 0; k < count; ++k) {
         const double old = h(row, k), now = old + g(static_cast<Eigen::Index>(2 * r) + part, k);
         if (rr) rr[k] += now * now - old * old;
@@ -1435,8 +1443,6 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
         if (!on[static_cast<size_t>(i)] && !seg_fixed[si][i]) on[static_cast<size_t>(i)] = 1, start.push_back(i);
       };
       for (const int i : changed_rows[si]) add(i);
-      if (local)
-        for (const int i : moving[si].leak_rows) add(i);
       for (size_t k = 0; k < segs.segments[si].second; ++k) modes[mode_offset[si] + k].active = start;
     }
   }
@@ -1560,6 +1566,8 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     lambda_local[si].assign(moving[si].cut.size() * segs.segments[si].second, cplx(0, 0));
   }
   double local_floor2 = 0;  // the local solves stop below this squared residual (set below)
+  std::vector<int> stamp(change && has_moving ? n : 0, 0);
+  int stamp_id = 0;
   auto local_round = [&]() {
     for (size_t si = 0; si < nseg; ++si) {
       if (moving[si].cut.empty()) continue;
@@ -1591,6 +1599,27 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       delta.resize(u.size() + y_outer.size());
       for (size_t k = 0; k < u.size(); ++k) delta[k] = m.moving[k] ? cplx(0, 0) : -y_omega[k];
       for (size_t k = 0; k < y_outer.size(); ++k) delta[u.size() + k] = -y_outer[k];
+      if (change) {
+        // Solving for the change: the leak's rows join every mode's active rows first (the
+        // rows outside them must keep what the last solve left).
+        std::vector<int> leaking;
+        for (size_t r = 0; r < m.leak_rows.size(); ++r)
+          if (std::any_of(delta.begin() + static_cast<std::ptrdiff_t>(r * count),
+                          delta.begin() + static_cast<std::ptrdiff_t>((r + 1) * count),
+                          [](cplx v) { return v != cplx(0, 0); }))
+            leaking.push_back(m.leak_rows[r]);
+        for (size_t k = 0; k < count; ++k) {
+          Mode& mode = modes[mode_offset[si] + k];
+          ++stamp_id;
+          for (const int i : mode.active) stamp[static_cast<size_t>(i)] = stamp_id;
+          const cplx* res = column(w.res_hat, mode);
+          for (const int i : leaking)
+            if (stamp[static_cast<size_t>(i)] != stamp_id) {
+              mode.active.push_back(i);
+              mode.outside -= std::norm(res[i]);
+            }
+        }
+      }
       add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data(), change ? &w.e_hat[si] : nullptr);
       // The multipliers, on the cut vertices' rows (the only ones with constraint entries).
       std::vector<cplx>& ll = lambda_local[si];
