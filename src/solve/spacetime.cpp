@@ -81,6 +81,12 @@ struct SpaceTimeSolver::Workspace {
   // starts every mode from its kept residual instead of a sweep.
   std::vector<std::vector<double>> r_hat, x_hat, res_hat;
   bool modes_kept = false;                         // r_hat, x_hat, res_hat belong to rhs, x
+  // A warm re-solve with the kept residuals solves for the change alone (iterate_change):
+  // per segment, what it adds to x_hat and the part of res_hat it brought, zero between
+  // solves (allocated by the first such solve; change_zero false where a solve that
+  // stopped short may have left them otherwise).
+  std::vector<std::vector<double>> d_hat, e_hat;
+  bool change_zero = true;
   bool same_fixed = false, same_guess = false;     // set by solve() for solve_modes()
   // The slow modes' factorizations (SpaceTimeOptions::direct_shift), kept for the next
   // solve: one with the same fixed set and shift is used as it is, another one refactored.
@@ -340,6 +346,10 @@ struct SpaceTime {
 struct ModeScratch {
   Vec p, ap, res, sp;  // res, sp: the coarse solves' only
   std::vector<double> diagonal, inverse;
+  // ModeSystem::iterate_change's: zero (in, cp, cap) between its calls.
+  std::vector<char> in;
+  Vec cp, cap;
+  std::vector<double> cdiagonal, cinverse;
   void resize(size_t n) {
     if (p.size() == n) return;
     p.resize(n), ap.resize(n), diagonal.resize(n), inverse.resize(n);
@@ -476,6 +486,105 @@ struct ModeSystem {
       for (size_t i = 0; i < n; ++i) p[i] = z[static_cast<Eigen::Index>(i)] + beta * p[i];
     }
     return it;
+  }
+
+  // The same CG run on the change only (a warm re-solve): e is the part of the residual res
+  // that this solve brought (res − e, what the last solve left, stays out of the Krylov
+  // space), d accumulates what it adds to y. e is zero outside the rows in `active` (free
+  // rows), and so are p and d: each iteration grows `active` by one ring of neighbours and
+  // works on those rows alone, so a mode that converges in a few iterations touches the
+  // rows near the change, not all |V|. rr = ‖res‖² is the stopping test, as above (the rows
+  // outside `active` keep what the last solve left: `outside`, their ‖res‖², summed by the caller
+  // and kept up to date here as rows join); the caller sees to it that ‖res − e‖² is
+  // well below tau2 (else it folds res − e into e and makes every free row active).
+  int iterate_change(cplx* y, cplx* d, cplx* res, cplx* e, double& rr, double& outside, double tau2,
+                     int max_iterations, std::vector<int>& active, ModeScratch& w) const {
+    if (rr <= tau2) return 0;
+    const auto n = static_cast<size_t>(op.rows);
+    if (w.in.size() != n) {  // zero between calls on the rows they used
+      w.in.assign(n, 0);
+      w.cp.assign(n, cplx(0, 0));
+      w.cap.assign(n, cplx(0, 0));
+      w.cinverse.assign(n, 0.0);
+      w.cdiagonal.assign(n, 0.0);
+    }
+    cplx *p = w.cp.data(), *ap = w.cap.data();
+    char* in = w.in.data();
+    double *diagonal = w.cdiagonal.data(), *inverse = w.cinverse.data();
+    auto join = [&](size_t i) {
+      in[i] = 1;
+      diagonal[i] = op.diagonal[i] + s * op.weight_sum[i];
+      inverse[i] = 1.0 / diagonal[i];
+    };
+    double rz = 0;
+    for (const int a : active) {
+      const auto i = static_cast<size_t>(a);
+      join(i);
+      p[i] = inverse[i] * e[i];
+      rz += inverse[i] * std::norm(e[i]);
+    }
+    size_t frontier = 0;                          // active[frontier, end): not yet grown from
+    int it = 0, result = 0;
+    for (;;) {
+      if (rr <= tau2) {
+        result = it;
+        break;
+      }
+      if (it == max_iterations || !(rz > 0)) {
+        result = -1;
+        break;
+      }
+      const size_t end = active.size();
+      for (size_t a = frontier; a < end; ++a) {
+        const auto i = static_cast<size_t>(active[a]);
+        for (int k = op.row_start[i]; k < op.row_start[i + 1]; ++k) {
+          const auto j = static_cast<size_t>(op.column[static_cast<size_t>(k)]);
+          if (in[j] || fixed[j]) continue;
+          join(j);
+          active.push_back(static_cast<int>(j));
+          outside -= std::norm(res[j]);
+        }
+      }
+      frontier = end;
+      double pap = 0;
+      for (const int a : active) {
+        const auto i = static_cast<size_t>(a);
+        const cplx v = diagonal[i] * p[i] + op.off(a, p);
+        ap[i] = v;
+        pap += p[i].real() * v.real() + p[i].imag() * v.imag();
+      }
+      if (!(pap > 0)) {
+        result = -1;
+        break;
+      }
+      const double alpha = rz / pap;
+      double rz_new = 0, inside = 0;
+      for (const int a : active) {
+        const auto i = static_cast<size_t>(a);
+        const cplx step = alpha * p[i], change = alpha * ap[i];
+        y[i] += step;
+        d[i] += step;
+        e[i] -= change;
+        res[i] -= change;
+        const double q = std::norm(e[i]);
+        inside += std::norm(res[i]);
+        rz_new += inverse[i] * q;
+      }
+      rr = std::max(outside, 0.0) + inside;
+      ++it;
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (const int a : active) {
+        const auto i = static_cast<size_t>(a);
+        p[i] = inverse[i] * e[i] + beta * p[i];
+      }
+    }
+    for (const int a : active) {
+      const auto i = static_cast<size_t>(a);
+      in[i] = 0;
+      p[i] = ap[i] = 0;
+    }
+    return result;
   }
 };
 
@@ -731,28 +840,112 @@ void rows_to_frames(const std::vector<double>& hat, size_t n, const std::vector<
 }
 
 // hat's rows += values (vertex-major, count per row) · Q; rr[k] (‖column k‖²) updated when
-// given.
+// given, and the same added to also's rows when given.
 void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<int>& rows, const Eigen::MatrixXd& q,
-                        const std::vector<cplx>& values, double* rr) {
+                        const std::vector<cplx>& values, double* rr, std::vector<double>* also = nullptr) {
   const auto count = q.rows();
+  const auto c = static_cast<size_t>(count);
   Eigen::Map<Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
-  Eigen::MatrixXd f(static_cast<Eigen::Index>(2 * rows.size()), count);
+  // Rows whose values are all zero add nothing: left out (a warm re-solve's local solves
+  // change few of omega's rows).
+  std::vector<size_t> some;
   for (size_t r = 0; r < rows.size(); ++r)
+    if (std::any_of(values.begin() + static_cast<std::ptrdiff_t>(r * c),
+                    values.begin() + static_cast<std::ptrdiff_t>((r + 1) * c), [](cplx v) { return v != cplx(0, 0); }))
+      some.push_back(r);
+  Eigen::MatrixXd f(static_cast<Eigen::Index>(2 * some.size()), count);
+  for (size_t t = 0; t < some.size(); ++t)
     for (Eigen::Index jj = 0; jj < count; ++jj) {
-      const cplx v = values[r * static_cast<size_t>(count) + static_cast<size_t>(jj)];
-      f(static_cast<Eigen::Index>(2 * r), jj) = v.real();
-      f(static_cast<Eigen::Index>(2 * r + 1), jj) = v.imag();
+      const cplx v = values[some[t] * c + static_cast<size_t>(jj)];
+      f(static_cast<Eigen::Index>(2 * t), jj) = v.real();
+      f(static_cast<Eigen::Index>(2 * t + 1), jj) = v.imag();
     }
   const Eigen::MatrixXd g = f * q;
-  for (size_t r = 0; r < rows.size(); ++r)
+  for (size_t r = 0; r < some.size(); ++r)
     for (int part = 0; part < 2; ++part) {
-      const Eigen::Index row = 2 * rows[r] + part;
+      const Eigen::Index row = 2 * rows[some[r]] + part;
       for (Eigen::Index k = 0; k < count; ++k) {
         const double old = h(row, k), now = old + g(static_cast<Eigen::Index>(2 * r) + part, k);
         if (rr) rr[k] += now * now - old * old;
         h(row, k) = now;
+        if (also) (*also)[static_cast<size_t>(k * 2 * static_cast<Eigen::Index>(n) + row)] +=
+            g(static_cast<Eigen::Index>(2 * r) + part, k);
       }
     }
+}
+
+// A warm re-solve's change back into frames: x (a segment's frames, 2|V| × count real,
+// column-major as the modes) += d · Qᵀ, d the change of the segment's modes in this solve,
+// zero outside few rows in all but the slowest modes (iterate_change): outside the rows
+// reach_of[k] lists for mode k. The modes, ordered by how many rows they reach, go in groups
+// whose rows (the union) are gathered and multiplied, 2|T| × g by g × count, instead of
+// all 2|V| rows by every mode. d and e (the change's residual) are left zero. The groups and
+// the row blocks do not depend on the thread count, nor does any row's sum. Returns the
+// rows reached, summed over the modes.
+size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size_t n, const Eigen::MatrixXd& q,
+                            const std::vector<const std::vector<int>*>& reach_of, double* x, bool parallel) {
+  const auto count = static_cast<size_t>(q.rows());
+  auto reach = [&](size_t k) -> const std::vector<int>& { return *reach_of[k]; };
+  for (size_t k = 0; k < count; ++k) {
+    cplx* ek = reinterpret_cast<cplx*>(e.data() + 2 * n * k);
+    for (const int i : reach(k)) ek[i] = 0;
+  }
+  std::vector<size_t> order;
+  for (size_t k = 0; k < count; ++k)
+    if (!reach(k).empty()) order.push_back(k);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return reach(a).size() > reach(b).size(); });
+  std::vector<int> stamp(n, -1);
+  const Eigen::Map<const Eigen::MatrixXd> dm(d.data(), static_cast<Eigen::Index>(2 * n), static_cast<Eigen::Index>(count));
+  Eigen::Map<Eigen::MatrixXd> xm(x, static_cast<Eigen::Index>(2 * n), static_cast<Eigen::Index>(count));
+  constexpr size_t kGroup = 16;
+  for (size_t g0 = 0; g0 < order.size();) {
+    // Modes reaching at least half the rows of the group's first, at most kGroup of them.
+    size_t g1 = g0 + 1;
+    while (g1 < order.size() && g1 - g0 < kGroup && 2 * reach(order[g1]).size() >= reach(order[g0]).size()) ++g1;
+    const auto group = static_cast<int>(g0);
+    std::vector<int> rows;
+    for (size_t c = g0; c < g1; ++c)
+      for (const int i : reach(order[c]))
+        if (stamp[static_cast<size_t>(i)] != group) stamp[static_cast<size_t>(i)] = group, rows.push_back(i);
+    std::sort(rows.begin(), rows.end());
+    const auto g = static_cast<Eigen::Index>(g1 - g0);
+    Eigen::MatrixXd qg(static_cast<Eigen::Index>(count), g);
+    for (Eigen::Index c = 0; c < g; ++c) qg.col(c) = q.col(static_cast<Eigen::Index>(order[g0 + static_cast<size_t>(c)]));
+    // Fixed blocks of 1024 rows (vertices), each gathered, multiplied and added on one thread.
+    constexpr size_t kRowsPerBlock = 1024;
+    const size_t nblocks = (rows.size() + kRowsPerBlock - 1) / kRowsPerBlock;
+    auto block = [&](size_t b) {
+      const size_t t0 = b * kRowsPerBlock, nt = std::min(kRowsPerBlock, rows.size() - t0);
+      Eigen::MatrixXd gathered(static_cast<Eigen::Index>(2 * nt), g);
+      for (Eigen::Index c = 0; c < g; ++c) {
+        const auto k = static_cast<Eigen::Index>(order[g0 + static_cast<size_t>(c)]);
+        for (size_t t = 0; t < nt; ++t) {
+          const auto row = static_cast<Eigen::Index>(2 * rows[t0 + t]);
+          gathered(static_cast<Eigen::Index>(2 * t), c) = dm(row, k);
+          gathered(static_cast<Eigen::Index>(2 * t + 1), c) = dm(row + 1, k);
+        }
+      }
+      const Eigen::MatrixXd r = gathered * qg.transpose();
+      for (Eigen::Index jj = 0; jj < static_cast<Eigen::Index>(count); ++jj)
+        for (size_t t = 0; t < nt; ++t) {
+          const auto row = static_cast<Eigen::Index>(2 * rows[t0 + t]);
+          xm(row, jj) += r(static_cast<Eigen::Index>(2 * t), jj);
+          xm(row + 1, jj) += r(static_cast<Eigen::Index>(2 * t + 1), jj);
+        }
+    };
+    if (parallel && nblocks > 1)
+      tbb::parallel_for(size_t{0}, nblocks, block);
+    else
+      for (size_t b = 0; b < nblocks; ++b) block(b);
+    g0 = g1;
+  }
+  size_t reached = 0;
+  for (size_t k = 0; k < count; ++k) {
+    cplx* dk = reinterpret_cast<cplx*>(d.data() + 2 * n * k);
+    for (const int i : reach(k)) dk[i] = 0;
+    reached += reach(k).size();
+  }
+  return reached;
 }
 
 // The local solve's set-up for a segment whose common fixed set and cut vertices are in m.
@@ -1039,6 +1232,11 @@ constexpr double kModeResidualTolerance = 1e-8;
 // left of the residual budget.
 constexpr double kSlowShift = 1.0;
 
+// Solving for the change (a warm re-solve): a mode whose residual left by the last solve is
+// above this fraction of its target takes its whole residual instead (the change alone
+// could not bring it below the target, or only with many more iterations).
+constexpr double kChangeFold = 0.5;
+
 size_t SpaceTimeSolver::longest_segment(std::span<const char> fixed) const {
   size_t most = 0;
   for (const auto& s : find_segments(fixed, static_cast<size_t>(vertices()), static_cast<size_t>(frames_)).segments)
@@ -1207,6 +1405,14 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   // The kept residuals of the modes are theirs when the first guess is the last result
   // and every change of the right-hand side is known.
   const bool residuals_kept = kept && w.same_guess && w.rhs_incremental;
+  // Then the modes' solves work on the change alone (iterate_change: what the last solve
+  // left stays out of their Krylov spaces), and the result goes back into frames as the
+  // last one plus the change, on the rows the change reaches (add_change_to_frames).
+  const bool change = residuals_kept;
+  if (change) {
+    w.d_hat.resize(nseg);
+    w.e_hat.resize(nseg);
+  }
   w.modes_kept = false;  // until this solve has left its own modes
   w.r_hat.resize(nseg);
   w.x_hat.resize(nseg);
@@ -1236,12 +1442,16 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   struct Mode {
     size_t segment, k;
     double shift;
-    double rr = 0;  // ‖residual‖²
+    double rr = 0;       // ‖residual‖²
+    double base_rr = 0;       // solving for the change: ‖residual − change‖², what the last solve left,
+    std::vector<int> active;  // and the rows the change may have reached (iterate_change),
+    double outside = 0;       // ‖residual‖² on the other rows
     int iterations = 0;
   };
   std::vector<Mode> modes;
   std::vector<const TemporalBasis*> bases(nseg);
   std::vector<size_t> mode_offset(nseg);
+  std::vector<std::vector<int>> changed_rows(nseg);  // solving for the change: the rows it starts on
   auto column = [&](std::vector<std::vector<double>>& m, const Mode& mode) {
     return reinterpret_cast<cplx*>(m[mode.segment].data() + 2 * n * mode.k);
   };
@@ -1254,6 +1464,12 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     Eigen::Map<Eigen::MatrixXd> r_hat(sized(w.r_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
     Eigen::Map<Eigen::MatrixXd> x_hat(sized(w.x_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
     Eigen::Map<Eigen::MatrixXd> res_hat(sized(w.res_hat[si], static_cast<size_t>(rows * cols)).data(), rows, cols);
+    if (change) {
+      for (auto* v : {&w.d_hat[si], &w.e_hat[si]}) {
+        sized(*v, static_cast<size_t>(rows * cols));
+        if (!w.change_zero) std::fill(v->begin(), v->end(), 0.0);
+      }
+    }
     if (kept && w.rhs_incremental) {
       // r_hat (and the kept residuals) += Qᵀ Δ on the rows whose right-hand side changed
       // in this segment: Δ per vertex over the segment's frames.
@@ -1276,6 +1492,12 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
           res_hat.row(row) += re;
           res_hat.row(row + 1) += im;
         }
+        if (change) {
+          Eigen::Map<Eigen::MatrixXd> e_hat(w.e_hat[si].data(), rows, cols);
+          e_hat.row(row) += re;
+          e_hat.row(row + 1) += im;
+          changed_rows[si].push_back(static_cast<int>(i));
+        }
       }
     } else {
       multiply_rows(reinterpret_cast<const double*>(rhs.data() + first * n), basis.q, false, r_hat.data(), rows);
@@ -1283,7 +1505,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     if (!kept || !w.same_guess) multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
     mode_offset[si] = modes.size();
     for (size_t k = 0; k < count; ++k)
-      modes.push_back({si, k, b_ * basis.lambda[static_cast<Eigen::Index>(k)]});
+      modes.push_back({si, k, b_ * basis.lambda[static_cast<Eigen::Index>(k)], 0, 0, {}, 0, 0});
   }
   auto each_mode = [&](const std::vector<size_t>& which, auto&& body) {
     if (par)
@@ -1291,6 +1513,22 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     else
       for (const size_t m : which) body(modes[m]);
   };
+  std::vector<std::vector<char>> start_on(change ? nseg : 0);
+  if (change) {
+    w.change_zero = false;  // until add_change_to_frames has cleared them
+    // The rows the change starts on: where the right-hand side changed, and with moving
+    // constraints omega and the ring around it (the local solves' leak goes there).
+    for (size_t si = 0; si < nseg; ++si) {
+      std::vector<char>& on = start_on[si];
+      on.assign(n, 0);
+      std::vector<int> start;
+      auto add = [&](int i) {
+        if (!on[static_cast<size_t>(i)] && !seg_fixed[si][i]) on[static_cast<size_t>(i)] = 1, start.push_back(i);
+      };
+      for (const int i : changed_rows[si]) add(i);
+      for (size_t k = 0; k < segs.segments[si].second; ++k) modes[mode_offset[si] + k].active = start;
+    }
+  }
   std::vector<size_t> every(modes.size());
   for (size_t m = 0; m < modes.size(); ++m) every[m] = m;
   auto system = [&](const Mode& mode) {
@@ -1304,6 +1542,16 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       double rr = 0;
       for (size_t i = 0; i < n; ++i) rr += std::norm(res[i]);
       mode.rr = rr;
+      if (change) {  // summed apart (no difference of large sums: the change is far above the rest)
+        const cplx* e = column(w.e_hat, mode);
+        const char* on = start_on[mode.segment].data();
+        double outside = 0, base = 0;
+        for (size_t i = 0; i < n; ++i)
+          if (!on[i]) outside += std::norm(res[i]);
+        for (const int i : mode.active) base += std::norm(res[i] - e[i]);
+        mode.outside = outside;
+        mode.base_rr = outside + base;
+      }
     } else {
       mode.rr = system(mode).residual(column(w.r_hat, mode), column(w.x_hat, mode), res);
     }
@@ -1375,14 +1623,42 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     if (!wanted.empty()) w.factors = std::move(order);
   }
   auto converge = [&](Mode& mode, double tau2) {
+    cplx *y = column(w.x_hat, mode), *res = column(w.res_hat, mode);
+    // Solving for the change: the mode takes its whole residual (e = res on every free row)
+    // when what the last solve left is too close to its target, or when it is a slow mode
+    // (its response reaches every row anyway).
+    auto fold = [&]() {
+      std::copy(res, res + n, column(w.e_hat, mode));
+      mode.base_rr = 0;
+      mode.outside = 0;
+      mode.active.clear();
+      for (size_t i = 0; i < n; ++i)
+        if (!seg_fixed[mode.segment][i]) mode.active.push_back(static_cast<int>(i));
+    };
     detail::ModeFactor* f = direct[static_cast<size_t>(&mode - modes.data())];
     const bool fresh = f && !f->factored;
-    int it = f ? system(mode).iterate_direct(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
-                                             options.max_iterations, *f, laplacian_, scratch.local())
-               : -2;
-    if (it == -2)
-      it = system(mode).iterate(column(w.x_hat, mode), column(w.res_hat, mode), mode.rr, tau2,
-                                options.max_iterations, scratch.local());
+    int it = -2;
+    if (f) {
+      // A slow mode with its factorization: the whole residual; what it adds to y is the
+      // change (d), and e stays equal to res on the rows it has (all).
+      cplx* d = change ? column(w.d_hat, mode) : nullptr;
+      if (change) {
+        fold();
+        for (size_t i = 0; i < n; ++i) d[i] -= y[i];
+      }
+      it = system(mode).iterate_direct(y, res, mode.rr, tau2, options.max_iterations, *f, laplacian_, scratch.local());
+      if (change) {
+        for (size_t i = 0; i < n; ++i) d[i] += y[i];
+        std::copy(res, res + n, column(w.e_hat, mode));
+      }
+    }
+    if (it == -2 && change) {
+      if (mode.base_rr > kChangeFold * tau2 || (mode.base_rr > 0 && mode.shift < kSlowShift)) fold();
+      it = system(mode).iterate_change(y, column(w.d_hat, mode), res, column(w.e_hat, mode), mode.rr, mode.outside,
+                                       tau2, options.max_iterations, mode.active, scratch.local());
+    } else if (it == -2) {
+      it = system(mode).iterate(y, res, mode.rr, tau2, options.max_iterations, scratch.local());
+    }
     if (fresh && f->factored) ++factorizations;
     if (it < 0) failed = true;
     mode.iterations += std::max(it, 0);
@@ -1444,6 +1720,8 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     lambda_local[si].assign(moving[si].cut.size() * segs.segments[si].second, cplx(0, 0));
   }
   double local_floor2 = 0;  // the local solves stop below this squared residual (set below)
+  std::vector<int> stamp(change && has_moving ? n : 0, 0);
+  int stamp_id = 0;
   auto local_round = [&]() {
     for (size_t si = 0; si < nseg; ++si) {
       if (moving[si].cut.empty()) continue;
@@ -1475,7 +1753,28 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       delta.resize(u.size() + y_outer.size());
       for (size_t k = 0; k < u.size(); ++k) delta[k] = m.moving[k] ? cplx(0, 0) : -y_omega[k];
       for (size_t k = 0; k < y_outer.size(); ++k) delta[u.size() + k] = -y_outer[k];
-      add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data());
+      if (change) {
+        // Solving for the change: the leak's rows join every mode's active rows first (the
+        // rows outside them must keep what the last solve left).
+        std::vector<int> leaking;
+        for (size_t r = 0; r < m.leak_rows.size(); ++r)
+          if (std::any_of(delta.begin() + static_cast<std::ptrdiff_t>(r * count),
+                          delta.begin() + static_cast<std::ptrdiff_t>((r + 1) * count),
+                          [](cplx v) { return v != cplx(0, 0); }))
+            leaking.push_back(m.leak_rows[r]);
+        for (size_t k = 0; k < count; ++k) {
+          Mode& mode = modes[mode_offset[si] + k];
+          ++stamp_id;
+          for (const int i : mode.active) stamp[static_cast<size_t>(i)] = stamp_id;
+          const cplx* res = column(w.res_hat, mode);
+          for (const int i : leaking)
+            if (stamp[static_cast<size_t>(i)] != stamp_id) {
+              mode.active.push_back(i);
+              mode.outside -= std::norm(res[i]);
+            }
+        }
+      }
+      add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data(), change ? &w.e_hat[si] : nullptr);
       // The multipliers, on the cut vertices' rows (the only ones with constraint entries).
       std::vector<cplx>& ll = lambda_local[si];
       for (size_t r = 0; r < m.cut.size(); ++r) {
@@ -1539,17 +1838,44 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     add_frames_to_rows(w.r_hat[si], n, moving[si].cut, bases[si]->q, lambda_local[si], nullptr);
   }
 
-  // Back from the modes.
+  // Back from the modes: the whole transform, or the last result plus the change (what
+  // the modes' solves added, and the local solves' part, kept in frames).
+  size_t reached = 0, mode_rows = 0;
   for (size_t si = 0; si < nseg; ++si) {
     const auto [first, count] = segs.segments[si];
-    const auto rows = static_cast<Eigen::Index>(2 * n);
-    multiply_rows(w.x_hat[si].data(), bases[si]->q, true, reinterpret_cast<double*>(x.data() + first * n), rows);
+    auto* x_seg = reinterpret_cast<double*>(x.data() + first * n);
+    if (!change) {
+      multiply_rows(w.x_hat[si].data(), bases[si]->q, true, x_seg, static_cast<Eigen::Index>(2 * n));
+      continue;
+    }
+    std::vector<const std::vector<int>*> reach_of(count);
+    for (size_t k = 0; k < count; ++k) reach_of[k] = &modes[mode_offset[si] + k].active;
+    reached += add_change_to_frames(w.d_hat[si], w.e_hat[si], n, bases[si]->q, reach_of, x_seg, par);
+    mode_rows += n * count;
+    if (local && !moving[si].cut.empty()) {
+      const MovingSegment& m = moving[si];
+      for (size_t li = 0; li < m.omega.size(); ++li)
+        for (size_t jj = 0; jj < count; ++jj)
+          x[(first + jj) * n + static_cast<size_t>(m.omega[li])] += x_local[si][li * count + jj];
+    }
   }
-  if (has_moving)  // the constraint entries: zero to rounding, exactly zero here (x is the free part)
+  if (change) w.change_zero = true;
+  // The constraint entries: zero to rounding, exactly zero here (x is the free part); in a
+  // segment they are on the cut vertices' rows only.
+  if (has_moving && change) {
+    for (size_t si = 0; si < nseg; ++si) {
+      const auto [first, count] = segs.segments[si];
+      if (local)
+        for (const int i : moving[si].cut)
+          for (size_t j = first; j < first + count; ++j)
+            if (fixed[j * n + static_cast<size_t>(i)]) x[j * n + static_cast<size_t>(i)] = 0;
+    }
+  } else if (has_moving) {
     blocks(n * nf, par, [&](size_t s0, size_t e0) {
       for (size_t k = s0; k < e0; ++k)
         if (fixed[k]) x[k] = 0;
     });
+  }
 
   int most = 0;
   long all = 0;
@@ -1583,6 +1909,9 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
                     by_cholesky;
     report.iterations = most;
   }
+  if (change)
+    report.method += fmt::format(", the change solved alone (it reached {:.1f} % of the modes' rows)",
+                                 100.0 * static_cast<double>(reached) / static_cast<double>(std::max<size_t>(mode_rows, 1)));
   // Q is orthogonal, so the modes' residuals add up to the whole one's, up to the
   // rounding of the transforms (~1e-14 relative). Where the tolerance leaves room for
   // that (a warm re-solve to 1e-6), that sum is the residual (with moving constraints,
