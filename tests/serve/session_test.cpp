@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <cstring>
 #include <future>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <fstream>
@@ -178,6 +179,21 @@ TEST(ServeSession, TheShownFrameOfASolveUnderWayIsPublishedFirst) {
   EXPECT_EQ(preview["singularities"].size(), final_frame["singularities"].size());
 }
 
+// The tests that hold whether the scene's save overlaps the solve or comes before it
+// (SessionOptions::solve_while_saving), run both ways.
+class ServeSessionSaveOrder : public ::testing::TestWithParam<bool> {
+ protected:
+  SessionOptions options(const test::TempDir& dir) const {
+    SessionOptions o = options_in(dir);
+    o.solve_while_saving = GetParam();
+    return o;
+  }
+};
+INSTANTIATE_TEST_SUITE_P(ServeSession, ServeSessionSaveOrder, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "SolveWhileSaving" : "SaveThenSolve";
+                         });
+
 // Issue 15: a client hears of the status from the event stream and from polls, and a
 // poll's answer can arrive after newer events. Each status carries the sequence of the
 // change it shows (wait_change's count, read under the same lock as the rest) and the
@@ -185,75 +201,75 @@ TEST(ServeSession, TheShownFrameOfASolveUnderWayIsPublishedFirst) {
 // started while the scene is saved, or after), the result and the analysis that follows,
 // the sequence only grows, every state it shows has one, and a status of the same
 // sequence shows the same state.
-TEST(ServeSession, StatusesAreNumberedInTheOrderTheyAreMade) {
-  for (const bool overlap : {true, false}) {
-    SCOPED_TRACE(overlap ? "solve while saving" : "save, then solve");
-    test::TempDir dir;
-    SessionOptions o = options_in(dir);
-    o.solve_while_saving = overlap;
-    Session s(o);
-    ASSERT_TRUE(s.wait_idle(60));
-    s.analysis();  // the first result's analysis is there
-    const json first = s.status();
-    ASSERT_TRUE(first.contains("sequence") && first.contains("session"));
-    // What a client is shown, without the counts that change without a new sequence (the
-    // solve's progress, the solves cancelled).
-    const auto shown = [](json st) {
-      st.erase("progress");
-      st.erase("cancelled");
-      return st;
-    };
-    std::vector<json> seen{first};
-    std::mutex seen_mutex;
-    std::atomic<bool> done{false};
-    // A reader as GET /api/events is: every change of the count, then the status.
-    std::thread reader([&] {
-      long long count = first["sequence"].get<long long>();
-      while (!done) {
-        count = s.wait_change(count, 0.05);
-        if (count < 0) return;
-        json st = s.status();
-        std::lock_guard lock(seen_mutex);
-        seen.push_back(std::move(st));
-      }
-    });
-    json next = s.scene()["scene"];
-    next["elements"][2]["path"][0][0] = 0.25;
-    const long long revision = s.put_scene(next)["revision"];
-    ASSERT_TRUE(s.wait_idle(60));
-    s.analysis();
-    // The count the reader follows has reached the analysed result's status.
-    const json last = s.status();
-    const auto caught_up = [&] {
+TEST_P(ServeSessionSaveOrder, StatusesAreNumberedInTheOrderTheyAreMade) {
+  test::TempDir dir;
+  Session s(options(dir));
+  ASSERT_TRUE(s.wait_idle(60));
+  s.analysis();  // the first result's analysis is there
+  const json first = s.status();
+  ASSERT_TRUE(first.contains("sequence") && first.contains("session"));
+  // What a client is shown, without the counts that change without a new sequence (the
+  // solve's progress, the solves cancelled).
+  const auto shown = [](json st) {
+    st.erase("progress");
+    st.erase("cancelled");
+    return st;
+  };
+  std::vector<json> seen{first};
+  std::mutex seen_mutex;
+  std::atomic<bool> done{false};
+  // A reader as GET /api/events is: every change of the count, then the status.
+  std::thread reader([&] {
+    long long count = first["sequence"].get<long long>();
+    while (!done) {
+      count = s.wait_change(count, 0.05);
+      if (count < 0) return;
+      json st = s.status();
       std::lock_guard lock(seen_mutex);
-      return seen.back()["sequence"] == last["sequence"];
-    };
-    for (int k = 0; k < 400 && !caught_up(); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    done = true;
-    reader.join();
-    EXPECT_EQ(last["analysis_revision"], revision);
-    EXPECT_EQ(last["session"], first["session"]);
-    EXPECT_GT(last["sequence"].get<long long>(), first["sequence"].get<long long>());
-    for (size_t k = 1; k < seen.size(); ++k) {
-      const json& a = seen[k - 1];
-      const json& b = seen[k];
-      ASSERT_LE(a["sequence"].get<long long>(), b["sequence"].get<long long>()) << a << "\n" << b;
-      if (a["sequence"] == b["sequence"]) {
-        EXPECT_EQ(shown(a), shown(b));
-      }
-      // Nothing of the new revision goes back once shown: its result, then its analysis.
-      if (a["result_revision"] == revision) {
-        EXPECT_EQ(b["result_revision"], revision);
-      }
-      if (a["analysis_revision"] == revision) {
-        EXPECT_EQ(b["analysis_revision"], revision);
-      }
+      seen.push_back(std::move(st));
     }
-    EXPECT_EQ(shown(seen.back()), shown(last));
-    // Another session (a restarted server): another id.
-    Session other(options_in(dir));
-    EXPECT_NE(other.status()["session"], first["session"]);
+  });
+  // Joined however the test ends (an ASSERT below returns early).
+  const auto join = [&](std::thread* t) {
+    done = true;
+    t->join();
+  };
+  std::unique_ptr<std::thread, decltype(join)> joined(&reader, join);
+  json next = s.scene()["scene"];
+  next["elements"][2]["path"][0][0] = 0.25;
+  const long long revision = s.put_scene(next)["revision"];
+  ASSERT_TRUE(s.wait_idle(60));
+  s.analysis();
+  // The count the reader follows has reached the analysed result's status.
+  const json last = s.status();
+  const auto caught_up = [&] {
+    std::lock_guard lock(seen_mutex);
+    return seen.back()["sequence"] == last["sequence"];
+  };
+  for (int k = 0; k < 400 && !caught_up(); ++k) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  joined.reset();  // the reader stops: what it saw is read below
+  EXPECT_EQ(last["analysis_revision"], revision);
+  EXPECT_EQ(last["session"], first["session"]);
+  EXPECT_GT(last["sequence"].get<long long>(), first["sequence"].get<long long>());
+  for (size_t k = 1; k < seen.size(); ++k) {
+    const json& a = seen[k - 1];
+    const json& b = seen[k];
+    ASSERT_LE(a["sequence"].get<long long>(), b["sequence"].get<long long>()) << a << "\n" << b;
+    if (a["sequence"] == b["sequence"]) {
+      EXPECT_EQ(shown(a), shown(b));
+    }
+    // Nothing of the new revision goes back once shown: its result, then its analysis.
+    if (a["result_revision"] == revision) {
+      EXPECT_EQ(b["result_revision"], revision);
+    }
+    if (a["analysis_revision"] == revision) {
+      EXPECT_EQ(b["analysis_revision"], revision);
+    }
   }
+  EXPECT_EQ(shown(seen.back()), shown(last));
+  // Another session (a restarted server): another id.
+  Session other(options_in(dir));
+  EXPECT_NE(other.status()["session"], first["session"]);
 }
 
 // GET /api/frame/J?format=f32: a 4-byte little-endian length, the frame's JSON without
@@ -288,15 +304,11 @@ TEST(ServeSession, TheBinaryFrameHoldsTheJsonFramesValues) {
   EXPECT_EQ(status_of([&] { s.frame_f32(500); }), 400);
 }
 
-// A new scene's solve starts while the scene is saved; when the save fails nothing
+// A new scene's solve starts while the scene is saved (or after); when the save fails nothing
 // changes: the revision, the file, and the field of the current scene, which is still made.
-TEST(ServeSession, ASceneThatCannotBeSavedChangesNothingAndTheFieldGoesOn) {
-  for (const bool overlap : {true, false}) {
-  SCOPED_TRACE(overlap ? "solve while saving" : "save, then solve");
+TEST_P(ServeSessionSaveOrder, ASceneThatCannotBeSavedChangesNothingAndTheFieldGoesOn) {
   test::TempDir dir;
-  SessionOptions o = options_in(dir);
-  o.solve_while_saving = overlap;
-  Session s(o);
+  Session s(options(dir));
   const long long r0 = s.revision();
   json next = s.scene()["scene"];
   next["falloff"] = 12.0;
@@ -322,7 +334,6 @@ TEST(ServeSession, ASceneThatCannotBeSavedChangesNothingAndTheFieldGoesOn) {
   st = s.status();
   EXPECT_EQ(st["state"], "ready");
   EXPECT_EQ(st["result_revision"], r0 + 1);
-  }
 }
 
 TEST(ServeSession, RefusedScenesChangeNothingAndUndoRedoWalkTheHistory) {

@@ -2,12 +2,9 @@
 // design dragged to a new place by the last frame (Fig. 12), and the whole field of a
 // source turned by π over time (Fig. 10: source → center → sink).
 // Usage: node e2e/deform.e2e.mjs --tvf PATH/TO/tvf [--out DIR]
-import { args, check, Designer, finish, launch, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, start } from "./harness.mjs";
 
-const a = args();
-const dir = tempDir("tvf-deform-");
-const browser = await launch(a.chromium);
-const server = await startServer(a.tvf, dir);
+const { a, dir, browser, server } = await start("tvf-deform-");
 let failed = false;
 let page;
 try {

@@ -4,12 +4,9 @@
 // intact. Screenshots go to --out (looked at by people, not compared by the test).
 // Usage: node e2e/designer.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
 import fs from "node:fs";
-import { args, check, Designer, finish, launch, nearest, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, nearest, start } from "./harness.mjs";
 
-const a = args();
-const dir = tempDir("tvf-e2e-");
-const browser = await launch(a.chromium);
-const server = await startServer(a.tvf, dir);
+const { a, dir, browser, server } = await start("tvf-e2e-");
 let failed = false;
 let page;
 try {

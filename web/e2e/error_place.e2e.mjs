@@ -2,12 +2,9 @@
 // with a bad value is refused, the message line says why, and the value the error names
 // (the server's json_path) is selected in the editor. Screenshot to --out.
 // Usage: node e2e/error_place.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
-import { args, check, Designer, finish, launch, reportFailure, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, reportFailure, start } from "./harness.mjs";
 
-const a = args();
-const dir = tempDir("tvf-e2e-error-place-");
-const browser = await launch(a.chromium);
-const server = await startServer(a.tvf, dir);
+const { a, dir, browser, server } = await start("tvf-e2e-error-place-");
 let failed = false;
 let page;
 try {

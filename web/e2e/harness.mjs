@@ -18,7 +18,19 @@ export function args() {
     tvf: get("--tvf", process.env.TVF_CLI ?? path.resolve("../build/release/tvf")),
     out: get("--out", path.resolve("e2e/screenshots")),
     chromium: get("--chromium", process.env.CHROMIUM ?? "/usr/bin/chromium"),
+    // --serve "OPTIONS": more options for `tvf serve` (e.g. "--save-before-solve").
+    serve: get("--serve", "").split(" ").filter((x) => x),
   };
+}
+
+// A script's start: its arguments, a fresh folder, Chromium, and `tvf serve` on that
+// folder with the --serve options.
+export async function start(prefix) {
+  const a = args();
+  const dir = tempDir(prefix);
+  const browser = await launch(a.chromium);
+  const server = await startServer(a.tvf, dir, a.serve);
+  return { a, dir, browser, server };
 }
 
 export async function loadPlaywright() {

@@ -20,14 +20,10 @@
 // --steps prints, for every change, the page's steps (window.tvf.marks) in ms after the event.
 import fs from "node:fs";
 import path from "node:path";
-import { args, check, Designer, finish, launch, reportFailure, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, reportFailure, start } from "./harness.mjs";
 
-const a = args();
+const { a, dir, browser, server } = await start("tvf-e2e-latency-");
 const n = Number(process.argv[process.argv.indexOf("--changes") + 1]) || 5;
-const dir = tempDir("tvf-e2e-latency-");
-const browser = await launch(a.chromium);
-const serveAt = process.argv.indexOf("--serve");
-const server = await startServer(a.tvf, dir, serveAt > 0 ? process.argv[serveAt + 1].split(" ").filter((x) => x) : []);
 const only = process.argv.indexOf("--generators");
 const generators = only > 0 ? process.argv[only + 1].split(",") : ["basis", "constrained", "spacetime", "deform"];
 const sphereAt = process.argv.indexOf("--sphere");

@@ -11,13 +11,9 @@
 // server's `sequence`; an older one is dropped.
 // Usage: node e2e/status_order.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH] [--serve "OPTIONS"]
 import path from "node:path";
-import { args, check, Designer, finish, launch, reportFailure, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, reportFailure, start } from "./harness.mjs";
 
-const a = args();
-const dir = tempDir("tvf-e2e-status-order-");
-const browser = await launch(a.chromium);
-const serveAt = process.argv.indexOf("--serve");
-const server = await startServer(a.tvf, dir, serveAt > 0 ? process.argv[serveAt + 1].split(" ").filter((x) => x) : []);
+const { a, dir, browser, server } = await start("tvf-e2e-status-order-");
 // The server's status, asked by this script (not through the page, whose polls are held).
 const serverStatus = () => fetch(new URL("api/status", server.url)).then((r) => r.json());
 let failed = false;

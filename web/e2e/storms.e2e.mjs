@@ -4,12 +4,9 @@
 // optimization moves them together and merges them. Then the video is rendered.
 // Usage: node e2e/storms.e2e.mjs --tvf PATH/TO/tvf [--out DIR]
 import fs from "node:fs";
-import { args, check, Designer, finish, launch, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, start } from "./harness.mjs";
 
-const a = args();
-const dir = tempDir("tvf-storms-");
-const browser = await launch(a.chromium);
-const server = await startServer(a.tvf, dir);
+const { a, dir, browser, server } = await start("tvf-storms-");
 let failed = false;
 let page;
 try {

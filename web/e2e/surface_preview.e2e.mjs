@@ -18,12 +18,9 @@
 // The designer's latencies on the sphere are printed (drag to field shown; one preview
 // step). Screenshots go to --out (looked at by people, not compared by the test).
 // Usage: node e2e/surface_preview.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
-import { args, check, Designer, finish, launch, reportFailure, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, reportFailure, start } from "./harness.mjs";
 
-const a = args();
-const dir = tempDir("tvf-e2e-surface-preview-");
-const browser = await launch(a.chromium);
-const server = await startServer(a.tvf, dir);
+const { a, dir, browser, server } = await start("tvf-e2e-surface-preview-");
 let failed = false;
 let page;
 

@@ -14,12 +14,9 @@
 // Screenshots go to --out (looked at by people, not compared by the test).
 // Usage: node e2e/surface_tools.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
 import fs from "node:fs";
-import { args, check, Designer, finish, launch, reportFailure, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, reportFailure, start } from "./harness.mjs";
 
-const a = args();
-const dir = tempDir("tvf-e2e-surface-tools-");
-const browser = await launch(a.chromium);
-const server = await startServer(a.tvf, dir);
+const { a, dir, browser, server } = await start("tvf-e2e-surface-tools-");
 let failed = false;
 let page;
 

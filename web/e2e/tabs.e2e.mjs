@@ -4,12 +4,9 @@
 // one tab build on each other. Nothing is lost. Also: the space-time view's time axis
 // is labelled. Screenshots of both tabs go to --out.
 // Usage: node e2e/tabs.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH]
-import { args, check, Designer, finish, launch, reportFailure, startServer, tempDir } from "./harness.mjs";
+import { check, Designer, finish, reportFailure, start } from "./harness.mjs";
 
-const a = args();
-const dir = tempDir("tvf-e2e-tabs-");
-const browser = await launch(a.chromium);
-const server = await startServer(a.tvf, dir);
+const { a, dir, browser, server } = await start("tvf-e2e-tabs-");
 let failed = false;
 let pageA;
 try {
