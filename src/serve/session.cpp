@@ -279,6 +279,8 @@ struct Session::State {
       // The solve of a new scene being saved (put_scene), or of the current scene.
       Design::Solve job = next_job ? std::move(*next_job) : design->prepare_solve();
       next_job.reset();
+      done = 0;  // this job's progress from here (a status never shows the last job's)
+      total = job.scene().time.frames;
       const int first_frame = focus_frame;
       auto flag = std::make_shared<std::atomic<bool>>(false);
       cancel = flag;
@@ -592,7 +594,10 @@ json Session::put_scene(const json& j, long long on_revision) {
   s_->upcoming = 0;
   s_->state = "running";
   s_->error.clear();
-  s_->total = s_->design->scene().time.frames;
+  if (s_->next_job) {  // the worker has not taken the new scene's solve yet: nothing done
+    s_->done = 0;
+    s_->total = s_->design->scene().time.frames;
+  }
   if (s_->held_preview && s_->held_preview->revision == s_->design->revision()) s_->preview = std::move(s_->held_preview);
   s_->held_preview.reset();
   if (s_->early && s_->early->job->revision() == s_->design->revision()) s_->finish(*s_->early->job, s_->early->seconds, s_->early->failure);
