@@ -190,8 +190,8 @@ class ServeSessionSaveOrder : public ::testing::TestWithParam<bool> {
   }
 };
 INSTANTIATE_TEST_SUITE_P(ServeSession, ServeSessionSaveOrder, ::testing::Bool(),
-                         [](const ::testing::TestParamInfo<bool>& info) {
-                           return info.param ? "SolveWhileSaving" : "SaveThenSolve";
+                         [](const ::testing::TestParamInfo<bool>& order) {
+                           return order.param ? "SolveWhileSaving" : "SaveThenSolve";
                          });
 
 // Issue 15: a client hears of the status from the event stream and from polls, and a
