@@ -1361,7 +1361,11 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   SolveReport report;
   if (bnorm == 0) {
     std::fill(x.begin(), x.end(), cplx(0, 0));
-    report.method = "nothing to solve (no fixed entry asks for a non-zero field)";
+    // Every entry fixed (a guide field between key frames holds all the free vertices), or
+    // free entries that no fixed one pulls away from zero.
+    const bool all_fixed = std::all_of(fixed.begin(), fixed.end(), [](char f) { return f != 0; });
+    report.method = all_fixed ? "nothing to solve (every entry is fixed)"
+                              : "nothing to solve (no fixed entry asks for a non-zero field)";
     report.success = true;
   } else {
     const bool modes = options.method == SpaceTimeMethod::modes ||

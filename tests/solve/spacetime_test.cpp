@@ -45,6 +45,33 @@ TEST(SpaceTime, ConstantKeyFramesInterpolateLinearlyInTime) {
     }
 }
 
+// Nothing left to solve says why: every entry fixed (as a guide field between key frames
+// fixes every free vertex), the field then the fixed values; or free entries with zero
+// fixed values around them, the field zero there.
+TEST(SpaceTime, NothingToSolveSaysWhy) {
+  const Mesh& grid = test::grid_mesh();
+  const TangentBundle bundle(grid);
+  const ConnectionLaplacian l = connection_laplacian(bundle);
+  const int nf = 5;
+  const auto n = static_cast<size_t>(grid.num_vertices());
+  SpaceTimeSolver solver(l, nf, 30.0);
+  std::vector<char> fixed(n * nf, 1);
+  std::vector<cplx> values(n * nf), z(n * nf, cplx(0, 0));
+  for (size_t k = 0; k < values.size(); ++k) values[k] = cplx(std::cos(0.1 * double(k)), std::sin(0.3 * double(k)));
+  SolveReport r = solver.solve(fixed, values, z);
+  ASSERT_TRUE(r.success);
+  EXPECT_EQ(r.method, "nothing to solve (every entry is fixed)");
+  for (size_t k = 0; k < z.size(); ++k) ASSERT_EQ(z[k], values[k]) << k;
+  // Free interior frames between zero key frames.
+  std::fill(fixed.begin() + static_cast<std::ptrdiff_t>(n), fixed.end() - static_cast<std::ptrdiff_t>(n), 0);
+  std::fill(values.begin(), values.end(), cplx(0, 0));
+  std::fill(z.begin(), z.end(), cplx(1, 1));
+  r = solver.solve(fixed, values, z);
+  ASSERT_TRUE(r.success);
+  EXPECT_EQ(r.method, "nothing to solve (no fixed entry asks for a non-zero field)");
+  for (size_t k = 0; k < z.size(); ++k) ASSERT_EQ(z[k], cplx(0, 0)) << k;
+}
+
 // The assembled normal equations A = I ⊗ L + b (T ⊗ D), frame-major.
 Eigen::SparseMatrix<cplx> assembled(const ConnectionLaplacian& l, int nf, double b) {
   const auto n = static_cast<int>(l.matrix.rows());
