@@ -279,6 +279,7 @@ TEST(ServeSession, TheBinaryFrameHoldsTheJsonFramesValues) {
   test::TempDir dir;
   Session s(options_in(dir));
   ASSERT_TRUE(s.wait_idle(120));
+  s.analysis();  // waits for it: a frame read before it has path -1 on its singularities, after it their paths
   const json frame = s.frame(7);
   const std::string bytes = s.frame_f32(7);
   ASSERT_GE(bytes.size(), 4u);
