@@ -93,6 +93,7 @@ struct SpaceTimeSolver::Workspace {
   // result with the new guess at them; solve_modes() patches the kept modes.
   std::vector<size_t> toggled;
   bool moved = false;
+  bool kept_moving = false;  // the kept modes are a solve's with moving constraints (r_hat holds multipliers)
   // The slow modes' factorizations (SpaceTimeOptions::direct_shift), kept for the next
   // solve: one with the same fixed set and shift is used as it is, another one refactored.
   std::vector<std::unique_ptr<detail::ModeFactor>> factors;
@@ -1322,7 +1323,7 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   // the last one's modes and residuals, patched where the fixed set changed.
   w.toggled.clear();
   bool moved = false;
-  if (!same_fixed && w.last_kept && w.modes_kept && w.fixed.size() == total) {
+  if (!same_fixed && w.last_kept && w.modes_kept && !w.kept_moving && w.fixed.size() == total) {
     const size_t most = total / 16;
     for (size_t k = 0; k < total && w.toggled.size() <= most; ++k)
       if (fixed[k] != w.fixed[k]) w.toggled.push_back(k);
@@ -2028,6 +2029,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   report.residual = rnorm / bnorm;
   report.success = !failed && !stalled && report.residual <= options.tolerance;
   w.modes_kept = !failed && !stalled;  // x_hat holds the modes of x, r_hat those of rhs, res_hat their residuals
+  w.kept_moving = has_moving;
   if (!report.success && options.method != SpaceTimeMethod::modes) {
     // Rounding (or a mode that would not converge): finish with CG from here.
     w.modes_kept = false;
