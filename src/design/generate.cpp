@@ -21,6 +21,7 @@
 #include <cmath>
 #include <exception>
 #include <mutex>
+#include <string>
 
 namespace tvf {
 
@@ -39,9 +40,13 @@ struct GenerateCache::State {
   double temporal_weight = 0;
   std::unique_ptr<SpaceTimeSolver> spacetime;
   std::vector<cplx> last;  // the last space-time solution (frames × |V|), or empty
-  int warm = 0, reused = 0;
+  // The key frames' fields (designed on `laplacian`) by what they depend on (keyframe_key),
+  // most recently used first: a change elsewhere in the scene designs no key frame again.
+  std::vector<std::pair<std::string, std::vector<cplx>>> keyframes;
+  int warm = 0, reused = 0, reused_keyframes = 0;
 
   void clear() {
+    keyframes.clear();
     spacetime.reset();
     dirichlet.reset();
     prototype.reset();
@@ -57,6 +62,7 @@ GenerateCache::~GenerateCache() = default;
 void GenerateCache::clear() { state_->clear(); }
 int GenerateCache::warm_starts() const { return state_->warm; }
 int GenerateCache::reused_laplacians() const { return state_->reused; }
+int GenerateCache::reused_keyframes() const { return state_->reused_keyframes; }
 
 namespace {
 
@@ -386,6 +392,54 @@ SpaceTimeProblem spacetime_problem(const DesignSpace& space, const Scene& scene,
 
 namespace {
 
+// What a key frame's designed field depends on besides the domain and the Laplacian: its
+// elements and streamlines, the scene's falloff and region radius (keyframe_constraints),
+// as bytes. Empty for a key frame read from a field file (whose content may change).
+std::string keyframe_key(const Scene& scene, size_t k) {
+  const Keyframe& key = scene.keyframes[k];
+  if (!key.field.empty()) return {};
+  std::string out;
+  auto add = [&](const auto& v) { out.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  add(scene.falloff);
+  add(scene.solver.region_radius);
+  add(key.elements.size());
+  for (const KeyframeElement& e : key.elements) {
+    add(e.kind.size());
+    out += e.kind;
+    add(e.type ? static_cast<int>(*e.type) : -1);
+    for (int i = 0; i < 4; ++i) add(e.jacobian(i / 2, i % 2));
+    for (int i = 0; i < 3; ++i) add(e.at[i]), add(e.vector[i]);
+  }
+  add(key.streamlines.size());
+  for (const KeyframeStreamline& l : key.streamlines) {
+    add(l.speed);
+    add(l.points.size());
+    for (const Vec3& p : l.points)
+      for (int i = 0; i < 3; ++i) add(p[i]);
+  }
+  return out;
+}
+
+// Key frame k's field: the cache's when the cache holds it for this Laplacian, else
+// designed (keyframe_field) and kept there (the last generation's and a few before, for
+// an undo).
+std::vector<cplx> cached_keyframe_field(const DesignSpace& space, const Scene& scene, size_t k,
+                                        const ConnectionLaplacian& laplacian, GenerateCache* cache) {
+  const std::string key = cache && cache->state().laplacian.get() == &laplacian ? keyframe_key(scene, k) : std::string();
+  if (key.empty()) return keyframe_field(space, scene, k, laplacian);
+  auto& kept = cache->state().keyframes;
+  auto at = std::find_if(kept.begin(), kept.end(), [&](const auto& e) { return e.first == key; });
+  if (at == kept.end()) {
+    kept.emplace(kept.begin(), key, keyframe_field(space, scene, k, laplacian));
+    constexpr size_t kKeptKeyframes = 8;
+    if (kept.size() > kKeptKeyframes) kept.pop_back();
+  } else {
+    std::rotate(kept.begin(), at, at + 1);
+    ++cache->state().reused_keyframes;
+  }
+  return kept.front().second;
+}
+
 // The space-time system's constraints frame by frame: key frames (whole frames held
 // fixed), then at every other frame the elements' regions, the matched topology's moving
 // constraints and the streaklines. Built once (the key frames' fields, the plan), then
@@ -393,7 +447,7 @@ namespace {
 class SpaceTimeConstraints {
 public:
   SpaceTimeConstraints(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
-                       std::vector<KeyframeIntervalReport>* intervals)
+                       std::vector<KeyframeIntervalReport>* intervals, GenerateCache* cache = nullptr)
       : space_(space), scene_(scene), key_of_(static_cast<size_t>(scene.time.frames), -1),
         elements_(compile(scene)), d_(scene.falloff / (space.diameter() * space.diameter())),
         streaklines_(space, scene) {
@@ -405,7 +459,7 @@ public:
                                       "use more frames or move the key frame",
                                       scene.keyframes[k].t, j));
       key_of_[j] = static_cast<int>(k);
-      key_fields_.push_back(keyframe_field(space, scene, k, laplacian));
+      key_fields_.push_back(cached_keyframe_field(space, scene, k, laplacian, cache));
     }
     // Topology kept between key frames (keyframe_topology.h): moving constraints and
     // templates, added at every other frame.
@@ -448,7 +502,7 @@ void spacetime_constraints(const DesignSpace& space, const Scene& scene, const C
                            std::vector<KeyframeIntervalReport>* intervals) {
   const auto n = static_cast<size_t>(space.mesh().num_vertices());
   const auto frames = static_cast<size_t>(scene.time.frames);
-  const SpaceTimeConstraints constraints(space, scene, laplacian, intervals);
+  const SpaceTimeConstraints constraints(space, scene, laplacian, intervals, options.cache);
   fixed.assign(n * frames, 0);
   values.assign(n * frames, cplx(0, 0));
   GenerateOptions quiet = options;

@@ -88,6 +88,12 @@ struct SpaceTimeSolver::Workspace {
   std::vector<std::vector<double>> d_hat, e_hat;
   bool change_zero = true;
   bool same_fixed = false, same_guess = false;     // set by solve() for solve_modes()
+  // The fixed set changed at these entries since the last solve (few, the same whole fixed
+  // frames, the last solve's modes kept): solve() updated rhs there and x is the last
+  // result with the new guess at them; solve_modes() patches the kept modes.
+  std::vector<size_t> toggled;
+  bool moved = false;
+  bool kept_moving = false;  // the kept modes are a solve's with moving constraints (r_hat holds multipliers)
   // The slow modes' factorizations (SpaceTimeOptions::direct_shift), kept for the next
   // solve: one with the same fixed set and shift is used as it is, another one refactored.
   std::vector<std::unique_ptr<detail::ModeFactor>> factors;
@@ -309,22 +315,24 @@ struct SpaceTime {
       for (size_t j = 0; j < nf; ++j) body(j);
   }
 
-  // Where the fixed values changed (the entries `changed` of fixed_at), updates rhs in
-  // place at the free entries they reach (their spatial neighbours in the frame, the
-  // entry itself in the frames before and after) and lists rhs's changes. `mark` is
-  // n × frames scratch, zero on entry and exit.
-  void update_right_hand_side(std::span<const cplx> values, std::span<const size_t> fixed_at,
-                              std::span<const size_t> changed, Vec& rhs, std::vector<char>& mark,
-                              std::vector<std::pair<size_t, cplx>>& change) const {
+  // Where the fixed part changed (`sources`: entries whose fixed value changed, or that
+  // were fixed and are free now, or the other way round), updates rhs in place at the free
+  // entries it reaches (their spatial neighbours in the frame, the entry itself in the
+  // frames before and after, and a source that is free now), sets it to zero at the
+  // sources that are fixed now, and lists rhs's changes. `mark` is n × frames scratch,
+  // zero on entry and exit.
+  void update_right_hand_side(std::span<const cplx> values, std::span<const size_t> sources, Vec& rhs,
+                              std::vector<char>& mark, std::vector<std::pair<size_t, cplx>>& change) const {
     std::vector<size_t> reached;
     auto reach = [&](size_t k) {
-      if (!fixed[k] && !mark[k]) {
+      if (!mark[k] && (!fixed[k] || rhs[k] != cplx(0, 0))) {
         mark[k] = 1;
         reached.push_back(k);
       }
     };
-    for (const size_t m : changed) {
-      const size_t k = fixed_at[m], j = k / n, i = k % n;
+    for (const size_t k : sources) {
+      const size_t j = k / n, i = k % n;
+      reach(k);
       for (int e = op.row_start[i]; e < op.row_start[i + 1]; ++e)
         reach(j * n + static_cast<size_t>(op.column[static_cast<size_t>(e)]));
       if (j > 0) reach(k - n);
@@ -334,7 +342,7 @@ struct SpaceTime {
     change.clear();
     for (const size_t k : reached) {
       mark[k] = 0;
-      const cplx v = rhs_entry(values, k / n, k % n);
+      const cplx v = fixed[k] ? cplx(0, 0) : rhs_entry(values, k / n, k % n);
       if (v != rhs[k]) change.emplace_back(k, v - rhs[k]);
       rhs[k] = v;
     }
@@ -1308,21 +1316,50 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   if (!work_) work_ = std::make_shared<Workspace>();
   Workspace& w = *work_;
   const bool same_fixed = w.last_kept && std::equal(fixed.begin(), fixed.end(), w.fixed.begin(), w.fixed.end());
-  w.same_fixed = same_fixed && w.modes_kept;
+  // Or a fixed set that differs from the last one at a few entries, with the same whole
+  // fixed frames (an element that stays put moved, came or went: the designer's click),
+  // after a solve that left its modes: the modes are the same (the segments are), so the
+  // right-hand side is updated as for changed values and a temporal-mode solve starts from
+  // the last one's modes and residuals, patched where the fixed set changed.
+  w.toggled.clear();
+  bool moved = false;
+  if (!same_fixed && w.last_kept && w.modes_kept && !w.kept_moving && w.fixed.size() == total) {
+    const size_t most = total / 16;
+    for (size_t k = 0; k < total && w.toggled.size() <= most; ++k)
+      if (fixed[k] != w.fixed[k]) w.toggled.push_back(k);
+    moved = w.toggled.size() <= most && find_segments(fixed, n, nf).key == find_segments(w.fixed, n, nf).key;
+    if (!moved) w.toggled.clear();
+  }
+  w.same_fixed = (same_fixed || moved) && w.modes_kept;
+  w.moved = moved;
   if (!w.same_fixed) w.modes_kept = false;
   Vec& rhs = sized(w.rhs, total);
-  // The right-hand side: updated where the fixed values changed when the fixed set is the
-  // last solve's and few of them did, else computed whole.
+  // The right-hand side: updated where the fixed part changed when the fixed set is the
+  // last solve's or close to it and little changed, else computed whole.
   w.rhs_incremental = false;
-  if (same_fixed) {
-    std::vector<size_t> changed;
-    for (size_t m = 0; m < w.fixed_at.size(); ++m)
-      if (values[w.fixed_at[m]] != w.fixed_value[m]) changed.push_back(m);
-    if (changed.size() <= total / 64) {
+  if (same_fixed || moved) {
+    std::vector<size_t> sources = w.toggled;
+    for (size_t m = 0; m < w.fixed_at.size(); ++m) {
+      const size_t k = w.fixed_at[m];
+      if (fixed[k] && values[k] != w.fixed_value[m]) sources.push_back(k);
+    }
+    if (sources.size() <= total / (moved ? 16 : 64)) {
       sized(w.mark, total);  // zero from its last use (or new)
-      a.update_right_hand_side(values, w.fixed_at, changed, rhs, w.mark, w.rhs_change);
-      for (const size_t m : changed) w.fixed_value[m] = values[w.fixed_at[m]];
+      a.update_right_hand_side(values, sources, rhs, w.mark, w.rhs_change);
+      if (moved) {
+        w.fixed.assign(fixed.begin(), fixed.end());
+        w.fixed_at.clear();
+        for (size_t k = 0; k < total; ++k)
+          if (fixed[k]) w.fixed_at.push_back(k);
+        w.fixed_value.resize(w.fixed_at.size());
+      }
+      for (size_t m = 0; m < w.fixed_at.size(); ++m) w.fixed_value[m] = values[w.fixed_at[m]];
       w.rhs_incremental = true;
+    } else if (moved) {
+      w.moved = false;
+      w.same_fixed = false;
+      w.modes_kept = false;
+      w.toggled.clear();
     }
   }
   if (!w.rhs_incremental) {
@@ -1341,8 +1378,10 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   const double bnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(rhs[k]); }));
 
   // The unknown: the free part of z (its first guess), fixed entries zero; noting
-  // whether it is the last solve's result (whose modes are kept).
+  // whether it is the last solve's result (whose modes are kept; where the fixed set
+  // changed, the last result with the new fixed set's guess).
   Vec& x = sized(w.x, total);
+  for (const size_t k : w.toggled) x[k] = fixed[k] ? cplx(0, 0) : z[k];
   std::atomic<bool> changed{false};
   blocks(total, par, [&](size_t s, size_t e) {
     if (changed) return;
@@ -1405,7 +1444,9 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   const Segments segs = find_segments(fixed, n, nf);
   const size_t nseg = segs.segments.size();
   Workspace& w = *work_;
-  const bool kept = w.modes_kept && w.r_hat.size() == nseg;
+  // (Not where the fixed set changed and moving constraints cut the segments: their common
+  // fixed sets and local solves are built again, the modes transformed again.)
+  const bool kept = w.modes_kept && w.r_hat.size() == nseg && !(w.moved && local);
   // The kept residuals of the modes are theirs when the first guess is the last result
   // and every change of the right-hand side is known.
   const bool residuals_kept = kept && w.same_guess && w.rhs_incremental;
@@ -1517,6 +1558,64 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     else
       for (const size_t m : which) body(modes[m]);
   };
+  // Where the fixed set changed (w.toggled) and the kept residuals go on: the result's modes
+  // on the vertices whose fixed entries changed are transformed again from x (zero where
+  // fixed now, the first guess where free now), and every mode's residual is computed
+  // again on them and their neighbours (the only rows A_k x_hat changes on) with the new
+  // fixed set; the difference joins the change (e), those rows the change's start.
+  size_t moved_vertices = 0;
+  if (residuals_kept && w.moved) {
+    std::vector<char> on(n, 0);
+    for (size_t si = 0; si < nseg; ++si) {
+      const auto [first, count] = segs.segments[si];
+      std::vector<int> vertices, rows;
+      for (const size_t k : w.toggled) {
+        const size_t j = k / n, i = k % n;
+        if (j < first || j >= first + count || on[i]) continue;
+        on[i] = 1;
+        vertices.push_back(static_cast<int>(i));
+      }
+      if (vertices.empty()) continue;
+      moved_vertices += vertices.size();
+      const auto mrows = static_cast<Eigen::Index>(2 * n), cols = static_cast<Eigen::Index>(count);
+      Eigen::Map<Eigen::MatrixXd> x_hat(w.x_hat[si].data(), mrows, cols);
+      const Eigen::MatrixXd& q = bases[si]->q;
+      for (const int i : vertices) {
+        Eigen::VectorXd re(cols), im(cols);
+        for (size_t jj = 0; jj < count; ++jj) {
+          const cplx v = x[(first + jj) * n + static_cast<size_t>(i)];
+          re[static_cast<Eigen::Index>(jj)] = v.real();
+          im[static_cast<Eigen::Index>(jj)] = v.imag();
+        }
+        x_hat.row(2 * i) = (q.transpose() * re).transpose();
+        x_hat.row(2 * i + 1) = (q.transpose() * im).transpose();
+      }
+      for (const int i : vertices) rows.push_back(i);
+      for (const int i : vertices)
+        for (int e = op_->row_start[static_cast<size_t>(i)]; e < op_->row_start[static_cast<size_t>(i) + 1]; ++e) {
+          const int c = op_->column[static_cast<size_t>(e)];
+          if (!on[static_cast<size_t>(c)]) on[static_cast<size_t>(c)] = 1, rows.push_back(c);
+        }
+      for (const int i : rows) on[static_cast<size_t>(i)] = 0;
+      const char* sf = seg_fixed[si];
+      for (size_t k = 0; k < count; ++k) {
+        const Mode& mode = modes[mode_offset[si] + k];
+        const cplx *rh = column(w.r_hat, mode), *xh = column(w.x_hat, mode);
+        cplx *res = column(w.res_hat, mode), *e = column(w.e_hat, mode);
+        for (const int r : rows) {
+          const auto i = static_cast<size_t>(r);
+          if (sf[i]) {
+            res[i] = e[i] = 0;
+            continue;
+          }
+          const cplx now = rh[i] - ((op_->diagonal[i] + mode.shift * op_->weight_sum[i]) * xh[i] + op_->off(r, xh));
+          e[i] += now - res[i];
+          res[i] = now;
+        }
+      }
+      changed_rows[si].insert(changed_rows[si].end(), rows.begin(), rows.end());
+    }
+  }
   std::vector<std::vector<char>> start_on(change ? nseg : 0);
   if (change) {
     w.change_zero = false;  // until add_change_to_frames has cleared them
@@ -1916,6 +2015,9 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   if (change)
     report.method += fmt::format(", the change solved alone (it reached {:.1f} % of the modes' rows)",
                                  100.0 * static_cast<double>(reached) / static_cast<double>(std::max<size_t>(mode_rows, 1)));
+  if (moved_vertices)
+    report.method += fmt::format(", from the last result's modes with the fixed set changed at {} vertices",
+                                 moved_vertices);
   // Q is orthogonal, so the modes' residuals add up to the whole one's, up to the
   // rounding of the transforms (~1e-14 relative). Where the tolerance leaves room for
   // that (a warm re-solve to 1e-6), that sum is the residual (with moving constraints,
@@ -1931,6 +2033,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   report.residual = rnorm / bnorm;
   report.success = !failed && !stalled && report.residual <= options.tolerance;
   w.modes_kept = !failed && !stalled;  // x_hat holds the modes of x, r_hat those of rhs, res_hat their residuals
+  w.kept_moving = has_moving;
   if (!report.success && options.method != SpaceTimeMethod::modes) {
     // Rounding (or a mode that would not converge): finish with CG from here.
     w.modes_kept = false;

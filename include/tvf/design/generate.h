@@ -47,10 +47,12 @@ public:
   GenerateCache(const GenerateCache&) = delete;
   GenerateCache& operator=(const GenerateCache&) = delete;
   void clear();  // forget everything (the next generate() builds from scratch)
-  // Solves that started from the last solution instead of the linear-in-time guess, and
-  // generations that reused a kept Laplacian, since construction.
+  // Solves that started from the last solution instead of the linear-in-time guess,
+  // generations that reused a kept Laplacian, and key frames whose designed field was
+  // kept (the same elements, streamlines, falloff and region radius), since construction.
   int warm_starts() const;
   int reused_laplacians() const;
+  int reused_keyframes() const;
 
   struct State;  // private to generate.cpp
   State& state() const { return *state_; }
