@@ -42,8 +42,12 @@
 //     key frames to the interval's guide field (keyframe_topology.cpp, Guide): a field
 //     whose zeros are the carried singularities and the planned pairs alone, equal to the
 //     key frames at the ends, the matched nodes' types held; so the analysis finds no
-//     bifurcation but the planned ones. Not on surfaces, nor in an interval with a
-//     singularity left unpaired or paths that could not be kept apart.
+//     bifurcation but the planned ones. On surfaces (SurfaceGuide) the first key frame's
+//     field carried along the paths: each matched singularity's zero moved by a ratio
+//     factor (z − p(t)) / (z − p(t₀)) in a log-map chart around its path, blended to 1
+//     outside a tube round the path, then turned into the second key frame's field by a
+//     zero-free factor; only in intervals where every singularity is matched. Not in an
+//     interval with a singularity left unpaired or paths that could not be kept apart.
 // Key frames themselves are unchanged. What could not be paired (an odd singularity out,
 // e.g. one that must leave through the boundary) is left to the solve and reported.
 #include "tvf/analysis/singularities.h"
@@ -120,6 +124,7 @@ public:
   struct Track;     // one singularity carried between two times
   struct Template;  // one saddle–node template
   struct Guide;     // one interval's guide field (planar domains)
+  struct SurfaceGuide;  // one interval's guide field on a surface
   ~KeyframeTopologyPlan();
   KeyframeTopologyPlan(KeyframeTopologyPlan&&) noexcept;
 
@@ -127,6 +132,7 @@ private:
   std::vector<Track> tracks_;
   std::vector<Template> templates_;
   std::vector<Guide> guides_;
+  std::vector<SurfaceGuide> surface_guides_;
   std::vector<KeyframeIntervalReport> intervals_;
 };
 
