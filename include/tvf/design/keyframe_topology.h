@@ -96,9 +96,10 @@ struct KeyframeIntervalReport {
   // kept apart: see collision), "pairwise" (bent one pair at a time) or "joint" (all the
   // interval's paths bent at once, keeping clear of its saddle–node templates too).
   std::string routing = "straight";
-  // The frames strictly between the two key frames are the interval's guide field
-  // (planar domains): a field whose zeros are the plan's alone (keyframe_topology.cpp,
-  // Guide), so the analysis finds no bifurcation but the planned ones.
+  // The frames strictly between the two key frames are the interval's guide field: a
+  // field whose zeros are the plan's alone (keyframe_topology.cpp, Guide; on surfaces
+  // SurfaceGuide, where every singularity is matched), so the analysis finds no
+  // bifurcation but the planned ones.
   bool guided = false;
 };
 
