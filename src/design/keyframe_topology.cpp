@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -161,6 +162,39 @@ struct KeyframeTopologyPlan::Guide {
   std::vector<Pair> pairs;
   std::vector<cplx> h0, log_q;           // per vertex
   std::vector<std::vector<cplx>> lambda;  // per track of [first, last): λ at kTable + 1 times (empty: a pair's)
+};
+
+// One interval's guide field on a surface, where no product of scalar factors has the
+// carried zeros and no other (a scalar function's zeros on a closed surface sum to index
+// 0). Ratio factors do: R_j = (z − p_j(t)) / (z − p_j(t₀)) (conjugated for a saddle) has
+// index 0 seen from afar, so it can be blended to 1 without a zero. z is a log-map chart
+// around the path's middle; log R_j is single-valued off the path (its argument is the
+// angle the path from p_j(t₀) to p_j(t) subtends at z), so S_j = exp(w_j log R_j), w_j = 1
+// within `inner` of the path (chart distance) and a smoothstep down to 0 at `outer`, is
+// R_j itself near the path and has no zero or pole anywhere else. G₀(t) = F₀ Π_j S_j has
+// the zeros p_j(t) alone (F₀'s own zeros p_j(t₀) are the poles'), each of its index; G₁(t)
+// = F₁ Π_j S_j / S_j(t₁) likewise, and G₁/G₀ = H is the same at every t, without zero or
+// pole. G(t) = G₀(t) · exp(u(t) log H), log H lifted over the mesh's edges: F₀ at t₀, F₁
+// at t₁, and no zero but the plan's in between.
+struct KeyframeTopologyPlan::SurfaceGuide {
+  double t0 = 0, t1 = 0;
+  std::vector<cplx> f0, log_h;  // per vertex (f0 in vertex bases)
+  struct Path {
+    size_t track = 0;
+    bool conj = false;                // a saddle's factor is conjugated
+    std::vector<cplx> coords;         // the chart, per vertex (+∞ beyond its patch)
+    std::vector<size_t> support;      // the vertices with w > 0
+    std::vector<double> w;            // their weights
+    std::vector<cplx> x;              // the path in the chart at s = k / kSamples
+  };
+  static constexpr int kSamples = 256;
+  std::vector<Path> paths;
+  // The nodes' phase: G's α at a node over the plan's (the track's J(t)), its argument at
+  // kSamples + 1 times, unwrapped, less its ends' values within (−π, π]; G is turned by
+  // −Λ, Λ the nodes' λ interpolated by Shepard's weights |x − p_j|⁻⁴ (the planar guide's
+  // correction), so a node keeps its type while the configuration turns round it.
+  std::vector<size_t> nodes;                // tracks
+  std::vector<std::vector<double>> lambda;  // per node
 };
 
 KeyframeTopologyPlan::~KeyframeTopologyPlan() = default;
@@ -520,6 +554,322 @@ void apply_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
     }
     fixed[vi] = 1;
     values[vi] = bundle.world_to_vertex(v, Vec3(val.real(), val.imag(), 0));
+  }
+}
+
+using SurfaceGuide = KeyframeTopologyPlan::SurfaceGuide;
+
+// A point of the surface in a chart (its face's corners' coordinates, barycentric); NaN
+// when a corner is beyond the chart's patch.
+cplx chart_point(const Mesh& mesh, const std::vector<cplx>& coords, const SurfacePoint& at) {
+  cplx z{0, 0};
+  for (int k = 0; k < 3; ++k) {
+    const cplx c = coords[static_cast<size_t>(mesh.face(at.face)[static_cast<size_t>(k)])];
+    if (!std::isfinite(c.real()) || !std::isfinite(c.imag())) return {std::nan(""), 0};
+    z += at.bary[k] * c;
+  }
+  return z;
+}
+
+// log((z − x(s)) / (z − x(0))) for a path sampled at x[k] (s = k / (x.size() − 1)) ending
+// at `end` = x(s): the argument is the angle the path subtends at z, so the value is
+// continuous in z off the path (and jumps by 2πi across it, where exp does not see it).
+cplx log_ratio(cplx z, const std::vector<cplx>& x, double s, cplx end) {
+  const auto n = static_cast<double>(x.size() - 1);
+  const auto last = std::min(static_cast<size_t>(std::max(s, 0.0) * n), x.size() - 1);
+  double angle = 0;
+  cplx prev = z - x[0];
+  for (size_t k = 1; k <= last; ++k) {
+    const cplx next = z - x[k];
+    angle += std::arg(next / prev);
+    prev = next;
+  }
+  const cplx d_end = z - end, d0 = z - x[0];
+  angle += std::arg(d_end / prev);
+  return {std::log(std::abs(d_end)) - std::log(std::abs(d0)), angle};
+}
+
+// Σ_j w_j log R_j (conjugated for saddles) at every vertex, the tracks at time t; `at_end`
+// takes every path to its second end instead.
+std::vector<cplx> surface_log_factors(const DesignSpace& space, const std::vector<Track>& tracks,
+                                      const SurfaceGuide& g, double t, bool at_end) {
+  const Mesh& mesh = space.mesh();
+  std::vector<cplx> out(static_cast<size_t>(mesh.num_vertices()), cplx(0, 0));
+  for (const SurfaceGuide::Path& path : g.paths) {
+    const Track& tr = tracks[path.track];
+    const double s = at_end ? 1.0 : tr.param(t);
+    const cplx end = chart_point(mesh, path.coords, space.locate(tr.raw(s)));
+    for (size_t m = 0; m < path.support.size(); ++m) {
+      const size_t v = path.support[m];
+      const cplx l = path.w[m] * log_ratio(path.coords[v], path.x, s, end);
+      out[v] += path.conj ? std::conj(l) : l;
+    }
+  }
+  return out;
+}
+
+// G at the corners of face f at time t (before the phase correction), in the face's frame.
+std::array<cplx, 3> surface_guide_on_face(const DesignSpace& space, const std::vector<Track>& tracks,
+                                          const SurfaceGuide& g, double t, int f) {
+  const Mesh& mesh = space.mesh();
+  const double u = smoothstep01(t, g.t0, g.t1);
+  std::array<cplx, 3> out;
+  for (int c = 0; c < 3; ++c) {
+    const auto v = static_cast<size_t>(mesh.face(f)[static_cast<size_t>(c)]);
+    cplx l = u * g.log_h[v];
+    for (const SurfaceGuide::Path& path : g.paths) {
+      const auto it = std::lower_bound(path.support.begin(), path.support.end(), v);
+      if (it == path.support.end() || *it != v) continue;
+      const Track& tr = tracks[path.track];
+      const double s = tr.param(t);
+      const cplx end = chart_point(mesh, path.coords, space.locate(tr.raw(s)));
+      const cplx lr = path.w[static_cast<size_t>(it - path.support.begin())] * log_ratio(path.coords[v], path.x, s, end);
+      l += path.conj ? std::conj(lr) : lr;
+    }
+    out[static_cast<size_t>(c)] = space.bundle().corner_to_face(3 * f + c) * g.f0[v] * std::exp(l);
+  }
+  return out;
+}
+
+// The α of the linear interpolant of face values w (in the face frame) over face f.
+cplx face_alpha(const DesignSpace& space, int f, const std::array<cplx, 3>& w) {
+  const Mesh& mesh = space.mesh();
+  const TangentBundle& bundle = space.bundle();
+  const Vec3& x0 = mesh.position(mesh.face(f)[0]);
+  Mat2 Y, W;
+  for (int c = 1; c < 3; ++c) {
+    const Vec3 d = mesh.position(mesh.face(f)[static_cast<size_t>(c)]) - x0;
+    Y.col(c - 1) = Vec2(d.dot(bundle.face_e1(f)), d.dot(bundle.face_e2(f)));
+    const cplx dw = w[static_cast<size_t>(c)] - w[0];
+    W.col(c - 1) = Vec2(dw.real(), dw.imag());
+  }
+  return to_linear(W * Y.inverse()).alpha;
+}
+
+// Builds a surface guide for the tracks [first, last) (all matched, spanning [t0, t1]);
+// false when a path leaves its chart or a key frame's field has a zero no track carries.
+bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, size_t first, size_t last,
+                         double radius, const std::vector<cplx>& f0, const std::vector<cplx>& f1, SurfaceGuide& g) {
+  const Mesh& mesh = space.mesh();
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  const double h = mesh.mean_edge_length();
+  const double inner = std::max(radius, 1.5 * h), outer = inner + std::max(radius, 2 * h);
+  for (size_t i = first; i < last; ++i) {
+    const Track& tr = tracks[i];
+    SurfaceGuide::Path path;
+    path.track = i;
+    path.conj = tr.index < 0;
+    // The path on the surface, and the chart around its middle reaching `outer` past it.
+    std::vector<SurfacePoint> on(SurfaceGuide::kSamples + 1);
+    for (int k = 0; k <= SurfaceGuide::kSamples; ++k)
+      on[static_cast<size_t>(k)] = space.locate(tr.raw(static_cast<double>(k) / SurfaceGuide::kSamples));
+    const SurfacePoint mid = on[SurfaceGuide::kSamples / 2];
+    const Vec3 centre = surface_position(mesh, mid);
+    double reach = 0;
+    for (const SurfacePoint& p : on) reach = std::max(reach, (surface_position(mesh, p) - centre).norm());
+    if (reach < 1e-9 * h) continue;  // a singularity that stays: F₀ and F₁ share it, H carries it
+    // The chart: the projection onto the plane through the path's middle normal to the
+    // path's mean normal, linear on every face (so the factors' zeros and poles are where
+    // the face's linear interpolant has them, and the quotient F₀ / (z − p(t₀)) has no
+    // noise), on the vertices the log map puts within `outer` of the path, geodesically;
+    // the faces there must face the plane's way (the projection is then one to one).
+    Vec3 normal = Vec3::Zero();
+    for (const SurfacePoint& p : on) normal += space.bundle().face_normal(p.face);
+    if (normal.norm() == 0) return false;
+    normal.normalize();
+    const Vec3 e1 = (std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(normal).normalized();
+    const Vec3 e2 = normal.cross(e1);
+    auto project = [&](const Vec3& x) { return cplx((x - centre).dot(e1), (x - centre).dot(e2)); };
+    std::vector<Vec3> world;
+    for (const SurfacePoint& p : on) {
+      world.push_back(surface_position(mesh, p));
+      path.x.push_back(project(world.back()));
+    }
+    LocalChart chart;
+    space.log_map().compute_local(mid, reach + 2 * outer + 2 * h, chart);
+    // Every vertex's distance from the path (chord, to the polyline), near the path.
+    std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
+    for (size_t v = 0; v < nv; ++v) {
+      const cplx geo = chart.coords[v];
+      if (!std::isfinite(geo.real()) || !std::isfinite(geo.imag()) || std::abs(geo) > reach + 1.5 * outer) continue;
+      const Vec3& x = mesh.position(static_cast<int>(v));
+      for (size_t k = 0; k + 1 < world.size(); ++k) {
+        const Vec3 e = world[k + 1] - world[k];
+        const double n2 = e.squaredNorm();
+        const double u = n2 > 0 ? std::clamp((x - world[k]).dot(e) / n2, 0.0, 1.0) : 0.0;
+        dist[v] = std::min(dist[v], (x - world[k] - u * e).norm());
+      }
+    }
+    // The widest tube (of inner, outer; then narrower, down to one edge length) whose
+    // faces all face the plane's way.
+    bool found = false;
+    for (double shrink = 1; !found && shrink * inner >= h; shrink *= 0.7) {
+      const double in_r = shrink * inner, out_r = shrink * outer;
+      found = true;
+      for (int f = 0; f < mesh.num_faces() && found; ++f) {
+        const Face& c = mesh.face(f);
+        if (std::min({dist[static_cast<size_t>(c[0])], dist[static_cast<size_t>(c[1])], dist[static_cast<size_t>(c[2])]}) <
+                out_r &&
+            space.bundle().face_normal(f).dot(normal) <= 0)
+          found = false;
+      }
+      if (!found) continue;
+      path.coords.assign(nv, cplx(std::numeric_limits<double>::infinity(), 0));
+      for (size_t v = 0; v < nv; ++v) {
+        if (dist[v] >= out_r) continue;
+        path.coords[v] = project(mesh.position(static_cast<int>(v)));
+        path.support.push_back(v);
+        path.w.push_back(dist[v] <= in_r ? 1.0 : smoothstep((out_r - dist[v]) / (out_r - in_r)));
+      }
+    }
+    if (!found) return false;  // the surface folds over the plane within an edge length of the path
+    g.paths.push_back(std::move(path));
+  }
+  // H = F₁ / F₀ · exp(−Σ_j w_j log R_j(t₁)), with no zero or pole: its log, lifted.
+  const std::vector<cplx> l1 = surface_log_factors(space, tracks, g, g.t1, true);
+  std::vector<cplx> hv(nv, cplx(0, 0));
+  std::vector<char> ok(nv, 0);
+  for (size_t v = 0; v < nv; ++v) {
+    const cplx q = f1[v] / f0[v] * std::exp(-l1[v]);
+    if (std::abs(f0[v]) == 0 || !std::isfinite(q.real()) || !std::isfinite(q.imag()) || std::abs(q) == 0) continue;
+    hv[v] = q;
+    ok[v] = 1;
+  }
+  std::vector<std::vector<size_t>> nbr(nv);
+  for (int e = 0; e < mesh.num_halfedges(); ++e) {
+    const auto a = static_cast<size_t>(mesh.tail(e)), b = static_cast<size_t>(mesh.head(e));
+    nbr[a].push_back(b);
+    nbr[b].push_back(a);
+  }
+  // A vertex on a key frame's zero: the mean of its neighbours' H (H is smooth there).
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t v = 0; v < nv; ++v) {
+      if (ok[v]) continue;
+      cplx sum{0, 0};
+      int n = 0;
+      for (const size_t w : nbr[v])
+        if (ok[w] == 1) sum += hv[w], ++n;
+      if (n == 0 || std::abs(sum) == 0) continue;
+      hv[v] = sum / static_cast<double>(n);
+      ok[v] = 2;
+      changed = true;
+    }
+    for (char& o : ok) o = o ? char{1} : char{0};
+  }
+  for (size_t v = 0; v < nv; ++v)
+    if (!ok[v]) return false;
+  g.log_h.assign(nv, cplx(0, 0));
+  std::vector<char> seen(nv, 0);
+  double sum_arg = 0;
+  for (size_t root = 0; root < nv; ++root) {
+    if (seen[root]) continue;
+    std::vector<size_t> queue{root};
+    seen[root] = 1;
+    g.log_h[root] = {std::log(std::abs(hv[root])), std::arg(hv[root])};
+    for (size_t k = 0; k < queue.size(); ++k) {
+      const size_t v = queue[k];
+      for (const size_t w : nbr[v]) {
+        if (seen[w]) continue;
+        seen[w] = 1;
+        g.log_h[w] = {std::log(std::abs(hv[w])), g.log_h[v].imag() + std::arg(hv[w] / hv[v])};
+        queue.push_back(w);
+      }
+    }
+  }
+  for (const cplx& l : g.log_h) sum_arg += l.imag();
+  // The far field turns the shorter way: the mean lifted argument within (−π, π].
+  const double shift = 2 * std::numbers::pi * std::round(sum_arg / static_cast<double>(nv) / (2 * std::numbers::pi));
+  for (cplx& l : g.log_h) l -= cplx(0, shift);
+  g.f0 = f0;
+  // λ of the nodes.
+  for (size_t i = first; i < last; ++i) {
+    const Track& tr = tracks[i];
+    if (tr.index <= 0) continue;
+    std::vector<double> lam;
+    for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
+      const double t = g.t0 + (g.t1 - g.t0) * k / SurfaceGuide::kSamples;
+      const int f = space.locate(tr.raw(tr.param(t))).face;
+      const cplx a = face_alpha(space, f, surface_guide_on_face(space, tracks, g, t, f));
+      const cplx plan = track_jacobian(space.bundle(), tr, t, f).alpha;
+      if (!(std::abs(a) > 0) || !(std::abs(plan) > 0) || !std::isfinite(std::abs(a))) {
+        // A corner on a key frame's zero (G has no value there): the last sample's.
+        lam.push_back(lam.empty() ? 0.0 : lam.back());
+        continue;
+      }
+      const double arg = std::arg(a / plan);
+      lam.push_back(lam.empty() ? arg : lam.back() + std::remainder(arg - lam.back(), 2 * std::numbers::pi));
+    }
+    const double a0 = std::remainder(lam.front(), 2 * std::numbers::pi);
+    const double b0 = std::remainder(lam.back(), 2 * std::numbers::pi);
+    for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
+      const double u = smoothstep(static_cast<double>(k) / SurfaceGuide::kSamples);
+      lam[static_cast<size_t>(k)] -= (1 - u) * a0 + u * b0;
+    }
+    g.nodes.push_back(i);
+    g.lambda.push_back(std::move(lam));
+  }
+  return true;
+}
+
+// Fixes every free vertex of a frame at time t (strictly inside the interval) to G(t).
+void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, const SurfaceGuide& g,
+                         double t, std::span<char> fixed, std::span<cplx> values) {
+  const Mesh& mesh = space.mesh();
+  const std::vector<cplx> l = surface_log_factors(space, tracks, g, t, false);
+  const double u = smoothstep01(t, g.t0, g.t1);
+  const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * SurfaceGuide::kSamples;
+  const auto k = std::min(static_cast<size_t>(x), static_cast<size_t>(SurfaceGuide::kSamples - 1));
+  std::vector<Vec3> at;
+  std::vector<double> lambda;
+  for (size_t n = 0; n < g.nodes.size(); ++n) {
+    const Track& tr = tracks[g.nodes[n]];
+    at.push_back(surface_position(mesh, space.locate(tr.raw(tr.param(t)))));
+    const std::vector<double>& lam = g.lambda[n];
+    lambda.push_back(lam[k] + (x - static_cast<double>(k)) * (lam[k + 1] - lam[k]));
+  }
+  const double floor = 1e-12 * space.diameter();
+  for (size_t v = 0; v < l.size(); ++v) {
+    if (fixed[v]) continue;
+    double num = 0, den = 0;
+    for (size_t n = 0; n < at.size(); ++n) {
+      const double w = 1 / std::pow(std::max((mesh.position(static_cast<int>(v)) - at[n]).norm(), floor), 4);
+      num += w * lambda[n];
+      den += w;
+    }
+    const double turn = den > 0 ? num / den : 0.0;
+    const cplx val = g.f0[v] * std::exp(l[v] + u * g.log_h[v] - cplx(0, turn));
+    if (!std::isfinite(val.real()) || !std::isfinite(val.imag())) continue;  // on a pole: left to the solve
+    fixed[v] = 1;
+    values[v] = val;
+  }
+}
+
+// The phase correction turns G by a field that varies by the nodes' whole turns (2π for
+// the knot's center) over their distance, which a coarse mesh does not resolve: the
+// faces between the nodes then hold extra zeros. So it is kept only where it does no
+// harm, by measurement: G with and without it at 33 times, and the correction dropped
+// when its frames hold more singularities than the plan carries more often.
+void keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& tracks, SurfaceGuide& g,
+                            size_t carried) {
+  if (g.nodes.empty()) return;
+  const auto nv = static_cast<size_t>(space.mesh().num_vertices());
+  auto wrong_frames = [&](const SurfaceGuide& guide) {
+    int wrong = 0;
+    for (int k = 1; k < 32; ++k) {
+      std::vector<char> fixed(nv, 0);
+      std::vector<cplx> values(nv, cplx(0, 0));
+      apply_surface_guide(space, tracks, guide, guide.t0 + (guide.t1 - guide.t0) * k / 32.0, fixed, values);
+      if (find_singularities(space.bundle(), values).size() != carried) ++wrong;
+    }
+    return wrong;
+  };
+  SurfaceGuide plain = g;
+  plain.nodes.clear();
+  plain.lambda.clear();
+  if (wrong_frames(g) > wrong_frames(plain)) {
+    g.nodes.clear();
+    g.lambda.clear();
   }
 }
 
@@ -1423,6 +1773,21 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       rep.guided = true;
       guides_.push_back(std::move(guide));
     }
+    // Surfaces: the first key frame's field carried along the paths (SurfaceGuide), where
+    // every singularity of both key frames is matched.
+    if (!space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
+        rep.created.empty() && rep.cancelled.empty() && tracks_.size() > first_track) {
+      SurfaceGuide sg;
+      sg.t0 = rep.t0;
+      sg.t1 = rep.t1;
+      if (build_surface_guide(space, tracks_, first_track, tracks_.size(), scene.solver.region_radius,
+                              keyframe_fields[k], keyframe_fields[k + 1], sg)) {
+        keep_phase_if_resolved(space, tracks_, sg, sing[k].size());
+        for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].guided = true;
+        rep.guided = true;
+        surface_guides_.push_back(std::move(sg));
+      }
+    }
     intervals_.push_back(std::move(rep));
   }
 }
@@ -1452,6 +1817,8 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
   }
   for (const Guide& g : guides_)
     if (t > g.t0 && t < g.t1) apply_guide(space, tracks_, g, t, fixed, values);
+  for (const SurfaceGuide& g : surface_guides_)
+    if (t > g.t0 && t < g.t1) apply_surface_guide(space, tracks_, g, t, fixed, values);
 }
 
 std::vector<Vec3> KeyframeTopologyPlan::carried(double t) const {

@@ -3,6 +3,8 @@
 #include "tvf/analysis/topology.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframes.h"
+#include "tvf/mesh/face_subdivision.h"
+#include "tvf/mesh/mesh_io.h"
 #include "tvf/scene/scene_json.h"
 #include "tvf/solve/connection_laplacian.h"
 
@@ -13,6 +15,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <limits>
 #include <string>
 
@@ -465,6 +469,92 @@ TEST(KeyframeTopology, ReportAndSceneRoundTripAsJson) {
   EXPECT_EQ(j[0]["separation"], 0.3);
   EXPECT_TRUE(j[0].contains("closest_approach"));
   for (const auto& m : j[0]["matched"]) EXPECT_EQ(m["detour"], 0.0);
+}
+
+// The knot on a surface: a source and a center trading places, 0.3 (chord) apart on a unit
+// sphere near its north pole, or `half` either side of `centre` on a mesh. Matched with
+// the static solve's other singularities (every one of both key frames), the interval is
+// guided on a surface too (KeyframeTopologyPlan::SurfaceGuide): every frame holds the
+// key frames' singularities and nothing else.
+std::string surface_knot(const std::string& domain, const Vec3& a, const Vec3& b, double radius, double falloff) {
+  auto at = [](const Vec3& p) { return fmt::format("[{}, {}, {}]", p.x(), p.y(), p.z()); };
+  return R"({"tvf": 1, "domain": )" + domain + R"(,
+    "time": {"frames": 32, "range": [0, 1]}, "generator": "spacetime", "falloff": )" +
+         std::to_string(falloff) + R"(,
+    "solver": {"region_radius": )" + std::to_string(radius) + R"(, "keyframe_topology": "matched"},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": )" + at(a) + R"(},
+                            {"kind": "singular", "type": "ccw_center", "at": )" + at(b) + R"(}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": )" + at(b) + R"(},
+                            {"kind": "singular", "type": "ccw_center", "at": )" + at(a) + R"(}]}]})";
+}
+
+// Every frame holds as many singularities as the key frames, Poincaré–Hopf's sum, no
+// bifurcation, and every path runs from the first frame to the last or ends at a type
+// change (where the tracker splits it; no path is born or dies at a zero).
+void expect_guided_knot(const Generated& g, const std::string& what, size_t allowed = 0) {
+  const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+  EXPECT_TRUE(r.guided) << what;
+  EXPECT_TRUE(r.created.empty() && r.cancelled.empty() && r.unpaired_first.empty() && r.unpaired_second.empty())
+      << what;
+  const size_t n = g.topology.singularities.front().size();
+  EXPECT_EQ(n, r.matched.size()) << what;
+  size_t lo = n, hi = n;
+  for (const auto& frame : g.topology.singularities) {
+    lo = std::min(lo, frame.size());
+    hi = std::max(hi, frame.size());
+    int sum = 0;
+    for (const Singularity& s : frame) sum += s.index;
+    EXPECT_EQ(sum, g.space->mesh().euler_characteristic()) << what;
+  }
+  std::printf("  %s: %zu singularities a frame (%zu–%zu), %zu bifurcations, %zu paths\n", what.c_str(), n, lo, hi,
+              g.topology.bifurcations.size(), g.topology.paths.size());
+  EXPECT_EQ(lo, n) << what;
+  if (allowed == 0) EXPECT_EQ(hi, n) << what;
+  EXPECT_LE(g.topology.bifurcations.size(), allowed) << what;
+}
+
+// Unguided (pairwise routing, the regions carried, the rest left to the solve) the same
+// knot showed 6 and 10 bifurcations at subdivisions 3 and 4 (4–8 and 4–10 singularities a
+// frame); guided, none.
+TEST(KeyframeTopology, AKnotOnASphereIsGuided) {
+  const double z = std::sqrt(0.75);
+  for (const int sub : {3, 4}) {
+    const Generated g = run(surface_knot(R"({"sphere": {"subdivisions": )" + std::to_string(sub) + R"(, "radius": 1}})",
+                                         Vec3(-0.5, 0, z), Vec3(0.5, 0, z), 0.15, 8));
+    expect_guided_knot(g, fmt::format("sphere, subdivisions {}", sub));
+  }
+}
+
+// A real mesh: CGAL's blobby (libcgal-demo's data archive, 2,027 vertices) and the same
+// surface with every face split in four (8,102 vertices), the knot 0.3 across on its
+// bumpy top. Unguided: 10 and 16 bifurcations (4–8 and 4–14 singularities a frame).
+// Guided: none on the finer mesh; on the coarser one pair (the tube round a path is
+// 2.5 edge lengths wide there, and the field turns fast across it).
+TEST(KeyframeTopology, AKnotOnARealMeshIsGuided) {
+  const test::TempDir dir;
+  const std::string archive = "/usr/share/doc/libcgal-dev/data.tar.gz";
+  const std::string cmd = fmt::format("tar -xzf '{}' -C '{}' data/meshes/blobby.off 2>/dev/null", archive, dir.path().string());
+  if (!std::filesystem::exists(archive) || std::system(cmd.c_str()) != 0)
+    GTEST_SKIP() << archive << " is missing or has no data/meshes/blobby.off (Debian package libcgal-demo)";
+  const std::filesystem::path coarse = dir / "data/meshes/blobby.off";
+  // The finer mesh: each face split in four, written as OFF.
+  const Mesh fine = subdivide_faces(load_mesh(coarse.string()).mesh, 2).mesh;
+  {
+    std::ofstream out(dir / "fine.off");
+    out << "OFF\n" << fine.num_vertices() << " " << fine.num_faces() << " 0\n";
+    out.precision(17);
+    for (int v = 0; v < fine.num_vertices(); ++v)
+      out << fine.position(v).x() << " " << fine.position(v).y() << " " << fine.position(v).z() << "\n";
+    for (int f = 0; f < fine.num_faces(); ++f)
+      out << "3 " << fine.face(f)[0] << " " << fine.face(f)[1] << " " << fine.face(f)[2] << "\n";
+  }
+  for (const std::filesystem::path& mesh : {coarse, dir / "fine.off"}) {
+    const Generated g = run(surface_knot(R"({"mesh": ")" + mesh.string() + R"("})", Vec3(-0.15, 0, 0.2),
+                                         Vec3(0.15, 0, 0.2), 0.05, 60));
+    const int nv = g.space->mesh().num_vertices();
+    expect_guided_knot(g, fmt::format("blobby, {} vertices", nv), nv < 4000 ? 2 : 0);
+  }
 }
 
 // A knot of three paths: a source and a center trading places across the saddle the

@@ -42,8 +42,12 @@
 //     key frames to the interval's guide field (keyframe_topology.cpp, Guide): a field
 //     whose zeros are the carried singularities and the planned pairs alone, equal to the
 //     key frames at the ends, the matched nodes' types held; so the analysis finds no
-//     bifurcation but the planned ones. Not on surfaces, nor in an interval with a
-//     singularity left unpaired or paths that could not be kept apart.
+//     bifurcation but the planned ones. On surfaces (SurfaceGuide) the first key frame's
+//     field carried along the paths: each matched singularity's zero moved by a ratio
+//     factor (z − p(t)) / (z − p(t₀)) in a log-map chart around its path, blended to 1
+//     outside a tube round the path, then turned into the second key frame's field by a
+//     zero-free factor; only in intervals where every singularity is matched. Not in an
+//     interval with a singularity left unpaired or paths that could not be kept apart.
 // Key frames themselves are unchanged. What could not be paired (an odd singularity out,
 // e.g. one that must leave through the boundary) is left to the solve and reported.
 #include "tvf/analysis/singularities.h"
@@ -92,9 +96,10 @@ struct KeyframeIntervalReport {
   // kept apart: see collision), "pairwise" (bent one pair at a time) or "joint" (all the
   // interval's paths bent at once, keeping clear of its saddle–node templates too).
   std::string routing = "straight";
-  // The frames strictly between the two key frames are the interval's guide field
-  // (planar domains): a field whose zeros are the plan's alone (keyframe_topology.cpp,
-  // Guide), so the analysis finds no bifurcation but the planned ones.
+  // The frames strictly between the two key frames are the interval's guide field: a
+  // field whose zeros are the plan's alone (keyframe_topology.cpp, Guide; on surfaces
+  // SurfaceGuide, where every singularity is matched), so the analysis finds no
+  // bifurcation but the planned ones.
   bool guided = false;
 };
 
@@ -120,6 +125,7 @@ public:
   struct Track;     // one singularity carried between two times
   struct Template;  // one saddle–node template
   struct Guide;     // one interval's guide field (planar domains)
+  struct SurfaceGuide;  // one interval's guide field on a surface
   ~KeyframeTopologyPlan();
   KeyframeTopologyPlan(KeyframeTopologyPlan&&) noexcept;
 
@@ -127,6 +133,7 @@ private:
   std::vector<Track> tracks_;
   std::vector<Template> templates_;
   std::vector<Guide> guides_;
+  std::vector<SurfaceGuide> surface_guides_;
   std::vector<KeyframeIntervalReport> intervals_;
 };
 
