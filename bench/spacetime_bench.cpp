@@ -126,8 +126,7 @@ void generation(benchmark::State& state, const DesignSpace& space, const Scene& 
 // The solve alone, from the interpolation-in-time first guess, by one method.
 void solve_only(benchmark::State& state, const DesignSpace& space, const Scene& s, SpaceTimeMethod method,
                 int coarse_modes = SpaceTimeOptions{}.coarse_modes, int local_rings = SpaceTimeOptions{}.local_rings,
-                int moving_rings = SpaceTimeOptions{}.moving_rings,
-                int kept_corrections = SpaceTimeOptions{}.local_kept_corrections) {
+                int moving_rings = SpaceTimeOptions{}.moving_rings) {
   const SpaceTimeProblem p = spacetime_problem(space, s);
   const SpaceTimeSolver solver(p.laplacian, s.time.frames, s.solver.temporal_weight);
   std::vector<cplx> z(p.values.size());
@@ -136,7 +135,6 @@ void solve_only(benchmark::State& state, const DesignSpace& space, const Scene& 
   o.coarse_modes = coarse_modes;
   o.local_rings = local_rings;
   o.moving_rings = moving_rings;
-  o.local_kept_corrections = kept_corrections;
   o.tolerance = s.solver.tolerance;
   o.max_iterations = 100000;
   SolveReport r;
@@ -184,8 +182,7 @@ BENCHMARK(BM_SpaceTimeKeyframesAndElementSphere20k)->Unit(benchmark::kMillisecon
 // 7 the two-level CG with the local solve and 2 coarse temporal modes instead of 4.
 // 8 the temporal modes with local solves at the moving constraints (SpaceTimeMethod::
 // modes_local, four rings: what automatic takes for a moving element since issue 15's third
-// step), 9 the same with two rings, 10 with one, 11 with four rings but every local solve
-// started from zero (before the local solves started from the earlier rounds' corrections).
+// step), 9 the same with two rings, 10 with one.
 SpaceTimeMethod method_of(int64_t m) {
   return m == 0 ? SpaceTimeMethod::automatic : m >= 8 ? SpaceTimeMethod::modes_local : m >= 3 ? SpaceTimeMethod::cg
          : m == 1         ? SpaceTimeMethod::cg
@@ -195,16 +192,15 @@ SpaceTimeMethod method_of(int64_t m) {
 int coarse_modes_of(int64_t m) { return m == 3 ? 0 : m == 4 ? 8 : m == 7 ? 2 : 4; }
 int local_rings_of(int64_t m) { return m == 5 ? -1 : m == 6 ? 1 : SpaceTimeOptions{}.local_rings; }
 int moving_rings_of(int64_t m) { return m == 9 ? 2 : m == 10 ? 1 : SpaceTimeOptions{}.moving_rings; }
-int kept_corrections_of(int64_t m) { return m == 11 ? 0 : SpaceTimeOptions{}.local_kept_corrections; }
 
 void BM_SolveGrid65(benchmark::State& state) {
   const Scene s = grid_scene(65, state.range(0) != 0);
   solve_only(state, *make_design_space(s), s, method_of(state.range(1)), coarse_modes_of(state.range(1)),
-             local_rings_of(state.range(1)), moving_rings_of(state.range(1)), kept_corrections_of(state.range(1)));
+             local_rings_of(state.range(1)), moving_rings_of(state.range(1)));
 }
 BENCHMARK(BM_SolveGrid65)
     ->ArgNames({"element", "method"})
-    ->ArgsProduct({{0, 1}, {0, 1, 3, 4, 5, 6, 7, 8, 9, 10, 11}})
+    ->ArgsProduct({{0, 1}, {0, 1, 3, 4, 5, 6, 7, 8, 9, 10}})
     ->Unit(benchmark::kMillisecond);
 // The paper's kind of method takes tens of seconds even here: once.
 BENCHMARK(BM_SolveGrid65)
@@ -216,12 +212,11 @@ BENCHMARK(BM_SolveGrid65)
 
 void BM_SolveSphere20k(benchmark::State& state) {
   solve_only(state, *sphere_space(), sphere_scene(state.range(0) != 0), method_of(state.range(1)),
-             coarse_modes_of(state.range(1)), local_rings_of(state.range(1)), moving_rings_of(state.range(1)),
-             kept_corrections_of(state.range(1)));
+             coarse_modes_of(state.range(1)), local_rings_of(state.range(1)), moving_rings_of(state.range(1)));
 }
 BENCHMARK(BM_SolveSphere20k)
     ->ArgNames({"element", "method"})
-    ->ArgsProduct({{0, 1}, {0, 1, 3, 4, 5, 6, 7, 8, 9, 10, 11}})
+    ->ArgsProduct({{0, 1}, {0, 1, 3, 4, 5, 6, 7, 8, 9, 10}})
     ->Unit(benchmark::kMillisecond);
 // The paper's kind of method at 20k × 100 takes minutes: once.
 BENCHMARK(BM_SolveSphere20k)

@@ -1025,17 +1025,7 @@ struct LocalSolve {
   const MovingSegment& m;
   size_t nf, first, count;
   double b;
-  size_t most_kept;  // SpaceTimeOptions::local_kept_corrections
   std::vector<cplx> r, z, p, ap;
-  // The earlier rounds' corrections on the free entries, made A-orthonormal (Hermitian
-  // A-inner product), and A times each (zero at the constraint entries): a new round's
-  // solve starts from its Galerkin projection on them (SpaceTimeOptions::
-  // local_kept_corrections). The rounds' errors lean towards the slowest directions of the
-  // iteration, so much of a round's correction lies in the span of the last ones': on the
-  // 65² grid with a moving vortex the projection takes 35–80 % of a local solve's starting
-  // residual norm out, and the local CG iterations went from 61 to 47.
-  std::vector<std::vector<cplx>> kept, kept_a;
-  std::vector<cplx> start_r;
 
   // y = (A u) on omega vertex li's line, u zero outside omega (every entry of u counts).
   void product(const cplx* u, size_t li, cplx* y) const {
@@ -1134,76 +1124,10 @@ struct LocalSolve {
       }
     }
     const double tau2 = std::max(tolerance * tolerance * rr, floor2);
-    start_r = r;
-    if (!kept.empty() && rr > tau2) rr = project(u, r);
     // p stays zero at the constraint entries, so u keeps them.
-    const int it = local_pcg(u, r, z, p, ap, rr, tau2, max_iterations,
-                             [&](const Vec& x, Vec& y) { return apply(x, y); },
-                             [&](const Vec& x, Vec& y) { return lines(x, y); });
-    keep(u);
-    return it;
+    return local_pcg(u, r, z, p, ap, rr, tau2, max_iterations, [&](const Vec& x, Vec& y) { return apply(x, y); },
+                     [&](const Vec& x, Vec& y) { return lines(x, y); });
   }
-  // u += Σ c_j w_j and r −= Σ c_j A w_j, c_j = <w_j, r> (the Galerkin projection on the kept
-  // corrections, which are A-orthonormal); returns ‖r‖². Sums in a fixed order.
-  double project(std::vector<cplx>& u, std::vector<cplx>& res) const {
-    const size_t nq = u.size();
-    for (size_t j = 0; j < kept.size(); ++j) {
-      const cplx c = dot(kept[j], res);
-      const cplx *w = kept[j].data(), *aw = kept_a[j].data();
-      for (size_t q = 0; q < nq; ++q) {
-        u[q] += mul(c, w[q]);
-        res[q] -= mul(c, aw[q]);
-      }
-    }
-    double rr = 0;
-    for (size_t q = 0; q < nq; ++q) rr += std::norm(res[q]);
-    return rr;
-  }
-  // The free part v of this round's correction u joins the kept ones, A-orthogonalised
-  // (A v = the residual it took out: start_r − r), unless it adds nothing new; at most
-  // most_kept, the oldest dropped (the others stay A-orthonormal).
-  void keep(const std::vector<cplx>& u) {
-    if (most_kept == 0) return;
-    const size_t nq = u.size();
-    std::vector<cplx> v(nq), av(nq);
-    for (size_t q = 0; q < nq; ++q) {
-      v[q] = m.moving[q] ? cplx(0, 0) : u[q];
-      av[q] = start_r[q] - r[q];
-    }
-    const double before = dot(v, av).real();
-    if (!(before > 0)) return;
-    for (size_t j = 0; j < kept.size(); ++j) {
-      const cplx c = dot(kept[j], av);
-      const cplx *w = kept[j].data(), *aw = kept_a[j].data();
-      for (size_t q = 0; q < nq; ++q) {
-        v[q] -= mul(c, w[q]);
-        av[q] -= mul(c, aw[q]);
-      }
-    }
-    const double after = dot(v, av).real();
-    if (!(after > kKeptNew * before)) return;
-    const double scale = 1 / std::sqrt(after);
-    for (size_t q = 0; q < nq; ++q) v[q] *= scale, av[q] *= scale;
-    if (kept.size() == most_kept) {
-      kept.erase(kept.begin());
-      kept_a.erase(kept_a.begin());
-    }
-    kept.push_back(std::move(v));
-    kept_a.push_back(std::move(av));
-  }
-  // Σ conj(a) b, and a·b, written out (std::complex's operator* checks for NaN).
-  static cplx dot(const std::vector<cplx>& a, const std::vector<cplx>& b) {
-    double re = 0, im = 0;
-    for (size_t q = 0; q < a.size(); ++q) {
-      re += a[q].real() * b[q].real() + a[q].imag() * b[q].imag();
-      im += a[q].real() * b[q].imag() - a[q].imag() * b[q].real();
-    }
-    return {re, im};
-  }
-  static cplx mul(cplx a, cplx b) {
-    return {a.real() * b.real() - a.imag() * b.imag(), a.real() * b.imag() + a.imag() * b.real()};
-  }
-  static constexpr double kKeptNew = 1e-8;  // of ‖v‖²_A: below it v adds nothing new
 };
 
 }  // namespace
@@ -1784,8 +1708,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   std::vector<cplx> cut_values, u, y_line, delta;
   std::vector<LocalSolve> local_solves;  // their vectors kept between rounds
   for (size_t si = 0; si < moving.size(); ++si)
-    local_solves.push_back({*op_, moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_,
-                            static_cast<size_t>(std::max(options.local_kept_corrections, 0)), {}, {}, {}, {}, {}, {}, {}});
+    local_solves.push_back({*op_, moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {}, {}, {}});
   std::vector<double> rr_delta;
   // What the local solves add to x on omega's rows and to the multipliers on the cut rows,
   // kept in frames (omega × count, cut × count per segment) and transformed into the modes

@@ -632,59 +632,6 @@ TEST(SpaceTime, LocalModesThatStopShortAreFinishedByCG) {
   }
 }
 
-// Each round's local solve starts from the Galerkin projection of its right-hand side on
-// the earlier rounds' corrections (SpaceTimeOptions::local_kept_corrections): the field is
-// the reference CG's either way, the fixed entries exact, the residual measured on the
-// assembled system within the tolerance, in as many rounds, and the local CG takes fewer
-// iterations than when every local solve starts from zero.
-TEST(SpaceTime, LocalSolvesStartFromTheEarlierRoundsCorrections) {
-  const Mesh grid = make_grid(GridSpec{41, 41, {-1.0, -1.0}, {1.0, 1.0}});
-  const int nf = 60;
-  const MovingDisc d = moving_disc(
-      grid, nf, 0.2, [&](int j) { return Vec3(-0.6 + 1.2 * j / (nf - 1), 0.1, 0); },
-      [](const Vec3& x, const Vec3& c) { return cplx(0, 1) * cplx(x.x() - c.x(), x.y() - c.y()); });
-  const TangentBundle bundle(grid);
-  const ConnectionLaplacian l = connection_laplacian(bundle);
-  const SpaceTimeSolver solver(l, nf, 30.0);
-  const std::vector<cplx> ref = reference_solve(solver, d);
-  const Eigen::SparseMatrix<cplx> a = assembled(l, nf, 30.0);
-  // "… local solves on N vertices (M iterations in all)": M.
-  auto local_iterations = [](const SolveReport& r) {
-    const auto at = r.method.find(" iterations in all)");
-    EXPECT_NE(at, std::string::npos) << r.method;
-    if (at == std::string::npos) return -1L;
-    const auto start = r.method.rfind('(', at);
-    return std::stol(r.method.substr(start + 1, at - start - 1));
-  };
-  long its[2] = {0, 0};
-  int rounds[2] = {0, 0};
-  for (const int kept : {0, 4}) {
-    std::vector<cplx> z(d.values.size(), cplx(0, 0));
-    solver.interpolate_in_time(d.fixed, d.values, z);
-    SpaceTimeOptions o;
-    o.method = SpaceTimeMethod::modes_local;
-    o.local_kept_corrections = kept;
-    const SolveReport r = solver.solve(d.fixed, d.values, z, o);
-    ASSERT_TRUE(r.success) << r.method;
-    EXPECT_EQ(r.method.find("finished by"), std::string::npos) << r.method;
-    EXPECT_LE(r.residual, 1e-10);
-    EXPECT_LT(relative_residual(a, d.fixed, z), 2e-10);
-    for (size_t k = 0; k < z.size(); ++k) {
-      if (d.fixed[k]) {
-        ASSERT_EQ(z[k], d.values[k]) << k;
-      }
-    }
-    double scale = 0;
-    const double diff = max_difference(ref, z, scale);
-    EXPECT_LT(diff, 1e-8 * scale) << kept;
-    its[kept ? 1 : 0] = local_iterations(r);
-    rounds[kept ? 1 : 0] = r.iterations;
-    std::printf("%d kept corrections: %s\n", kept, r.method.c_str());
-  }
-  EXPECT_LE(rounds[1], rounds[0]);
-  EXPECT_LT(its[1], its[0]) << its[0] << " " << its[1];
-}
-
 // modes_local with two segments of different kinds (a key frame at frame 0 and one in the
 // middle: Dirichlet–Dirichlet, then Dirichlet–Neumann up to the last frame), a disc moving
 // through both, and an element that stays put (in the segments' common fixed set).

@@ -94,12 +94,6 @@ struct SpaceTimeOptions {
   // than 0.7 of the last one's residual) the rounds stop and CG finishes the solve from
   // where they are (the report's method then says "finished by").
   int most_rounds = 40;
-  // modes_local only: each round's local solve starts from the Galerkin projection of its
-  // right-hand side on the corrections of this many earlier rounds (the rounds' corrections
-  // are nearly multiples of each other: 61 local CG iterations became 47 on the 65² grid
-  // with a moving vortex, docs/benchmarks.md). 0: every local solve starts from zero (the
-  // method before, kept as the benchmarks' baseline).
-  int local_kept_corrections = 4;
 
   // The temporal-mode methods: modes whose shift b·λ_k is below this have their spatial
   // system (L + b·λ_k·D on the free vertices) solved with a sparse Cholesky factorization
