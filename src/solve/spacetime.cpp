@@ -1808,7 +1808,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   long local_iterations = 0;
   bool stalled = false;
   double theta = 0;  // the problem's residual after the last local solve
-  std::vector<cplx> cut_values, u, y_omega, y_outer, delta;
+  std::vector<cplx> cut_values, u, y_line, delta;
   std::vector<LocalSolve> local_solves;  // their vectors kept between rounds
   for (size_t si = 0; si < moving.size(); ++si)
     local_solves.push_back({*op_, moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {}, {}, {}});
@@ -1841,21 +1841,35 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       }
       LocalSolve& solve = local_solves[si];
       local_iterations += solve.solve(u, kMovingLocalTolerance, local_floor2, kMovingLocalIterations);
-      y_omega.resize(u.size());
-      for (size_t li = 0; li < m.omega.size(); ++li) solve.product(u.data(), li, y_omega.data() + li * count);
-      y_outer.assign(m.outer.size() * count, cplx(0, 0));
-      for (size_t oi = 0; oi < m.outer.size(); ++oi)
+      for (size_t k = 0; k < u.size(); ++k) xl[k] += u[k];
+      // The multipliers take (A u) at the constraint entries, on the cut vertices' lines.
+      std::vector<cplx>& ll = lambda_local[si];
+      y_line.resize(count);
+      for (size_t r = 0; r < m.cut.size(); ++r) {
+        const auto li = static_cast<size_t>(m.cut_local[r]);
+        solve.product(u.data(), li, y_line.data());
+        for (size_t jj = 0; jj < count; ++jj)
+          if (m.moving[li * count + jj]) ll[r * count + jj] += y_line[jj];
+      }
+      // The residual's change, −(A u), into the modes: on omega's free entries the local
+      // CG's own residual (A u = 0 there is what it solved), on the ring around omega what
+      // leaks out.
+      const size_t no = u.size();
+      delta.assign(no + m.outer.size() * count, cplx(0, 0));
+      std::copy(solve.r.begin(), solve.r.end(), delta.begin());
+      for (size_t oi = 0; oi < m.outer.size(); ++oi) {
+        double* d = reinterpret_cast<double*>(delta.data() + no + oi * count);
         for (int e = m.outer_start[oi]; e < m.outer_start[oi + 1]; ++e) {
           const cplx v = m.outer_value[static_cast<size_t>(e)];
-          const cplx* uc = u.data() + static_cast<size_t>(m.outer_column[static_cast<size_t>(e)]) * count;
-          for (size_t jj = 0; jj < count; ++jj) y_outer[oi * count + jj] += v * uc[jj];
+          const double vr = v.real(), vi = v.imag();
+          const double* uc =
+              reinterpret_cast<const double*>(u.data() + static_cast<size_t>(m.outer_column[static_cast<size_t>(e)]) * count);
+          for (size_t jj = 0; jj < count; ++jj) {
+            d[2 * jj] -= vr * uc[2 * jj] - vi * uc[2 * jj + 1];
+            d[2 * jj + 1] -= vr * uc[2 * jj + 1] + vi * uc[2 * jj];
+          }
         }
-      for (size_t k = 0; k < u.size(); ++k) xl[k] += u[k];
-      // The residual's change on omega's and outer's rows together (one product).
-      rr_delta.assign(count, 0.0);
-      delta.resize(u.size() + y_outer.size());
-      for (size_t k = 0; k < u.size(); ++k) delta[k] = m.moving[k] ? cplx(0, 0) : -y_omega[k];
-      for (size_t k = 0; k < y_outer.size(); ++k) delta[u.size() + k] = -y_outer[k];
+      }
       if (change) {
         // Solving for the change: the leak's rows join every mode's active rows first (the
         // rows outside them must keep what the last solve left).
@@ -1877,16 +1891,8 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
             }
         }
       }
+      rr_delta.assign(count, 0.0);
       add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data(), change ? &w.e_hat[si] : nullptr);
-      // The multipliers, on the cut vertices' rows (the only ones with constraint entries).
-      std::vector<cplx>& ll = lambda_local[si];
-      for (size_t r = 0; r < m.cut.size(); ++r) {
-        const auto li = static_cast<size_t>(m.cut_local[r]);
-        for (size_t jj = 0; jj < count; ++jj) {
-          const size_t qi = li * count + jj;
-          if (m.moving[qi]) ll[r * count + jj] += y_omega[qi];
-        }
-      }
       for (size_t k = 0; k < count; ++k) {
         Mode& mode = modes[mode_offset[si] + k];
         mode.rr = std::max(mode.rr + rr_delta[k], 0.0);
