@@ -153,5 +153,37 @@ TEST(CliKeyframeTopology, Example26KnotIsRoutedTogether) {
   }
 }
 
+// Example 26's knot_sphere.json: the knot on a sphere, every singularity of both key frames
+// matched, so the interval is guided on the surface (SurfaceGuide). The analysis finds four
+// singularities in every frame (index sum 2, the sphere's) and no saddle–node event (the
+// center's Hopf events are its phase turning, docs/architecture.md).
+TEST(CliKeyframeTopology, Example26KnotOnASphereIsGuided) {
+  test::TempDir dir;
+  const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/knot_sphere.json";
+  const auto g = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+  EXPECT_NE(g.output.find("4 matched"), std::string::npos) << g.output;
+  std::ifstream in(dir / "out" / "keyframe_topology.json");
+  const nlohmann::json i = nlohmann::json::parse(in).at("intervals").at(0);
+  EXPECT_TRUE(i.at("guided").get<bool>()) << i;
+  EXPECT_TRUE(i.at("created").empty() && i.at("cancelled").empty()) << i;
+  const auto a = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json") + " --no-plots");
+  ASSERT_EQ(a.exit_code, 0) << a.output;
+  EXPECT_NE(a.output.find("0 bifurcations planned, 0 not asked for"), std::string::npos) << a.output;
+  std::ifstream ain(dir / "a.json");
+  const nlohmann::json analysis = nlohmann::json::parse(ain);
+  std::vector<int> count(32, 0), index_sum(32, 0);
+  for (const auto& s : analysis.at("singularities")) {
+    const auto f = s.at("frame").get<size_t>();
+    ++count.at(f);
+    index_sum.at(f) += s.at("index").get<int>();
+  }
+  for (size_t f = 0; f < count.size(); ++f) {
+    EXPECT_EQ(count[f], 4) << "frame " << f;
+    EXPECT_EQ(index_sum[f], 2) << "frame " << f;
+  }
+  for (const auto& b : analysis.at("bifurcations")) EXPECT_EQ(b.at("kind"), "hopf") << b;
+}
+
 }  // namespace
 }  // namespace tvf
