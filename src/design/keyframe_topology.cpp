@@ -162,6 +162,17 @@ struct KeyframeTopologyPlan::Guide {
   std::vector<Pair> pairs;
   std::vector<cplx> h0, log_q;           // per vertex
   std::vector<std::vector<cplx>> lambda;  // per track of [first, last): λ at kTable + 1 times (empty: a pair's)
+  // A created or cancelled pair's node held to its key frame's type: λ = i times the turn
+  // of G's α at the node since that key frame, at kTable + 1 times over [a, b] (where the
+  // node is: between t_c and that key frame), one more of the nodes Λ interpolates; before
+  // its birth (after its death) a node at the template's middle whose λ goes from Λ's value
+  // there without it, at the other key frame, to the node's λ at t_c. Empty: not held (G's
+  // α had no direction somewhere).
+  struct PairPhase {
+    double a = 0, b = 0;
+    std::vector<double> turn;
+  };
+  std::vector<PairPhase> pair_phase;  // per pair
 };
 
 // One interval's guide field on a surface, where no product of scalar factors has the
@@ -384,6 +395,80 @@ cplx guide_h(const Mesh& mesh, const Guide& g, const SurfacePoint& at, double u)
   return h0 * std::exp(u * lq);
 }
 
+// The matched tracks' λ at time t, per factor (0 for the others).
+std::vector<cplx> factor_lambda(const Guide& g, const std::vector<Factor>& factors, double t) {
+  const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * Guide::kTable;
+  const auto k = std::min(static_cast<size_t>(x), static_cast<size_t>(Guide::kTable - 1));
+  std::vector<cplx> lambda(factors.size(), cplx(0, 0));
+  for (size_t m = 0; m < factors.size(); ++m)
+    if (factors[m].track >= 0 && !g.lambda[static_cast<size_t>(factors[m].track)].empty()) {
+      const std::vector<cplx>& l = g.lambda[static_cast<size_t>(factors[m].track)];
+      lambda[m] = l[k] + (x - static_cast<double>(k)) * (l[k + 1] - l[k]);
+    }
+  return lambda;
+}
+
+// Λ(z): the nodes' λ, interpolated by Shepard's weights |z − p|⁻⁴ (Λ(p_j) = λ_j with zero
+// slope there). Saddles keep their type whatever the phase: G's own (their axes turn with
+// the neighbourhood, and no linear region is blended in, which for a weak saddle made
+// zeros where G's quadratic terms take over).
+struct PhaseNode {
+  cplx p, lambda;
+};
+cplx shepard(const std::vector<PhaseNode>& nodes, double radius, cplx z) {
+  cplx num{0, 0};
+  double den = 0;
+  for (const PhaseNode& n : nodes) {
+    const double w = 1 / std::pow(std::max(std::abs(z - n.p), 1e-12 * radius), 4);
+    num += w * n.lambda;
+    den += w;
+  }
+  return den > 0 ? num / den : cplx(0, 0);
+}
+
+// A created or cancelled pair's node at time t (world plane), where it is: on its track
+// while that holds, else the template's zero on +axis, √−μ from its middle.
+std::optional<cplx> pair_node(const std::vector<Track>& tracks, const Guide::Pair& pr, double t) {
+  if (pr.cancel ? t > pr.tc : t < pr.tc) return std::nullopt;
+  const double a = pr.tc - pr.tau, b = pr.tc + pr.tau;
+  if (pr.cancel ? t <= a : t >= b) {
+    const Track& tr = tracks[pr.node];
+    return flat(tr.raw(tr.param(t)));
+  }
+  const double u = smoothstep01(t, a, b);
+  const double mu = pr.s * pr.s * (pr.cancel ? 2 * u - 1 : 1 - 2 * u);
+  return pr.mid + pr.axis * std::sqrt(std::max(-mu, 0.0));
+}
+
+// The nodes whose phase Λ holds at time t: the matched nodes (their λ tabled) and the
+// created or cancelled pairs' (PairPhase).
+std::vector<PhaseNode> phase_nodes(const std::vector<Track>& tracks, const Guide& g,
+                                   const std::vector<Factor>& factors, double t) {
+  std::vector<PhaseNode> nodes;
+  const std::vector<cplx> lambda = factor_lambda(g, factors, t);
+  for (size_t m = 0; m < factors.size(); ++m)
+    if (factors[m].track >= 0 && factors[m].index > 0) nodes.push_back({factors[m].p, lambda[m]});
+  const size_t matched = nodes.size();
+  for (size_t q = 0; q < g.pair_phase.size(); ++q) {
+    const Guide::PairPhase& ph = g.pair_phase[q];
+    if (ph.turn.empty()) continue;
+    const Guide::Pair& pr = g.pairs[q];
+    if (const auto p = pair_node(tracks, pr, t)) {
+      const double x = std::clamp((t - ph.a) / (ph.b - ph.a), 0.0, 1.0) * Guide::kTable;
+      const auto k = std::min(static_cast<size_t>(x), static_cast<size_t>(Guide::kTable - 1));
+      nodes.push_back({*p, cplx(0, ph.turn[k] + (x - static_cast<double>(k)) * (ph.turn[k + 1] - ph.turn[k]))});
+    } else {
+      // Not born yet (or dead): at the template's middle, from what Λ is there without it
+      // (at the other key frame, where the matched nodes' λ is 0) to its λ at t_c.
+      const std::vector<PhaseNode> others(nodes.begin(), nodes.begin() + static_cast<std::ptrdiff_t>(matched));
+      const double r = pr.cancel ? smoothstep01(t, g.t1, pr.tc) : smoothstep01(t, g.t0, pr.tc);
+      const cplx at_tc(0, pr.cancel ? ph.turn.back() : ph.turn.front());
+      nodes.push_back({pr.mid, r * at_tc + (1 - r) * shepard(others, g.radius, pr.mid)});
+    }
+  }
+  return nodes;
+}
+
 // Fills h₀, log q and λ of a guide whose tracks, pairs and times are set; false when a
 // key frame's field has a zero the factors do not (then the interval is left to the
 // regions and the solve).
@@ -497,6 +582,40 @@ bool build_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
       lam.push_back(logc[i][static_cast<size_t>(k)] - ((1 - u) * a0 + u * b0));
     }
   }
+  // The pairs' nodes: the argument of G's α at the node (G without Λ, as for the matched
+  // nodes' c; α by central differences: G(p + ε) ≈ αε + β conj ε), unwrapped, less its
+  // value at the key frame where the pair is (there G is that key frame, whose type the
+  // node keeps).
+  const double delta = 1e-4 * mesh.mean_edge_length();
+  g.pair_phase.assign(g.pairs.size(), {});
+  for (size_t q = 0; q < g.pairs.size(); ++q) {
+    const Guide::Pair& pr = g.pairs[q];
+    Guide::PairPhase& ph = g.pair_phase[q];
+    ph.a = pr.cancel ? g.t0 : pr.tc;
+    ph.b = pr.cancel ? pr.tc : g.t1;
+    std::vector<double> arg;
+    for (int k = 0; k <= Guide::kTable; ++k) {
+      const double t = ph.a + (ph.b - ph.a) * k / Guide::kTable;
+      const std::vector<Factor> factors = guide_factors(space, tracks, g, t);
+      const double u = smoothstep01(t, g.t0, g.t1);
+      const cplx p = pair_node(tracks, pr, t).value_or(pr.mid);
+      auto value = [&](cplx z) {
+        cplx val = guide_h(mesh, g, space.locate(Vec3(z.real(), z.imag(), 0)), u);
+        for (const Factor& fa : factors) val *= fa(z);
+        return val;
+      };
+      const cplx alpha = ((value(p + delta) - value(p - delta)) - cplx(0, 1) * (value(p + cplx(0, delta)) - value(p - cplx(0, delta)))) /
+                         (4 * delta);
+      if (!(std::abs(alpha) > 0) || !std::isfinite(std::abs(alpha))) {
+        arg.clear();
+        break;
+      }
+      arg.push_back(arg.empty() ? std::arg(alpha) : arg.back() + std::remainder(std::arg(alpha) - arg.back(), 2 * std::numbers::pi));
+    }
+    if (arg.empty()) continue;
+    const double key = pr.cancel ? arg.front() : arg.back();
+    for (const double a : arg) ph.turn.push_back(a - key);
+  }
   return true;
 }
 
@@ -507,33 +626,11 @@ void apply_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
   const TangentBundle& bundle = space.bundle();
   const std::vector<Factor> factors = guide_factors(space, tracks, g, t);
   const double u = smoothstep01(t, g.t0, g.t1);
-  const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * Guide::kTable;
-  const auto k = std::min(static_cast<size_t>(x), static_cast<size_t>(Guide::kTable - 1));
-  std::vector<cplx> lambda(factors.size(), cplx(0, 0));
-  for (size_t m = 0; m < factors.size(); ++m)
-    if (factors[m].track >= 0) {
-      const std::vector<cplx>& l = g.lambda[static_cast<size_t>(factors[m].track)];
-      lambda[m] = l[k] + (x - static_cast<double>(k)) * (l[k + 1] - l[k]);
-    }
+  const std::vector<PhaseNode> nodes = phase_nodes(tracks, g, factors, t);
   // The tracks' own linear fields within `outer` (G's nonlinear terms matter farther out
   // for a weak saddle): the whole face around the point inside `inner`.
   const double h = mesh.mean_edge_length();
   const double inner = std::min(0.7 * g.radius, 1.5 * h), outer = std::min(g.radius, 2.5 * h);
-  // Λ(z): the nodes' λ, interpolated by Shepard's weights |z − p|⁻⁴ (Λ(p_j) = λ_j with zero
-  // slope there). Saddles keep their type whatever the phase: G's own (their axes turn
-  // with the neighbourhood, and no linear region is blended in, which for a weak saddle
-  // made zeros where G's quadratic terms take over).
-  auto shepard = [&](cplx z) {
-    cplx num{0, 0};
-    double den = 0;
-    for (size_t m = 0; m < factors.size(); ++m) {
-      if (factors[m].track < 0 || factors[m].index <= 0) continue;
-      const double w = 1 / std::pow(std::max(std::abs(z - factors[m].p), 1e-12 * g.radius), 4);
-      num += w * lambda[m];
-      den += w;
-    }
-    return den > 0 ? num / den : cplx(0, 0);
-  };
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     const auto vi = static_cast<size_t>(v);
     if (fixed[vi]) continue;
@@ -547,7 +644,7 @@ void apply_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
       const double r = std::abs(z - factors[m].p);
       if (r < rn) rn = r, nearest = m;
     }
-    val *= std::exp(-shepard(z));
+    val *= std::exp(-shepard(nodes, g.radius, z));
     if (nearest < factors.size() && factors[nearest].index > 0 && rn < outer) {
       const double w = rn <= inner ? 1.0 : smoothstep01(rn, outer, inner);
       val = w * factors[nearest](z) + (1 - w) * val;
@@ -555,6 +652,34 @@ void apply_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
     fixed[vi] = 1;
     values[vi] = bundle.world_to_vertex(v, Vec3(val.real(), val.imag(), 0));
   }
+}
+
+// The pairs' holds turn G by Λ, which then varies between a pair's node and the matched
+// nodes near it by what each turned (a sink passing round a cancelled pair's source: 2.1
+// against −1.6 radians about 0.3 apart), and where G is small (round a template) the
+// piecewise-linear field then holds extra zeros. So they are kept only where they do no
+// harm, by measurement as on surfaces: G with and without them at 31 times, the holds
+// dropped when their frames hold other than the plan's zeros more often.
+void keep_pair_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& tracks, Guide& g) {
+  if (std::all_of(g.pair_phase.begin(), g.pair_phase.end(), [](const Guide::PairPhase& ph) { return ph.turn.empty(); }))
+    return;
+  const auto nv = static_cast<size_t>(space.mesh().num_vertices());
+  auto wrong_frames = [&](const Guide& guide) {
+    int wrong = 0;
+    for (int k = 1; k < 32; ++k) {
+      const double t = guide.t0 + (guide.t1 - guide.t0) * k / 32.0;
+      size_t planned = guide.last - guide.first;
+      for (const Guide::Pair& pr : guide.pairs) planned -= pair_node(tracks, pr, t) ? 0 : 2;
+      std::vector<char> fixed(nv, 0);
+      std::vector<cplx> values(nv, cplx(0, 0));
+      apply_guide(space, tracks, guide, t, fixed, values);
+      if (find_singularities(space.bundle(), values).size() != planned) ++wrong;
+    }
+    return wrong;
+  };
+  Guide plain = g;
+  plain.pair_phase.clear();
+  if (wrong_frames(g) > wrong_frames(plain)) g.pair_phase.clear();
 }
 
 using SurfaceGuide = KeyframeTopologyPlan::SurfaceGuide;
@@ -1768,6 +1893,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         guide.last > guide.first &&
         build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], guide)) {
+      keep_pair_phase_if_resolved(space, tracks_, guide);
       for (size_t i = guide.first; i < guide.last; ++i) tracks_[i].guided = true;
       for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
       rep.guided = true;
