@@ -735,14 +735,15 @@ cplx face_alpha(const DesignSpace& space, int f, const std::array<cplx, 3>& w) {
 
 // Builds a surface guide for the tracks [first, last) (spanning [t0, t1]; the tracks of
 // `pairs` are created or cancelled pairs', the others matched); false when a path leaves
-// its chart or a key frame's field has a zero no track carries.
+// its chart or a key frame's field has a zero no track carries. `ramp` widens the band
+// where the factors' weights fall from 1 to 0.
 bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, size_t first, size_t last,
-                         const std::vector<Guide::Pair>& pairs, double radius, const std::vector<cplx>& f0,
-                         const std::vector<cplx>& f1, SurfaceGuide& g) {
+                         const std::vector<Guide::Pair>& pairs, double radius, double ramp,
+                         const std::vector<cplx>& f0, const std::vector<cplx>& f1, SurfaceGuide& g) {
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   const double h = mesh.mean_edge_length();
-  const double inner = std::max(radius, 1.5 * h), outer = inner + std::max(radius, 2 * h);
+  const double inner = std::max(radius, 1.5 * h), outer = inner + ramp * std::max(radius, 2 * h);
   auto samples = [&](const Track& tr) {
     std::vector<SurfacePoint> on(SurfaceGuide::kSamples + 1);
     for (int k = 0; k <= SurfaceGuide::kSamples; ++k)
@@ -991,8 +992,8 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
 // A surface guide is kept only when at most this many of the 31 frames keep_phase_if_resolved
 // samples hold another number of singularities than the plan carries; else the interval
 // is left to the regions and the solve, as unguided. (The knot with a created pair at
-// subdivisions 4, whose matched saddle and focus move across it: 12 frames, 135
-// bifurcations guided against 19 unguided; every scene the tests guide: 0.)
+// subdivisions 4, whose matched saddle and focus move across it, with the narrow ramp:
+// 12 frames, 135 bifurcations against 19 unguided; every scene the tests guide: 0.)
 constexpr int kMaxWrongFrames = 2;
 
 int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& tracks, SurfaceGuide& g,
@@ -1948,18 +1949,30 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     }
     // Surfaces: the first key frame's field carried along the paths (SurfaceGuide), where
     // every singularity of both key frames is matched or in a created or cancelled pair.
+    // Where its frames hold extra zeros, the guide is built again with the weights' ramp
+    // twice as wide (a long path's log R changes by ~|log R| across it, which two edge
+    // lengths did not resolve beside the knot with a pair; the wider tube does not fit
+    // every coarse mesh, so it is the second try), and the one with fewer kept.
     if (!space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         tracks_.size() > first_track) {
-      SurfaceGuide sg;
-      sg.t0 = rep.t0;
-      sg.t1 = rep.t1;
-      if (build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
-                              keyframe_fields[k], keyframe_fields[k + 1], sg) &&
-          keep_phase_if_resolved(space, tracks_, sg, rep.matched.size()) <= kMaxWrongFrames) {
+      std::optional<SurfaceGuide> best;
+      int best_wrong = kMaxWrongFrames + 1;
+      for (const double ramp : {1.0, 2.0}) {
+        SurfaceGuide sg;
+        sg.t0 = rep.t0;
+        sg.t1 = rep.t1;
+        if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
+                                 ramp, keyframe_fields[k], keyframe_fields[k + 1], sg))
+          continue;
+        const int wrong = keep_phase_if_resolved(space, tracks_, sg, rep.matched.size());
+        if (wrong < best_wrong) best = std::move(sg), best_wrong = wrong;
+        if (best_wrong == 0) break;
+      }
+      if (best) {
         for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].guided = true;
         for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
         rep.guided = true;
-        surface_guides_.push_back(std::move(sg));
+        surface_guides_.push_back(std::move(*best));
       }
     }
     intervals_.push_back(std::move(rep));
