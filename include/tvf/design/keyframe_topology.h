@@ -98,7 +98,7 @@ struct KeyframeIntervalReport {
   std::string routing = "straight";
   // The frames strictly between the two key frames are the interval's guide field: a
   // field whose zeros are the plan's alone (keyframe_topology.cpp, Guide; on surfaces
-  // SurfaceGuide, where every singularity is matched), so the analysis finds no
+  // SurfaceGuide, where every singularity is matched or in a created or cancelled pair),
   // bifurcation but the planned ones.
   bool guided = false;
 };
