@@ -99,7 +99,7 @@ struct KeyframeIntervalReport {
   // The frames strictly between the two key frames are the interval's guide field: a
   // field whose zeros are the plan's alone (keyframe_topology.cpp, Guide; on surfaces
   // SurfaceGuide, where every singularity is matched or in a created or cancelled pair),
-  // bifurcation but the planned ones.
+  // so the analysis finds no bifurcation but the planned ones.
   bool guided = false;
 };
 
