@@ -98,8 +98,8 @@ struct KeyframeIntervalReport {
   std::string routing = "straight";
   // The frames strictly between the two key frames are the interval's guide field: a
   // field whose zeros are the plan's alone (keyframe_topology.cpp, Guide; on surfaces
-  // SurfaceGuide, where every singularity is matched), so the analysis finds no
-  // bifurcation but the planned ones.
+  // SurfaceGuide, where every singularity is matched or in a created or cancelled pair),
+  // so the analysis finds no bifurcation but the planned ones.
   bool guided = false;
 };
 
