@@ -44,10 +44,11 @@
 //     key frames at the ends, the matched nodes' types held; so the analysis finds no
 //     bifurcation but the planned ones. On surfaces (SurfaceGuide) the first key frame's
 //     field carried along the paths: each matched singularity's zero moved by a ratio
-//     factor (z − p(t)) / (z − p(t₀)) in a log-map chart around its path, blended to 1
-//     outside a tube round the path, then turned into the second key frame's field by a
-//     zero-free factor; only in intervals where every singularity is matched. Not in an
-//     interval with a singularity left unpaired or paths that could not be kept apart.
+//     factor (z − p(t)) / (z − p(t₀)) in a projection chart around its path, blended to 1
+//     outside a tube round the path, each created or cancelled pair's template likewise
+//     as a ratio, then turned into the second key frame's field by a zero-free factor.
+//     Not in an interval with a singularity left unpaired or paths that could not be
+//     kept apart.
 // Key frames themselves are unchanged. What could not be paired (an odd singularity out,
 // e.g. one that must leave through the boundary) is left to the solve and reported.
 #include "tvf/analysis/singularities.h"
