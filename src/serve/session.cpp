@@ -280,6 +280,10 @@ struct Session::State {
   void schedule() {
     if (cancel) cancel->store(true);
     stop_analysis();
+    // A new scene's solve that the worker has not taken yet (put_scene) is of an older
+    // revision now (an undo or redo came before the worker did): taken, its field would be
+    // dropped and the current revision never solved.
+    if (next_job && next_job->revision() != design->revision()) next_job.reset();
     pending = true;
     state = "running";
     error.clear();
@@ -451,7 +455,7 @@ struct Session::State {
       analysing = 0;
       // A newer change came meanwhile: a newer result, or one on its way (then this
       // analysis starts again if that change's solve fails).
-      if (stopped || result != r) {
+      if (stopped || flag->load() || result != r) {  // (flagged after its last check: dropped too)
         if (flag->load()) count_stopped(r->revision);
         continue;
       }
