@@ -197,8 +197,11 @@ public:
     exponent_.resize(static_cast<size_t>(field_.frames()));
   }
 
-  void compute_exponents(bool parallel) {
-    auto body = [&](int j) { exponent_[static_cast<size_t>(j)] = frame_exponent(mesh_, field_.frame(j), j); };
+  void compute_exponents(bool parallel, const std::atomic<bool>* cancel) {
+    auto body = [&](int j) {
+      check_analysis_cancel(cancel);
+      exponent_[static_cast<size_t>(j)] = frame_exponent(mesh_, field_.frame(j), j);
+    };
     if (parallel)
       tbb::parallel_for(0, field_.frames(), body);
     else
@@ -207,7 +210,7 @@ public:
 
   // Crossings and tetrahedron links of the slabs j0..j1−1 (slab j: frames j and j+1), in
   // order, so that each frame is scaled and its edges tested once.
-  void slabs(int j0, int j1, std::vector<SlabResult>& results) const {
+  void slabs(int j0, int j1, std::vector<SlabResult>& results, const std::atomic<bool>* cancel) const {
     const int ne = mesh_.num_edges();
     const int nv = mesh_.num_vertices();
     std::vector<cplx> z0, z1;
@@ -225,6 +228,7 @@ public:
     normalize_frame(field_.frame(j0), exponent_[static_cast<size_t>(j0)], z0);
     frame_flags(z0, large0);
     for (int j = j0; j < j1; ++j) {
+      check_analysis_cancel(cancel);
       normalize_frame(field_.frame(j + 1), exponent_[static_cast<size_t>(j + 1)], z1);
       frame_flags(z1, large1);
       for (int e = 0; e < ne; ++e) {
@@ -539,7 +543,7 @@ Topology analyze_topology(const TangentBundle& bundle, const Field& field, const
   topo.singularity_path.resize(static_cast<size_t>(N));
   if (N == 0) return topo;
   Tracker tracker(bundle, field);
-  tracker.compute_exponents(options.parallel);  // throws on non-finite values
+  tracker.compute_exponents(options.parallel, options.cancel);  // throws on non-finite values
   topo.coherence = coherence(field);
 
   // One frame: every singularity is a path of one point.
@@ -565,10 +569,11 @@ Topology analyze_topology(const TangentBundle& bundle, const Field& field, const
   if (options.parallel) {
     // Runs of at least 4 slabs, so that each run scales and tests most frames once.
     tbb::parallel_for(tbb::blocked_range<int>(0, N - 1, 4),
-                      [&](const tbb::blocked_range<int>& r) { tracker.slabs(r.begin(), r.end(), slabs); });
+                      [&](const tbb::blocked_range<int>& r) { tracker.slabs(r.begin(), r.end(), slabs, options.cancel); });
   } else {
-    tracker.slabs(0, N - 1, slabs);
+    tracker.slabs(0, N - 1, slabs, options.cancel);
   }
+  check_analysis_cancel(options.cancel);
 
   // Nodes: one per crossing slot (the prisms on both sides of a triangle report it).
   std::vector<Crossing> all;

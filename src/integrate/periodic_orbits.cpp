@@ -384,6 +384,7 @@ PeriodicOrbits find_periodic_orbits(const TangentBundle& bundle, const Field& fi
             topology.singularities.size(), N);
   std::vector<std::vector<PeriodicOrbit>> frames(static_cast<size_t>(N));
   auto one = [&](int j) {
+    check_analysis_cancel(options.cancel);
     frames[static_cast<size_t>(j)] =
         find_frame_orbits(bundle, field.frame(j), topology.singularities[static_cast<size_t>(j)], options);
   };
@@ -391,6 +392,7 @@ PeriodicOrbits find_periodic_orbits(const TangentBundle& bundle, const Field& fi
     tbb::parallel_for(0, N, one);
   else
     for (int j = 0; j < N; ++j) one(j);
+  check_analysis_cancel(options.cancel);
   const double distance = options.track_distance * bundle.mesh().mean_edge_length();
   track_orbits(frames, distance);
   PeriodicOrbits out;

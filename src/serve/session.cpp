@@ -181,6 +181,7 @@ struct Session::State {
   std::string error;
   int done = 0, total = 0;
   long long cancelled = 0;  // solves stopped because a newer change came
+  bool solving = false;     // the worker runs a solve (the analysis thread waits meanwhile)
   std::shared_ptr<const Result> result;
   long long domains = 0;           // domains the results have lived on so far (Result::domain)
   long long analysed_revision = 0;  // the revision of the last analysis published
@@ -207,6 +208,26 @@ struct Session::State {
   bool saved_already = false;  // before_change: the scene about to be set is on disk
   std::condition_variable analysis_work;  // a result without its analysis was published
   std::thread analyst;
+  // The running analysis's flag (run_analyst): set when a newer change makes its field
+  // obsolete. `analyses_stopped` counts the results whose analysis a newer change stopped
+  // or kept from starting (each revision once: `stopped_revision`, the last one counted).
+  std::shared_ptr<std::atomic<bool>> analysis_cancel;
+  long long analysing = 0;  // the revision of the result it analyses (0: none)
+  long long analyses_stopped = 0, stopped_revision = 0;
+  void count_stopped(long long revision) {
+    if (revision == stopped_revision) return;
+    ++analyses_stopped;
+    stopped_revision = revision;
+  }
+  // A newer change is coming or came: the running analysis (of the result about to be
+  // replaced) stops, so that it does not take a core from the change's solve; the analysis
+  // thread then waits for the worker (a solve that fails leaves the result as it was, and
+  // its analysis starts again). Caller holds `mutex`.
+  void stop_analysis() {
+    if (analysis_cancel) analysis_cancel->store(true);
+  }
+  // A newer change is on its way: a solve waits or runs, or a new scene is being saved.
+  bool busy() const { return pending || solving || upcoming != 0; }
 
   bool interrupted = false;  // interrupt(): waits end at once
   // Counts the changes of status() that GET /api/events pushes: the revision, the
@@ -258,6 +279,11 @@ struct Session::State {
   // Caller holds `mutex`.
   void schedule() {
     if (cancel) cancel->store(true);
+    stop_analysis();
+    // A new scene's solve that the worker has not taken yet (put_scene) is of an older
+    // revision now (an undo or redo came before the worker did): taken, its field would be
+    // dropped and the current revision never solved.
+    if (next_job && next_job->revision() != design->revision()) next_job.reset();
     pending = true;
     state = "running";
     error.clear();
@@ -276,6 +302,7 @@ struct Session::State {
       work.wait(lock, [&] { return pending || stop; });
       if (stop) return;
       pending = false;
+      solving = true;
       // The solve of a new scene being saved (put_scene), or of the current scene.
       Design::Solve job = next_job ? std::move(*next_job) : design->prepare_solve();
       next_job.reset();
@@ -333,6 +360,8 @@ struct Session::State {
       }
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       lock.lock();
+      solving = false;
+      analysis_work.notify_one();  // the analysis thread waits for an idle worker
       if (stopped) ++cancelled;
       const long long job_revision = job.revision();
       if (job_revision != design->revision()) {
@@ -371,34 +400,50 @@ struct Session::State {
     if (!result || &result->space() != &r->space()) ++domains;
     r->domain = domains;
     if (r->analysed()) analysed_revision = r->revision;
+    // The analysis of the result replaced here stops if it runs (run_analyst counts it),
+    // and is counted here if it never started.
+    stop_analysis();
+    if (result && result->revision != analysing && !result->analysed() && result->analysis_error.empty())
+      count_stopped(result->revision);
     result = std::move(r);
     if (!result->analysed()) analysis_work.notify_one();
   }
 
   // The analysis thread: the topology and periodic orbits of the newest result, made while
-  // the worker solves the next change (a change never waits for the analysis of the one
-  // before), published as a copy of the Result with them. An analysis overtaken by a newer
-  // result is dropped. It runs on this thread alone (not TBB's workers) at a lower
-  // priority (nice 10): on a busy machine the next solve and the requests for the new
+  // no solve runs, published as a copy of the Result with them. A change never waits for
+  // the analysis of the one before: a newer change stops it (stop_analysis; its field is
+  // about to be replaced, its analysis would be dropped) and it waits until the worker is
+  // idle, then analyses the newest result. It runs on this thread alone (not TBB's
+  // workers) at a lower priority (nice 10): on a busy machine the requests for the new
   // picture go first.
   void run_analyst() {
     ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);  // best effort: a failure changes nothing
     std::unique_lock lock(mutex);
     for (;;) {
-      analysis_work.wait(lock, [&] { return stop || (result && !result->analysed() && result->analysis_error.empty()); });
+      analysis_work.wait(lock, [&] {
+        return stop || (result && !result->analysed() && result->analysis_error.empty() && !busy());
+      });
       if (stop) return;
       const std::shared_ptr<const Result> r = result;
+      const auto flag = std::make_shared<std::atomic<bool>>(false);
+      analysis_cancel = flag;
+      analysing = r->revision;
       lock.unlock();
       auto made = std::make_shared<Analysis>();
       std::string failure;
+      bool stopped = false;
       const auto start = std::chrono::steady_clock::now();
       try {
         TopologyOptions to;
         to.parallel = false;
+        to.cancel = flag.get();
         made->topology = analyze_topology(r->space().bundle(), r->field(), to);
         PeriodicOrbitOptions po;
         po.parallel = false;
+        po.cancel = flag.get();
         made->orbits = find_periodic_orbits(r->space().bundle(), r->field(), made->topology, po);
+      } catch (const AnalysisCancelled&) {
+        stopped = true;
       } catch (const std::bad_alloc&) {
         failure = "the analysis needs more memory than this machine has";
       } catch (const std::exception& e) {
@@ -406,7 +451,14 @@ struct Session::State {
       }
       made->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       lock.lock();
-      if (result != r) continue;  // a newer result (or an edit) came meanwhile
+      analysis_cancel.reset();
+      analysing = 0;
+      // A newer change came meanwhile: a newer result, or one on its way (then this
+      // analysis starts again if that change's solve fails).
+      if (stopped || flag->load() || result != r) {  // (flagged after its last check: dropped too)
+        if (flag->load()) count_stopped(r->revision);
+        continue;
+      }
       auto next = std::make_shared<Result>(*r);
       if (failure.empty()) {
         next->analysis = std::move(made);
@@ -515,6 +567,7 @@ Session::~Session() {
     s_->stop = true;
     s_->interrupted = true;
     if (s_->cancel) s_->cancel->store(true);
+    s_->stop_analysis();
     s_->work.notify_all();
     s_->analysis_work.notify_all();
     s_->changed.notify_all();
@@ -572,6 +625,7 @@ json Session::put_scene(const json& j, long long on_revision) {
     s_->early.reset();
     s_->held_preview.reset();
     s_->pending = true;
+    s_->stop_analysis();
     s_->work.notify_one();
   }
   try {
@@ -582,6 +636,7 @@ json Session::put_scene(const json& j, long long on_revision) {
     s_->next_job.reset();
     s_->early.reset();
     s_->held_preview.reset();
+    s_->analysis_work.notify_one();  // it waited for the new scene
     if (s_->cancel) s_->cancel->store(true);
     // The current revision's solve may have been cancelled for the new one: again.
     if (!(s_->result && s_->result->revision == s_->design->revision()) && s_->state != "failed") s_->schedule();
@@ -592,6 +647,7 @@ json Session::put_scene(const json& j, long long on_revision) {
   s_->design->set_scene(std::move(next));
   s_->saved_already = false;
   s_->upcoming = 0;
+  s_->analysis_work.notify_one();  // it waited for the new scene
   s_->state = "running";
   s_->error.clear();
   if (s_->next_job) {  // the worker has not taken the new scene's solve yet: nothing done
@@ -693,7 +749,8 @@ json Session::status() const {
             {"state", s_->state},
             {"progress", {s_->done, s_->total}},
             {"error", s_->error},
-            {"cancelled", s_->cancelled}};
+            {"cancelled", s_->cancelled},
+            {"analyses_stopped", s_->analyses_stopped}};
   if (s_->result) {
     const Result& r = *s_->result;
     j["warnings"] = r.made->report.warnings;

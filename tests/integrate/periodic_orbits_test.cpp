@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 
 namespace tvf {
@@ -119,6 +120,34 @@ TEST(PeriodicOrbits, TrackedThroughTimeWithTheHopfEventAtT0) {
     for (const char* key : {"frame", "t", "center", "radius", "stability", "points"})
       EXPECT_TRUE(first.contains(key)) << key;
     EXPECT_EQ(first["stability"], type == BifurcationType::hopf_supercritical ? "attracting" : "repelling");
+  }
+}
+
+// The designer's server stops the analysis of a field a newer change replaced (issue 15):
+// with the cancel flag set, analyze_topology and find_periodic_orbits stop with
+// AnalysisCancelled; with it present but false, the results are those made without it.
+TEST(PeriodicOrbits, TheAnalysisStopsWhenItsCancelFlagIsSet) {
+  const Scene scene = hopf_scene({33, BifurcationType::hopf_supercritical}, 21);
+  const auto space = make_design_space(scene);
+  const Field field = generate(*space, scene);
+  const Topology plain = analyze_topology(space->bundle(), field);
+  const PeriodicOrbits plain_orbits = find_periodic_orbits(space->bundle(), field, plain);
+  for (const bool parallel : {false, true}) {
+    std::atomic<bool> cancel{false};
+    TopologyOptions to;
+    to.parallel = parallel;
+    to.cancel = &cancel;
+    PeriodicOrbitOptions po;
+    po.parallel = parallel;
+    po.cancel = &cancel;
+    const Topology topo = analyze_topology(space->bundle(), field, to);
+    EXPECT_EQ(topology_to_json(topo).dump(), topology_to_json(plain).dump());
+    const PeriodicOrbits orbits = find_periodic_orbits(space->bundle(), field, topo, po);
+    EXPECT_EQ(orbits.orbits.size(), plain_orbits.orbits.size());
+    EXPECT_EQ(orbits.hopf.size(), plain_orbits.hopf.size());
+    cancel = true;
+    EXPECT_THROW(analyze_topology(space->bundle(), field, to), AnalysisCancelled) << parallel;
+    EXPECT_THROW(find_periodic_orbits(space->bundle(), field, topo, po), AnalysisCancelled) << parallel;
   }
 }
 

@@ -18,6 +18,12 @@
 //        [--generators basis,spacetime] [--modes push] [--sphere basis,spacetime|none] [--sphere-changes N] [--steps]
 //        [--serve "--solve-while-saving ..."] (more options for tvf serve, space-separated)
 // --steps prints, for every change, the page's steps (window.tvf.marks) in ms after the event.
+// --no-analysis-wait makes each change as soon as the last one's picture and whole result are
+// there, as a designer clicking on does, without waiting for its analysis (only the last
+// change's analysis is waited for): the analysis of a replaced field then meets the next
+// change's solve. It also reports "server CPU": the server process's CPU time (all its
+// threads, /proc/PID/stat, 10 ms ticks) from the event to the whole result, median over
+// the changes but the last.
 import fs from "node:fs";
 import path from "node:path";
 import { check, Designer, finish, reportFailure, start } from "./harness.mjs";
@@ -33,6 +39,16 @@ const sphereGenerators = sphereAt > 0 ? process.argv[sphereAt + 1].split(",").fi
 const sphereChangesAt = process.argv.indexOf("--sphere-changes");
 const sphereChanges = sphereChangesAt > 0 ? Number(process.argv[sphereChangesAt + 1]) : n;
 const median = (v) => [...v].sort((x, y) => x - y)[Math.floor(v.length / 2)];
+const noAnalysisWait = process.argv.includes("--no-analysis-wait");
+// The server's CPU time so far in ms (user + system, all threads; Linux).
+const serverCpuMs = () => {
+  try {
+    const f = fs.readFileSync(`/proc/${server.proc.pid}/stat`, "utf8").split(") ")[1].split(" ");
+    return (Number(f[11]) + Number(f[12])) * 10;  // utime, stime (fields 14, 15) in 1/100 s
+  } catch {
+    return NaN;
+  }
+};
 
 // The geodesic sphere of the benchmarks (make_geodesic_sphere(45): each icosahedron face
 // cut into 45² triangles, projected on the unit sphere; 10·45² + 2 = 20,252 vertices) as OFF.
@@ -73,8 +89,9 @@ function geodesicSphereOff(n) {
 
 // One change, timed in the page from its event: `act` is {pointer: [clientX, clientY],
 // selector} (a click there: pointerdown, pointerup) or {turn: θ} (the Rotate field button
-// with that angle). Returns [picture, whole result, analysis shown, steps] in ms (−1: not
-// reached within a minute).
+// with that angle); with `noAnalysis` it returns once the picture and the whole result are
+// there (analysis shown: null). Returns [picture, whole result, analysis shown, steps] in
+// ms (−1: not reached within a minute).
 const timeChange = (page, act) =>
   page.evaluate(async (act) => {
     const before = window.tvf.state.scene.revision;
@@ -99,9 +116,9 @@ const timeChange = (page, act) =>
       const s = window.tvf.state;
       if (shown < 0 && s.shownRevision > before) shown = performance.now() - t0;
       if (whole < 0 && s.resultRevision > before && s.frames.has(s.frame)) whole = performance.now() - t0;
-      if (shown >= 0 && whole >= 0 && s.analysisRevision === s.resultRevision) {
+      if (shown >= 0 && whole >= 0 && (act.noAnalysis || s.analysisRevision === s.resultRevision)) {
         const steps = window.tvf.marks.filter(([, at]) => at >= t0).map(([what, at]) => `${what} @${Math.round(at - t0)}`);
-        return [shown, whole, performance.now() - t0, steps];
+        return [shown, whole, act.noAnalysis ? null : performance.now() - t0, steps];
       }
     }
     // Not there: what the page was doing (printed with the failure).
@@ -121,15 +138,22 @@ async function series(page, d, mode, generator, actFor, count = n) {
   const analysed = [];
   const wholes = [];
   const solves = [];
+  const cpus = [];
   for (let k = 0; k < count; ++k) {
-    const result = await timeChange(page, await actFor(k));
+    const act = await actFor(k);
+    act.noAnalysis = noAnalysisWait && k + 1 < count;
+    const cpu0 = serverCpuMs();
+    const result = await timeChange(page, act);
+    if (act.noAnalysis) cpus.push(serverCpuMs() - cpu0);
     const [ms, wholeMs, analysisMs, steps] = result;
     wholes.push(wholeMs);
     if (process.argv.includes("--steps")) console.log(`  ${mode} ${generator} change ${k + 1}: ${steps.join(", ")}`);
-    analysed.push(analysisMs);
     check(ms >= 0, `${mode} · ${generator}: change ${k + 1} reached the page`);
-    if (analysisMs < 0) console.log(`  the page's steps: ${steps.join(", ")}`);
-    check(analysisMs >= 0, `${mode} · ${generator}: the analysis of change ${k + 1} reached the page`);
+    if (analysisMs !== null) {
+      analysed.push(analysisMs);
+      if (analysisMs < 0) console.log(`  the page's steps: ${steps.join(", ")}`);
+      check(analysisMs >= 0, `${mode} · ${generator}: the analysis of change ${k + 1} reached the page`);
+    }
     times.push(ms);
     solves.push(1000 * ((await d.status()).seconds ?? 0));
   }
@@ -142,9 +166,11 @@ async function series(page, d, mode, generator, actFor, count = n) {
   const row = { mode, generator, change_to_ready_ms: times.map(Math.round), median_ms: Math.round(median(times)),
                 change_to_result_ms: wholes.map(Math.round), result_median_ms: Math.round(median(wholes)),
                 change_to_analysis_ms: analysed.map(Math.round), analysis_median_ms: Math.round(median(analysed)),
-                server_solve_median_ms: Math.round(median(solves)), beyond_solve_median_ms: Math.round(median(rest)) };
+                server_solve_median_ms: Math.round(median(solves)), beyond_solve_median_ms: Math.round(median(rest)),
+                server_cpu_ms: cpus, server_cpu_median_ms: cpus.length ? median(cpus) : null };
   results.push(row);
-  console.log(`latency: ${mode.padEnd(4)} ${generator.padEnd(17)} median ${row.median_ms} ms (server solve ${row.server_solve_median_ms} ms, the rest ${row.beyond_solve_median_ms} ms) of ${times.map(Math.round).join(", ")}; whole result: median ${row.result_median_ms} ms; analysis shown: median ${row.analysis_median_ms} ms`);
+  console.log(`latency: ${mode.padEnd(4)} ${generator.padEnd(17)} median ${row.median_ms} ms (server solve ${row.server_solve_median_ms} ms, the rest ${row.beyond_solve_median_ms} ms) of ${times.map(Math.round).join(", ")}; whole result: median ${row.result_median_ms} ms; analysis shown: median ${row.analysis_median_ms} ms` +
+              (cpus.length ? `; server CPU to the whole result: median ${row.server_cpu_median_ms} ms of ${cpus.join(", ")}` : ""));
 }
 
 try {

@@ -26,12 +26,14 @@
 // stability are one topological type (docs/analysis.md, "Type changes"); a path is named
 // by the precise type that most of its frames have.
 #include "tvf/analysis/singularities.h"
+#include "tvf/core/error.h"
 #include "tvf/field/field.h"
 #include "tvf/mesh/tangent_bundle.h"
 
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -102,7 +104,21 @@ struct TopologyOptions {
   // topologically equivalent, equal eigenvalues are no bifurcation, and near them the
   // per-face Jacobian of a sampled field flips between the two from face to face.
   bool node_focus_changes = false;
+  // Checked between frames (and between the steps after them): once true, the analysis
+  // stops with AnalysisCancelled. The designer's server sets it when a newer change makes
+  // the analysed field obsolete (issue 15).
+  const std::atomic<bool>* cancel = nullptr;
 };
+
+// Thrown by analyze_topology and find_periodic_orbits once their options' `cancel` is true.
+class AnalysisCancelled : public Error {
+public:
+  AnalysisCancelled() : Error("analysis cancelled") {}
+};
+// Throws AnalysisCancelled when `cancel` is set and true.
+inline void check_analysis_cancel(const std::atomic<bool>* cancel) {
+  if (cancel && cancel->load(std::memory_order_relaxed)) throw AnalysisCancelled();
+}
 
 // Topology of `field` on the mesh of `bundle`. Throws tvf::Error when a value is not
 // finite (naming the vertex), as find_singularities does.

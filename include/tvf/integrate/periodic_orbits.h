@@ -89,6 +89,9 @@ struct PeriodicOrbitOptions {
   double track_distance = 2.0;    // tracking and focus matching, in mean edge lengths
   int hopf_frames = 5;            // orbit track end to stability change, in frames
   bool include_nodes = false;     // also search around sources and sinks
+  // Checked between frames: once true, find_periodic_orbits stops with AnalysisCancelled
+  // (topology.h).
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 // Periodic orbits of every frame of `field` around the foci and centers of `topology`
