@@ -415,6 +415,28 @@ cplx guide_h(const Mesh& mesh, const Guide& g, const SurfacePoint& at, double u)
   return h0 * std::exp(u * lq);
 }
 
+// Fills the vertices not `ok` with the mean of their filled neighbours, ring by ring (a
+// smooth quantity at a vertex where it could not be evaluated: on a zero); false when one
+// stays unfilled (no filled neighbour, or their mean is zero).
+bool fill_from_neighbours(const std::vector<std::vector<size_t>>& nbr, std::vector<cplx>& values, std::vector<char>& ok) {
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t v = 0; v < values.size(); ++v) {
+      if (ok[v]) continue;
+      cplx sum{0, 0};
+      int n = 0;
+      for (const size_t w : nbr[v])
+        if (ok[w] == 1) sum += values[w], ++n;
+      if (n == 0 || std::abs(sum) == 0) continue;
+      values[v] = sum / static_cast<double>(n);
+      ok[v] = 2;
+      changed = true;
+    }
+    for (char& o : ok) o = o ? char{1} : char{0};
+  }
+  return std::all_of(ok.begin(), ok.end(), [](char o) { return o != 0; });
+}
+
 // The matched tracks' λ at time t, per factor (0 for the others).
 std::vector<cplx> factor_lambda(const Guide& g, const std::vector<Factor>& factors, double t) {
   const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * Guide::kTable;
@@ -525,23 +547,7 @@ bool build_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
       ok[v] = 1;
     }
     // A vertex on a zero: the mean of its neighbours' h (h is smooth there).
-    for (bool changed = true; changed;) {
-      changed = false;
-      for (size_t v = 0; v < nv; ++v) {
-        if (ok[v]) continue;
-        cplx sum{0, 0};
-        int n = 0;
-        for (const size_t w : nbr[v])
-          if (ok[w] == 1) sum += h[w], ++n;
-        if (n == 0 || std::abs(sum) == 0) continue;
-        h[v] = sum / static_cast<double>(n);
-        ok[v] = 2;
-        changed = true;
-      }
-      for (char& o : ok) o = o ? char{1} : char{0};
-    }
-    for (size_t v = 0; v < nv; ++v)
-      if (!ok[v]) return false;
+    if (!fill_from_neighbours(nbr, h, ok)) return false;
   }
   // log(h₁/h₀), its argument lifted continuously along the mesh's edges.
   g.h0 = hk[0];
@@ -1002,23 +1008,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     nbr[b].push_back(a);
   }
   // A vertex on a key frame's zero: the mean of its neighbours' H (H is smooth there).
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (size_t v = 0; v < nv; ++v) {
-      if (ok[v]) continue;
-      cplx sum{0, 0};
-      int n = 0;
-      for (const size_t w : nbr[v])
-        if (ok[w] == 1) sum += hv[w], ++n;
-      if (n == 0 || std::abs(sum) == 0) continue;
-      hv[v] = sum / static_cast<double>(n);
-      ok[v] = 2;
-      changed = true;
-    }
-    for (char& o : ok) o = o ? char{1} : char{0};
-  }
-  for (size_t v = 0; v < nv; ++v)
-    if (!ok[v]) return false;
+  if (!fill_from_neighbours(nbr, hv, ok)) return false;
   g.log_h.assign(nv, cplx(0, 0));
   std::vector<char> seen(nv, 0);
   double sum_arg = 0;
