@@ -195,13 +195,30 @@ private:
 
   // An edit's position on a grid domain must lie on the grid: an edit names a feature of
   // the field there, and a move's target is where a bifurcation goes (issue 16).
-  void check_on_domain(const Vec3& p, const std::string& where) const {
-    if (!grid_) return;
+  bool on_domain(const Vec3& p) const {
+    if (!grid_) return true;
     const double eps = 1e-9 * (grid_->max - grid_->min).norm();
-    if (p.x() < grid_->min.x() - eps || p.x() > grid_->max.x() + eps || p.y() < grid_->min.y() - eps ||
-        p.y() > grid_->max.y() + eps)
-      fail(where, fmt::format("({}, {}) is outside the domain [{}, {}] × [{}, {}]", p.x(), p.y(), grid_->min.x(),
-                              grid_->max.x(), grid_->min.y(), grid_->max.y()));
+    return p.x() >= grid_->min.x() - eps && p.x() <= grid_->max.x() + eps && p.y() >= grid_->min.y() - eps &&
+           p.y() <= grid_->max.y() + eps;
+  }
+  std::string domain_extent() const {
+    return fmt::format("[{}, {}] × [{}, {}]", grid_->min.x(), grid_->max.x(), grid_->min.y(), grid_->max.y());
+  }
+  void check_on_domain(const Vec3& p, const std::string& where) const {
+    if (!on_domain(p))
+      fail(where, fmt::format("({}, {}) is outside the domain {}", p.x(), p.y(), domain_extent()));
+  }
+  // An element, streamline or path wholly off a grid domain constrains no vertex of it:
+  // every generator would give the field without it (or none), so it is refused (a moving
+  // element may enter or leave: one point on the domain is enough).
+  template <class Points, class Position>
+  void check_reaches_domain(const Points& points, Position position, const std::string& where,
+                            const char* what) const {
+    if (!grid_) return;
+    for (const auto& p : points)
+      if (on_domain(position(p))) return;
+    fail(where, fmt::format("{} lies wholly outside the domain {}: it would constrain nothing there", what,
+                            domain_extent()));
   }
 
   [[noreturn]] void fail(const std::string& where, const std::string& message) const {
@@ -737,6 +754,8 @@ SingularElement Reader::singular(const json& j, const std::string& path) const {
                                        "makes a fixed element",
                                        path_point_form());
   e.path = path_points(need(j, path, "path", hint), join_key(path, "path"), 1);
+  check_reaches_domain(e.path, [](const PathPoint& p) { return p.position; }, join_key(path, "path"),
+                       e.path.size() == 1 ? "the element" : "the element's path");
   if (const json* t = get(j, "transform")) e.transform = transform_keys(*t, join_key(path, "transform"));
   return e;
 }
@@ -747,6 +766,8 @@ RegularElement Reader::regular(const json& j, const std::string& path) const {
   const std::string hint =
       fmt::format("a regular element needs a pathline of at least 2 {} points", path_point_form());
   e.pathline = path_points(need(j, path, "pathline", hint), join_key(path, "pathline"), 2);
+  check_reaches_domain(e.pathline, [](const PathPoint& p) { return p.position; }, join_key(path, "pathline"),
+                       "the pathline");
   if (const json* a = get(j, "attach")) e.attach = non_negative(*a, join_key(path, "attach"));
   return e;
 }
@@ -760,6 +781,7 @@ BifurcationElement Reader::bifurcation(const json& j, const std::string& path) c
   e.at = path_point(need(j, path, "at", fmt::format("the place and time {} of the bifurcation",
                                                     path_point_form())),
                     join_key(path, "at"));
+  check_on_domain(e.at.position, join_key(path, "at"));
   if (const json* v = get(j, "scale")) e.scale = positive(*v, join_key(path, "scale"));
   if (const json* v = get(j, "time_scale")) e.time_scale = positive(*v, join_key(path, "time_scale"));
   if (const json* v = get(j, "angle")) e.angle = number(*v, join_key(path, "angle"));
@@ -833,9 +855,11 @@ KeyframeElement Reader::keyframe_element(const json& j, const std::string& path)
       e.jacobian = jacobian_matrix(*jacobian, join_key(path, "jacobian"));
     }
     e.at = position(need(j, path, "at", at_hint), join_key(path, "at"));
+    check_on_domain(e.at, join_key(path, "at"));
   } else if (e.kind == "regular") {
     check_keys(j, path, "a key-frame regular element", {"kind", "at", "vector"});
     e.at = position(need(j, path, "at", at_hint), join_key(path, "at"));
+    check_on_domain(e.at, join_key(path, "at"));
     e.vector = position(need(j, path, "vector", fmt::format("the field's vector {} there", point_form())),
                         join_key(path, "vector"));
     if (e.vector.isZero(0.0))
@@ -859,6 +883,7 @@ KeyframeStreamline Reader::keyframe_streamline(const json& j, const std::string&
     if (i > 0 && s.points[i] == s.points[i - 1])
       fail(p, "repeats the previous point (a streamline's direction would be undefined)");
   }
+  check_reaches_domain(s.points, [](const Vec3& p) { return p; }, join_key(path, "points"), "the streamline");
   if (const json* v = get(j, "speed")) s.speed = positive(*v, join_key(path, "speed"));
   return s;
 }
