@@ -19,32 +19,51 @@ namespace {
 
 namespace fs = std::filesystem;
 
-TEST(CliKeyframeTopology, Example24ReportsItsIntervalAndTheAnalysisAgrees) {
+nlohmann::json read_json(const fs::path& file) {
+  std::ifstream in(file);
+  EXPECT_TRUE(in.good()) << file;
+  return in.good() ? nlohmann::json::parse(in) : nlohmann::json();
+}
+
+// `tvf generate SCENE -o DIR/out --no-vtk`, then `tvf analyze DIR/out -o DIR/a.json`: both
+// printed reports, keyframe_topology.json (null when not written) and the analysis.
+struct GeneratedAndAnalysed {
+  test::CommandResult generated, analysed;
+  nlohmann::json topology, analysis;
+};
+GeneratedAndAnalysed generate_and_analyze(const test::TempDir& dir, const std::string& scene, const std::string& analyze_options = "") {
+  GeneratedAndAnalysed r;
+  r.generated = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
+  EXPECT_EQ(r.generated.exit_code, 0) << r.generated.output;
+  if (r.generated.exit_code != 0) return r;
+  if (fs::exists(dir / "out" / "keyframe_topology.json")) r.topology = read_json(dir / "out" / "keyframe_topology.json");
+  r.analysed = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json") +
+                             analyze_options);
+  EXPECT_EQ(r.analysed.exit_code, 0) << r.analysed.output;
+  if (r.analysed.exit_code == 0) r.analysis = read_json(dir / "a.json");
+  return r;
+}
+
+TEST(CliKeyframeTopology, Example26ReportsItsIntervalAndTheAnalysisAgrees) {
   test::TempDir dir;
   const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/scene.json";
-  const auto g = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
-  ASSERT_EQ(g.exit_code, 0) << g.output;
-  EXPECT_NE(g.output.find("key frames 0 → 1 (t 0 → 1): 3 matched, 1 pairs created and 0 cancelled at t = 0.6"),
+  const GeneratedAndAnalysed r = generate_and_analyze(dir, scene);
+  ASSERT_FALSE(r.analysis.is_null());
+  EXPECT_NE(r.generated.output.find("key frames 0 → 1 (t 0 → 1): 3 matched, 1 pairs created and 0 cancelled at t = 0.6"),
             std::string::npos)
-      << g.output;
-  std::ifstream in(dir / "out" / "keyframe_topology.json");
-  ASSERT_TRUE(in.good());
-  const nlohmann::json k = nlohmann::json::parse(in);
-  ASSERT_EQ(k.at("intervals").size(), 1u);
-  const nlohmann::json& i = k["intervals"][0];
+      << r.generated.output;
+  ASSERT_EQ(r.topology.at("intervals").size(), 1u);
+  const nlohmann::json& i = r.topology["intervals"][0];
   EXPECT_EQ(i.at("bifurcation_t"), 0.6);
   EXPECT_EQ(i.at("matched").size(), 3u);
   ASSERT_EQ(i.at("created").size(), 1u);
   EXPECT_EQ(i["created"][0].at("node_type"), "sink");
   EXPECT_TRUE(i.at("cancelled").empty());
 
-  const auto a = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json"));
-  ASSERT_EQ(a.exit_code, 0) << a.output;
   // The design check counts the planned creation as designed.
-  EXPECT_NE(a.output.find("designed 6 singularities, 1 bifurcation: all found; no extras"), std::string::npos)
-      << a.output;
-  std::ifstream ain(dir / "a.json");
-  const nlohmann::json analysis = nlohmann::json::parse(ain);
+  EXPECT_NE(r.analysed.output.find("designed 6 singularities, 1 bifurcation: all found; no extras"), std::string::npos)
+      << r.analysed.output;
+  const nlohmann::json& analysis = r.analysis;
   // Exactly the planned creation, where and when the template put it; no other event.
   ASSERT_EQ(analysis.at("bifurcations").size(), 1u) << analysis["bifurcations"].dump();
   const nlohmann::json& b = analysis["bifurcations"][0];
@@ -57,18 +76,14 @@ TEST(CliKeyframeTopology, Example24ReportsItsIntervalAndTheAnalysisAgrees) {
   EXPECT_EQ(analysis.at("paths").size(), 5u);
 
   // The same scene with "free": bifurcations nobody designed, and no keyframe_topology.json.
-  std::ifstream sin(scene);
-  nlohmann::json free = nlohmann::json::parse(sin);
+  test::TempDir free_dir;
+  nlohmann::json free = read_json(scene);
   free["solver"] = {{"region_radius", 0.15}};
-  test::write_text(dir / "free.json", free.dump());
-  const auto f = test::run_tvf("generate " + test::quoted(dir / "free.json") + " -o " + test::quoted(dir / "free") +
-                               " --no-vtk -q");
-  ASSERT_EQ(f.exit_code, 0) << f.output;
-  EXPECT_FALSE(fs::exists(dir / "free" / "keyframe_topology.json"));
-  const auto fa = test::run_tvf("analyze " + test::quoted(dir / "free") + " -o " + test::quoted(dir / "f.json"));
-  ASSERT_EQ(fa.exit_code, 0) << fa.output;
-  std::ifstream fin(dir / "f.json");
-  EXPECT_GE(nlohmann::json::parse(fin).at("bifurcations").size(), 3u);
+  test::write_text(free_dir / "free.json", free.dump());
+  const GeneratedAndAnalysed f = generate_and_analyze(free_dir, (free_dir / "free.json").string());
+  ASSERT_FALSE(f.analysis.is_null());
+  EXPECT_TRUE(f.topology.is_null());
+  EXPECT_GE(f.analysis.at("bifurcations").size(), 3u);
 }
 
 // Example 26's crossing.json: a source and a sink trading places. `tvf generate` says it
@@ -77,24 +92,20 @@ TEST(CliKeyframeTopology, Example24ReportsItsIntervalAndTheAnalysisAgrees) {
 TEST(CliKeyframeTopology, Example26CrossingPathsAreBentApart) {
   test::TempDir dir;
   const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/crossing.json";
-  const auto g = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
-  ASSERT_EQ(g.exit_code, 0) << g.output;
-  EXPECT_NE(g.output.find("key frames 0 → 1 (t 0 → 1): 2 matched (2 bent to keep 0.3 apart), 0 pairs created and 0 "
-                          "cancelled at t = 0.5"),
+  const GeneratedAndAnalysed r = generate_and_analyze(dir, scene);
+  ASSERT_FALSE(r.analysis.is_null());
+  EXPECT_NE(r.generated.output.find("key frames 0 → 1 (t 0 → 1): 2 matched (2 bent to keep 0.3 apart), 0 pairs created "
+                                    "and 0 cancelled at t = 0.5"),
             std::string::npos)
-      << g.output;
-  EXPECT_EQ(g.output.find("warning"), std::string::npos) << g.output;
-  std::ifstream in(dir / "out" / "keyframe_topology.json");
-  const nlohmann::json i = nlohmann::json::parse(in).at("intervals").at(0);
+      << r.generated.output;
+  EXPECT_EQ(r.generated.output.find("warning"), std::string::npos) << r.generated.output;
+  const nlohmann::json& i = r.topology.at("intervals").at(0);
   EXPECT_EQ(i.at("separation"), 0.3);
   EXPECT_GE(i.at("closest_approach").get<double>(), 0.3);
   EXPECT_FALSE(i.contains("collision"));
   for (const auto& m : i.at("matched")) EXPECT_GT(m.at("detour").get<double>(), 0.15);
 
-  const auto a = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json"));
-  ASSERT_EQ(a.exit_code, 0) << a.output;
-  std::ifstream ain(dir / "a.json");
-  const nlohmann::json analysis = nlohmann::json::parse(ain);
+  const nlohmann::json& analysis = r.analysis;
   EXPECT_EQ(analysis.at("paths").size(), 2u);
   EXPECT_TRUE(analysis.at("bifurcations").empty());
   std::vector<std::vector<std::array<double, 2>>> frames(60);
@@ -113,19 +124,16 @@ TEST(CliKeyframeTopology, Example26CrossingPathsAreBentApart) {
 TEST(CliKeyframeTopology, Example26KnotIsRoutedTogether) {
   test::TempDir dir;
   const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/knot.json";
-  const auto g = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
-  ASSERT_EQ(g.exit_code, 0) << g.output;
-  EXPECT_NE(g.output.find("3 matched (3 bent together to keep 0.3 apart)"), std::string::npos) << g.output;
-  EXPECT_EQ(g.output.find("warning"), std::string::npos) << g.output;
-  std::ifstream in(dir / "out" / "keyframe_topology.json");
-  const nlohmann::json i = nlohmann::json::parse(in).at("intervals").at(0);
+  const GeneratedAndAnalysed r = generate_and_analyze(dir, scene);
+  ASSERT_FALSE(r.analysis.is_null());
+  EXPECT_NE(r.generated.output.find("3 matched (3 bent together to keep 0.3 apart)"), std::string::npos)
+      << r.generated.output;
+  EXPECT_EQ(r.generated.output.find("warning"), std::string::npos) << r.generated.output;
+  const nlohmann::json& i = r.topology.at("intervals").at(0);
   EXPECT_EQ(i.at("routing"), "joint");
   EXPECT_FALSE(i.contains("collision"));
   EXPECT_GE(i.at("closest_approach").get<double>(), 0.3);
-  const auto a = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json"));
-  ASSERT_EQ(a.exit_code, 0) << a.output;
-  std::ifstream ain(dir / "a.json");
-  const nlohmann::json analysis = nlohmann::json::parse(ain);
+  const nlohmann::json& analysis = r.analysis;
   // Per frame: a source, a center and a saddle among the found ones, pairwise 0.3 apart
   // (the first of each type nearest to the previous frame's).
   std::map<std::string, std::array<double, 2>> prev;
@@ -160,18 +168,14 @@ TEST(CliKeyframeTopology, Example26KnotIsRoutedTogether) {
 TEST(CliKeyframeTopology, Example26KnotOnASphereIsGuided) {
   test::TempDir dir;
   const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/knot_sphere.json";
-  const auto g = test::run_tvf("generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk");
-  ASSERT_EQ(g.exit_code, 0) << g.output;
-  EXPECT_NE(g.output.find("4 matched"), std::string::npos) << g.output;
-  std::ifstream in(dir / "out" / "keyframe_topology.json");
-  const nlohmann::json i = nlohmann::json::parse(in).at("intervals").at(0);
+  const GeneratedAndAnalysed r = generate_and_analyze(dir, scene, " --no-plots");
+  ASSERT_FALSE(r.analysis.is_null());
+  EXPECT_NE(r.generated.output.find("4 matched"), std::string::npos) << r.generated.output;
+  const nlohmann::json& i = r.topology.at("intervals").at(0);
   EXPECT_TRUE(i.at("guided").get<bool>()) << i;
   EXPECT_TRUE(i.at("created").empty() && i.at("cancelled").empty()) << i;
-  const auto a = test::run_tvf("analyze " + test::quoted(dir / "out") + " -o " + test::quoted(dir / "a.json") + " --no-plots");
-  ASSERT_EQ(a.exit_code, 0) << a.output;
-  EXPECT_NE(a.output.find("0 bifurcations planned, 0 not asked for"), std::string::npos) << a.output;
-  std::ifstream ain(dir / "a.json");
-  const nlohmann::json analysis = nlohmann::json::parse(ain);
+  EXPECT_NE(r.analysed.output.find("0 bifurcations planned, 0 not asked for"), std::string::npos) << r.analysed.output;
+  const nlohmann::json& analysis = r.analysis;
   std::vector<int> count(32, 0), index_sum(32, 0);
   for (const auto& s : analysis.at("singularities")) {
     const auto f = s.at("frame").get<size_t>();
