@@ -1913,6 +1913,9 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   };
 
   const double separation = scene.solver.path_separation.value_or(2 * scene.solver.region_radius);
+  // How far a node that changes stability may be carried (the last resort below): a
+  // quarter of the domain's diameter, at least the separation.
+  const double stability_reach = std::max(0.25 * space.diameter(), separation);
   const PathRouter router(space, separation);
   int groups = 0;
   for (size_t k = 0; k + 1 < nk; ++k) {
@@ -1957,11 +1960,33 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
                     return x.index == y.index && stability(x.type) * stability(y.type) >= 0;
                   },
                   pairs);
+    // The unmatched of each key frame in saddle–node pairs (cancelled or created below).
+    const std::array<std::vector<std::pair<size_t, size_t>>, 2> side_pairs{pair_unmatched(A, ma), pair_unmatched(B, mb)};
+    // The last resort, for what neither matched nor paired: a node of one stability in the
+    // first key frame and one of the other in the second (the static solve's far foci turn
+    // over), nearest first within stability_reach. Carried like any match, its α turns
+    // through a center on the way (track_jacobian: |α| > |β| throughout, so det J > 0; a
+    // Hopf-like passage, not a saddle–node pair).
+    {
+      std::vector<int> fa = ma, fb = mb;  // the paired count as taken
+      for (const auto& [si, ni] : side_pairs[0]) fa[si] = fa[ni] = static_cast<int>(B.size());
+      for (const auto& [si, ni] : side_pairs[1]) fb[si] = fb[ni] = static_cast<int>(A.size());
+      const size_t before = pairs.size();
+      match_nearest(A, B, fa, fb,
+                    [&](const Singularity& x, const Singularity& y) {
+                      return x.index == y.index && (x.position - y.position).norm() <= stability_reach;
+                    },
+                    pairs);
+      for (size_t m = before; m < pairs.size(); ++m) {
+        ma[pairs[m].first] = static_cast<int>(pairs[m].second);
+        mb[pairs[m].second] = static_cast<int>(pairs[m].first);
+      }
+    }
     for (size_t m = 0; m < pairs.size(); ++m) {
       const Singularity& a = A[pairs[m].first];
       const Singularity& b = B[pairs[m].second];
       add_track(a, b.position, rep.t0, rep.t1, to_linear(b.jacobian), b.where.face);
-      rep.matched.push_back({a.type, a.position, b.position, m < n_linked});
+      rep.matched.push_back({a.type, a.position, b.position, m < n_linked, 0.0, b.type});
     }
 
     // The unmatched, in pairs: cancelled before t_c, created after.
@@ -1972,7 +1997,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       const std::vector<Singularity>& S = side == 0 ? A : B;
       const std::vector<int>& matched = side == 0 ? ma : mb;
       std::vector<char> paired(S.size(), 0);
-      for (const auto& [si, ni] : pair_unmatched(S, matched)) {
+      for (const auto& [si, ni] : side_pairs[static_cast<size_t>(side)]) {
         paired[si] = paired[ni] = 1;
         const Singularity& saddle = S[si];
         const Singularity& node = S[ni];
@@ -2146,7 +2171,8 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
                               {"from", xyz(m.from)},
                               {"to", xyz(m.to)},
                               {"linked", m.linked},
-                              {"detour", m.detour}});
+                              {"detour", m.detour},
+                              {"to_type", to_string(m.to_type)}});
     for (const char* key : {"created", "cancelled"}) {
       j[key] = json::array();
       for (const auto& p : std::string(key) == "created" ? r.created : r.cancelled)
