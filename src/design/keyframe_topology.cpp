@@ -87,6 +87,10 @@ struct KeyframeTopologyPlan::Track {
   Linear j0, j1;
   Vec3 ref_e1 = Vec3::UnitX();  // the first axis of the reference frame, world
   SingularityType type = SingularityType::source;
+  // The second key frame's type: of the other stability for a node matched as the last
+  // resort, whose α then turns through a center (the shorter way round unless `other_way`).
+  SingularityType to_type = SingularityType::source;
+  bool other_way = false;
   int index = 0;   // +1 or −1 (0: a template standing in the router's way)
   int group = -1;  // ≥ 0: one of a created or cancelled pair (the two are meant to meet)
   bool guided = false;  // its interval's guide field constrains the frames (Guide, below)
@@ -296,6 +300,13 @@ using Track = KeyframeTopologyPlan::Track;
 Linear track_jacobian(const TangentBundle& bundle, const Track& tr, double t, int face) {
   const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
   Linear j{blend(tr.j0.alpha, tr.j1.alpha, s), blend(tr.j0.beta, tr.j1.beta, s)};
+  if (tr.other_way && std::abs(tr.j0.alpha) > 0 && std::abs(tr.j1.alpha) > 0) {
+    // The longer arc: through the other center (a source's α turning clockwise instead).
+    const double pa = std::arg(tr.j0.alpha);
+    double d = std::remainder(std::arg(tr.j1.alpha) - pa, 2 * std::numbers::pi);
+    d -= std::copysign(2 * std::numbers::pi, d);
+    j.alpha = std::polar(std::abs(j.alpha), pa + s * d);
+  }
   if (!tr.turn.empty()) {
     // β's argument follows the neighbourhood's turn, plus the shorter-arc remainder
     // that brings it to the second end's, spread linearly like blend().
@@ -1900,6 +1911,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
                        int face1, int group = -1) {
     Track tr;
     tr.type = a.type;
+    tr.to_type = a.type;
     tr.index = a.index;
     tr.group = group;
     tr.p0 = a.position;
@@ -1986,6 +1998,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       const Singularity& a = A[pairs[m].first];
       const Singularity& b = B[pairs[m].second];
       add_track(a, b.position, rep.t0, rep.t1, to_linear(b.jacobian), b.where.face);
+      tracks_.back().to_type = b.type;
       rep.matched.push_back({a.type, a.position, b.position, m < n_linked, 0.0, b.type});
     }
 
@@ -2079,9 +2092,38 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     guide.t0 = rep.t0;
     guide.t1 = rep.t1;
     guide.radius = scene.solver.region_radius;
+    const Guide unbuilt = guide;
     if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         guide.last > guide.first &&
         build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], guide)) {
+      // A node changing stability turns through one center or the other: the shorter arc
+      // of α, unless the nodes' phases then end whole turns apart (λ_j ends at 2πk_j),
+      // which Λ's Shepard blend cannot take out between them (the frames before the second
+      // key frame were half a turn off it there); then the other way round, kept where the
+      // nodes' ends come closer (its own λ is G's without it: the others' move a turn).
+      auto spread = [&](const Guide& g) {
+        double lo = 0, hi = 0;
+        bool any = false;
+        for (size_t i = g.first; i < g.last; ++i) {
+          if (tracks_[i].index <= 0 || g.lambda[i - g.first].empty()) continue;
+          const double e = g.lambda[i - g.first].back().imag();
+          lo = any ? std::min(lo, e) : e;
+          hi = any ? std::max(hi, e) : e;
+          any = true;
+        }
+        return hi - lo;
+      };
+      for (size_t i = guide.first; i < guide.last; ++i) {
+        if (stability(tracks_[i].type) * stability(tracks_[i].to_type) >= 0 || spread(guide) < std::numbers::pi)
+          continue;
+        tracks_[i].other_way = true;
+        Guide other = unbuilt;
+        if (build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], other) &&
+            spread(other) < spread(guide))
+          guide = std::move(other);
+        else
+          tracks_[i].other_way = false;
+      }
       keep_pair_phase_if_resolved(space, tracks_, guide);
       for (size_t i = guide.first; i < guide.last; ++i) tracks_[i].guided = true;
       for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;

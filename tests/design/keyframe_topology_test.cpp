@@ -836,10 +836,16 @@ void expect_stability_carried(const Generated& g, const std::string& what) {
     EXPECT_EQ(s, sum) << what << ", frame " << f;
     EXPECT_EQ(g.topology.singularities[f].size(), n) << what << ", frame " << f;
   }
-  std::printf("  %s: %zu matched (%d changing stability), %zu bifurcations, %zu paths, %d type changes\n",
+  const double turn = worst_mean_turn(g, 3 * g.space->mesh().mean_edge_length());
+  std::printf("  %s: %zu matched (%d changing stability), %zu bifurcations, %zu paths, %d type changes, worst mean "
+              "turn per frame %.3f rad\n",
               what.c_str(), n, changes, g.topology.bifurcations.size(), g.topology.paths.size(),
-              g.topology.stats.type_changes);
+              g.topology.stats.type_changes, turn);
   EXPECT_EQ(g.topology.bifurcations.size(), 0u) << what;
+  // One path per match, split only where a type changes (none leaving through the
+  // boundary), and coherent in time: no frame half a turn off the next.
+  EXPECT_EQ(g.topology.paths.size(), n + static_cast<size_t>(g.topology.stats.type_changes)) << what;
+  EXPECT_LT(turn, 0.25) << what;
   // The report says the type changes.
   const nlohmann::json j = keyframe_intervals_json(g.report.keyframe_intervals);
   int reported = 0;
@@ -850,6 +856,9 @@ void expect_stability_carried(const Generated& g, const std::string& what) {
 // With the last resort off: 2 matched, 2 unpaired, not guided, 6 bifurcations at 33² and at
 // 65², 2 at subdivisions 3 and 4; with α blended linearly instead of through its phase
 // (det J = |α|² − |β|² through zero): 8 bifurcations at 33², extra zeros on the sphere.
+// With α always the shorter way round, 65²'s last guided frame was half a turn off the key
+// frame between the center and the changing node (the two nodes' phases ending a whole
+// turn apart): a saddle path left through the boundary and another entered.
 TEST(KeyframeTopology, ANodeThatChangesStabilityIsCarriedThroughACenter) {
   for (const int n : {33, 65}) expect_stability_carried(run(planar_stability_scene(n)), fmt::format("{}²", n));
 }
