@@ -10,6 +10,8 @@
 //     across stability (a source-like node in one key frame, a sink-like one in the next,
 //     within a quarter of the domain's diameter): its α turns through a center on the way
 //     (|α| > |β| throughout, det J > 0), a Hopf-like type change, not a saddle–node pair;
+//     the shorter way round, or the other where the planar guide's nodes' phases would
+//     otherwise end whole turns apart (step 8);
 //  3. carries each matched singularity from its key-frame position to the next one's as a
 //     moving constraint (the linear field J(t)·w within solver.region_radius, as a moving
 //     singular element is constrained; the position follows a smoothstep in time along
