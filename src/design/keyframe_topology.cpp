@@ -87,6 +87,10 @@ struct KeyframeTopologyPlan::Track {
   Linear j0, j1;
   Vec3 ref_e1 = Vec3::UnitX();  // the first axis of the reference frame, world
   SingularityType type = SingularityType::source;
+  // The second key frame's type: of the other stability for a node matched as the last
+  // resort, whose α then turns through a center (the shorter way round unless `other_way`).
+  SingularityType to_type = SingularityType::source;
+  bool other_way = false;
   int index = 0;   // +1 or −1 (0: a template standing in the router's way)
   int group = -1;  // ≥ 0: one of a created or cancelled pair (the two are meant to meet)
   bool guided = false;  // its interval's guide field constrains the frames (Guide, below)
@@ -296,6 +300,13 @@ using Track = KeyframeTopologyPlan::Track;
 Linear track_jacobian(const TangentBundle& bundle, const Track& tr, double t, int face) {
   const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
   Linear j{blend(tr.j0.alpha, tr.j1.alpha, s), blend(tr.j0.beta, tr.j1.beta, s)};
+  if (tr.other_way && std::abs(tr.j0.alpha) > 0 && std::abs(tr.j1.alpha) > 0) {
+    // The longer arc: through the other center (a source's α turning clockwise instead).
+    const double pa = std::arg(tr.j0.alpha);
+    double d = std::remainder(std::arg(tr.j1.alpha) - pa, 2 * std::numbers::pi);
+    d -= std::copysign(2 * std::numbers::pi, d);
+    j.alpha = std::polar(std::abs(j.alpha), pa + s * d);
+  }
   if (!tr.turn.empty()) {
     // β's argument follows the neighbourhood's turn, plus the shorter-arc remainder
     // that brings it to the second end's, spread linearly like blend().
@@ -1900,6 +1911,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
                        int face1, int group = -1) {
     Track tr;
     tr.type = a.type;
+    tr.to_type = a.type;
     tr.index = a.index;
     tr.group = group;
     tr.p0 = a.position;
@@ -1913,6 +1925,9 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   };
 
   const double separation = scene.solver.path_separation.value_or(2 * scene.solver.region_radius);
+  // How far a node that changes stability may be carried (the last resort below): a
+  // quarter of the domain's diameter, at least the separation.
+  const double stability_reach = std::max(0.25 * space.diameter(), separation);
   const PathRouter router(space, separation);
   int groups = 0;
   for (size_t k = 0; k + 1 < nk; ++k) {
@@ -1957,11 +1972,34 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
                     return x.index == y.index && stability(x.type) * stability(y.type) >= 0;
                   },
                   pairs);
+    // The unmatched of each key frame in saddle–node pairs (cancelled or created below).
+    const std::array<std::vector<std::pair<size_t, size_t>>, 2> side_pairs{pair_unmatched(A, ma), pair_unmatched(B, mb)};
+    // The last resort, for what neither matched nor paired: a node of one stability in the
+    // first key frame and one of the other in the second (the static solve's far foci turn
+    // over), nearest first within stability_reach. Carried like any match, its α turns
+    // through a center on the way (track_jacobian: |α| > |β| throughout, so det J > 0; a
+    // Hopf-like passage, not a saddle–node pair).
+    {
+      std::vector<int> fa = ma, fb = mb;  // the paired count as taken
+      for (const auto& [si, ni] : side_pairs[0]) fa[si] = fa[ni] = static_cast<int>(B.size());
+      for (const auto& [si, ni] : side_pairs[1]) fb[si] = fb[ni] = static_cast<int>(A.size());
+      const size_t before = pairs.size();
+      match_nearest(A, B, fa, fb,
+                    [&](const Singularity& x, const Singularity& y) {
+                      return x.index == y.index && (x.position - y.position).norm() <= stability_reach;
+                    },
+                    pairs);
+      for (size_t m = before; m < pairs.size(); ++m) {
+        ma[pairs[m].first] = static_cast<int>(pairs[m].second);
+        mb[pairs[m].second] = static_cast<int>(pairs[m].first);
+      }
+    }
     for (size_t m = 0; m < pairs.size(); ++m) {
       const Singularity& a = A[pairs[m].first];
       const Singularity& b = B[pairs[m].second];
       add_track(a, b.position, rep.t0, rep.t1, to_linear(b.jacobian), b.where.face);
-      rep.matched.push_back({a.type, a.position, b.position, m < n_linked});
+      tracks_.back().to_type = b.type;
+      rep.matched.push_back({a.type, a.position, b.position, m < n_linked, 0.0, b.type});
     }
 
     // The unmatched, in pairs: cancelled before t_c, created after.
@@ -1972,7 +2010,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       const std::vector<Singularity>& S = side == 0 ? A : B;
       const std::vector<int>& matched = side == 0 ? ma : mb;
       std::vector<char> paired(S.size(), 0);
-      for (const auto& [si, ni] : pair_unmatched(S, matched)) {
+      for (const auto& [si, ni] : side_pairs[static_cast<size_t>(side)]) {
         paired[si] = paired[ni] = 1;
         const Singularity& saddle = S[si];
         const Singularity& node = S[ni];
@@ -2054,9 +2092,38 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     guide.t0 = rep.t0;
     guide.t1 = rep.t1;
     guide.radius = scene.solver.region_radius;
+    const Guide unbuilt = guide;
     if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         guide.last > guide.first &&
         build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], guide)) {
+      // A node changing stability turns through one center or the other: the shorter arc
+      // of α, unless the nodes' phases then end whole turns apart (λ_j ends at 2πk_j),
+      // which Λ's Shepard blend cannot take out between them (the frames before the second
+      // key frame were half a turn off it there); then the other way round, kept where the
+      // nodes' ends come closer (its own λ is G's without it: the others' move a turn).
+      auto spread = [&](const Guide& g) {
+        double lo = 0, hi = 0;
+        bool any = false;
+        for (size_t i = g.first; i < g.last; ++i) {
+          if (tracks_[i].index <= 0 || g.lambda[i - g.first].empty()) continue;
+          const double e = g.lambda[i - g.first].back().imag();
+          lo = any ? std::min(lo, e) : e;
+          hi = any ? std::max(hi, e) : e;
+          any = true;
+        }
+        return hi - lo;
+      };
+      for (size_t i = guide.first; i < guide.last; ++i) {
+        if (stability(tracks_[i].type) * stability(tracks_[i].to_type) >= 0 || spread(guide) < std::numbers::pi)
+          continue;
+        tracks_[i].other_way = true;
+        Guide other = unbuilt;
+        if (build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], other) &&
+            spread(other) < spread(guide))
+          guide = std::move(other);
+        else
+          tracks_[i].other_way = false;
+      }
       keep_pair_phase_if_resolved(space, tracks_, guide);
       for (size_t i = guide.first; i < guide.last; ++i) tracks_[i].guided = true;
       for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
@@ -2146,7 +2213,8 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
                               {"from", xyz(m.from)},
                               {"to", xyz(m.to)},
                               {"linked", m.linked},
-                              {"detour", m.detour}});
+                              {"detour", m.detour},
+                              {"to_type", to_string(m.to_type)}});
     for (const char* key : {"created", "cancelled"}) {
       j[key] = json::array();
       for (const auto& p : std::string(key) == "created" ? r.created : r.cancelled)

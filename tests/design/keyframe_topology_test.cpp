@@ -773,3 +773,109 @@ TEST(KeyframeTopology, PathsGoRoundTheTemplatesOfCancelledPairs) {
 
 }  // namespace
 }  // namespace tvf
+
+namespace tvf {
+namespace {
+
+// A node that changes stability between key frames (issue 20's last resort): a source at
+// one key frame where the next has a sink nearby, beside a center both key frames hold (on
+// the plane; on a sphere the source at the north pole, the center at the south). Neither type
+// nor stability matches and no saddle is left to pair them with, so only the last resort
+// carries them: the interval is guided, its analysis has no saddle–node bifurcation, each
+// frame the key frames' singularities (Poincaré–Hopf's sum), and the carried node turns
+// from repelling to attracting through a center (its index +1 all the way).
+std::string stability_scene(const std::string& domain, const std::string& k0, const std::string& k1) {
+  return R"({"tvf": 1, "domain": )" + domain + R"(,
+    "time": {"frames": 32, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.15, "keyframe_topology": "matched"},
+    "keyframes": [{"t": 0, "elements": [)" + k0 + R"(]}, {"t": 1, "elements": [)" + k1 + "]}]}";
+}
+
+std::string planar_stability_scene(int n) {
+  const std::string center = R"({"kind": "singular", "type": "ccw_center", "at": [0.4, 0.3]})";
+  return stability_scene(R"({"grid": {"size": [)" + std::to_string(n) + ", " + std::to_string(n) +
+                             R"(], "min": [-1, -1], "max": [1, 1]}})",
+                         R"({"kind": "singular", "type": "source", "at": [-0.4, -0.3]}, )" + center,
+                         R"({"kind": "singular", "type": "sink", "at": [-0.3, -0.35]}, )" + center);
+}
+
+std::string sphere_stability_scene(int sub) {
+  return stability_scene(R"({"sphere": {"subdivisions": )" + std::to_string(sub) + R"(, "radius": 1}})",
+                         R"({"kind": "singular", "type": "source", "at": [0, 0, 1]},
+                            {"kind": "singular", "type": "ccw_center", "at": [0, 0, -1]})",
+                         R"({"kind": "singular", "type": "sink", "at": [0.2, 0, 0.98]},
+                            {"kind": "singular", "type": "ccw_center", "at": [0, 0, -1]})");
+}
+
+void expect_stability_carried(const Generated& g, const std::string& what) {
+  const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+  EXPECT_TRUE(r.guided) << what;
+  EXPECT_TRUE(r.created.empty() && r.cancelled.empty() && r.unpaired_first.empty() && r.unpaired_second.empty())
+      << what;
+  int changes = 0;
+  for (const auto& m : r.matched) {
+    const bool flips = (m.type == SingularityType::source || m.type == SingularityType::repelling_focus) !=
+                       (m.to_type == SingularityType::source || m.to_type == SingularityType::repelling_focus);
+    if (flips) {
+      ++changes;
+      // The carried node, every frame: the singularity nearest its straight path is a +1.
+      for (size_t f = 0; f < g.topology.singularities.size(); ++f) {
+        const double s = static_cast<double>(f) / static_cast<double>(g.topology.singularities.size() - 1);
+        const Vec3 p = m.from + s * s * (3 - 2 * s) * (m.to - m.from);
+        const auto& frame = g.topology.singularities[f];
+        ASSERT_FALSE(frame.empty()) << what;
+        const auto& near = *std::min_element(frame.begin(), frame.end(), [&](const auto& x, const auto& y) {
+          return (x.position - p).norm() < (y.position - p).norm();
+        });
+        EXPECT_EQ(near.index, 1) << what << ", frame " << f;
+        EXPECT_GT(near.jacobian.determinant(), 0) << what << ", frame " << f;
+        EXPECT_LT((near.position - p).norm(), 0.1) << what << ", frame " << f;
+      }
+    }
+  }
+  EXPECT_GE(changes, 1) << what;
+  const size_t n = r.matched.size();
+  const int sum = [&] {
+    int s = 0;
+    for (const Singularity& x : g.topology.singularities.front()) s += x.index;
+    return s;
+  }();
+  for (size_t f = 0; f < g.topology.singularities.size(); ++f) {
+    int s = 0;
+    for (const Singularity& x : g.topology.singularities[f]) s += x.index;
+    EXPECT_EQ(s, sum) << what << ", frame " << f;
+    EXPECT_EQ(g.topology.singularities[f].size(), n) << what << ", frame " << f;
+  }
+  const double turn = worst_mean_turn(g, 3 * g.space->mesh().mean_edge_length());
+  std::printf("  %s: %zu matched (%d changing stability), %zu bifurcations, %zu paths, %d type changes, worst mean "
+              "turn per frame %.3f rad\n",
+              what.c_str(), n, changes, g.topology.bifurcations.size(), g.topology.paths.size(),
+              g.topology.stats.type_changes, turn);
+  EXPECT_EQ(g.topology.bifurcations.size(), 0u) << what;
+  // One path per match, split only where a type changes (none leaving through the
+  // boundary), and coherent in time: no frame half a turn off the next.
+  EXPECT_EQ(g.topology.paths.size(), n + static_cast<size_t>(g.topology.stats.type_changes)) << what;
+  EXPECT_LT(turn, 0.25) << what;
+  // The report says the type changes.
+  const nlohmann::json j = keyframe_intervals_json(g.report.keyframe_intervals);
+  int reported = 0;
+  for (const auto& m : j[0]["matched"]) reported += m["type"] != m["to_type"];
+  EXPECT_GE(reported, changes) << what;
+}
+
+// With the last resort off: 2 matched, 2 unpaired, not guided, 6 bifurcations at 33² and at
+// 65², 2 at subdivisions 3 and 4; with α blended linearly instead of through its phase
+// (det J = |α|² − |β|² through zero): 8 bifurcations at 33², extra zeros on the sphere.
+// With α always the shorter way round, 65²'s last guided frame was half a turn off the key
+// frame between the center and the changing node (the two nodes' phases ending a whole
+// turn apart): a saddle path left through the boundary and another entered.
+TEST(KeyframeTopology, ANodeThatChangesStabilityIsCarriedThroughACenter) {
+  for (const int n : {33, 65}) expect_stability_carried(run(planar_stability_scene(n)), fmt::format("{}²", n));
+}
+
+TEST(KeyframeTopology, ANodeThatChangesStabilityOnASphereIsCarriedThroughACenter) {
+  for (const int sub : {3, 4}) expect_stability_carried(run(sphere_stability_scene(sub)), fmt::format("sphere, subdivisions {}", sub));
+}
+
+}  // namespace
+}  // namespace tvf

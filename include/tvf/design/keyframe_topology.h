@@ -6,6 +6,12 @@
 //  2. matches those of consecutive key frames: first the pairs the scene links
 //     (solver.links, by key-frame element), then the same type nearest first, then the
 //     same index nearest first (never a source with a sink: a node keeps its stability);
+//     last, of what step 4 leaves neither matched nor paired, the same index nearest first
+//     across stability (a source-like node in one key frame, a sink-like one in the next,
+//     within a quarter of the domain's diameter): its α turns through a center on the way
+//     (|α| > |β| throughout, det J > 0), a Hopf-like type change, not a saddle–node pair;
+//     the shorter way round, or the other where the planar guide's nodes' phases would
+//     otherwise end whole turns apart (step 8);
 //  3. carries each matched singularity from its key-frame position to the next one's as a
 //     moving constraint (the linear field J(t)·w within solver.region_radius, as a moving
 //     singular element is constrained; the position follows a smoothstep in time along
@@ -74,6 +80,9 @@ struct KeyframeIntervalReport {
     Vec3 from = Vec3::Zero(), to = Vec3::Zero();
     bool linked = false;  // named by solver.links
     double detour = 0;    // largest distance of its path from the straight segment (0: straight)
+    // At the second key frame: the same as `type`, or of the other stability (a node
+    // matched as the last resort, its type changing through a center on the way).
+    SingularityType to_type = SingularityType::source;
   };
   struct Pair {
     SingularityType saddle_type = SingularityType::saddle, node_type = SingularityType::source;
@@ -139,7 +148,7 @@ private:
 };
 
 // {"interval": [t0, t1], "keyframes": [k0, k1], "bifurcation_t", "matched": [{"type",
-// "from", "to", "linked", "detour"}], "created": [{"t", "at", "saddle", "node",
+// "from", "to", "linked", "detour", "to_type"}], "created": [{"t", "at", "saddle", "node",
 // "node_type"}], "cancelled": [same], "separation", "closest_approach" (when two or more
 // are carried), "collision" (when not empty), "unpaired": [[x, y, z], ...]} per interval.
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals);
