@@ -835,10 +835,12 @@ void rows_to_frames(const std::vector<double>& hat, size_t n, const std::vector<
   const auto count = q.rows();
   const Eigen::Map<const Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
   Eigen::MatrixXd g(static_cast<Eigen::Index>(2 * rows.size()), count);
-  for (size_t r = 0; r < rows.size(); ++r) {
-    g.row(static_cast<Eigen::Index>(2 * r)) = h.row(2 * rows[r]);
-    g.row(static_cast<Eigen::Index>(2 * r + 1)) = h.row(2 * rows[r] + 1);
-  }
+  // Column by column: both matrices are column-major (a row of hat is count far-apart entries).
+  for (Eigen::Index k = 0; k < count; ++k)
+    for (size_t r = 0; r < rows.size(); ++r) {
+      g(static_cast<Eigen::Index>(2 * r), k) = h(2 * rows[r], k);
+      g(static_cast<Eigen::Index>(2 * r + 1), k) = h(2 * rows[r] + 1, k);
+    }
   const Eigen::MatrixXd f = g * q.transpose();
   out.resize(rows.size() * static_cast<size_t>(count));
   for (size_t r = 0; r < rows.size(); ++r)
@@ -869,34 +871,42 @@ void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<in
       f(static_cast<Eigen::Index>(2 * t + 1), jj) = v.imag();
     }
   const Eigen::MatrixXd g = f * q;
-  for (size_t r = 0; r < some.size(); ++r)
-    for (int part = 0; part < 2; ++part) {
-      const Eigen::Index row = 2 * rows[some[r]] + part;
-      for (Eigen::Index k = 0; k < count; ++k) {
-        const double old = h(row, k), now = old + g(static_cast<Eigen::Index>(2 * r) + part, k);
-        if (rr) rr[k] += now * now - old * old;
+  // Column by column (all three matrices are column-major); each rr[k] sums its rows in
+  // the same order as row by row.
+  for (Eigen::Index k = 0; k < count; ++k) {
+    double* also_k = also ? also->data() + static_cast<size_t>(k) * 2 * n : nullptr;
+    double sum = 0;
+    for (size_t r = 0; r < some.size(); ++r)
+      for (int part = 0; part < 2; ++part) {
+        const Eigen::Index row = 2 * rows[some[r]] + part;
+        const double add = g(static_cast<Eigen::Index>(2 * r) + part, k);
+        const double old = h(row, k), now = old + add;
+        sum += now * now - old * old;
         h(row, k) = now;
-        if (also) (*also)[static_cast<size_t>(k * 2 * static_cast<Eigen::Index>(n) + row)] +=
-            g(static_cast<Eigen::Index>(2 * r) + part, k);
+        if (also_k) also_k[row] += add;
       }
-    }
+    if (rr) rr[k] += sum;
+  }
 }
 
 // A warm re-solve's change back into frames: x (a segment's frames, 2|V| × count real,
 // column-major as the modes) += d · Qᵀ, d the change of the segment's modes in this solve,
 // zero outside few rows in all but the slowest modes (iterate_change): outside the rows
-// reach_of[k] lists for mode k. The modes, ordered by how many rows they reach, go in groups
-// whose rows (the union) are gathered and multiplied, 2|T| × g by g × count, instead of
-// all 2|V| rows by every mode. d and e (the change's residual) are left zero. The groups and
-// the row blocks do not depend on the thread count, nor does any row's sum. Returns the
-// rows reached, summed over the modes.
+// reach_of[k] lists for mode k. e (the change's residual) is zero outside the rows
+// clear_of[k] lists (a superset: with moving constraints the last local solve's leak joins
+// them after the modes' last solve). The modes, ordered by how many rows they reach, go in
+// groups whose rows (the union) are gathered and multiplied, 2|T| × g by g × count, instead
+// of all 2|V| rows by every mode. d and e are left zero. The groups and the row blocks do
+// not depend on the thread count, nor does any row's sum. Returns the rows reached, summed
+// over the modes.
 size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size_t n, const Eigen::MatrixXd& q,
-                            const std::vector<const std::vector<int>*>& reach_of, double* x, bool parallel) {
+                            const std::vector<std::span<const int>>& reach_of,
+                            const std::vector<const std::vector<int>*>& clear_of, double* x, bool parallel) {
   const auto count = static_cast<size_t>(q.rows());
-  auto reach = [&](size_t k) -> const std::vector<int>& { return *reach_of[k]; };
+  auto reach = [&](size_t k) { return reach_of[k]; };
   for (size_t k = 0; k < count; ++k) {
     cplx* ek = reinterpret_cast<cplx*>(e.data() + 2 * n * k);
-    for (const int i : reach(k)) ek[i] = 0;
+    for (const int i : *clear_of[k]) ek[i] = 0;
   }
   std::vector<size_t> order;
   for (size_t k = 0; k < count; ++k)
@@ -1034,6 +1044,7 @@ struct LocalSolve {
   size_t nf, first, count;
   double b;
   std::vector<cplx> r, z, p, ap;
+  std::vector<char> hot;  // per omega line: u not zero on it
 
   // y = (A u) on omega vertex li's line, u zero outside omega (every entry of u counts).
   void product(const cplx* u, size_t li, cplx* y) const {
@@ -1122,9 +1133,22 @@ struct LocalSolve {
     r.resize(nq), z.resize(nq), p.resize(nq), ap.resize(nq);
     for (size_t q = 0; q < nq; ++q)
       if (!m.moving[q]) u[q] = 0;
-    // r = −A u_constraints on the free entries.
+    // r = −A u_constraints on the free entries: zero but on the lines where u is not and
+    // their neighbours (a warm re-solve's change reaches few of omega's lines).
+    const size_t nl = m.omega.size();
+    hot.assign(nl, 0);
+    for (size_t li = 0; li < nl; ++li)
+      hot[li] = std::any_of(u.begin() + static_cast<std::ptrdiff_t>(li * count),
+                            u.begin() + static_cast<std::ptrdiff_t>((li + 1) * count), [](cplx v) { return v != cplx(0, 0); });
     double rr = 0;
-    for (size_t li = 0; li < m.omega.size(); ++li) {
+    for (size_t li = 0; li < nl; ++li) {
+      bool near = hot[li] != 0;
+      for (int e = m.start[li]; e < m.start[li + 1] && !near; ++e) near = hot[static_cast<size_t>(m.column[static_cast<size_t>(e)])] != 0;
+      if (!near) {
+        std::fill(r.begin() + static_cast<std::ptrdiff_t>(li * count), r.begin() + static_cast<std::ptrdiff_t>((li + 1) * count),
+                  cplx(0, 0));
+        continue;
+      }
       product(u.data(), li, r.data() + li * count);
       for (size_t q = li * count; q < (li + 1) * count; ++q) {
         r[q] = m.moving[q] ? cplx(0, 0) : -r[q];
@@ -1244,6 +1268,10 @@ constexpr double kSlowShift = 1.0;
 // above this fraction of its target takes its whole residual instead (the change alone
 // could not bring it below the target, or only with many more iterations).
 constexpr double kChangeFold = 0.5;
+
+// Solving for the change with moving constraints: the first round's modes go to this
+// fraction of the rounds' target (the rest is room for the local solve's leak).
+constexpr double kChangeModesShare = 0.7;
 
 size_t SpaceTimeSolver::longest_segment(std::span<const char> fixed) const {
   size_t most = 0;
@@ -1490,6 +1518,8 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     double rr = 0;       // ‖residual‖²
     double base_rr = 0;       // solving for the change: ‖residual − change‖², what the last solve left,
     std::vector<int> active;  // and the rows the change may have reached (iterate_change),
+    size_t solved = 0;        // of which the first `solved` the modes' solves have (the change's
+                              // modes, d, are zero on the rest: the last local solve's leak)
     double outside = 0;       // ‖residual‖² on the other rows
     int iterations = 0;
   };
@@ -1550,7 +1580,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     if (!kept || !w.same_guess) multiply_rows(x_seg, basis.q, false, x_hat.data(), rows);
     mode_offset[si] = modes.size();
     for (size_t k = 0; k < count; ++k)
-      modes.push_back({si, k, b_ * basis.lambda[static_cast<Eigen::Index>(k)], 0, 0, {}, 0, 0});
+      modes.push_back({si, k, b_ * basis.lambda[static_cast<Eigen::Index>(k)], 0, 0, {}, 0, 0, 0});
   }
   auto each_mode = [&](const std::vector<size_t>& which, auto&& body) {
     if (par)
@@ -1765,6 +1795,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     if (fresh && f->factored) ++factorizations;
     if (it < 0) failed = true;
     mode.iterations += std::max(it, 0);
+    mode.solved = mode.active.size();
   };
   // One round of the modes' solves: the squared residuals add up (Q is orthogonal), so a
   // budget of squared residual is theirs to share. Modes already within an equal share keep
@@ -1811,7 +1842,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   std::vector<cplx> cut_values, u, y_line, delta;
   std::vector<LocalSolve> local_solves;  // their vectors kept between rounds
   for (size_t si = 0; si < moving.size(); ++si)
-    local_solves.push_back({*op_, moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {}, {}, {}});
+    local_solves.push_back({*op_, moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {}, {}, {}, {}});
   std::vector<double> rr_delta;
   // What the local solves add to x on omega's rows and to the multipliers on the cut rows,
   // kept in frames (omega × count, cut × count per segment) and transformed into the modes
@@ -1824,6 +1855,10 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   }
   double local_floor2 = 0;  // the local solves stop below this squared residual (set below)
   std::vector<int> stamp(change && has_moving ? n : 0, 0);
+  std::vector<size_t> free_rows(nseg, 0);  // per segment: the modes' free rows
+  if (change && has_moving)
+    for (size_t si = 0; si < nseg; ++si)
+      free_rows[si] = static_cast<size_t>(std::count(seg_fixed[si], seg_fixed[si] + n, char{0}));
   int stamp_id = 0;
   auto local_round = [&]() {
     for (size_t si = 0; si < nseg; ++si) {
@@ -1881,6 +1916,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
             leaking.push_back(m.leak_rows[r]);
         for (size_t k = 0; k < count; ++k) {
           Mode& mode = modes[mode_offset[si] + k];
+          if (mode.active.size() == free_rows[si]) continue;  // every free row already (folded)
           ++stamp_id;
           for (const int i : mode.active) stamp[static_cast<size_t>(i)] = stamp_id;
           const cplx* res = column(w.res_hat, mode);
@@ -1927,7 +1963,13 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     theta = std::sqrt(theta);
     int slow_rounds = 0;
     for (;;) {
-      solve_round(std::max(moving_budget, std::pow(kRoundReduction * theta, 2)));
+      // Solving for the change (a warm re-solve), the first round's modes go to
+      // kChangeModesShare of the target at once: what the change moves at the constraint
+      // entries is far below it, so the local solve's leak usually leaves the whole within
+      // the target and no second round is needed.
+      const double round_budget = change && rounds == 0 ? moving_budget * kChangeModesShare * kChangeModesShare
+                                                        : std::max(moving_budget, std::pow(kRoundReduction * theta, 2));
+      solve_round(round_budget);
       ++rounds;
       const double now = local_round();
       slow_rounds = now > kRoundStall * theta ? slow_rounds + 1 : 0;
@@ -1957,9 +1999,14 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       multiply_rows(w.x_hat[si].data(), bases[si]->q, true, x_seg, static_cast<Eigen::Index>(2 * n));
       continue;
     }
-    std::vector<const std::vector<int>*> reach_of(count);
-    for (size_t k = 0; k < count; ++k) reach_of[k] = &modes[mode_offset[si] + k].active;
-    reached += add_change_to_frames(w.d_hat[si], w.e_hat[si], n, bases[si]->q, reach_of, x_seg, par);
+    std::vector<std::span<const int>> reach_of(count);
+    std::vector<const std::vector<int>*> clear_of(count);
+    for (size_t k = 0; k < count; ++k) {
+      const Mode& mode = modes[mode_offset[si] + k];
+      reach_of[k] = std::span<const int>(mode.active.data(), mode.solved);
+      clear_of[k] = &mode.active;
+    }
+    reached += add_change_to_frames(w.d_hat[si], w.e_hat[si], n, bases[si]->q, reach_of, clear_of, x_seg, par);
     mode_rows += n * count;
     if (local && !moving[si].cut.empty()) {
       const MovingSegment& m = moving[si];

@@ -915,7 +915,8 @@ TEST(SpaceTime, SlowModesTakeTheirFactorizationsKeptWhileTheFixedSetStays) {
 // frame in turn (each solve starts from a residual the last one left near its target, so
 // some modes take their whole residual): after each, the measured residual within the
 // tolerance and what the report says, the field a fresh solver's, the change's reach a small
-// part of the modes' rows; and the whole sequence the same bits on 1, 2 and 4 threads.
+// part of the modes' rows, with the moving disc in one round of modes and local solves;
+// and the whole sequence the same bits on 1, 2 and 4 threads.
 TEST(SpaceTime, WarmResolvesSolveForTheChangeAlone) {
   const Mesh grid = make_grid(GridSpec{49, 49, {-1.0, -1.0}, {1.0, 1.0}});
   const int nf = 24;
@@ -950,7 +951,15 @@ TEST(SpaceTime, WarmResolvesSolveForTheChangeAlone) {
         if (at != std::string::npos) {
           const double reached = std::stod(r.method.substr(at + 36));
           EXPECT_LT(reached, 50.0) << what << " round " << round << ": " << r.method;
+          // With the moving disc, 10.0–14.4 % (key frames alone 9.7–26.9 %): the rows the
+          // last local solve's leak joins after the modes' last solve carry no change of
+          // theirs and do not go back into frames (with them: 18.9–25.2 %).
+          if (radius > 0) EXPECT_LT(reached, 15.0) << what << " round " << round << ": " << r.method;
         }
+        // With the moving disc, the first round's modes go to the target at once (what the
+        // edit moves at the constraint entries is far below it): one round, not two.
+        if (radius > 0)
+          EXPECT_NE(r.method.find(", 1 rounds,"), std::string::npos) << what << " round " << round << ": " << r.method;
         const double measured = relative_residual(a, d.fixed, z);
         EXPECT_LE(measured, 1e-6 * (1 + 1e-6)) << what << " round " << round;
         EXPECT_NEAR(r.residual, measured, 0.05 * measured + 1e-12) << what << " round " << round;
