@@ -954,12 +954,15 @@ TEST(SpaceTime, WarmResolvesSolveForTheChangeAlone) {
           // With the moving disc, 10.0–14.4 % (key frames alone 9.7–26.9 %): the rows the
           // last local solve's leak joins after the modes' last solve carry no change of
           // theirs and do not go back into frames (with them: 18.9–25.2 %).
-          if (radius > 0) EXPECT_LT(reached, 15.0) << what << " round " << round << ": " << r.method;
+          if (radius > 0) {
+            EXPECT_LT(reached, 15.0) << what << " round " << round << ": " << r.method;
+          }
         }
         // With the moving disc, the first round's modes go to the target at once (what the
         // edit moves at the constraint entries is far below it): one round, not two.
-        if (radius > 0)
+        if (radius > 0) {
           EXPECT_NE(r.method.find(", 1 rounds,"), std::string::npos) << what << " round " << round << ": " << r.method;
+        }
         const double measured = relative_residual(a, d.fixed, z);
         EXPECT_LE(measured, 1e-6 * (1 + 1e-6)) << what << " round " << round;
         EXPECT_NEAR(r.residual, measured, 0.05 * measured + 1e-12) << what << " round " << round;
