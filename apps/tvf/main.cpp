@@ -106,11 +106,24 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
     for (const auto& e : report.edits) std::printf("  edit: %s\n", e.c_str());
     for (const auto& k : report.keyframe_intervals) {
       const auto bent = std::count_if(k.matched.begin(), k.matched.end(), [](const auto& m) { return m.detour > 0; });
+      // A node matched across stability (a source-like one to a sink-like one).
+      const auto repelling = [](SingularityType t) {
+        return t == SingularityType::source || t == SingularityType::repelling_focus;
+      };
+      const auto attracting = [](SingularityType t) {
+        return t == SingularityType::sink || t == SingularityType::attracting_focus;
+      };
+      const auto turning = std::count_if(k.matched.begin(), k.matched.end(), [&](const auto& m) {
+        return (repelling(m.type) && attracting(m.to_type)) || (attracting(m.type) && repelling(m.to_type));
+      });
+      std::vector<std::string> notes;
+      if (bent > 0)
+        notes.push_back(
+            fmt::format("{} bent{} to keep {:g} apart", bent, k.routing == "joint" ? " together" : "", k.separation));
+      if (turning > 0) notes.push_back(fmt::format("{} changing stability through a center", turning));
       std::printf("  key frames %d → %d (t %g → %g): %zu matched%s, %zu pairs created and %zu cancelled at t = %g%s\n",
                   k.from_keyframe, k.to_keyframe, k.t0, k.t1, k.matched.size(),
-                  bent == 0 ? "" : fmt::format(" ({} bent{} to keep {:g} apart)", bent,
-                                                          k.routing == "joint" ? " together" : "", k.separation)
-                                                  .c_str(),
+                  notes.empty() ? "" : fmt::format(" ({})", fmt::join(notes, "; ")).c_str(),
                   k.created.size(), k.cancelled.size(), k.bifurcation_t,
                   k.unpaired_first.empty() && k.unpaired_second.empty()
                       ? ""

@@ -189,5 +189,42 @@ TEST(CliKeyframeTopology, Example26KnotOnASphereIsGuided) {
   for (const auto& b : analysis.at("bifurcations")) EXPECT_EQ(b.at("kind"), "hopf") << b;
 }
 
+
+// Example 26's stability.json: a source in the first key frame, a sink near it in the
+// second. Matched across stability as the last resort, the node is carried through a
+// center: `tvf generate` says so, keyframe_topology.json gives its to_type, and the
+// analysis finds three singularities in every frame and no bifurcation ("free": two).
+TEST(CliKeyframeTopology, Example26NodeChangesStabilityWithoutABifurcation) {
+  test::TempDir dir;
+  const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/stability.json";
+  const GeneratedAndAnalysed r = generate_and_analyze(dir, scene, " --no-plots");
+  ASSERT_FALSE(r.analysis.is_null());
+  EXPECT_NE(r.generated.output.find("3 matched (1 changing stability through a center), 0 pairs created"),
+            std::string::npos)
+      << r.generated.output;
+  const nlohmann::json& i = r.topology.at("intervals").at(0);
+  EXPECT_TRUE(i.at("guided").get<bool>()) << i;
+  int turning = 0;
+  for (const auto& m : i.at("matched"))
+    if (m.at("type") != m.at("to_type")) {
+      ++turning;
+      EXPECT_EQ(m.at("type"), "source") << m;
+      EXPECT_EQ(m.at("to_type"), "sink") << m;
+    }
+  EXPECT_EQ(turning, 1) << i;
+  EXPECT_TRUE(r.analysis.at("bifurcations").empty()) << r.analysis.at("bifurcations");
+  std::vector<int> count(60, 0);
+  for (const auto& s : r.analysis.at("singularities")) ++count.at(s.at("frame").get<size_t>());
+  for (size_t f = 0; f < count.size(); ++f) EXPECT_EQ(count[f], 3) << "frame " << f;
+
+  test::TempDir free_dir;
+  nlohmann::json free = read_json(scene);
+  free["solver"]["keyframe_topology"] = "free";
+  test::write_text(free_dir / "free.json", free.dump());
+  const GeneratedAndAnalysed f = generate_and_analyze(free_dir, (free_dir / "free.json").string(), " --no-plots");
+  ASSERT_FALSE(f.analysis.is_null());
+  EXPECT_GE(f.analysis.at("bifurcations").size(), 2u);
+}
+
 }  // namespace
 }  // namespace tvf
