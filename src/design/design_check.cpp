@@ -296,6 +296,20 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
       key_fields.emplace_back(frame.begin(), frame.end());
     }
     const KeyframeTopologyPlan plan(space, scene, key_fields);
+    // The plan carries every matched singularity, also those no element names (a key
+    // frame's own saddle, which the static solve adds): the path through one at its first
+    // key frame is the plan's, not an extra (its continuations across type changes, a node
+    // changing stability, are claimed with it below).
+    for (const KeyframeIntervalReport& r : plan.intervals()) {
+      const double t0 = topo.times[static_cast<size_t>(keyframe_frame(scene, r.t0))];
+      for (const KeyframeIntervalReport::Match& m : r.matched)
+        for (const SingularityPath& p : topo.paths)
+          for (const PathSample& s : p.points)
+            if (s.t == t0 && (s.position - m.from).norm() <= tol) {
+              claimed.insert(p.id);
+              break;
+            }
+    }
     for (const KeyframeIntervalReport& r : plan.intervals())
       out.keyframe_intervals.push_back({r.from_keyframe, r.to_keyframe, r.t0, r.t1,
                                         static_cast<int>(r.created.size() + r.cancelled.size()), {}});
