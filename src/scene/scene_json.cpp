@@ -208,15 +208,34 @@ private:
     if (!on_domain(p))
       fail(where, fmt::format("({}, {}) is outside the domain {}", p.x(), p.y(), domain_extent()));
   }
+  // Whether the segment ab meets the grid's rectangle (clipped slab by slab).
+  bool segment_meets_domain(const Vec3& a, const Vec3& b) const {
+    const double eps = 1e-9 * (grid_->max - grid_->min).norm();
+    double t0 = 0, t1 = 1;
+    for (int k = 0; k < 2; ++k) {
+      const double lo = grid_->min[k] - eps, hi = grid_->max[k] + eps, d = b[k] - a[k];
+      if (d == 0) {
+        if (a[k] < lo || a[k] > hi) return false;
+        continue;
+      }
+      const double ta = (lo - a[k]) / d, tb = (hi - a[k]) / d;
+      t0 = std::max(t0, std::min(ta, tb));
+      t1 = std::min(t1, std::max(ta, tb));
+      if (t0 > t1) return false;
+    }
+    return true;
+  }
   // An element, streamline or path wholly off a grid domain constrains no vertex of it:
-  // every generator would give the field without it (or none), so it is refused (a moving
-  // element may enter or leave: one point on the domain is enough).
+  // every generator would give the field without it (or none), so it is refused. A moving
+  // element may enter, leave or cross the domain: its polyline of keys meeting it is enough.
   template <class Points, class Position>
   void check_reaches_domain(const Points& points, Position position, const std::string& where,
                             const char* what) const {
     if (!grid_) return;
-    for (const auto& p : points)
-      if (on_domain(position(p))) return;
+    for (size_t i = 0; i < points.size(); ++i)
+      if (on_domain(position(points[i])) ||
+          (i > 0 && segment_meets_domain(position(points[i - 1]), position(points[i]))))
+        return;
     fail(where, fmt::format("{} lies wholly outside the domain {}: it would constrain nothing there", what,
                             domain_extent()));
   }
