@@ -348,16 +348,21 @@ std::vector<HopfEvent> find_hopf_events(const Topology& topo, const std::vector<
       for (size_t id = 0; id < tracks.size(); ++id) {
         const Track& tr = tracks[id];
         if (tr.first < 0 || used[id] || tr.last == tr.first) continue;  // one frame: too weak a sign
-        // Born after t* (first frame ≥ j + 1) or ended before it (last frame ≤ j).
-        const bool born = tr.first >= static_cast<int>(j) + 1 && tr.first <= static_cast<int>(j) + hopf_frames &&
+        // Born after t* (first frame ≥ j + 1) or ended before it (last frame ≤ j), with one
+        // frame of slack: the focus's stability is read from one face's linear Jacobian,
+        // the cycle from streamlines across many faces, and near t* the two may disagree by a
+        // frame (a focus at a vertex on CGAL's elephant: trace −0.01 at the frame where a
+        // cycle of radius 1.8 edges is first found).
+        const bool born = tr.first >= static_cast<int>(j) && tr.first <= static_cast<int>(j) + hopf_frames &&
                           (tr.first_center - e.position).norm() <= distance;
-        const bool ended = tr.last <= static_cast<int>(j) && tr.last + hopf_frames > static_cast<int>(j) &&
+        const bool ended = tr.last <= static_cast<int>(j) + 1 && tr.last + hopf_frames > static_cast<int>(j) &&
                            (tr.last_center - e.position).norm() <= distance;
         if (!born && !ended) continue;
         // The focus inside an attracting cycle repels, inside a repelling one attracts.
         const double inside_trace = born ? tb : ta;
         if ((tr.stability == OrbitStability::attracting) != (inside_trace > 0)) continue;
-        const double gap = born ? tr.first - static_cast<double>(j) : static_cast<double>(j) - tr.last;
+        const double gap = born ? std::abs(tr.first - (static_cast<double>(j) + 1))
+                                : std::abs(static_cast<double>(j) - tr.last);
         if (gap < best_gap) best_gap = gap, best = static_cast<int>(id);
       }
       if (best < 0) continue;

@@ -35,7 +35,9 @@
 // within `track_distance` edge lengths) the trace of the face Jacobian changing sign
 // between frames j and j + 1 with complex eigenvalues on both sides marks a stability
 // change at t* (linear in the trace); it is a Hopf event when an orbit track around that
-// focus, at least two frames long, begins or ends within `hopf_frames` frames of t*.
+// focus, at least two frames long, begins or ends within `hopf_frames` frames of t* (one
+// frame early allowed: the focus's face Jacobian and the cycle's streamlines read the
+// piecewise-linear field differently near t*).
 // Supercritical when the cycle is
 // attracting (it surrounds the repelling focus), subcritical when it is repelling.
 #include "tvf/analysis/topology.h"
