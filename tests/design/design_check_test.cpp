@@ -135,6 +135,33 @@ TEST(DesignCheck, AHopfElementIsItsFocusAndItsHopfEvent) {
   const DesignCheck other = check_design(wrong, *g.space, g.field, g.topology);
   EXPECT_FALSE(other.designed[1].found);
   EXPECT_NE(other.designed[1].note.find("supercritical"), std::string::npos) << other.designed[1].note;
+  EXPECT_EQ(other.designed[1].note.find("mean edge lengths"), std::string::npos) << other.designed[1].note;
+}
+
+TEST(DesignCheck, ATemplateTooSmallForTheMeshIsNotFoundAndSaysSo) {
+  // A Hopf template of scale 0.19 on the 33² grid (2.7 mean edge lengths): the cubic term at
+  // one edge from the focus outweighs μ near t0, so the piecewise-linear focus keeps its
+  // stability for frames past t0 and the event is not found within the tolerance; the note
+  // says why. At scale 0.45 (6.4 edges) the same design is found and has no such note.
+  for (const double scale : {0.19, 0.45}) {
+    SCOPED_TRACE(scale);
+    Scene scene = grid_scene(33, 41, 8);
+    BifurcationElement b = bifurcation(BifurcationType::hopf_supercritical, Vec3(0, 0, 0), 0.35);
+    b.scale = scale;
+    b.time_scale = 0.4;
+    scene.elements.push_back(b);
+    const Generated g = generate_and_analyze(scene);
+    const DesignCheck check = check_design(scene, *g.space, g.field, g.topology);
+    ASSERT_EQ(check.designed.size(), 2u);
+    const DesignedFeature& event = check.designed[1];
+    if (scale < 0.3) {
+      EXPECT_FALSE(event.found);
+      EXPECT_NE(event.note.find("spans 2.7 mean edge lengths"), std::string::npos) << event.note;
+    } else {
+      EXPECT_TRUE(check.all_found()) << check.summary();
+      EXPECT_EQ(event.note.find("mean edge lengths"), std::string::npos) << event.note;
+    }
+  }
 }
 
 TEST(DesignCheck, ReportsAnUndesignedPairAsOneExtraGroup) {
