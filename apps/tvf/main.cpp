@@ -128,6 +128,8 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
                   k.unpaired_first.empty() && k.unpaired_second.empty()
                       ? ""
                       : fmt::format(", {} left unpaired", k.unpaired_first.size() + k.unpaired_second.size()).c_str());
+      if (k.fallback)
+        std::printf("    not guided, left free (key frames only): %s\n", k.unguided_reason.c_str());
     }
     if (const auto& inc = report.incompressible)
       std::printf("  incompressible (%s boundary): RMS divergence %.3g before, %.2g after (worst frame; "
@@ -218,9 +220,11 @@ int run_analyze(const AnalyzeArgs& args) {
     for (const auto& f : pictures) std::printf("  %s\n", f.c_str());
     if (check) {
       std::printf("%s\n", check->summary().c_str());
-      for (const auto& k : check->keyframe_intervals)
+      for (const auto& k : check->keyframe_intervals) {
         std::printf("  key frames %d → %d (t %g → %g): %d bifurcations planned, %zu not asked for\n", k.from_keyframe,
                     k.to_keyframe, k.t0, k.t1, k.planned, k.extra_bifurcations.size());
+        if (k.fallback) std::printf("    not guided, left free (key frames only): %s\n", k.unguided_reason.c_str());
+      }
       std::printf("  %s\n", cli::design_check_path(args.out).c_str());
     } else
       std::printf("no scene.json beside the field: nothing to check the design against\n");

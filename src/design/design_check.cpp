@@ -307,6 +307,7 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     // key frame is the plan's, not an extra (its continuations across type changes, a node
     // changing stability, are claimed with it below).
     for (const KeyframeIntervalReport& r : plan.intervals()) {
+      if (r.fallback) continue;  // left free: nothing carried
       const double t0 = topo.times[static_cast<size_t>(keyframe_frame(scene, r.t0))];
       for (const KeyframeIntervalReport::Match& m : r.matched)
         for (const SingularityPath& p : topo.paths)
@@ -318,9 +319,10 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     }
     for (const KeyframeIntervalReport& r : plan.intervals())
       out.keyframe_intervals.push_back({r.from_keyframe, r.to_keyframe, r.t0, r.t1,
-                                        static_cast<int>(r.created.size() + r.cancelled.size()), {}});
+                                        r.fallback ? 0 : static_cast<int>(r.created.size() + r.cancelled.size()),
+                                        {}, r.fallback, r.unguided_reason});
     for (const KeyframeIntervalReport& r : plan.intervals())
-      for (int creation = 0; creation < 2; ++creation)
+      for (int creation = 0; creation < 2 && !r.fallback; ++creation)
         for (const KeyframeIntervalReport::Pair& p : creation ? r.created : r.cancelled) {
           if (N < 2 || p.t <= topo.times.front() || p.t >= topo.times.back()) continue;
           const bool sink = p.node_type == SingularityType::sink || p.node_type == SingularityType::attracting_focus;
@@ -783,7 +785,11 @@ nlohmann::json design_check_to_json(const DesignCheck& check) {
       intervals.push_back({{"keyframes", json::array({k.from_keyframe, k.to_keyframe})},
                            {"interval", json::array({k.t0, k.t1})},
                            {"planned_bifurcations", k.planned},
-                           {"extra_bifurcations", k.extra_bifurcations}});
+                           {"extra_bifurcations", k.extra_bifurcations},
+                           {"fallback", k.fallback}});
+    for (size_t k = 0; k < check.keyframe_intervals.size(); ++k)
+      if (!check.keyframe_intervals[k].unguided_reason.empty())
+        intervals[k]["unguided_reason"] = check.keyframe_intervals[k].unguided_reason;
     out["keyframe_intervals"] = std::move(intervals);
   }
   return out;

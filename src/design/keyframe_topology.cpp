@@ -94,6 +94,7 @@ struct KeyframeTopologyPlan::Track {
   int index = 0;   // +1 or −1 (0: a template standing in the router's way)
   int group = -1;  // ≥ 0: one of a created or cancelled pair (the two are meant to meet)
   bool guided = false;  // its interval's guide field constrains the frames (Guide, below)
+  bool free = false;    // its interval could not be guided and is left free (no constraint)
   // A detour bent into the path (PathRouter, below): amplitude · bump(s, rise, fall) · dir.
   struct Bend {
     double rise = 0.5, fall = 0.5, amplitude = 0;
@@ -132,6 +133,7 @@ struct KeyframeTopologyPlan::Template {
   double t0 = 0, t1 = 0;  // present for t0 ≤ t ≤ t1
   double radius = 0;
   bool guided = false;  // its interval's guide field stands in for it
+  bool free = false;    // its interval could not be guided and is left free (not placed)
 };
 
 // One interval's guide field on a planar domain: G(z, t) = h(z, t) · Π_k g_k(z, t), every
@@ -881,7 +883,8 @@ cplx face_alpha(const DesignSpace& space, int f, const std::array<cplx, 3>& w) {
 // where the factors' weights fall from 1 to 0.
 bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, size_t first, size_t last,
                          const std::vector<Guide::Pair>& pairs, double radius, double ramp,
-                         const std::vector<cplx>& f0, const std::vector<cplx>& f1, SurfaceGuide& g) {
+                         const std::vector<cplx>& f0, const std::vector<cplx>& f1, SurfaceGuide& g,
+                         std::string& why) {
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   const double h = mesh.mean_edge_length();
@@ -971,7 +974,11 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     for (const SurfacePoint& p : on)
       reach = std::max(reach, (surface_position(mesh, p) - surface_position(mesh, mid)).norm());
     if (reach < 1e-9 * h) continue;  // a singularity that stays: F₀ and F₁ share it, H carries it
-    if (!make_tube(path, {on}, mid)) return false;
+    if (!make_tube(path, {on}, mid)) {
+      why = fmt::format("the surface folds over the chart of the {}'s path from {} to {} within an edge length of it",
+                        to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1));
+      return false;
+    }
     g.paths.push_back(std::move(path));
   }
   for (const Guide::Pair& pr : pairs) {
@@ -991,10 +998,17 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     for (const auto* on : {&on_node, &on_saddle})
       for (const SurfacePoint& p : *on) mean += surface_position(mesh, p);
     const SurfacePoint mid = space.locate(mean / (2.0 * (SurfaceGuide::kSamples + 1)));
-    if (!make_tube(path, {on_node, on_saddle, between}, mid)) return false;
+    if (!make_tube(path, {on_node, on_saddle, between}, mid)) {
+      why = fmt::format("the surface folds over the chart of the pair at {} within an edge length of its paths",
+                        describe_point(surface_position(mesh, mid), false, 1));
+      return false;
+    }
     // The template in the chart: its zeros are the tracks' ends.
     const cplx xn = chart_point(mesh, path.coords, on_node.back()), xs = chart_point(mesh, path.coords, on_saddle.back());
-    if (!std::isfinite(std::abs(xn)) || !std::isfinite(std::abs(xs)) || std::abs(xn - xs) == 0) return false;
+    if (!std::isfinite(std::abs(xn)) || !std::isfinite(std::abs(xs)) || std::abs(xn - xs) == 0) {
+      why = fmt::format("the pair at {} has no template in its chart", describe_point(surface_position(mesh, mid), false, 1));
+      return false;
+    }
     path.mid = 0.5 * (xn + xs);
     path.sigma = 0.5 * std::abs(xn - xs);
     path.axis = (xn - xs) / std::abs(xn - xs);
@@ -1019,7 +1033,10 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     nbr[b].push_back(a);
   }
   // A vertex on a key frame's zero: the mean of its neighbours' H (H is smooth there).
-  if (!fill_from_neighbours(nbr, hv, ok)) return false;
+  if (!fill_from_neighbours(nbr, hv, ok)) {
+    why = "the key frames' fields have no zero-free quotient (a part of the surface where one of them vanishes)";
+    return false;
+  }
   g.log_h.assign(nv, cplx(0, 0));
   std::vector<char> seen(nv, 0);
   double sum_arg = 0;
@@ -1343,12 +1360,42 @@ public:
     const char* why = nullptr;
     size_t wi = 0, wj = 0;
     Approach wap;
+    // A cheap test first: the paths spanning the whole interval at kCoarse + 1 times; two
+    // whose samples stay farther apart than the separation plus twice the largest step of
+    // each between samples cannot come within it (approach() is 257 samples of both, each
+    // a point location on a surface: 0.3 s a round for the elephant's 190 pairs).
+    constexpr int kCoarse = 64;
+    double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin;
+    for (size_t i = first; i < last; ++i)
+      tmin = std::min({tmin, tracks[i].t0, tracks[i].t1}), tmax = std::max({tmax, tracks[i].t0, tracks[i].t1});
+    std::vector<std::vector<Vec3>> coarse(n);
+    std::vector<double> step(n, 0.0);
+    auto spans_all = [&](const Track& tr) { return std::min(tr.t0, tr.t1) == tmin && std::max(tr.t0, tr.t1) == tmax; };
+    auto far_apart = [&](size_t i, size_t j) {
+      if (coarse[i - first].empty() || coarse[j - first].empty()) return false;
+      double closest = std::numeric_limits<double>::infinity();
+      for (int k = 0; k <= kCoarse; ++k)
+        closest = std::min(closest, (coarse[i - first][static_cast<size_t>(k)] - coarse[j - first][static_cast<size_t>(k)]).norm());
+      return closest > separation_ + 2 * (step[i - first] + step[j - first]);
+    };
     for (int round = 0;; ++round) {
+      for (size_t i = first; i < last; ++i) {
+        coarse[i - first].clear();
+        step[i - first] = 0;
+        if (!spans_all(tracks[i])) continue;
+        for (int k = 0; k <= kCoarse; ++k) {
+          coarse[i - first].push_back(at(tracks[i], tmin + (tmax - tmin) * k / kCoarse));
+          if (k > 0)
+            step[i - first] = std::max(step[i - first], (coarse[i - first][static_cast<size_t>(k)] -
+                                                         coarse[i - first][static_cast<size_t>(k) - 1]).norm());
+        }
+      }
       // The pair that comes closest relative to what it must keep, first.
       double worst = 1 - 1e-6;
       for (size_t i = first; i < last; ++i)
         for (size_t j = i + 1; j < last; ++j) {
           if (tracks[i].group >= 0 && tracks[i].group == tracks[j].group) continue;
+          if (far_apart(i, j)) continue;
           const auto ap = approach(tracks[i], tracks[j]);
           if (ap && ap->ratio < worst) worst = ap->ratio, wi = i, wj = j, wap = *ap;
         }
@@ -1390,7 +1437,22 @@ public:
     const Track a = tracks[why ? wi : oi];
     const Track b = why ? tracks[wj] : obstacles[oj];
     if (why) std::copy(before.begin(), before.end(), tracks.begin() + static_cast<std::ptrdiff_t>(first));
-    if (joint(tracks, first, last, obstacles)) {
+    // The key frames' own collision: two paths that no detour of their own parts, already
+    // closer than the separation at a key frame (where their ends are fixed), are not
+    // parted by bending the others either; the joint search (seconds on a surface with
+    // tens of paths) is not tried.
+    std::string held;
+    if (why) {
+      const double from = wap.from, to = wap.to;
+      for (const double t : {from, to}) {
+        const double d = (at(before[wi - first], t) - at(before[wj - first], t)).norm();
+        const bool keyframe = t == std::min(a.t0, a.t1) || t == std::max(a.t0, a.t1);
+        if (keyframe && d < separation_ * (1 - 1e-9) && held.empty())
+          held = fmt::format("no detour (the key frame at t = {:.3g} holds them {:.3g} apart already)", t, d);
+      }
+      if (!held.empty()) why = held.c_str();
+    }
+    if (held.empty() && joint(tracks, first, last, obstacles)) {
       how = "joint";
       return std::nullopt;
     }
@@ -1425,6 +1487,7 @@ public:
   // times of its common time (approach()) and stay inside (inside()), the one that adds
   // least length is kept. False, tracks unchanged, when none does.
   static constexpr int kWaves = 4;
+  static constexpr int kJointSteps = 1200;
   bool joint(std::vector<Track>& tracks, size_t first, size_t last, const std::vector<Track>& obstacles) const {
     const size_t n = last - first;
     if (n == 0) return false;
@@ -1610,8 +1673,13 @@ public:
     patterns.emplace_back();  // no detour to start from
     double best_cost = std::numeric_limits<double>::infinity();
     std::optional<std::vector<Track>> best;
+    // The budget: kJointSteps Levenberg–Marquardt steps over all the starts (each step
+    // places every path at 257 times, so the search's time grows with the number of paths
+    // alone); a start begun when it is spent is not tried.
+    int steps = 0;
     for (const double target : {1.03, 1.1}) {
       for (const std::vector<double>& pattern : patterns) {
+        if (steps >= kJointSteps) break;
         Eigen::VectorXd x = Eigen::VectorXd::Zero(N);
         for (size_t q = 0; q < pattern.size(); ++q) {
           const size_t i = moving[q];
@@ -1622,7 +1690,7 @@ public:
         Eigen::VectorXd jtr(N);
         double cost = evaluate(x, target, &jtj, &jtr);
         double mu = 1e-3;
-        for (int it = 0; it < 200 && mu < 1e12; ++it) {
+        for (int it = 0; it < 200 && mu < 1e12 && steps < kJointSteps; ++it, ++steps) {
           Eigen::MatrixXd a = jtj;
           for (int v = 0; v < N; ++v) a(v, v) += mu * (jtj(v, v) + 1e-9);
           const Eigen::VectorXd step = a.ldlt().solve(-jtr);
@@ -2136,27 +2204,61 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     // twice as wide (a long path's log R changes by ~|log R| across it, which two edge
     // lengths did not resolve beside the knot with a pair; the wider tube does not fit
     // every coarse mesh, so it is the second try), and the one with fewer kept.
+    std::string unbuilt_why;  // why the guide could not be built, when it was tried
+    if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
+        guide.last > guide.first && !rep.guided)
+      unbuilt_why = "the guide field has two zeros on one point";
     if (!space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         tracks_.size() > first_track) {
       std::optional<SurfaceGuide> best;
-      int best_wrong = kMaxWrongFrames + 1;
+      int best_wrong = kMaxWrongFrames + 1, fewest_wrong = -1;
       for (const double ramp : {1.0, 2.0}) {
         SurfaceGuide sg;
         sg.t0 = rep.t0;
         sg.t1 = rep.t1;
+        std::string why;
         if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
-                                 ramp, keyframe_fields[k], keyframe_fields[k + 1], sg))
+                                 ramp, keyframe_fields[k], keyframe_fields[k + 1], sg, why)) {
+          if (unbuilt_why.empty()) unbuilt_why = why;
           continue;
+        }
         const int wrong = keep_phase_if_resolved(space, tracks_, sg, rep.matched.size());
+        if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong;
         if (wrong < best_wrong) best = std::move(sg), best_wrong = wrong;
         if (best_wrong == 0) break;
       }
+      if (!best && fewest_wrong >= 0)
+        unbuilt_why = fmt::format("the surface guide's frames hold other singularities than the plan's at {} of 31 "
+                                  "sampled times (at most {} kept)",
+                                  fewest_wrong, kMaxWrongFrames);
+      else if (!best && unbuilt_why.empty())
+        unbuilt_why = "the surface guide could not be built";
       if (best) {
         for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].guided = true;
         for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
         rep.guided = true;
         surface_guides_.push_back(std::move(*best));
       }
+    }
+    // An interval that could not be guided falls back to "free" (key frames only): carrying
+    // the matched singularities' regions alone leaves the band between them to the solve's
+    // blend of the two key frames, which made far more bifurcations than no constraint at
+    // all (CGAL's elephant: 122 against 8). Its report says so, and why.
+    if (!rep.guided) {
+      const size_t unpaired = rep.unpaired_first.size() + rep.unpaired_second.size();
+      if (tracks_.size() == first_track)
+        rep.unguided_reason = "the key frames have no singularity to carry";
+      else if (!rep.collision.empty())
+        rep.unguided_reason = "two of its paths could not be kept apart (see collision)";
+      else if (unpaired > 0)
+        rep.unguided_reason =
+            fmt::format("{} singularit{} of the key frames left unpaired (the guide would need {} zero{})", unpaired,
+                        unpaired == 1 ? "y" : "ies", unpaired == 1 ? "its" : "their", unpaired == 1 ? "" : "s");
+      else
+        rep.unguided_reason = unbuilt_why.empty() ? std::string("the guide could not be built") : unbuilt_why;
+      rep.fallback = true;
+      for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].free = true;
+      for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].free = true;
     }
     intervals_.push_back(std::move(rep));
   }
@@ -2168,7 +2270,7 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
   detail::ElementOnDomain placed;
   for (const Track& tr : tracks_) {
     const double lo = std::min(tr.t0, tr.t1), hi = std::max(tr.t0, tr.t1);
-    if (tr.guided || !(t > lo && t < hi)) continue;
+    if (tr.guided || tr.free || !(t > lo && t < hi)) continue;
     const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
     ElementState st;
     st.active = true;
@@ -2181,7 +2283,7 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
     detail::constrain_region(space.mesh(), placed, scene.solver.region_radius, fixed, values);
   }
   for (const Template& tp : templates_) {
-    if (tp.guided || t < tp.t0 || t > tp.t1) continue;
+    if (tp.guided || tp.free || t < tp.t0 || t > tp.t1) continue;
     detail::place_element(space, tp.element, t, d, chart, placed);
     detail::constrain_region(space.mesh(), placed, tp.radius, fixed, values);
   }
@@ -2194,7 +2296,7 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
 std::vector<Vec3> KeyframeTopologyPlan::carried(double t) const {
   std::vector<Vec3> out;
   for (const Track& tr : tracks_)
-    if (t > std::min(tr.t0, tr.t1) && t < std::max(tr.t0, tr.t1)) out.push_back(tr.raw(tr.param(t)));
+    if (!tr.free && t > std::min(tr.t0, tr.t1) && t < std::max(tr.t0, tr.t1)) out.push_back(tr.raw(tr.param(t)));
   return out;
 }
 
@@ -2229,6 +2331,8 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
     if (!r.collision.empty()) j["collision"] = r.collision;
     j["routing"] = r.routing;
     j["guided"] = r.guided;
+    j["fallback"] = r.fallback;
+    if (!r.unguided_reason.empty()) j["unguided_reason"] = r.unguided_reason;
     j["unpaired"] = json::array();
     for (const auto& p : r.unpaired_first) j["unpaired"].push_back(xyz(p));
     for (const auto& p : r.unpaired_second) j["unpaired"].push_back(xyz(p));

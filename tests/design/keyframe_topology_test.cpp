@@ -718,13 +718,17 @@ TEST(KeyframeTopology, AKnotOfThreePathsIsRoutedTogether) {
       EXPECT_LT(d, 1e-9) << n;
     }
   }
-  // Straight, the source and the center run into the saddle and the analysis shows it.
-  const Generated straight = run(knot_scene(33, 32, R"(, "path_separation": 0)"));
-  double worst = std::numeric_limits<double>::infinity();
-  for (const auto& frame : straight.topology.singularities) worst = std::min(worst, closest_pair(frame));
-  std::printf("  knot straight: closest %.4f, %zu bifurcations, %zu paths\n", worst,
-              straight.topology.bifurcations.size(), straight.topology.paths.size());
-  EXPECT_LT(worst, 0.3);
+  // Straight, the source and the center would run into the saddle: the planned paths come
+  // closer than 0.3, and the guide cannot be built, so the interval falls back to "free"
+  // (carried straight, the regions made the singularities meet on the way).
+  const std::string straight_text = knot_scene(33, 32, R"(, "path_separation": 0)");
+  const Generated straight = run(straight_text);
+  const KeyframeIntervalReport& r = straight.report.keyframe_intervals.at(0);
+  std::printf("  knot straight: closest planned %.4f, %s (%s), %zu bifurcations, %zu paths\n", r.closest_approach,
+              r.guided ? "guided" : "not guided", r.unguided_reason.c_str(), straight.topology.bifurcations.size(),
+              straight.topology.paths.size());
+  EXPECT_LT(r.closest_approach, 0.3);
+  EXPECT_TRUE(r.fallback);
 }
 
 // A sink crossing the place where a saddle and a source are cancelled, while the template
@@ -875,6 +879,83 @@ TEST(KeyframeTopology, ANodeThatChangesStabilityIsCarriedThroughACenter) {
 
 TEST(KeyframeTopology, ANodeThatChangesStabilityOnASphereIsCarriedThroughACenter) {
   for (const int sub : {3, 4}) expect_stability_carried(run(sphere_stability_scene(sub)), fmt::format("sphere, subdivisions {}", sub));
+}
+
+// An interval that cannot be guided falls back to "free": carrying the matched
+// singularities' regions alone leaves the band between them to the solve's blend of the
+// two key frames, which made far more bifurcations than no constraint at all. Two cases:
+// on the narrow strip a sink and a source 0.15 apart at the first key frame cross head on
+// (the paths cannot be kept apart: 35 bifurcations with the regions carried, 3 free); on a
+// sphere (subdivisions 3) the knot with a cancelled pair, whose matched sink runs nearly to
+// its antipode, so that its tube folds over every plane (37 carried, 3 free). The matched
+// field is then the free one, and the report says it fell back and why.
+std::string held_strip_scene(const std::string& topology) {
+  return R"({"tvf": 1, "domain": {"grid": {"size": [65, 9], "min": [-1, -0.125], "max": [1, 0.125]}},
+    "time": {"frames": 17, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.1, "keyframe_topology": ")" + topology + R"("},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
+                            {"kind": "singular", "type": "sink", "at": [-0.35, 0]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]},
+                            {"kind": "singular", "type": "sink", "at": [-0.65, 0]}]}]})";
+}
+
+TEST(KeyframeTopology, AnIntervalThatCannotBeGuidedIsLeftFree) {
+  struct Case {
+    std::string what, matched, free, reason;
+  };
+  std::string sphere_free = pair_scene(3, true, false);
+  const std::string solver = R"(, "keyframe_topology": "matched", "bifurcation_times": [0.4])";
+  sphere_free.erase(sphere_free.find(solver), solver.size());
+  const std::vector<Case> cases{
+      {"strip", held_strip_scene("matched"), held_strip_scene("free"),
+       "two of its paths could not be kept apart (see collision)"},
+      {"sphere, subdivisions 3", pair_scene(3, true, false), sphere_free,
+       "the surface folds over the chart of the sink's path from"}};
+  for (const Case& c : cases) {
+    const Generated matched = run(c.matched), free = run(c.free);
+    const KeyframeIntervalReport& r = matched.report.keyframe_intervals.at(0);
+    EXPECT_FALSE(r.guided) << c.what;
+    EXPECT_TRUE(r.fallback) << c.what;
+    EXPECT_EQ(r.unguided_reason.substr(0, c.reason.size()), c.reason) << c.what;
+    std::printf("  %s: %zu bifurcations matched (left free: %s), %zu free\n", c.what.c_str(),
+                matched.topology.bifurcations.size(), r.unguided_reason.c_str(), free.topology.bifurcations.size());
+    EXPECT_LE(matched.topology.bifurcations.size(), free.topology.bifurcations.size()) << c.what;
+    // The key frames alone constrain the frames: the free solve's field.
+    double worst = 0, largest = 0;
+    for (int j = 0; j < free.field.frames(); ++j)
+      for (int v = 0; v < free.space->mesh().num_vertices(); ++v) {
+        worst = std::max(worst, std::abs(matched.field.at(j, v) - free.field.at(j, v)));
+        largest = std::max(largest, std::abs(free.field.at(j, v)));
+      }
+    EXPECT_LE(worst, 1e-12 * largest) << c.what;
+    const nlohmann::json j = keyframe_intervals_json(matched.report.keyframe_intervals)[0];
+    EXPECT_EQ(j["fallback"], true) << c.what;
+    EXPECT_EQ(j["unguided_reason"], r.unguided_reason) << c.what;
+  }
+  // A guided interval does not fall back and has no reason.
+  const Generated guided = run(move_scene(33, R"(, "keyframe_topology": "matched")"));
+  EXPECT_TRUE(guided.report.keyframe_intervals.at(0).guided);
+  EXPECT_FALSE(guided.report.keyframe_intervals.at(0).fallback);
+  EXPECT_FALSE(keyframe_intervals_json(guided.report.keyframe_intervals)[0].contains("unguided_reason"));
+}
+
+// Two paths a key frame already holds closer than the separation, which no detour of their
+// own parts: the collision is the key frames' own, so the router says so at once instead
+// of searching for a joint detour of every path (CGAL's elephant: two saddles 0.065 apart
+// at the first key frame, separation 0.1; 16 s of the joint search before). The report
+// names the key frame and the distance it holds them at.
+TEST(KeyframeTopology, PathsAKeyFrameHoldsTooCloseAreReportedAtOnce) {
+  const Planned p = plan_of(held_strip_scene("matched"));
+  const KeyframeIntervalReport& r = p.plan->intervals().at(0);
+  EXPECT_EQ(r.collision,
+            "scene: solver.keyframe_topology: between keyframes[0] and keyframes[1] the paths of the sink from (-0.35, 0) "
+            "to (-0.65, 0) and the source from (-0.5, 0) to (0.5, 0) come 0.000869 apart at t = 0.211, and no detour "
+            "(the key frame at t = 0 holds them 0.15 apart already) keeps them 0.2 apart, so the paths stay straight "
+            "and the singularities meet; set a smaller solver.path_separation, link them differently (solver.links) or "
+            "add a key frame between");
+  EXPECT_EQ(r.routing, "straight");
+  for (const auto& m : r.matched) EXPECT_EQ(m.detour, 0.0);
 }
 
 }  // namespace

@@ -138,6 +138,10 @@ struct DesignCheck {
     double t0 = 0, t1 = 0;
     int planned = 0;
     std::vector<int> extra_bifurcations;  // indices into Topology::bifurcations
+    // The plan could not guide the interval and left it free (KeyframeIntervalReport):
+    // nothing planned or carried there; why.
+    bool fallback = false;
+    std::string unguided_reason;
   };
   std::vector<KeyframeInterval> keyframe_intervals;
   double position_tolerance = 0;  // world units

@@ -41,7 +41,10 @@
 //     c Π_j g_j(z) drift half a turn apart, routes all the interval's paths at once: smooth
 //     detours (sin(πs) sin(kπs), k = 1..4) that bend least under the separation, the
 //     boundary margin and the phase drift (Levenberg–Marquardt from each choice of sides);
-//     when that fails too, the paths stay straight with the warning of 5.
+//     when that fails too, the paths stay straight with the warning of 5. Bounded: the
+//     joint search is not tried for two paths a key frame already holds closer than the
+//     separation (the collision is the key frames' own), and stops after a fixed number
+//     of Levenberg–Marquardt steps over all its starts.
 //  7. in a routed interval, turns each saddle's axes with its neighbours (its β follows
 //     the product model's phase) instead of keeping the key frames' axes.
 //  8. on planar domains, fixes every free vertex of the frames strictly between the two
@@ -55,6 +58,10 @@
 //     as a ratio, then turned into the second key frame's field by a zero-free factor.
 //     Not in an interval with a singularity left unpaired or paths that could not be
 //     kept apart.
+//  9. an interval that is not guided falls back to "free": none of its tracks or
+//     templates is placed (the key frames alone constrain its frames), since the carried
+//     regions alone left the band between them to the key frames' blend and made far more
+//     bifurcations than none; its report says `fallback` and `unguided_reason`.
 // Key frames themselves are unchanged. What could not be paired (an odd singularity out,
 // e.g. one that must leave through the boundary) is left to the solve and reported.
 #include "tvf/analysis/singularities.h"
@@ -111,6 +118,14 @@ struct KeyframeIntervalReport {
   // SurfaceGuide, where every singularity is matched or in a created or cancelled pair),
   // so the analysis finds no bifurcation but the planned ones.
   bool guided = false;
+  // Not guided: the interval falls back to what "free" does there (the key frames alone;
+  // none of its matched singularities carried, none of its pairs' templates placed), since
+  // the carried regions alone make far more bifurcations than none; unguided_reason says
+  // why it could not be guided, in one sentence (a collision, singularities left
+  // unpaired, the surface folding over a path's chart, the guide's frames holding extra
+  // zeros).
+  bool fallback = false;
+  std::string unguided_reason;
 };
 
 // The constraints that keep the topology between key frames, planned once per generation.
@@ -150,7 +165,9 @@ private:
 // {"interval": [t0, t1], "keyframes": [k0, k1], "bifurcation_t", "matched": [{"type",
 // "from", "to", "linked", "detour", "to_type"}], "created": [{"t", "at", "saddle", "node",
 // "node_type"}], "cancelled": [same], "separation", "closest_approach" (when two or more
-// are carried), "collision" (when not empty), "unpaired": [[x, y, z], ...]} per interval.
+// are carried), "collision" (when not empty), "routing", "guided", "fallback" (not guided:
+// the interval left free), "unguided_reason" (when not guided), "unpaired": [[x, y, z],
+// ...]} per interval.
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals);
 
 }  // namespace tvf
