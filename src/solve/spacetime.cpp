@@ -23,6 +23,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <numeric>
 #include <vector>
 
 namespace tvf {
@@ -807,7 +808,15 @@ struct MovingSegment {
   // temporal line solves' factors on the other entries.
   std::vector<char> moving;
   std::vector<double> lower, pivot, upper;
+  // The cut rows in groups for cut_rows_to_frames: their indices in cut, ordered by the
+  // first constraint entry of their line, kCutGroup at a time; per group the frames
+  // [window_first, window_end) that hold every constraint entry of its rows.
+  std::vector<int> cut_order, window_first, window_end;
 };
+
+// Cut rows gathered together into one product with the frames they need (see
+// cut_rows_to_frames): a group's window is the union of its rows' constraint entries.
+constexpr size_t kCutGroup = 8;
 
 // A segment's common fixed set and the vertices whose temporal line its fixed set cuts.
 void common_fixed_set(std::span<const char> fixed, size_t n, size_t first, size_t count, std::vector<char>& base,
@@ -828,25 +837,36 @@ void common_fixed_set(std::span<const char> fixed, size_t n, size_t first, size_
     if (any[i] && !base[i]) cut.push_back(static_cast<int>(i));
 }
 
-// Gathered rows of a segment's modes (2|V| × count, re and im rows interleaved) back into
-// frames: out (vertex-major, count per row) = rows of hat · Qᵀ.
-void rows_to_frames(const std::vector<double>& hat, size_t n, const std::vector<int>& rows, const Eigen::MatrixXd& q,
-                    std::vector<cplx>& out) {
+// The rows of a segment's modes (hat: 2|V| × count, re and im rows interleaved) at m's cut
+// vertices back into frames (out: vertex-major, count per cut row; rows of hat · Qᵀ), at
+// their constraint entries only: the rounds read nothing else there. A cut vertex's
+// constraint entries span a few of the segment's frames (a moving region passes it), so
+// each group of cut rows is multiplied by its window's rows of Q alone (2·kCutGroup ×
+// count by count × window) instead of by all of Qᵀ. The other entries of out are zero.
+void cut_rows_to_frames(const std::vector<double>& hat, size_t n, const MovingSegment& m, const Eigen::MatrixXd& q,
+                        std::vector<cplx>& out) {
   const auto count = q.rows();
+  const auto c = static_cast<size_t>(count);
   const Eigen::Map<const Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
-  Eigen::MatrixXd g(static_cast<Eigen::Index>(2 * rows.size()), count);
-  // Column by column: both matrices are column-major (a row of hat is count far-apart entries).
-  for (Eigen::Index k = 0; k < count; ++k)
-    for (size_t r = 0; r < rows.size(); ++r) {
-      g(static_cast<Eigen::Index>(2 * r), k) = h(2 * rows[r], k);
-      g(static_cast<Eigen::Index>(2 * r + 1), k) = h(2 * rows[r] + 1, k);
+  out.assign(m.cut.size() * c, cplx(0, 0));
+  Eigen::MatrixXd g, f;
+  for (size_t g0 = 0, group = 0; g0 < m.cut_order.size(); g0 += kCutGroup, ++group) {
+    const size_t size = std::min(kCutGroup, m.cut_order.size() - g0);
+    const Eigen::Index lo = m.window_first[group], len = m.window_end[group] - lo;
+    g.resize(static_cast<Eigen::Index>(2 * size), count);
+    for (Eigen::Index k = 0; k < count; ++k)
+      for (size_t t = 0; t < size; ++t) {
+        const int row = m.cut[static_cast<size_t>(m.cut_order[g0 + t])];
+        g(static_cast<Eigen::Index>(2 * t), k) = h(2 * row, k);
+        g(static_cast<Eigen::Index>(2 * t + 1), k) = h(2 * row + 1, k);
+      }
+    f.noalias() = g * q.middleRows(lo, len).transpose();
+    for (size_t t = 0; t < size; ++t) {
+      cplx* o = out.data() + static_cast<size_t>(m.cut_order[g0 + t]) * c + static_cast<size_t>(lo);
+      for (Eigen::Index jj = 0; jj < len; ++jj)
+        o[jj] = cplx(f(static_cast<Eigen::Index>(2 * t), jj), f(static_cast<Eigen::Index>(2 * t + 1), jj));
     }
-  const Eigen::MatrixXd f = g * q.transpose();
-  out.resize(rows.size() * static_cast<size_t>(count));
-  for (size_t r = 0; r < rows.size(); ++r)
-    for (Eigen::Index jj = 0; jj < count; ++jj)
-      out[r * static_cast<size_t>(count) + static_cast<size_t>(jj)] =
-          cplx(f(static_cast<Eigen::Index>(2 * r), jj), f(static_cast<Eigen::Index>(2 * r + 1), jj));
+  }
 }
 
 // hat's rows += values (vertex-major, count per row) · Q; rr[k] (‖column k‖²) updated when
@@ -1031,6 +1051,36 @@ void build_moving(const SpaceTimeSolver::Operator& op, std::span<const char> fix
       m.pivot[q] = 1.0 / denom;
       m.upper[q] = up / denom;
     }
+  }
+  // The cut rows' windows: each row's first and last constraint entry, the rows ordered by
+  // the first, then grouped.
+  std::vector<int> first_entry(m.cut.size()), end_entry(m.cut.size());
+  for (size_t r = 0; r < m.cut.size(); ++r) {
+    const size_t q0 = static_cast<size_t>(m.cut_local[r]) * count;
+    size_t lo = count, hi = 0;
+    for (size_t jj = 0; jj < count; ++jj)
+      if (m.moving[q0 + jj]) lo = std::min(lo, jj), hi = jj + 1;
+    if (lo > hi) lo = hi = 0;  // no constraint entry in this segment
+    first_entry[r] = static_cast<int>(lo);
+    end_entry[r] = static_cast<int>(hi);
+  }
+  m.cut_order.resize(m.cut.size());
+  std::iota(m.cut_order.begin(), m.cut_order.end(), 0);
+  std::stable_sort(m.cut_order.begin(), m.cut_order.end(),
+                   [&](int r0, int r1) { return first_entry[static_cast<size_t>(r0)] < first_entry[static_cast<size_t>(r1)]; });
+  m.window_first.clear();
+  m.window_end.clear();
+  for (size_t g0 = 0; g0 < m.cut_order.size(); g0 += kCutGroup) {
+    int lo = static_cast<int>(count), hi = 0;
+    for (size_t t = g0; t < std::min(g0 + kCutGroup, m.cut_order.size()); ++t) {
+      const auto r = static_cast<size_t>(m.cut_order[t]);
+      if (end_entry[r] == 0) continue;
+      lo = std::min(lo, first_entry[r]);
+      hi = std::max(hi, end_entry[r]);
+    }
+    if (lo > hi) lo = hi = 0;
+    m.window_first.push_back(lo);
+    m.window_end.push_back(hi);
   }
 }
 
@@ -1867,7 +1917,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       const auto [first, count] = segs.segments[si];
       const Eigen::MatrixXd& q = bases[si]->q;
       std::vector<cplx>& xl = x_local[si];
-      rows_to_frames(w.x_hat[si], n, m.cut, q, cut_values);
+      cut_rows_to_frames(w.x_hat[si], n, m, q, cut_values);
       u.assign(m.omega.size() * count, cplx(0, 0));
       for (size_t r = 0; r < m.cut.size(); ++r) {
         const auto li = static_cast<size_t>(m.cut_local[r]);
@@ -1940,7 +1990,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       if (moving[si].cut.empty()) continue;
       const MovingSegment& m = moving[si];
       const size_t count = segs.segments[si].second;
-      rows_to_frames(w.res_hat[si], n, m.cut, bases[si]->q, cut_values);
+      cut_rows_to_frames(w.res_hat[si], n, m, bases[si]->q, cut_values);
       for (size_t r = 0; r < m.cut.size(); ++r) {
         const auto li = static_cast<size_t>(m.cut_local[r]);
         for (size_t jj = 0; jj < count; ++jj)
