@@ -60,6 +60,17 @@ nlohmann::json points_json(const Streakline& s) {
   return points;
 }
 
+// Runs what integrates the input's field; the library's refusals (a field too fast for its
+// time range, a seed off the domain) name the input.
+template <class F>
+auto on_input(const std::string& input, F&& f) {
+  try {
+    return f();
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", input, e.what()));
+  }
+}
+
 std::vector<Vec3> positions(const Streakline& s) {
   std::vector<Vec3> out;
   for (const StreakPoint& p : s.points) out.push_back(p.position);
@@ -159,7 +170,7 @@ int LcsCommand::run_ftle() {
   for (int j = 0; j < in.field.frames(); j += every_) o.frames.push_back(j);
   o.progress = [&](int done, int total) { progress.update(done, total); };
   progress.note("flow maps");
-  const FtleResult r = compute_ftle(bundle, in.field, o);
+  const FtleResult r = on_input(input_, [&] { return compute_ftle(bundle, in.field, o); });
 
   progress.note("writing");
   OutputStage stage(out_);
@@ -286,7 +297,7 @@ int LcsCommand::run_streaklines() {
   o.flow.dt = dt_;
   const Vec3 seed = point_option(seed_, 0, seed_.size());
   progress.note("releasing");
-  const Streakline s = trace_streakline(bundle, in.field, seed, o);
+  const Streakline s = on_input(input_, [&] { return trace_streakline(bundle, in.field, seed, o); });
   nlohmann::json j = {{"t", s.t},
                       {"from", o.t0},
                       {"seed", {seed.x(), seed.y(), seed.z()}},
@@ -348,7 +359,7 @@ int LcsCommand::run_timelines() {
   o.flow.dt = dt_;
   const Vec3 a = point_option(line_, 0, dims), b = point_option(line_, dims, dims);
   progress.note("carrying");
-  const Streakline s = trace_timeline(bundle, in.field, a, b, o);
+  const Streakline s = on_input(input_, [&] { return trace_timeline(bundle, in.field, a, b, o); });
   const nlohmann::json j = {{"t", s.t},
                             {"from", o.t0},
                             {"line", {{a.x(), a.y(), a.z()}, {b.x(), b.y(), b.z()}}},

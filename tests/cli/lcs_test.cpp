@@ -210,7 +210,16 @@ TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {
   write_field(dir / "f", GridSpec{9, 9, {-1, -1}, {1, 1}}, TimeSampling{0, 1, 5},
               [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
   const std::string in = quoted(dir / "f");
+  // A field far too fast for its time range (a billion edge lengths a frame): refused,
+  // naming the input, not walked round the domain.
+  write_field(dir / "fast", GridSpec{9, 9, {-1, -1}, {1, 1}}, TimeSampling{0, 1, 5},
+              [](const Vec3& x, double) -> Vec3 { return 1e9 * Vec3(-x.y(), x.x(), 0); });
+  const std::string fast = quoted(dir / "fast");
   const std::pair<std::string, std::string> cases[] = {
+      {"streaklines " + fast + " --seed 0.5 0 -o " + quoted(dir / "out.json"),
+       (dir / "fast").string() + ": the field's speed"},
+      {"ftle " + fast + " --horizon 0.5 -o " + quoted(dir / "out"), "too fast for its time range"},
+      {"timelines " + fast + " --line 0 0 0.5 0 -o " + quoted(dir / "out.json"), "too fast for its time range"},
       {"ftle " + in + " --horizon 0 -o " + quoted(dir / "out"), "--horizon 0: must be a positive time"},
       {"ftle " + in + " --horizon -2 -o " + quoted(dir / "out"), "--horizon -2: must be a positive time"},
       {"ftle " + quoted(dir / "nothing") + " --horizon 1 -o " + quoted(dir / "out"), "no such file or folder"},
