@@ -75,16 +75,16 @@ FlowMap::FlowMap(const TangentBundle& bundle, const Field& field, const FlowMapO
   const double frame_dt = time.frames > 1 ? span / (time.frames - 1) : span;
   dt_ = options.dt > 0 ? options.dt : 0.5 * frame_dt;
   if (!(dt_ > 0)) dt_ = 1.0;
-  // At most a mean edge length per step at the field's largest speed.
+  // At most kReachEdges mean edge lengths per step at the field's largest speed.
   double vmax = 0;
   for (const cplx& z : field.data()) vmax = std::max(vmax, std::abs(z));
-  const double reach = bundle.mesh().mean_edge_length();
+  const double reach = kReachEdges * bundle.mesh().mean_edge_length();
   if (vmax > 0 && reach > 0 && vmax * dt_ > reach) {
     dt_ = reach / vmax;
     if (span / dt_ > kMaxSteps)
-      throw Error(fmt::format("the field's speed {:.3g} would take {:.3g} steps of a mean edge length ({:.3g}) over its "
-                              "time range of {:.3g}: it is too fast for its time range; scale it down",
-                              vmax, span / dt_, reach, span));
+      throw Error(fmt::format("the field's speed {:.3g} would take {:.3g} steps of {:g} mean edge lengths ({:.3g}) over "
+                              "its time range of {:.3g}: it is too fast for its time range; scale it down",
+                              vmax, span / dt_, kReachEdges, reach, span));
   }
   if (!options.walk)
     if (const auto g = detail::detect_grid(bundle)) grid_ = std::make_shared<const detail::GridFlow>(*g, field);

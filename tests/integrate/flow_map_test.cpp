@@ -80,7 +80,7 @@ TEST(FlowMap, StepsAtMostAnEdgeAtTheFastestPointAndRefusesAFieldFarTooFast) {
   // ω = 40 over [0, 1] with 5 frames: a step of half a frame (0.125) would turn a particle
   // at radius 0.6 by 5 radians, 3 units along the circle; RK4 in one such step misses the
   // circle by far (and the walk would cross about a hundred faces). With steps of at most
-  // a mean edge length at the fastest point (the corners, ω√2) the particle turns by
+  // four mean edge lengths at the fastest point (the corners, ω√2) the particle turns by
   // 40 radians and stays on its circle, on the grid's fast path and on the walk alike.
   const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
   const TangentBundle bundle(grid);
@@ -93,14 +93,15 @@ TEST(FlowMap, StepsAtMostAnEdgeAtTheFastestPointAndRefusesAFieldFarTooFast) {
     o.walk = walk;
     const FlowMap flow(bundle, field, o);
     EXPECT_EQ(flow.on_grid(), !walk);
-    EXPECT_NEAR(flow.dt(), grid.mean_edge_length() / (kOmega * std::sqrt(2.0)), 1e-9);
+    EXPECT_NEAR(flow.dt(), FlowMap::kReachEdges * grid.mean_edge_length() / (kOmega * std::sqrt(2.0)), 1e-9);
     const FlowMapResult r = flow.advect(at(grid, Vec3(0.6, 0, 0)), 0, 1);
     ASSERT_FALSE(r.left) << walk;
     EXPECT_NEAR((surface_position(grid, r.where) - want).norm(), 0.0, 1e-3) << walk;
   }
-  // A slow field (0.28 at the corners: 0.035 per step, under an edge) keeps its step.
+  // A slower field (1.4 at the corners: 0.18 per step, under four edges of 0.057) keeps
+  // its step.
   const Field slow = field_from(bundle, TimeSampling{0, 1, 5},
-                                [](const Vec3& x, double) -> Vec3 { return 0.2 * Vec3(-x.y(), x.x(), 0); });
+                                [](const Vec3& x, double) -> Vec3 { return Vec3(-x.y(), x.x(), 0); });
   EXPECT_DOUBLE_EQ(FlowMap(bundle, slow).dt(), 0.125);
 
   // A field crossing millions of edges per frame: refused in one sentence, not walked.

@@ -9,22 +9,22 @@
 // keep moving towards a sink or around a centre) and keeps no trail. The interval
 // [t0, t1] is split at the frame times (where the field's time derivative jumps) and each
 // piece is walked in equal RK4 steps of at most `dt`, and of at most the time the field's
-// fastest point takes to cross a mean edge length (a step that crosses many faces samples
-// the piecewise-linear field too coarsely, and a fast field over a long time range would
-// wrap the walk round the mesh; one step for every particle, not one per particle's own
-// speed, keeps the flow map smooth from particle to particle, which FTLE differentiates).
-// A field whose speed would need over kMaxSteps steps across its time range is refused;
-// every stage walks along the surface
-// (surface_walk.h), so planar domains and surfaces share one integrator. A step that
-// meets the domain's boundary slides along it when the remaining displacement is
-// tangential there (rounding); one whose displacement points out of the domain leaves
-// it: the particle is then reported as gone (FlowMapResult::left).
+// fastest point takes to cross kReachEdges mean edge lengths (a step that crosses many
+// faces samples the piecewise-linear field too coarsely, and a fast field over a long time
+// range would wrap the walk round the mesh; one step for every particle, not one per
+// particle's own speed, keeps the flow map smooth from particle to particle, which FTLE
+// differentiates). A field whose speed would need over kMaxSteps such steps across its
+// time range is refused. Every stage walks along the surface (surface_walk.h), so planar
+// domains and surfaces share one integrator. A step that meets the domain's boundary
+// slides along it when the remaining displacement is tangential there (rounding); one
+// whose displacement points out of the domain leaves it: the particle is then reported as
+// gone (FlowMapResult::left).
 //
 // On a planar regular grid (one made by make_grid, grid.h) the same steps run on the grid
 // directly: the point is located by dividing by the spacing instead of walking, and the
 // walls are the box's sides (src/integrate/grid_flow.h). The results agree with the walk
-// to rounding (the tests check 5e-8 after a saddle's stretching of 55) at a small fraction
-// of the cost: this is what lets the designer update FTLE while designing. FlowMapOptions::walk forces the walk.
+// to rounding (the tests check 1e-8) at a small fraction of the cost: this is what lets
+// the designer update FTLE while designing. FlowMapOptions::walk forces the walk.
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/mesh/tangent_bundle.h"
@@ -52,10 +52,14 @@ struct FlowMapResult {
 
 class FlowMap {
 public:
-  // The most RK4 steps across the field's whole time range (see above).
+  // The farthest one RK4 step moves at the field's fastest point, in mean edge lengths
+  // (designed fields sampled at their frames move far less: the designer's 65² double
+  // gyre, half a frame a step, about 1.7 cells), and the most steps across the field's whole
+  // time range (see above).
+  static constexpr double kReachEdges = 4;
   static constexpr double kMaxSteps = 1e6;
   // Throws tvf::Error on a non-positive dt, a field that does not fit the mesh, or one too
-  // fast for its time range (over kMaxSteps steps of a mean edge length).
+  // fast for its time range (over kMaxSteps steps of kReachEdges mean edge lengths).
   FlowMap(const TangentBundle& bundle, const Field& field, const FlowMapOptions& options = {});
 
   // The particle at p at time t0, carried to t1 (t1 < t0: backwards in time). t0 and t1
