@@ -453,6 +453,12 @@ int flattest_vertex(const Mesh& mesh, double radius) {
   return best;
 }
 
+// A test's name for a mesh file parameter: the file's stem ("cow.off" → cow).
+std::string mesh_name(const ::testing::TestParamInfo<const char*>& mesh_info) {
+  const std::string n = mesh_info.param;
+  return n.substr(0, n.find('.'));
+}
+
 class HopfOnMeshes : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(HopfOnMeshes, TheEventAndTheCycleAreFoundWhereAndWhenDesigned) {
@@ -514,10 +520,7 @@ TEST_P(HopfOnMeshes, TheEventAndTheCycleAreFoundWhereAndWhenDesigned) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, HopfOnMeshes, ::testing::Values("cow.off", "elephant.off"),
-                         [](const ::testing::TestParamInfo<const char*>& mesh_info) {
-                           const std::string n = mesh_info.param;
-                           return n.substr(0, n.find('.'));
-                         });
+                         mesh_name);
 
 // A streakline of a steady field is the streamline through its seed (issue 20's closed
 // form) on real meshes: one frame of a source-to-sink field on the cow and the elephant,
@@ -597,10 +600,7 @@ TEST_P(SteadyStreaklineOnMeshes, IsTheStreamlineThroughTheSeed) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, SteadyStreaklineOnMeshes, ::testing::Values("cow.off", "elephant.off"),
-                         [](const ::testing::TestParamInfo<const char*>& mesh_info) {
-                           const std::string n = mesh_info.param;
-                           return n.substr(0, n.find('.'));
-                         });
+                         mesh_name);
 
 }  // namespace
 }  // namespace tvf
