@@ -263,6 +263,7 @@ int LcsCommand::run_ftle() {
 }
 
 int LcsCommand::run_streaklines() {
+  check_output_file(out_);  // before the work, not after it
   if (!(spacing_ >= 0) || !std::isfinite(spacing_))
     throw Error(fmt::format("--release-spacing {}: must be a positive time", spacing_));
   if (!(dt_ >= 0) || !std::isfinite(dt_)) throw Error(fmt::format("--dt {}: must be a positive time", dt_));
@@ -314,6 +315,7 @@ int LcsCommand::run_streaklines() {
                    {"mean_edge_length", h}};
   }
   std::string picture;
+  create_output_folder_for(out_);
   if (!no_picture_) {
     progress.note("drawing");
     CurvePictureOptions po;
@@ -341,6 +343,7 @@ int LcsCommand::run_streaklines() {
 }
 
 int LcsCommand::run_timelines() {
+  check_output_file(out_);  // before the work, not after it
   if (line_.size() == 5) throw Error("--line: give X0 Y0 X1 Y1 (planar) or X0 Y0 Z0 X1 Y1 Z1 (surfaces)");
   if (count_ < 2) throw Error(fmt::format("--count {}: a timeline needs at least 2 particles", count_));
   if (!(max_gap_ >= 0) || !std::isfinite(max_gap_)) throw Error(fmt::format("--max-gap {}: must be positive", max_gap_));
@@ -367,6 +370,7 @@ int LcsCommand::run_timelines() {
                             {"left", s.left},
                             {"points", points_json(s)}};
   std::string picture;
+  create_output_folder_for(out_);
   if (!no_picture_) {
     progress.note("drawing");
     CurvePictureOptions po;

@@ -162,6 +162,7 @@ struct AnalyzeArgs {
 int run_analyze(const AnalyzeArgs& args) {
   const bool show = !args.quiet && cli::progress_wanted();
   cli::Progress progress("tvf analyze", show);
+  check_output_file(args.out);  // before the work, not after it
   // A folder written by `tvf generate` (or its field.tvff) is read; a scene is generated.
   Design design = Design::open(args.input);
   if (!design.has_field()) {
@@ -180,6 +181,7 @@ int run_analyze(const AnalyzeArgs& args) {
   // The field against its scene's design, when the scene is known.
   const std::optional<DesignCheck> check = design.check();
   progress.note("writing " + args.out);
+  create_output_folder_for(args.out);
   write_file_atomically(args.out, design.analysis_json().dump() + "\n");
   if (check) write_file_atomically(cli::design_check_path(args.out), design_check_to_json(*check).dump(2) + "\n");
   // The pictures beside the JSON: STEM_coherence.{svg,png} and STEM_paths.{svg,png}.

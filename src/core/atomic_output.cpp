@@ -168,6 +168,29 @@ fs::path temporary_sibling(const fs::path& path) {
   return path.parent_path() / name;
 }
 
+void check_output_file(const fs::path& file) {
+  std::error_code ec;
+  if (file.empty()) throw_input_error("", "", "the output file is an empty path");
+  if (fs::is_directory(file, ec)) fail(file, "is a folder; give the name of the file to write", {});
+  // The nearest part of the folder's path that exists must be a folder.
+  for (fs::path p = file.parent_path(); !p.empty(); p = p.parent_path()) {
+    const fs::file_status st = fs::status(p, ec);
+    if (fs::exists(st)) {
+      if (!fs::is_directory(st)) fail(file, fmt::format("cannot be written: {} is not a folder", p.string()), {});
+      break;
+    }
+    if (p == p.parent_path()) break;
+  }
+}
+
+void create_output_folder_for(const fs::path& file) {
+  const fs::path parent = file.parent_path();
+  std::error_code ec;
+  if (parent.empty() || fs::is_directory(parent, ec)) return;
+  fs::create_directories(parent, ec);
+  if (ec) fail(parent, "cannot create the output folder", ec);
+}
+
 void write_file_atomically(const fs::path& path, const std::function<void(std::ostream&)>& writer) {
   const fs::path tmp = temporary_sibling(path);
   std::error_code ec;

@@ -212,12 +212,23 @@ TEST(CliAnalyze, BadInputIsOneSentenceNonZeroExitAndNoOutput) {
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(out)) << "output left behind";
   }
-  // An output that cannot be written names itself.
+  // An output that cannot be written names itself, and is refused before the work: a file
+  // where its folder would be, a folder given as the file.
   test::write_text(dir / "scene.json", kSmallScene);
-  const auto r = run_tvf("analyze " + quoted(dir / "scene.json") + " -o " + quoted(dir / "no" / "such" / "a.json"));
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(count_lines(r.output), 1) << r.output;
-  EXPECT_NE(r.output.find("a.json"), std::string::npos) << r.output;
+  for (const auto& [out, expected] :
+       {std::pair{dir / "scene.json" / "a.json", std::string("scene.json is not a folder")},
+        std::pair{dir / "empty", (dir / "empty").string() + ": is a folder; give the name of the file"}}) {
+    const auto r = run_tvf("analyze " + quoted(dir / "scene.json") + " -o " + quoted(out));
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_EQ(count_lines(r.output), 1) << r.output;
+    EXPECT_NE(r.output.find(expected), std::string::npos) << r.output;
+  }
+  // A folder that does not exist yet is made, as `tvf generate` makes its output folder.
+  const auto made = run_tvf("analyze " + quoted(dir / "scene.json") + " -q -o " + quoted(dir / "new" / "a.json"));
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  EXPECT_TRUE(fs::exists(dir / "new" / "a.json"));
+  EXPECT_TRUE(fs::exists(dir / "new" / "a_paths.png"));
+  fs::remove_all(dir / "new");
   // Nothing but the inputs in the folder: no temporary files.
   for (const auto& e : fs::directory_iterator(dir.path()))
     EXPECT_NE(e.path().filename().string()[0], '.') << e.path();

@@ -102,12 +102,13 @@ TEST(CliLcs, StreaklineOfARotationIsTheCircleThroughTheSeed) {
   TempDir dir;
   write_field(dir / "rot", GridSpec{33, 33, {-1, -1}, {1, 1}}, TimeSampling{0, 2, 9},
               [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  // Into a folder that does not exist yet: made, as the other commands make theirs.
   const auto r = run_tvf("streaklines " + quoted(dir / "rot") + " --seed 0.5 0 --from 0.5 --to 2 " +
-                         "--release-spacing 0.1 -s 200 -o " + quoted(dir / "streak.json"));
+                         "--release-spacing 0.1 -s 200 -o " + quoted(dir / "new" / "streak.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(count_lines(r.output), 1) << r.output;
-  EXPECT_TRUE(fs::exists(dir / "streak.png"));
-  const nlohmann::json j = nlohmann::json::parse(test::read_text(dir / "streak.json"));
+  EXPECT_TRUE(fs::exists(dir / "new" / "streak.png"));
+  const nlohmann::json j = nlohmann::json::parse(test::read_text(dir / "new" / "streak.json"));
   EXPECT_EQ(j["t"], 2.0);
   ASSERT_EQ(j["points"].size(), 16u);
   for (const auto& p : j["points"]) {
@@ -233,6 +234,10 @@ TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {
       {"timelines " + in + " --line 0 0 5 0 -o " + quoted(dir / "out.json"), "is outside the domain"},
       {"timelines " + in + " --line 0 0 0.5 0 --from -1 -o " + quoted(dir / "out.json"),
        "--from -1 is outside the field's time range"},
+      // Outputs refused before the work: a folder given as the file, a file in the way.
+      {"streaklines " + in + " --seed 0.5 0 -o " + in, (dir / "f").string() + ": is a folder; give the name"},
+      {"timelines " + in + " --line 0 0 0.5 0 -o " + quoted(dir / "f" / "field.tvff" / "out.json"),
+       "field.tvff is not a folder"},
   };
   for (const auto& [args, message] : cases) {
     const auto r = run_tvf(args);

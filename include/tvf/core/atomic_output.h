@@ -40,6 +40,15 @@ void sync_path(const std::filesystem::path& path);
 // Path of a temporary sibling of `path` (same folder, so rename() is atomic).
 std::filesystem::path temporary_sibling(const std::filesystem::path& path);
 
+// An output file's path checked before the work that makes it: throws tvf::Error naming it
+// when it is a folder, or when a part of its folder's path is a file, so a command refuses
+// at once instead of after its work. A folder that is missing is fine (see below).
+void check_output_file(const std::filesystem::path& file);
+
+// Creates the folder an output file goes into when it is missing (as the commands' output
+// folders are created); throws tvf::Error naming it when it cannot.
+void create_output_folder_for(const std::filesystem::path& file);
+
 // Writes `bytes` to `path` atomically. Throws tvf::Error naming `path` on failure.
 void write_file_atomically(const std::filesystem::path& path, const std::string& bytes);
 
