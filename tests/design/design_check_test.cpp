@@ -9,6 +9,7 @@
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
+#include "tvf/mesh/primitives.h"
 #include "tvf/scene/scene_json.h"
 
 #include <fmt/format.h>
@@ -160,6 +161,49 @@ TEST(DesignCheck, ATemplateTooSmallForTheMeshIsNotFoundAndSaysSo) {
     } else {
       EXPECT_TRUE(check.all_found()) << check.summary();
       EXPECT_EQ(event.note.find("mean edge lengths"), std::string::npos) << event.note;
+    }
+  }
+}
+
+TEST(DesignCheck, ATemplateAtTheEndOfAThinPartIsNotFoundAndSaysTheSurfaceClosesRound) {
+  // A Hopf template of scale 0.3 at the tip of a cigar (an icosphere stretched to semi-axes
+  // 1, 0.12, 0.12), as on the end of CGAL's camel's tail: within half the scale the surface
+  // holds nearly a whole cap's curvature (2π), its geodesic circles stop growing, and the
+  // event is not found; the note says why. The same template on a fat torus's outer
+  // equator (curvature 0.5 within half the scale) is found, with no such note.
+  for (const bool tip : {true, false}) {
+    SCOPED_TRACE(tip);
+    Scene scene;
+    scene.time.frames = 41;
+    scene.falloff = 8;
+    std::unique_ptr<DesignSpace> space;
+    Vec3 at;
+    if (tip) {
+      Mesh cigar = make_icosphere(4);
+      std::vector<Vec3> stretched(cigar.positions().begin(), cigar.positions().end());
+      for (Vec3& x : stretched) x = Vec3(x.x(), 0.12 * x.y(), 0.12 * x.z());
+      space = std::make_unique<DesignSpace>(Mesh(std::move(stretched), cigar.faces()));
+      at = Vec3(1, 0, 0);
+    } else {
+      scene.domain.torus = TorusSpec{160, 64, 1.0, 0.35};
+      space = make_design_space(scene);
+      at = Vec3(1.35, 0, 0);
+    }
+    BifurcationElement b = bifurcation(BifurcationType::hopf_supercritical, at, 0.35);
+    b.scale = 0.3;
+    b.time_scale = 0.4;
+    scene.elements.push_back(b);
+    const Field field = generate(*space, scene);
+    const Topology topology = analyze_topology(space->bundle(), field);
+    const DesignCheck check = check_design(scene, *space, field, topology);
+    ASSERT_EQ(check.designed.size(), 2u);
+    const DesignedFeature& event = check.designed[1];
+    if (tip) {
+      EXPECT_FALSE(event.found);
+      EXPECT_NE(event.note.find("holds a total curvature of"), std::string::npos) << event.note;
+    } else {
+      EXPECT_TRUE(check.all_found()) << check.summary();
+      EXPECT_EQ(event.note.find("curvature"), std::string::npos) << event.note;
     }
   }
 }
