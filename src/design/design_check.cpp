@@ -14,7 +14,6 @@
 #include <algorithm>
 #include <map>
 #include <numeric>
-#include <queue>
 #include <set>
 #include <tuple>
 
@@ -113,43 +112,6 @@ void match_singularity(DesignedFeature& f, const std::vector<Expected>& expected
                                 f.frames_type_differs, f.frames, topo.times[static_cast<size_t>(first_differs)],
                                 to_string(differs_found), to_string(differs_designed)));
   for (size_t k = 0; k < notes.size(); ++k) f.note += (k ? "; " : "") + notes[k];
-}
-
-// The Gaussian curvature within edge-path distance `radius` of x (Dijkstra from x's
-// corners): the sum of the angle defects 2π − Σ corner angles of the interior vertices
-// reached. Over π, the disk closes round like the end of a tail or a finger (a whole cap
-// holds 2π): its circles stop growing, and a template's cycles and ramps do not fit there.
-double curvature_within(const DesignSpace& space, const Vec3& x, double radius) {
-  const Mesh& mesh = space.mesh();
-  const SurfacePoint p = space.locate(x);
-  std::vector<double> dist(static_cast<size_t>(mesh.num_vertices()), std::numeric_limits<double>::infinity());
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-  for (const int c : mesh.face(p.face)) {
-    dist[static_cast<size_t>(c)] = (mesh.position(c) - x).norm();
-    queue.emplace(dist[static_cast<size_t>(c)], c);
-  }
-  double total = 0;
-  while (!queue.empty()) {
-    const auto [d, v] = queue.top();
-    queue.pop();
-    if (d > dist[static_cast<size_t>(v)]) continue;
-    double angles = 0;
-    for (const int h : mesh.outgoing(v)) {
-      // The corner at v of h's face: between h and the edge into v.
-      const Vec3 a = mesh.position(mesh.head(h)) - mesh.position(v);
-      const Vec3 b = mesh.position(mesh.tail(Mesh::prev(h))) - mesh.position(v);
-      angles += std::atan2(a.cross(b).norm(), a.dot(b));
-      const int w = mesh.head(h);
-      const double nd = d + a.norm();
-      if (nd <= radius && nd < dist[static_cast<size_t>(w)]) {
-        dist[static_cast<size_t>(w)] = nd;
-        queue.emplace(nd, w);
-      }
-    }
-    if (!mesh.is_boundary_vertex(v)) total += 2 * 3.141592653589793 - angles;
-  }
-  return total;
 }
 
 }  // namespace
@@ -594,7 +556,6 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   // stability or pair for a few frames (a Hopf template of 3.8 edges on CGAL's cow was found
   // a tenth of its time scale late; at 8 edges within a frame step or two).
   constexpr double kResolvedEdges = 6;
-  constexpr double kClosingCurvature = 3.141592653589793;
   for (const auto& [feature, scale] : template_scales) {
     DesignedFeature& f = out.designed[feature];
     const double edges = scale / mesh.mean_edge_length();
@@ -607,8 +568,8 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     // Or the surface closes round within it (placed on the end of a tail or a leg): the
     // template's normal form lives in a plane, and its cycles and ramps do not fit there.
     if (!f.found && !f.expected_absent && unmatched && !space.planar()) {
-      const double curvature = curvature_within(space, f.position, 0.5 * scale);
-      if (curvature > kClosingCurvature)
+      const double curvature = space.curvature_within(f.position, 0.5 * scale);
+      if (curvature > kTemplateMostCurvature)
         f.note += fmt::format("{}the surface within half its scale ({:.3g}) of its point holds a total curvature "
                               "of {:.2f} (over π: it closes round, as at the end of a tail or a finger); a template "
                               "needs a patch about flat at its scale (place it where the surface is flatter, or "

@@ -152,6 +152,23 @@ std::vector<std::string> design_warnings(const Scene& scene) {
   return out;
 }
 
+std::vector<std::string> domain_warnings(const DesignSpace& space, const Scene& scene) {
+  std::vector<std::string> out;
+  if (space.planar()) return out;
+  for (size_t i = 0; i < scene.elements.size(); ++i) {
+    const auto* b = std::get_if<BifurcationElement>(&scene.elements[i]);
+    if (!b) continue;
+    const double curvature = space.curvature_within(b->at.position, 0.5 * b->scale);
+    if (curvature > kTemplateMostCurvature)
+      out.push_back(fmt::format("{}: elements[{}]: the surface within half the template's scale ({:.3g}) of its "
+                                "point holds a total curvature of {:.2f} (over π: it closes round, as at the end of "
+                                "a tail or a finger), so its {} will not be as designed; place it where the surface "
+                                "is flatter, or make its scale smaller",
+                                scene.label(), i, 0.5 * b->scale, curvature,
+                                is_hopf(b->type) ? "cycle and event" : "pair and event"));
+  }
+  return out;
+}
 
 Field generate_basis_sum(const DesignSpace& space, const Scene& scene,
                          const GenerateOptions& options, GenerateReport* report) {
@@ -711,6 +728,10 @@ Field generate(const DesignSpace& space, const Scene& scene, const GenerateOptio
   if (!scene.edits.empty() || scene.incompressible) o.first_frame_done = nullptr;
   Field field = generate_unedited(space, scene, o, report);
   check_cancelled(options);
+  if (report) {
+    auto w = domain_warnings(space, scene);
+    report->warnings.insert(report->warnings.end(), w.begin(), w.end());
+  }
   // Under mpirun the spacetime generator leaves the field whole on rank 0 alone (the
   // others keep their shares: solve/distributed.h): the edits and the projection are rank 0's.
   if (field.num_vertices() != space.mesh().num_vertices()) return field;

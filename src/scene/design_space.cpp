@@ -1,6 +1,7 @@
 #include "tvf/scene/design_space.h"
 
 #include "tvf/core/error.h"
+#include "tvf/field/field_sampler.h"
 #include "tvf/mesh/grid.h"
 #include "tvf/mesh/mesh_io.h"
 #include "tvf/mesh/primitives.h"
@@ -8,6 +9,8 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <limits>
+#include <queue>
 #include <unistd.h>
 
 namespace tvf {
@@ -49,6 +52,35 @@ const LogMap& DesignSpace::log_map() const {
 }
 
 SurfacePoint DesignSpace::locate(const Vec3& x) const { return locator_.closest(x); }
+
+double DesignSpace::curvature_within(const Vec3& x, double radius) const {
+  if (planar()) return 0;
+  const SurfacePoint p = locate(x);
+  const Vec3 at = surface_position(mesh_, p);
+  std::vector<double> dist(static_cast<size_t>(mesh_.num_vertices()), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  for (const int c : mesh_.face(p.face)) {
+    dist[static_cast<size_t>(c)] = (mesh_.position(c) - at).norm();
+    queue.emplace(dist[static_cast<size_t>(c)], c);
+  }
+  double total = 0;
+  while (!queue.empty()) {
+    const auto [d, v] = queue.top();
+    queue.pop();
+    if (d > dist[static_cast<size_t>(v)]) continue;
+    total += bundle_.angle_defect(v);
+    for (const int h : mesh_.outgoing(v)) {
+      const int w = mesh_.head(h);
+      const double nd = d + (mesh_.position(w) - mesh_.position(v)).norm();
+      if (nd <= radius && nd < dist[static_cast<size_t>(w)]) {
+        dist[static_cast<size_t>(w)] = nd;
+        queue.emplace(nd, w);
+      }
+    }
+  }
+  return total;
+}
 
 std::unique_ptr<DesignSpace> make_design_space(const Scene& scene) {
   const Domain& d = scene.domain;

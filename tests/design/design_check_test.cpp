@@ -193,17 +193,24 @@ TEST(DesignCheck, ATemplateAtTheEndOfAThinPartIsNotFoundAndSaysTheSurfaceClosesR
     b.scale = 0.3;
     b.time_scale = 0.4;
     scene.elements.push_back(b);
-    const Field field = generate(*space, scene);
+    GenerateReport report;
+    const Field field = generate(*space, scene, {}, &report);
     const Topology topology = analyze_topology(space->bundle(), field);
     const DesignCheck check = check_design(scene, *space, field, topology);
     ASSERT_EQ(check.designed.size(), 2u);
     const DesignedFeature& event = check.designed[1];
+    // Generation warns of it too, before any analysis.
+    const bool warned = std::any_of(report.warnings.begin(), report.warnings.end(), [](const std::string& w) {
+      return w.find("elements[0]: the surface within half the template's scale") != std::string::npos;
+    });
     if (tip) {
       EXPECT_FALSE(event.found);
       EXPECT_NE(event.note.find("holds a total curvature of"), std::string::npos) << event.note;
+      EXPECT_TRUE(warned);
     } else {
       EXPECT_TRUE(check.all_found()) << check.summary();
       EXPECT_EQ(event.note.find("curvature"), std::string::npos) << event.note;
+      EXPECT_FALSE(warned);
     }
   }
 }

@@ -177,4 +177,14 @@ Mat2 deform_matrix(const Scene& scene, double t);
 // the time range without a bifurcation there (DESIGN §4). One warning per problem.
 std::vector<std::string> design_warnings(const Scene& scene);
 
+// A template element (a bifurcation or Hopf template) whose point holds more Gaussian
+// curvature than this within half its scale does not fit the surface there: the disk
+// closes round (the end of a tail, a finger), and its cycles and ramps cannot be as
+// designed (DesignSpace::curvature_within). generate() warns; the design check's note says so.
+inline constexpr double kTemplateMostCurvature = 3.141592653589793;
+
+// Checks that need the domain: template elements placed where the surface closes round
+// within half their scale. One warning per element.
+std::vector<std::string> domain_warnings(const DesignSpace& space, const Scene& scene);
+
 }  // namespace tvf
