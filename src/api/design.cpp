@@ -3,6 +3,7 @@
 #include "tvf/integrate/periodic_orbits.h"
 
 #include "tvf/core/error.h"
+#include "tvf/design/keyframe_topology.h"
 #include "tvf/scene/scene_json.h"
 #include "tvf/field/field_io.h"
 #include "tvf/mesh/mesh_io.h"
@@ -13,6 +14,7 @@
 #include <algorithm>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <utility>
 
@@ -253,6 +255,14 @@ Design Design::open(const std::string& path, DesignOptions options) {
   r->report.frames = r->field.frames();
   r->report.vertices = r->field.num_vertices();
   r->report.method = "read from " + file.string();
+  // The key-frame plan of the generation that wrote the folder, for the design check (which
+  // else makes it again); a file that does not parse is left to that.
+  const fs::path plan = file.parent_path() / "keyframe_topology.json";
+  if (fs::exists(plan, ec)) {
+    std::ifstream in(plan);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (auto intervals = keyframe_intervals_from_json(j)) r->report.keyframe_intervals = std::move(*intervals);
+  }
   s->result = r;
   s->last = r;
   return Design(std::move(s));
@@ -336,6 +346,7 @@ std::optional<DesignCheck> Design::check() {
   DesignCheckOptions options;
   options.orbits = &periodic_orbits();
   const DesignResult& r = *s_->result;
+  if (!r.report.keyframe_intervals.empty()) options.keyframe_intervals = &r.report.keyframe_intervals;
   return check_design(*s_->scene, *r.space, r.field, topology, options);
 }
 

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <tuple>
 
@@ -292,21 +293,28 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   }
 
   // Key-frame topology "matched": the pairs it creates or cancels between key frames are
-  // designed bifurcations (keyframe_topology.h; planned again from the key frames, which
-  // the spacetime generator holds exactly).
+  // designed bifurcations (keyframe_topology.h; the generation's plan, or planned again
+  // from the key frames, which the spacetime generator holds exactly).
   if (scene.generator == Generator::spacetime && scene.solver.keyframe_topology == KeyframeTopology::matched &&
       scene.keyframes.size() >= 2 && N == scene.time.frames) {
-    std::vector<std::vector<cplx>> key_fields;
-    for (const Keyframe& kf : scene.keyframes) {
-      const auto frame = field.frame(keyframe_frame(scene, kf.t));
-      key_fields.emplace_back(frame.begin(), frame.end());
+    // The generation's own plan when the caller has it, else the same plan made again.
+    std::optional<KeyframeTopologyPlan> replanned;
+    const std::vector<KeyframeIntervalReport>* given = options.keyframe_intervals;
+    if (!given || given->size() + 1 != scene.keyframes.size()) given = nullptr;
+    if (!given) {
+      std::vector<std::vector<cplx>> key_fields;
+      for (const Keyframe& kf : scene.keyframes) {
+        const auto frame = field.frame(keyframe_frame(scene, kf.t));
+        key_fields.emplace_back(frame.begin(), frame.end());
+      }
+      replanned.emplace(space, scene, key_fields);
     }
-    const KeyframeTopologyPlan plan(space, scene, key_fields);
+    const std::vector<KeyframeIntervalReport>& intervals = given ? *given : replanned->intervals();
     // The plan carries every matched singularity, also those no element names (a key
     // frame's own saddle, which the static solve adds): the path through one at its first
     // key frame is the plan's, not an extra (its continuations across type changes, a node
     // changing stability, are claimed with it below).
-    for (const KeyframeIntervalReport& r : plan.intervals()) {
+    for (const KeyframeIntervalReport& r : intervals) {
       if (r.fallback) continue;  // left free: nothing carried
       const double t0 = topo.times[static_cast<size_t>(keyframe_frame(scene, r.t0))];
       for (const KeyframeIntervalReport::Match& m : r.matched)
@@ -317,11 +325,11 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
               break;
             }
     }
-    for (const KeyframeIntervalReport& r : plan.intervals())
+    for (const KeyframeIntervalReport& r : intervals)
       out.keyframe_intervals.push_back({r.from_keyframe, r.to_keyframe, r.t0, r.t1,
                                         r.fallback ? 0 : static_cast<int>(r.created.size() + r.cancelled.size()),
                                         {}, r.fallback, r.unguided_reason});
-    for (const KeyframeIntervalReport& r : plan.intervals())
+    for (const KeyframeIntervalReport& r : intervals)
       for (int creation = 0; creation < 2 && !r.fallback; ++creation)
         for (const KeyframeIntervalReport::Pair& p : creation ? r.created : r.cancelled) {
           if (N < 2 || p.t <= topo.times.front() || p.t >= topo.times.back()) continue;

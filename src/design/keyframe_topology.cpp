@@ -2341,4 +2341,55 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
   return out;
 }
 
+std::optional<std::vector<KeyframeIntervalReport>> keyframe_intervals_from_json(const nlohmann::json& file) {
+  using nlohmann::json;
+  auto type = [](const json& name) {
+    for (const SingularityType t : {SingularityType::source, SingularityType::sink, SingularityType::saddle,
+                                    SingularityType::center, SingularityType::attracting_focus,
+                                    SingularityType::repelling_focus})
+      if (name.get<std::string>() == to_string(t)) return t;
+    throw std::invalid_argument("unknown singularity type");
+  };
+  auto xyz = [](const json& p) {
+    if (!p.is_array() || p.size() != 3) throw std::invalid_argument("not a point");
+    return Vec3(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+  };
+  try {
+    std::vector<KeyframeIntervalReport> out;
+    for (const json& j : file.at("intervals")) {
+      KeyframeIntervalReport r;
+      r.t0 = j.at("interval").at(0).get<double>();
+      r.t1 = j.at("interval").at(1).get<double>();
+      r.from_keyframe = j.at("keyframes").at(0).get<int>();
+      r.to_keyframe = j.at("keyframes").at(1).get<int>();
+      r.bifurcation_t = j.at("bifurcation_t").get<double>();
+      for (const json& m : j.at("matched"))
+        r.matched.push_back({type(m.at("type")), xyz(m.at("from")), xyz(m.at("to")), m.at("linked").get<bool>(),
+                             m.at("detour").get<double>(), type(m.at("to_type"))});
+      for (const char* key : {"created", "cancelled"})
+        for (const json& p : j.at(key)) {
+          KeyframeIntervalReport::Pair pair;
+          pair.t = p.at("t").get<double>();
+          pair.at = xyz(p.at("at"));
+          pair.saddle = xyz(p.at("saddle"));
+          pair.node = xyz(p.at("node"));
+          pair.node_type = type(p.at("node_type"));
+          (std::string(key) == "created" ? r.created : r.cancelled).push_back(pair);
+        }
+      r.separation = j.at("separation").get<double>();
+      if (j.contains("closest_approach")) r.closest_approach = j.at("closest_approach").get<double>();
+      r.collision = j.value("collision", std::string());
+      r.routing = j.at("routing").get<std::string>();
+      r.guided = j.at("guided").get<bool>();
+      r.fallback = j.value("fallback", false);
+      r.unguided_reason = j.value("unguided_reason", std::string());
+      for (const json& p : j.at("unpaired")) r.unpaired_first.push_back(xyz(p));
+      out.push_back(std::move(r));
+    }
+    return out;
+  } catch (const std::exception&) {
+    return std::nullopt;  // not such a file: the caller plans again
+  }
+}
+
 }  // namespace tvf

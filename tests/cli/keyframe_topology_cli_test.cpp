@@ -75,6 +75,28 @@ TEST(CliKeyframeTopology, Example26ReportsItsIntervalAndTheAnalysisAgrees) {
   EXPECT_LT(std::hypot(dx, dy), 0.1);
   EXPECT_EQ(analysis.at("paths").size(), 5u);
 
+  // The design check takes the plan from the folder's keyframe_topology.json (it is not
+  // made again): without the file, or with one that does not parse, it plans again and
+  // says the same; with the planned creation taken out of the file, the creation is extra.
+  const nlohmann::json design = read_json(dir / "a_design.json");
+  const fs::path plan = dir / "out" / "keyframe_topology.json";
+  nlohmann::json edited = r.topology;
+  edited["intervals"][0]["created"] = nlohmann::json::array();
+  for (const std::string& content : {std::string("none"), std::string("{\"intervals\": 3}"), edited.dump()}) {
+    SCOPED_TRACE(content.substr(0, 40));
+    if (content == "none") fs::remove(plan);
+    else test::write_text(plan, content);
+    const auto again = test::run_tvf("analyze " + test::quoted(dir / "out") + " -q -o " + test::quoted(dir / "b.json"));
+    ASSERT_EQ(again.exit_code, 0) << again.output;
+    const nlohmann::json d = read_json(dir / "b_design.json");
+    if (content == edited.dump()) {
+      EXPECT_EQ(d.at("extra").at("bifurcations").size(), 1u) << d.dump();
+      EXPECT_EQ(d.at("keyframe_intervals").at(0).at("planned_bifurcations"), 0) << d.dump();
+    } else {
+      EXPECT_EQ(d, design);
+    }
+  }
+
   // The same scene with "free": bifurcations nobody designed, and no keyframe_topology.json.
   test::TempDir free_dir;
   nlohmann::json free = read_json(scene);

@@ -69,6 +69,7 @@
 namespace tvf {
 
 struct PeriodicOrbits;  // integrate/periodic_orbits.h
+struct KeyframeIntervalReport;  // design/keyframe_topology.h
 
 struct DesignCheckOptions {
   // How far a found singularity or bifurcation may lie from the designed point, in mean
@@ -79,6 +80,12 @@ struct DesignCheckOptions {
   // The field's periodic orbits and Hopf events, when the caller has them; else they are
   // found here when the scene has a Hopf element.
   const PeriodicOrbits* orbits = nullptr;
+  // Key-frame topology "matched": the plan of the generation that made the field, when the
+  // caller has it (GenerateReport::keyframe_intervals, or a generated folder's
+  // keyframe_topology.json), one interval per pair of consecutive key frames; else it is
+  // planned again here from the field's key frames (the same plan, at the plan's cost:
+  // seconds on a large mesh whose guide is tried and refused).
+  const std::vector<KeyframeIntervalReport>* keyframe_intervals = nullptr;
 };
 
 enum class FeatureKind { singularity, bifurcation };

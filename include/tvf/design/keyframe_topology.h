@@ -72,6 +72,7 @@
 
 #include <limits>
 #include <span>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -169,5 +170,10 @@ private:
 // the interval left free), "unguided_reason" (when not guided), "unpaired": [[x, y, z],
 // ...]} per interval.
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals);
+
+// The intervals back from keyframe_topology.json ({"intervals": keyframe_intervals_json}),
+// as the design check uses them (what was matched, created and cancelled, guided or left
+// free, and why); nullopt when the JSON is not such a file (the check then plans again).
+std::optional<std::vector<KeyframeIntervalReport>> keyframe_intervals_from_json(const nlohmann::json& file);
 
 }  // namespace tvf
