@@ -7,6 +7,7 @@
 #include "tvf/field/field_sampler.h"
 
 #include <Eigen/Dense>
+#include <Eigen/SparseLU>
 
 #include <algorithm>
 #include <array>
@@ -877,6 +878,130 @@ cplx face_alpha(const DesignSpace& space, int f, const std::array<cplx, 3>& w) {
   return to_linear(W * Y.inverse()).alpha;
 }
 
+// A chart that follows the path, for a tube no plane fits (a thin or crumpled part of
+// the surface, where the faces within an edge length of the path already face away from
+// any one plane): the faces whose corners all lie within `out_r` of the path, when those
+// joined to `start_face` form a disk, mapped by Tutte's embedding with Floater's
+// mean-value weights, the disk's boundary laid on an ellipse whose long axis runs from
+// the boundary vertex nearest `from` to the one nearest `to` (boundary length kept in
+// proportion along each side). Positive weights and a convex boundary make the map one to
+// one (Floater 2003), and it is linear on every face as the projection is, so a factor's
+// zero is where the face's linear interpolant has it and F₀ / (z − p(t₀)) has no noise.
+// Returns the coordinates (+∞ off the disk), or none when the faces are not a disk.
+std::vector<cplx> follow_chart(const Mesh& mesh, const std::vector<double>& dist, double out_r, int start_face,
+                               const Vec3& from, const Vec3& to) {
+  const auto nv = static_cast<size_t>(mesh.num_vertices());
+  const auto nf = static_cast<size_t>(mesh.num_faces());
+  auto inside = [&](size_t f) {
+    const Face& c = mesh.face(static_cast<int>(f));
+    return dist[static_cast<size_t>(c[0])] < out_r && dist[static_cast<size_t>(c[1])] < out_r &&
+           dist[static_cast<size_t>(c[2])] < out_r;
+  };
+  if (start_face < 0 || !inside(static_cast<size_t>(start_face))) return {};
+  std::vector<char> in(nf, 0);
+  std::vector<int> faces{start_face};
+  in[static_cast<size_t>(start_face)] = 1;
+  for (size_t k = 0; k < faces.size(); ++k)
+    for (int c = 0; c < 3; ++c) {
+      const int t = mesh.twin(3 * faces[k] + c);
+      if (t < 0) continue;
+      const auto g = static_cast<size_t>(Mesh::face_of(t));
+      if (!in[g] && inside(g)) in[g] = 1, faces.push_back(static_cast<int>(g));
+    }
+  // A disk: V − E + F = 1 and one boundary loop (no vertex with two boundary edges out).
+  std::vector<int> local(nv, -1), out_of(nv, -1), boundary;
+  size_t nverts = 0, interior_halfedges = 0;
+  for (const int f : faces)
+    for (int c = 0; c < 3; ++c) {
+      const int h = 3 * f + c;
+      const auto v = static_cast<size_t>(mesh.tail(h));
+      if (local[v] < 0) local[v] = static_cast<int>(nverts++);
+      const int t = mesh.twin(h);
+      if (t >= 0 && in[static_cast<size_t>(Mesh::face_of(t))]) {
+        ++interior_halfedges;
+        continue;
+      }
+      if (out_of[v] >= 0) return {};
+      out_of[v] = h;
+      boundary.push_back(h);
+    }
+  const size_t edges = boundary.size() + interior_halfedges / 2;
+  if (boundary.size() < 3 || nverts + faces.size() != edges + 1) return {};
+  std::vector<int> loop{mesh.tail(boundary.front())};
+  for (int h = out_of[static_cast<size_t>(mesh.head(boundary.front()))]; mesh.tail(h) != loop.front();
+       h = out_of[static_cast<size_t>(mesh.head(h))]) {
+    loop.push_back(mesh.tail(h));
+    if (loop.size() > boundary.size()) return {};
+  }
+  if (loop.size() != boundary.size()) return {};
+  // The boundary on the ellipse, counter-clockwise (the faces' orientation).
+  auto nearest = [&](const Vec3& x) {
+    size_t best = 0;
+    for (size_t k = 1; k < loop.size(); ++k)
+      if ((mesh.position(loop[k]) - x).squaredNorm() < (mesh.position(loop[best]) - x).squaredNorm()) best = k;
+    return best;
+  };
+  const size_t a = nearest(from), b = nearest(to), n = loop.size();
+  std::vector<double> along(n + 1, 0);  // boundary length from a
+  for (size_t k = 0; k < n; ++k)
+    along[k + 1] = along[k] + (mesh.position(loop[(a + k + 1) % n]) - mesh.position(loop[(a + k) % n])).norm();
+  const size_t mid = (b + n - a) % n;  // b's place after a
+  const double half = 0.5 * (from - to).norm() + out_r, width = out_r;
+  std::vector<cplx> coords(nv, cplx(std::numeric_limits<double>::infinity(), 0));
+  for (size_t k = 0; k < n; ++k) {
+    double angle = 0;
+    if (mid == 0)
+      angle = std::numbers::pi + 2 * std::numbers::pi * along[k] / along[n];
+    else if (k <= mid)
+      angle = std::numbers::pi + std::numbers::pi * along[k] / along[mid];
+    else
+      angle = std::numbers::pi * (along[k] - along[mid]) / (along[n] - along[mid]);
+    coords[static_cast<size_t>(loop[(a + k) % n])] = {half * std::cos(angle), width * std::sin(angle)};
+  }
+  // The interior: Σ_j w_ij (z_i − z_j) = 0, w_ij = (tan(θ₁/2) + tan(θ₂/2)) / |x_j − x_i|.
+  std::vector<int> unknown(nv, -1);
+  size_t nu = 0;
+  for (size_t v = 0; v < nv; ++v)
+    if (local[v] >= 0 && out_of[v] < 0) unknown[v] = static_cast<int>(nu++);
+  if (nu > 0) {
+    std::vector<Eigen::Triplet<double>> entries;
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nu), 2);
+    for (const int f : faces)
+      for (int c = 0; c < 3; ++c) {
+        const int h = 3 * f + c;
+        const auto i = static_cast<size_t>(mesh.tail(h));
+        if (unknown[i] < 0) continue;
+        const double t = std::tan(0.5 * mesh.corner_angle(h));
+        for (const int j : {mesh.head(h), mesh.tail(Mesh::prev(h))}) {
+          const double w = t / (mesh.position(j) - mesh.position(static_cast<int>(i))).norm();
+          entries.emplace_back(unknown[i], unknown[i], w);
+          const auto ju = static_cast<size_t>(j);
+          if (unknown[ju] >= 0) {
+            entries.emplace_back(unknown[i], unknown[ju], -w);
+          } else {
+            rhs(unknown[i], 0) += w * coords[ju].real();
+            rhs(unknown[i], 1) += w * coords[ju].imag();
+          }
+        }
+      }
+    Eigen::SparseMatrix<double> m(static_cast<Eigen::Index>(nu), static_cast<Eigen::Index>(nu));
+    m.setFromTriplets(entries.begin(), entries.end());
+    Eigen::SparseLU<Eigen::SparseMatrix<double>> lu(m);
+    if (lu.info() != Eigen::Success) return {};
+    const Eigen::MatrixXd z = lu.solve(rhs);
+    for (size_t v = 0; v < nv; ++v)
+      if (unknown[v] >= 0) coords[v] = {z(unknown[v], 0), z(unknown[v], 1)};
+  }
+  // One to one in exact arithmetic; checked in floating point.
+  for (const int f : faces) {
+    const Face& c = mesh.face(f);
+    const cplx p = coords[static_cast<size_t>(c[1])] - coords[static_cast<size_t>(c[0])];
+    const cplx q = coords[static_cast<size_t>(c[2])] - coords[static_cast<size_t>(c[0])];
+    if (!(p.real() * q.imag() - p.imag() * q.real() > 0)) return {};
+  }
+  return coords;
+}
+
 // Builds a surface guide for the tracks [first, last) (spanning [t0, t1]; the tracks of
 // `pairs` are created or cancelled pairs', the others matched); false when a path leaves
 // its chart or a key frame's field has a zero no track carries. `ramp` widens the band
@@ -919,48 +1044,105 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     std::vector<std::vector<Vec3>> world(lines.size());
     for (size_t l = 0; l < lines.size(); ++l)
       for (const SurfacePoint& p : lines[l]) world[l].push_back(surface_position(mesh, p));
-    if (!path.pair)
-      for (const Vec3& x : world[0]) path.x.push_back(project(x));
-    LocalChart chart;
-    space.log_map().compute_local(mid, reach + 2 * outer + 2 * h, chart);
-    // Every vertex's distance from the path (chord, to the polylines), near the path.
-    std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
-    for (size_t v = 0; v < nv; ++v) {
-      const cplx geo = chart.coords[v];
-      if (!std::isfinite(geo.real()) || !std::isfinite(geo.imag()) || std::abs(geo) > reach + 1.5 * outer) continue;
-      const Vec3& x = mesh.position(static_cast<int>(v));
-      for (const std::vector<Vec3>& line : world)
-        for (size_t k = 0; k + 1 < line.size(); ++k) {
-          const Vec3 e = line[k + 1] - line[k];
-          const double n2 = e.squaredNorm();
-          const double u = n2 > 0 ? std::clamp((x - line[k]).dot(e) / n2, 0.0, 1.0) : 0.0;
-          dist[v] = std::min(dist[v], (x - line[k] - u * e).norm());
-        }
-    }
-    // The widest tube (of inner, outer; then narrower, down to one edge length) whose
-    // faces all face the plane's way.
-    bool found = false;
-    for (double shrink = 1; !found && shrink * inner >= h; shrink *= 0.7) {
-      const double in_r = shrink * inner, out_r = shrink * outer;
-      found = true;
-      for (int f = 0; f < mesh.num_faces() && found; ++f) {
-        const Face& c = mesh.face(f);
-        if (std::min({dist[static_cast<size_t>(c[0])], dist[static_cast<size_t>(c[1])], dist[static_cast<size_t>(c[2])]}) <
-                out_r &&
-            space.bundle().face_normal(f).dot(normal) <= 0)
-          found = false;
-      }
-      if (!found) continue;
-      path.coords.assign(nv, cplx(std::numeric_limits<double>::infinity(), 0));
+    // Every vertex's distance from the path (chord, to the polylines), of those `near` it.
+    std::vector<double> dist;
+    auto measure = [&](auto near) {
+      dist.assign(nv, std::numeric_limits<double>::infinity());
       for (size_t v = 0; v < nv; ++v) {
-        if (dist[v] >= out_r) continue;
-        path.coords[v] = project(mesh.position(static_cast<int>(v)));
+        if (!near(v)) continue;
+        const Vec3& x = mesh.position(static_cast<int>(v));
+        for (const std::vector<Vec3>& line : world)
+          for (size_t k = 0; k + 1 < line.size(); ++k) {
+            const Vec3 e = line[k + 1] - line[k];
+            const double n2 = e.squaredNorm();
+            const double u = n2 > 0 ? std::clamp((x - line[k]).dot(e) / n2, 0.0, 1.0) : 0.0;
+            dist[v] = std::min(dist[v], (x - line[k] - u * e).norm());
+          }
+      }
+    };
+    // The plane fits no tube when a face holding the path faces away from it (the tube
+    // is never narrower than that face): then the chart that follows the path at once.
+    bool plane = true;
+    for (const auto& on : lines)
+      for (const SurfacePoint& p : on) plane = plane && space.bundle().face_normal(p.face).dot(normal) > 0;
+    bool found = false;
+    if (plane) {
+      LocalChart chart;
+      space.log_map().compute_local(mid, reach + 2 * outer + 2 * h, chart);
+      measure([&](size_t v) {
+        const cplx geo = chart.coords[v];
+        return std::isfinite(geo.real()) && std::isfinite(geo.imag()) && std::abs(geo) <= reach + 1.5 * outer;
+      });
+      // The widest tube (of inner, outer; then narrower, down to one edge length) whose
+      // faces all face the plane's way.
+      for (double shrink = 1; !found && shrink * inner >= h; shrink *= 0.7) {
+        const double in_r = shrink * inner, out_r = shrink * outer;
+        found = true;
+        for (int f = 0; f < mesh.num_faces() && found; ++f) {
+          const Face& c = mesh.face(f);
+          if (std::min({dist[static_cast<size_t>(c[0])], dist[static_cast<size_t>(c[1])], dist[static_cast<size_t>(c[2])]}) <
+                  out_r &&
+              space.bundle().face_normal(f).dot(normal) <= 0)
+            found = false;
+        }
+        if (!found) continue;
+        path.coords.assign(nv, cplx(std::numeric_limits<double>::infinity(), 0));
+        for (size_t v = 0; v < nv; ++v) {
+          if (dist[v] >= out_r) continue;
+          path.coords[v] = project(mesh.position(static_cast<int>(v)));
+          path.support.push_back(v);
+          path.w.push_back(dist[v] <= in_r ? 1.0 : smoothstep((out_r - dist[v]) / (out_r - in_r)));
+        }
+        if (!path.pair)
+          for (const Vec3& x : world[0]) path.x.push_back(project(x));
+      }
+      if (found) return true;
+    }
+    // The chart that follows the path (follow_chart): the widest tube whose faces are a disk.
+    measure([&](size_t v) { return (mesh.position(static_cast<int>(v)) - centre).norm() <= reach + 1.5 * outer; });
+    for (double shrink = 1; !found && shrink * outer >= 1.5 * h; shrink *= 0.7) {
+      const double in_r = shrink * inner, out_r = shrink * outer;
+      std::vector<cplx> coords = follow_chart(mesh, dist, out_r, lines[0].front().face, world[0].front(), world[0].back());
+      if (coords.empty()) continue;
+      std::vector<cplx> x;
+      bool on_chart = true;
+      for (const auto& on : lines)
+        for (const SurfacePoint& p : on) {
+          const cplx z = chart_point(mesh, coords, p);
+          on_chart = on_chart && std::isfinite(z.real());
+          if (&on == &lines[0]) x.push_back(z);
+        }
+      if (!on_chart) continue;
+      found = true;
+      path.coords = std::move(coords);
+      path.support.clear();
+      path.w.clear();
+      for (size_t v = 0; v < nv; ++v) {
+        if (!std::isfinite(path.coords[v].real())) continue;
         path.support.push_back(v);
         path.w.push_back(dist[v] <= in_r ? 1.0 : smoothstep((out_r - dist[v]) / (out_r - in_r)));
       }
+      if (!path.pair) path.x = std::move(x);
     }
-    return found;  // else the surface folds over the plane within an edge length of the path
+    return found;  // else neither chart fits within an edge length of the path
   };
+  // First, cheaply, every path: the straight segment's nearest points on the surface.
+  // Where the segment runs through the solid (a path across the bunny, or through the
+  // elephant's leg) they jump, and no chart holds a path that is not a curve on the surface.
+  for (size_t i = first; i < last; ++i) {
+    const Track& tr = tracks[i];
+    const std::vector<SurfacePoint> on = samples(tr);
+    double jump = 0;
+    for (size_t k = 0; k + 1 < on.size(); ++k)
+      jump = std::max(jump, (surface_position(mesh, on[k + 1]) - surface_position(mesh, on[k])).norm());
+    if (jump > 2 * h) {
+      why = fmt::format("the {}'s path from {} to {} leaves the surface (its nearest surface points jump {:.2g}, "
+                        "{:.0f} edge lengths, between two of its {} samples)",
+                        to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1), jump,
+                        jump / h, SurfaceGuide::kSamples + 1);
+      return false;
+    }
+  }
   for (size_t i = first; i < last; ++i) {
     const Track& tr = tracks[i];
     if (tr.group >= 0) continue;  // a pair's (below)
@@ -973,9 +1155,12 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     double reach = 0;
     for (const SurfacePoint& p : on)
       reach = std::max(reach, (surface_position(mesh, p) - surface_position(mesh, mid)).norm());
-    if (reach < 1e-9 * h) continue;  // a singularity that stays: F₀ and F₁ share it, H carries it
+    // A singularity that stays (the key frames' static solves put it within a thousandth
+    // of an edge length, CGAL's elephant's foci 1e-8 apart): F₀ and F₁ share it, H carries it.
+    if (reach < 1e-3 * h) continue;
     if (!make_tube(path, {on}, mid)) {
-      why = fmt::format("the surface folds over the chart of the {}'s path from {} to {} within an edge length of it",
+      why = fmt::format("the surface folds over the chart of the {}'s path from {} to {} within an edge length of it "
+                        "(and its tube is no disk down to 1.5 edge lengths wide)",
                         to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1));
       return false;
     }
@@ -2219,8 +2404,10 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         std::string why;
         if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
                                  ramp, keyframe_fields[k], keyframe_fields[k + 1], sg, why)) {
+          // The wider ramp widens the same tubes: a path or pair that fits no chart at the
+          // first does not at the second either, so no second try (on the bunny ~0.5 s).
           if (unbuilt_why.empty()) unbuilt_why = why;
-          continue;
+          break;
         }
         const int wrong = keep_phase_if_resolved(space, tracks_, sg, rep.matched.size());
         if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong;
