@@ -214,10 +214,12 @@ struct Session::State {
   std::shared_ptr<std::atomic<bool>> analysis_cancel;
   long long analysing = 0;  // the revision of the result it analyses (0: none)
   long long analyses_stopped = 0, stopped_revision = 0;
-  void count_stopped(long long revision) {
-    if (revision == stopped_revision) return;
+  // Returns whether it counted (the status changed).
+  bool count_stopped(long long revision) {
+    if (revision == stopped_revision) return false;
     ++analyses_stopped;
     stopped_revision = revision;
+    return true;
   }
   // A newer change is coming or came: the running analysis (of the result about to be
   // replaced) stops, so that it does not take a core from the change's solve; the analysis
@@ -456,7 +458,9 @@ struct Session::State {
       // A newer change came meanwhile: a newer result, or one on its way (then this
       // analysis starts again if that change's solve fails).
       if (stopped || flag->load() || result != r) {  // (flagged after its last check: dropped too)
-        if (flag->load()) count_stopped(r->revision);
+        // Counted after the change's own status was pushed: a status change of its own
+        // (else a poll could read another analyses_stopped under the same sequence).
+        if (flag->load() && count_stopped(r->revision)) touch();
         continue;
       }
       auto next = std::make_shared<Result>(*r);
