@@ -300,7 +300,19 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     // The generation's own plan when the caller has it, else the same plan made again.
     std::optional<KeyframeTopologyPlan> replanned;
     const std::vector<KeyframeIntervalReport>* given = options.keyframe_intervals;
-    if (!given || given->size() + 1 != scene.keyframes.size()) given = nullptr;
+    // (Only when it is this scene's: an interval for each pair of its key frames, at their times.)
+    if (given && given->size() + 1 == scene.keyframes.size()) {
+      for (const KeyframeIntervalReport& r : *given) {
+        const auto n = static_cast<int>(scene.keyframes.size());
+        if (r.from_keyframe < 0 || r.to_keyframe < 0 || r.from_keyframe >= n || r.to_keyframe >= n ||
+            scene.keyframes[static_cast<size_t>(r.from_keyframe)].t != r.t0 ||
+            scene.keyframes[static_cast<size_t>(r.to_keyframe)].t != r.t1)
+          given = nullptr;
+        if (!given) break;
+      }
+    } else {
+      given = nullptr;
+    }
     if (!given) {
       std::vector<std::vector<cplx>> key_fields;
       for (const Keyframe& kf : scene.keyframes) {
