@@ -301,18 +301,13 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     std::optional<KeyframeTopologyPlan> replanned;
     const std::vector<KeyframeIntervalReport>* given = options.keyframe_intervals;
     // (Only when it is this scene's: an interval for each pair of its key frames, at their times.)
-    if (given && given->size() + 1 == scene.keyframes.size()) {
-      for (const KeyframeIntervalReport& r : *given) {
-        const auto n = static_cast<int>(scene.keyframes.size());
-        if (r.from_keyframe < 0 || r.to_keyframe < 0 || r.from_keyframe >= n || r.to_keyframe >= n ||
-            scene.keyframes[static_cast<size_t>(r.from_keyframe)].t != r.t0 ||
-            scene.keyframes[static_cast<size_t>(r.to_keyframe)].t != r.t1)
-          given = nullptr;
-        if (!given) break;
-      }
-    } else {
+    const auto n = static_cast<int>(scene.keyframes.size());
+    auto at = [&](int k, double t) { return k >= 0 && k < n && scene.keyframes[static_cast<size_t>(k)].t == t; };
+    if (given && (given->size() + 1 != scene.keyframes.size() ||
+                  !std::all_of(given->begin(), given->end(), [&](const KeyframeIntervalReport& r) {
+                    return at(r.from_keyframe, r.t0) && at(r.to_keyframe, r.t1);
+                  })))
       given = nullptr;
-    }
     if (!given) {
       std::vector<std::vector<cplx>> key_fields;
       for (const Keyframe& kf : scene.keyframes) {

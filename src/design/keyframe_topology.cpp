@@ -1129,9 +1129,11 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   // First, cheaply, every path: the straight segment's nearest points on the surface.
   // Where the segment runs through the solid (a path across the bunny, or through the
   // elephant's leg) they jump, and no chart holds a path that is not a curve on the surface.
+  // (Each track's samples are kept for the tubes below.)
+  std::vector<std::vector<SurfacePoint>> sampled(last - first);
   for (size_t i = first; i < last; ++i) {
     const Track& tr = tracks[i];
-    const std::vector<SurfacePoint> on = samples(tr);
+    const std::vector<SurfacePoint>& on = sampled[i - first] = samples(tr);
     double jump = 0;
     for (size_t k = 0; k + 1 < on.size(); ++k)
       jump = std::max(jump, (surface_position(mesh, on[k + 1]) - surface_position(mesh, on[k])).norm());
@@ -1150,7 +1152,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     path.track = i;
     path.conj = tr.index < 0;
     // The path on the surface, and the chart around its middle reaching `outer` past it.
-    const std::vector<SurfacePoint> on = samples(tr);
+    const std::vector<SurfacePoint>& on = sampled[i - first];
     const SurfacePoint mid = on[SurfaceGuide::kSamples / 2];
     double reach = 0;
     for (const SurfacePoint& p : on)
@@ -1174,9 +1176,9 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     path.saddle = pr.saddle;
     path.tc = pr.tc;
     path.tau = pr.tau;
-    const Track &node = tracks[pr.node], &saddle = tracks[pr.saddle];
     // The two paths run from the key frame (s = 0) to the template's zeros (s = 1).
-    const std::vector<SurfacePoint> on_node = samples(node), on_saddle = samples(saddle);
+    auto kept = [&](size_t t) { return t >= first && t < last ? sampled[t - first] : samples(tracks[t]); };
+    const std::vector<SurfacePoint> on_node = kept(pr.node), on_saddle = kept(pr.saddle);
     const std::vector<SurfacePoint> between{on_saddle.back(), on_node.back()};
     // The middle: the surface point nearest the mean of the two paths.
     Vec3 mean = Vec3::Zero();
