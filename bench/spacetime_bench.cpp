@@ -162,6 +162,10 @@ void BM_SpaceTimeKeyframesAndElementGrid(benchmark::State& state) {
   generation(state, *make_design_space(s), s);
 }
 BENCHMARK(BM_SpaceTimeKeyframesAndElementGrid)->Arg(65)->Arg(141)->Arg(317)->Unit(benchmark::kMillisecond);
+// Issue 15's "iterations flat from 4k to 1M": the same two designs on a 1001² grid (1M
+// vertices × 100 frames), run once each (minutes of CPU, ~10 GB).
+BENCHMARK(BM_SpaceTimeKeyframesGrid)->Arg(1001)->Iterations(1)->Repetitions(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SpaceTimeKeyframesAndElementGrid)->Arg(1001)->Iterations(1)->Repetitions(1)->Unit(benchmark::kMillisecond);
 
 void BM_SpaceTimeKeyframesSphere20k(benchmark::State& state) {
   generation(state, *sphere_space(), sphere_scene(false));
