@@ -86,6 +86,13 @@ public:
     const Vec3 d = x - focus_.position;
     return std::hypot(d.dot(u_), d.dot(v_));
   }
+  // The radius squared (each step's tests against the section's inner and outer radii,
+  // without a hypot call).
+  double radius2(const Vec3& x) const {
+    const Vec3 d = x - focus_.position;
+    const double a = d.dot(u_), b = d.dot(v_);
+    return a * a + b * b;
+  }
   double angle(const Vec3& x) const {
     const Vec3 d = x - focus_.position;
     return std::atan2(d.dot(v_), d.dot(u_));
@@ -117,13 +124,14 @@ public:
     o.step = std::min(0.5 * edge_, kTwoPi * std::max(r, r_min_) / 48);
     o.max_length = 3 * kTwoPi * r_out_;
     o.max_speed = max_speed_;
+    const double in2 = (0.3 * r_min_) * (0.3 * r_min_), out2 = r_out_ * r_out_;
     o.accept = [&](const Vec3& x) {
-      const double rx = radius(x);
-      if (rx < 0.3 * r_min_) {
+      const double rx2 = radius2(x);
+      if (rx2 < in2) {
         end = End::in;
         return false;
       }
-      if (rx > r_out_) {
+      if (rx2 > out2) {
         end = End::out;
         return false;
       }
