@@ -35,14 +35,20 @@ bool searched(SingularityType type, bool include_nodes) {
   return false;
 }
 
+// What every section of a frame shares, found once a frame (each is a pass over the whole
+// mesh or frame; issue 15): the mean edge length, the bounding-box diagonal and the
+// frame's largest |V| (StreamlineOptions::max_speed).
+struct FrameScales {
+  double edge = 0, diameter = 0, max_speed = 0;
+};
+
 // The Poincaré section of one focus: a ray in the plane of its face.
 class Section {
 public:
   Section(const TangentBundle& bundle, std::span<const cplx> values, const Singularity& focus,
-          const std::vector<Singularity>& others, const PeriodicOrbitOptions& options)
-      : bundle_(bundle), values_(values), focus_(focus) {
-    const Mesh& mesh = bundle.mesh();
-    edge_ = mesh.mean_edge_length();
+          const std::vector<Singularity>& others, const PeriodicOrbitOptions& options, const FrameScales& scales)
+      : bundle_(bundle), values_(values), focus_(focus), max_speed_(scales.max_speed) {
+    edge_ = scales.edge;
     const int f = focus.where.face;
     const Vec3 n = bundle.face_normal(f);
     // The ray points away from the nearest other singularity (the most room), else along e1.
@@ -63,7 +69,7 @@ public:
     ray_ = bundle.world_to_face(f, u_);
     ray_ /= std::abs(ray_);
     r_min_ = options.min_radius * edge_;
-    r_max_ = std::min(0.9 * nearest, options.max_radius * mesh.diameter());
+    r_max_ = std::min(0.9 * nearest, options.max_radius * scales.diameter);
     // The domain boundary along the ray.
     if (std::isfinite(r_max_) && r_max_ > r_min_) {
       const SurfaceWalk w = walk_surface(bundle, focus.where, r_max_ * ray_);
@@ -79,6 +85,13 @@ public:
   double radius(const Vec3& x) const {
     const Vec3 d = x - focus_.position;
     return std::hypot(d.dot(u_), d.dot(v_));
+  }
+  // The radius squared (each step's tests against the section's inner and outer radii,
+  // without a hypot call).
+  double radius2(const Vec3& x) const {
+    const Vec3 d = x - focus_.position;
+    const double a = d.dot(u_), b = d.dot(v_);
+    return a * a + b * b;
   }
   double angle(const Vec3& x) const {
     const Vec3 d = x - focus_.position;
@@ -110,13 +123,15 @@ public:
     o.stop_at_singular_faces = false;
     o.step = std::min(0.5 * edge_, kTwoPi * std::max(r, r_min_) / 48);
     o.max_length = 3 * kTwoPi * r_out_;
+    o.max_speed = max_speed_;
+    const double in2 = (0.3 * r_min_) * (0.3 * r_min_), out2 = r_out_ * r_out_;
     o.accept = [&](const Vec3& x) {
-      const double rx = radius(x);
-      if (rx < 0.3 * r_min_) {
+      const double rx2 = radius2(x);
+      if (rx2 < in2) {
         end = End::in;
         return false;
       }
-      if (rx > r_out_) {
+      if (rx2 > out2) {
         end = End::out;
         return false;
       }
@@ -162,6 +177,7 @@ private:
   const TangentBundle& bundle_;
   std::span<const cplx> values_;
   const Singularity& focus_;
+  double max_speed_ = 0;
   double edge_ = 0;
   Vec3 u_, v_;
   cplx ray_{1, 0};
@@ -186,10 +202,12 @@ std::vector<PeriodicOrbit> find_frame_orbits(const TangentBundle& bundle, std::s
                                              const std::vector<Singularity>& singularities,
                                              const PeriodicOrbitOptions& options) {
   std::vector<PeriodicOrbit> out;
+  std::optional<FrameScales> scales;  // found at the frame's first section
   for (size_t k = 0; k < singularities.size(); ++k) {
     const Singularity& focus = singularities[k];
     if (focus.index != 1 || !searched(focus.type, options.include_nodes)) continue;
-    const Section section(bundle, values, focus, singularities, options);
+    if (!scales) scales = FrameScales{bundle.mesh().mean_edge_length(), bundle.mesh().diameter(), max_speed(values)};
+    const Section section(bundle, values, focus, singularities, options, *scales);
     const double r0 = section.r_min(), r1 = section.r_max();
     if (!(r1 > r0)) continue;
     const int n = std::clamp(static_cast<int>(std::ceil((r1 - r0) / section.edge())) + 1, 4,

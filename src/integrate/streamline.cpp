@@ -42,6 +42,15 @@ std::vector<cplx> values_at(const Field& field, double t) {
   return out;
 }
 
+double max_speed(std::span<const cplx> values) {
+  // √ of the largest |z|² (one pass the compiler vectorises, instead of a hypot call per
+  // vertex: the periodic-orbit search traces many short lines per frame, and this scan of
+  // every vertex was most of each one's cost on the 20k sphere; issue 15).
+  double vmax2 = 0;
+  for (const cplx& z : values) vmax2 = std::max(vmax2, std::norm(z));
+  return std::sqrt(vmax2);
+}
+
 Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> values,
                             const Vec3& seed, const StreamlineOptions& options) {
   const Mesh& mesh = bundle.mesh();
@@ -58,12 +67,7 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
   const Mesh& mesh = bundle.mesh();
   TVF_CHECK(values.size() == static_cast<size_t>(mesh.num_vertices()), "{} values for {} vertices",
             values.size(), mesh.num_vertices());
-  // The largest |z| as √ of the largest |z|² (one pass the compiler vectorises, instead of
-  // a hypot call per vertex: the periodic-orbit search traces many short lines per frame,
-  // and this scan of every vertex was most of each one's cost on the 20k sphere; issue 15).
-  double vmax2 = 0;
-  for (const cplx& z : values) vmax2 = std::max(vmax2, std::norm(z));
-  const double vmax = std::sqrt(vmax2);
+  const double vmax = options.max_speed >= 0 ? options.max_speed : max_speed(values);
   const double h = options.step > 0 ? options.step : 0.5 * mesh.mean_edge_length();
   const double max_len = options.max_length > 0 ? options.max_length : mesh.diameter();
   const double stop = options.stop_speed * vmax;
@@ -75,15 +79,21 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
   const Vec3 x0 = surface_position(mesh, seed);
   const cplx v0 = interpolate_in_face(bundle, values, seed);
 
-  // Unit direction at p in p's face frame, or nothing at a zero.
-  auto direction = [&](const SurfacePoint& p, double sign) -> std::optional<cplx> {
-    const cplx z = interpolate_in_face(bundle, values, p);
-    const double n = std::abs(z);
+  // The unit direction of the field's vector z (of length n = |z|) at a point, in that
+  // point's face frame, or nothing at a zero.
+  auto unit = [&](cplx z, double n, double sign) -> std::optional<cplx> {
     if (!(n > stop) || n == 0) return std::nullopt;
     return sign * z / n;
   };
+  auto direction = [&](const SurfacePoint& p, double sign) -> std::optional<cplx> {
+    const cplx z = interpolate_in_face(bundle, values, p);
+    return unit(z, std::abs(z), sign);
+  };
 
+  // Each step's point, its position and speed (the field there, interpolated once: the
+  // speed and the next step's first stage both read it; issue 15).
   std::vector<SurfacePoint> half[2];
+  std::vector<Vec3> position[2];
   std::vector<double> speed[2];
   StopReason why[2] = {StopReason::none, StopReason::none};
   const int ndir = options.both_directions ? 2 : 1;
@@ -91,6 +101,9 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
   for (int dir = 0; dir < ndir; ++dir) {
     const double sign = dir == 0 && !(options.backward_only && !options.both_directions) ? 1.0 : -1.0;
     SurfacePoint p = seed;
+    Vec3 xp = x0;
+    cplx zp = v0;  // the field at p
+    double np = std::abs(v0);
     why[dir] = StopReason::length;
     if (singular(p.face)) {
       why[dir] = StopReason::singularity;
@@ -99,7 +112,7 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
     double len = 0;
     for (long step = 0; step < max_steps && len < max_len; ++step) {
       // RK4 with every stage's vector carried back into p's face frame.
-      const auto k1 = direction(p, sign);
+      const auto k1 = unit(zp, np, sign);
       if (!k1) { why[dir] = StopReason::singularity; break; }
       auto stage = [&](cplx k, double frac) -> std::optional<cplx> {
         const SurfaceWalk w = walk_surface(bundle, p, frac * h * k);
@@ -114,16 +127,19 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
       const cplx d = k4 ? (*k1 + 2.0 * *k2 + 2.0 * *k3 + *k4) / 6.0 : *k1;
       // Stages that cancel out (|d| of unit vectors under ½: the direction turns by more
       // than about 120° within a step) mean a zero inside the step: a sink or a source.
-      if (std::abs(d) < 0.5) { why[dir] = StopReason::singularity; break; }
+      const double nd2 = std::norm(d);  // |d|² against ¼: no hypot (|d| ≤ 1, a mean of unit vectors)
+      if (nd2 < 0.25) { why[dir] = StopReason::singularity; break; }
       const SurfaceWalk w = walk_surface(bundle, p, h * d, index.empty() ? std::function<bool(int)>{} : singular_fn);
       const SurfacePoint q = w.end;
       const Vec3 xq = surface_position(mesh, q);
       if (options.accept && !options.accept(xq)) { why[dir] = StopReason::rejected; break; }
-      const Vec3 xp = surface_position(mesh, p);
       p = q;
+      zp = interpolate_in_face(bundle, values, p);
+      np = std::abs(zp);
       half[dir].push_back(p);
-      speed[dir].push_back(std::abs(interpolate_in_face(bundle, values, p)));
-      len += h * w.travelled * std::abs(d);
+      position[dir].push_back(xq);
+      speed[dir].push_back(np);
+      len += h * w.travelled * std::sqrt(nd2);
       if (w.hit_boundary) { why[dir] = StopReason::boundary; break; }
       if (w.stopped || singular(p.face)) { why[dir] = StopReason::singularity; break; }
       // Closed orbit: back next to the seed after going some way round.
@@ -134,19 +150,24 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
         why[dir] = StopReason::closed;
         break;
       }
+      xp = xq;
     }
     if (why[dir] == StopReason::closed) break;  // the other half would retrace the orbit
   }
   Streamline s;
-  auto push = [&](const SurfacePoint& q, double sp) {
+  const size_t count = half[0].size() + half[1].size() + 1;
+  s.where.reserve(count);
+  s.points.reserve(count);
+  s.speeds.reserve(count);
+  auto push = [&](const SurfacePoint& q, const Vec3& x, double sp) {
     s.where.push_back(q);
-    s.points.push_back(surface_position(mesh, q));
+    s.points.push_back(x);
     s.speeds.push_back(sp);
   };
-  for (size_t k = half[1].size(); k-- > 0;) push(half[1][k], speed[1][k]);
+  for (size_t k = half[1].size(); k-- > 0;) push(half[1][k], position[1][k], speed[1][k]);
   s.seed = s.points.size();
-  push(seed, std::abs(v0));
-  for (size_t k = 0; k < half[0].size(); ++k) push(half[0][k], speed[0][k]);
+  push(seed, x0, std::abs(v0));
+  for (size_t k = 0; k < half[0].size(); ++k) push(half[0][k], position[0][k], speed[0][k]);
   s.stop_forward = why[0];
   s.stop_backward = why[1];
   return s;

@@ -47,7 +47,11 @@ SurfaceWalk walk_surface(const TangentBundle& bundle, const SurfacePoint& start,
   SurfaceWalk w;
   w.end = start;
   cplx rem = displacement;
-  const double total = std::abs(displacement);
+  // Whether |displacement| > 0, without the hypot call of std::abs (the walk is an RK4
+  // stage's: four a streamline step; issue 15): zero unless a part is NaN-free and non-zero
+  // or infinite, exactly as std::abs(displacement) > 0.
+  const double re = std::abs(displacement.real()), im = std::abs(displacement.imag());
+  const bool moves = std::isinf(re) || std::isinf(im) || (!std::isnan(re) && !std::isnan(im) && (re > 0 || im > 0));
   double left = 1.0;  // fraction of the displacement still to walk
   // Each pass crosses one edge; a walk of a few edge lengths crosses few. The cap only
   // guards against rounding ping-pong around a vertex.
@@ -82,7 +86,7 @@ SurfaceWalk walk_surface(const TangentBundle& bundle, const SurfacePoint& start,
     if (tw < 0) {
       w.end.bary = e;
       w.hit_boundary = true;
-      w.travelled = total > 0 ? 1.0 - left : 1.0;
+      w.travelled = moves ? 1.0 - left : 1.0;
       return w;
     }
     const int g = Mesh::face_of(tw);
@@ -98,7 +102,7 @@ SurfaceWalk walk_surface(const TangentBundle& bundle, const SurfacePoint& start,
     w.end = next;
     if (stop_in && stop_in(g)) {
       w.stopped = true;
-      w.travelled = total > 0 ? 1.0 - left : 1.0;
+      w.travelled = moves ? 1.0 - left : 1.0;
       return w;
     }
   }

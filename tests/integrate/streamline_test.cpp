@@ -1,6 +1,7 @@
 #include "tvf/integrate/streamline.h"
 
 #include "tvf/core/error.h"
+#include "tvf/integrate/surface_walk.h"
 #include "tvf/mesh/grid.h"
 #include "tvf/mesh/primitives.h"
 
@@ -111,6 +112,45 @@ TEST(Streamline, StopsAtMaxLengthAndAtTheCallersTest) {
   EXPECT_EQ(t.stop_forward, StopReason::rejected);
   EXPECT_LT(t.points.back().y(), 0.25);
   EXPECT_GT(t.points.back().y(), 0.25 - 0.011);
+}
+
+// A caller that traces many lines on one frame gives its largest |V| once
+// (StreamlineOptions::max_speed): the lines are those traced without it, bit for bit; a
+// largest |V| given is the one used (here one so large that the field is "zero"
+// everywhere: the line stops at its seed). Each point's position and speed are those of
+// its surface point (the speed is read once a step, for the point and the next step).
+TEST(Streamline, TakesTheFramesLargestSpeedFromItsCaller) {
+  const Mesh grid = make_grid(GridSpec{31, 31, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  std::vector<cplx> values(static_cast<size_t>(grid.num_vertices()));
+  for (int v = 0; v < grid.num_vertices(); ++v) {
+    const cplx z(grid.position(v).x(), grid.position(v).y());
+    values[static_cast<size_t>(v)] = cplx(-0.2, 1) * (z - cplx(0.1, 0.05)) * (1.0 + std::norm(z));
+  }
+  const double vmax = max_speed(values);
+  double largest = 0;
+  for (const cplx& z : values) largest = std::max(largest, std::abs(z));
+  EXPECT_NEAR(vmax, largest, 1e-15 * largest);
+  StreamlineOptions o;
+  o.stop_at_singular_faces = false;
+  const Streamline plain = trace_streamline(bundle, values, Vec3(0.7, 0.1, 0), o);
+  ASSERT_GT(plain.points.size(), 20u);
+  o.max_speed = vmax;
+  const Streamline given = trace_streamline(bundle, values, Vec3(0.7, 0.1, 0), o);
+  ASSERT_EQ(given.points.size(), plain.points.size());
+  EXPECT_EQ(given.seed, plain.seed);
+  EXPECT_EQ(given.stop_forward, plain.stop_forward);
+  EXPECT_EQ(given.stop_backward, plain.stop_backward);
+  for (size_t k = 0; k < plain.points.size(); ++k) {
+    EXPECT_EQ(given.points[k], plain.points[k]) << k;
+    EXPECT_EQ(given.speeds[k], plain.speeds[k]) << k;
+    EXPECT_EQ(plain.points[k], surface_position(grid, plain.where[k])) << k;
+    EXPECT_EQ(plain.speeds[k], std::abs(interpolate_in_face(bundle, values, plain.where[k]))) << k;
+  }
+  o.max_speed = 1e12 * vmax;  // every |V| below 1e-9 of it
+  const Streamline stopped = trace_streamline(bundle, values, Vec3(0.7, 0.1, 0), o);
+  EXPECT_EQ(stopped.points.size(), 1u);
+  EXPECT_EQ(stopped.stop_forward, StopReason::singularity);
 }
 
 // The rotation about the z axis, ẑ × x, in each vertex's basis: its streamlines are the

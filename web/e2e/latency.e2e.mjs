@@ -5,7 +5,8 @@
 // design that New starts, for each generator, with results pushed (GET /api/events) and
 // with the polling fallback (the event stream refused), which is what the page did
 // before; then, pushed only, on the 20,252-vertex geodesic sphere × 100 frames (the
-// benchmarks' sphere, written here as an OFF file; sources clicked on the surface). Each
+// benchmarks' sphere, written here as an OFF file; sources clicked on the surface, or for
+// `deform` a vortex turned, as on the grid). Each
 // change adds a source, except for `deform`, which ignores the scene's elements (the page
 // refuses them, checked here): its changes turn the whole field by a new angle. Beside it: the whole result held (every frame ready) and its analysis (paths,
 // bifurcations, coherence: it follows the field). "server solve" is status.seconds, the
@@ -15,7 +16,8 @@
 // the page. Writes latency.json and, after each generator's changes with pushed results,
 // a screenshot latency_GENERATOR.png to --out.
 // Usage: node e2e/latency.e2e.mjs --tvf PATH/TO/tvf [--out DIR] [--chromium PATH] [--changes N]
-//        [--generators basis,spacetime] [--modes push] [--sphere basis,spacetime|none] [--sphere-changes N] [--steps]
+//        [--generators basis,spacetime] [--modes push] [--sphere basis,constrained,spacetime,deform|none]
+//        [--sphere-changes N] [--steps]
 //        [--serve "--solve-while-saving ..."] (more options for tvf serve, space-separated)
 // --steps prints, for every change, the page's steps (window.tvf.marks) in ms after the event.
 // --no-analysis-wait makes each change as soon as the last one's picture and whole result are
@@ -33,7 +35,8 @@ const n = Number(process.argv[process.argv.indexOf("--changes") + 1]) || 5;
 const only = process.argv.indexOf("--generators");
 const generators = only > 0 ? process.argv[only + 1].split(",") : ["basis", "constrained", "spacetime", "deform"];
 const sphereAt = process.argv.indexOf("--sphere");
-const sphereGenerators = sphereAt > 0 ? process.argv[sphereAt + 1].split(",").filter((g) => g !== "none") : ["basis", "spacetime"];
+const sphereGenerators = sphereAt > 0 ? process.argv[sphereAt + 1].split(",").filter((g) => g !== "none")
+                                       : ["basis", "constrained", "spacetime", "deform"];
 // Changes on the sphere (each one a whole 20k × 100 field and its analysis: seconds idle,
 // a minute or more on a loaded machine), and how long one may take to reach the page.
 const sphereChangesAt = process.argv.indexOf("--sphere-changes");
@@ -220,8 +223,15 @@ try {
       // the camera sees (it looks from (0.2, −1, 0.6)).
       fs.writeFileSync(path.join(dir, "sphere20k.off"), geodesicSphereOff(45));
       for (const generator of sphereGenerators) {
+        const vortex = { kind: "singular", type: "ccw_center", path: [[0.0, -0.8, 0.6, 0]] };
         const scene = { tvf: 1, domain: { mesh: "sphere20k.off" }, time: { frames: 100, range: [0, 1] }, generator,
-                        elements: [{ kind: "singular", type: "ccw_center", path: [[0.0, -0.8, 0.6, 0]] }] };
+                        elements: [vortex] };
+        if (generator === "deform") {
+          // As on the grid: the vortex is the base design, and each change turns the field.
+          scene.elements = [];
+          scene.deform = { base: { elements: [vortex] },
+                           transform: [{ t: 0, sx: 1, sy: 1, theta: 0 }, { t: 1, sx: 1, sy: 1, theta: 0.5 }] };
+        }
         await d.change(async () => {
           await page.fill("#scene-json", JSON.stringify(scene, null, 2));
           await page.click("#apply-json");
@@ -231,6 +241,7 @@ try {
         await page.selectOption("#singular-type", "source");
         const sb = await page.locator("#surface canvas").boundingBox();
         await series(page, d, mode, `sphere20k_${generator}`, async (k) => {
+          if (generator === "deform") return { turn: 0.5 + 0.25 * (k + 1), waitMs: 300000 };
           const q = [-0.6 + (1.2 * k) / Math.max(1, sphereChanges - 1), -1, k % 2 ? 0.5 : 0.1];
           const r = Math.hypot(...q);
           const [x, y] = await page.evaluate((p) => window.tvf.surface(p), q.map((v) => v / r));

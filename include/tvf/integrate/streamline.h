@@ -34,6 +34,9 @@ struct StreamlineOptions {
   double step = 0.0;        // arc length per RK4 step; 0: half the mean edge length
   double max_length = 0.0;  // per direction; 0: the domain's bounding-box diagonal
   double stop_speed = 1e-9; // stop where |V| < stop_speed · (largest |V| of the frame)
+  // The frame's largest |V| (max_speed(values)) when the caller has it, so that many short
+  // lines on one frame do not each scan every vertex for it; negative: found from the values.
+  double max_speed = -1.0;
   bool stop_at_singular_faces = true;  // stop on entering a face of non-zero index
   bool both_directions = true;         // false: forward only
   // With both_directions false: trace against the flow only; the points after the seed
@@ -54,6 +57,9 @@ struct Streamline {
   StopReason stop_forward = StopReason::none;   // at points.back()
   double length() const;
 };
+
+// The largest |V| of one frame's vertex values (what StreamlineOptions::max_speed takes).
+double max_speed(std::span<const cplx> values);
 
 // `values`: one frame, |V| vectors each in its vertex basis. The seed is snapped to the
 // closest point of the surface; on a planar domain a seed outside the domain is an error
