@@ -2456,11 +2456,18 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         paired[si] = paired[ni] = 1;
         const Singularity& saddle = S[si];
         const Singularity& node = S[ni];
-        const Vec3 mid = surface_position(mesh, space.locate(0.5 * (saddle.position + node.position)));
+        // The template's middle and axis: on a surface the middle of the shortest path
+        // from the saddle to the node (the curve the pair's tracks run along) and its
+        // direction there; on the plane the segment's.
+        const std::shared_ptr<const SurfaceCurve> between =
+            space.planar() ? nullptr : surface_curve(space, neighbours, saddle.position, node.position);
+        const Vec3 mid = between ? surface_position(mesh, space.locate(between->at(0.5)))
+                                 : surface_position(mesh, space.locate(0.5 * (saddle.position + node.position)));
         const int face = space.locate(mid).face;
         const double dist = (node.position - saddle.position).norm();
         const double s = std::max(1.5 * h, std::min(0.25 * dist, 0.1 * diam));
-        cplx axis = bundle.world_to_face(face, node.position - saddle.position);
+        cplx axis = bundle.world_to_face(face, between ? Vec3(between->at(0.55) - between->at(0.45))
+                                                       : Vec3(node.position - saddle.position));
         axis = std::abs(axis) > 0 ? axis / std::abs(axis) : cplx(1, 0);
         const bool sink = stability(node.type) < 0;
         BifurcationElement b;
