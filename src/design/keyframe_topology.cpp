@@ -88,6 +88,8 @@ namespace {
 // A path's curve on a surface (surface_curve, below): a polyline of points on the surface
 // from p0 to p1, `along` each point's arclength over the whole (0 … 1).
 struct SurfaceCurve {
+  // The domain the plan was made on (the plan is used with it alone, and it outlives the
+  // plan: the generator and the design check hold both).
   const DesignSpace* space = nullptr;
   std::vector<Vec3> points;
   std::vector<double> along;
@@ -1454,7 +1456,8 @@ int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& t
 // its neighbours runs through), until no point moves more than 1e-6 edge lengths. Its
 // fixed points are polylines whose turn at every point is normal to the surface, evenly
 // spaced: a discrete geodesic, in the edge path's homotopy class. Null when no edge path
-// joins them (another connected component): then the path is the straight segment.
+// joins them (another connected component) or the curve has no length: then the path is
+// the straight segment.
 constexpr int kCurvePoints = 96;
 
 std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, const std::vector<std::vector<int>>& nbr,
@@ -1545,6 +1548,7 @@ std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, cons
   for (size_t k = 1; k < curve->points.size(); ++k)
     curve->along[k] = curve->along[k - 1] + (curve->points[k] - curve->points[k - 1]).norm();
   curve->length = curve->along.back();
+  if (!(curve->length > 0)) return nullptr;  // straightened to a point: the segment
   for (double& a : curve->along) a /= curve->length;
   return curve;
 }
