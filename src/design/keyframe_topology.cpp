@@ -1064,9 +1064,11 @@ std::vector<cplx> follow_chart(const Mesh& mesh, const std::vector<double>& dist
 // Why a track's path is no curve on the surface, in one sentence (empty when it is): its
 // points at kSamples + 1 parameters, `on` (snapped to the surface), jump more than two edge
 // lengths between two of them. The path's curve (surface_curve) is on the surface, so this
-// fires only where a detour bent it off (or no edge path joined its ends): the straight
-// segment of such a path, or a detour's offset, runs through the solid, and its nearest
-// surface points jump across (CGAL's elephant's leg, before the paths were curves on it).
+// fires only where no edge path joined its ends (the straight segment then runs through
+// the solid, and its nearest surface points jump across, as every path's did through
+// CGAL's elephant's leg before the paths were curves on it), or where a long detour walked
+// across a thin part is not continuous along the path (the walk passing a vertex or a
+// fold on one side, then the other: 0.093 on an elephant, docs/benchmarks.md).
 std::string leaves_surface(const DesignSpace& space, const Track& tr, const std::vector<SurfacePoint>& on) {
   const Mesh& mesh = space.mesh();
   const double h = mesh.mean_edge_length();
