@@ -5,6 +5,7 @@
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "tvf/field/field_sampler.h"
+#include "tvf/integrate/surface_walk.h"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseLU>
@@ -13,7 +14,9 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
+#include <queue>
 #include <optional>
 #include <string>
 
@@ -80,10 +83,49 @@ double wave_shape(int k, double s) {
 
 }  // namespace
 
+namespace {
+
+// A path's curve on a surface (surface_curve, below): a polyline of points on the surface
+// from p0 to p1, `along` each point's arclength over the whole (0 … 1).
+struct SurfaceCurve {
+  // The domain the plan was made on (the plan is used with it alone, and it outlives the
+  // plan: the generator and the design check hold both).
+  const DesignSpace* space = nullptr;
+  std::vector<Vec3> points;
+  std::vector<double> along;
+  double length = 0;
+  // The point reached from the surface point nearest p by walking the world vector
+  // `offset` (its part in that face's plane) along the surface (walk_surface: the offset's
+  // straight line unfolded across the edges it meets): a detour that stays on the surface
+  // however it curves, where p + offset's nearest surface point would jump to another
+  // sheet beyond a fold or across a thin part.
+  Vec3 walked(const Vec3& p, const Vec3& offset) const {
+    const SurfacePoint at = space->locate(p);
+    const cplx d = space->bundle().world_to_face(at.face, offset);
+    if (std::abs(d) == 0) return p;
+    return surface_position(space->mesh(), walk_surface(space->bundle(), at, d).end);
+  }
+  // The point at arclength fraction s (linear between the polyline's points: within a
+  // hair of the surface, which locate() snaps).
+  Vec3 at(double s) const {
+    if (s <= 0) return points.front();
+    if (s >= 1) return points.back();
+    const auto k = static_cast<size_t>(std::upper_bound(along.begin(), along.end(), s) - along.begin()) - 1;
+    const double w = along[k + 1] > along[k] ? (s - along[k]) / (along[k + 1] - along[k]) : 0.0;
+    return points[k] + w * (points[k + 1] - points[k]);
+  }
+};
+
+}  // namespace
+
 // One singularity carried from (p0, t0) to (p1, t1), present for t0 < t < t1. Its linear
 // field is given in the frame of face `ref` (the frame at p0): the ends' α and β.
 struct KeyframeTopologyPlan::Track {
   Vec3 p0, p1;
+  // On a surface, the path's curve on it (the shortest path from p0 to p1, straightened on
+  // the surface; shared between copies of the track); null on planar domains, where the
+  // path is the straight segment.
+  std::shared_ptr<const SurfaceCurve> curve;
   double t0 = 0, t1 = 0;
   Linear j0, j1;
   Vec3 ref_e1 = Vec3::UnitX();  // the first axis of the reference frame, world
@@ -112,10 +154,27 @@ struct KeyframeTopologyPlan::Track {
 
   // Path parameter at time t: smoothstep in time from the key frame's end.
   double param(double t) const { return smoothstep((t - t0) / (t1 - t0)); }
+  // The path before any detour at parameter s: the straight segment's point, or on a
+  // surface the curve's point at arclength fraction s.
+  Vec3 base(double s) const {
+    if (curve) return curve->at(s);
+    return p0 + s * (p1 - p0);
+  }
+  // The path's length before any detour.
+  double base_length() const { return curve ? curve->length : (p1 - p0).norm(); }
   // The constraint's position at path parameter s (world; snapped to the domain where it
-  // is placed). Without bends exactly the straight segment's point.
+  // is placed). Without bends exactly base(s): on a planar domain the straight segment's
+  // point; on a surface the curve's, and a detour (an offset tangent to the surface where
+  // the paths meet) is walked along the surface from the curve's point (SurfaceCurve::walked).
   Vec3 raw(double s) const {
-    Vec3 p = p0 + s * (p1 - p0);
+    if (curve) {
+      if (bends.empty() && wave.empty()) return curve->at(s);
+      Vec3 offset = Vec3::Zero();
+      for (const Bend& b : bends) offset += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
+      for (size_t k = 0; k < wave.size(); ++k) offset += wave_shape(static_cast<int>(k) + 1, s) * wave[k];
+      return curve->walked(curve->at(s), offset);
+    }
+    Vec3 p = base(s);
     for (const Bend& b : bends) p += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
     for (size_t k = 0; k < wave.size(); ++k) p += wave_shape(static_cast<int>(k) + 1, s) * wave[k];
     return p;
@@ -1002,6 +1061,27 @@ std::vector<cplx> follow_chart(const Mesh& mesh, const std::vector<double>& dist
   return coords;
 }
 
+// Why a track's path is no curve on the surface, in one sentence (empty when it is): its
+// points at kSamples + 1 parameters, `on` (snapped to the surface), jump more than two edge
+// lengths between two of them. The path's curve (surface_curve) is on the surface, so this
+// fires only where no edge path joined its ends (the straight segment then runs through
+// the solid, and its nearest surface points jump across, as every path's did through
+// CGAL's elephant's leg before the paths were curves on it), or where a long detour walked
+// across a thin part is not continuous along the path (the walk passing a vertex or a
+// fold on one side, then the other: 0.093 on an elephant, docs/benchmarks.md).
+std::string leaves_surface(const DesignSpace& space, const Track& tr, const std::vector<SurfacePoint>& on) {
+  const Mesh& mesh = space.mesh();
+  const double h = mesh.mean_edge_length();
+  double jump = 0;
+  for (size_t k = 0; k + 1 < on.size(); ++k)
+    jump = std::max(jump, (surface_position(mesh, on[k + 1]) - surface_position(mesh, on[k])).norm());
+  if (jump <= 2 * h) return {};
+  return fmt::format("the {}'s path from {} to {} leaves the surface (its nearest surface points jump {:.2g}, "
+                     "{:.0f} edge lengths, between two of its {} samples)",
+                     to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1), jump,
+                     jump / h, on.size());
+}
+
 // Builds a surface guide for the tracks [first, last) (spanning [t0, t1]; the tracks of
 // `pairs` are created or cancelled pairs', the others matched); false when a path leaves
 // its chart or a key frame's field has a zero no track carries. `ramp` widens the band
@@ -1126,24 +1206,16 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     }
     return found;  // else neither chart fits within an edge length of the path
   };
-  // First, cheaply, every path: the straight segment's nearest points on the surface.
-  // Where the segment runs through the solid (a path across the bunny, or through the
-  // elephant's leg) they jump, and no chart holds a path that is not a curve on the surface.
-  // (Each track's samples are kept for the tubes below.)
+  // First, cheaply, every path's points on the surface: a guard (leaves_surface), since no
+  // chart holds a path that is not a curve on the surface. The paths are curves on it
+  // (surface_curve), so only a detour bent off it makes them jump. (Each track's samples
+  // are kept for the tubes below.)
   std::vector<std::vector<SurfacePoint>> sampled(last - first);
   for (size_t i = first; i < last; ++i) {
     const Track& tr = tracks[i];
-    const std::vector<SurfacePoint>& on = sampled[i - first] = samples(tr);
-    double jump = 0;
-    for (size_t k = 0; k + 1 < on.size(); ++k)
-      jump = std::max(jump, (surface_position(mesh, on[k + 1]) - surface_position(mesh, on[k])).norm());
-    if (jump > 2 * h) {
-      why = fmt::format("the {}'s path from {} to {} leaves the surface (its nearest surface points jump {:.2g}, "
-                        "{:.0f} edge lengths, between two of its {} samples)",
-                        to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1), jump,
-                        jump / h, SurfaceGuide::kSamples + 1);
-      return false;
-    }
+    sampled[i - first] = samples(tr);
+    why = leaves_surface(space, tr, sampled[i - first]);
+    if (!why.empty()) return false;
   }
   for (size_t i = first; i < last; ++i) {
     const Track& tr = tracks[i];
@@ -1377,6 +1449,112 @@ int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& t
   return with;
 }
 
+// The shortest path on a surface from p to q (points on it), as a curve on the surface: the
+// shortest path along the mesh's edges (Dijkstra from the corners of p's face to those of
+// q's), resampled at about an edge length apart (at most kCurvePoints segments), then
+// straightened on the surface: Gauss–Seidel sweeps move each inner point towards the
+// middle of its two neighbours by that displacement's part in its face's plane (over-
+// relaxed; walk_surface, so a point never leaves the surface, whatever the chord between
+// its neighbours runs through), until no point moves more than 1e-6 edge lengths. Its
+// fixed points are polylines whose turn at every point is normal to the surface, evenly
+// spaced: a discrete geodesic, in the edge path's homotopy class. Null when no edge path
+// joins them (another connected component) or the curve has no length: then the path is
+// the straight segment.
+constexpr int kCurvePoints = 96;
+
+std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, const std::vector<std::vector<int>>& nbr,
+                                                  const Vec3& p, const Vec3& q) {
+  const Mesh& mesh = space.mesh();
+  const TangentBundle& bundle = space.bundle();
+  const double h = mesh.mean_edge_length();
+  const SurfacePoint sp = space.locate(p), sq = space.locate(q);
+  // The edge path: p, the vertices, q.
+  std::vector<Vec3> line{p};
+  if (sp.face != sq.face) {
+    const auto nv = static_cast<size_t>(mesh.num_vertices());
+    std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
+    std::vector<int> from(nv, -1);
+    using Item = std::pair<double, int>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+    for (const int c : mesh.face(sp.face)) {
+      dist[static_cast<size_t>(c)] = (mesh.position(c) - p).norm();
+      queue.emplace(dist[static_cast<size_t>(c)], c);
+    }
+    auto is_goal = [&](int v) {
+      const Face& f = mesh.face(sq.face);
+      return v == f[0] || v == f[1] || v == f[2];
+    };
+    double best = std::numeric_limits<double>::infinity();
+    int end = -1;
+    while (!queue.empty()) {
+      const auto [d, v] = queue.top();
+      queue.pop();
+      if (d > dist[static_cast<size_t>(v)]) continue;
+      if (d >= best) break;
+      if (is_goal(v) && d + (mesh.position(v) - q).norm() < best) best = d + (mesh.position(v) - q).norm(), end = v;
+      for (const int w : nbr[static_cast<size_t>(v)]) {
+        const double nd = d + (mesh.position(w) - mesh.position(v)).norm();
+        if (nd < dist[static_cast<size_t>(w)]) {
+          dist[static_cast<size_t>(w)] = nd;
+          from[static_cast<size_t>(w)] = v;
+          queue.emplace(nd, w);
+        }
+      }
+    }
+    if (end < 0) return nullptr;
+    std::vector<Vec3> vertices;
+    for (int v = end; v >= 0; v = from[static_cast<size_t>(v)]) vertices.push_back(mesh.position(v));
+    line.insert(line.end(), vertices.rbegin(), vertices.rend());
+  }
+  line.push_back(q);
+  std::vector<double> cum(line.size(), 0.0);
+  for (size_t k = 1; k < line.size(); ++k) cum[k] = cum[k - 1] + (line[k] - line[k - 1]).norm();
+  const double total = cum.back();
+  auto curve = std::make_shared<SurfaceCurve>();
+  curve->space = &space;
+  if (!(total > 0)) {
+    curve->points = {p, q};
+    curve->along = {0.0, 1.0};
+    return curve;
+  }
+  // Resampled evenly along the edge path (every point on the surface: on an edge, or in
+  // p's or q's face).
+  const int n = std::clamp(static_cast<int>(std::ceil(total / h)), 2, kCurvePoints);
+  std::vector<Vec3> x(static_cast<size_t>(n) + 1);
+  std::vector<SurfacePoint> on(x.size());
+  for (int i = 0, k = 0; i <= n; ++i) {
+    const double a = total * i / n;
+    while (k + 2 < static_cast<int>(line.size()) && cum[static_cast<size_t>(k) + 1] < a) ++k;
+    const auto ku = static_cast<size_t>(k);
+    const double w = cum[ku + 1] > cum[ku] ? std::clamp((a - cum[ku]) / (cum[ku + 1] - cum[ku]), 0.0, 1.0) : 0.0;
+    x[static_cast<size_t>(i)] = i == 0 ? p : i == n ? q : Vec3(line[ku] + w * (line[ku + 1] - line[ku]));
+    on[static_cast<size_t>(i)] = space.locate(x[static_cast<size_t>(i)]);
+    x[static_cast<size_t>(i)] = i == 0 ? p : i == n ? q : surface_position(mesh, on[static_cast<size_t>(i)]);
+  }
+  // Straightened on the surface.
+  const double omega = std::min(1.9, 2 / (1 + std::sin(std::numbers::pi / n)));
+  for (int sweep = 0; sweep < 20 * n + 200; ++sweep) {
+    double moved = 0;
+    for (size_t i = 1; i + 1 < x.size(); ++i) {
+      const Vec3 d = 0.5 * (x[i - 1] + x[i + 1]) - x[i];
+      const cplx step = omega * bundle.world_to_face(on[i].face, d);
+      if (std::abs(step) == 0) continue;
+      on[i] = walk_surface(bundle, on[i], step).end;
+      x[i] = surface_position(mesh, on[i]);
+      moved = std::max(moved, std::abs(step));
+    }
+    if (moved < 1e-6 * h) break;
+  }
+  curve->points = std::move(x);
+  curve->along.assign(curve->points.size(), 0.0);
+  for (size_t k = 1; k < curve->points.size(); ++k)
+    curve->along[k] = curve->along[k - 1] + (curve->points[k] - curve->points[k - 1]).norm();
+  curve->length = curve->along.back();
+  if (!(curve->length > 0)) return nullptr;  // straightened to a point: the segment
+  for (double& a : curve->along) a /= curve->length;
+  return curve;
+}
+
 // Keeps the singularities carried through one key-frame interval `separation` apart: two
 // paths that come closer at the same time (paths that cross, or pass close) get a detour,
 // a bump perpendicular to their relative motion at the closest approach, full over the
@@ -1461,7 +1639,7 @@ public:
     n.normalize();
     // The side the two already pass on (the left of the relative motion when they meet head on).
     const double side = r.dot(n) < -1e-12 * separation_ ? -1.0 : 1.0;
-    const double la = (a.p1 - a.p0).norm(), lb = (b.p1 - b.p0).norm();
+    const double la = a.base_length(), lb = b.base_length();
     std::vector<std::pair<double, double>> shares;
     if (la + lb > 0) shares.emplace_back(la / (la + lb), lb / (la + lb));  // the shortest pair of paths
     shares.emplace_back(1.0, 0.0);
@@ -1693,7 +1871,8 @@ public:
       const Vec3 normal = space_.planar() ? Vec3::UnitZ() : space_.bundle().face_normal(f);
       ax1[i] = space_.planar() ? Vec3::UnitX() : space_.bundle().face_e1(f);
       ax2[i] = normal.cross(ax1[i]);
-      const Vec3 d = items[i].p1 - items[i].p0;
+      // The path's direction at its middle (on a surface its curve's; planar the segment's).
+      const Vec3 d = items[i].curve ? Vec3(items[i].base(0.51) - items[i].base(0.49)) : Vec3(items[i].p1 - items[i].p0);
       const Vec3 l = normal.cross(d);
       if (l.norm() > 1e-9 * space_.diameter()) left[i] = l.normalized();
     }
@@ -2061,12 +2240,13 @@ public:
     }
   }
 
-  // Largest distance of a track's path from its straight segment (0 when straight).
+  // Largest distance of a track's path from its path before detours (the straight segment,
+  // on a surface its curve; 0 when not bent).
   double detour(const Track& tr) const {
     double out = 0;
     for (int k = 0; k <= kSamples; ++k) {
       const double s = static_cast<double>(k) / kSamples;
-      out = std::max(out, (tr.raw(s) - (tr.p0 + s * (tr.p1 - tr.p0))).norm());
+      out = std::max(out, (tr.raw(s) - tr.base(s)).norm());
     }
     return out;
   }
@@ -2162,6 +2342,18 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     return static_cast<size_t>(best);
   };
 
+  // The mesh's vertex neighbours (surface_curve's edge paths).
+  std::vector<std::vector<int>> neighbours;
+  if (!space.planar()) {
+    neighbours.resize(static_cast<size_t>(mesh.num_vertices()));
+    for (int e = 0; e < mesh.num_halfedges(); ++e) {
+      const int a = mesh.tail(e), b = mesh.head(e);
+      for (const auto& [u, w] : {std::pair{a, b}, std::pair{b, a}}) {
+        std::vector<int>& list = neighbours[static_cast<size_t>(u)];
+        if (std::find(list.begin(), list.end(), w) == list.end()) list.push_back(w);
+      }
+    }
+  }
   auto add_track = [&](const Singularity& a, const Vec3& p1, double t0, double t1, const Linear& j1_in_face,
                        int face1, int group = -1) {
     Track tr;
@@ -2173,6 +2365,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     tr.p1 = p1;
     tr.t0 = t0;
     tr.t1 = t1;
+    if (!space.planar()) tr.curve = surface_curve(space, neighbours, tr.p0, tr.p1);
     tr.ref_e1 = bundle.face_e1(a.where.face);
     tr.j0 = to_linear(a.jacobian);
     tr.j1 = {j1_in_face.alpha, beta_in_frame(bundle, face1, tr.ref_e1, j1_in_face.beta)};
@@ -2269,11 +2462,18 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         paired[si] = paired[ni] = 1;
         const Singularity& saddle = S[si];
         const Singularity& node = S[ni];
-        const Vec3 mid = surface_position(mesh, space.locate(0.5 * (saddle.position + node.position)));
+        // The template's middle and axis: on a surface the middle of the shortest path
+        // from the saddle to the node (the curve the pair's tracks run along) and its
+        // direction there; on the plane the segment's.
+        const std::shared_ptr<const SurfaceCurve> between =
+            space.planar() ? nullptr : surface_curve(space, neighbours, saddle.position, node.position);
+        const Vec3 mid = between ? surface_position(mesh, space.locate(between->at(0.5)))
+                                 : surface_position(mesh, space.locate(0.5 * (saddle.position + node.position)));
         const int face = space.locate(mid).face;
         const double dist = (node.position - saddle.position).norm();
         const double s = std::max(1.5 * h, std::min(0.25 * dist, 0.1 * diam));
-        cplx axis = bundle.world_to_face(face, node.position - saddle.position);
+        cplx axis = bundle.world_to_face(face, between ? Vec3(between->at(0.55) - between->at(0.45))
+                                                       : Vec3(node.position - saddle.position));
         axis = std::abs(axis) > 0 ? axis / std::abs(axis) : cplx(1, 0);
         const bool sink = stability(node.type) < 0;
         BifurcationElement b;
@@ -2325,12 +2525,25 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         if (matched[i] < 0 && !paired[i]) (side == 0 ? rep.unpaired_first : rep.unpaired_second).push_back(S[i].position);
     }
 
+    // On a surface, a path that is no curve on it (leaves_surface: its ends joined by no
+    // edge path, so left the straight segment) cannot be guided; found before the router
+    // spends its time on the interval (which then stays "straight" and falls back).
+    std::string off_surface;
+    if (!space.planar())
+      for (size_t i = first_track; i < tracks_.size() && off_surface.empty(); ++i) {
+        std::vector<SurfacePoint> on(SurfaceGuide::kSamples + 1);
+        for (int q = 0; q <= SurfaceGuide::kSamples; ++q)
+          on[static_cast<size_t>(q)] = space.locate(tracks_[i].raw(static_cast<double>(q) / SurfaceGuide::kSamples));
+        off_surface = leaves_surface(space, tracks_[i], on);
+      }
     // Paths that would come closer than the separation are bent around each other.
     const std::string where =
         scene.solver.path_separation ? "solver.path_separation" : "solver.keyframe_topology";
-    if (auto why = router.route(tracks_, first_track, tracks_.size(), obstacles, scene, where,
-                                fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1), rep.routing))
-      rep.collision = std::move(*why);
+    if (off_surface.empty()) {
+      if (auto why = router.route(tracks_, first_track, tracks_.size(), obstacles, scene, where,
+                                  fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1), rep.routing))
+        rep.collision = std::move(*why);
+    }
     // Where paths were bent, each Jacobian turns with its neighbourhood.
     if (rep.routing != "straight") router.turn_with_neighbours(tracks_, first_track, tracks_.size());
     rep.separation = separation;
@@ -2391,12 +2604,12 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     // twice as wide (a long path's log R changes by ~|log R| across it, which two edge
     // lengths did not resolve beside the knot with a pair; the wider tube does not fit
     // every coarse mesh, so it is the second try), and the one with fewer kept.
-    std::string unbuilt_why;  // why the guide could not be built, when it was tried
+    std::string unbuilt_why = off_surface;  // why the guide could not be built, when it was tried
     if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         guide.last > guide.first && !rep.guided)
       unbuilt_why = "the guide field has two zeros on one point";
-    if (!space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
-        tracks_.size() > first_track) {
+    if (!space.planar() && off_surface.empty() && rep.collision.empty() && rep.unpaired_first.empty() &&
+        rep.unpaired_second.empty() && tracks_.size() > first_track) {
       std::optional<SurfaceGuide> best;
       int best_wrong = kMaxWrongFrames + 1, fewest_wrong = -1;
       for (const double ramp : {1.0, 2.0}) {

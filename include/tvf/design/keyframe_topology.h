@@ -15,8 +15,10 @@
 //  3. carries each matched singularity from its key-frame position to the next one's as a
 //     moving constraint (the linear field J(t)·w within solver.region_radius, as a moving
 //     singular element is constrained; the position follows a smoothstep in time along
-//     the straight segment, snapped to the surface; J(t) turns from one end's Jacobian to
-//     the other's with det J keeping its sign, so the index cannot change on the way);
+//     the straight segment, on a surface along a curve on it: the shortest path, the
+//     shortest edge path straightened on the surface, by arclength; J(t) turns from one
+//     end's Jacobian to the other's with det J keeping its sign, so the index cannot
+//     change on the way);
 //  4. pairs the unmatched ones of each key frame (opposite index, nearest first) and
 //     cancels (first key frame's) or creates (second key frame's) each pair with a
 //     saddle–node template (the bifurcation elements of DESIGN §4) centred between the
@@ -34,7 +36,8 @@
 //     domain or comes nearer its boundary than half the separation, when the other side
 //     or one path alone is taken; when no detour fits, the interval's paths stay straight
 //     and its report (and a warning) names the two paths that meet.
-//     Distances are chord distances on surfaces (never more than the geodesic ones).
+//     Distances are chord distances on surfaces (never more than the geodesic ones); there
+//     a detour is an offset tangent to the surface walked along it from the path's curve.
 //  6. when bending one pair after the other does not settle (three or more paths
 //     knotted), leaves a path nearer than the separation to a saddle–node template while
 //     it holds, or (planar domains) lets the nodes' phases in the product model
@@ -87,7 +90,8 @@ struct KeyframeIntervalReport {
     SingularityType type = SingularityType::source;  // at the first key frame
     Vec3 from = Vec3::Zero(), to = Vec3::Zero();
     bool linked = false;  // named by solver.links
-    double detour = 0;    // largest distance of its path from the straight segment (0: straight)
+    double detour = 0;    // largest distance of its path from the straight segment, on a
+                          // surface from its curve on it (0: not bent)
     // At the second key frame: the same as `type`, or of the other stability (a node
     // matched as the last resort, its type changing through a center on the way).
     SingularityType to_type = SingularityType::source;
