@@ -1385,21 +1385,24 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
 // The phase correction turns G by a field that varies by the nodes' whole turns (2π for
 // the knot's center) over their distance, which a coarse mesh does not resolve: the
 // faces between the nodes then hold extra zeros. So it is kept only where it does no
-// harm, by measurement: G with and without it at 31 times, and the correction dropped
-// when its frames hold more singularities than the plan carries more often (`matched`
-// throughout, and each pair's two while it exists; not counted within half a sample of
-// a pair's event, where its two zeros are too close to tell). A vertex G leaves to the
-// solve (on a key frame's zero) counts as its neighbours' mean. Returns the number of
-// frames of the guide kept that hold another number of singularities.
-// A surface guide is kept only when at most this many of the 31 frames keep_phase_if_resolved
-// samples hold another number of singularities than the plan carries; else the interval
-// is left to the regions and the solve, as unguided. (The knot with a created pair at
-// subdivisions 4, whose matched saddle and focus move across it, with the narrow ramp:
-// 12 frames, 135 bifurcations against 19 unguided; every scene the tests guide: 0.)
-constexpr int kMaxWrongFrames = 2;
+// harm, by measurement: G with and without it at the scene's frames inside the interval
+// (`times`: what the analysis will see; 31 evenly spaced times were sampled before, and a
+// pair living a third of their spacing slipped between them on CGAL's bunny), and the
+// correction dropped when its frames hold more singularities than the plan carries more
+// often (`matched` throughout, and each pair's two while it exists; not counted within half
+// a frame of a pair's event, where its two zeros are too close to tell). A vertex G leaves
+// to the solve (on a key frame's zero) counts as its neighbours' mean. Returns the number
+// of frames of the guide kept that hold another number of singularities.
+// A surface guide is kept only when none of those frames holds another number of
+// singularities than the plan carries: a frame that does is a bifurcation the user did not
+// ask for in the analysis (two, with the pair's birth and death), so the interval is left
+// free instead, and says why. (The knot with a created pair at subdivisions 4, whose
+// matched saddle and focus move across it, with the narrow ramp: 12 of 31 sampled frames,
+// 135 bifurcations against 19 unguided; every scene the tests guide: 0.)
+constexpr int kMaxWrongFrames = 0;
 
 int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& tracks, SurfaceGuide& g,
-                           size_t matched) {
+                           size_t matched, std::span<const double> times) {
   const Mesh& mesh = space.mesh();
   const TangentBundle& bundle = space.bundle();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
@@ -1411,13 +1414,15 @@ int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& t
   }
   auto wrong_frames = [&](const SurfaceGuide& guide) {
     int wrong = 0;
-    for (int k = 1; k < 32; ++k) {
-      const double t = guide.t0 + (guide.t1 - guide.t0) * k / 32.0;
+    // Half the frames' spacing (the pair's event is not told within it).
+    const double half = times.size() > 1 ? 0.5 * std::abs(times[1] - times[0]) : 0.0;
+    for (const double t : times) {
+      if (!(t > guide.t0 && t < guide.t1)) continue;
       size_t carried = matched;
       bool at_event = false;
       for (const SurfaceGuide::Path& p : guide.paths) {
         if (!p.pair) continue;
-        at_event = at_event || std::abs(t - p.tc) < (guide.t1 - guide.t0) / 64.0;
+        at_event = at_event || std::abs(t - p.tc) < half;
         if (p.cancel ? t < p.tc : t > p.tc) carried += 2;
       }
       if (at_event) continue;
@@ -2611,6 +2616,11 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     if (!space.planar() && off_surface.empty() && rep.collision.empty() && rep.unpaired_first.empty() &&
         rep.unpaired_second.empty() && tracks_.size() > first_track) {
       std::optional<SurfaceGuide> best;
+      // The frames the guide will be checked at: the scene's, strictly between the key frames.
+      std::vector<double> frame_times;
+      for (const double t : scene.time.times())
+        if (t > rep.t0 && t < rep.t1) frame_times.push_back(t);
+      const size_t inner_frames = frame_times.size();
       int best_wrong = kMaxWrongFrames + 1, fewest_wrong = -1;
       for (const double ramp : {1.0, 2.0}) {
         SurfaceGuide sg;
@@ -2624,15 +2634,15 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
           if (unbuilt_why.empty()) unbuilt_why = why;
           break;
         }
-        const int wrong = keep_phase_if_resolved(space, tracks_, sg, rep.matched.size());
+        const int wrong = keep_phase_if_resolved(space, tracks_, sg, rep.matched.size(), frame_times);
         if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong;
         if (wrong < best_wrong) best = std::move(sg), best_wrong = wrong;
         if (best_wrong == 0) break;
       }
       if (!best && fewest_wrong >= 0)
-        unbuilt_why = fmt::format("the surface guide's frames hold other singularities than the plan's at {} of 31 "
-                                  "sampled times (at most {} kept)",
-                                  fewest_wrong, kMaxWrongFrames);
+        unbuilt_why = fmt::format("the surface guide's frames hold other singularities than the plan's at {} of the "
+                                  "{} frames between the key frames",
+                                  fewest_wrong, inner_frames);
       else if (!best && unbuilt_why.empty())
         unbuilt_why = "the surface guide could not be built";
       if (best) {
