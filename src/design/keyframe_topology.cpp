@@ -292,6 +292,22 @@ struct KeyframeTopologyPlan::SurfaceGuide {
   // correction), so a node keeps its type while the configuration turns round it.
   std::vector<size_t> nodes;                // tracks
   std::vector<std::vector<double>> lambda;  // per node
+  // A created or cancelled pair's node held to its key frame's type (the planar guide's
+  // PairPhase): its λ is the turn of G's α (before the correction) at the node since that
+  // key frame, at kSamples + 1 times over [a, b] (where the node is: between t_c and that
+  // key frame), one more node of Λ; before its birth (after its death) a node at the
+  // template's middle whose λ goes from what Λ is there without it, at the other key frame,
+  // to the node's λ at t_c. (α of a face's linear field is the same in any frame of the
+  // face, so its argument is the node's type: 0 a source, ±π/2 a center, π a sink.)
+  struct PairHold {
+    bool cancel = true;
+    double t0 = 0, t1 = 0, tc = 0;  // the interval and the pair's event
+    double a = 0, b = 0;
+    Vec3 mid = Vec3::Zero();  // the template's middle on the surface
+    std::vector<Vec3> at;     // the node's point at the tabled times
+    std::vector<double> turn;
+  };
+  std::vector<PairHold> holds;
 };
 
 KeyframeTopologyPlan::~KeyframeTopologyPlan() = default;
@@ -793,6 +809,36 @@ cplx chart_point(const Mesh& mesh, const std::vector<cplx>& coords, const Surfac
     z += at.bary[k] * c;
   }
   return z;
+}
+
+// The surface point at chart point z: the face of the chart's patch whose chart triangle
+// holds z (barycentric), or the one nearest to holding it (largest smallest barycentric
+// coordinate). Empty when no face is in the patch.
+std::optional<SurfacePoint> chart_locate(const Mesh& mesh, const std::vector<cplx>& coords, cplx z) {
+  std::optional<SurfacePoint> best;
+  double best_min = -std::numeric_limits<double>::infinity();
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    std::array<cplx, 3> c;
+    bool in = true;
+    for (int k = 0; k < 3; ++k) {
+      c[static_cast<size_t>(k)] = coords[static_cast<size_t>(mesh.face(f)[static_cast<size_t>(k)])];
+      in = in && std::isfinite(c[static_cast<size_t>(k)].real()) && std::isfinite(c[static_cast<size_t>(k)].imag());
+    }
+    if (!in) continue;
+    const cplx e1 = c[1] - c[0], e2 = c[2] - c[0], d = z - c[0];
+    const double det = e1.real() * e2.imag() - e1.imag() * e2.real();
+    if (det == 0) continue;
+    const double b1 = (d.real() * e2.imag() - d.imag() * e2.real()) / det;
+    const double b2 = (e1.real() * d.imag() - e1.imag() * d.real()) / det;
+    const double b0 = 1 - b1 - b2;
+    const double lo = std::min({b0, b1, b2});
+    if (lo > best_min) {
+      best_min = lo;
+      best = SurfacePoint{f, Vec3(b0, b1, b2)};
+      if (lo >= 0) break;
+    }
+  }
+  return best;
 }
 
 // log((z − x(s)) / (z − x(0))) for a path sampled at x[k] (s = k / (x.size() − 1)) ending
@@ -1322,7 +1368,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   // λ of the nodes.
   for (size_t i = first; i < last; ++i) {
     const Track& tr = tracks[i];
-    if (tr.index <= 0 || tr.group >= 0) continue;  // a pair's node is not held to its type
+    if (tr.index <= 0 || tr.group >= 0) continue;  // a pair's node: its hold, below
     std::vector<double> lam;
     for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
       const double t = g.t0 + (g.t1 - g.t0) * k / SurfaceGuide::kSamples;
@@ -1346,6 +1392,48 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     g.nodes.push_back(i);
     g.lambda.push_back(std::move(lam));
   }
+  // The pairs' nodes (PairHold): G's α at the node's face, its argument unwrapped, less its
+  // value at the key frame where the pair is (there G is that key frame, whose type the
+  // node keeps). In the template's window the node is Q's zero on +axis, √−μ from the
+  // middle, found in the chart; a face where G has no value (a corner on a key frame's
+  // zero) repeats the last sample's turn.
+  for (const SurfaceGuide::Path& path : g.paths) {
+    if (!path.pair) continue;
+    SurfaceGuide::PairHold hold;
+    hold.cancel = path.cancel;
+    hold.t0 = g.t0;
+    hold.t1 = g.t1;
+    hold.tc = path.tc;
+    hold.a = path.cancel ? g.t0 : path.tc;
+    hold.b = path.cancel ? path.tc : g.t1;
+    const std::optional<SurfacePoint> mid = chart_locate(mesh, path.coords, path.mid);
+    if (!mid) continue;
+    hold.mid = surface_position(mesh, *mid);
+    std::vector<double> arg;
+    for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
+      const double t = hold.a + (hold.b - hold.a) * k / SurfaceGuide::kSamples;
+      const SurfaceGuide::PairState q = pair_state(space, tracks, path, t);
+      std::optional<SurfacePoint> at;
+      if (q.linear) {
+        const Track& tr = tracks[path.track];
+        at = space.locate(tr.raw(tr.param(t)));
+      } else {
+        at = chart_locate(mesh, path.coords, path.mid + path.axis * std::sqrt(std::max(-q.mu, 0.0)));
+      }
+      if (!at) break;
+      hold.at.push_back(surface_position(mesh, *at));
+      const cplx a = face_alpha(space, at->face, surface_guide_on_face(space, tracks, g, t, at->face));
+      if (!(std::abs(a) > 0) || !std::isfinite(std::abs(a))) {
+        arg.push_back(arg.empty() ? 0.0 : arg.back());
+        continue;
+      }
+      arg.push_back(arg.empty() ? std::arg(a) : arg.back() + std::remainder(std::arg(a) - arg.back(), 2 * std::numbers::pi));
+    }
+    if (hold.at.size() != static_cast<size_t>(SurfaceGuide::kSamples + 1)) continue;
+    const double key = path.cancel ? arg.front() : arg.back();
+    for (const double x : arg) hold.turn.push_back(x - key);
+    g.holds.push_back(std::move(hold));
+  }
   return true;
 }
 
@@ -1366,15 +1454,36 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     lambda.push_back(lam[k] + (x - static_cast<double>(k)) * (lam[k + 1] - lam[k]));
   }
   const double floor = 1e-12 * space.diameter();
-  for (size_t v = 0; v < l.size(); ++v) {
-    if (fixed[v]) continue;
+  // Λ at a point from the nodes so far (Shepard's weights |x − p|⁻⁴).
+  auto shepard_at = [&](const Vec3& point, size_t count) {
     double num = 0, den = 0;
-    for (size_t n = 0; n < at.size(); ++n) {
-      const double w = 1 / std::pow(std::max((mesh.position(static_cast<int>(v)) - at[n]).norm(), floor), 4);
+    for (size_t n = 0; n < count; ++n) {
+      const double w = 1 / std::pow(std::max((point - at[n]).norm(), floor), 4);
       num += w * lambda[n];
       den += w;
     }
-    const double turn = den > 0 ? num / den : 0.0;
+    return den > 0 ? num / den : 0.0;
+  };
+  const size_t matched = at.size();
+  for (const SurfaceGuide::PairHold& h : g.holds) {
+    if (t >= h.a && t <= h.b) {
+      const double y = (t - h.a) / (h.b - h.a) * SurfaceGuide::kSamples;
+      const auto j = std::min(static_cast<size_t>(std::max(y, 0.0)), static_cast<size_t>(SurfaceGuide::kSamples - 1));
+      const double r = y - static_cast<double>(j);
+      at.push_back((1 - r) * h.at[j] + r * h.at[j + 1]);
+      lambda.push_back((1 - r) * h.turn[j] + r * h.turn[j + 1]);
+    } else {
+      // Not born yet (or dead): at the template's middle, from what Λ is there without it
+      // (at the other key frame) to its λ at t_c.
+      const double r = h.cancel ? smoothstep01(t, h.t1, h.tc) : smoothstep01(t, h.t0, h.tc);
+      const double at_tc = h.cancel ? h.turn.back() : h.turn.front();
+      lambda.push_back(r * at_tc + (1 - r) * shepard_at(h.mid, matched));
+      at.push_back(h.mid);
+    }
+  }
+  for (size_t v = 0; v < l.size(); ++v) {
+    if (fixed[v]) continue;
+    const double turn = shepard_at(mesh.position(static_cast<int>(v)), at.size());
     const cplx val = g.f0[v] * std::exp(l[v] + u * g.log_h[v] - cplx(0, turn));
     if (!std::isfinite(val.real()) || !std::isfinite(val.imag())) continue;  // on a pole: left to the solve
     fixed[v] = 1;
@@ -1440,18 +1549,29 @@ int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& t
     }
     return wrong;
   };
-  const int with = wrong_frames(g);
-  if (g.nodes.empty()) return with;
-  SurfaceGuide plain = g;
-  plain.nodes.clear();
-  plain.lambda.clear();
-  const int without = wrong_frames(plain);
-  if (with > without) {
-    g.nodes.clear();
-    g.lambda.clear();
-    return without;
-  }
-  return with;
+  // The matched nodes' correction and the pairs' holds, each kept only where it adds no
+  // wrong frame: the first of (both, the nodes' alone, the holds alone, neither) with the
+  // fewest. The holds alone keep the matched nodes with λ = 0: Λ must stay 0 at them (a
+  // pair's node alone would make Λ its λ everywhere, turning every other node's type: the
+  // knot's source into a sink on the sphere 3 knot with a cancelled pair).
+  int best = wrong_frames(g);
+  if (g.nodes.empty() && g.holds.empty()) return best;
+  SurfaceGuide choice = g;
+  auto consider = [&](bool nodes, bool holds) {
+    SurfaceGuide other = g;
+    if (!nodes && holds)
+      for (std::vector<double>& lam : other.lambda) std::fill(lam.begin(), lam.end(), 0.0);
+    else if (!nodes)
+      other.nodes.clear(), other.lambda.clear();
+    if (!holds) other.holds.clear();
+    const int wrong = wrong_frames(other);
+    if (wrong < best) best = wrong, choice = std::move(other);
+  };
+  if (!g.holds.empty() && !g.nodes.empty()) consider(true, false);
+  if (best > 0 && !g.nodes.empty() && !g.holds.empty()) consider(false, true);
+  if (best > 0) consider(false, false);
+  g = std::move(choice);
+  return best;
 }
 
 // The shortest path on a surface from p to q (points on it), as a curve on the surface: the

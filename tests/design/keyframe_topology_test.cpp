@@ -614,6 +614,45 @@ TEST(KeyframeTopology, APairOnASphereIsCreatedOrCancelledByTheGuide) {
   }
 }
 
+// A created or cancelled pair's node is held to its key frame's type on a surface too
+// (SurfaceGuide::PairHold, as Guide::PairPhase on the plane): in every frame where the
+// pair exists (not within a frame of its event) the index +1 singularity nearest the
+// node's key-frame place is a source, as designed. Without the hold, at subdivisions 3,
+// the knot's created source was born a repelling focus and stayed one for 9 frames (with
+// a Hopf event in `tvf analyze`), and the sliding pair's cancelled source was a repelling
+// focus at frame 10.
+TEST(KeyframeTopology, APairsNodeOnASphereKeepsItsType) {
+  for (const bool knot : {true, false}) {
+    const bool create = knot;
+    const std::string what = fmt::format("{}, {} pair, subdivisions 3", knot ? "knot" : "sliding", create ? "created" : "cancelled");
+    const Generated g = run(pair_scene(3, knot, create));
+    const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+    ASSERT_TRUE(r.guided) << what;
+    ASSERT_EQ((create ? r.created : r.cancelled).size(), 1u) << what;
+    const KeyframeIntervalReport::Pair& planned = create ? r.created[0] : r.cancelled[0];
+    const double dt = 1.0 / 31;
+    int frames = 0, kept = 0;
+    for (size_t f = 0; f < g.topology.singularities.size(); ++f) {
+      const double t = static_cast<double>(f) * dt;
+      if (std::abs(t - 0.4) <= dt || (t > 0.4) != create) continue;
+      const Singularity* node = nullptr;
+      for (const Singularity& s : g.topology.singularities[f])
+        if (s.index > 0 && (!node || (s.position - planned.node).norm() < (node->position - planned.node).norm()))
+          node = &s;
+      ASSERT_NE(node, nullptr) << what << ", frame " << f;
+      EXPECT_LT((node->position - planned.node).norm(), 0.4) << what << ", frame " << f;
+      ++frames;
+      if (node->type == planned.node_type) {
+        ++kept;
+      } else {
+        ADD_FAILURE() << what << ", frame " << f << ": the pair's node is a " << to_string(node->type) << ", not a "
+                      << to_string(planned.node_type);
+      }
+    }
+    std::printf("  %s: the pair's node a %s in %d of %d frames\n", what.c_str(), to_string(planned.node_type), kept, frames);
+  }
+}
+
 // A real mesh: CGAL's blobby (libcgal-demo's data archive, 2,027 vertices) and the same
 // surface with every face split in four (8,102 vertices), the knot 0.3 across on its
 // bumpy top. Unguided: 10 and 16 bifurcations (4–8 and 4–14 singularities a frame).
