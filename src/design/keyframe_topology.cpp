@@ -276,6 +276,10 @@ struct KeyframeTopologyPlan::SurfaceGuide {
     std::vector<size_t> support;      // the vertices with w > 0
     std::vector<double> w;            // their weights
     std::vector<cplx> x;              // the path in the chart at s = k / kSamples
+    // The track's linear part J(s) in the chart (M J M⁻¹, M the chart's map of the face
+    // holding x(s)) at the same s: the factor is A(s)(z − x(s)) / A(0)(z − x(0)). Empty:
+    // the plain ratio (conjugated for a saddle).
+    std::vector<Linear> a;
     // A created or cancelled pair (then `x` is unused).
     bool pair = false, cancel = true;
     size_t saddle = 0;                // its saddle's track
@@ -844,17 +848,24 @@ std::optional<SurfacePoint> chart_locate(const Mesh& mesh, const std::vector<cpl
 // log((z − x(s)) / (z − x(0))) for a path sampled at x[k] (s = k / (x.size() − 1)) ending
 // at `end` = x(s): the argument is the angle the path subtends at z, so the value is
 // continuous in z off the path (and jumps by 2πi across it, where exp does not see it).
-cplx log_ratio(cplx z, const std::vector<cplx>& x, double s, cplx end) {
+cplx apply_linear(const Linear& l, cplx w) { return l.alpha * w + l.beta * std::conj(w); }
+
+// The same with the linear parts `a` (a[k] at x[k], `a_end` at `end`; empty: the identity):
+// log(A(s)(z − x(s)) / A(0)(z − x(0))), its argument summed over the steps likewise.
+cplx log_ratio(cplx z, const std::vector<cplx>& x, const std::vector<Linear>& a, double s, cplx end,
+               const Linear& a_end) {
   const auto n = static_cast<double>(x.size() - 1);
   const auto last = std::min(static_cast<size_t>(std::max(s, 0.0) * n), x.size() - 1);
+  auto at = [&](size_t k) { return a.empty() ? z - x[k] : apply_linear(a[k], z - x[k]); };
   double angle = 0;
-  cplx prev = z - x[0];
+  const cplx d0 = at(0);
+  cplx prev = d0;
   for (size_t k = 1; k <= last; ++k) {
-    const cplx next = z - x[k];
+    const cplx next = at(k);
     angle += std::arg(next / prev);
     prev = next;
   }
-  const cplx d_end = z - end, d0 = z - x[0];
+  const cplx d_end = a.empty() ? z - end : apply_linear(a_end, z - end);
   angle += std::arg(d_end / prev);
   return {std::log(std::abs(d_end)) - std::log(std::abs(d0)), angle};
 }
@@ -910,8 +921,56 @@ cplx pair_log(const SurfaceGuide& g, const SurfaceGuide::Path& p, cplx z, double
 struct PathNow {
   double t = 0, s = 0;
   cplx end{0, 0};
+  Linear a;  // the track's linear part in the chart at `end` (with the path's `a`)
   SurfaceGuide::PairState q;
 };
+
+// The chart's linear map (face frame to chart) on face f; none when a corner is off the
+// chart's patch or the face is degenerate.
+std::optional<Mat2> chart_map(const DesignSpace& space, const std::vector<cplx>& coords, int f) {
+  const Mesh& mesh = space.mesh();
+  const TangentBundle& bundle = space.bundle();
+  const Vec3& x0 = mesh.position(mesh.face(f)[0]);
+  const cplx c0 = coords[static_cast<size_t>(mesh.face(f)[0])];
+  Mat2 Y, Z;
+  for (int c = 1; c < 3; ++c) {
+    const Vec3 d = mesh.position(mesh.face(f)[static_cast<size_t>(c)]) - x0;
+    Y.col(c - 1) = Vec2(d.dot(bundle.face_e1(f)), d.dot(bundle.face_e2(f)));
+    const cplx dz = coords[static_cast<size_t>(mesh.face(f)[static_cast<size_t>(c)])] - c0;
+    if (!std::isfinite(dz.real()) || !std::isfinite(dz.imag())) return std::nullopt;
+    Z.col(c - 1) = Vec2(dz.real(), dz.imag());
+  }
+  if (Y.determinant() == 0 || Z.determinant() == 0) return std::nullopt;
+  return Z * Y.inverse();
+}
+
+// The track's J at time t in the chart, M J M⁻¹ on the face holding its point; none where
+// the chart has no map there or J's determinant is not of the track's index's sign.
+std::optional<Linear> chart_jacobian(const DesignSpace& space, const Track& tr, const std::vector<cplx>& coords,
+                                     double t, int f) {
+  const std::optional<Mat2> m = chart_map(space, coords, f);
+  if (!m) return std::nullopt;
+  const Mat2 j = to_matrix(track_jacobian(space.bundle(), tr, t, f));
+  const Mat2 a = *m * j * m->inverse();
+  const double det = a.determinant();
+  if (!std::isfinite(det) || det * tr.index <= 0) return std::nullopt;
+  // Its shape only: divided by its dominant coefficient (α for a node, β for a saddle), so
+  // that far from the path the ratio tends to 1 and does not turn the tube's phase as J
+  // turns (a node changing stability): the type is Λ's to hold, as before.
+  const Linear l = to_linear(a);
+  const cplx d = tr.index > 0 ? l.alpha : l.beta;
+  return Linear{l.alpha / d, l.beta / d};
+}
+
+// The time at which a track's smoothstep parameter is s (bisection).
+double time_at(const Track& tr, double s) {
+  double lo = tr.t0, hi = tr.t1;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (tr.param(mid) < s ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
 
 PathNow path_now(const DesignSpace& space, const std::vector<Track>& tracks, const SurfaceGuide::Path& path,
                  double t) {
@@ -923,7 +982,13 @@ PathNow path_now(const DesignSpace& space, const std::vector<Track>& tracks, con
   }
   const Track& tr = tracks[path.track];
   now.s = tr.param(t);
-  now.end = chart_point(space.mesh(), path.coords, space.locate(tr.raw(now.s)));
+  const SurfacePoint at = space.locate(tr.raw(now.s));
+  now.end = chart_point(space.mesh(), path.coords, at);
+  if (!path.a.empty()) {
+    // Off the chart's map (not seen: the path's samples all have one): the nearest sample's.
+    const auto k = std::min(static_cast<size_t>(std::lround(now.s * SurfaceGuide::kSamples)), path.a.size() - 1);
+    now.a = chart_jacobian(space, tr, path.coords, t, at.face).value_or(path.a[k]);
+  }
   return now;
 }
 
@@ -931,8 +996,8 @@ PathNow path_now(const DesignSpace& space, const std::vector<Track>& tracks, con
 cplx path_log(const SurfaceGuide& g, const SurfaceGuide::Path& path, size_t m, const PathNow& now) {
   const cplx z = path.coords[path.support[m]];
   if (path.pair) return path.w[m] * pair_log(g, path, z, now.t, now.q);
-  const cplx l = path.w[m] * log_ratio(z, path.x, now.s, now.end);
-  return path.conj ? std::conj(l) : l;
+  const cplx l = path.w[m] * log_ratio(z, path.x, path.a, now.s, now.end, now.a);
+  return path.conj && path.a.empty() ? std::conj(l) : l;
 }
 
 // Σ_j w_j log(factor_j) at every vertex, the factors at time t.
@@ -1133,7 +1198,7 @@ std::string leaves_surface(const DesignSpace& space, const Track& tr, const std:
 // its chart or a key frame's field has a zero no track carries. `ramp` widens the band
 // where the factors' weights fall from 1 to 0.
 bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, size_t first, size_t last,
-                         const std::vector<Guide::Pair>& pairs, double radius, double ramp,
+                         const std::vector<Guide::Pair>& pairs, double radius, double ramp, bool shaped,
                          const std::vector<cplx>& f0, const std::vector<cplx>& f1, SurfaceGuide& g,
                          std::string& why) {
   const Mesh& mesh = space.mesh();
@@ -1283,6 +1348,17 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
                         "(and its tube is no disk down to 1.5 edge lengths wide)",
                         to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1));
       return false;
+    }
+    // The shaped ratio: the key frames' linear parts along the path (`a`), where every
+    // sample has one.
+    for (int k = 0; shaped && k <= SurfaceGuide::kSamples; ++k) {
+      const double s = static_cast<double>(k) / SurfaceGuide::kSamples;
+      const std::optional<Linear> a = chart_jacobian(space, tr, path.coords, time_at(tr, s), on[static_cast<size_t>(k)].face);
+      if (!a) {
+        path.a.clear();
+        break;
+      }
+      path.a.push_back(*a);
     }
     g.paths.push_back(std::move(path));
   }
@@ -2728,7 +2804,11 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     // Where its frames hold extra zeros, the guide is built again with the weights' ramp
     // twice as wide (a long path's log R changes by ~|log R| across it, which two edge
     // lengths did not resolve beside the knot with a pair; the wider tube does not fit
-    // every coarse mesh, so it is the second try), and the one with fewer kept.
+    // every coarse mesh, so it is the second try), then with the shaped ratio at both
+    // ramps (SurfaceGuide::Path::a: the key frames' own linear parts in R, which a very
+    // anisotropic focus needs at its path's ends, CGAL's bunny; the sphere 3 knot with a
+    // pair is not guided with it, so it comes after the plain ratio), and the one with
+    // fewest kept.
     std::string unbuilt_why = off_surface;  // why the guide could not be built, when it was tried
     if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         guide.last > guide.first && !rep.guided)
@@ -2742,13 +2822,13 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         if (t > rep.t0 && t < rep.t1) frame_times.push_back(t);
       const size_t inner_frames = frame_times.size();
       int best_wrong = kMaxWrongFrames + 1, fewest_wrong = -1;
-      for (const double ramp : {1.0, 2.0}) {
+      for (const auto& [ramp, shaped] : {std::pair{1.0, false}, std::pair{2.0, false}, std::pair{1.0, true}, std::pair{2.0, true}}) {
         SurfaceGuide sg;
         sg.t0 = rep.t0;
         sg.t1 = rep.t1;
         std::string why;
         if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
-                                 ramp, keyframe_fields[k], keyframe_fields[k + 1], sg, why)) {
+                                 ramp, shaped, keyframe_fields[k], keyframe_fields[k + 1], sg, why)) {
           // The wider ramp widens the same tubes: a path or pair that fits no chart at the
           // first does not at the second either, so no second try (on the bunny ~0.5 s).
           if (unbuilt_why.empty()) unbuilt_why = why;

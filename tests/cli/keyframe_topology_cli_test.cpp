@@ -217,15 +217,19 @@ TEST(CliKeyframeTopology, Example26KnotOnASphereIsGuided) {
 
 
 // Example 26's knot_bunny.json: the knot on CGAL's bunny. Its paths are curves on the
-// surface and the surface guide can be built, but its frames would hold a focus that jumps
-// (a pair created at t ≈ 0.023 and cancelled with it by 0.033, between two of the 31
-// evenly spaced times the guide was once checked at, and inside frame 1's): the guide is
-// checked at the scene's own frames and, with one of them holding an extra pair, the
-// interval is left free and says so — the analysis then shows no more saddle–node events
-// than the free solve (1), where the guide kept made 3. Release only: ~10 s there.
-TEST(CliKeyframeTopology, Example26KnotOnTheBunnyIsLeftFreeWhereAFrameWouldHoldAnExtraPair) {
+// surface; with the plain ratio R = (z − p(t)) / (z − p(t₀)) the guide's frames held an extra
+// pair where a very anisotropic focus (|β|/|α| 0.86) leaves or reaches its place on its 0.97
+// path across the bunny (frame 1 with the wider ramp, frame 29 with the narrow one), so the
+// interval was left free. The shaped ratio (the key frames' own linear parts in R,
+// SurfaceGuide::Path::a) has no such frame: the interval is guided, every frame holds the
+// plan's singularities (6, and 8 once the pair is created) and the analysis shows the
+// planned creation alone of the saddle–node events, half a frame after t = 0.5 (the
+// designed center's Hopf events aside). It is found 0.027 from the report's template (the
+// chart's midpoint of the pair's ends is not the surface's), beyond the design check's
+// 0.020. Release only: ~20 s there.
+TEST(CliKeyframeTopology, Example26KnotOnTheBunnyIsGuidedWithThePlannedCreationAlone) {
 #ifdef TVF_SANITIZE_BUILD
-  GTEST_SKIP() << "the bunny's guide is ~10 s in release; its code runs under the sanitizers in KeyframeTopology.*";
+  GTEST_SKIP() << "the bunny's guide is ~20 s in release; its code runs under the sanitizers in KeyframeTopology.*";
 #endif
   if (!fs::exists(test::source_dir() + "/examples/04_surface_mesh/bunny.off"))
     GTEST_SKIP() << "examples/04_surface_mesh/bunny.off is not extracted (scripts/install-deps.sh does it)";
@@ -234,15 +238,20 @@ TEST(CliKeyframeTopology, Example26KnotOnTheBunnyIsLeftFreeWhereAFrameWouldHoldA
   const GeneratedAndAnalysed r = generate_and_analyze(dir, scene, " --no-plots");
   ASSERT_FALSE(r.analysis.is_null());
   const nlohmann::json& i = r.topology.at("intervals").at(0);
-  EXPECT_FALSE(i.at("guided").get<bool>()) << i;
-  EXPECT_TRUE(i.at("fallback").get<bool>()) << i;
-  EXPECT_NE(i.at("unguided_reason").get<std::string>().find("of the 30 frames between the key frames"),
-            std::string::npos)
-      << i;
-  EXPECT_NE(r.generated.output.find("not guided, left free"), std::string::npos) << r.generated.output;
+  EXPECT_TRUE(i.at("guided").get<bool>()) << i;
+  EXPECT_FALSE(i.at("fallback").get<bool>()) << i;
+  EXPECT_EQ(r.generated.output.find("not guided"), std::string::npos) << r.generated.output;
+  std::vector<int> count(32, 0);
+  for (const auto& s : r.analysis.at("singularities")) ++count.at(s.at("frame").get<size_t>());
+  for (size_t f = 0; f < count.size(); ++f) EXPECT_EQ(count[f], f <= 15 ? 6 : 8) << "frame " << f;
   int saddle_node = 0;
-  for (const auto& b : r.analysis.at("bifurcations")) saddle_node += b.at("kind") != "hopf";
-  EXPECT_LE(saddle_node, 1) << r.analysis.at("bifurcations");
+  for (const auto& b : r.analysis.at("bifurcations")) {
+    if (b.at("kind") == "hopf") continue;
+    ++saddle_node;
+    EXPECT_EQ(b.at("kind"), "creation") << b;
+    EXPECT_NEAR(b.at("t").get<double>(), 0.5, 1.0 / 31) << b;
+  }
+  EXPECT_EQ(saddle_node, 1) << r.analysis.at("bifurcations");
 }
 
 // Example 26's stability.json: a source in the first key frame, a sink near it in the
