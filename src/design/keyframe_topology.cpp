@@ -2846,6 +2846,18 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       else if (!best && unbuilt_why.empty())
         unbuilt_why = "the surface guide could not be built";
       if (best) {
+        // A pair's event happens where its template's zeros meet in the pair's chart: the
+        // middle of the two ends there, which on a curved chart is not the surface middle the
+        // plan first reported (CGAL's bunny: 0.029 apart for ends 0.18 apart). The report
+        // (keyframe_topology.json, the design check) says where the guide puts it.
+        for (const SurfaceGuide::Path& path : best->paths) {
+          if (!path.pair) continue;
+          const std::optional<SurfacePoint> at = chart_locate(mesh, path.coords, path.mid);
+          if (!at) continue;
+          for (KeyframeIntervalReport::Pair& pr : path.cancel ? rep.cancelled : rep.created)
+            if (pr.t == path.tc && pr.saddle == tracks_[path.saddle].p0 && pr.node == tracks_[path.track].p0)
+              pr.at = surface_position(mesh, *at);
+        }
         for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].guided = true;
         for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
         rep.guided = true;
