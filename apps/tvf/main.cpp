@@ -5,6 +5,7 @@
 #include "edit_command.h"
 #include "export_command.h"
 #include "lcs_command.h"
+#include "mpi_exec.h"
 #include "progress.h"
 #include "render_command.h"
 #include "serve_command.h"
@@ -252,6 +253,7 @@ int run_validate(const std::string& path, bool with_domain) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  cli::run_mpi_program_if_launched(argv);  // under mpirun: tvf-mpi in this process's place (mpi_exec.h)
   const DistributedSession mpi;  // MPI and PETSc, where launched by mpirun (solve/distributed.h)
   CLI::App app{"tvf: design of time-varying vector fields on planar domains and surfaces.\n"
                "Run with no command to generate the built-in demo scene."};

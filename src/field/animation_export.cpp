@@ -13,7 +13,12 @@
 #include <ostream>
 
 #if TVF_HAVE_OPENVDB
-#include <openvdb/openvdb.h>
+#include "vdb/vdb_module.h"
+
+#include <dlfcn.h>
+
+#include <mutex>
+#include <string>
 #endif
 
 namespace fs = std::filesystem;
@@ -21,6 +26,63 @@ namespace fs = std::filesystem;
 namespace tvf {
 
 bool vdb_export_available() { return TVF_HAVE_OPENVDB != 0; }
+
+#if TVF_HAVE_OPENVDB
+namespace {
+
+// OpenVDB's writer lives in the module libtvf_vdb.so (vdb/vdb_module.h), opened here on
+// the first export: linking OpenVDB into libtvf made every tvf command and every
+// `import tvf` load it. Looked for beside the program (tvf), beside the object that holds
+// this code (the Python module's _tvf.so, installed with the module beside it), then where
+// this build put it (TVF_VDB_MODULE_PATH).
+constexpr const char* kVdbModule = "libtvf_vdb.so";
+
+struct VdbModule {
+  tvf_vdb_write_frame_fn write = nullptr;
+  std::string error;  // why it could not be opened
+};
+
+const VdbModule& vdb_module() {
+  static VdbModule module;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    std::vector<fs::path> candidates;
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) candidates.push_back(exe.parent_path() / kVdbModule);
+    Dl_info info{};
+    if (dladdr(reinterpret_cast<void*>(&vdb_export_available), &info) != 0 && info.dli_fname != nullptr &&
+        fs::path(info.dli_fname).is_absolute())
+      candidates.push_back(fs::path(info.dli_fname).parent_path() / kVdbModule);
+    candidates.emplace_back(TVF_VDB_MODULE_PATH);
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::string looked;
+    for (const fs::path& c : candidates) {
+      if (!looked.empty()) looked += ", ";
+      looked += c.string();
+      if (!fs::exists(c, ec)) continue;
+      void* handle = dlopen(c.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (handle == nullptr) {
+        module.error = fmt::format("cannot open the OpenVDB module {}: {}", c.string(), dlerror());
+        return;
+      }
+      const auto version = reinterpret_cast<tvf_vdb_abi_version_fn>(dlsym(handle, "tvf_vdb_abi_version"));
+      module.write = reinterpret_cast<tvf_vdb_write_frame_fn>(dlsym(handle, "tvf_vdb_write_frame"));
+      if (version == nullptr || module.write == nullptr || version() != TVF_VDB_ABI_VERSION) {
+        module.write = nullptr;
+        module.error = fmt::format("the OpenVDB module {} is not the one of this tvf (rebuild or reinstall tvf)",
+                                   c.string());
+      }
+      return;  // the module stays loaded for the life of the process
+    }
+    module.error = fmt::format("the OpenVDB module {} is missing (looked in {}): rebuild or reinstall tvf",
+                               kVdbModule, looked);
+  });
+  return module;
+}
+
+}  // namespace
+#endif
 
 GridLattice grid_lattice(const Mesh& mesh, const std::string& label) {
   const auto not_grid = [&](const std::string& why) {
@@ -58,37 +120,16 @@ std::vector<fs::path> write_vdb_sequence(const fs::path& dir, const TangentBundl
                                          const std::string& label) {
   const GridLattice g = grid_lattice(bundle.mesh(), label);
 #if TVF_HAVE_OPENVDB
-  openvdb::initialize();
+  const VdbModule& module = vdb_module();
+  if (module.write == nullptr) throw Error(fmt::format("{}: cannot write OpenVDB files: {}", label, module.error));
   OutputStage stage(dir);
-  openvdb::math::Transform::Ptr transform;
-  if (g.hx == g.hy) {
-    transform = openvdb::math::Transform::createLinearTransform(g.hx);
-    transform->postTranslate(openvdb::Vec3d(g.x0, g.y0, 0.0));
-  } else {
-    transform = std::make_shared<openvdb::math::Transform>(std::make_shared<openvdb::math::ScaleTranslateMap>(
-        openvdb::Vec3d(g.hx, g.hy, g.hx), openvdb::Vec3d(g.x0, g.y0, 0.0)));
-  }
   for (int j = 0; j < field.frames(); ++j) {
     const std::vector<float> w = world_vectors_f32(bundle, field, j);
-    auto grid = openvdb::Vec3fGrid::create(openvdb::Vec3f(0.0f));
-    grid->setName("v");
-    grid->setTransform(transform->copy());
-    grid->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
-    grid->insertMeta("time", openvdb::FloatMetadata(static_cast<float>(field.time().time(j))));
-    auto access = grid->getAccessor();
-    for (int iy = 0; iy < g.ny; ++iy)
-      for (int ix = 0; ix < g.nx; ++ix) {
-        const float* v = w.data() + 3 * static_cast<size_t>(iy * g.nx + ix);
-        access.setValueOn(openvdb::Coord(ix, iy, 0), openvdb::Vec3f(v[0], v[1], 0.0f));
-      }
     const fs::path file = stage.file(fmt::format("velocity_{:04d}.vdb", j));
-    try {
-      openvdb::io::File out(file.string());
-      out.write({grid});
-      out.close();
-    } catch (const openvdb::Exception& e) {
-      throw Error(fmt::format("{}: cannot write: {}", file.string(), e.what()));
-    }
+    char error[512] = {};
+    if (module.write(file.c_str(), g.nx, g.ny, g.x0, g.y0, g.hx, g.hy, static_cast<float>(field.time().time(j)),
+                     w.data(), error, sizeof error) != 0)
+      throw Error(fmt::format("{}: cannot write: {}", file.string(), error));
   }
   return stage.commit();
 #else

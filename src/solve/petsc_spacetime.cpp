@@ -1,5 +1,12 @@
 #include "solve/petsc_spacetime.h"
 
+// Compiled twice (src/CMakeLists.txt): into libtvf without TVF_HAVE_PETSC (the
+// single-process stubs), and as tvf_petsc with TVF_HAVE_PETSC=1 (the distributed back end of
+// tvf-mpi and the MPI tests). Both define the same symbols.
+#ifndef TVF_HAVE_PETSC
+#define TVF_HAVE_PETSC 0
+#endif
+
 #include "solve/spacetime_coarse.h"
 #include "tvf/core/error.h"
 #include "tvf/solve/distributed.h"
@@ -27,14 +34,6 @@ namespace tvf {
 
 namespace {
 
-// An MPI launcher's environment: OpenMPI's mpirun, MPICH's/Hydra's mpiexec (PMI), PMIx
-// (Slurm's srun, OpenMPI 5).
-[[maybe_unused]] bool launched_by_mpi() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "PMI_RANK"})
-    if (std::getenv(v) != nullptr) return true;
-  return false;
-}
-
 int g_ranks = 1;
 int g_rank = 0;
 bool g_active = false;
@@ -42,6 +41,13 @@ bool g_active = false;
 }  // namespace
 
 bool distributed_built() { return TVF_HAVE_PETSC != 0; }
+// An MPI launcher's environment: OpenMPI's mpirun, MPICH's/Hydra's mpiexec (PMI), PMIx
+// (Slurm's srun, OpenMPI 5).
+bool distributed_launched() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "PMI_RANK"})
+    if (std::getenv(v) != nullptr) return true;
+  return false;
+}
 int distributed_ranks() { return g_ranks; }
 int distributed_rank() { return g_rank; }
 bool distributed_active() { return g_active; }
@@ -135,7 +141,7 @@ void check(PetscErrorCode code, const char* what) {
 }  // namespace
 
 DistributedSession::DistributedSession() {
-  if (!launched_by_mpi()) return;
+  if (!distributed_launched()) return;
   // PETSc's options come from PETSC_OPTIONS only: the command line is the CLI's. Its signal
   // handlers stay off (the CLI removes its staging folders on SIGINT/SIGTERM itself).
   check(PetscOptionsSetValue(nullptr, "-no_signal_handler", nullptr), "PetscOptionsSetValue");

@@ -156,6 +156,19 @@ TEST(CliMpi, AnInputErrorIsPrintedOnceAndFailsTheRun) {
   EXPECT_EQ(occurrences(bad.output, "--output is required"), 1u) << bad.output;
 }
 
+// tvf links neither PETSc nor MPI: launched by mpirun it runs tvf-mpi beside it in its place
+// (apps/tvf/mpi_exec.h). A tvf without that program says so in one sentence (here an MPI
+// launcher's environment variable, without mpirun, on a copy of tvf in a folder of its own).
+TEST(CliMpi, MissingMpiProgramIsOneSentence) {
+  test::TempDir dir;
+  std::filesystem::copy_file(TVF_CLI_PATH, dir / "tvf");
+  const auto run = test::run_command("OMPI_COMM_WORLD_SIZE=1 " + test::quoted(dir / "tvf") + " --help");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_EQ(occurrences(run.output, "tvf: error: launched by mpirun, but "), 1u) << run.output;
+  EXPECT_NE(run.output.find((dir / "tvf-mpi").string()), std::string::npos) << run.output;
+  EXPECT_EQ(run.output.find("Usage"), std::string::npos) << run.output;
+}
+
 #else
 
 TEST(CliMpi, NotBuilt) { GTEST_SKIP() << "this build has no distributed solve (TVF_MPI off)"; }

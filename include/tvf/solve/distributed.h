@@ -27,8 +27,13 @@
 
 namespace tvf {
 
-// Whether this build has the distributed back end (CMake option TVF_MPI).
+// Whether this program has the distributed back end: true in tvf-mpi and the MPI tests
+// (CMake option TVF_MPI; src/CMakeLists.txt, tvf_petsc), false in libtvf's own
+// single-process stubs, which tvf and the Python module link.
 bool distributed_built();
+// Whether the process was launched by an MPI launcher (mpirun/mpiexec of OpenMPI or MPICH,
+// srun with PMI): its environment variables. tvf then runs tvf-mpi in its place (apps/tvf).
+bool distributed_launched();
 
 // Starts MPI and PETSc for the lifetime of the object where the process was launched by an
 // MPI launcher and the build has the back end; otherwise does nothing. One per process

@@ -1,0 +1,16 @@
+# cmake -DFILES="a;b" -P check_not_loaded.cmake: fails when ldd lists PETSc, MPI or OpenVDB
+# among what one of FILES loads (tests/CMakeLists.txt, cli_loads_no_petsc_or_openvdb).
+foreach(file IN LISTS FILES)
+  execute_process(COMMAND ldd ${file} OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "ldd ${file} failed (${rc}): ${err}")
+  endif()
+  string(REGEX MATCHALL "lib(petsc|mpi|open-pal|openvdb)[^ \t\n]*" heavy "${out}")
+  if(heavy)
+    list(REMOVE_DUPLICATES heavy)
+    message(FATAL_ERROR "${file} loads ${heavy}: PETSc and MPI belong in tvf-mpi, OpenVDB in libtvf_vdb.so")
+  endif()
+  string(REGEX MATCHALL "\n" lines "${out}")
+  list(LENGTH lines count)
+  message(STATUS "${file}: ${count} libraries, none of PETSc, MPI, OpenVDB")
+endforeach()
