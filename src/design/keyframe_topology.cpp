@@ -1630,7 +1630,21 @@ int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& t
   // fewest. The holds alone keep the matched nodes with λ = 0: Λ must stay 0 at them (a
   // pair's node alone would make Λ its λ everywhere, turning every other node's type: the
   // knot's source into a sink on the sphere 3 knot with a cancelled pair).
-  int best = wrong_frames(g);
+  // A correction whose matched nodes end their interval with different whole turns (the
+  // knot's center 2π, its source 0) leaves Λ at t₁ their Shepard blend, π midway between
+  // them: G(t) then tends to F₁ turned by up to π there, and the last frame before the key
+  // frame pops (CGAL's and the tests' sphere knot: vectors reversed between the nodes, the
+  // coherence series' last step 28× its median). Such a correction is not one of the
+  // choices; a node's λ at t₁ is a whole turn, and they must all be the same one.
+  auto ends_at_key_frames = [](const SurfaceGuide& s) {
+    for (const std::vector<double>& lam : s.lambda)
+      if (std::abs(lam.back() - s.lambda.front().back()) > 1e-6) return false;
+    return true;
+  };
+  auto score = [&](const SurfaceGuide& s) {
+    return ends_at_key_frames(s) ? wrong_frames(s) : std::numeric_limits<int>::max();
+  };
+  int best = score(g);
   if (g.nodes.empty() && g.holds.empty()) return best;
   SurfaceGuide choice = g;
   auto consider = [&](bool nodes, bool holds) {
@@ -1640,7 +1654,7 @@ int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& t
     else if (!nodes)
       other.nodes.clear(), other.lambda.clear();
     if (!holds) other.holds.clear();
-    const int wrong = wrong_frames(other);
+    const int wrong = score(other);
     if (wrong < best) best = wrong, choice = std::move(other);
   };
   if (!g.holds.empty() && !g.nodes.empty()) consider(true, false);

@@ -213,6 +213,14 @@ TEST(CliKeyframeTopology, Example26KnotOnASphereIsGuided) {
     EXPECT_EQ(index_sum[f], 2) << "frame " << f;
   }
   for (const auto& b : analysis.at("bifurcations")) EXPECT_EQ(b.at("kind"), "hopf") << b;
+  // Coherent in time up to the second key frame: no frame-to-frame step above 3× the
+  // median (1.3× now; 5.7× with a phase correction whose nodes ended on different whole
+  // turns, the last step reversing the vectors between them).
+  std::vector<double> steps = analysis.at("coherence").get<std::vector<double>>();
+  ASSERT_FALSE(steps.empty());
+  const double largest = *std::max_element(steps.begin(), steps.end());
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  EXPECT_LE(largest, 3 * steps[steps.size() / 2]) << analysis.at("coherence");
 }
 
 
