@@ -53,6 +53,7 @@ SurfaceWalk walk_surface(const TangentBundle& bundle, const SurfacePoint& start,
   const double re = std::abs(displacement.real()), im = std::abs(displacement.imag());
   const bool moves = std::isinf(re) || std::isinf(im) || (!std::isnan(re) && !std::isnan(im) && (re > 0 || im > 0));
   double left = 1.0;  // fraction of the displacement still to walk
+  int entered = -1;   // the half-edge of the current face the walk came in through
   // Each pass crosses one edge; a walk of a few edge lengths crosses few. The cap only
   // guards against rounding ping-pong around a vertex.
   for (int pass = 0; pass < 10000; ++pass) {
@@ -81,6 +82,20 @@ SurfaceWalk walk_surface(const TangentBundle& bundle, const SurfacePoint& start,
     e[c] = 0.0;
     e = clamp_bary(e);
     const int h = 3 * f + (c + 1) % 3;  // the edge opposite corner c
+    if (h == entered && !(s > 0.0)) {
+      // Out again, without a move in this face, through the edge the walk came in by: what
+      // is left runs along that edge, or crosses it by less than rounding, and each face's
+      // rounding would send it into the other for ever (CGAL's cow: a curve point on an
+      // edge, 1e-18 left). Move along the edge in this face, up to its ends, and stop.
+      const int a = (c + 1) % 3, z = (c + 2) % 3;
+      const Vec2 edge = p[static_cast<size_t>(z)] - p[static_cast<size_t>(a)];
+      const double along = edge.dot(to_vec2(rem)) / edge.squaredNorm();
+      Vec3 on_edge = Vec3::Zero();
+      on_edge[z] = std::clamp(std::max(b[z], 0.0) + along, 0.0, 1.0);
+      on_edge[a] = 1.0 - on_edge[z];
+      w.end.bary = on_edge;
+      return w;
+    }
     const int tw = mesh.twin(h);
     left *= 1.0 - s;
     if (tw < 0) {
@@ -100,6 +115,7 @@ SurfaceWalk walk_surface(const TangentBundle& bundle, const SurfacePoint& start,
     rem = r * ((1.0 - s) * rem);
     w.transport = r * w.transport;
     w.end = next;
+    entered = tw;
     if (stop_in && stop_in(g)) {
       w.stopped = true;
       w.travelled = moves ? 1.0 - left : 1.0;

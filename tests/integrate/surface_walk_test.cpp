@@ -1,10 +1,15 @@
 #include "tvf/integrate/surface_walk.h"
 
 #include "tvf/mesh/grid.h"
+#include "tvf/mesh/mesh_io.h"
 #include "tvf/mesh/primitives.h"
+#include "support/test_paths.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <random>
 
 namespace tvf {
@@ -61,6 +66,27 @@ TEST(SurfaceWalk, StopsOnEnteringANamedFace) {
   EXPECT_NEAR(x.y(), 0.25, 1e-12);
   EXPECT_GT(x.x(), 2.0 - 1e-12);  // entered the cell [2, 3]
   EXPECT_LT(x.x(), 2.5);
+}
+
+// A walk that starts on an edge (a corner's coordinate 2⁻⁵³) by a displacement of 1e-18
+// across it: each face's rounding sent it into the other, for ever (the check "did not end"
+// failed: a key-frame knot on CGAL's cow, a curve point straightened onto an edge). It stays
+// on the edge now, where it started to rounding.
+TEST(SurfaceWalk, AWalkAlongAnEdgeByLessThanRoundingEnds) {
+  const test::TempDir dir;
+  const std::string archive = "/usr/share/doc/libcgal-dev/data.tar.gz";
+  const std::string cmd = fmt::format("tar -xzf '{}' -C '{}' data/meshes/cow.off 2>/dev/null", archive, dir.path().string());
+  if (!std::filesystem::exists(archive) || std::system(cmd.c_str()) != 0)
+    GTEST_SKIP() << archive << " is missing or has no data/meshes/cow.off (Debian package libcgal-demo)";
+  const Mesh cow = load_mesh((dir / "data/meshes/cow.off").string()).mesh;
+  ASSERT_GT(cow.num_faces(), 3762);
+  const TangentBundle bundle(cow);
+  SurfacePoint p;
+  p.face = 3762;
+  p.bary = Vec3(0x1p-53, 0x1.0e70533cd574dp-1, 0x1.e31f598655164p-2);
+  const SurfaceWalk w = walk_surface(bundle, p, cplx(0x1.9cdae9fae3dcp-59, 0x1.8c09ffb81009p-58));
+  EXPECT_FALSE(w.hit_boundary);
+  EXPECT_LT((surface_position(cow, w.end) - surface_position(cow, p)).norm(), 1e-15);
 }
 
 }  // namespace
