@@ -852,9 +852,7 @@ std::optional<SurfacePoint> chart_locate(const Mesh& mesh, const std::vector<cpl
   return best;
 }
 
-// log((z − x(s)) / (z − x(0))) for a path sampled at x[k] (s = k / (x.size() − 1)) ending
-// at `end` = x(s): the argument is the angle the path subtends at z, so the value is
-// continuous in z off the path (and jumps by 2πi across it, where exp does not see it).
+// A linear map's value at w: αw + β conj w.
 cplx apply_linear(const Linear& l, cplx w) { return l.alpha * w + l.beta * std::conj(w); }
 
 // A sum of arguments along a sampled curve, d(0), d(1), …, kept so that it can be carried
@@ -888,13 +886,17 @@ cplx arg_sum_log(ArgSum& sum, bool started, size_t last, D&& d, cplx d_end) {
   return {std::log(std::abs(d_end)) - sum.log_d0, sum.angle + std::arg(d_end / sum.prev)};
 }
 
-// The same with the linear parts `a` (a[k] at x[k], `a_end` at `end`; empty: the identity):
-// log(A(s)(z − x(s)) / A(0)(z − x(0))), its argument summed over the steps likewise.
+// The last sample at or before parameter s of a path sampled at x[k], s = k / (x.size() − 1).
 size_t path_last(const std::vector<cplx>& x, double s) {
   const auto n = static_cast<double>(x.size() - 1);
   return std::min(static_cast<size_t>(std::max(s, 0.0) * n), x.size() - 1);
 }
 
+// log((z − x(s)) / (z − x(0))) for a path sampled at x[k] ending at `end` = x(s): the
+// argument is the angle the path subtends at z, so the value is continuous in z off the
+// path (and jumps by 2πi across it, where exp does not see it). With the linear parts `a`
+// (a[k] at x[k], `a_end` at `end`; empty: the identity): log(A(s)(z − x(s)) / A(0)(z − x(0))),
+// its argument summed over the steps likewise. `sum`, `started`: as arg_sum_log's.
 cplx log_ratio(ArgSum& sum, bool started, cplx z, const std::vector<cplx>& x, const std::vector<Linear>& a, double s,
                cplx end, const Linear& a_end) {
   auto at = [&](size_t k) { return a.empty() ? z - x[k] : apply_linear(a[k], z - x[k]); };
@@ -2992,8 +2994,9 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     // every coarse mesh, so it is the second try), then with the shaped ratio at both
     // ramps (SurfaceGuide::Path::a: the key frames' own linear parts in R, which a very
     // anisotropic focus needs at its path's ends, CGAL's bunny; the sphere 3 knot with a
-    // pair is not guided with it, so it comes after the plain ratio), and the one with
-    // fewest kept.
+    // pair is not guided with it, so it comes after the plain ratio): the first with no
+    // wrong frame is kept (PhaseCheck; the key frames' |β|/|α| does not tell beforehand
+    // which scenes need the shaped ratio, docs/benchmarks.md, so the order stays).
     std::string unbuilt_why = off_surface;  // why the guide could not be built, when it was tried
     if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         guide.last > guide.first && !rep.guided)
