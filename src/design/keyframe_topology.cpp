@@ -14,11 +14,13 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <queue>
 #include <optional>
 #include <string>
+#include <tuple>
 
 namespace tvf {
 
@@ -1276,10 +1278,15 @@ std::string leaves_surface(const DesignSpace& space, const Track& tr, const std:
 // `pairs` are created or cancelled pairs', the others matched); false when a path leaves
 // its chart or a key frame's field has a zero no track carries. `ramp` widens the band
 // where the factors' weights fall from 1 to 0.
+// A path's tube and chart (SurfaceGuide::Path before its `a`) by (a pair's, track or pair
+// index, ramp): the same at every try with that ramp (the shaped ratio's tries reuse the
+// plain ratio's tubes).
+using TubeCache = std::map<std::tuple<bool, size_t, double>, KeyframeTopologyPlan::SurfaceGuide::Path>;
+
 bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, size_t first, size_t last,
                          const std::vector<Guide::Pair>& pairs, double radius, double ramp, bool shaped,
-                         const std::vector<cplx>& f0, const std::vector<cplx>& f1, SurfaceGuide& g,
-                         std::string& why) {
+                         const std::vector<cplx>& f0, const std::vector<cplx>& f1, TubeCache& tubes,
+                         SurfaceGuide& g, std::string& why) {
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   const double h = mesh.mean_edge_length();
@@ -1396,6 +1403,17 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     }
     return found;  // else neither chart fits within an edge length of the path
   };
+  auto cached_tube = [&](SurfaceGuide::Path& path, size_t which, const std::vector<std::vector<SurfacePoint>>& lines,
+                         const SurfacePoint& mid) {
+    const auto key = std::tuple{path.pair, which, ramp};
+    if (const auto it = tubes.find(key); it != tubes.end()) {
+      path = it->second;
+      return true;
+    }
+    if (!make_tube(path, lines, mid)) return false;
+    tubes.emplace(key, path);
+    return true;
+  };
   // First, cheaply, every path's points on the surface: a guard (leaves_surface), since no
   // chart holds a path that is not a curve on the surface. The paths are curves on it
   // (surface_curve), so only a detour bent off it makes them jump. (Each track's samples
@@ -1422,7 +1440,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     // A singularity that stays (the key frames' static solves put it within a thousandth
     // of an edge length, CGAL's elephant's foci 1e-8 apart): F₀ and F₁ share it, H carries it.
     if (reach < 1e-3 * h) continue;
-    if (!make_tube(path, {on}, mid)) {
+    if (!cached_tube(path, i, {on}, mid)) {
       why = fmt::format("the surface folds over the chart of the {}'s path from {} to {} within an edge length of it "
                         "(and its tube is no disk down to 1.5 edge lengths wide)",
                         to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1));
@@ -1441,7 +1459,8 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     }
     g.paths.push_back(std::move(path));
   }
-  for (const Guide::Pair& pr : pairs) {
+  for (size_t pi = 0; pi < pairs.size(); ++pi) {
+    const Guide::Pair& pr = pairs[pi];
     SurfaceGuide::Path path;
     path.pair = true;
     path.cancel = pr.cancel;
@@ -1458,7 +1477,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     for (const auto* on : {&on_node, &on_saddle})
       for (const SurfacePoint& p : *on) mean += surface_position(mesh, p);
     const SurfacePoint mid = space.locate(mean / (2.0 * (SurfaceGuide::kSamples + 1)));
-    if (!make_tube(path, {on_node, on_saddle, between}, mid)) {
+    if (!cached_tube(path, pi, {on_node, on_saddle, between}, mid)) {
       why = fmt::format("the surface folds over the chart of the pair at {} within an edge length of its paths",
                         describe_point(surface_position(mesh, mid), false, 1));
       return false;
@@ -3011,13 +3030,14 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       const size_t inner_frames = frame_times.size();
       const PhaseCheck check(space, tracks_, rep.matched.size(), frame_times);
       std::vector<PhaseCheck::Trial> failed;  // counted on only when no guide is kept
+      TubeCache tubes;
       for (const auto& [ramp, shaped] : {std::pair{1.0, false}, std::pair{2.0, false}, std::pair{1.0, true}, std::pair{2.0, true}}) {
         SurfaceGuide sg;
         sg.t0 = rep.t0;
         sg.t1 = rep.t1;
         std::string why;
         if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
-                                 ramp, shaped, keyframe_fields[k], keyframe_fields[k + 1], sg, why)) {
+                                 ramp, shaped, keyframe_fields[k], keyframe_fields[k + 1], tubes, sg, why)) {
           // The wider ramp widens the same tubes: a path or pair that fits no chart at the
           // first does not at the second either, so no second try (on the bunny ~0.5 s).
           if (unbuilt_why.empty()) unbuilt_why = why;
