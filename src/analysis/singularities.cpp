@@ -80,20 +80,24 @@ std::vector<double> halfedge_angles(const TangentBundle& bundle, const std::vect
   return a;
 }
 
-std::vector<int> indices_of(const TangentBundle& bundle, const std::vector<cplx>& z) {
+// `curvature`: Ω_f of every face (face_curvatures), or empty: computed here.
+std::vector<int> indices_of(const TangentBundle& bundle, const std::vector<cplx>& z,
+                            std::span<const double> curvature = {}) {
   const Mesh& mesh = bundle.mesh();
   const std::vector<double> a = halfedge_angles(bundle, z);
   std::vector<int> index(static_cast<size_t>(mesh.num_faces()), 0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const auto h = static_cast<size_t>(3 * f);
-    const double turn = a[h] + a[h + 1] + a[h + 2] + face_curvature(bundle, f);
+    const double omega =
+        curvature.empty() ? face_curvature(bundle, f) : curvature[static_cast<size_t>(f)];
+    const double turn = a[h] + a[h + 1] + a[h + 2] + omega;
     const double k = std::round(turn / kTwoPi);
     // Σ a + Ω_f is a multiple of 2π by construction (the product of the edge ratios is
     // the inverse holonomy); a large residual means the bundle's transports and its
     // angle sums disagree.
     TVF_CHECK(std::abs(turn - kTwoPi * k) < 1e-6,
               "face {}: edge angles {} {} {} and curvature {} do not close (residual {})", f,
-              a[h], a[h + 1], a[h + 2], face_curvature(bundle, f), turn - kTwoPi * k);
+              a[h], a[h + 1], a[h + 2], omega, turn - kTwoPi * k);
     index[static_cast<size_t>(f)] = static_cast<int>(k);
   }
   return index;
@@ -171,12 +175,27 @@ std::vector<int> face_indices(const TangentBundle& bundle, std::span<const cplx>
   return indices_of(bundle, normalized_values(bundle, values).z);
 }
 
+std::vector<double> face_curvatures(const TangentBundle& bundle) {
+  std::vector<double> out(static_cast<size_t>(bundle.mesh().num_faces()));
+  for (int f = 0; f < bundle.mesh().num_faces(); ++f)
+    out[static_cast<size_t>(f)] = face_curvature(bundle, f);
+  return out;
+}
+
 std::vector<Singularity> find_singularities(const TangentBundle& bundle,
                                             std::span<const cplx> values) {
+  return find_singularities(bundle, values, {});
+}
+
+std::vector<Singularity> find_singularities(const TangentBundle& bundle,
+                                            std::span<const cplx> values,
+                                            std::span<const double> curvature) {
   const Mesh& mesh = bundle.mesh();
+  TVF_CHECK(curvature.empty() || static_cast<int>(curvature.size()) == mesh.num_faces(),
+            "{} face curvatures for a mesh of {} faces", curvature.size(), mesh.num_faces());
   const Scaled scaled = normalized_values(bundle, values);
   const std::vector<cplx>& z = scaled.z;
-  const std::vector<int> index = indices_of(bundle, z);
+  const std::vector<int> index = indices_of(bundle, z, curvature);
   std::vector<Singularity> out;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const int k = index[static_cast<size_t>(f)];

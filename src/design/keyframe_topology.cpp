@@ -14,11 +14,13 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <queue>
 #include <optional>
 #include <string>
+#include <tuple>
 
 namespace tvf {
 
@@ -312,6 +314,13 @@ struct KeyframeTopologyPlan::SurfaceGuide {
     std::vector<double> turn;
   };
   std::vector<PairHold> holds;
+  // The paths' log factors (surface_log_factors) at the scene's frames inside the interval,
+  // frame_t[i], on the vertices of the paths' supports (`tube`; zero elsewhere): made once,
+  // in time order, each vertex's argument sums carried on from frame to frame, for the
+  // acceptance check and the solve's frames (the same values as summing from t₀ at each).
+  std::vector<double> frame_t;
+  std::vector<size_t> tube;
+  std::vector<std::vector<cplx>> frame_log;
 };
 
 KeyframeTopologyPlan::~KeyframeTopologyPlan() = default;
@@ -845,29 +854,56 @@ std::optional<SurfacePoint> chart_locate(const Mesh& mesh, const std::vector<cpl
   return best;
 }
 
-// log((z − x(s)) / (z − x(0))) for a path sampled at x[k] (s = k / (x.size() − 1)) ending
-// at `end` = x(s): the argument is the angle the path subtends at z, so the value is
-// continuous in z off the path (and jumps by 2πi across it, where exp does not see it).
+// A linear map's value at w: αw + β conj w.
 cplx apply_linear(const Linear& l, cplx w) { return l.alpha * w + l.beta * std::conj(w); }
 
-// The same with the linear parts `a` (a[k] at x[k], `a_end` at `end`; empty: the identity):
-// log(A(s)(z − x(s)) / A(0)(z − x(0))), its argument summed over the steps likewise.
-cplx log_ratio(cplx z, const std::vector<cplx>& x, const std::vector<Linear>& a, double s, cplx end,
-               const Linear& a_end) {
-  const auto n = static_cast<double>(x.size() - 1);
-  const auto last = std::min(static_cast<size_t>(std::max(s, 0.0) * n), x.size() - 1);
-  auto at = [&](size_t k) { return a.empty() ? z - x[k] : apply_linear(a[k], z - x[k]); };
+// A sum of arguments along a sampled curve, d(0), d(1), …, kept so that it can be carried
+// on to a later sample (the acceptance check's frames, in time order, extend each vertex's
+// sum instead of summing again from d(0): the same additions in the same order, so the same
+// value to the bit). `k` is the last sample summed, `prev` its value.
+struct ArgSum {
+  size_t k = 0;
   double angle = 0;
-  const cplx d0 = at(0);
-  cplx prev = d0;
-  for (size_t k = 1; k <= last; ++k) {
-    const cplx next = at(k);
-    angle += std::arg(next / prev);
-    prev = next;
+  cplx prev{0, 0};
+  double log_d0 = 0;  // log |d(0)|
+};
+
+// Starts a sum at d(0), or carries it on to sample `last` (from d(0) again when it is past
+// `last`), `d(k)` the curve's k-th sample; then log(d_end / d(0)), its argument the sum's
+// plus d_end's turn from d(last).
+template <typename D>
+cplx arg_sum_log(ArgSum& sum, bool started, size_t last, D&& d, cplx d_end) {
+  if (!started || sum.k > last) {
+    sum.k = 0;
+    sum.angle = 0;
+    sum.prev = d(size_t{0});
+    sum.log_d0 = std::log(std::abs(sum.prev));
   }
+  for (size_t k = sum.k + 1; k <= last; ++k) {
+    const cplx next = d(k);
+    sum.angle += std::arg(next / sum.prev);
+    sum.prev = next;
+  }
+  sum.k = std::max(sum.k, last);
+  return {std::log(std::abs(d_end)) - sum.log_d0, sum.angle + std::arg(d_end / sum.prev)};
+}
+
+// The last sample at or before parameter s of a path sampled at x[k], s = k / (x.size() − 1).
+size_t path_last(const std::vector<cplx>& x, double s) {
+  const auto n = static_cast<double>(x.size() - 1);
+  return std::min(static_cast<size_t>(std::max(s, 0.0) * n), x.size() - 1);
+}
+
+// log((z − x(s)) / (z − x(0))) for a path sampled at x[k] ending at `end` = x(s): the
+// argument is the angle the path subtends at z, so the value is continuous in z off the
+// path (and jumps by 2πi across it, where exp does not see it). With the linear parts `a`
+// (a[k] at x[k], `a_end` at `end`; empty: the identity): log(A(s)(z − x(s)) / A(0)(z − x(0))),
+// its argument summed over the steps likewise. `sum`, `started`: as arg_sum_log's.
+cplx log_ratio(ArgSum& sum, bool started, cplx z, const std::vector<cplx>& x, const std::vector<Linear>& a, double s,
+               cplx end, const Linear& a_end) {
+  auto at = [&](size_t k) { return a.empty() ? z - x[k] : apply_linear(a[k], z - x[k]); };
   const cplx d_end = a.empty() ? z - end : apply_linear(a_end, z - end);
-  angle += std::arg(d_end / prev);
-  return {std::log(std::abs(d_end)) - std::log(std::abs(d0)), angle};
+  return arg_sum_log(sum, started, path_last(x, s), at, d_end);
 }
 
 // A pair's Q at chart point z.
@@ -899,21 +935,11 @@ SurfaceGuide::PairState pair_state(const DesignSpace& space, const std::vector<T
 // log(Q(z, t) / Q(z, t₀)) for the state `now` at time t: the argument is Q's turn summed
 // over the tabled times up to t (continuous in z off the zeros' sweep, as log_ratio is
 // off the path).
-cplx pair_log(const SurfaceGuide& g, const SurfaceGuide::Path& p, cplx z, double t,
+cplx pair_log(ArgSum& sum, bool started, const SurfaceGuide& g, const SurfaceGuide::Path& p, cplx z, double t,
               const SurfaceGuide::PairState& now) {
   const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * SurfaceGuide::kSamples;
   const auto last = std::min(static_cast<size_t>(x), p.states.size() - 1);
-  const cplx q0 = pair_q(p, p.states[0], z);
-  cplx prev = q0;
-  double angle = 0;
-  for (size_t k = 1; k <= last; ++k) {
-    const cplx next = pair_q(p, p.states[k], z);
-    angle += std::arg(next / prev);
-    prev = next;
-  }
-  const cplx q = pair_q(p, now, z);
-  angle += std::arg(q / prev);
-  return {std::log(std::abs(q)) - std::log(std::abs(q0)), angle};
+  return arg_sum_log(sum, started, last, [&](size_t k) { return pair_q(p, p.states[k], z); }, pair_q(p, now, z));
 }
 
 // What a path's factor needs at time t: a track's point on its path (parameter and chart
@@ -992,12 +1018,19 @@ PathNow path_now(const DesignSpace& space, const std::vector<Track>& tracks, con
   return now;
 }
 
-// w log(factor) at the path's m-th support vertex.
-cplx path_log(const SurfaceGuide& g, const SurfaceGuide::Path& path, size_t m, const PathNow& now) {
+// w log(factor) at the path's m-th support vertex (`sum`: its argument sum so far, when
+// `started`).
+cplx path_log(ArgSum& sum, bool started, const SurfaceGuide& g, const SurfaceGuide::Path& path, size_t m,
+              const PathNow& now) {
   const cplx z = path.coords[path.support[m]];
-  if (path.pair) return path.w[m] * pair_log(g, path, z, now.t, now.q);
-  const cplx l = path.w[m] * log_ratio(z, path.x, path.a, now.s, now.end, now.a);
+  if (path.pair) return path.w[m] * pair_log(sum, started, g, path, z, now.t, now.q);
+  const cplx l = path.w[m] * log_ratio(sum, started, z, path.x, path.a, now.s, now.end, now.a);
   return path.conj && path.a.empty() ? std::conj(l) : l;
+}
+
+cplx path_log(const SurfaceGuide& g, const SurfaceGuide::Path& path, size_t m, const PathNow& now) {
+  ArgSum sum;
+  return path_log(sum, false, g, path, m, now);
 }
 
 // Σ_j w_j log(factor_j) at every vertex, the factors at time t.
@@ -1009,6 +1042,54 @@ std::vector<cplx> surface_log_factors(const DesignSpace& space, const std::vecto
     for (size_t m = 0; m < path.support.size(); ++m) out[path.support[m]] += path_log(g, path, m, now);
   }
   return out;
+}
+
+// The same at a series of times, each vertex's argument sums carried on from the last
+// time's (cheapest in time order; the values are surface_log_factors's to the bit).
+class SurfaceLogSweep {
+ public:
+  explicit SurfaceLogSweep(const SurfaceGuide& g) : g_(g), sums_(g.paths.size()) {
+    for (size_t j = 0; j < g.paths.size(); ++j) sums_[j].resize(g.paths[j].support.size());
+  }
+  void at(const DesignSpace& space, const std::vector<Track>& tracks, double t, std::vector<cplx>& out) {
+    out.assign(static_cast<size_t>(space.mesh().num_vertices()), cplx(0, 0));
+    for (size_t j = 0; j < g_.paths.size(); ++j) {
+      const SurfaceGuide::Path& path = g_.paths[j];
+      const PathNow now = path_now(space, tracks, path, t);
+      for (size_t m = 0; m < path.support.size(); ++m)
+        out[path.support[m]] += path_log(sums_[j][m], started_, g_, path, m, now);
+    }
+    started_ = true;
+  }
+
+ private:
+  const SurfaceGuide& g_;
+  std::vector<std::vector<ArgSum>> sums_;
+  bool started_ = false;
+};
+
+// Makes g's frame logs at `times` (ascending).
+void keep_frame_logs(const DesignSpace& space, const std::vector<Track>& tracks, SurfaceGuide& g,
+                     std::span<const double> times) {
+  g.tube.clear();
+  for (const SurfaceGuide::Path& p : g.paths) g.tube.insert(g.tube.end(), p.support.begin(), p.support.end());
+  std::sort(g.tube.begin(), g.tube.end());
+  g.tube.erase(std::unique(g.tube.begin(), g.tube.end()), g.tube.end());
+  g.frame_t.assign(times.begin(), times.end());
+  g.frame_log.assign(times.size(), {});
+  SurfaceLogSweep sweep(g);
+  std::vector<cplx> l;
+  for (size_t i = 0; i < times.size(); ++i) {
+    sweep.at(space, tracks, times[i], l);
+    g.frame_log[i].reserve(g.tube.size());
+    for (const size_t v : g.tube) g.frame_log[i].push_back(l[v]);
+  }
+}
+
+// g's log factors at its i-th frame, at every vertex.
+void frame_logs(const SurfaceGuide& g, size_t i, size_t nv, std::vector<cplx>& out) {
+  out.assign(nv, cplx(0, 0));
+  for (size_t j = 0; j < g.tube.size(); ++j) out[g.tube[j]] = g.frame_log[i][j];
 }
 
 // G at the corners of face f at time t (before the phase correction), in the face's frame.
@@ -1197,10 +1278,15 @@ std::string leaves_surface(const DesignSpace& space, const Track& tr, const std:
 // `pairs` are created or cancelled pairs', the others matched); false when a path leaves
 // its chart or a key frame's field has a zero no track carries. `ramp` widens the band
 // where the factors' weights fall from 1 to 0.
+// A path's tube and chart (SurfaceGuide::Path before its `a`) by (a pair's, track or pair
+// index, ramp): the same at every try with that ramp (the shaped ratio's tries reuse the
+// plain ratio's tubes).
+using TubeCache = std::map<std::tuple<bool, size_t, double>, KeyframeTopologyPlan::SurfaceGuide::Path>;
+
 bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, size_t first, size_t last,
                          const std::vector<Guide::Pair>& pairs, double radius, double ramp, bool shaped,
-                         const std::vector<cplx>& f0, const std::vector<cplx>& f1, SurfaceGuide& g,
-                         std::string& why) {
+                         const std::vector<cplx>& f0, const std::vector<cplx>& f1, TubeCache& tubes,
+                         SurfaceGuide& g, std::string& why) {
   const Mesh& mesh = space.mesh();
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   const double h = mesh.mean_edge_length();
@@ -1317,6 +1403,17 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     }
     return found;  // else neither chart fits within an edge length of the path
   };
+  auto cached_tube = [&](SurfaceGuide::Path& path, size_t which, const std::vector<std::vector<SurfacePoint>>& lines,
+                         const SurfacePoint& mid) {
+    const auto key = std::tuple{path.pair, which, ramp};
+    if (const auto it = tubes.find(key); it != tubes.end()) {
+      path = it->second;
+      return true;
+    }
+    if (!make_tube(path, lines, mid)) return false;
+    tubes.emplace(key, path);
+    return true;
+  };
   // First, cheaply, every path's points on the surface: a guard (leaves_surface), since no
   // chart holds a path that is not a curve on the surface. The paths are curves on it
   // (surface_curve), so only a detour bent off it makes them jump. (Each track's samples
@@ -1343,7 +1440,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     // A singularity that stays (the key frames' static solves put it within a thousandth
     // of an edge length, CGAL's elephant's foci 1e-8 apart): F₀ and F₁ share it, H carries it.
     if (reach < 1e-3 * h) continue;
-    if (!make_tube(path, {on}, mid)) {
+    if (!cached_tube(path, i, {on}, mid)) {
       why = fmt::format("the surface folds over the chart of the {}'s path from {} to {} within an edge length of it "
                         "(and its tube is no disk down to 1.5 edge lengths wide)",
                         to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1));
@@ -1362,7 +1459,8 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     }
     g.paths.push_back(std::move(path));
   }
-  for (const Guide::Pair& pr : pairs) {
+  for (size_t pi = 0; pi < pairs.size(); ++pi) {
+    const Guide::Pair& pr = pairs[pi];
     SurfaceGuide::Path path;
     path.pair = true;
     path.cancel = pr.cancel;
@@ -1379,7 +1477,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     for (const auto* on : {&on_node, &on_saddle})
       for (const SurfacePoint& p : *on) mean += surface_position(mesh, p);
     const SurfacePoint mid = space.locate(mean / (2.0 * (SurfaceGuide::kSamples + 1)));
-    if (!make_tube(path, {on_node, on_saddle, between}, mid)) {
+    if (!cached_tube(path, pi, {on_node, on_saddle, between}, mid)) {
       why = fmt::format("the surface folds over the chart of the pair at {} within an edge length of its paths",
                         describe_point(surface_position(mesh, mid), false, 1));
       return false;
@@ -1513,11 +1611,12 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   return true;
 }
 
-// Fixes every free vertex of a frame at time t (strictly inside the interval) to G(t).
+// Fixes every free vertex of a frame at time t (strictly inside the interval) to G(t), `l`
+// the paths' log factors at t (surface_log_factors: they depend on the paths alone, not on
+// the phase correction, so the acceptance check computes them once for all its choices).
 void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, const SurfaceGuide& g,
-                         double t, std::span<char> fixed, std::span<cplx> values) {
+                         double t, const std::vector<cplx>& l, std::span<char> fixed, std::span<cplx> values) {
   const Mesh& mesh = space.mesh();
-  const std::vector<cplx> l = surface_log_factors(space, tracks, g, t);
   const double u = smoothstep01(t, g.t0, g.t1);
   const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * SurfaceGuide::kSamples;
   const auto k = std::min(static_cast<size_t>(x), static_cast<size_t>(SurfaceGuide::kSamples - 1));
@@ -1567,6 +1666,12 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   }
 }
 
+// The same with the log factors computed here.
+void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, const SurfaceGuide& g,
+                         double t, std::span<char> fixed, std::span<cplx> values) {
+  apply_surface_guide(space, tracks, g, t, surface_log_factors(space, tracks, g, t), fixed, values);
+}
+
 // The phase correction turns G by a field that varies by the nodes' whole turns (2π for
 // the knot's center) over their distance, which a coarse mesh does not resolve: the
 // faces between the nodes then hold extra zeros. So it is kept only where it does no
@@ -1576,55 +1681,51 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
 // correction dropped when its frames hold more singularities than the plan carries more
 // often (`matched` throughout, and each pair's two while it exists; not counted within half
 // a frame of a pair's event, where its two zeros are too close to tell). A vertex G leaves
-// to the solve (on a key frame's zero) counts as its neighbours' mean. Returns the number
-// of frames of the guide kept that hold another number of singularities.
+// to the solve (on a key frame's zero) counts as its neighbours' mean.
 // A surface guide is kept only when none of those frames holds another number of
 // singularities than the plan carries: a frame that does is a bifurcation the user did not
 // ask for in the analysis (two, with the pair's birth and death), so the interval is left
 // free instead, and says why. (The knot with a created pair at subdivisions 4, whose
 // matched saddle and focus move across it, with the narrow ramp: 12 of 31 sampled frames,
 // 135 bifurcations against 19 unguided; every scene the tests guide: 0.)
-constexpr int kMaxWrongFrames = 0;
-
-int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& tracks, SurfaceGuide& g,
-                           size_t matched, std::span<const double> times) {
-  const Mesh& mesh = space.mesh();
-  const TangentBundle& bundle = space.bundle();
-  const auto nv = static_cast<size_t>(mesh.num_vertices());
-  std::vector<std::vector<size_t>> nbr(nv);
-  for (int e = 0; e < mesh.num_halfedges(); ++e) {
-    const auto a = static_cast<size_t>(mesh.tail(e)), b = static_cast<size_t>(mesh.head(e));
-    nbr[a].push_back(b);
-    nbr[b].push_back(a);
-  }
-  auto wrong_frames = [&](const SurfaceGuide& guide) {
-    int wrong = 0;
-    // Half the frames' spacing (the pair's event is not told within it).
-    const double half = times.size() > 1 ? 0.5 * std::abs(times[1] - times[0]) : 0.0;
-    for (const double t : times) {
-      if (!(t > guide.t0 && t < guide.t1)) continue;
-      size_t carried = matched;
-      bool at_event = false;
-      for (const SurfaceGuide::Path& p : guide.paths) {
-        if (!p.pair) continue;
-        at_event = at_event || std::abs(t - p.tc) < half;
-        if (p.cancel ? t < p.tc : t > p.tc) carried += 2;
-      }
-      if (at_event) continue;
-      std::vector<char> fixed(nv, 0);
-      std::vector<cplx> values(nv, cplx(0, 0));
-      apply_surface_guide(space, tracks, guide, t, fixed, values);
-      for (size_t v = 0; v < nv; ++v) {
-        if (fixed[v]) continue;
-        Vec3 sum = Vec3::Zero();
-        for (const size_t w : nbr[v])
-          if (fixed[w]) sum += bundle.vertex_to_world(static_cast<int>(w), values[w]);
-        values[v] = bundle.world_to_vertex(static_cast<int>(v), sum);
-      }
-      if (find_singularities(bundle, values).size() != carried) ++wrong;
+//
+// The check is cheap to fail: the interval tries up to four guides (PhaseCheck's users,
+// below) and keeps the first with a choice that holds no wrong frame, so a choice's frames
+// are counted only until its first wrong one (from both ends of the interval inwards, where
+// the guide meets the key frames and the failures were seen on CGAL's bunny), and counted
+// on from there only when no guide is kept and the report says how many frames were wrong.
+// The frames' log factors (keep_frame_logs) are made once per guide for all its choices,
+// which differ in the phase correction alone, and the faces' curvature once per interval.
+class PhaseCheck {
+ public:
+  PhaseCheck(const DesignSpace& space, const std::vector<Track>& tracks, size_t matched,
+             std::span<const double> times)
+      : space_(space), tracks_(tracks), matched_(matched), times_(times.begin(), times.end()),
+        curvature_(face_curvatures(space.bundle())) {
+    const Mesh& mesh = space.mesh();
+    nbr_.resize(static_cast<size_t>(mesh.num_vertices()));
+    for (int e = 0; e < mesh.num_halfedges(); ++e) {
+      const auto a = static_cast<size_t>(mesh.tail(e)), b = static_cast<size_t>(mesh.head(e));
+      nbr_[a].push_back(b);
+      nbr_[b].push_back(a);
     }
-    return wrong;
+    for (size_t lo = 0, hi = times_.size(); lo < hi;) {
+      order_.push_back(lo++);
+      if (lo < hi) order_.push_back(--hi);
+    }
+  }
+
+  // One built guide and its choices of phase correction.
+  struct Trial {
+    SurfaceGuide g;
+    struct Choice {
+      bool nodes = true, holds = true;
+      int wrong = 0;     // counted so far (int max: not a choice, its nodes end apart)
+      size_t next = 0;   // in the check's order, the next frame to count
+    };
+    std::vector<Choice> choices;
   };
+
   // The matched nodes' correction and the pairs' holds, each kept only where it adds no
   // wrong frame: the first of (both, the nodes' alone, the holds alone, neither) with the
   // fewest. The holds alone keep the matched nodes with λ = 0: Λ must stay 0 at them (a
@@ -1636,33 +1737,124 @@ int keep_phase_if_resolved(const DesignSpace& space, const std::vector<Track>& t
   // frame pops (CGAL's and the tests' sphere knot: vectors reversed between the nodes, the
   // coherence series' last step 28× its median). Such a correction is not one of the
   // choices; a node's λ at t₁ is a whole turn, and they must all be the same one.
-  auto ends_at_key_frames = [](const SurfaceGuide& s) {
+  Trial start(SurfaceGuide g) const {
+    Trial trial;
+    keep_frame_logs(space_, tracks_, g, times_);
+    trial.g = std::move(g);
+    const SurfaceGuide& s = trial.g;
+    trial.choices.push_back({true, true});
+    if (!s.nodes.empty() || !s.holds.empty()) {
+      if (!s.holds.empty() && !s.nodes.empty()) {
+        trial.choices.push_back({true, false});
+        trial.choices.push_back({false, true});
+      }
+      trial.choices.push_back({false, false});
+    }
+    // The nodes' λ as they are (without the nodes' correction: none, or 0 throughout).
+    bool ends = true;
     for (const std::vector<double>& lam : s.lambda)
-      if (std::abs(lam.back() - s.lambda.front().back()) > 1e-6) return false;
-    return true;
-  };
-  auto score = [&](const SurfaceGuide& s) {
-    return ends_at_key_frames(s) ? wrong_frames(s) : std::numeric_limits<int>::max();
-  };
-  int best = score(g);
-  if (g.nodes.empty() && g.holds.empty()) return best;
-  SurfaceGuide choice = g;
-  auto consider = [&](bool nodes, bool holds) {
-    SurfaceGuide other = g;
-    if (!nodes && holds)
-      for (std::vector<double>& lam : other.lambda) std::fill(lam.begin(), lam.end(), 0.0);
-    else if (!nodes)
-      other.nodes.clear(), other.lambda.clear();
-    if (!holds) other.holds.clear();
-    const int wrong = score(other);
-    if (wrong < best) best = wrong, choice = std::move(other);
-  };
-  if (!g.holds.empty() && !g.nodes.empty()) consider(true, false);
-  if (best > 0 && !g.nodes.empty() && !g.holds.empty()) consider(false, true);
-  if (best > 0) consider(false, false);
-  g = std::move(choice);
-  return best;
-}
+      ends = ends && std::abs(lam.back() - s.lambda.front().back()) <= 1e-6;
+    for (Trial::Choice& c : trial.choices)
+      if (c.nodes && !ends) c.wrong = std::numeric_limits<int>::max(), c.next = order_.size();
+    return trial;
+  }
+
+  // Whether a choice holds no wrong frame; then the trial's guide is the first such.
+  bool accept(Trial& trial) const {
+    for (Trial::Choice& c : trial.choices) {
+      count(trial, c, 1);
+      if (c.wrong == 0) {
+        trial.g = variant(trial.g, c, true);
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // The fewest wrong frames of the trial's choices, every frame counted.
+  int fewest(Trial& trial) const {
+    int best = std::numeric_limits<int>::max();
+    for (Trial::Choice& c : trial.choices) {
+      count(trial, c, std::numeric_limits<int>::max());
+      best = std::min(best, c.wrong);
+    }
+    return best;
+  }
+
+ private:
+  // The guide with a choice's correction (`logs`: with the trial's frame logs, else without).
+  static SurfaceGuide variant(const SurfaceGuide& g, const Trial::Choice& c, bool logs = false) {
+    SurfaceGuide v;
+    v.t0 = g.t0;
+    v.t1 = g.t1;
+    v.f0 = g.f0;
+    v.log_h = g.log_h;
+    v.paths = g.paths;
+    v.nodes = g.nodes;
+    v.lambda = g.lambda;
+    v.holds = g.holds;
+    if (logs) {
+      v.frame_t = g.frame_t;
+      v.tube = g.tube;
+      v.frame_log = g.frame_log;
+    }
+    if (!c.nodes && c.holds)
+      for (std::vector<double>& lam : v.lambda) std::fill(lam.begin(), lam.end(), 0.0);
+    else if (!c.nodes)
+      v.nodes.clear(), v.lambda.clear();
+    if (!c.holds) v.holds.clear();
+    return v;
+  }
+
+  // Counts a choice's wrong frames on from where it stopped, until `bound` or the last.
+  void count(const Trial& trial, Trial::Choice& c, int bound) const {
+    if (c.wrong >= bound || c.next >= order_.size()) return;
+    const SurfaceGuide guide = variant(trial.g, c);
+    for (; c.next < order_.size() && c.wrong < bound; ++c.next)
+      if (wrong_frame(trial.g, guide, order_[c.next])) ++c.wrong;
+  }
+
+  // Whether frame i of `guide` (a choice of g's) holds another number of singularities
+  // than the plan carries (false within half a frame of a pair's event).
+  bool wrong_frame(const SurfaceGuide& g, const SurfaceGuide& guide, size_t i) const {
+    const Mesh& mesh = space_.mesh();
+    const TangentBundle& bundle = space_.bundle();
+    const auto nv = static_cast<size_t>(mesh.num_vertices());
+    const double t = times_[i];
+    if (!(t > guide.t0 && t < guide.t1)) return false;
+    // Half the frames' spacing (the pair's event is not told within it).
+    const double half = times_.size() > 1 ? 0.5 * std::abs(times_[1] - times_[0]) : 0.0;
+    size_t carried = matched_;
+    bool at_event = false;
+    for (const SurfaceGuide::Path& p : guide.paths) {
+      if (!p.pair) continue;
+      at_event = at_event || std::abs(t - p.tc) < half;
+      if (p.cancel ? t < p.tc : t > p.tc) carried += 2;
+    }
+    if (at_event) return false;
+    std::vector<cplx> l;
+    frame_logs(g, i, nv, l);
+    std::vector<char> fixed(nv, 0);
+    std::vector<cplx> values(nv, cplx(0, 0));
+    apply_surface_guide(space_, tracks_, guide, t, l, fixed, values);
+    for (size_t v = 0; v < nv; ++v) {
+      if (fixed[v]) continue;
+      Vec3 sum = Vec3::Zero();
+      for (const size_t w : nbr_[v])
+        if (fixed[w]) sum += bundle.vertex_to_world(static_cast<int>(w), values[w]);
+      values[v] = bundle.world_to_vertex(static_cast<int>(v), sum);
+    }
+    return find_singularities(bundle, values, curvature_).size() != carried;
+  }
+
+  const DesignSpace& space_;
+  const std::vector<Track>& tracks_;
+  size_t matched_;
+  std::vector<double> times_;
+  std::vector<double> curvature_;
+  std::vector<std::vector<size_t>> nbr_;
+  std::vector<size_t> order_;  // the frames' order of counting: from both ends inwards
+};
 
 // The shortest path on a surface from p to q (points on it), as a curve on the surface: the
 // shortest path along the mesh's edges (Dijkstra from the corners of p's face to those of
@@ -2821,8 +3013,9 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     // every coarse mesh, so it is the second try), then with the shaped ratio at both
     // ramps (SurfaceGuide::Path::a: the key frames' own linear parts in R, which a very
     // anisotropic focus needs at its path's ends, CGAL's bunny; the sphere 3 knot with a
-    // pair is not guided with it, so it comes after the plain ratio), and the one with
-    // fewest kept.
+    // pair is not guided with it, so it comes after the plain ratio): the first with no
+    // wrong frame is kept (PhaseCheck; the key frames' |β|/|α| does not tell beforehand
+    // which scenes need the shaped ratio, docs/benchmarks.md, so the order stays).
     std::string unbuilt_why = off_surface;  // why the guide could not be built, when it was tried
     if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
         guide.last > guide.first && !rep.guided)
@@ -2835,23 +3028,32 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       for (const double t : scene.time.times())
         if (t > rep.t0 && t < rep.t1) frame_times.push_back(t);
       const size_t inner_frames = frame_times.size();
-      int best_wrong = kMaxWrongFrames + 1, fewest_wrong = -1;
+      const PhaseCheck check(space, tracks_, rep.matched.size(), frame_times);
+      std::vector<PhaseCheck::Trial> failed;  // counted on only when no guide is kept
+      TubeCache tubes;
       for (const auto& [ramp, shaped] : {std::pair{1.0, false}, std::pair{2.0, false}, std::pair{1.0, true}, std::pair{2.0, true}}) {
         SurfaceGuide sg;
         sg.t0 = rep.t0;
         sg.t1 = rep.t1;
         std::string why;
         if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
-                                 ramp, shaped, keyframe_fields[k], keyframe_fields[k + 1], sg, why)) {
+                                 ramp, shaped, keyframe_fields[k], keyframe_fields[k + 1], tubes, sg, why)) {
           // The wider ramp widens the same tubes: a path or pair that fits no chart at the
           // first does not at the second either, so no second try (on the bunny ~0.5 s).
           if (unbuilt_why.empty()) unbuilt_why = why;
           break;
         }
-        const int wrong = keep_phase_if_resolved(space, tracks_, sg, rep.matched.size(), frame_times);
+        PhaseCheck::Trial trial = check.start(std::move(sg));
+        if (check.accept(trial)) {
+          best = std::move(trial.g);
+          break;
+        }
+        failed.push_back(std::move(trial));
+      }
+      int fewest_wrong = -1;
+      for (PhaseCheck::Trial& trial : best ? std::span<PhaseCheck::Trial>() : std::span(failed)) {
+        const int wrong = check.fewest(trial);
         if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong;
-        if (wrong < best_wrong) best = std::move(sg), best_wrong = wrong;
-        if (best_wrong == 0) break;
       }
       if (!best && fewest_wrong >= 0)
         unbuilt_why = fmt::format("the surface guide's frames hold other singularities than the plan's at {} of the "
@@ -2927,8 +3129,18 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
   }
   for (const Guide& g : guides_)
     if (t > g.t0 && t < g.t1) apply_guide(space, tracks_, g, t, fixed, values);
-  for (const SurfaceGuide& g : surface_guides_)
-    if (t > g.t0 && t < g.t1) apply_surface_guide(space, tracks_, g, t, fixed, values);
+  for (const SurfaceGuide& g : surface_guides_) {
+    if (!(t > g.t0 && t < g.t1)) continue;
+    // A scene frame's log factors were made with the guide (keep_frame_logs).
+    const auto it = std::lower_bound(g.frame_t.begin(), g.frame_t.end(), t);
+    if (it == g.frame_t.end() || *it != t) {
+      apply_surface_guide(space, tracks_, g, t, fixed, values);
+      continue;
+    }
+    std::vector<cplx> l;
+    frame_logs(g, static_cast<size_t>(it - g.frame_t.begin()), static_cast<size_t>(space.mesh().num_vertices()), l);
+    apply_surface_guide(space, tracks_, g, t, l, fixed, values);
+  }
 }
 
 std::vector<Vec3> KeyframeTopologyPlan::carried(double t) const {

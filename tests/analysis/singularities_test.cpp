@@ -353,6 +353,32 @@ TEST(SingularityPoincareHopf, RandomFieldsOnClosedMeshes) {
   }
 }
 
+// The faces' curvature given once (face_curvatures, for a caller that checks many fields
+// on one mesh): every face's Ω_f as face_curvature has it, and the same singularities to
+// the bit; a list of another length is refused.
+TEST(SingularityPoincareHopf, GivenCurvatureGivesTheSameSingularities) {
+  for (const auto& [name, mesh] : test::closed_meshes()) {
+    const TangentBundle bundle(*mesh);
+    const std::vector<double> curvature = face_curvatures(bundle);
+    ASSERT_EQ(curvature.size(), static_cast<size_t>(mesh->num_faces())) << name;
+    for (int f = 0; f < mesh->num_faces(); ++f)
+      EXPECT_EQ(curvature[static_cast<size_t>(f)], face_curvature(bundle, f)) << name << " " << f;
+    std::mt19937 rng(4242);
+    const auto values = random_values(*mesh, rng);
+    const auto a = find_singularities(bundle, values);
+    const auto b = find_singularities(bundle, values, curvature);
+    ASSERT_EQ(a.size(), b.size()) << name;
+    for (size_t k = 0; k < a.size(); ++k) {
+      EXPECT_EQ(a[k].where.face, b[k].where.face) << name;
+      EXPECT_EQ(a[k].index, b[k].index) << name;
+      EXPECT_EQ(a[k].position, b[k].position) << name;
+      EXPECT_EQ(a[k].jacobian, b[k].jacobian) << name;
+    }
+    const std::vector<double> short_list(curvature.begin(), curvature.end() - 1);
+    EXPECT_THROW(find_singularities(bundle, values, short_list), InternalError) << name;
+  }
+}
+
 TEST(SingularityPoincareHopf, SmoothFieldsOnClosedMeshes) {
   for (const auto& [name, mesh] : test::closed_meshes()) {
     const TangentBundle bundle(*mesh);

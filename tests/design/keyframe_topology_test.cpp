@@ -540,6 +540,24 @@ TEST(KeyframeTopology, AKnotOnASphereIsGuided) {
   }
 }
 
+// A surface guide whose every try holds other singularities than the plan's: the interval
+// is left free, and its reason counts the wrong frames of the try and choice with fewest,
+// every frame counted, though the check rejects each try at its first wrong frame (frames
+// are counted on only when no try is kept). The knot of AKnotOnASphereIsGuided at
+// subdivisions 2 (162 vertices): 6 of the 30 frames, before the early rejection and after
+// (counting each try only to its first wrong frame said 1).
+TEST(KeyframeTopology, AGuideRejectedAtEveryTryCountsAllItsWrongFrames) {
+  const double z = std::sqrt(0.75);
+  const Generated g =
+      run(surface_knot(R"({"sphere": {"subdivisions": 2, "radius": 1}})", Vec3(-0.5, 0, z), Vec3(0.5, 0, z), 0.15, 8));
+  const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+  EXPECT_FALSE(r.guided);
+  EXPECT_TRUE(r.fallback);
+  EXPECT_EQ(r.unguided_reason,
+            "the surface guide's frames hold other singularities than the plan's at 6 of the 30 frames between the "
+            "key frames");
+}
+
 // A created or cancelled pair on a surface: the pair's factor in the guide is the planar
 // template's as a ratio (docs/architecture.md "The guide on surfaces"). A saddle and a
 // source 0.6 apart on the equator, present in one key frame only, beside matched paths:

@@ -61,6 +61,12 @@ struct Singularity {
 // value is not finite.
 std::vector<Singularity> find_singularities(const TangentBundle& bundle,
                                             std::span<const cplx> values);
+// The same with every face's Ω_f given (face_curvatures; empty: computed here), for a
+// caller that finds the singularities of many fields on one mesh (Ω_f is the mesh's, and
+// three quarters of the arctangents of a call): the same result to the bit.
+std::vector<Singularity> find_singularities(const TangentBundle& bundle,
+                                            std::span<const cplx> values,
+                                            std::span<const double> curvature);
 // Singularities of frame j of a field (frame and t filled in).
 std::vector<Singularity> find_singularities(const TangentBundle& bundle, const Field& field,
                                             int frame);
@@ -88,5 +94,7 @@ std::vector<int> face_indices(const TangentBundle& bundle, std::span<const cplx>
 // the argument of the product of the three transports, lifted to the real line next to
 // the rescaled angle excess Σ s_v·α − π. Over a closed mesh the sum is 2π·χ.
 double face_curvature(const TangentBundle& bundle, int face);
+// Ω_f of every face, in face order.
+std::vector<double> face_curvatures(const TangentBundle& bundle);
 
 }  // namespace tvf
