@@ -98,6 +98,15 @@ struct SpaceTimeSolver::Workspace {
   // The slow modes' factorizations (SpaceTimeOptions::direct_shift), kept for the next
   // solve: one with the same fixed set and shift is used as it is, another one refactored.
   std::vector<std::unique_ptr<detail::ModeFactor>> factors;
+  // What depends on the fixed set alone, kept while it is the same (reset by solve() when
+  // it changes): which methods apply (-1: not yet known), and the modes with local solves'
+  // set-up (their segments' common fixed sets, omega and its rows, the line solves'
+  // factors, the local CG's vectors) with the local solves' part of the result not yet
+  // in the modes (see LocalSetup).
+  int modes_fit = -1, local_fit = -1;
+  size_t longest = 0;  // the longest segment's frames (0: not yet known)
+  struct LocalSetup;
+  std::unique_ptr<LocalSetup> local;
 };
 
 // T_s = Q Λ Qᵀ for the frames of one segment.
@@ -1214,6 +1223,42 @@ struct LocalSolve {
 
 }  // namespace
 
+// The modes with local solves' set-up for one fixed set (Workspace::local): per segment its
+// moving constraints and local solve, built by the first solve with that fixed set and
+// used as they are by the next ones while it stays (a warm re-solve after an edit). And
+// the local solves' part of the result not yet in the modes (`pending`): a re-solve that
+// solves for the change alone adds what its local solves found to x in frames, and of x's
+// modes it reads only the cut rows (the local rounds' constraint values), so that part is
+// kept in frames (omega × count, and the multipliers' cut × count), summed over such
+// solves, instead of being transformed into x_hat and r_hat (|omega| × count by count ×
+// count) each time; the cut rows read it beside their modes. Any other solve adds it into
+// the modes first where it keeps them (flush), or drops it where it transforms them again.
+struct SpaceTimeSolver::Workspace::LocalSetup {
+  int rings = -1;
+  std::vector<std::pair<size_t, size_t>> segments;
+  std::vector<MovingSegment> moving;         // per segment
+  std::vector<LocalSolve> solves;            // per segment, on `moving` (built once it is)
+  std::vector<std::vector<cplx>> x, lambda;  // pending, per segment: omega × count, cut × count
+  bool pending = false;                      // x or lambda may be non-zero
+
+  // x_hat and r_hat += the pending part in the modes; then none is pending.
+  void flush(std::vector<std::vector<double>>& x_hat, std::vector<std::vector<double>>& r_hat, size_t n,
+             const std::vector<const Eigen::MatrixXd*>& q) {
+    if (!pending) return;
+    for (size_t si = 0; si < moving.size(); ++si) {
+      if (moving[si].cut.empty()) continue;
+      add_frames_to_rows(x_hat[si], n, moving[si].omega, *q[si], x[si], nullptr);
+      add_frames_to_rows(r_hat[si], n, moving[si].cut, *q[si], lambda[si], nullptr);
+    }
+    drop();
+  }
+  void drop() {
+    for (auto* parts : {&x, &lambda})
+      for (auto& v : *parts) std::fill(v.begin(), v.end(), cplx(0, 0));
+    pending = false;
+  }
+};
+
 void temporal_eigenbasis(int count, bool left_open, bool right_open, int modes, Eigen::MatrixXd& q,
                          Eigen::VectorXd& lambda) {
   // The eigenvectors are the discrete sine/cosine bases of the ends (j = 0 … m−1,
@@ -1410,6 +1455,11 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   }
   w.same_fixed = (same_fixed || moved) && w.modes_kept;
   w.moved = moved;
+  if (!same_fixed) {
+    w.modes_fit = w.local_fit = -1;
+    w.longest = 0;
+    w.local.reset();
+  }
   if (!w.same_fixed) w.modes_kept = false;
   Vec& rhs = sized(w.rhs, total);
   // The right-hand side: updated where the fixed part changed when the fixed set is the
@@ -1485,16 +1535,26 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
                               : "nothing to solve (no fixed entry asks for a non-zero field)";
     report.success = true;
   } else {
+    // Which methods apply depends on the fixed set alone: known from the last solve when
+    // it is the same.
+    auto modes_fit = [&]() {
+      if (w.modes_fit < 0) w.modes_fit = modes_apply(fixed) ? 1 : 0;
+      return w.modes_fit == 1;
+    };
+    auto local_fit = [&]() {
+      if (w.local_fit < 0) w.local_fit = local_modes_apply(fixed) ? 1 : 0;
+      return w.local_fit == 1;
+    };
     const bool modes = options.method == SpaceTimeMethod::modes ||
-                       (options.method == SpaceTimeMethod::automatic && modes_apply(fixed) &&
-                        longest_segment(fixed) <= kMostModeFrames);
+                       (options.method == SpaceTimeMethod::automatic && modes_fit() &&
+                        (w.longest ? w.longest : (w.longest = longest_segment(fixed))) <= kMostModeFrames);
     const bool local = !modes && (options.method == SpaceTimeMethod::modes_local ||
-                                  (options.method == SpaceTimeMethod::automatic && local_modes_apply(fixed)));
+                                  (options.method == SpaceTimeMethod::automatic && local_fit()));
     if (options.method == SpaceTimeMethod::modes)
-      TVF_CHECK(modes_apply(fixed), "the temporal-mode method needs the same fixed vertices at every "
+      TVF_CHECK(modes_fit(), "the temporal-mode method needs the same fixed vertices at every "
                                     "frame between two key frames");
     if (options.method == SpaceTimeMethod::modes_local)
-      TVF_CHECK(local_modes_apply(fixed), "the temporal modes with local solves need a key frame, at most a "
+      TVF_CHECK(local_fit(), "the temporal modes with local solves need a key frame, at most a "
                                           "quarter of the vertices cut by moving constraints and segments of at "
                                           "most {} frames",
                 kMostModeFrames);
@@ -1543,21 +1603,54 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   // Each segment's modes take its common fixed set: the first frame's (the same at every
   // frame where the modes apply), or with local solves the vertices fixed at every frame
   // of it, the constraints that move being imposed by the local solves.
+  // The local solves' set-up: the last solve's where the fixed set is the same (solve()
+  // drops it when it changes), else built here. What its local solves left out of the
+  // modes stays out where this solve solves for the change alone with it; otherwise it goes
+  // into the modes now where they are kept, and is dropped where they are transformed again.
+  const int rings = std::max(options.moving_rings, 0);
+  std::unique_ptr<Workspace::LocalSetup>& setup = w.local;
+  const bool reuse = local && setup && setup->rings == rings && setup->segments == segs.segments;
+  if (setup && setup->pending && !(change && reuse)) {
+    if (kept) {
+      std::vector<const Eigen::MatrixXd*> q;
+      for (const auto& [first, count] : setup->segments)
+        q.push_back(&temporal_basis(static_cast<int>(first), static_cast<int>(count)).q);
+      setup->flush(w.x_hat, w.r_hat, n, q);
+    } else {
+      setup->drop();
+    }
+  }
+  if (local && !reuse) {
+    setup = std::make_unique<Workspace::LocalSetup>();
+    setup->rings = rings;
+    setup->segments = segs.segments;
+    setup->moving.resize(nseg);
+    setup->x.resize(nseg);
+    setup->lambda.resize(nseg);
+    for (size_t si = 0; si < nseg; ++si) {
+      const auto [first, count] = segs.segments[si];
+      MovingSegment& m = setup->moving[si];
+      common_fixed_set(fixed, n, first, count, m.base, m.cut);
+      if (!m.cut.empty()) build_moving(*op_, fixed, n, nf, first, count, rings, b_, m);
+      setup->x[si].assign(m.omega.size() * count, cplx(0, 0));
+      setup->lambda[si].assign(m.cut.size() * count, cplx(0, 0));
+    }
+    for (size_t si = 0; si < nseg; ++si)
+      setup->solves.push_back({*op_, setup->moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {},
+                               {}, {}, {}});
+  }
+  static const std::vector<MovingSegment> no_moving;
+  const std::vector<MovingSegment>& moving = local ? setup->moving : no_moving;
   std::vector<const char*> seg_fixed(nseg);
-  std::vector<MovingSegment> moving(local ? nseg : 0);
   bool has_moving = false;
   size_t local_vertices = 0;
   for (size_t si = 0; si < nseg; ++si) {
-    const auto [first, count] = segs.segments[si];
-    seg_fixed[si] = fixed.data() + first * n;
+    seg_fixed[si] = fixed.data() + segs.segments[si].first * n;
     if (!local) continue;
-    MovingSegment& m = moving[si];
-    common_fixed_set(fixed, n, first, count, m.base, m.cut);
-    seg_fixed[si] = m.base.data();
-    if (m.cut.empty()) continue;
+    seg_fixed[si] = moving[si].base.data();
+    if (moving[si].cut.empty()) continue;
     has_moving = true;
-    build_moving(*op_, fixed, n, nf, first, count, std::max(options.moving_rings, 0), b_, m);
-    local_vertices += m.omega.size();
+    local_vertices += moving[si].omega.size();
   }
 
   // Into the modes: per segment r_hat = rhs·Q, x_hat = x·Q (complex |V| × count blocks seen
@@ -1890,9 +1983,11 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   bool stalled = false;
   double theta = 0;  // the problem's residual after the last local solve
   std::vector<cplx> cut_values, u, y_line, delta;
-  std::vector<LocalSolve> local_solves;  // their vectors kept between rounds
-  for (size_t si = 0; si < moving.size(); ++si)
-    local_solves.push_back({*op_, moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {}, {}, {}, {}});
+  // The local solves (their vectors kept between rounds and solves) and what earlier
+  // solves' local solves left out of the modes (pending: none unless this one solves for
+  // the change alone).
+  std::vector<LocalSolve>* local_solves = local ? &setup->solves : nullptr;
+  const bool pending = local && setup->pending;
   std::vector<double> rr_delta;
   // What the local solves add to x on omega's rows and to the multipliers on the cut rows,
   // kept in frames (omega × count, cut × count per segment) and transformed into the modes
@@ -1919,12 +2014,15 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       std::vector<cplx>& xl = x_local[si];
       cut_rows_to_frames(w.x_hat[si], n, m, q, cut_values);
       u.assign(m.omega.size() * count, cplx(0, 0));
+      const cplx* px = pending ? setup->x[si].data() : nullptr;
       for (size_t r = 0; r < m.cut.size(); ++r) {
         const auto li = static_cast<size_t>(m.cut_local[r]);
-        for (size_t jj = 0; jj < count; ++jj)
-          if (m.moving[li * count + jj]) u[li * count + jj] = -(cut_values[r * count + jj] + xl[li * count + jj]);
+        for (size_t jj = 0; jj < count; ++jj) {
+          const size_t e = li * count + jj;
+          if (m.moving[e]) u[e] = -(cut_values[r * count + jj] + xl[e] + (px ? px[e] : cplx(0, 0)));
+        }
       }
-      LocalSolve& solve = local_solves[si];
+      LocalSolve& solve = (*local_solves)[si];
       local_iterations += solve.solve(u, kMovingLocalTolerance, local_floor2, kMovingLocalIterations);
       for (size_t k = 0; k < u.size(); ++k) xl[k] += u[k];
       // The multipliers take (A u) at the constraint entries, on the cut vertices' lines.
@@ -2032,9 +2130,16 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     }
   }
 
-  // What the local solves added to x and to the multipliers, into the modes.
+  // What the local solves added to x and to the multipliers, into the modes; or, solving
+  // for the change alone, to what is pending (LocalSetup).
   for (size_t si = 0; si < moving.size(); ++si) {
     if (moving[si].cut.empty()) continue;
+    if (change) {
+      for (size_t k = 0; k < x_local[si].size(); ++k) setup->x[si][k] += x_local[si][k];
+      for (size_t k = 0; k < lambda_local[si].size(); ++k) setup->lambda[si][k] += lambda_local[si][k];
+      setup->pending = true;
+      continue;
+    }
     add_frames_to_rows(w.x_hat[si], n, moving[si].omega, bases[si]->q, x_local[si], nullptr);
     add_frames_to_rows(w.r_hat[si], n, moving[si].cut, bases[si]->q, lambda_local[si], nullptr);
   }
@@ -2104,8 +2209,9 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   if (has_moving) {
     report.method = fmt::format("temporal eigenmodes (direct in time) with Jacobi-PCG per mode and local solves at "
                                 "the moving constraints, {} modes, {} rounds, {} spatial iterations in all, "
-                                "local solves on {} vertices ({} iterations in all)",
-                                modes.size(), rounds, all, local_vertices, local_iterations) +
+                                "local solves on {} vertices ({} iterations in all{})",
+                                modes.size(), rounds, all, local_vertices, local_iterations,
+                                reuse ? ", their set-up kept from the last solve" : "") +
                     by_cholesky;
     report.iterations = rounds;
   } else {
