@@ -74,6 +74,8 @@ struct SpaceTimeSolver::Workspace {
   std::vector<std::pair<size_t, cplx>> rhs_change; // this solve's rhs − the last one's, where they differ
   bool rhs_incremental = false;                    // rhs_change lists every change
   std::vector<char> mark;                          // scratch: n × frames, all zero between uses
+  std::vector<double> rhs_parts;                   // ‖rhs‖² by chunks of kSumChunk entries
+  std::vector<double> mode_rr;                     // per mode: ‖res_hat's column‖² as the last solve left it
   // The temporal-mode method's, per segment (2|V| × frames, re and im interleaved): the
   // modes of the right-hand side, of the result, and the modes' residuals
   // r_hat − A_k x_hat (the last CG residual of each mode). They stay valid while the fixed
@@ -879,9 +881,11 @@ void cut_rows_to_frames(const std::vector<double>& hat, size_t n, const MovingSe
 }
 
 // hat's rows += values (vertex-major, count per row) · Q; rr[k] (‖column k‖²) updated when
-// given, and the same added to also's rows when given.
+// given, and the same added to also's rows when given. In parallel or not, by fixed blocks
+// of Q's columns (each column's product and sum the same either way).
 void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<int>& rows, const Eigen::MatrixXd& q,
-                        const std::vector<cplx>& values, double* rr, std::vector<double>* also = nullptr) {
+                        const std::vector<cplx>& values, double* rr, std::vector<double>* also = nullptr,
+                        bool parallel = false) {
   const auto count = q.rows();
   const auto c = static_cast<size_t>(count);
   Eigen::Map<Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
@@ -899,23 +903,33 @@ void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<in
       f(static_cast<Eigen::Index>(2 * t), jj) = v.real();
       f(static_cast<Eigen::Index>(2 * t + 1), jj) = v.imag();
     }
-  const Eigen::MatrixXd g = f * q;
-  // Column by column (all three matrices are column-major); each rr[k] sums its rows in
-  // the same order as row by row.
-  for (Eigen::Index k = 0; k < count; ++k) {
-    double* also_k = also ? also->data() + static_cast<size_t>(k) * 2 * n : nullptr;
-    double sum = 0;
-    for (size_t r = 0; r < some.size(); ++r)
-      for (int part = 0; part < 2; ++part) {
-        const Eigen::Index row = 2 * rows[some[r]] + part;
-        const double add = g(static_cast<Eigen::Index>(2 * r) + part, k);
-        const double old = h(row, k), now = old + add;
-        sum += now * now - old * old;
-        h(row, k) = now;
-        if (also_k) also_k[row] += add;
-      }
-    if (rr) rr[k] += sum;
-  }
+  constexpr Eigen::Index kColumns = 16;
+  const Eigen::Index nblocks = (count + kColumns - 1) / kColumns;
+  auto block = [&](Eigen::Index b) {
+    const Eigen::Index k0 = b * kColumns, len = std::min(kColumns, count - k0);
+    const Eigen::MatrixXd g = f * q.middleCols(k0, len);
+    // Column by column (all three matrices are column-major); each rr[k] sums its rows in
+    // the same order as row by row.
+    for (Eigen::Index col = 0; col < len; ++col) {
+      const Eigen::Index k = k0 + col;
+      double* also_k = also ? also->data() + static_cast<size_t>(k) * 2 * n : nullptr;
+      double sum = 0;
+      for (size_t r = 0; r < some.size(); ++r)
+        for (int part = 0; part < 2; ++part) {
+          const Eigen::Index row = 2 * rows[some[r]] + part;
+          const double add = g(static_cast<Eigen::Index>(2 * r) + part, col);
+          const double old = h(row, k), now = old + add;
+          sum += now * now - old * old;
+          h(row, k) = now;
+          if (also_k) also_k[row] += add;
+        }
+      if (rr) rr[k] += sum;
+    }
+  };
+  if (parallel && nblocks > 1)
+    tbb::parallel_for(Eigen::Index{0}, nblocks, block);
+  else
+    for (Eigen::Index b = 0; b < nblocks; ++b) block(b);
 }
 
 // A warm re-solve's change back into frames: x (a segment's frames, 2|V| × count real,
@@ -1503,7 +1517,34 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
     for (size_t m = 0; m < w.fixed_at.size(); ++m) w.fixed_value[m] = values[w.fixed_at[m]];
     w.last_kept = true;
   }
-  const double bnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(rhs[k]); }));
+  // ‖rhs‖ by fixed chunks (as sum()), each chunk's part kept: where the right-hand side
+  // changed at a few entries only their chunks are summed again (the same bits).
+  const size_t nchunks = (total + kSumChunk - 1) / kSumChunk;
+  auto chunk_norm = [&](size_t c) {
+    double part = 0;
+    for (size_t k = c * kSumChunk; k < std::min(total, (c + 1) * kSumChunk); ++k) part += std::norm(rhs[k]);
+    return part;
+  };
+  if (w.rhs_incremental && w.rhs_parts.size() == nchunks) {
+    std::vector<size_t> dirty;
+    for (const auto& change : w.rhs_change) dirty.push_back(change.first / kSumChunk);
+    std::sort(dirty.begin(), dirty.end());
+    dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
+    for (const size_t c : dirty) w.rhs_parts[c] = chunk_norm(c);
+  } else {
+    w.rhs_parts.resize(nchunks);
+    auto run = [&](size_t c) { w.rhs_parts[c] = chunk_norm(c); };
+    if (par && nchunks > 1)
+      tbb::parallel_for(size_t{0}, nchunks, run);
+    else
+      for (size_t c = 0; c < nchunks; ++c) run(c);
+  }
+  double bnorm2 = 0;
+  if (nchunks == 1)
+    bnorm2 = w.rhs_parts[0];
+  else
+    for (const double part : w.rhs_parts) bnorm2 += part;
+  const double bnorm = std::sqrt(bnorm2);
 
   // The unknown: the free part of z (its first guess), fixed entries zero; noting
   // whether it is the last solve's result (whose modes are kept; where the fixed set
@@ -1811,10 +1852,24 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     return ModeSystem{*op_, seg_fixed[mode.segment], mode.shift};
   };
 
-  // Every mode's residual now: kept (updated above), or one sweep.
+  // Every mode's residual now: kept (updated above), or one sweep. Solving for the change
+  // with the last solve's ‖residual‖² per mode kept (w.mode_rr) and no fixed row changed,
+  // the residual changed on the change's first rows alone (active): their part of the
+  // kept sum, what the last solve left there (res − e), gives what is outside them.
+  const bool rr_kept = change && !w.moved && w.mode_rr.size() == modes.size();
   each_mode(every, [&](Mode& mode) {
     cplx* res = column(w.res_hat, mode);
-    if (residuals_kept) {
+    if (rr_kept) {
+      const cplx* e = column(w.e_hat, mode);
+      double base = 0, now = 0;
+      for (const int i : mode.active) {
+        base += std::norm(res[i] - e[i]);
+        now += std::norm(res[i]);
+      }
+      mode.outside = std::max(w.mode_rr[static_cast<size_t>(&mode - modes.data())] - base, 0.0);
+      mode.base_rr = mode.outside + base;
+      mode.rr = mode.outside + now;
+    } else if (residuals_kept) {
       double rr = 0;
       for (size_t i = 0; i < n; ++i) rr += std::norm(res[i]);
       mode.rr = rr;
@@ -2076,7 +2131,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
         }
       }
       rr_delta.assign(count, 0.0);
-      add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data(), change ? &w.e_hat[si] : nullptr);
+      add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data(), change ? &w.e_hat[si] : nullptr, par);
       for (size_t k = 0; k < count; ++k) {
         Mode& mode = modes[mode_offset[si] + k];
         mode.rr = std::max(mode.rr + rr_delta[k], 0.0);
@@ -2140,8 +2195,8 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       setup->pending = true;
       continue;
     }
-    add_frames_to_rows(w.x_hat[si], n, moving[si].omega, bases[si]->q, x_local[si], nullptr);
-    add_frames_to_rows(w.r_hat[si], n, moving[si].cut, bases[si]->q, lambda_local[si], nullptr);
+    add_frames_to_rows(w.x_hat[si], n, moving[si].omega, bases[si]->q, x_local[si], nullptr, nullptr, par);
+    add_frames_to_rows(w.r_hat[si], n, moving[si].cut, bases[si]->q, lambda_local[si], nullptr, nullptr, par);
   }
 
   // Back from the modes: the whole transform, or the last result plus the change (what
@@ -2191,10 +2246,12 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   int most = 0;
   long all = 0;
   double modes_rr = 0;
+  w.mode_rr.clear();
   for (const Mode& m : modes) {
     most = std::max(most, m.iterations);
     all += m.iterations;
     modes_rr += m.rr;
+    w.mode_rr.push_back(m.rr);  // res_hat's ‖column‖², for the next solve while the modes are kept
   }
   size_t direct_modes = 0;
   long direct_iterations = 0;
