@@ -855,13 +855,16 @@ void common_fixed_set(std::span<const char> fixed, size_t n, size_t first, size_
 // each group of cut rows is multiplied by its window's rows of Q alone (2·kCutGroup ×
 // count by count × window) instead of by all of Qᵀ. The other entries of out are zero.
 void cut_rows_to_frames(const std::vector<double>& hat, size_t n, const MovingSegment& m, const Eigen::MatrixXd& q,
-                        std::vector<cplx>& out) {
+                        std::vector<cplx>& out, bool parallel) {
   const auto count = q.rows();
   const auto c = static_cast<size_t>(count);
   const Eigen::Map<const Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
   out.assign(m.cut.size() * c, cplx(0, 0));
-  Eigen::MatrixXd g, f;
-  for (size_t g0 = 0, group = 0; g0 < m.cut_order.size(); g0 += kCutGroup, ++group) {
+  // The groups write disjoint rows of out: in parallel or not, the same bits.
+  const size_t groups = (m.cut_order.size() + kCutGroup - 1) / kCutGroup;
+  auto run = [&](size_t group) {
+    Eigen::MatrixXd g, f;
+    const size_t g0 = group * kCutGroup;
     const size_t size = std::min(kCutGroup, m.cut_order.size() - g0);
     const Eigen::Index lo = m.window_first[group], len = m.window_end[group] - lo;
     g.resize(static_cast<Eigen::Index>(2 * size), count);
@@ -877,7 +880,11 @@ void cut_rows_to_frames(const std::vector<double>& hat, size_t n, const MovingSe
       for (Eigen::Index jj = 0; jj < len; ++jj)
         o[jj] = cplx(f(static_cast<Eigen::Index>(2 * t), jj), f(static_cast<Eigen::Index>(2 * t + 1), jj));
     }
-  }
+  };
+  if (parallel && groups > 1)
+    tbb::parallel_for(size_t{0}, groups, run);
+  else
+    for (size_t group = 0; group < groups; ++group) run(group);
 }
 
 // hat's rows += values (vertex-major, count per row) · Q; rr[k] (‖column k‖²) updated when
@@ -2067,7 +2074,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       const auto [first, count] = segs.segments[si];
       const Eigen::MatrixXd& q = bases[si]->q;
       std::vector<cplx>& xl = x_local[si];
-      cut_rows_to_frames(w.x_hat[si], n, m, q, cut_values);
+      cut_rows_to_frames(w.x_hat[si], n, m, q, cut_values, par);
       u.assign(m.omega.size() * count, cplx(0, 0));
       const cplx* px = pending ? setup->x[si].data() : nullptr;
       for (size_t r = 0; r < m.cut.size(); ++r) {
@@ -2143,7 +2150,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       if (moving[si].cut.empty()) continue;
       const MovingSegment& m = moving[si];
       const size_t count = segs.segments[si].second;
-      cut_rows_to_frames(w.res_hat[si], n, m, bases[si]->q, cut_values);
+      cut_rows_to_frames(w.res_hat[si], n, m, bases[si]->q, cut_values, par);
       for (size_t r = 0; r < m.cut.size(); ++r) {
         const auto li = static_cast<size_t>(m.cut_local[r]);
         for (size_t jj = 0; jj < count; ++jj)
