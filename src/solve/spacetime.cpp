@@ -954,10 +954,17 @@ size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size
                             const std::vector<const std::vector<int>*>& clear_of, double* x, bool parallel) {
   const auto count = static_cast<size_t>(q.rows());
   auto reach = [&](size_t k) { return reach_of[k]; };
-  for (size_t k = 0; k < count; ++k) {
+  // Each mode's column alone: in parallel or not, the same.
+  auto each_column = [&](auto&& body) {
+    if (parallel)
+      tbb::parallel_for(size_t{0}, count, body);
+    else
+      for (size_t k = 0; k < count; ++k) body(k);
+  };
+  each_column([&](size_t k) {
     cplx* ek = reinterpret_cast<cplx*>(e.data() + 2 * n * k);
     for (const int i : *clear_of[k]) ek[i] = 0;
-  }
+  });
   std::vector<size_t> order;
   for (size_t k = 0; k < count; ++k)
     if (!reach(k).empty()) order.push_back(k);
@@ -1008,11 +1015,11 @@ size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size
     g0 = g1;
   }
   size_t reached = 0;
-  for (size_t k = 0; k < count; ++k) {
+  for (size_t k = 0; k < count; ++k) reached += reach(k).size();
+  each_column([&](size_t k) {
     cplx* dk = reinterpret_cast<cplx*>(d.data() + 2 * n * k);
     for (const int i : reach(k)) dk[i] = 0;
-    reached += reach(k).size();
-  }
+  });
   return reached;
 }
 
