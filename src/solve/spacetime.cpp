@@ -1132,6 +1132,26 @@ struct LocalSolve {
   double b;
   std::vector<cplx> r, z, p, ap;
   std::vector<char> hot;  // per omega line: u not zero on it
+  bool parallel = false;  // the lines by fixed blocks on threads (each line's sum kept, added in line order)
+  std::vector<double> line_dot;
+
+  // body(li) for every omega line, by fixed blocks of lines (in parallel or not), then
+  // Σ line_dot[li] in line order: the same bits either way.
+  template <class F>
+  double each_line(F&& body) {
+    const size_t nl = m.omega.size();
+    line_dot.resize(nl);
+    constexpr size_t kLines = 64;  // a multiple of lines()'s group
+    const size_t nb = (nl + kLines - 1) / kLines;
+    auto block = [&](size_t k) { body(k * kLines, std::min(nl, (k + 1) * kLines)); };
+    if (parallel && nb > 1)
+      tbb::parallel_for(size_t{0}, nb, block);
+    else
+      for (size_t k = 0; k < nb; ++k) block(k);
+    double dot = 0;
+    for (size_t li = 0; li < nl; ++li) dot += line_dot[li];
+    return dot;
+  }
 
   // y = (A u) on omega vertex li's line, u zero outside omega (every entry of u counts).
   void product(const cplx* u, size_t li, cplx* y) const {
@@ -1160,18 +1180,18 @@ struct LocalSolve {
     }
   }
   // y = (A u) on the free entries of omega's lines (constraint entries: 0); returns Re <u, y>.
-  double apply(const std::vector<cplx>& u, std::vector<cplx>& y) const {
-    double dot = 0;
-    for (size_t li = 0; li < m.omega.size(); ++li) {
-      product(u.data(), li, y.data() + li * count);
-      double part[2] = {0, 0};
-      for (size_t q = li * count; q < (li + 1) * count; ++q) {
-        if (m.moving[q]) y[q] = 0;
-        part[q & 1] += u[q].real() * y[q].real() + u[q].imag() * y[q].imag();
+  double apply(const std::vector<cplx>& u, std::vector<cplx>& y) {
+    return each_line([&](size_t l0, size_t l1) {
+      for (size_t li = l0; li < l1; ++li) {
+        product(u.data(), li, y.data() + li * count);
+        double part[2] = {0, 0};
+        for (size_t q = li * count; q < (li + 1) * count; ++q) {
+          if (m.moving[q]) y[q] = 0;
+          part[q & 1] += u[q].real() * y[q].real() + u[q].imag() * y[q].imag();
+        }
+        line_dot[li] = part[0] + part[1];
       }
-      dot += part[0] + part[1];
-    }
-    return dot;
+    });
   }
   // zl = the temporal line solves of rl on omega's lines; returns Re <rl, zl>. A line's
   // substitutions are chains of dependent multiply-adds, so kGroup lines go side by side
@@ -1179,13 +1199,11 @@ struct LocalSolve {
   // line alone. With the partial sums in local_pcg a small gain, within the noise of the
   // loaded machine it was measured on (the local CG 11–12 ms a round before, 10–12 after:
   // 65² grid, moving vortex, 12 iterations).
-  double lines(const std::vector<cplx>& rl, std::vector<cplx>& zl) const {
+  double lines(const std::vector<cplx>& rl, std::vector<cplx>& zl) {
     constexpr size_t kGroup = 4;
-    const size_t nl = m.omega.size();
     const double *lower = m.lower.data(), *pivot = m.pivot.data(), *upper = m.upper.data();
     const cplx* rs = rl.data();
     cplx* zs = zl.data();
-    double dot = 0;
     auto group = [&]<size_t G>(size_t li) {
       size_t q0[G];
       double part[G];
@@ -1206,12 +1224,13 @@ struct LocalSolve {
           zs[q] -= upper[q] * zs[q + 1];
           part[g] += rs[q].real() * zs[q].real() + rs[q].imag() * zs[q].imag();
         }
-      for (size_t g = 0; g < G; ++g) dot += part[g];
+      for (size_t g = 0; g < G; ++g) line_dot[li + g] = part[g];
     };
-    size_t li = 0;
-    for (; li + kGroup <= nl; li += kGroup) group.template operator()<kGroup>(li);
-    for (; li < nl; ++li) group.template operator()<1>(li);
-    return dot;
+    return each_line([&](size_t l0, size_t l1) {
+      size_t li = l0;
+      for (; li + kGroup <= l1; li += kGroup) group.template operator()<kGroup>(li);
+      for (; li < l1; ++li) group.template operator()<1>(li);
+    });
   }
   // u holds −ε at the constraint entries and anything elsewhere on entry. CG until the
   // residual is `tolerance` of its start or below √floor2 (what the round's budget needs).
@@ -1692,7 +1711,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     }
     for (size_t si = 0; si < nseg; ++si)
       setup->solves.push_back({*op_, setup->moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {},
-                               {}, {}, {}});
+                               {}, {}, {}, false, {}});
   }
   static const std::vector<MovingSegment> no_moving;
   const std::vector<MovingSegment>& moving = local ? setup->moving : no_moving;
@@ -2092,6 +2111,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
         }
       }
       LocalSolve& solve = (*local_solves)[si];
+      solve.parallel = par;
       local_iterations += solve.solve(u, kMovingLocalTolerance, local_floor2, kMovingLocalIterations);
       for (size_t k = 0; k < u.size(); ++k) xl[k] += u[k];
       // The multipliers take (A u) at the constraint entries, on the cut vertices' lines.
