@@ -74,6 +74,8 @@ struct SpaceTimeSolver::Workspace {
   std::vector<std::pair<size_t, cplx>> rhs_change; // this solve's rhs − the last one's, where they differ
   bool rhs_incremental = false;                    // rhs_change lists every change
   std::vector<char> mark;                          // scratch: n × frames, all zero between uses
+  std::vector<double> rhs_parts;                   // ‖rhs‖² by chunks of kSumChunk entries
+  std::vector<double> mode_rr;                     // per mode: ‖res_hat's column‖² as the last solve left it
   // The temporal-mode method's, per segment (2|V| × frames, re and im interleaved): the
   // modes of the right-hand side, of the result, and the modes' residuals
   // r_hat − A_k x_hat (the last CG residual of each mode). They stay valid while the fixed
@@ -98,6 +100,15 @@ struct SpaceTimeSolver::Workspace {
   // The slow modes' factorizations (SpaceTimeOptions::direct_shift), kept for the next
   // solve: one with the same fixed set and shift is used as it is, another one refactored.
   std::vector<std::unique_ptr<detail::ModeFactor>> factors;
+  // What depends on the fixed set alone, kept while it is the same (reset by solve() when
+  // it changes): which methods apply (-1: not yet known), and the modes with local solves'
+  // set-up (their segments' common fixed sets, omega and its rows, the line solves'
+  // factors, the local CG's vectors) with the local solves' part of the result not yet
+  // in the modes (see LocalSetup).
+  int modes_fit = -1, local_fit = -1;
+  size_t longest = 0;  // the longest segment's frames (0: not yet known)
+  struct LocalSetup;
+  std::unique_ptr<LocalSetup> local;
 };
 
 // T_s = Q Λ Qᵀ for the frames of one segment.
@@ -844,13 +855,16 @@ void common_fixed_set(std::span<const char> fixed, size_t n, size_t first, size_
 // each group of cut rows is multiplied by its window's rows of Q alone (2·kCutGroup ×
 // count by count × window) instead of by all of Qᵀ. The other entries of out are zero.
 void cut_rows_to_frames(const std::vector<double>& hat, size_t n, const MovingSegment& m, const Eigen::MatrixXd& q,
-                        std::vector<cplx>& out) {
+                        std::vector<cplx>& out, bool parallel) {
   const auto count = q.rows();
   const auto c = static_cast<size_t>(count);
   const Eigen::Map<const Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
   out.assign(m.cut.size() * c, cplx(0, 0));
-  Eigen::MatrixXd g, f;
-  for (size_t g0 = 0, group = 0; g0 < m.cut_order.size(); g0 += kCutGroup, ++group) {
+  // The groups write disjoint rows of out: in parallel or not, the same bits.
+  const size_t groups = (m.cut_order.size() + kCutGroup - 1) / kCutGroup;
+  auto run = [&](size_t group) {
+    Eigen::MatrixXd g, f;
+    const size_t g0 = group * kCutGroup;
     const size_t size = std::min(kCutGroup, m.cut_order.size() - g0);
     const Eigen::Index lo = m.window_first[group], len = m.window_end[group] - lo;
     g.resize(static_cast<Eigen::Index>(2 * size), count);
@@ -866,13 +880,19 @@ void cut_rows_to_frames(const std::vector<double>& hat, size_t n, const MovingSe
       for (Eigen::Index jj = 0; jj < len; ++jj)
         o[jj] = cplx(f(static_cast<Eigen::Index>(2 * t), jj), f(static_cast<Eigen::Index>(2 * t + 1), jj));
     }
-  }
+  };
+  if (parallel && groups > 1)
+    tbb::parallel_for(size_t{0}, groups, run);
+  else
+    for (size_t group = 0; group < groups; ++group) run(group);
 }
 
 // hat's rows += values (vertex-major, count per row) · Q; rr[k] (‖column k‖²) updated when
-// given, and the same added to also's rows when given.
+// given, and the same added to also's rows when given. In parallel or not, by fixed blocks
+// of Q's columns (each column's product and sum the same either way).
 void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<int>& rows, const Eigen::MatrixXd& q,
-                        const std::vector<cplx>& values, double* rr, std::vector<double>* also = nullptr) {
+                        const std::vector<cplx>& values, double* rr, std::vector<double>* also = nullptr,
+                        bool parallel = false) {
   const auto count = q.rows();
   const auto c = static_cast<size_t>(count);
   Eigen::Map<Eigen::MatrixXd> h(hat.data(), static_cast<Eigen::Index>(2 * n), count);
@@ -890,23 +910,33 @@ void add_frames_to_rows(std::vector<double>& hat, size_t n, const std::vector<in
       f(static_cast<Eigen::Index>(2 * t), jj) = v.real();
       f(static_cast<Eigen::Index>(2 * t + 1), jj) = v.imag();
     }
-  const Eigen::MatrixXd g = f * q;
-  // Column by column (all three matrices are column-major); each rr[k] sums its rows in
-  // the same order as row by row.
-  for (Eigen::Index k = 0; k < count; ++k) {
-    double* also_k = also ? also->data() + static_cast<size_t>(k) * 2 * n : nullptr;
-    double sum = 0;
-    for (size_t r = 0; r < some.size(); ++r)
-      for (int part = 0; part < 2; ++part) {
-        const Eigen::Index row = 2 * rows[some[r]] + part;
-        const double add = g(static_cast<Eigen::Index>(2 * r) + part, k);
-        const double old = h(row, k), now = old + add;
-        sum += now * now - old * old;
-        h(row, k) = now;
-        if (also_k) also_k[row] += add;
-      }
-    if (rr) rr[k] += sum;
-  }
+  constexpr Eigen::Index kColumns = 16;
+  const Eigen::Index nblocks = (count + kColumns - 1) / kColumns;
+  auto block = [&](Eigen::Index b) {
+    const Eigen::Index k0 = b * kColumns, len = std::min(kColumns, count - k0);
+    const Eigen::MatrixXd g = f * q.middleCols(k0, len);
+    // Column by column (all three matrices are column-major); each rr[k] sums its rows in
+    // the same order as row by row.
+    for (Eigen::Index col = 0; col < len; ++col) {
+      const Eigen::Index k = k0 + col;
+      double* also_k = also ? also->data() + static_cast<size_t>(k) * 2 * n : nullptr;
+      double sum = 0;
+      for (size_t r = 0; r < some.size(); ++r)
+        for (int part = 0; part < 2; ++part) {
+          const Eigen::Index row = 2 * rows[some[r]] + part;
+          const double add = g(static_cast<Eigen::Index>(2 * r) + part, col);
+          const double old = h(row, k), now = old + add;
+          sum += now * now - old * old;
+          h(row, k) = now;
+          if (also_k) also_k[row] += add;
+        }
+      if (rr) rr[k] += sum;
+    }
+  };
+  if (parallel && nblocks > 1)
+    tbb::parallel_for(Eigen::Index{0}, nblocks, block);
+  else
+    for (Eigen::Index b = 0; b < nblocks; ++b) block(b);
 }
 
 // A warm re-solve's change back into frames: x (a segment's frames, 2|V| × count real,
@@ -924,10 +954,17 @@ size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size
                             const std::vector<const std::vector<int>*>& clear_of, double* x, bool parallel) {
   const auto count = static_cast<size_t>(q.rows());
   auto reach = [&](size_t k) { return reach_of[k]; };
-  for (size_t k = 0; k < count; ++k) {
+  // Each mode's column alone: in parallel or not, the same.
+  auto each_column = [&](auto&& body) {
+    if (parallel)
+      tbb::parallel_for(size_t{0}, count, body);
+    else
+      for (size_t k = 0; k < count; ++k) body(k);
+  };
+  each_column([&](size_t k) {
     cplx* ek = reinterpret_cast<cplx*>(e.data() + 2 * n * k);
     for (const int i : *clear_of[k]) ek[i] = 0;
-  }
+  });
   std::vector<size_t> order;
   for (size_t k = 0; k < count; ++k)
     if (!reach(k).empty()) order.push_back(k);
@@ -978,11 +1015,11 @@ size_t add_change_to_frames(std::vector<double>& d, std::vector<double>& e, size
     g0 = g1;
   }
   size_t reached = 0;
-  for (size_t k = 0; k < count; ++k) {
+  for (size_t k = 0; k < count; ++k) reached += reach(k).size();
+  each_column([&](size_t k) {
     cplx* dk = reinterpret_cast<cplx*>(d.data() + 2 * n * k);
     for (const int i : reach(k)) dk[i] = 0;
-    reached += reach(k).size();
-  }
+  });
   return reached;
 }
 
@@ -1095,6 +1132,26 @@ struct LocalSolve {
   double b;
   std::vector<cplx> r, z, p, ap;
   std::vector<char> hot;  // per omega line: u not zero on it
+  bool parallel = false;  // the lines by fixed blocks on threads (each line's sum kept, added in line order)
+  std::vector<double> line_dot;
+
+  // body(li) for every omega line, by fixed blocks of lines (in parallel or not), then
+  // Σ line_dot[li] in line order: the same bits either way.
+  template <class F>
+  double each_line(F&& body) {
+    const size_t nl = m.omega.size();
+    line_dot.resize(nl);
+    constexpr size_t kLines = 64;  // a multiple of lines()'s group
+    const size_t nb = (nl + kLines - 1) / kLines;
+    auto block = [&](size_t k) { body(k * kLines, std::min(nl, (k + 1) * kLines)); };
+    if (parallel && nb > 1)
+      tbb::parallel_for(size_t{0}, nb, block);
+    else
+      for (size_t k = 0; k < nb; ++k) block(k);
+    double dot = 0;
+    for (size_t li = 0; li < nl; ++li) dot += line_dot[li];
+    return dot;
+  }
 
   // y = (A u) on omega vertex li's line, u zero outside omega (every entry of u counts).
   void product(const cplx* u, size_t li, cplx* y) const {
@@ -1123,18 +1180,18 @@ struct LocalSolve {
     }
   }
   // y = (A u) on the free entries of omega's lines (constraint entries: 0); returns Re <u, y>.
-  double apply(const std::vector<cplx>& u, std::vector<cplx>& y) const {
-    double dot = 0;
-    for (size_t li = 0; li < m.omega.size(); ++li) {
-      product(u.data(), li, y.data() + li * count);
-      double part[2] = {0, 0};
-      for (size_t q = li * count; q < (li + 1) * count; ++q) {
-        if (m.moving[q]) y[q] = 0;
-        part[q & 1] += u[q].real() * y[q].real() + u[q].imag() * y[q].imag();
+  double apply(const std::vector<cplx>& u, std::vector<cplx>& y) {
+    return each_line([&](size_t l0, size_t l1) {
+      for (size_t li = l0; li < l1; ++li) {
+        product(u.data(), li, y.data() + li * count);
+        double part[2] = {0, 0};
+        for (size_t q = li * count; q < (li + 1) * count; ++q) {
+          if (m.moving[q]) y[q] = 0;
+          part[q & 1] += u[q].real() * y[q].real() + u[q].imag() * y[q].imag();
+        }
+        line_dot[li] = part[0] + part[1];
       }
-      dot += part[0] + part[1];
-    }
-    return dot;
+    });
   }
   // zl = the temporal line solves of rl on omega's lines; returns Re <rl, zl>. A line's
   // substitutions are chains of dependent multiply-adds, so kGroup lines go side by side
@@ -1142,13 +1199,11 @@ struct LocalSolve {
   // line alone. With the partial sums in local_pcg a small gain, within the noise of the
   // loaded machine it was measured on (the local CG 11–12 ms a round before, 10–12 after:
   // 65² grid, moving vortex, 12 iterations).
-  double lines(const std::vector<cplx>& rl, std::vector<cplx>& zl) const {
+  double lines(const std::vector<cplx>& rl, std::vector<cplx>& zl) {
     constexpr size_t kGroup = 4;
-    const size_t nl = m.omega.size();
     const double *lower = m.lower.data(), *pivot = m.pivot.data(), *upper = m.upper.data();
     const cplx* rs = rl.data();
     cplx* zs = zl.data();
-    double dot = 0;
     auto group = [&]<size_t G>(size_t li) {
       size_t q0[G];
       double part[G];
@@ -1169,12 +1224,13 @@ struct LocalSolve {
           zs[q] -= upper[q] * zs[q + 1];
           part[g] += rs[q].real() * zs[q].real() + rs[q].imag() * zs[q].imag();
         }
-      for (size_t g = 0; g < G; ++g) dot += part[g];
+      for (size_t g = 0; g < G; ++g) line_dot[li + g] = part[g];
     };
-    size_t li = 0;
-    for (; li + kGroup <= nl; li += kGroup) group.template operator()<kGroup>(li);
-    for (; li < nl; ++li) group.template operator()<1>(li);
-    return dot;
+    return each_line([&](size_t l0, size_t l1) {
+      size_t li = l0;
+      for (; li + kGroup <= l1; li += kGroup) group.template operator()<kGroup>(li);
+      for (; li < l1; ++li) group.template operator()<1>(li);
+    });
   }
   // u holds −ε at the constraint entries and anything elsewhere on entry. CG until the
   // residual is `tolerance` of its start or below √floor2 (what the round's budget needs).
@@ -1213,6 +1269,42 @@ struct LocalSolve {
 };
 
 }  // namespace
+
+// The modes with local solves' set-up for one fixed set (Workspace::local): per segment its
+// moving constraints and local solve, built by the first solve with that fixed set and
+// used as they are by the next ones while it stays (a warm re-solve after an edit). And
+// the local solves' part of the result not yet in the modes (`pending`): a re-solve that
+// solves for the change alone adds what its local solves found to x in frames, and of x's
+// modes it reads only the cut rows (the local rounds' constraint values), so that part is
+// kept in frames (omega × count, and the multipliers' cut × count), summed over such
+// solves, instead of being transformed into x_hat and r_hat (|omega| × count by count ×
+// count) each time; the cut rows read it beside their modes. Any other solve adds it into
+// the modes first where it keeps them (flush), or drops it where it transforms them again.
+struct SpaceTimeSolver::Workspace::LocalSetup {
+  int rings = -1;
+  std::vector<std::pair<size_t, size_t>> segments;
+  std::vector<MovingSegment> moving;         // per segment
+  std::vector<LocalSolve> solves;            // per segment, on `moving` (built once it is)
+  std::vector<std::vector<cplx>> x, lambda;  // pending, per segment: omega × count, cut × count
+  bool pending = false;                      // x or lambda may be non-zero
+
+  // x_hat and r_hat += the pending part in the modes; then none is pending.
+  void flush(std::vector<std::vector<double>>& x_hat, std::vector<std::vector<double>>& r_hat, size_t n,
+             const std::vector<const Eigen::MatrixXd*>& q) {
+    if (!pending) return;
+    for (size_t si = 0; si < moving.size(); ++si) {
+      if (moving[si].cut.empty()) continue;
+      add_frames_to_rows(x_hat[si], n, moving[si].omega, *q[si], x[si], nullptr);
+      add_frames_to_rows(r_hat[si], n, moving[si].cut, *q[si], lambda[si], nullptr);
+    }
+    drop();
+  }
+  void drop() {
+    for (auto* parts : {&x, &lambda})
+      for (auto& v : *parts) std::fill(v.begin(), v.end(), cplx(0, 0));
+    pending = false;
+  }
+};
 
 void temporal_eigenbasis(int count, bool left_open, bool right_open, int modes, Eigen::MatrixXd& q,
                          Eigen::VectorXd& lambda) {
@@ -1410,6 +1502,11 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
   }
   w.same_fixed = (same_fixed || moved) && w.modes_kept;
   w.moved = moved;
+  if (!same_fixed) {
+    w.modes_fit = w.local_fit = -1;
+    w.longest = 0;
+    w.local.reset();
+  }
   if (!w.same_fixed) w.modes_kept = false;
   Vec& rhs = sized(w.rhs, total);
   // The right-hand side: updated where the fixed part changed when the fixed set is the
@@ -1453,7 +1550,34 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
     for (size_t m = 0; m < w.fixed_at.size(); ++m) w.fixed_value[m] = values[w.fixed_at[m]];
     w.last_kept = true;
   }
-  const double bnorm = std::sqrt(sum(total, par, [&](size_t k) { return std::norm(rhs[k]); }));
+  // ‖rhs‖ by fixed chunks (as sum()), each chunk's part kept: where the right-hand side
+  // changed at a few entries only their chunks are summed again (the same bits).
+  const size_t nchunks = (total + kSumChunk - 1) / kSumChunk;
+  auto chunk_norm = [&](size_t c) {
+    double part = 0;
+    for (size_t k = c * kSumChunk; k < std::min(total, (c + 1) * kSumChunk); ++k) part += std::norm(rhs[k]);
+    return part;
+  };
+  if (w.rhs_incremental && w.rhs_parts.size() == nchunks) {
+    std::vector<size_t> dirty;
+    for (const auto& change : w.rhs_change) dirty.push_back(change.first / kSumChunk);
+    std::sort(dirty.begin(), dirty.end());
+    dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
+    for (const size_t c : dirty) w.rhs_parts[c] = chunk_norm(c);
+  } else {
+    w.rhs_parts.resize(nchunks);
+    auto run = [&](size_t c) { w.rhs_parts[c] = chunk_norm(c); };
+    if (par && nchunks > 1)
+      tbb::parallel_for(size_t{0}, nchunks, run);
+    else
+      for (size_t c = 0; c < nchunks; ++c) run(c);
+  }
+  double bnorm2 = 0;
+  if (nchunks == 1)
+    bnorm2 = w.rhs_parts[0];
+  else
+    for (const double part : w.rhs_parts) bnorm2 += part;
+  const double bnorm = std::sqrt(bnorm2);
 
   // The unknown: the free part of z (its first guess), fixed entries zero; noting
   // whether it is the last solve's result (whose modes are kept; where the fixed set
@@ -1485,16 +1609,26 @@ SolveReport SpaceTimeSolver::solve(std::span<const char> fixed, std::span<const 
                               : "nothing to solve (no fixed entry asks for a non-zero field)";
     report.success = true;
   } else {
+    // Which methods apply depends on the fixed set alone: known from the last solve when
+    // it is the same.
+    auto modes_fit = [&]() {
+      if (w.modes_fit < 0) w.modes_fit = modes_apply(fixed) ? 1 : 0;
+      return w.modes_fit == 1;
+    };
+    auto local_fit = [&]() {
+      if (w.local_fit < 0) w.local_fit = local_modes_apply(fixed) ? 1 : 0;
+      return w.local_fit == 1;
+    };
     const bool modes = options.method == SpaceTimeMethod::modes ||
-                       (options.method == SpaceTimeMethod::automatic && modes_apply(fixed) &&
-                        longest_segment(fixed) <= kMostModeFrames);
+                       (options.method == SpaceTimeMethod::automatic && modes_fit() &&
+                        (w.longest ? w.longest : (w.longest = longest_segment(fixed))) <= kMostModeFrames);
     const bool local = !modes && (options.method == SpaceTimeMethod::modes_local ||
-                                  (options.method == SpaceTimeMethod::automatic && local_modes_apply(fixed)));
+                                  (options.method == SpaceTimeMethod::automatic && local_fit()));
     if (options.method == SpaceTimeMethod::modes)
-      TVF_CHECK(modes_apply(fixed), "the temporal-mode method needs the same fixed vertices at every "
+      TVF_CHECK(modes_fit(), "the temporal-mode method needs the same fixed vertices at every "
                                     "frame between two key frames");
     if (options.method == SpaceTimeMethod::modes_local)
-      TVF_CHECK(local_modes_apply(fixed), "the temporal modes with local solves need a key frame, at most a "
+      TVF_CHECK(local_fit(), "the temporal modes with local solves need a key frame, at most a "
                                           "quarter of the vertices cut by moving constraints and segments of at "
                                           "most {} frames",
                 kMostModeFrames);
@@ -1543,21 +1677,54 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   // Each segment's modes take its common fixed set: the first frame's (the same at every
   // frame where the modes apply), or with local solves the vertices fixed at every frame
   // of it, the constraints that move being imposed by the local solves.
+  // The local solves' set-up: the last solve's where the fixed set is the same (solve()
+  // drops it when it changes), else built here. What its local solves left out of the
+  // modes stays out where this solve solves for the change alone with it; otherwise it goes
+  // into the modes now where they are kept, and is dropped where they are transformed again.
+  const int rings = std::max(options.moving_rings, 0);
+  std::unique_ptr<Workspace::LocalSetup>& setup = w.local;
+  const bool reuse = local && setup && setup->rings == rings && setup->segments == segs.segments;
+  if (setup && setup->pending && !(change && reuse)) {
+    if (kept) {
+      std::vector<const Eigen::MatrixXd*> q;
+      for (const auto& [first, count] : setup->segments)
+        q.push_back(&temporal_basis(static_cast<int>(first), static_cast<int>(count)).q);
+      setup->flush(w.x_hat, w.r_hat, n, q);
+    } else {
+      setup->drop();
+    }
+  }
+  if (local && !reuse) {
+    setup = std::make_unique<Workspace::LocalSetup>();
+    setup->rings = rings;
+    setup->segments = segs.segments;
+    setup->moving.resize(nseg);
+    setup->x.resize(nseg);
+    setup->lambda.resize(nseg);
+    for (size_t si = 0; si < nseg; ++si) {
+      const auto [first, count] = segs.segments[si];
+      MovingSegment& m = setup->moving[si];
+      common_fixed_set(fixed, n, first, count, m.base, m.cut);
+      if (!m.cut.empty()) build_moving(*op_, fixed, n, nf, first, count, rings, b_, m);
+      setup->x[si].assign(m.omega.size() * count, cplx(0, 0));
+      setup->lambda[si].assign(m.cut.size() * count, cplx(0, 0));
+    }
+    for (size_t si = 0; si < nseg; ++si)
+      setup->solves.push_back({*op_, setup->moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {},
+                               {}, {}, {}, false, {}});
+  }
+  static const std::vector<MovingSegment> no_moving;
+  const std::vector<MovingSegment>& moving = local ? setup->moving : no_moving;
   std::vector<const char*> seg_fixed(nseg);
-  std::vector<MovingSegment> moving(local ? nseg : 0);
   bool has_moving = false;
   size_t local_vertices = 0;
   for (size_t si = 0; si < nseg; ++si) {
-    const auto [first, count] = segs.segments[si];
-    seg_fixed[si] = fixed.data() + first * n;
+    seg_fixed[si] = fixed.data() + segs.segments[si].first * n;
     if (!local) continue;
-    MovingSegment& m = moving[si];
-    common_fixed_set(fixed, n, first, count, m.base, m.cut);
-    seg_fixed[si] = m.base.data();
-    if (m.cut.empty()) continue;
+    seg_fixed[si] = moving[si].base.data();
+    if (moving[si].cut.empty()) continue;
     has_moving = true;
-    build_moving(*op_, fixed, n, nf, first, count, std::max(options.moving_rings, 0), b_, m);
-    local_vertices += m.omega.size();
+    local_vertices += moving[si].omega.size();
   }
 
   // Into the modes: per segment r_hat = rhs·Q, x_hat = x·Q (complex |V| × count blocks seen
@@ -1718,10 +1885,24 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     return ModeSystem{*op_, seg_fixed[mode.segment], mode.shift};
   };
 
-  // Every mode's residual now: kept (updated above), or one sweep.
+  // Every mode's residual now: kept (updated above), or one sweep. Solving for the change
+  // with the last solve's ‖residual‖² per mode kept (w.mode_rr) and no fixed row changed,
+  // the residual changed on the change's first rows alone (active): their part of the
+  // kept sum, what the last solve left there (res − e), gives what is outside them.
+  const bool rr_kept = change && !w.moved && w.mode_rr.size() == modes.size();
   each_mode(every, [&](Mode& mode) {
     cplx* res = column(w.res_hat, mode);
-    if (residuals_kept) {
+    if (rr_kept) {
+      const cplx* e = column(w.e_hat, mode);
+      double base = 0, now = 0;
+      for (const int i : mode.active) {
+        base += std::norm(res[i] - e[i]);
+        now += std::norm(res[i]);
+      }
+      mode.outside = std::max(w.mode_rr[static_cast<size_t>(&mode - modes.data())] - base, 0.0);
+      mode.base_rr = mode.outside + base;
+      mode.rr = mode.outside + now;
+    } else if (residuals_kept) {
       double rr = 0;
       for (size_t i = 0; i < n; ++i) rr += std::norm(res[i]);
       mode.rr = rr;
@@ -1890,9 +2071,11 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   bool stalled = false;
   double theta = 0;  // the problem's residual after the last local solve
   std::vector<cplx> cut_values, u, y_line, delta;
-  std::vector<LocalSolve> local_solves;  // their vectors kept between rounds
-  for (size_t si = 0; si < moving.size(); ++si)
-    local_solves.push_back({*op_, moving[si], nf, segs.segments[si].first, segs.segments[si].second, b_, {}, {}, {}, {}, {}});
+  // The local solves (their vectors kept between rounds and solves) and what earlier
+  // solves' local solves left out of the modes (pending: none unless this one solves for
+  // the change alone).
+  std::vector<LocalSolve>* local_solves = local ? &setup->solves : nullptr;
+  const bool pending = local && setup->pending;
   std::vector<double> rr_delta;
   // What the local solves add to x on omega's rows and to the multipliers on the cut rows,
   // kept in frames (omega × count, cut × count per segment) and transformed into the modes
@@ -1917,14 +2100,18 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       const auto [first, count] = segs.segments[si];
       const Eigen::MatrixXd& q = bases[si]->q;
       std::vector<cplx>& xl = x_local[si];
-      cut_rows_to_frames(w.x_hat[si], n, m, q, cut_values);
+      cut_rows_to_frames(w.x_hat[si], n, m, q, cut_values, par);
       u.assign(m.omega.size() * count, cplx(0, 0));
+      const cplx* px = pending ? setup->x[si].data() : nullptr;
       for (size_t r = 0; r < m.cut.size(); ++r) {
         const auto li = static_cast<size_t>(m.cut_local[r]);
-        for (size_t jj = 0; jj < count; ++jj)
-          if (m.moving[li * count + jj]) u[li * count + jj] = -(cut_values[r * count + jj] + xl[li * count + jj]);
+        for (size_t jj = 0; jj < count; ++jj) {
+          const size_t e = li * count + jj;
+          if (m.moving[e]) u[e] = -(cut_values[r * count + jj] + xl[e] + (px ? px[e] : cplx(0, 0)));
+        }
       }
-      LocalSolve& solve = local_solves[si];
+      LocalSolve& solve = (*local_solves)[si];
+      solve.parallel = par;
       local_iterations += solve.solve(u, kMovingLocalTolerance, local_floor2, kMovingLocalIterations);
       for (size_t k = 0; k < u.size(); ++k) xl[k] += u[k];
       // The multipliers take (A u) at the constraint entries, on the cut vertices' lines.
@@ -1978,7 +2165,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
         }
       }
       rr_delta.assign(count, 0.0);
-      add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data(), change ? &w.e_hat[si] : nullptr);
+      add_frames_to_rows(w.res_hat[si], n, m.leak_rows, q, delta, rr_delta.data(), change ? &w.e_hat[si] : nullptr, par);
       for (size_t k = 0; k < count; ++k) {
         Mode& mode = modes[mode_offset[si] + k];
         mode.rr = std::max(mode.rr + rr_delta[k], 0.0);
@@ -1990,7 +2177,7 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
       if (moving[si].cut.empty()) continue;
       const MovingSegment& m = moving[si];
       const size_t count = segs.segments[si].second;
-      cut_rows_to_frames(w.res_hat[si], n, m, bases[si]->q, cut_values);
+      cut_rows_to_frames(w.res_hat[si], n, m, bases[si]->q, cut_values, par);
       for (size_t r = 0; r < m.cut.size(); ++r) {
         const auto li = static_cast<size_t>(m.cut_local[r]);
         for (size_t jj = 0; jj < count; ++jj)
@@ -2032,11 +2219,18 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
     }
   }
 
-  // What the local solves added to x and to the multipliers, into the modes.
+  // What the local solves added to x and to the multipliers, into the modes; or, solving
+  // for the change alone, to what is pending (LocalSetup).
   for (size_t si = 0; si < moving.size(); ++si) {
     if (moving[si].cut.empty()) continue;
-    add_frames_to_rows(w.x_hat[si], n, moving[si].omega, bases[si]->q, x_local[si], nullptr);
-    add_frames_to_rows(w.r_hat[si], n, moving[si].cut, bases[si]->q, lambda_local[si], nullptr);
+    if (change) {
+      for (size_t k = 0; k < x_local[si].size(); ++k) setup->x[si][k] += x_local[si][k];
+      for (size_t k = 0; k < lambda_local[si].size(); ++k) setup->lambda[si][k] += lambda_local[si][k];
+      setup->pending = true;
+      continue;
+    }
+    add_frames_to_rows(w.x_hat[si], n, moving[si].omega, bases[si]->q, x_local[si], nullptr, nullptr, par);
+    add_frames_to_rows(w.r_hat[si], n, moving[si].cut, bases[si]->q, lambda_local[si], nullptr, nullptr, par);
   }
 
   // Back from the modes: the whole transform, or the last result plus the change (what
@@ -2086,10 +2280,12 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   int most = 0;
   long all = 0;
   double modes_rr = 0;
+  w.mode_rr.clear();
   for (const Mode& m : modes) {
     most = std::max(most, m.iterations);
     all += m.iterations;
     modes_rr += m.rr;
+    w.mode_rr.push_back(m.rr);  // res_hat's ‖column‖², for the next solve while the modes are kept
   }
   size_t direct_modes = 0;
   long direct_iterations = 0;
@@ -2104,8 +2300,9 @@ SolveReport SpaceTimeSolver::solve_modes(std::span<const char> fixed, std::span<
   if (has_moving) {
     report.method = fmt::format("temporal eigenmodes (direct in time) with Jacobi-PCG per mode and local solves at "
                                 "the moving constraints, {} modes, {} rounds, {} spatial iterations in all, "
-                                "local solves on {} vertices ({} iterations in all)",
-                                modes.size(), rounds, all, local_vertices, local_iterations) +
+                                "local solves on {} vertices ({} iterations in all{})",
+                                modes.size(), rounds, all, local_vertices, local_iterations,
+                                reuse ? ", their set-up kept from the last solve" : "") +
                     by_cholesky;
     report.iterations = rounds;
   } else {
