@@ -111,9 +111,9 @@ export function frameOf(scene: Scene, t: number): number {
 // An empty design on the paper's 65×65 grid over [−1, 1]², 100 frames, with the
 // spatio-temporal generator (paper §6.1): it keeps every element at its place with its
 // type, as the constrained generator does, and it is temporally coherent by
-// construction (one solve over space and time: no frame-to-frame flips) and faster (the
-// designer answers a change in about 0.5 s against 2 s; docs/benchmarks.md). The basis
-// sum is faster still but lets wide elements shift each other.
+// construction (one solve over space and time: no frame-to-frame flips) and fast (a change's
+// picture in about 0.1–0.17 s on two idle cores; docs/benchmarks.md, "Issue 15: every target
+// in one idle hour"). The basis sum is faster still but lets wide elements shift each other.
 export function emptyScene(): Scene {
   return {
     tvf: 1,
