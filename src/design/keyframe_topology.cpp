@@ -316,12 +316,16 @@ struct KeyframeTopologyPlan::SurfaceGuide {
   };
   std::vector<PairHold> holds;
   // The paths' log factors (surface_log_factors) at the scene's frames inside the interval,
-  // frame_t[i], on the vertices of the paths' supports (`tube`; zero elsewhere): made once,
-  // in time order, each vertex's argument sums carried on from frame to frame, for the
+  // t[i], on the vertices of the paths' supports (`tube`; zero elsewhere): made once, in
+  // time order, each vertex's argument sums carried on from frame to frame, for the
   // acceptance check and the solve's frames (the same values as summing from t₀ at each).
-  std::vector<double> frame_t;
-  std::vector<size_t> tube;
-  std::vector<std::vector<cplx>> frame_log;
+  // They do not depend on the phase correction, so the check's choices share them.
+  struct FrameLogs {
+    std::vector<double> t;
+    std::vector<size_t> tube;
+    std::vector<std::vector<cplx>> log;
+  };
+  std::shared_ptr<const FrameLogs> logs;  // null: made at each time asked
 };
 
 KeyframeTopologyPlan::~KeyframeTopologyPlan() = default;
@@ -1072,25 +1076,27 @@ class SurfaceLogSweep {
 // Makes g's frame logs at `times` (ascending).
 void keep_frame_logs(const DesignSpace& space, const std::vector<Track>& tracks, SurfaceGuide& g,
                      std::span<const double> times) {
-  g.tube.clear();
-  for (const SurfaceGuide::Path& p : g.paths) g.tube.insert(g.tube.end(), p.support.begin(), p.support.end());
-  std::sort(g.tube.begin(), g.tube.end());
-  g.tube.erase(std::unique(g.tube.begin(), g.tube.end()), g.tube.end());
-  g.frame_t.assign(times.begin(), times.end());
-  g.frame_log.assign(times.size(), {});
+  auto logs = std::make_shared<SurfaceGuide::FrameLogs>();
+  for (const SurfaceGuide::Path& p : g.paths) logs->tube.insert(logs->tube.end(), p.support.begin(), p.support.end());
+  std::sort(logs->tube.begin(), logs->tube.end());
+  logs->tube.erase(std::unique(logs->tube.begin(), logs->tube.end()), logs->tube.end());
+  logs->t.assign(times.begin(), times.end());
+  logs->log.assign(times.size(), {});
   SurfaceLogSweep sweep(g);
   std::vector<cplx> l;
   for (size_t i = 0; i < times.size(); ++i) {
     sweep.at(space, tracks, times[i], l);
-    g.frame_log[i].reserve(g.tube.size());
-    for (const size_t v : g.tube) g.frame_log[i].push_back(l[v]);
+    logs->log[i].reserve(logs->tube.size());
+    for (const size_t v : logs->tube) logs->log[i].push_back(l[v]);
   }
+  g.logs = std::move(logs);
 }
 
 // g's log factors at its i-th frame, at every vertex.
 void frame_logs(const SurfaceGuide& g, size_t i, size_t nv, std::vector<cplx>& out) {
   out.assign(nv, cplx(0, 0));
-  for (size_t j = 0; j < g.tube.size(); ++j) out[g.tube[j]] = g.frame_log[i][j];
+  const SurfaceGuide::FrameLogs& logs = *g.logs;
+  for (size_t j = 0; j < logs.tube.size(); ++j) out[logs.tube[j]] = logs.log[i][j];
 }
 
 // G at the corners of face f at time t (before the phase correction), in the face's frame.
@@ -1765,7 +1771,7 @@ class PhaseCheck {
     for (Trial::Choice& c : trial.choices) {
       count(trial, c, 1);
       if (c.wrong == 0) {
-        trial.g = variant(trial.g, c, true);
+        trial.g = variant(trial.g, c);
         return true;
       }
     }
@@ -1783,22 +1789,9 @@ class PhaseCheck {
   }
 
  private:
-  // The guide with a choice's correction (`logs`: with the trial's frame logs, else without).
-  static SurfaceGuide variant(const SurfaceGuide& g, const Trial::Choice& c, bool logs = false) {
-    SurfaceGuide v;
-    v.t0 = g.t0;
-    v.t1 = g.t1;
-    v.f0 = g.f0;
-    v.log_h = g.log_h;
-    v.paths = g.paths;
-    v.nodes = g.nodes;
-    v.lambda = g.lambda;
-    v.holds = g.holds;
-    if (logs) {
-      v.frame_t = g.frame_t;
-      v.tube = g.tube;
-      v.frame_log = g.frame_log;
-    }
+  // The guide with a choice's correction (its frame logs shared with g's).
+  static SurfaceGuide variant(const SurfaceGuide& g, const Trial::Choice& c) {
+    SurfaceGuide v = g;
     if (!c.nodes && c.holds)
       for (std::vector<double>& lam : v.lambda) std::fill(lam.begin(), lam.end(), 0.0);
     else if (!c.nodes)
@@ -3147,13 +3140,15 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
   for (const SurfaceGuide& g : surface_guides_) {
     if (!(t > g.t0 && t < g.t1)) continue;
     // A scene frame's log factors were made with the guide (keep_frame_logs).
-    const auto it = std::lower_bound(g.frame_t.begin(), g.frame_t.end(), t);
-    if (it == g.frame_t.end() || *it != t) {
+    const std::vector<double> none;
+    const std::vector<double>& logged = g.logs ? g.logs->t : none;
+    const auto it = std::lower_bound(logged.begin(), logged.end(), t);
+    if (it == logged.end() || *it != t) {
       apply_surface_guide(space, tracks_, g, t, fixed, values);
       continue;
     }
     std::vector<cplx> l;
-    frame_logs(g, static_cast<size_t>(it - g.frame_t.begin()), static_cast<size_t>(space.mesh().num_vertices()), l);
+    frame_logs(g, static_cast<size_t>(it - logged.begin()), static_cast<size_t>(space.mesh().num_vertices()), l);
     apply_surface_guide(space, tracks_, g, t, l, fixed, values);
   }
 }
