@@ -5,6 +5,7 @@ For each mesh of libcgal-demo's data archive named on the command line (default:
 mushroom, camel, man, bear, elephant) this writes the knot of examples/26 (a source and a
 center trading places, 32 frames, solver.keyframe_topology "matched") on the mesh's flank,
 runs `tvf generate` and `tvf analyze`, and prints one table row: singularities matched,
+the longest carry (chord over the bounding box's diagonal), how the paths were routed,
 guided or the reason it fell back, events the analysis finds that were not asked for,
 and the CPU seconds of `tvf generate`.
 
@@ -98,8 +99,8 @@ def main():
                 tar.extract(f"data/meshes/{m}.off", out)
     except (OSError, KeyError) as e:
         sys.exit(f"{ARCHIVE}: {e} (Debian package libcgal-demo)")
-    print("| mesh | vertices | matched | guided | why not | events not asked for | generate CPU s |")
-    print("|---|---:|---:|---|---|---:|---:|")
+    print("| mesh | vertices | matched | longest carry | routing | guided | why not | events not asked for | generate CPU s |")
+    print("|---|---:|---:|---:|---|---|---|---:|---:|")
     for m in args.meshes:
         mesh = (out / "data/meshes" / f"{m}.off").resolve()
         scene = knot_scene(mesh, args.apart, args.region)
@@ -123,8 +124,13 @@ def main():
         extra = re.search(r"(\d+) not asked for", ana.stdout)
         nv = len(load_off(mesh)[0])
         why = interval.get("unguided_reason", "")
-        print(f"| {m} | {nv} | {len(interval['matched'])} | {'yes' if interval['guided'] else 'no'} | "
-              f"{why} | {extra.group(1) if extra else '?'} | {cpu:.1f} |")
+        # The longest chord a matched singularity is carried, over the mesh's bounding-box
+        # diagonal (the designed pair's is --apart).
+        v = load_off(mesh)[0]
+        diag = float(np.linalg.norm(v.max(0) - v.min(0)))
+        longest = max((np.linalg.norm(np.subtract(x["to"], x["from"])) for x in interval["matched"]), default=0.0)
+        print(f"| {m} | {nv} | {len(interval['matched'])} | {longest / diag:.2f} | {interval['routing']} | "
+              f"{'yes' if interval['guided'] else 'no'} | {why} | {extra.group(1) if extra else '?'} | {cpu:.1f} |")
 
 
 if __name__ == "__main__":

@@ -139,6 +139,7 @@ struct KeyframeTopologyPlan::Track {
   bool other_way = false;
   int index = 0;   // +1 or −1 (0: a template standing in the router's way)
   int group = -1;  // ≥ 0: one of a created or cancelled pair (the two are meant to meet)
+  int slot = -1;   // its place among the interval's tracks while PathRouter::route() runs
   bool guided = false;  // its interval's guide field constrains the frames (Guide, below)
   bool free = false;    // its interval could not be guided and is left free (no constraint)
   // A detour bent into the path (PathRouter, below): amplitude · bump(s, rise, fall) · dir.
@@ -349,7 +350,7 @@ struct Candidate {
 
 // Greedy matching nearest first among the pairs `allowed` accepts.
 template <class Allowed>
-void match_nearest(const std::vector<Singularity>& A, const std::vector<Singularity>& B, std::vector<int>& match_a,
+void match_nearest(std::span<const Singularity> A, std::span<const Singularity> B, std::vector<int>& match_a,
                    std::vector<int>& match_b, Allowed allowed, std::vector<std::pair<size_t, size_t>>& out) {
   std::vector<Candidate> c;
   for (size_t a = 0; a < A.size(); ++a)
@@ -369,7 +370,7 @@ void match_nearest(const std::vector<Singularity>& A, const std::vector<Singular
 
 // Pairs a saddle with a node (index +1) of one key frame's unmatched singularities,
 // nearest first: (saddle, node) indices.
-std::vector<std::pair<size_t, size_t>> pair_unmatched(const std::vector<Singularity>& S, const std::vector<int>& matched) {
+std::vector<std::pair<size_t, size_t>> pair_unmatched(std::span<const Singularity> S, const std::vector<int>& matched) {
   std::vector<Candidate> c;
   for (size_t a = 0; a < S.size(); ++a)
     for (size_t b = 0; b < S.size(); ++b)
@@ -1966,7 +1967,10 @@ class PathRouter {
 public:
   static constexpr int kSamples = 256;
 
-  PathRouter(const DesignSpace& space, double separation) : space_(space), separation_(separation) {
+  // keyframe_times: the scene's key frames' times (where the paths' ends are the key
+  // frames' singularities; required() never asks a pair for more than those hold it).
+  PathRouter(const DesignSpace& space, double separation, std::vector<double> keyframe_times)
+      : space_(space), separation_(separation), keyframe_times_(std::move(keyframe_times)) {
     const Mesh& mesh = space.mesh();
     for (int h = 0; h < mesh.num_halfedges(); ++h)
       if (mesh.is_boundary_halfedge(h)) boundary_.emplace_back(mesh.position(mesh.tail(h)), mesh.position(mesh.head(h)));
@@ -1981,7 +1985,8 @@ public:
   // The distance two tracks must keep at time t of their common time [from, to]: the
   // separation, eased near the two ends (over the first and last fifth, by a smoothstep)
   // down to what their straight paths hold there, so that two singularities a key frame
-  // holds closer than the separation need only part from there as they would anyway.
+  // holds closer than the separation need only part from there as they would anyway; for
+  // two of the interval being routed, never more than set_caps() allows them.
   double required(const Track& a, const Track& b, double t, double from, double to) const {
     const double u = (t - from) / (to - from);
     const double ease = smoothstep(std::min(u, 1 - u) / 0.2);
@@ -1989,7 +1994,73 @@ public:
     sa.bends.clear();
     sb.bends.clear();
     const double straight = (at(sa, t) - at(sb, t)).norm();
-    return std::min(separation_, std::max(straight, ease * separation_));
+    double most = separation_;
+    if (a.slot >= 0 && b.slot >= 0 && static_cast<size_t>(a.slot) < caps_n_ && static_cast<size_t>(b.slot) < caps_n_)
+      most = caps_[static_cast<size_t>(a.slot) * caps_n_ + static_cast<size_t>(b.slot)];
+    return std::min(separation_, std::max(straight, ease * most));
+  }
+
+  // A path that moves less than a tenth of the separation (the static solve's own saddles
+  // and foci on a scanned surface, most of which stay put between key frames): the pairwise
+  // router bends the other path round it, never it (bent, such paths pushed the next ones
+  // about, and 20–26 paths' bends on CGAL's meshes never settled), and two such keep what
+  // their straight paths keep (set_caps()).
+  bool settled(const Track& tr) const { return tr.base_length() < 0.1 * separation_; }
+
+  // What each two of the tracks [first, last) must keep at most (required()), their slots
+  // set. Two settled paths: nothing (neither is bent; they keep what they keep). Two that
+  // both key frames hold closer than the separation and whose straight paths never come
+  // nearer than half of what the nearer key frame holds them (they neither cross nor pass
+  // close): what their straight paths keep at their closest, so that they are not bent for
+  // their own sake, only kept from being pushed closer by the others' detours. The static
+  // solve's own saddles and foci on a scanned surface sit 0.02 apart where the separation
+  // is 0.1 and barely move; asked to part in between, every such pair set off the router,
+  // and 20–26 paths' bends never settled (CGAL's cow, camel, elephant, bear). Any other
+  // two: the separation, as before, also two that part from a key frame that holds them
+  // close to one that holds them farther than the separation (a sphere's sink running
+  // nearly to its antipode beside a saddle, capped, made 3 bifurcations where 1 was
+  // planned).
+  void set_caps(std::vector<Track>& tracks, size_t first, size_t last) const {
+    const size_t n = last - first;
+    caps_n_ = n;
+    caps_.assign(n * n, separation_);
+    double tmin = std::numeric_limits<double>::infinity(), tmax = -tmin;
+    for (size_t i = first; i < last; ++i) {
+      tracks[i].slot = static_cast<int>(i - first);
+      tmin = std::min({tmin, tracks[i].t0, tracks[i].t1}), tmax = std::max({tmax, tracks[i].t0, tracks[i].t1});
+    }
+    if (!(tmax > tmin)) return;
+    auto time = [&](int k) { return tmin + (tmax - tmin) * k / kSamples; };
+    std::vector<std::vector<Vec3>> straight(n);
+    for (size_t i = 0; i < n; ++i) {
+      Track tr = tracks[first + i];
+      tr.bends.clear();
+      for (int k = 0; k <= kSamples; ++k) straight[i].push_back(at(tr, time(k)));
+    }
+    auto is_keyframe = [&](double t) {
+      return std::find(keyframe_times_.begin(), keyframe_times_.end(), t) != keyframe_times_.end();
+    };
+    for (size_t i = 0; i < n; ++i)
+      for (size_t j = i + 1; j < n; ++j) {
+        const Track &a = tracks[first + i], &b = tracks[first + j];
+        const double from = std::max(std::min(a.t0, a.t1), std::min(b.t0, b.t1));
+        const double to = std::min(std::max(a.t0, a.t1), std::max(b.t0, b.t1));
+        if (!(to > from)) continue;
+        if (settled(a) && settled(b)) {
+          caps_[i * n + j] = caps_[j * n + i] = 0;
+          continue;
+        }
+        if (!is_keyframe(from) || !is_keyframe(to)) continue;
+        double nearer = std::numeric_limits<double>::infinity(), farther = 0, closest = nearer;
+        for (int k = 0; k <= kSamples; ++k) {
+          const double t = time(k);
+          if (t < from || t > to) continue;
+          const double d = (straight[i][static_cast<size_t>(k)] - straight[j][static_cast<size_t>(k)]).norm();
+          closest = std::min(closest, d);
+          if (t == from || t == to) nearer = std::min(nearer, d), farther = std::max(farther, d);
+        }
+        if (farther < separation_ && closest >= 0.5 * nearer) caps_[i * n + j] = caps_[j * n + i] = closest;
+      }
   }
 
   // Over the two tracks' common time: where they come closest relative to what they must
@@ -2042,9 +2113,13 @@ public:
     const double side = r.dot(n) < -1e-12 * separation_ ? -1.0 : 1.0;
     const double la = a.base_length(), lb = b.base_length();
     std::vector<std::pair<double, double>> shares;
-    if (la + lb > 0) shares.emplace_back(la / (la + lb), lb / (la + lb));  // the shortest pair of paths
-    shares.emplace_back(1.0, 0.0);
-    shares.emplace_back(0.0, 1.0);
+    if (settled(a) != settled(b)) {
+      shares.emplace_back(settled(a) ? 0.0 : 1.0, settled(a) ? 1.0 : 0.0);  // only the one that moves
+    } else {
+      if (la + lb > 0) shares.emplace_back(la / (la + lb), lb / (la + lb));  // the shortest pair of paths
+      shares.emplace_back(1.0, 0.0);
+      shares.emplace_back(0.0, 1.0);
+    }
     std::pair<int, int> window{0, kSamples};
     {
       auto too_close = [&](int k) {
@@ -2119,6 +2194,7 @@ public:
                                    const std::string& interval, std::string& how) const {
     how = "straight";
     if (separation_ <= 0) return std::nullopt;
+    set_caps(tracks, first, last);
     const std::vector<Track> before(tracks.begin() + static_cast<std::ptrdiff_t>(first),
                                     tracks.begin() + static_cast<std::ptrdiff_t>(last));
     const size_t n = last - first;
@@ -2222,7 +2298,9 @@ public:
     // parted by bending the others either; the joint search (seconds on a surface with
     // tens of paths) is not tried.
     std::string held;
-    if (why) {
+    // (Not a pair that need keep only what its straight paths keep (set_caps()): that one
+    // was pushed closer by the others' detours, which routing them together may undo.)
+    if (why && caps_[(wi - first) * n + (wj - first)] >= separation_) {
       const double from = wap.from, to = wap.to;
       for (const double t : {from, to}) {
         const double d = (at(before[wi - first], t) - at(before[wj - first], t)).norm();
@@ -2269,10 +2347,17 @@ public:
   static constexpr int kWaves = 4;
   static constexpr int kJointSteps = 1200;
   bool joint(std::vector<Track>& tracks, size_t first, size_t last, const std::vector<Track>& obstacles) const {
-    const size_t n = last - first;
+    // The paths that move get detours; the settled ones (settled()) stand in the way with
+    // the templates (the man's knot: 50 paths, 12 that move, 8 unknowns each).
+    std::vector<size_t> order;
+    for (size_t i = first; i < last; ++i)
+      if (!settled(tracks[i])) order.push_back(i);
+    const size_t n = order.size();
     if (n == 0) return false;
-    std::vector<Track> items(tracks.begin() + static_cast<std::ptrdiff_t>(first),
-                             tracks.begin() + static_cast<std::ptrdiff_t>(last));
+    for (size_t i = first; i < last; ++i)
+      if (settled(tracks[i])) order.push_back(i);
+    std::vector<Track> items;
+    for (const size_t i : order) items.push_back(tracks[i]);
     for (Track& tr : items) tr.wave.clear();
     items.insert(items.end(), obstacles.begin(), obstacles.end());
     const size_t m = items.size();
@@ -2336,7 +2421,7 @@ public:
       }
     };
     const double lambda = 1e-3;
-    const std::vector<size_t> whole = whole_tracks(items, n, tmin, tmax);
+    const std::vector<size_t> whole = whole_tracks(items, order.size(), tmin, tmax);  // the settled too
     std::vector<size_t> plus;
     for (const size_t i : whole)
       if (items[i].index > 0) plus.push_back(i);
@@ -2504,8 +2589,7 @@ public:
       if (best) break;
     }
     if (!best) return false;
-    std::copy(best->begin(), best->begin() + static_cast<std::ptrdiff_t>(n),
-              tracks.begin() + static_cast<std::ptrdiff_t>(first));
+    for (size_t q = 0; q < order.size(); ++q) tracks[order[q]] = (*best)[q];
     return true;
   }
 
@@ -2723,10 +2807,92 @@ private:
 
   const DesignSpace& space_;
   double separation_;
+  std::vector<double> keyframe_times_;
+  mutable std::vector<double> caps_;  // set_caps(): caps_[i * caps_n_ + j] for slots i, j
+  mutable size_t caps_n_ = 0;
   std::vector<std::pair<Vec3, Vec3>> boundary_;
 };
 
 }  // namespace
+
+KeyframeMatch match_keyframe_singularities(std::span<const Singularity> A, std::span<const Singularity> B,
+                                           const KeyframeMatchRules& rules) {
+  KeyframeMatch out;
+  std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
+  std::vector<std::pair<size_t, size_t>>& pairs = out.matched;
+  for (const auto& [a, b] : rules.links) {
+    ma[a] = static_cast<int>(b);
+    mb[b] = static_cast<int>(a);
+    pairs.emplace_back(a, b);
+  }
+  match_nearest(A, B, ma, mb, [](const Singularity& x, const Singularity& y) { return x.type == y.type; }, pairs);
+  match_nearest(A, B, ma, mb,
+                [](const Singularity& x, const Singularity& y) {
+                  return x.index == y.index && stability(x.type) * stability(y.type) >= 0;
+                },
+                pairs);
+  // Two of the static solve's own nodes that trade places (a repelling focus on one ear and
+  // an attracting one on the other in the first key frame, the other way round in the
+  // second: matching by type carries each across the surface) are matched in place instead
+  // where their paths would cross and in place they would not, or else where that carries
+  // less, a stability change counting turnover_cost more (passes over all pairs until
+  // none swaps, at most 64: a swap can make a crossing with a third). Linked and designed
+  // singularities keep their matches (the user named them: a source and a center trading
+  // places are meant to).
+  auto own = [&](size_t a, size_t b) {
+    return A[a].index > 0 && !(a < rules.designed_a.size() && rules.designed_a[a]) &&
+           !(b < rules.designed_b.size() && rules.designed_b[b]);
+  };
+  auto cost = [&](size_t a, size_t b) {
+    return (A[a].position - B[b].position).norm() +
+           (stability(A[a].type) * stability(B[b].type) < 0 ? rules.turnover_cost : 0.0);
+  };
+  // Whether a1 → b1 and a2 → b2, moving straight at the same pace, cross: their relative
+  // position passes nearer than half of what either key frame holds them apart (two foci
+  // 0.01 apart trading stability would pass through each other, where no detour parts
+  // them; turning over in place they keep their distance).
+  auto cross = [&](size_t a1, size_t b1, size_t a2, size_t b2) {
+    const Vec3 r0 = A[a1].position - A[a2].position, r1 = B[b1].position - B[b2].position, d = r1 - r0;
+    const double s = d.squaredNorm() > 0 ? std::clamp(-r0.dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+    return (r0 + s * d).norm() < 0.5 * std::min(r0.norm(), r1.norm());
+  };
+  for (int pass = 0, again = 1; again && pass < 64; ++pass) {
+    again = 0;
+    for (size_t i = rules.links.size(); i < pairs.size(); ++i)
+      for (size_t j = i + 1; j < pairs.size(); ++j) {
+        const auto [a1, b1] = pairs[i];
+        const auto [a2, b2] = pairs[j];
+        if (!own(a1, b1) || !own(a2, b2)) continue;
+        const bool crossing = cross(a1, b1, a2, b2), other_crossing = cross(a1, b2, a2, b1);
+        if ((crossing && !other_crossing) ||
+            (crossing == other_crossing && cost(a1, b2) + cost(a2, b1) < cost(a1, b1) + cost(a2, b2))) {
+          pairs[i].second = b2;
+          pairs[j].second = b1;
+          mb[b2] = static_cast<int>(a1);
+          mb[b1] = static_cast<int>(a2);
+          ma[a1] = static_cast<int>(b2);
+          ma[a2] = static_cast<int>(b1);
+          again = 1;
+        }
+      }
+  }
+  // The unmatched of each key frame in saddle–node pairs (cancelled or created).
+  out.cancelled = pair_unmatched(A, ma);
+  out.created = pair_unmatched(B, mb);
+  // The last resort, for what neither matched nor paired: a node of one stability in the
+  // first key frame and one of the other in the second (the static solve's far foci turn
+  // over), nearest first within stability_reach. Carried like any match, its α turns
+  // through a center on the way (track_jacobian: |α| > |β| throughout, so det J > 0; a
+  // Hopf-like passage, not a saddle–node pair).
+  for (const auto& [si, ni] : out.cancelled) ma[si] = ma[ni] = static_cast<int>(B.size());
+  for (const auto& [si, ni] : out.created) mb[si] = mb[ni] = static_cast<int>(A.size());
+  match_nearest(A, B, ma, mb,
+                [&](const Singularity& x, const Singularity& y) {
+                  return x.index == y.index && (x.position - y.position).norm() <= rules.stability_reach;
+                },
+                pairs);
+  return out;
+}
 
 KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene& scene,
                                            const std::vector<std::vector<cplx>>& keyframe_fields) {
@@ -2740,15 +2906,21 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
 
   // A linked key-frame element's singularity: the nearest of its key frame's field.
   const double link_reach = std::max(scene.solver.region_radius, 3 * h);
-  auto linked_singularity = [&](size_t link, int key, int element) {
-    const Vec3 at = scene.keyframes[static_cast<size_t>(key)].elements[static_cast<size_t>(element)].at;
+  // The singularity of key frame `key`'s field that the element at `at` stands for: the
+  // nearest within link_reach (−1: none).
+  auto element_singularity = [&](size_t key, const Vec3& at) {
     const Vec3 p = surface_position(mesh, space.locate(at));
     int best = -1;
     double best_d = link_reach;
-    for (size_t s = 0; s < sing[static_cast<size_t>(key)].size(); ++s) {
-      const double dist = (sing[static_cast<size_t>(key)][s].position - p).norm();
+    for (size_t s = 0; s < sing[key].size(); ++s) {
+      const double dist = (sing[key][s].position - p).norm();
       if (dist <= best_d) best = static_cast<int>(s), best_d = dist;
     }
+    return best;
+  };
+  auto linked_singularity = [&](size_t link, int key, int element) {
+    const int best = element_singularity(
+        static_cast<size_t>(key), scene.keyframes[static_cast<size_t>(key)].elements[static_cast<size_t>(element)].at);
     if (best < 0)
       throw_input_error(scene.label(), fmt::format("solver.links[{}]", link),
                         fmt::format("keyframes[{}].elements[{}] has no singularity of the key frame's field within {:.3g} "
@@ -2756,6 +2928,15 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
                                     key, element, link_reach));
     return static_cast<size_t>(best);
   };
+
+  // designed[k][s]: singularity s of key frame k is the one a singular element of that key
+  // frame names (the nearest within link_reach, as a link would take it).
+  std::vector<std::vector<char>> designed(nk);
+  for (size_t k = 0; k < nk; ++k) {
+    designed[k].assign(sing[k].size(), 0);
+    for (const KeyframeElement& e : scene.keyframes[k].elements)
+      if (const int s = e.kind == "singular" ? element_singularity(k, e.at) : -1; s >= 0) designed[k][static_cast<size_t>(s)] = 1;
+  }
 
   // The mesh's vertex neighbours (surface_curve's edge paths).
   std::vector<std::vector<int>> neighbours;
@@ -2791,7 +2972,9 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   // How far a node that changes stability may be carried (the last resort below): a
   // quarter of the domain's diameter, at least the separation.
   const double stability_reach = std::max(0.25 * space.diameter(), separation);
-  const PathRouter router(space, separation);
+  std::vector<double> keyframe_times;
+  for (const Keyframe& key : scene.keyframes) keyframe_times.push_back(key.t);
+  const PathRouter router(space, separation, keyframe_times);
   int groups = 0;
   for (size_t k = 0; k + 1 < nk; ++k) {
     const size_t first_track = tracks_.size();
@@ -2807,56 +2990,38 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     rep.t1 = scene.keyframes[k + 1].t;
     rep.bifurcation_t = k < scene.solver.bifurcation_times.size() ? scene.solver.bifurcation_times[k]
                                                                    : 0.5 * (rep.t0 + rep.t1);
-    std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
-    std::vector<std::pair<size_t, size_t>> pairs;
-    std::vector<char> linked_pair;
-    for (size_t l = 0; l < scene.solver.links.size(); ++l) {
-      const KeyframeLink& link = scene.solver.links[l];
-      if (link.from_keyframe != static_cast<int>(k)) continue;
-      const size_t a = linked_singularity(l, link.from_keyframe, link.from_element);
-      const size_t b = linked_singularity(l, link.to_keyframe, link.to_element);
-      if (ma[a] >= 0 || mb[b] >= 0)
-        throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
-                          "links a singularity of the key frames' fields that an earlier link already holds (the two "
-                          "elements are too close to tell apart)");
-      if (A[a].index != B[b].index)
-        throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
-                          fmt::format("the key frames' fields have singularities of index {} and {} at the linked "
-                                      "elements; linked singularities must have the same index",
-                                      A[a].index, B[b].index));
-      ma[a] = static_cast<int>(b);
-      mb[b] = static_cast<int>(a);
-      pairs.emplace_back(a, b);
-    }
-    const size_t n_linked = pairs.size();
-    match_nearest(A, B, ma, mb, [](const Singularity& x, const Singularity& y) { return x.type == y.type; }, pairs);
-    match_nearest(A, B, ma, mb,
-                  [](const Singularity& x, const Singularity& y) {
-                    return x.index == y.index && stability(x.type) * stability(y.type) >= 0;
-                  },
-                  pairs);
-    // The unmatched of each key frame in saddle–node pairs (cancelled or created below).
-    const std::array<std::vector<std::pair<size_t, size_t>>, 2> side_pairs{pair_unmatched(A, ma), pair_unmatched(B, mb)};
-    // The last resort, for what neither matched nor paired: a node of one stability in the
-    // first key frame and one of the other in the second (the static solve's far foci turn
-    // over), nearest first within stability_reach. Carried like any match, its α turns
-    // through a center on the way (track_jacobian: |α| > |β| throughout, so det J > 0; a
-    // Hopf-like passage, not a saddle–node pair).
+    KeyframeMatchRules rules;
     {
-      std::vector<int> fa = ma, fb = mb;  // the paired count as taken
-      for (const auto& [si, ni] : side_pairs[0]) fa[si] = fa[ni] = static_cast<int>(B.size());
-      for (const auto& [si, ni] : side_pairs[1]) fb[si] = fb[ni] = static_cast<int>(A.size());
-      const size_t before = pairs.size();
-      match_nearest(A, B, fa, fb,
-                    [&](const Singularity& x, const Singularity& y) {
-                      return x.index == y.index && (x.position - y.position).norm() <= stability_reach;
-                    },
-                    pairs);
-      for (size_t m = before; m < pairs.size(); ++m) {
-        ma[pairs[m].first] = static_cast<int>(pairs[m].second);
-        mb[pairs[m].second] = static_cast<int>(pairs[m].first);
+      std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
+      for (size_t l = 0; l < scene.solver.links.size(); ++l) {
+        const KeyframeLink& link = scene.solver.links[l];
+        if (link.from_keyframe != static_cast<int>(k)) continue;
+        const size_t a = linked_singularity(l, link.from_keyframe, link.from_element);
+        const size_t b = linked_singularity(l, link.to_keyframe, link.to_element);
+        if (ma[a] >= 0 || mb[b] >= 0)
+          throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
+                            "links a singularity of the key frames' fields that an earlier link already holds (the "
+                            "two elements are too close to tell apart)");
+        if (A[a].index != B[b].index)
+          throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
+                            fmt::format("the key frames' fields have singularities of index {} and {} at the linked "
+                                        "elements; linked singularities must have the same index",
+                                        A[a].index, B[b].index));
+        ma[a] = static_cast<int>(b);
+        mb[b] = static_cast<int>(a);
+        rules.links.emplace_back(a, b);
       }
     }
+    rules.designed_a = designed[k];
+    rules.designed_b = designed[k + 1];
+    rules.turnover_cost = separation;
+    rules.stability_reach = stability_reach;
+    const KeyframeMatch matching = match_keyframe_singularities(A, B, rules);
+    const std::vector<std::pair<size_t, size_t>>& pairs = matching.matched;
+    const size_t n_linked = rules.links.size();
+    const std::array<std::vector<std::pair<size_t, size_t>>, 2> side_pairs{matching.cancelled, matching.created};
+    std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
+    for (const auto& [a, b] : pairs) ma[a] = static_cast<int>(b), mb[b] = static_cast<int>(a);
     for (size_t m = 0; m < pairs.size(); ++m) {
       const Singularity& a = A[pairs[m].first];
       const Singularity& b = B[pairs[m].second];

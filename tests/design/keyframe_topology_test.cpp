@@ -1060,6 +1060,92 @@ TEST(KeyframeTopology, AMatchedPathOnASurfaceIsACurveOnIt) {
 // of searching for a joint detour of every path (CGAL's elephant: two saddles 0.065 apart
 // at the first key frame, separation 0.1; 16 s of the joint search before). The report
 // names the key frame and the distance it holds them at.
+// Matching (match_keyframe_singularities): the static solve's own foci that trade places
+// (a repelling one at p and an attracting one at q in the first key frame, the other way
+// round in the second) turn over where they are instead of each travelling to the other's
+// place; a designed singularity keeps its type (a source and a center trading places are
+// meant to), and so does a linked one.
+TEST(KeyframeTopology, TheStaticSolvesOwnFociTurnOverInPlace) {
+  auto at = [](SingularityType type, double x, double y) {
+    Singularity s;
+    s.type = type;
+    s.index = type == SingularityType::saddle ? -1 : 1;
+    s.position = Vec3(x, y, 0);
+    return s;
+  };
+  using T = SingularityType;
+  // Two far foci swapping stability (1 apart), a source and a center trading places (0.3).
+  const std::vector<Singularity> A{at(T::repelling_focus, -0.5, 0.8), at(T::attracting_focus, 0.5, 0.8),
+                                   at(T::source, -0.15, 0), at(T::center, 0.15, 0)};
+  const std::vector<Singularity> B{at(T::attracting_focus, -0.5, 0.8), at(T::repelling_focus, 0.5, 0.8),
+                                   at(T::center, -0.15, 0), at(T::source, 0.15, 0)};
+  KeyframeMatchRules rules;
+  rules.turnover_cost = 0.3;
+  using Pairs = std::vector<std::pair<size_t, size_t>>;
+  // Nobody designed any: everything turns over in place (the source and the center too:
+  // same stability class, nothing to pay).
+  KeyframeMatch m = match_keyframe_singularities(A, B, rules);
+  std::sort(m.matched.begin(), m.matched.end());
+  EXPECT_EQ(m.matched, (Pairs{{0, 0}, {1, 1}, {2, 2}, {3, 3}}));
+  // The source and the center designed: they trade places, the foci still turn over.
+  rules.designed_a = {0, 0, 1, 1};
+  rules.designed_b = {0, 0, 1, 1};
+  m = match_keyframe_singularities(A, B, rules);
+  std::sort(m.matched.begin(), m.matched.end());
+  EXPECT_EQ(m.matched, (Pairs{{0, 0}, {1, 1}, {2, 3}, {3, 2}}));
+  EXPECT_TRUE(m.cancelled.empty());
+  EXPECT_TRUE(m.created.empty());
+  // Two foci 0.2 apart trading stability: by type each would run through the other (no
+  // detour parts them where the key frames hold them closer than the separation), so they
+  // turn over in place although that counts 2 × 0.3 against 0.4 of travel.
+  const std::vector<Singularity> A2{at(T::repelling_focus, -0.1, 0.8), at(T::attracting_focus, 0.1, 0.8)};
+  const std::vector<Singularity> B2{at(T::attracting_focus, -0.1, 0.8), at(T::repelling_focus, 0.1, 0.8)};
+  m = match_keyframe_singularities(A2, B2, KeyframeMatchRules{{}, {}, {}, 0.3});
+  std::sort(m.matched.begin(), m.matched.end());
+  EXPECT_EQ(m.matched, (Pairs{{0, 0}, {1, 1}}));
+  // Paths that do not cross: by type 2 × 0.78; the other way 2 × 0.64 of travel but two
+  // turnovers at 0.3 each: kept by type. Free turnovers take the shorter travel.
+  const std::vector<Singularity> A3{at(T::repelling_focus, 0, 0), at(T::attracting_focus, 1, 0)};
+  const std::vector<Singularity> B3{at(T::repelling_focus, 0.6, 0.5), at(T::attracting_focus, 0.4, -0.5)};
+  m = match_keyframe_singularities(A3, B3, KeyframeMatchRules{{}, {}, {}, 0.3});
+  std::sort(m.matched.begin(), m.matched.end());
+  EXPECT_EQ(m.matched, (Pairs{{0, 0}, {1, 1}}));
+  m = match_keyframe_singularities(A3, B3, KeyframeMatchRules{{}, {}, {}, 0.0});
+  std::sort(m.matched.begin(), m.matched.end());
+  EXPECT_EQ(m.matched, (Pairs{{0, 1}, {1, 0}}));
+  // Linked pairs are kept as linked.
+  m = match_keyframe_singularities(A, B, KeyframeMatchRules{{{0, 1}}, {}, {}, 0.3});
+  EXPECT_EQ(m.matched.front(), (std::pair<size_t, size_t>{0, 1}));
+}
+
+// Two singularities the key frames hold closer than path_separation and that stay put are
+// not bent apart in between: what a pair must keep is never more than the nearer of its
+// two key frames holds it (the static solve's own saddles and foci on scanned meshes sit
+// that close and barely move; bending them apart set off the router on every such pair).
+TEST(KeyframeTopology, PairsTheKeyFramesHoldCloseAreNotPartedInBetween) {
+  const std::string text = R"({"tvf": 1, "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 17, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.1, "path_separation": 0.4, "keyframe_topology": "matched"},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.15, 0]},
+                            {"kind": "singular", "type": "sink", "at": [0.15, 0]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [-0.15, 0.02]},
+                            {"kind": "singular", "type": "sink", "at": [0.15, -0.02]}]}]})";
+  const Generated g = run(text);
+  const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+  // The source, the sink and the two saddles the static solve puts above and below them,
+  // each moving 0.02–0.09; the nearest two 0.26 apart at the key frames. Asked for the
+  // separation in between, all four were bent (detours 0.09–0.21, routed pairwise).
+  ASSERT_EQ(r.matched.size(), 4u);
+  EXPECT_EQ(r.routing, "straight");
+  EXPECT_TRUE(r.collision.empty()) << r.collision;
+  for (const auto& m : r.matched) EXPECT_EQ(m.detour, 0.0);
+  EXPECT_GT(r.closest_approach, 0.26);
+  EXPECT_TRUE(r.guided);
+  EXPECT_EQ(g.topology.bifurcations.size(), 0u);
+  for (const auto& frame : g.topology.singularities) EXPECT_EQ(frame.size(), 4u);
+}
+
 TEST(KeyframeTopology, PathsAKeyFrameHoldsTooCloseAreReportedAtOnce) {
   const Planned p = plan_of(held_strip_scene("matched"));
   const KeyframeIntervalReport& r = p.plan->intervals().at(0);

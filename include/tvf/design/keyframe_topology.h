@@ -3,10 +3,12 @@
 // topology at the key frames is defined"). With "solver": {"keyframe_topology":
 // "matched"} the spacetime generator
 //  1. finds the singularities of every key frame's field (find_singularities);
-//  2. matches those of consecutive key frames: first the pairs the scene links
-//     (solver.links, by key-frame element), then the same type nearest first, then the
-//     same index nearest first (never a source with a sink: a node keeps its stability);
-//     last, of what step 4 leaves neither matched nor paired, the same index nearest first
+//  2. matches those of consecutive key frames (match_keyframe_singularities): first the
+//     pairs the scene links (solver.links, by key-frame element), then the same type
+//     nearest first, then the same index nearest first (never a source with a sink: a node
+//     keeps its stability); two of the static solve's own nodes that would trade places
+//     are matched in place instead where that carries less (a stability change counting
+//     solver.path_separation more); last, of what step 4 leaves neither matched nor paired, the same index nearest first
 //     across stability (a source-like node in one key frame, a sink-like one in the next,
 //     within a quarter of the domain's diameter): its α turns through a center on the way
 //     (|α| > |β| throughout, det J > 0), a Hopf-like type change, not a saddle–node pair;
@@ -31,7 +33,9 @@
 //     smooth bump perpendicular to their relative motion at the closest approach, full
 //     while they are too close and vanishing at the key frames (ends and times kept; near
 //     a key frame that holds them closer, the separation eases to what their straight
-//     paths keep), shared between the two in
+//     paths keep; two that both key frames hold closer than the separation and whose
+//     straight paths do not approach need keep only what those keep; a path that moves
+//     less than a tenth of the separation is never bent), shared between the two in
 //     proportion to their lengths (the shortest pair of paths) unless that leaves the
 //     domain or comes nearer its boundary than half the separation, when the other side
 //     or one path alone is taken; when no detour fits, the interval's paths stay straight
@@ -41,7 +45,8 @@
 //  6. when bending one pair after the other does not settle (three or more paths
 //     knotted), leaves a path nearer than the separation to a saddle–node template while
 //     it holds, or (planar domains) lets the nodes' phases in the product model
-//     c Π_j g_j(z) drift half a turn apart, routes all the interval's paths at once: smooth
+//     c Π_j g_j(z) drift half a turn apart, routes all the interval's moving paths at once
+//     (the ones that move less than a tenth of the separation stand in the way): smooth
 //     detours (sin(πs) sin(kπs), k = 1..4) that bend least under the separation, the
 //     boundary margin and the phase drift (Levenberg–Marquardt from each choice of sides);
 //     when that fails too, the paths stay straight with the warning of 5. Bounded: the
@@ -74,9 +79,10 @@
 #include <nlohmann/json.hpp>
 
 #include <limits>
-#include <span>
 #include <optional>
+#include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tvf {
@@ -132,6 +138,28 @@ struct KeyframeIntervalReport {
   bool fallback = false;
   std::string unguided_reason;
 };
+
+// Step 2's and 4's matching of two consecutive key frames' singularities (A: the first's,
+// B: the second's). Matched: the links, then the same type nearest first, then the same
+// index nearest first with the stability kept; then, among the matched nodes that neither a
+// link nor a designed element holds (the static solve's own), two that trade places are
+// matched in place instead wherever that carries less, a stability change counting
+// `turnover_cost` more (the static solve's far foci turn over where they are rather than
+// travel across the surface to where the other key frame has one of their kind); then the
+// left over are paired (saddle with node, nearest first, each key frame apart); last, what
+// is neither matched nor paired is matched across stability within `stability_reach`.
+struct KeyframeMatchRules {
+  std::vector<std::pair<size_t, size_t>> links;  // (in A, in B), checked by the caller
+  std::vector<char> designed_a, designed_b;      // the singularity a singular element names (empty: none)
+  double turnover_cost = 0;
+  double stability_reach = std::numeric_limits<double>::infinity();
+};
+struct KeyframeMatch {
+  std::vector<std::pair<size_t, size_t>> matched;  // (in A, in B): the links first
+  std::vector<std::pair<size_t, size_t>> cancelled, created;  // (saddle, node) of A, of B
+};
+KeyframeMatch match_keyframe_singularities(std::span<const Singularity> A, std::span<const Singularity> B,
+                                           const KeyframeMatchRules& rules);
 
 // The constraints that keep the topology between key frames, planned once per generation.
 class KeyframeTopologyPlan {
