@@ -1055,11 +1055,6 @@ TEST(KeyframeTopology, AMatchedPathOnASurfaceIsACurveOnIt) {
   EXPECT_LT(off_circle, h);
 }
 
-// Two paths a key frame already holds closer than the separation, which no detour of their
-// own parts: the collision is the key frames' own, so the router says so at once instead
-// of searching for a joint detour of every path (CGAL's elephant: two saddles 0.065 apart
-// at the first key frame, separation 0.1; 16 s of the joint search before). The report
-// names the key frame and the distance it holds them at.
 // Matching (match_keyframe_singularities): the static solve's own foci that trade places
 // (a repelling one at p and an attracting one at q in the first key frame, the other way
 // round in the second) turn over where they are instead of each travelling to the other's
@@ -1118,10 +1113,10 @@ TEST(KeyframeTopology, TheStaticSolvesOwnFociTurnOverInPlace) {
   EXPECT_EQ(m.matched.front(), (std::pair<size_t, size_t>{0, 1}));
 }
 
-// Two singularities the key frames hold closer than path_separation and that stay put are
-// not bent apart in between: what a pair must keep is never more than the nearer of its
-// two key frames holds it (the static solve's own saddles and foci on scanned meshes sit
-// that close and barely move; bending them apart set off the router on every such pair).
+// Two singularities the key frames hold closer than path_separation and that barely move
+// are not bent apart in between: two whose straight paths do not approach keep what those
+// keep (the static solve's own saddles and foci on scanned meshes sit that close and barely
+// move; bending them apart set off the router on every such pair).
 TEST(KeyframeTopology, PairsTheKeyFramesHoldCloseAreNotPartedInBetween) {
   const std::string text = R"({"tvf": 1, "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
     "time": {"frames": 17, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
@@ -1146,6 +1141,11 @@ TEST(KeyframeTopology, PairsTheKeyFramesHoldCloseAreNotPartedInBetween) {
   for (const auto& frame : g.topology.singularities) EXPECT_EQ(frame.size(), 4u);
 }
 
+// Two paths a key frame already holds closer than the separation, which no detour of their
+// own parts: the collision is the key frames' own, so the router says so at once instead
+// of searching for a joint detour of every path (CGAL's elephant: two saddles 0.065 apart
+// at the first key frame, separation 0.1; 16 s of the joint search before). The report
+// names the key frame and the distance it holds them at.
 TEST(KeyframeTopology, PathsAKeyFrameHoldsTooCloseAreReportedAtOnce) {
   const Planned p = plan_of(held_strip_scene("matched"));
   const KeyframeIntervalReport& r = p.plan->intervals().at(0);

@@ -7,9 +7,9 @@
 //     pairs the scene links (solver.links, by key-frame element), then the same type
 //     nearest first, then the same index nearest first (never a source with a sink: a node
 //     keeps its stability); two of the static solve's own nodes that would trade places
-//     are matched in place instead where that carries less (a stability change counting
-//     solver.path_separation more); last, of what step 4 leaves neither matched nor paired, the same index nearest first
-//     across stability (a source-like node in one key frame, a sink-like one in the next,
+//     are matched in place instead where their paths would cross or where that carries
+//     less (a stability change counting solver.path_separation more); last, of what step 4
+//     leaves neither matched nor paired, the same index nearest first across stability (a source-like node in one key frame, a sink-like one in the next,
 //     within a quarter of the domain's diameter): its α turns through a center on the way
 //     (|α| > |β| throughout, det J > 0), a Hopf-like type change, not a saddle–node pair;
 //     the shorter way round, or the other where the planar guide's nodes' phases would
@@ -143,9 +143,11 @@ struct KeyframeIntervalReport {
 // B: the second's). Matched: the links, then the same type nearest first, then the same
 // index nearest first with the stability kept; then, among the matched nodes that neither a
 // link nor a designed element holds (the static solve's own), two that trade places are
-// matched in place instead wherever that carries less, a stability change counting
-// `turnover_cost` more (the static solve's far foci turn over where they are rather than
-// travel across the surface to where the other key frame has one of their kind); then the
+// matched in place instead where their paths would cross (their relative position passing
+// nearer than half of what either key frame holds them apart) and in place they would not,
+// or else where that carries less, a stability change counting `turnover_cost` more (the
+// static solve's far foci turn over where they are rather than travel across the surface
+// to where the other key frame has one of their kind); then the
 // left over are paired (saddle with node, nearest first, each key frame apart); last, what
 // is neither matched nor paired is matched across stability within `stability_reach`.
 struct KeyframeMatchRules {
