@@ -51,8 +51,9 @@
 //     boundary margin and the phase drift (Levenberg–Marquardt from each choice of sides);
 //     when that fails too, the paths stay straight with the warning of 5. Bounded: the
 //     joint search is not tried for two paths a key frame already holds closer than the
-//     separation (the collision is the key frames' own), and stops after a fixed number
-//     of Levenberg–Marquardt steps over all its starts.
+//     separation that no detour of their own parts (the collision is the key frames' own;
+//     it is where the pairwise rounds merely ran out), and stops after a fixed number of
+//     Levenberg–Marquardt steps over all its starts.
 //  7. in a routed interval, turns each saddle's axes with its neighbours (its β follows
 //     the product model's phase) instead of keeping the key frames' axes.
 //  8. on planar domains, fixes every free vertex of the frames strictly between the two
