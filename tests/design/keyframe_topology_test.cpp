@@ -678,11 +678,10 @@ TEST(KeyframeTopology, APairsNodeOnASphereKeepsItsType) {
 // 2.5 edge lengths wide there, and the field turns fast across it).
 TEST(KeyframeTopology, AKnotOnARealMeshIsGuided) {
   const test::TempDir dir;
-  const std::string archive = "/usr/share/doc/libcgal-dev/data.tar.gz";
-  const std::string cmd = fmt::format("tar -xzf '{}' -C '{}' data/meshes/blobby.off 2>/dev/null", archive, dir.path().string());
-  if (!std::filesystem::exists(archive) || std::system(cmd.c_str()) != 0)
-    GTEST_SKIP() << archive << " is missing or has no data/meshes/blobby.off (Debian package libcgal-demo)";
-  const std::filesystem::path coarse = dir / "data/meshes/blobby.off";
+  const std::optional<std::filesystem::path> blobby_off = test::cgal_mesh(dir, "blobby");
+  if (!blobby_off)
+    GTEST_SKIP() << test::kCgalArchive << " is missing or has no data/meshes/blobby.off (Debian package libcgal-demo)";
+  const std::filesystem::path coarse = *blobby_off;
   // The finer mesh: each face split in four, written as OFF.
   const Mesh fine = subdivide_faces(load_mesh(coarse.string()).mesh, 2).mesh;
   {
@@ -710,12 +709,11 @@ TEST(KeyframeTopology, AKnotOnARealMeshIsGuided) {
 // singularities every frame, no saddle–node bifurcation.
 TEST(KeyframeTopology, AKnotOnCGALsMushroomIsRoutedTogetherAndGuided) {
   const test::TempDir dir;
-  const std::string archive = "/usr/share/doc/libcgal-dev/data.tar.gz";
-  const std::string cmd = fmt::format("tar -xzf '{}' -C '{}' data/meshes/mushroom.off 2>/dev/null", archive, dir.path().string());
-  if (!std::filesystem::exists(archive) || std::system(cmd.c_str()) != 0)
-    GTEST_SKIP() << archive << " is missing or has no data/meshes/mushroom.off (Debian package libcgal-demo)";
+  const std::optional<std::filesystem::path> mushroom_off = test::cgal_mesh(dir, "mushroom");
+  if (!mushroom_off)
+    GTEST_SKIP() << test::kCgalArchive << " is missing or has no data/meshes/mushroom.off (Debian package libcgal-demo)";
   const std::string p = "[0.226893, 0.000169333, 0.227341]", q = "[0.182076, 0.232276, 0.222321]";
-  const Generated g = run(R"({"tvf": 1, "domain": {"mesh": ")" + (dir / "data/meshes/mushroom.off").string() + R"("},
+  const Generated g = run(R"({"tvf": 1, "domain": {"mesh": ")" + mushroom_off->string() + R"("},
     "time": {"frames": 32, "range": [0, 1]}, "generator": "spacetime", "falloff": 20,
     "solver": {"region_radius": 0.0744, "keyframe_topology": "matched"},
     "keyframes": [

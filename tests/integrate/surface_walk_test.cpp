@@ -74,11 +74,10 @@ TEST(SurfaceWalk, StopsOnEnteringANamedFace) {
 // on the edge now, where it started to rounding.
 TEST(SurfaceWalk, AWalkAlongAnEdgeByLessThanRoundingEnds) {
   const test::TempDir dir;
-  const std::string archive = "/usr/share/doc/libcgal-dev/data.tar.gz";
-  const std::string cmd = fmt::format("tar -xzf '{}' -C '{}' data/meshes/cow.off 2>/dev/null", archive, dir.path().string());
-  if (!std::filesystem::exists(archive) || std::system(cmd.c_str()) != 0)
-    GTEST_SKIP() << archive << " is missing or has no data/meshes/cow.off (Debian package libcgal-demo)";
-  const Mesh cow = load_mesh((dir / "data/meshes/cow.off").string()).mesh;
+  const std::optional<std::filesystem::path> cow_off = test::cgal_mesh(dir, "cow");
+  if (!cow_off)
+    GTEST_SKIP() << test::kCgalArchive << " is missing or has no data/meshes/cow.off (Debian package libcgal-demo)";
+  const Mesh cow = load_mesh(cow_off->string()).mesh;
   ASSERT_GT(cow.num_faces(), 3762);
   const TangentBundle bundle(cow);
   SurfacePoint p;

@@ -65,4 +65,12 @@ std::string read_text(const std::filesystem::path& path) {
   return ss.str();
 }
 
+std::optional<std::filesystem::path> cgal_mesh(const TempDir& dir, const std::string& name) {
+  const std::string member = "data/meshes/" + name + ".off";
+  if (!std::filesystem::exists(kCgalArchive)) return std::nullopt;
+  const CommandResult r = run_command("tar -xzf " + quoted(kCgalArchive) + " -C " + quoted(dir.path()) + " " + member);
+  if (r.exit_code != 0) return std::nullopt;
+  return dir / member;
+}
+
 }  // namespace tvf::test

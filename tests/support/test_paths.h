@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 namespace tvf::test {
@@ -58,6 +59,12 @@ inline int count_lines(const std::string& s) {
   for (char c : s) n += c == '\n';
   return n;
 }
+
+// libcgal-demo's data archive (Debian), whose sample meshes the tests use as real inputs.
+inline constexpr const char* kCgalArchive = "/usr/share/doc/libcgal-dev/data.tar.gz";
+// Extracts the archive's data/meshes/NAME.off into `dir` and returns its path; nullopt when
+// the archive is missing or has no such mesh (the test then skips, naming kCgalArchive).
+std::optional<std::filesystem::path> cgal_mesh(const TempDir& dir, const std::string& name);
 
 // Writes text to a file (test fixtures).
 void write_text(const std::filesystem::path& path, const std::string& text);
