@@ -417,9 +417,18 @@ TEST(ServeHttp, AHugeHeaderLineIsRefusedQuicklyWithBoundedMemory) {
   EXPECT_LT(sent, kLine) << "the server took the whole 64 MiB line";
   const long long after = peak_resident();
   if (before > 0 && after > 0) {
-    // Under 8 MiB, below the 10 MB line (reading it whole grew the peak by 17 MB): the
-    // sanitizers' allocator adds ~4.5 MiB of its own to the few buffers the refusal needs.
-    EXPECT_LT(after - before, 8LL << 20) << "peak resident set grew by " << after - before;
+    // The peak is the whole process's, so it also holds what the workers' first use costs.
+    // Reading the line whole grows it by at least what the server received (a 10 MB line grew
+    // it by 17 MB). Without sanitizers the refusal's buffers stay under 8 MiB; AddressSanitizer's
+    // allocator (quarantine, per-thread caches, fake stacks) added 4.5 MiB in one run and
+    // 10.2 MiB in a loaded CI run (stop 32), so there the bound is 24 MiB — still far below the
+    // 64 MiB line, which `sent` above shows the server never took whole.
+#if defined(__SANITIZE_ADDRESS__)
+    constexpr long long kBound = 24LL << 20;
+#else
+    constexpr long long kBound = 8LL << 20;
+#endif
+    EXPECT_LT(after - before, kBound) << "peak resident set grew by " << after - before;
   }
   // Still up, and ordinary headers still pass.
   EXPECT_EQ(body(f.client->Get("/api/status"), 200)["state"], "ready");
