@@ -11,6 +11,7 @@
 #include <Eigen/SparseLU>
 
 #include <algorithm>
+#include <numeric>
 #include <cstdlib>
 #include <array>
 #include <cmath>
@@ -1767,10 +1768,25 @@ class PhaseCheck {
     return trial;
   }
 
-  // Whether a choice holds no wrong frame; then the trial's guide is the first such.
+  // Whether a choice holds no wrong frame; then the trial's guide is the first such. A choice
+  // with the nodes' correction must also not turn the frames faster than the same choice
+  // without it (roughness(): at most twice its largest change of a vertex from frame to
+  // frame): Λ blends nodes whose λ differ (up to 1.6 rad on CGAL's mushroom) and the switch
+  // between them sweeps over vertices as the nodes move; there it turned single vertices by
+  // six times the field's mean magnitude from one frame to the next (coherence max/median
+  // 4.1 against 1.6), and the solved frames held a pair the count of G's zeros did not see.
   bool accept(Trial& trial) const {
     for (Trial::Choice& c : trial.choices) {
       count(trial, c, 1);
+      if (c.wrong == 0 && c.nodes && !trial.g.nodes.empty()) {
+        const Trial::Choice plain{false, c.holds};
+        const double with = roughness(trial.g, variant(trial.g, c));
+        const double without = roughness(trial.g, variant(trial.g, plain));
+        if (with > 2 * without) {
+          c.wrong = std::numeric_limits<int>::max(), c.next = order_.size();
+          continue;
+        }
+      }
       if (c.wrong == 0) {
         trial.g = variant(trial.g, c);
         return true;
@@ -1807,6 +1823,28 @@ class PhaseCheck {
     const SurfaceGuide guide = variant(trial.g, c);
     for (; c.next < order_.size() && c.wrong < bound; ++c.next)
       if (wrong_frame(trial.g, guide, order_[c.next])) ++c.wrong;
+  }
+
+  // The largest change of a vertex's value from one of the interval's frames to the next.
+  double roughness(const SurfaceGuide& g, const SurfaceGuide& guide) const {
+    const auto nv = static_cast<size_t>(space_.mesh().num_vertices());
+    std::vector<cplx> prev, values, l;
+    std::vector<char> prev_fixed, fixed;
+    double out = 0;
+    for (size_t i = 0; i < times_.size(); ++i) {
+      const double t = times_[i];
+      if (!(t > guide.t0 && t < guide.t1)) continue;
+      frame_logs(g, i, nv, l);
+      fixed.assign(nv, 0);
+      values.assign(nv, cplx(0, 0));
+      apply_surface_guide(space_, tracks_, guide, t, l, fixed, values);
+      if (!prev.empty())
+        for (size_t v = 0; v < nv; ++v)
+          if (fixed[v] && prev_fixed[v]) out = std::max(out, std::abs(values[v] - prev[v]));
+      prev.swap(values);
+      prev_fixed.swap(fixed);
+    }
+    return out;
   }
 
   // Whether frame i of `guide` (a choice of g's) holds another number of singularities
@@ -1957,6 +1995,36 @@ std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, cons
   return curve;
 }
 
+// Where the +1 singularities' phase drifts (each one's phase change less their mean, so
+// summing to 0) must end for the key frames' types with no whole turn between two of them:
+// each drift's value within (−π, π], unwrapped across the largest gap on the circle (the
+// tightest cluster), less the cluster's whole turns' mean. A drift that ends elsewhere winds
+// whole turns round the others, which no correction of the phase undoes (a source and a
+// center trading places round a saddle on CGAL's mushroom ended at +3.06 and −3.06: each
+// within (−π, π], the two a whole turn apart; their targets are ∓0.08). Where the values lie
+// within π of each other, without wrapping, the targets are those values themselves.
+std::vector<double> phase_targets(const std::vector<double>& ends) {
+  const double two_pi = 2 * std::numbers::pi;
+  std::vector<double> r;
+  for (const double e : ends) r.push_back(std::remainder(e, two_pi));
+  if (r.size() < 2) return r;
+  std::vector<size_t> order(r.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return r[a] < r[b]; });
+  // The largest gap: after order[cut − 1] (cut 0: the gap across ±π, no unwrapping).
+  size_t cut = 0;
+  double widest = r[order.front()] + two_pi - r[order.back()];
+  for (size_t k = 1; k < order.size(); ++k)
+    if (r[order[k]] - r[order[k - 1]] > widest) widest = r[order[k]] - r[order[k - 1]], cut = k;
+  for (size_t k = 0; k < cut; ++k) r[order[k]] += two_pi;
+  double turns = 0;
+  for (size_t i = 0; i < r.size(); ++i) turns += std::round((r[i] - ends[i]) / two_pi);
+  turns /= static_cast<double>(r.size());
+  if (turns != 0)
+    for (double& x : r) x -= two_pi * turns;
+  return r;
+}
+
 // Keeps the singularities carried through one key-frame interval `separation` apart: two
 // paths that come closer at the same time (paths that cross, or pass close) get a detour,
 // a bump perpendicular to their relative motion at the closest approach, full over the
@@ -1977,9 +2045,12 @@ public:
   }
 
   // The carried singularity's point on the domain at time t.
-  Vec3 at(const Track& tr, double t) const {
+  Vec3 at(const Track& tr, double t, int* face = nullptr) const {
     const Vec3 raw = tr.raw(tr.param(t));
-    return space_.planar() ? raw : surface_position(space_.mesh(), space_.locate(raw));
+    if (space_.planar()) return raw;
+    const SurfacePoint sp = space_.locate(raw);
+    if (face) *face = sp.face;
+    return surface_position(space_.mesh(), sp);
   }
 
   // The distance two tracks must keep at time t of their common time [from, to]: the
@@ -2424,7 +2495,7 @@ public:
       }
     };
     const double lambda = 1e-3;
-    const std::vector<size_t> whole = whole_tracks(items, order.size(), tmin, tmax);  // the settled too
+    const PhaseSet whole = whole_tracks(items, order.size(), tmin, tmax, true);  // the settled too
     std::vector<size_t> plus;
     for (const size_t i : whole)
       if (items[i].index > 0) plus.push_back(i);
@@ -2433,10 +2504,12 @@ public:
       std::vector<Track> cur = items;
       apply(x, cur);
       std::vector<std::vector<Vec3>> pos(m, std::vector<Vec3>(kSamples + 1, Vec3::Zero()));
+      std::vector<std::vector<int>> faces(space_.planar() ? 0 : m, std::vector<int>(kSamples + 1, -1));
       for (size_t i = 0; i < m; ++i)
         for (int g = 0; g <= kSamples; ++g)
           if (present(cur[i], grid[static_cast<size_t>(g)]))
-            pos[i][static_cast<size_t>(g)] = at(cur[i], grid[static_cast<size_t>(g)]);
+            pos[i][static_cast<size_t>(g)] = at(cur[i], grid[static_cast<size_t>(g)],
+                                                faces.empty() ? nullptr : &faces[i][static_cast<size_t>(g)]);
       double cost = 0;
       if (jtj) jtj->setZero(N, N), jtr->setZero(N);
       auto add_row = [&](double r, const std::vector<std::pair<int, double>>& row) {
@@ -2488,22 +2561,27 @@ public:
       if (plus.size() >= 2) {
         std::vector<std::vector<double>> phi;
         std::vector<std::vector<std::vector<Vec3>>> dphi;
-        phases(cur, whole, pos, phi, jtj ? &dphi : nullptr);
+        phases(cur, whole, pos, phi, jtj ? &dphi : nullptr, faces.empty() ? nullptr : &faces);
         auto drift = [&](size_t i, size_t g) {
           double mean = 0;
           for (const size_t k : plus) mean += phi[k][g] - phi[k][0];
           return phi[i][g] - phi[i][0] - mean / static_cast<double>(plus.size());
         };
         const double wph = 0.05 * separation_;
-        for (const size_t i : plus) {
-          const double end_drift = std::remainder(drift(i, kSamples), 2 * std::numbers::pi);
+        std::vector<double> ends;
+        for (const size_t i : plus) ends.push_back(drift(i, kSamples));
+        const std::vector<double> targets = phase_targets(ends);
+        for (size_t q = 0; q < plus.size(); ++q) {
+          const size_t i = plus[q];
+          const double end_drift = targets[q];
           for (size_t g = 4; g < static_cast<size_t>(kSamples); g += 4) {
             const double r = wph * (drift(i, g) - smoothstep(static_cast<double>(g) / kSamples) * end_drift);
             row.clear();
             if (jtj)
-              for (const size_t j : whole) {
-                Vec3 v = dphi[i][g][j];
-                for (const size_t k : plus) v -= dphi[k][g][j] / static_cast<double>(plus.size());
+              for (size_t w = 0; w < whole.size(); ++w) {
+                const size_t j = whole.tracks[w];
+                Vec3 v = dphi[i][g][w];
+                for (const size_t k : plus) v -= dphi[k][g][w] / static_cast<double>(plus.size());
                 grad(j, cur[j].param(grid[g]), wph * v, 1.0);
               }
             add_row(r, row);
@@ -2596,6 +2674,18 @@ public:
     return true;
   }
 
+  // The tracks whose phases are modelled (whole_tracks(), below) and which pairs of them
+  // enter each other's phase (m × m over the interval's items).
+  struct PhaseSet {
+    std::vector<size_t> tracks;
+    std::vector<char> pairs;
+    size_t m = 0;
+    bool pair(size_t i, size_t j) const { return pairs[i * m + j] != 0; }
+    std::vector<size_t>::const_iterator begin() const { return tracks.begin(); }
+    std::vector<size_t>::const_iterator end() const { return tracks.end(); }
+    size_t size() const { return tracks.size(); }
+  };
+
   // The phases of an interval's tracks in the product model of a field with their
   // singularities, f(z) = c(t) Π_j g_j(z), g_j = z − p_j for index +1 and conj(z − p_j) for
   // −1 (only the tracks that span the whole interval, `whole`): at singularity i the field
@@ -2603,57 +2693,109 @@ public:
   // the tangent plane, in i's reference frame). A node, focus or center keeps its type only
   // if c e^{iΦ_i} keeps its argument; c is free (the far field may turn), so what matters is
   // each Φ_i's drift from the others' mean. `pos[i][g]`: track i at the grid's sample g.
-  // Fills phi[i][g] (unwrapped along g) for the tracks of `whole`; with `grad`, also
-  // dphi[i][g][j] = ∂Φ_i/∂p_j (world vectors, tangent).
-  double arg_from(const Track& tr, const Vec3& p, const Vec3& d, Vec3* grad) const {
-    if (space_.planar()) {
-      if (grad) *grad = Vec3(-d.y(), d.x(), 0) / d.squaredNorm();
-      return std::atan2(d.y(), d.x());
-    }
-    const int face = space_.locate(p).face;
-    const TangentBundle& bundle = space_.bundle();
-    const cplx c = bundle.world_to_face(face, tr.ref_e1);
-    const cplx cu = std::abs(c) > 0 ? c / std::abs(c) : cplx(1, 0);
-    if (grad) *grad = bundle.face_normal(face).cross(d) / d.squaredNorm();
-    return std::arg(bundle.world_to_face(face, d) * std::conj(cu));
-  }
-  void phases(const std::vector<Track>& items, const std::vector<size_t>& whole,
+  // Fills phi[i][g] (unwrapped along g) for the tracks of `whole`; with `dphi`, also
+  // dphi[i][g][w] = ∂Φ_i/∂p_j, j = whole.tracks[w] (world vectors, tangent; indexed by the
+  // place in `whole`, since on a surface with tens of settled paths few of them wind).
+  // `faces[i][g]`: the face holding pos[i][g] on a surface, where the caller has it.
+  void phases(const std::vector<Track>& items, const PhaseSet& whole,
               const std::vector<std::vector<Vec3>>& pos, std::vector<std::vector<double>>& phi,
-              std::vector<std::vector<std::vector<Vec3>>>* dphi) const {
+              std::vector<std::vector<std::vector<Vec3>>>* dphi,
+              const std::vector<std::vector<int>>* faces = nullptr) const {
     const size_t G = pos.empty() ? 0 : pos[0].size();
     phi.assign(items.size(), std::vector<double>(G, 0.0));
-    if (dphi) dphi->assign(items.size(), std::vector<std::vector<Vec3>>(G, std::vector<Vec3>(items.size(), Vec3::Zero())));
-    for (const size_t i : whole)
+    if (dphi) {
+      dphi->assign(items.size(), {});
+      for (const size_t i : whole) (*dphi)[i].assign(G, std::vector<Vec3>(whole.size(), Vec3::Zero()));
+    }
+    const TangentBundle& bundle = space_.bundle();
+    for (size_t wi = 0; wi < whole.size(); ++wi) {
+      const size_t i = whole.tracks[wi];
       for (size_t g = 0; g < G; ++g) {
+        // Directions in the tangent plane of the face holding p_i, from i's reference axis.
+        int face = -1;
+        cplx cu(1, 0);
+        if (!space_.planar()) {
+          face = faces ? (*faces)[i][g] : space_.locate(pos[i][g]).face;
+          const cplx c = bundle.world_to_face(face, items[i].ref_e1);
+          if (std::abs(c) > 0) cu = c / std::abs(c);
+        }
         double sum = 0;
-        for (const size_t j : whole) {
-          if (j == i) continue;
+        for (size_t wj = 0; wj < whole.size(); ++wj) {
+          const size_t j = whole.tracks[wj];
+          if (j == i || !whole.pair(i, j)) continue;
           const Vec3 d = pos[i][g] - pos[j][g];
           if (d.norm() <= 1e-12 * space_.diameter()) continue;
           Vec3 gr;
-          sum += items[j].index * arg_from(items[i], pos[i][g], d, dphi ? &gr : nullptr);
+          double arg = 0;
+          if (face < 0) {
+            gr = Vec3(-d.y(), d.x(), 0) / d.squaredNorm();
+            arg = std::atan2(d.y(), d.x());
+          } else {
+            gr = bundle.face_normal(face).cross(d) / d.squaredNorm();
+            arg = std::arg(bundle.world_to_face(face, d) * std::conj(cu));
+          }
+          sum += items[j].index * arg;
           if (dphi) {
-            (*dphi)[i][g][i] += items[j].index * gr;
-            (*dphi)[i][g][j] -= items[j].index * gr;
+            (*dphi)[i][g][wi] += items[j].index * gr;
+            (*dphi)[i][g][wj] -= items[j].index * gr;
           }
         }
         phi[i][g] = g == 0 ? sum : phi[i][g - 1] + std::remainder(sum - phi[i][g - 1], 2 * std::numbers::pi);
       }
+    }
   }
-  // The tracks of items[0, n) that span the whole interval [tmin, tmax].
-  // Only on planar domains (on a closed surface the directions to far singularities in one
-  // tangent plane do not make the product model: left to the solve there).
-  std::vector<size_t> whole_tracks(const std::vector<Track>& items, size_t n, double tmin, double tmax) const {
-    std::vector<size_t> out;
-    if (!space_.planar()) return out;
+  // The tracks of items[0, n) that span the whole interval [tmin, tmax], and the pairs of
+  // them whose directions enter each other's phase. On a planar domain every pair (the
+  // product model). On a surface none, except for the joint search (`winding`): there the
+  // directions to far singularities in one tangent plane do not make the product model (on
+  // a closed surface a chord to the far side is nearly normal to it, and its direction
+  // swings as either moves), but a node's type needs the phase's change alone, and a far
+  // pair's direction hardly changes; so a pair counts where their relative position on their
+  // paths before detours (base()) moves by more than they come close, i.e. where one can
+  // wind round the other. CGAL's mushroom: a source and a center trading places round a
+  // saddle, routed jointly without phases, the source wound a whole turn more than the
+  // center; the surface guide then cannot keep their types (PhaseCheck::start) and the
+  // center drifted into a focus and back, with limit cycles (2 Hopf events not asked for).
+  // Not the other uses (the pass that sends paths already apart to the joint search when
+  // their phases drift, the saddles' turns): on CGAL's blobby that pass bent a focus's
+  // pairwise-routed path off the surface.
+  PhaseSet whole_tracks(const std::vector<Track>& items, size_t n, double tmin, double tmax,
+                        bool winding = false) const {
+    PhaseSet out;
+    out.m = items.size();
+    out.pairs.assign(out.m * out.m, space_.planar() ? 1 : 0);
+    if (!space_.planar() && !winding) return out;
     for (size_t i = 0; i < n; ++i)
-      if (std::min(items[i].t0, items[i].t1) <= tmin && std::max(items[i].t0, items[i].t1) >= tmax) out.push_back(i);
+      if (std::min(items[i].t0, items[i].t1) <= tmin && std::max(items[i].t0, items[i].t1) >= tmax) out.tracks.push_back(i);
+    if (space_.planar()) return out;
+    constexpr int kWinding = 32;
+    auto base_at = [](const Track& tr, double t) { return tr.base(tr.param(t)); };
+    for (const size_t i : out.tracks)
+      for (const size_t j : out.tracks) {
+        if (j <= i) continue;
+        double closest = std::numeric_limits<double>::infinity(), moved = 0;
+        const Vec3 d0 = base_at(items[i], tmin) - base_at(items[j], tmin);
+        for (int k = 0; k <= kWinding; ++k) {
+          const double t = tmin + (tmax - tmin) * k / kWinding;
+          const Vec3 d = base_at(items[i], t) - base_at(items[j], t);
+          closest = std::min(closest, d.norm());
+          moved = std::max(moved, (d - d0).norm());
+        }
+        if (moved > closest) out.pairs[i * out.m + j] = out.pairs[j * out.m + i] = 1;
+      }
+    // A track that winds round none has no phase to keep against the others.
+    std::vector<size_t> winds;
+    for (const size_t i : out.tracks)
+      if (std::any_of(out.tracks.begin(), out.tracks.end(), [&](size_t j) { return out.pair(i, j); }))
+        winds.push_back(i);
+    out.tracks = std::move(winds);
     return out;
   }
   // The drift of the +1 tracks' phases from their mean (D_i(g) = Φ_i(g) − Φ_i(0) −
-  // mean_k(Φ_k(g) − Φ_k(0))) beyond what the key frames need (u(g) · remainder(D_i(end),
-  // 2π), u the smoothstep of time): the largest over the +1 tracks of `whole` and the samples.
-  double phase_error(const std::vector<Track>& items, const std::vector<size_t>& whole,
+  // mean_k(Φ_k(g) − Φ_k(0))) beyond what the key frames need (u(g) · T_i, T_i the
+  // phase_targets() of the D_i(end), u the smoothstep of time): the largest over the +1
+  // tracks of `whole` and the samples.
+  double phase_error(const std::vector<Track>& items, const PhaseSet& whole,
                      const std::vector<std::vector<Vec3>>& pos) const {
     std::vector<size_t> plus;
     for (const size_t i : whole)
@@ -2668,8 +2810,12 @@ public:
       return phi[i][g] - phi[i][0] - mean / static_cast<double>(plus.size());
     };
     double out = 0;
-    for (const size_t i : plus) {
-      const double target = std::remainder(drift(i, G - 1), 2 * std::numbers::pi);
+    std::vector<double> ends;
+    for (const size_t i : plus) ends.push_back(drift(i, G - 1));
+    const std::vector<double> targets = phase_targets(ends);
+    for (size_t q = 0; q < plus.size(); ++q) {
+      const size_t i = plus[q];
+      const double target = targets[q];
       for (size_t g = 0; g < G; ++g)
         out = std::max(out, std::abs(drift(i, g) - smoothstep(static_cast<double>(g) / (G - 1)) * target));
     }
@@ -2710,7 +2856,7 @@ public:
                                    tracks.begin() + static_cast<std::ptrdiff_t>(last));
     if (items.size() < 2) return;
     const auto [tmin, tmax] = span_of(items);
-    const std::vector<size_t> whole = whole_tracks(items, items.size(), tmin, tmax);
+    const PhaseSet whole = whole_tracks(items, items.size(), tmin, tmax);
     const std::vector<std::vector<Vec3>> pos = on_grid(items, tmin, tmax);
     std::vector<std::vector<double>> phi;
     phases(items, whole, pos, phi, nullptr);

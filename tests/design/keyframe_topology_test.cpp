@@ -3,6 +3,7 @@
 #include "tvf/analysis/topology.h"
 #include "tvf/design/generate.h"
 #include "tvf/design/keyframes.h"
+#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/mesh/face_subdivision.h"
 #include "tvf/mesh/mesh_io.h"
 #include "tvf/scene/scene_json.h"
@@ -706,7 +707,16 @@ TEST(KeyframeTopology, AKnotOnARealMeshIsGuided) {
 // saddle). Bending one pair after the other chased its tail (300 rounds, the closest pair
 // at 0.9996 of the separation), and the interval fell back as "the key frames' own
 // collision" without trying the joint search, which routes the three and is guided: three
-// singularities every frame, no saddle–node bifurcation.
+// singularities every frame, no saddle–node bifurcation. Routed without the phases (on
+// surfaces the router had none), the source wound a whole turn round the saddle more than
+// the center, so the guide could not keep their types: the center drifted into a focus and
+// back with limit cycles (2 Hopf events) and the source weakened to a focus (trace/√det down
+// to 0.79; a node's is 2). With the phases the three turn like a rigid body and the source
+// stays a node (≥ 1.74 in every frame). The guide's node correction is then possible but
+// turned single vertices six times the field's mean magnitude from frame to frame
+// (coherence max/median 4.1, a saddle–node pair at t = 0.55), so it is not kept
+// (PhaseCheck::accept), and the center's stability still wanders (−2.4 … 1.5) without
+// limit cycles.
 TEST(KeyframeTopology, AKnotOnCGALsMushroomIsRoutedTogetherAndGuided) {
   const test::TempDir dir;
   const std::optional<std::filesystem::path> mushroom_off = test::cgal_mesh(dir, "mushroom");
@@ -727,9 +737,22 @@ TEST(KeyframeTopology, AKnotOnCGALsMushroomIsRoutedTogetherAndGuided) {
   EXPECT_TRUE(r.collision.empty()) << r.collision;
   EXPECT_TRUE(r.guided) << r.unguided_reason;
   EXPECT_TRUE(g.topology.bifurcations.empty());
-  for (const auto& frame : g.topology.singularities) EXPECT_EQ(frame.size(), 3u);
-  std::printf("  mushroom: routed %s, %zu bifurcations, %zu paths\n", r.routing.c_str(), g.topology.bifurcations.size(),
-              g.topology.paths.size());
+  for (const auto& frame : g.topology.singularities) {
+    EXPECT_EQ(frame.size(), 3u);
+    // The source: the most repelling +1 singularity, trace/√det of its Jacobian.
+    double source = -std::numeric_limits<double>::infinity();
+    for (const Singularity& s : frame)
+      if (s.index == 1) source = std::max(source, s.jacobian.trace() / std::sqrt(std::abs(s.jacobian.determinant())));
+    EXPECT_GT(source, 1.5) << "at t = " << (frame.empty() ? -1.0 : frame.front().t);
+  }
+  const PeriodicOrbits orbits = find_periodic_orbits(g.space->bundle(), g.field, g.topology);
+  EXPECT_TRUE(orbits.hopf.empty()) << orbits.hopf.size() << " Hopf events, the first at t = " << orbits.hopf.front().t;
+  std::vector<double> c = g.topology.coherence;
+  std::sort(c.begin(), c.end());
+  const double ratio = c.back() / c[c.size() / 2];
+  EXPECT_LT(ratio, 2.5);
+  std::printf("  mushroom: routed %s, %zu bifurcations, %zu Hopf events, %zu paths, coherence max/median %.2f\n",
+              r.routing.c_str(), g.topology.bifurcations.size(), orbits.hopf.size(), g.topology.paths.size(), ratio);
 }
 
 // A knot of three paths: a source and a center trading places across the saddle the
