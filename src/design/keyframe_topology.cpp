@@ -2025,6 +2025,24 @@ std::vector<double> phase_targets(const std::vector<double>& ends) {
   return r;
 }
 
+// The +1 tracks' phase drifts from their mean, D_i(g) = Φ_i(g) − Φ_i(0) − mean_k(Φ_k(g) −
+// Φ_k(0)) (`phi` the tracks' unwrapped phases, `plus` the +1 tracks), and where they must
+// end (phase_targets of their values at the last sample), in the order of `plus`.
+struct PhaseDrifts {
+  const std::vector<std::vector<double>>& phi;
+  const std::vector<size_t>& plus;
+  double operator()(size_t i, size_t g) const {
+    double mean = 0;
+    for (const size_t k : plus) mean += phi[k][g] - phi[k][0];
+    return phi[i][g] - phi[i][0] - mean / static_cast<double>(plus.size());
+  }
+  std::vector<double> targets(size_t last) const {
+    std::vector<double> ends;
+    for (const size_t i : plus) ends.push_back((*this)(i, last));
+    return phase_targets(ends);
+  }
+};
+
 // Keeps the singularities carried through one key-frame interval `separation` apart: two
 // paths that come closer at the same time (paths that cross, or pass close) get a detour,
 // a bump perpendicular to their relative motion at the closest approach, full over the
@@ -2562,15 +2580,9 @@ public:
         std::vector<std::vector<double>> phi;
         std::vector<std::vector<std::vector<Vec3>>> dphi;
         phases(cur, whole, pos, phi, jtj ? &dphi : nullptr, faces.empty() ? nullptr : &faces);
-        auto drift = [&](size_t i, size_t g) {
-          double mean = 0;
-          for (const size_t k : plus) mean += phi[k][g] - phi[k][0];
-          return phi[i][g] - phi[i][0] - mean / static_cast<double>(plus.size());
-        };
+        const PhaseDrifts drift{phi, plus};
         const double wph = 0.05 * separation_;
-        std::vector<double> ends;
-        for (const size_t i : plus) ends.push_back(drift(i, kSamples));
-        const std::vector<double> targets = phase_targets(ends);
+        const std::vector<double> targets = drift.targets(kSamples);
         for (size_t q = 0; q < plus.size(); ++q) {
           const size_t i = plus[q];
           const double end_drift = targets[q];
@@ -2804,15 +2816,9 @@ public:
     std::vector<std::vector<double>> phi;
     phases(items, whole, pos, phi, nullptr);
     const size_t G = pos[0].size();
-    auto drift = [&](size_t i, size_t g) {
-      double mean = 0;
-      for (const size_t k : plus) mean += phi[k][g] - phi[k][0];
-      return phi[i][g] - phi[i][0] - mean / static_cast<double>(plus.size());
-    };
+    const PhaseDrifts drift{phi, plus};
     double out = 0;
-    std::vector<double> ends;
-    for (const size_t i : plus) ends.push_back(drift(i, G - 1));
-    const std::vector<double> targets = phase_targets(ends);
+    const std::vector<double> targets = drift.targets(G - 1);
     for (size_t q = 0; q < plus.size(); ++q) {
       const size_t i = plus[q];
       const double target = targets[q];
