@@ -35,6 +35,16 @@ Stability stability(SingularityType t) {
   }
   return Stability::saddle;
 }
+// Designed stabilities, as bits: a path designed repelling at some frame and attracting at
+// another changes stability by design (a Hopf event on it is implied, not extra).
+constexpr unsigned kRepelling = 1, kAttracting = 2;
+unsigned stability_bit(SingularityType t) {
+  switch (stability(t)) {
+    case Stability::repelling: return kRepelling;
+    case Stability::attracting: return kAttracting;
+    default: return 0;
+  }
+}
 bool complex_eigenvalues(SingularityType t) {
   return t == SingularityType::center || t == SingularityType::repelling_focus ||
          t == SingularityType::attracting_focus;
@@ -152,6 +162,11 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     return e;
   };
   std::set<int> claimed;
+  // The stabilities the design gives each feature's singularity over its life (kRepelling,
+  // kAttracting), and each path the key-frame plan carries: where a path's design holds
+  // both, its focus changes stability by design and a Hopf event on it is implied.
+  std::map<size_t, unsigned> feature_stabilities;  // index into out.designed
+  std::map<int, unsigned> path_stabilities;        // path id
 
   // The scene's edits (validated with the scene). Cancelled pairs: the frame, the window
   // (frames each way) and the two positions on the domain.
@@ -168,8 +183,10 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
                       {on_domain(c->pair[0]), on_domain(c->pair[1])}});
   auto edit_name = [](size_t i) { return fmt::format("edits[{}]", i); };
 
+  // `stability_designed`: false for a Hopf element's focus, whose designed stability change
+  // is its own Hopf event (matched below), not a licence for others.
   auto add_singularity = [&](const std::string& source, const std::string& type, const std::vector<Expected>& all,
-                             int index, const Vec3& first_position) {
+                             int index, const Vec3& first_position, bool stability_designed = true) {
     DesignedFeature f;
     f.kind = FeatureKind::singularity;
     f.source = source;
@@ -197,6 +214,8 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
       }
     }
     match_singularity(f, expected, topo, tol, claimed);
+    if (stability_designed)
+      for (const Expected& e : all) feature_stabilities[out.designed.size()] |= stability_bit(e.type);
     if (f.frames == 0 && f.frames_edited > 0) {
       f.found = true;  // every frame of its life is in the edit's window
       f.note.clear();
@@ -247,7 +266,7 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
         expected.push_back(expect(j, h->at.position, J));
       }
       template_scales.emplace_back(out.designed.size(), h->scale);
-      add_singularity(source, to_string(h->type), expected, 1, on_domain(h->at.position));
+      add_singularity(source, to_string(h->type), expected, 1, on_domain(h->at.position), false);
       if (N < 2 || h->at.t <= topo.times.front() || h->at.t >= topo.times.back()) continue;
       template_scales.emplace_back(out.designed.size(), h->scale);
       hopf_features.push_back({out.designed.size(), h->type == BifurcationType::hopf_supercritical});
@@ -329,6 +348,7 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
           for (const PathSample& s : p.points)
             if (s.t == t0 && (s.position - m.from).norm() <= tol) {
               claimed.insert(p.id);
+              path_stabilities[p.id] |= stability_bit(m.type) | stability_bit(m.to_type);
               break;
             }
     }
@@ -463,44 +483,46 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
                            to_string(p.type), to_string(q.type), bf.sink ? "sink" : "source");
   }
 
-  // Hopf events: the nearest of the field's within the tolerances, of the designed criticality.
-  if (!hopf_features.empty()) {
-    PeriodicOrbits own;
-    const PeriodicOrbits* orbits = options.orbits;
-    if (!orbits) {
-      own = find_periodic_orbits(space.bundle(), field, topo);
-      orbits = &own;
+  // Hopf events: the nearest of the field's within the tolerances, of the designed
+  // criticality. (The field's others are implied or extra, below: found for every scene.)
+  PeriodicOrbits own_orbits;
+  const PeriodicOrbits* orbits = options.orbits;
+  if (!orbits) {
+    own_orbits = find_periodic_orbits(space.bundle(), field, topo);
+    orbits = &own_orbits;
+  }
+  const int B = static_cast<int>(topo.bifurcations.size());  // Hopf event i is bifurcation B + i
+  std::set<int> designed_hopf;  // indices into orbits->hopf
+  for (const HopfFeature& hf : hopf_features) {
+    DesignedFeature& f = out.designed[hf.feature];
+    double best_score = 1e300;
+    int best = -1;
+    for (size_t i = 0; i < orbits->hopf.size(); ++i) {
+      const HopfEvent& ev = orbits->hopf[i];
+      const double d = (ev.position - f.position).norm();
+      const double dtime = std::abs(ev.t - f.t_begin);
+      if (d > tol || dtime > out.time_tolerance) continue;
+      const double score = d / tol + (out.time_tolerance > 0 ? dtime / out.time_tolerance : 0.0);
+      if (score < best_score) best_score = score, best = static_cast<int>(i);
     }
-    for (const HopfFeature& hf : hopf_features) {
-      DesignedFeature& f = out.designed[hf.feature];
-      double best_score = 1e300;
-      int best = -1;
-      for (size_t i = 0; i < orbits->hopf.size(); ++i) {
-        const HopfEvent& ev = orbits->hopf[i];
-        const double d = (ev.position - f.position).norm();
-        const double dtime = std::abs(ev.t - f.t_begin);
-        if (d > tol || dtime > out.time_tolerance) continue;
-        const double score = d / tol + (out.time_tolerance > 0 ? dtime / out.time_tolerance : 0.0);
-        if (score < best_score) best_score = score, best = static_cast<int>(i);
-      }
-      if (best < 0) {
-        f.note = fmt::format("no Hopf event within {:.3g} and {:.3g} in time of ({}, t = {:.3f})", tol,
-                             out.time_tolerance, position_text(f.position, space.planar()), f.t_begin);
-        continue;
-      }
-      const HopfEvent& ev = orbits->hopf[static_cast<size_t>(best)];
-      f.bifurcation = static_cast<int>(topo.bifurcations.size()) + best;
-      f.distance = (ev.position - f.position).norm();
-      f.time_offset = ev.t - f.t_begin;
-      f.paths = ev.paths;
-      claimed.insert(f.paths.begin(), f.paths.end());
-      f.found = ev.supercritical == hf.supercritical;
-      if (!f.found)
-        f.note = fmt::format("the Hopf event at t = {:.3f} is {} (its cycle is {}), not {}", ev.t,
-                             ev.supercritical ? "supercritical" : "subcritical",
-                             ev.supercritical ? "attracting" : "repelling",
-                             hf.supercritical ? "supercritical" : "subcritical");
+    if (best < 0) {
+      f.note = fmt::format("no Hopf event within {:.3g} and {:.3g} in time of ({}, t = {:.3f})", tol,
+                           out.time_tolerance, position_text(f.position, space.planar()), f.t_begin);
+      continue;
     }
+    const HopfEvent& ev = orbits->hopf[static_cast<size_t>(best)];
+    designed_hopf.insert(best);
+    f.bifurcation = B + best;
+    f.distance = (ev.position - f.position).norm();
+    f.time_offset = ev.t - f.t_begin;
+    f.paths = ev.paths;
+    claimed.insert(f.paths.begin(), f.paths.end());
+    f.found = ev.supercritical == hf.supercritical;
+    if (!f.found)
+      f.note = fmt::format("the Hopf event at t = {:.3f} is {} (its cycle is {}), not {}", ev.t,
+                           ev.supercritical ? "supercritical" : "subcritical",
+                           ev.supercritical ? "attracting" : "repelling",
+                           hf.supercritical ? "supercritical" : "subcritical");
   }
 
   // Cancelled pairs: absent at their frames.
@@ -565,6 +587,33 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     }
     f.paths.assign(ps.begin(), ps.end());
   }
+  // The designed stabilities of each chain of paths joined by type changes.
+  std::vector<unsigned> chain_stabilities(static_cast<size_t>(P), 0);
+  {
+    std::vector<unsigned> own(static_cast<size_t>(P), 0);
+    for (const auto& [p, bits] : path_stabilities) own[static_cast<size_t>(p)] |= bits;
+    for (const auto& [k, bits] : feature_stabilities)
+      for (const int p : out.designed[k].paths) own[static_cast<size_t>(p)] |= bits;
+    std::vector<int> chain(static_cast<size_t>(P), -1);
+    for (int p0 = 0; p0 < P; ++p0) {
+      if (chain[static_cast<size_t>(p0)] >= 0) continue;
+      std::vector<int> members{p0}, todo{p0};
+      chain[static_cast<size_t>(p0)] = p0;
+      unsigned bits = own[static_cast<size_t>(p0)];
+      while (!todo.empty()) {
+        const int p = todo.back();
+        todo.pop_back();
+        for (const int q : continuation[static_cast<size_t>(p)])
+          if (chain[static_cast<size_t>(q)] < 0) {
+            chain[static_cast<size_t>(q)] = p0;
+            bits |= own[static_cast<size_t>(q)];
+            members.push_back(q);
+            todo.push_back(q);
+          }
+      }
+      for (const int p : members) chain_stabilities[static_cast<size_t>(p)] = bits;
+    }
+  }
 
   // A template a few edges wide: its cubic terms at one edge from the zero are then of
   // the order of its linear part near t0, so the piecewise-linear field keeps the old
@@ -603,10 +652,37 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     else
       out.extra_bifurcations.push_back(static_cast<int>(i));
   }
+  // A Hopf event not designed is implied where its focus's design changes stability (every
+  // path of the focus designed, and the design repelling and attracting along them: a node
+  // matched across key frames to one of the other stability, an element turned from source
+  // to sink); else extra. (Without this a designed center that drifts into a focus with a
+  // limit cycle, as on CGAL's mushroom knot, passed as "no extras".)
+  std::vector<int> hopf_on_designed;  // extra Hopf events all of whose paths are designed
+  for (int i = 0; i < static_cast<int>(orbits->hopf.size()); ++i) {
+    if (designed_hopf.count(i)) continue;
+    const HopfEvent& ev = orbits->hopf[static_cast<size_t>(i)];
+    const bool designed_paths = !ev.paths.empty() && std::all_of(ev.paths.begin(), ev.paths.end(), is_claimed);
+    unsigned bits = 0;
+    for (const int p : ev.paths) bits |= chain_stabilities[static_cast<size_t>(p)];
+    if (designed_paths && bits == (kRepelling | kAttracting)) {
+      out.implied_bifurcations.push_back(B + i);
+    } else {
+      out.extra_bifurcations.push_back(B + i);
+      if (designed_paths) hopf_on_designed.push_back(i);
+    }
+  }
+  // The time of bifurcation i of the analysis JSON (saddle–node, then Hopf).
+  auto event_time = [&](int i) {
+    return i < B ? topo.bifurcations[static_cast<size_t>(i)].t : orbits->hopf[static_cast<size_t>(i - B)].t;
+  };
+  auto hopf_text = [](const HopfEvent& ev) {
+    return fmt::format("a {} Hopf event ({} cycle) at t={:.3f}", ev.supercritical ? "supercritical" : "subcritical",
+                       ev.supercritical ? "an attracting" : "a repelling", ev.t);
+  };
   for (int p = 0; p < P; ++p)
     if (!is_claimed(p)) out.extra_paths.push_back(p);
   for (const int i : out.extra_bifurcations) {
-    const double t = topo.bifurcations[static_cast<size_t>(i)].t;
+    const double t = event_time(i);
     for (size_t k = 0; k < out.keyframe_intervals.size(); ++k) {
       DesignCheck::KeyframeInterval& ki = out.keyframe_intervals[k];
       if ((t > ki.t0 || (k == 0 && t >= ki.t0)) && t <= ki.t1) {
@@ -631,6 +707,8 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     if (!is_claimed(a) && !is_claimed(b)) parent[static_cast<size_t>(root(a))] = root(b);
   };
   for (const Bifurcation& b : topo.bifurcations) unite(b.paths[0], b.paths[1]);
+  for (const HopfEvent& ev : orbits->hopf)
+    for (size_t k = 1; k < ev.paths.size(); ++k) unite(ev.paths[0], ev.paths[k]);
   for (int p = 0; p < P; ++p)
     for (const int q : continuation[static_cast<size_t>(p)]) unite(p, q);
   std::map<int, ExtraGroup> groups;
@@ -666,6 +744,15 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
       }
       events.emplace_back(b.t, fmt::format("{} at t={:.3f}", what, b.t));
     }
+    for (size_t i = 0; i < orbits->hopf.size(); ++i) {
+      const HopfEvent& ev = orbits->hopf[i];
+      const auto in = [&](int p) { return members.count(p) > 0; };
+      if (designed_hopf.count(static_cast<int>(i)) || std::none_of(ev.paths.begin(), ev.paths.end(), in)) continue;
+      g.bifurcations.push_back(B + static_cast<int>(i));
+      events.emplace_back(ev.t, hopf_text(ev) + (std::all_of(ev.paths.begin(), ev.paths.end(), in)
+                                                     ? ""
+                                                     : " of a focus that turns into a designed one"));
+    }
     for (const int p : g.paths)
       for (const int q : type_change_at[static_cast<size_t>(p)]) {
         const SingularityPath& a = topo.paths[static_cast<size_t>(p)];
@@ -699,6 +786,25 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     g.description = fmt::format("{} living t∈[{:.3f}, {:.3f}] near {}", what, g.t_begin, g.t_end,
                                 position_text(g.center, planar));
     for (size_t k = 0; k < events.size(); ++k) g.description += (k ? ", " : ": ") + events[k].second;
+    out.extras.push_back(std::move(g));
+  }
+  // A Hopf event not asked for on a designed focus: a group of its own, without paths.
+  for (const int i : hopf_on_designed) {
+    const HopfEvent& ev = orbits->hopf[static_cast<size_t>(i)];
+    ExtraGroup g;
+    g.bifurcations = {B + i};
+    g.t_begin = g.t_end = ev.t;
+    g.center = ev.position;
+    std::string owner = "a singularity the key-frame plan carries";
+    for (const DesignedFeature& f : out.designed)
+      if (f.kind == FeatureKind::singularity &&
+          std::any_of(ev.paths.begin(), ev.paths.end(),
+                      [&](int p) { return std::find(f.paths.begin(), f.paths.end(), p) != f.paths.end(); })) {
+        owner = fmt::format("{} ({})", f.source, f.type);
+        break;
+      }
+    g.description = fmt::format("{} near {}, on the designed path of {}", hopf_text(ev), position_text(ev.position, planar),
+                                owner);
     out.extras.push_back(std::move(g));
   }
   std::stable_sort(out.extras.begin(), out.extras.end(),

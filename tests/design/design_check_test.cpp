@@ -9,6 +9,7 @@
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
 #include "tvf/design/generate.h"
+#include "tvf/integrate/periodic_orbits.h"
 #include "tvf/mesh/primitives.h"
 #include "tvf/scene/scene_json.h"
 
@@ -392,6 +393,104 @@ TEST(DesignCheck, ACancelledPairIsExpectedAbsentAtItsFrame) {
   EXPECT_FALSE(still.found);
   EXPECT_NE(still.note.find("is still there at frame 10, although edits[0] cancels it"), std::string::npos)
       << still.note;
+}
+
+// A Hopf event no element designs is a bifurcation not asked for, even on a designed focus:
+// here the field of a supercritical Hopf template, checked against a scene that designs a
+// center there. The center is found at every frame (a focus of either stability is
+// compatible with it), its paths are designed, and the Hopf event is one extra, a group
+// of its own without paths that names the feature whose path it is on. (Before, the check
+// read only the saddle–node bifurcations and said "no extras".)
+TEST(DesignCheck, AHopfEventNotDesignedIsAnExtraEvenOnADesignedFocus) {
+  Scene generated = grid_scene(33, 21, 8);
+  BifurcationElement b = bifurcation(BifurcationType::hopf_supercritical, Vec3(0.1, 0, 0), 0.5);
+  b.scale = 0.3;
+  generated.elements.push_back(b);
+  const Generated g = generate_and_analyze(generated);
+  Scene center = grid_scene(33, 21, 8);
+  center.elements.push_back(singular(SingularType::ccw_center, {{Vec3(0.1, 0, 0), 0}}));
+  const DesignCheck check = check_design(center, *g.space, g.field, g.topology);
+  EXPECT_TRUE(check.all_found()) << check.summary();
+  EXPECT_TRUE(check.extra_paths.empty()) << check.summary();
+  const int B = static_cast<int>(g.topology.bifurcations.size());
+  ASSERT_EQ(check.extra_bifurcations, std::vector<int>{B}) << check.summary();
+  EXPECT_TRUE(check.implied_bifurcations.empty());
+  ASSERT_EQ(check.extras.size(), 1u) << check.summary();
+  const ExtraGroup& extra = check.extras[0];
+  EXPECT_TRUE(extra.paths.empty());
+  EXPECT_EQ(extra.bifurcations, std::vector<int>{B});
+  EXPECT_LE(std::abs(extra.t_begin - 0.5), check.time_tolerance);
+  EXPECT_LE((extra.center - Vec3(0.1, 0, 0)).norm(), check.position_tolerance);
+  EXPECT_NE(extra.description.find("a supercritical Hopf event (an attracting cycle) at t="), std::string::npos)
+      << extra.description;
+  EXPECT_NE(extra.description.find("on the designed path of elements[0] (ccw_center)"), std::string::npos)
+      << extra.description;
+  EXPECT_NE(check.summary().find("extra: 0 paths, 1 bifurcation"), std::string::npos) << check.summary();
+  const nlohmann::json j = design_check_to_json(check);
+  EXPECT_EQ(j.at("extra").at("bifurcations"), nlohmann::json::array({B}));
+  EXPECT_TRUE(j.at("extra").at("groups")[0].at("paths").empty());
+  // The orbits the caller already has give the same check.
+  const PeriodicOrbits orbits = find_periodic_orbits(g.space->bundle(), g.field, g.topology);
+  ASSERT_EQ(orbits.hopf.size(), 1u);
+  DesignCheckOptions given;
+  given.orbits = &orbits;
+  EXPECT_EQ(check_design(center, *g.space, g.field, g.topology, given).extra_bifurcations, check.extra_bifurcations);
+  // Against the scene that made it, the event is the Hopf element's: nothing extra.
+  const DesignCheck full = check_design(generated, *g.space, g.field, g.topology, given);
+  EXPECT_TRUE(full.extra_bifurcations.empty()) << full.summary();
+  EXPECT_TRUE(full.extras.empty()) << full.summary();
+}
+
+// With "keyframe_topology": "matched", a Hopf event is counted in the interval that holds
+// it: not asked for on the center both key frames hold, implied on the node the plan
+// carries from a source to a sink (its design changes stability, which a focus does by a
+// Hopf bifurcation). The events are placed on the generated field's paths by hand (the
+// plan's own field has none: examples/26_keyframe_topology/stability.json); the rule only
+// reads which paths they are on.
+TEST(DesignCheck, AHopfEventBetweenKeyFramesIsImpliedOnlyWhereTheDesignChangesStability) {
+  const Scene scene = scene_from_json(nlohmann::json::parse(R"({"tvf": 1,
+    "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 21, "range": [0, 1]}, "generator": "spacetime",
+    "solver": {"region_radius": 0.15, "keyframe_topology": "matched"}, "falloff": 8,
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.4, -0.3]},
+                            {"kind": "singular", "type": "ccw_center", "at": [0.4, 0.3]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "sink", "at": [-0.3, -0.35]},
+                            {"kind": "singular", "type": "ccw_center", "at": [0.4, 0.3]}]}]})"),
+                                      "stability.json");
+  const Generated g = generate_and_analyze(scene);
+  const DesignCheck plain = check_design(scene, *g.space, g.field, g.topology);
+  EXPECT_TRUE(plain.all_found()) << plain.summary();
+  EXPECT_TRUE(plain.extra_bifurcations.empty()) << plain.summary();
+  EXPECT_TRUE(plain.implied_bifurcations.empty()) << plain.summary();
+  // The paths through the node and the center at the middle frame.
+  const auto path_at = [&](const Vec3& near) {
+    const size_t mid = g.topology.times.size() / 2;
+    const auto& sings = g.topology.singularities[mid];
+    size_t best = 0;
+    for (size_t k = 1; k < sings.size(); ++k)
+      if ((sings[k].position - near).norm() < (sings[best].position - near).norm()) best = k;
+    return g.topology.singularity_path[mid][best];
+  };
+  const int node = path_at(Vec3(-0.35, -0.32, 0)), center_path = path_at(Vec3(0.4, 0.3, 0));
+  ASSERT_NE(node, center_path);
+  PeriodicOrbits orbits;
+  orbits.hopf.push_back({0.5, Vec3(-0.35, -0.32, 0), true, 0, {node}});
+  orbits.hopf.push_back({0.5, Vec3(0.4, 0.3, 0), false, 1, {center_path}});
+  DesignCheckOptions options;
+  options.orbits = &orbits;
+  const DesignCheck check = check_design(scene, *g.space, g.field, g.topology, options);
+  const int B = static_cast<int>(g.topology.bifurcations.size());
+  EXPECT_EQ(check.implied_bifurcations, std::vector<int>{B}) << check.summary();
+  EXPECT_EQ(check.extra_bifurcations, std::vector<int>{B + 1}) << check.summary();
+  ASSERT_EQ(check.keyframe_intervals.size(), 1u);
+  EXPECT_EQ(check.keyframe_intervals[0].extra_bifurcations, std::vector<int>{B + 1});
+  ASSERT_EQ(check.extras.size(), 1u) << check.summary();
+  EXPECT_NE(check.extras[0].description.find("a subcritical Hopf event (a repelling cycle) at t=0.500"),
+            std::string::npos)
+      << check.extras[0].description;
+  EXPECT_NE(check.extras[0].description.find("keyframes[0].elements[1] (ccw_center)"), std::string::npos)
+      << check.extras[0].description;
 }
 
 }  // namespace

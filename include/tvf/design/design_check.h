@@ -53,8 +53,17 @@
 // path is extra. A found bifurcation is designed (matched to a bifurcation element),
 // implied (it joins two designed paths: a designed singularity that appears or vanishes
 // between key frames, or at the end of its path, with a designed partner), or extra.
-// Extras are grouped into connected sets (paths joined by extra bifurcations and type
-// changes), each described in one line.
+// A Hopf event of the field (integrate/periodic_orbits.h; every scene's are found) that no
+// Hopf element designs is implied when every path of its focus is designed and the design
+// makes that focus change stability (it holds the chain of paths joined by type changes
+// repelling at some frame and attracting at another: a node the key-frame plan matches to
+// one of the other stability, an element or deformed base element turned from source to
+// sink), and extra otherwise (a designed center that drifts into a focus with a limit
+// cycle). Bifurcation indices here are those of the analysis JSON's "bifurcations":
+// Topology::bifurcations, then the Hopf events.
+// Extras are grouped into connected sets (paths joined by extra bifurcations, Hopf events
+// and type changes), each described in one line; a Hopf event not asked for on a designed
+// focus is a group of its own, without paths.
 #include "tvf/analysis/topology.h"
 #include "tvf/scene/design_space.h"
 #include "tvf/scene/design_tolerance.h"
@@ -78,7 +87,7 @@ struct DesignCheckOptions {
   // How far a found bifurcation's time may lie from the designed one, in frame steps.
   double time_tolerance = kDesignTimeTolerance;
   // The field's periodic orbits and Hopf events, when the caller has them; else they are
-  // found here when the scene has a Hopf element.
+  // found here (integrate/periodic_orbits.h).
   const PeriodicOrbits* orbits = nullptr;
   // Key-frame topology "matched": the plan of the generation that made the field, when the
   // caller has it (GenerateReport::keyframe_intervals, or a generated folder's
@@ -125,7 +134,8 @@ struct DesignedFeature {
 // A connected set of extra paths.
 struct ExtraGroup {
   std::vector<int> paths;         // path ids, ascending
-  std::vector<int> bifurcations;  // bifurcations touching these paths (indices, ascending)
+  std::vector<int> bifurcations;  // bifurcations and Hopf events touching these paths (indices
+                                  // as the analysis JSON's, ascending)
   double t_begin = 0, t_end = 0;  // life span of the set
   Vec3 center = Vec3::Zero();     // mean of the paths' points
   std::string description;        // "saddle+sink pair, created at t=0.410, cancelled at t=0.470"
@@ -133,9 +143,11 @@ struct ExtraGroup {
 
 struct DesignCheck {
   std::vector<DesignedFeature> designed;
-  std::vector<int> implied_bifurcations;  // indices into Topology::bifurcations
+  // Bifurcation indices are the analysis JSON's: i < Topology::bifurcations.size() a
+  // saddle–node bifurcation, else Hopf event i − Topology::bifurcations.size().
+  std::vector<int> implied_bifurcations;
   std::vector<int> extra_paths;           // path ids
-  std::vector<int> extra_bifurcations;    // indices into Topology::bifurcations
+  std::vector<int> extra_bifurcations;
   std::vector<ExtraGroup> extras;
   // With "keyframe_topology": "matched": per interval between consecutive key frames, the
   // bifurcations the plan creates or cancels there and the extra ones (not asked for) the
@@ -144,7 +156,7 @@ struct DesignCheck {
     int from_keyframe = 0, to_keyframe = 0;
     double t0 = 0, t1 = 0;
     int planned = 0;
-    std::vector<int> extra_bifurcations;  // indices into Topology::bifurcations
+    std::vector<int> extra_bifurcations;  // indices as DesignCheck's (Hopf events included)
     // The plan could not guide the interval and left it free (KeyframeIntervalReport):
     // nothing planned or carried there; why.
     bool fallback = false;
