@@ -123,6 +123,25 @@ TEST(PeriodicOrbits, TrackedThroughTimeWithTheHopfEventAtT0) {
   }
 }
 
+// A Hopf event joins a focus of each stability: its rate |Re λ / Im λ| leaves the center
+// band (0.1) on both sides. With a slow ramp (τ = 1, 121 frames, 65²: μ = ±0.1 twelve frames
+// from t0) the focus stays a center for longer than the frames within which the cycle must
+// be born, and the event is still found, once; the band is crossed while the rate grows.
+TEST(PeriodicOrbits, ASlowRampIsOneHopfEventAtT0) {
+  for (const BifurcationType type : {BifurcationType::hopf_supercritical, BifurcationType::hopf_subcritical}) {
+    Scene scene = hopf_scene({65, type}, 121);
+    std::get<BifurcationElement>(scene.elements[0]).time_scale = 1.0;
+    const auto space = make_design_space(scene);
+    const Field field = generate(*space, scene);
+    const Topology topo = analyze_topology(space->bundle(), field);
+    const PeriodicOrbits po = find_periodic_orbits(space->bundle(), field, topo);
+    const double dt = scene.time.time(1) - scene.time.time(0);
+    ASSERT_EQ(po.hopf.size(), 1u) << to_string(type);
+    EXPECT_NEAR(po.hopf[0].t, 0.5, 2 * dt) << to_string(type);
+    EXPECT_EQ(po.hopf[0].supercritical, type == BifurcationType::hopf_supercritical);
+  }
+}
+
 // The designer's server stops the analysis of a field a newer change replaced (issue 15):
 // with the cancel flag set, analyze_topology and find_periodic_orbits stop with
 // AnalysisCancelled; with it present but false, the results are those made without it.
