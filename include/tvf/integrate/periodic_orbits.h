@@ -37,10 +37,12 @@
 // change at t* (linear in the trace); it is a Hopf event when an orbit track around that
 // focus, at least two frames long, begins or ends within `hopf_frames` frames of t* (one
 // frame early allowed: the focus's face Jacobian and the cycle's streamlines read the
-// piecewise-linear field differently near t*), and the focus is a focus of each stability
-// on its side: while the trace keeps its sign, |Re λ| > kCenterTolerance·|Im λ| within
-// `hopf_frames` frames or, past them, while |Re λ / Im λ| still grows (not a center whose
-// trace wavers about zero beside a cycle of the nonlinear part).
+// piecewise-linear field differently near t*), and the focus changes stability for real:
+// on each side, while the trace keeps its sign, within `hopf_frames` frames or past them
+// while r = |Re λ / Im λ| still grows, its largest r is at least that of a hyperbolic
+// focus (e^{2πr} − 1 ≥ min_multiplier_gap) and the two sides' sum more than the center
+// band's width 2·kCenterTolerance (not a center whose trace wavers about zero beside a
+// cycle of the nonlinear part).
 // Supercritical when the cycle is
 // attracting (it surrounds the repelling focus), subcritical when it is repelling.
 #include "tvf/analysis/topology.h"
