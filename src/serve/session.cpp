@@ -2,6 +2,7 @@
 
 #include "tvf/api/design.h"
 #include "tvf/core/atomic_output.h"
+#include "tvf/design/keyframe_topology.h"
 #include "tvf/design/outputs.h"
 #include "tvf/scene/scene_json.h"
 #include "tvf/design/streamline_deform.h"
@@ -759,6 +760,24 @@ json Session::status() const {
     const Result& r = *s_->result;
     j["warnings"] = r.made->report.warnings;
     j["method"] = r.made->report.method;
+    // Topology between key frames: per interval, whether it was guided and, if not, why
+    // (the designer shows it beside the picture; keyframe_topology.json has the rest).
+    if (!r.made->report.keyframe_intervals.empty()) {
+      json intervals = json::array();
+      for (const KeyframeIntervalReport& k : r.made->report.keyframe_intervals) {
+        json i = {{"keyframes", {k.from_keyframe, k.to_keyframe}},
+                  {"guided", k.guided},
+                  {"fallback", k.fallback},
+                  {"routing", k.routing},
+                  {"matched", k.matched.size()},
+                  {"linked", std::count_if(k.matched.begin(), k.matched.end(), [](const auto& m) { return m.linked; })},
+                  {"created", k.created.size()},
+                  {"cancelled", k.cancelled.size()}};
+        if (!k.unguided_reason.empty()) i["unguided_reason"] = k.unguided_reason;
+        intervals.push_back(std::move(i));
+      }
+      j["keyframe_intervals"] = std::move(intervals);
+    }
     j["seconds"] = r.seconds;
     j["domain"] = r.domain;
     j["analysis"] = r.analysed() ? "ready" : r.analysis_error.empty() ? "running" : "failed";

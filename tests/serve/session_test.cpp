@@ -83,6 +83,41 @@ TEST(ServeSession, StartsFromTheInitialSceneSavesItAndGeneratesIt) {
   EXPECT_FALSE(a["paths"].empty());
 }
 
+// Topology between key frames (issue 20): the status carries, per interval, whether the
+// frames are the guide field and how many singularities are carried and linked, for the
+// designer to show beside the picture; a design without it has none.
+TEST(ServeSession, TheStatusSaysPerKeyFrameIntervalWhetherItWasGuided) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.initial_scene = R"({"tvf": 1, "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 21, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.15, "keyframe_topology": "matched",
+               "links": [{"from": [0, 0], "to": [1, 1]}, {"from": [0, 1], "to": [1, 0]}]},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, -0.2]},
+                            {"kind": "singular", "type": "source", "at": [0.5, -0.2]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0.4]},
+                            {"kind": "singular", "type": "source", "at": [0.5, 0.4]}]}]})";
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(120));
+  const json st = s.status();
+  ASSERT_EQ(st["state"], "ready") << st;
+  ASSERT_TRUE(st.contains("keyframe_intervals")) << st;
+  ASSERT_EQ(st["keyframe_intervals"].size(), 1u);
+  const json& k = st["keyframe_intervals"][0];
+  EXPECT_EQ(k["keyframes"], json::array({0, 1}));
+  EXPECT_EQ(k["linked"], 2);
+  EXPECT_GE(k["matched"].get<int>(), 2);
+  EXPECT_TRUE(k["guided"].get<bool>()) << k;
+  EXPECT_FALSE(k["fallback"].get<bool>());
+  EXPECT_FALSE(k.contains("unguided_reason"));
+
+  test::TempDir other;
+  Session plain(options_in(other));
+  ASSERT_TRUE(plain.wait_idle(60));
+  EXPECT_FALSE(plain.status().contains("keyframe_intervals"));
+}
+
 // Issue 15: the field is published before its analysis, which follows on its own thread:
 // a frame read before the analysis has the same singularities (found for that frame alone,
 // "path" −1), the analysis then arrives for that revision, and the domain id stays while

@@ -120,6 +120,20 @@ export interface Status {
   error: string;
   warnings?: string[];
   method?: string;
+  // With solver.keyframe_topology "matched": per interval between consecutive key frames,
+  // whether its frames are the guide field (no bifurcation but the planned ones) or left
+  // free, and why.
+  keyframe_intervals?: {
+    keyframes: [number, number];
+    guided: boolean;
+    fallback: boolean;
+    routing: string;
+    matched: number;
+    linked: number;
+    created: number;
+    cancelled: number;
+    unguided_reason?: string;
+  }[];
   seconds?: number;
   // The result's domain id (changes when the mesh does: GET /api/mesh again), its
   // analysis state, and the revision of the last analysis made (issue 15: the field is

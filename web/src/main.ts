@@ -75,6 +75,7 @@ interface State {
   drag?: { handle: S.Handle; scene: S.Scene };
   stroke?: S.Vec[];
   cancelPicks: number[][];
+  linkFrom?: S.Handle; // Link tool: the key-frame element picked first
   playing: boolean;
   jsonDirty: boolean;
 }
@@ -154,6 +155,7 @@ function showScene(s: SceneState) {
   $<HTMLButtonElement>("undo").disabled = !s.can_undo;
   $<HTMLButtonElement>("redo").disabled = !s.can_redo;
   $<HTMLSelectElement>("generator").value = s.scene.generator;
+  $<HTMLInputElement>("keep-topology").checked = S.keyframeTopologyMatched(s.scene);
   const d = s.scene.domain;
   $<HTMLSelectElement>("domain").value = d.grid ? "grid" : d.sphere ? "sphere" : d.torus ? "torus" : "mesh";
   if (framesChanged) {
@@ -192,6 +194,8 @@ function showDesignCurves() {
     for (const e of s.elements ?? []) if (e.kind === "streakline") lines.push({ points: e.points, color: STREAKLINE_COLOR, dashed: Math.abs(e.t - t) >= 0.02 });
     for (const k of s.keyframes ?? [])
       if (S.frameOf(s, k.t) === j) for (const sl of k.streamlines ?? []) lines.push({ points: sl.points, color: STREAMLINE_COLOR });
+    // Links at this key frame (the Link tool): dashed to the partner's place.
+    for (const [here, there] of linksAtFrame(s, j)) lines.push({ points: [here, there], color: LINK_COLOR, dashed: true });
     surface.setDesign(lines);
   }
 }
@@ -296,6 +300,7 @@ async function showStatus(st: Status) {
   if (st.state === "running") label.textContent = `rev ${st.revision} · solving ${st.progress[0]}/${st.progress[1]}…`;
   else if (st.state === "failed") label.textContent = `rev ${st.revision} · failed: ${st.error}`;
   else label.textContent = `rev ${st.revision} · ready in ${(st.seconds ?? 0).toFixed(2)} s`;
+  if (st.state !== "running") showKeyframeReport(st);
   // Another tab or client changed the scene: show it (not while changes of ours are
   // under way or an element is dragged).
   if (state.scene && st.revision !== state.scene.revision && !queue.busy && !state.drag) {
@@ -318,6 +323,21 @@ async function showStatus(st: Status) {
   const analysed = st.analysis_revision === undefined || st.analysis_revision === state.resultRevision;
   if (analysed && state.analysisRevision !== state.resultRevision && state.resultRevision > 0) void loadAnalysis(state.resultRevision);
   if (st.analysis === "failed" && st.result_revision === state.resultRevision) say(`the analysis failed: ${st.analysis_error ?? ""}`, true);
+}
+
+// Topology between key frames: one line per interval of the shown result.
+function showKeyframeReport(st: Status) {
+  const box = $("keyframe-report");
+  const intervals = st.state === "ready" ? (st.keyframe_intervals ?? []) : [];
+  box.hidden = intervals.length === 0;
+  box.classList.toggle("fallback", intervals.some((k) => k.fallback));
+  box.textContent = intervals
+    .map((k) => {
+      const what = `key frames ${k.keyframes[0]} → ${k.keyframes[1]}: ${k.matched} carried${k.linked ? ` (${k.linked} linked)` : ""}, ${k.created} pairs created, ${k.cancelled} cancelled`;
+      if (k.guided) return `${what}; guided (${k.routing} routing): no bifurcation but these`;
+      return `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
+    })
+    .join("\n");
 }
 
 // A change of this page under way (its request not answered yet), or its revision being
@@ -714,6 +734,16 @@ function redraw() {
     for (const e of k.elements ?? []) square(v, e.at, typeColor(e.type ?? "saddle"));
     for (const sl of k.streamlines ?? []) line(sl.points, STREAMLINE_COLOR, 3);
   }
+  // Links at this key frame: a dashed line to the partner, where the other key frame has it.
+  for (const [here, there] of linksAtFrame(s, j)) {
+    line([here, there], LINK_COLOR, 2, [6, 4]);
+    dot(v, there, LINK_COLOR, 4);
+  }
+  if (state.linkFrom?.kind === "keyframe") {
+    const e = s.keyframes?.[state.linkFrom.key];
+    const at = e?.elements?.[state.linkFrom.index]?.at;
+    if (e && at && S.frameOf(s, e.t) === j) ring(v, at, LINK_COLOR, 15);
+  }
   // Singularities of the field at this frame.
   for (const sg of f?.singularities ?? []) dot(v, sg.position, typeColor(sg.type), 6, "#fff");
   for (const p of state.cancelPicks) ring(v, p, "#111827", 12);
@@ -750,6 +780,20 @@ function square(v: View, p: number[], color: string) {
   ctx.strokeStyle = color;
   ctx.lineWidth = 3;
   ctx.strokeRect(x - 9, y - 9, 18, 18);
+}
+
+// The links of the key frame at frame j: [its element's position, the partner's].
+const LINK_COLOR = "#7c3aed";
+function linksAtFrame(s: S.Scene, j: number): [number[], number[]][] {
+  const at = (end: [number, number]) => s.keyframes?.[end[0]]?.elements?.[end[1]]?.at;
+  const out: [number[], number[]][] = [];
+  for (const l of S.keyframeLinks(s)) {
+    const a = at(l.from), b = at(l.to);
+    if (!a || !b) continue;
+    if (S.frameOf(s, s.keyframes![l.from[0]].t) === j) out.push([a, b]);
+    if (S.frameOf(s, s.keyframes![l.to[0]].t) === j) out.push([b, a]);
+  }
+  return out;
 }
 
 // ---- interaction ------------------------------------------------------------------------
@@ -797,6 +841,31 @@ function pickForCancel(p: number[], radius: number) {
   }
 }
 
+// Link tool: a key-frame element at one key frame, then its partner at the next or the
+// previous one.
+function pickForLink(p: number[], radius: number) {
+  const t = currentTime();
+  let best: S.Handle | undefined;
+  let bestD = radius;
+  for (const h of S.handles(scene(), t)) {
+    if (h.handle.kind !== "keyframe") continue;
+    const d = Math.hypot(...h.position.map((x, k) => x - p[k]));
+    if (d <= bestD) (bestD = d), (best = h.handle);
+  }
+  if (!best || best.kind !== "keyframe")
+    return say("click a key-frame singularity (a square) at a key frame: move the time slider onto a key frame's tick", true);
+  const name = (h: S.Handle & { kind: "keyframe" }) => `keyframes[${h.key}].elements[${h.index}]`;
+  const from = state.linkFrom;
+  if (!from || from.kind !== "keyframe" || (from.key === best.key && from.index === best.index)) {
+    state.linkFrom = from && from.kind === "keyframe" && from.key === best.key && from.index === best.index ? undefined : best;
+    redraw();
+    return say(state.linkFrom ? `${name(best)} picked: go to the next (or previous) key frame and click its partner` : "link unpicked");
+  }
+  state.linkFrom = undefined;
+  const [a, b] = from.key <= best.key ? [from, best] : [best, from];
+  void change((s) => S.linkKeyframeElements(s, a, b), `${name(a)} is carried into ${name(b)} (topology kept between key frames)`);
+}
+
 canvas.addEventListener("pointerdown", (e) => {
   if (!state.scene || !planar()) return;
   canvas.setPointerCapture(e.pointerId);
@@ -808,6 +877,8 @@ canvas.addEventListener("pointerdown", (e) => {
     redraw();
   } else if (state.tool === "cancel") {
     pickForCancel(p, view().worldLength(20));
+  } else if (state.tool === "link") {
+    pickForLink(p, radius);
   } else if (state.tool === "move-bifurcation") {
     const b = state.analysis?.bifurcations[state.selectedBifurcation];
     if (!b) return say("pick a bifurcation first: click it in the space-time view or press go to in the list", true);
@@ -912,6 +983,8 @@ function surfacePick(p: number[]) {
     void change((s) => S.addBifurcation(s, kind, at, t), `${kind} at t = ${t} (drag on the surface to give its axis and size)`);
   } else if (state.tool === "cancel") {
     pickForCancel(at, 0.2);
+  } else if (state.tool === "link") {
+    pickForLink(at, 0.06 * surfaceRadius());
   } else if (state.tool === "select") {
     state.selected = surfaceHandleAt(at) ?? S.pick(scene(), t, at, 0.1);
     if (state.selected) return say("selected: drag it over the surface to move it, Delete removes it");
@@ -1100,6 +1173,7 @@ document.querySelectorAll<HTMLInputElement>("input[name=tool]").forEach((r) =>
     state.tool = r.value;
     spacetime.drawing = state.tool === "pathline";
     state.cancelPicks = [];
+    state.linkFrom = undefined;
     state.selected = undefined;
     redraw();
   }),
@@ -1140,7 +1214,18 @@ $("rotate-field").addEventListener("click", () => {
 $("new").addEventListener("click", () => void change(() => S.emptyScene(), "new empty design on the 65² grid", false));
 $<HTMLSelectElement>("generator").addEventListener("change", (e) => {
   const generator = (e.target as HTMLSelectElement).value;
-  void change((s) => ({ ...s, generator }), "generator changed");
+  void change((s) => S.setGenerator(s, generator), "generator changed");
+});
+$<HTMLInputElement>("keep-topology").addEventListener("change", (e) => {
+  const on = (e.target as HTMLInputElement).checked;
+  // Shown as the scene has it until the change is made (a refused one leaves it as it was).
+  (e.target as HTMLInputElement).checked = S.keyframeTopologyMatched(scene());
+  void change(
+    (s) => S.setKeyframeTopology(s, on),
+    on
+      ? "topology kept between key frames: their singularities are matched and carried, unmatched ones created or cancelled in pairs"
+      : "topology between key frames left to the solve (the paper's behaviour)",
+  );
 });
 $<HTMLSelectElement>("domain").addEventListener("change", (e) => {
   const d = (e.target as HTMLSelectElement).value;

@@ -214,8 +214,122 @@ function keyframeAt(s: Scene, t: number): Keyframe {
 
 export function addKeyframeSingular(scene: Scene, t: number, type: string, at: Vec): Scene {
   const s = clone(scene);
+  const before = [...(s.keyframes ?? [])];
   (keyframeAt(s, t).elements ??= []).push({ kind: "singular", type, at: [...at] });
+  keepKeyframeTopology(s, before);
   return s;
+}
+
+// ---- topology between key frames (solver.keyframe_topology, DESIGN §12) -----------------
+
+// A link of solver.links: keyframes[from[0]].elements[from[1]] is carried into
+// keyframes[to[0]].elements[to[1]], to[0] = from[0] + 1.
+export interface KeyframeLink {
+  from: [number, number];
+  to: [number, number];
+}
+
+export function keyframeTopologyMatched(scene: Scene): boolean {
+  return scene.solver?.keyframe_topology === "matched";
+}
+export function keyframeLinks(scene: Scene): KeyframeLink[] {
+  return keyframeTopologyMatched(scene) ? ((scene.solver?.links as KeyframeLink[] | undefined) ?? []) : [];
+}
+
+// Drops the keys that "matched" alone takes (the engine refuses them otherwise).
+function dropKeyframeTopology(s: Scene) {
+  if (!s.solver) return;
+  for (const key of ["keyframe_topology", "links", "bifurcation_times", "path_separation"]) delete s.solver[key];
+  if (Object.keys(s.solver).length === 0) delete s.solver;
+}
+
+// After the key frames changed (one added, one removed, an element removed): the links
+// follow their elements (`before`: the key-frame objects before the change, the same
+// objects after it where they stayed), links to what is gone are dropped, the
+// per-interval bifurcation times are dropped when the intervals changed, and "matched" is
+// dropped when fewer than two key frames are left or the generator is not spacetime.
+// `removed`: a key-frame element taken out ([key frame, element] in `before`'s indices).
+function keepKeyframeTopology(s: Scene, before: Keyframe[], removed?: [number, number]) {
+  if (!keyframeTopologyMatched(s)) return;
+  const after = s.keyframes ?? [];
+  if (after.length < 2 || s.generator !== "spacetime") return dropKeyframeTopology(s);
+  const solver = s.solver!;
+  const moved = (end: [number, number]): [number, number] | undefined => {
+    const [k, i] = end;
+    if (removed && removed[0] === k && removed[1] === i) return undefined;
+    const key = after.indexOf(before[k]);
+    if (key < 0) return undefined;
+    return [key, removed && removed[0] === k && i > removed[1] ? i - 1 : i];
+  };
+  const links: KeyframeLink[] = [];
+  for (const l of (solver.links as KeyframeLink[] | undefined) ?? []) {
+    const from = moved(l.from), to = moved(l.to);
+    if (from && to && to[0] === from[0] + 1) links.push({ from, to });
+  }
+  if (links.length) solver.links = links;
+  else delete solver.links;
+  if (after.length !== before.length) delete solver.bifurcation_times;
+}
+
+// Keeps the topology between key frames (or not): with `on`, the spacetime generator
+// matches the singularities of consecutive key frames and carries them (solver
+// "keyframe_topology": "matched"); off, the solve alone (the paper's behaviour).
+export function setKeyframeTopology(scene: Scene, on: boolean): Scene {
+  const s = clone(scene);
+  if (!on) {
+    dropKeyframeTopology(s);
+    return s;
+  }
+  const n = s.keyframes?.length ?? 0;
+  if (n < 2)
+    throw new Error(
+      `keeping the topology between key frames needs two key frames at least (the design has ${n}): place singular elements with "key frame" checked at two times first`,
+    );
+  s.generator = "spacetime";
+  s.solver = { ...(s.solver ?? {}), keyframe_topology: "matched" };
+  return s;
+}
+
+// The same generator change, without the keys only the spacetime generator takes.
+export function setGenerator(scene: Scene, generator: string): Scene {
+  const s = clone(scene);
+  s.generator = generator;
+  if (generator !== "spacetime") dropKeyframeTopology(s);
+  return s;
+}
+
+// Links two key-frame singular elements of consecutive key frames (picked in either
+// order): the one of the earlier key frame is carried into the other, whatever is nearest
+// (solver.links). A link either of them had is replaced. Turns "matched" on.
+export function linkKeyframeElements(scene: Scene, a: Handle, b: Handle): Scene {
+  if (a.kind !== "keyframe" || b.kind !== "keyframe") throw new Error("links join key-frame elements: pick a square of a key frame");
+  const [p, q] = a.key <= b.key ? [a, b] : [b, a];
+  if (q.key !== p.key + 1)
+    throw new Error(
+      p.key === q.key
+        ? "both are in the same key frame: go to the next (or previous) key frame and pick the partner there"
+        : `these are in key frames ${p.key} and ${q.key}; a link joins a key frame with the next one`,
+    );
+  const ep = scene.keyframes?.[p.key]?.elements?.[p.index];
+  const eq = scene.keyframes?.[q.key]?.elements?.[q.index];
+  if (!ep || !eq) throw new Error("no such key-frame element");
+  if (ep.kind !== "singular" || eq.kind !== "singular") throw new Error("only singular elements are linked");
+  const index = (e: KeyframeElement) => (e.type ? (e.type === "saddle" ? -1 : 1) : det(e.jacobian) < 0 ? -1 : 1);
+  const same = ep.type && eq.type ? ep.type === eq.type : !ep.type && !eq.type && index(ep) === index(eq);
+  if (!same)
+    throw new Error(`a ${ep.type ?? "Jacobian"} cannot be linked with a ${eq.type ?? "Jacobian"}: linked singularities have the same type`);
+  const s = setKeyframeTopology(scene, true);
+  const solver = s.solver!;
+  const involves = (l: KeyframeLink, h: Handle & { kind: "keyframe" }) =>
+    (l.from[0] === h.key && l.from[1] === h.index) || (l.to[0] === h.key && l.to[1] === h.index);
+  const links = ((solver.links as KeyframeLink[] | undefined) ?? []).filter((l) => !involves(l, p) && !involves(l, q));
+  links.push({ from: [p.key, p.index], to: [q.key, q.index] });
+  solver.links = links;
+  return s;
+}
+
+function det(m?: number[][]): number {
+  return m ? m[0][0] * m[1][1] - m[0][1] * m[1][0] : 1;
 }
 
 // A streakline sketched at time t (the drawn curve from the seed), its dye released over
@@ -235,7 +349,9 @@ export function addStreakline(scene: Scene, points: Vec[], t: number): Scene {
 export function addKeyframeStreamline(scene: Scene, t: number, points: Vec[]): Scene {
   if (points.length < 2) throw new Error("a streamline needs at least two points");
   const s = clone(scene);
+  const before = [...(s.keyframes ?? [])];
   (keyframeAt(s, t).streamlines ??= []).push({ points: points.map((p) => [...p]) });
+  keepKeyframeTopology(s, before);
   return s;
 }
 
@@ -362,9 +478,11 @@ export function removeHandle(scene: Scene, h: Handle): Scene {
   if (h.kind === "element") {
     s.elements?.splice(h.index, 1);
   } else {
+    const before = [...(s.keyframes ?? [])];
     const k = s.keyframes?.[h.key];
     k?.elements?.splice(h.index, 1);
     if (k && !(k.elements?.length) && !(k.streamlines?.length) && !k.field) s.keyframes?.splice(h.key, 1);
+    keepKeyframeTopology(s, before, [h.key, h.index]);
   }
   return s;
 }

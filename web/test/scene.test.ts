@@ -1,5 +1,17 @@
 import { describe, expect, it } from "vitest";
 import * as S from "../src/scene";
+import {
+  addKeyframeSingular,
+  emptyScene,
+  keyframeLinks,
+  keyframeTopologyMatched,
+  linkKeyframeElements,
+  removeHandle,
+  setGenerator,
+  setKeyframeTopology,
+  type Handle,
+  type Scene,
+} from "../src/scene";
 
 describe("scene changes", () => {
   it("leave their argument unchanged and add what they say", () => {
@@ -159,5 +171,68 @@ describe("moving elements", () => {
     const s = S.addSingularPath(S.emptyScene(), "sink", [[0, 0], [0.5, 0.2], [1, 0]], 0.2, 0.6);
     expect((s.elements![0] as S.SingularElement).path).toEqual([[0, 0, 0.2], [0.5, 0.2, 0.4], [1, 0, 0.6]]);
     expect((S.addSingularPath(S.emptyScene(), "sink", [[0, 0]], 0.2, 0.6).elements![0] as S.SingularElement).path).toEqual([[0, 0, 0.2]]);
+  });
+});
+
+describe("topology between key frames", () => {
+  // Two key frames (t = 0 and 1) with a source and a center each.
+  const two = (): Scene => {
+    let s = emptyScene();
+    s = addKeyframeSingular(s, 0, "source", [-0.4, -0.3]);
+    s = addKeyframeSingular(s, 0, "ccw_center", [0.4, 0.3]);
+    s = addKeyframeSingular(s, 1, "ccw_center", [-0.4, -0.3]);
+    s = addKeyframeSingular(s, 1, "source", [0.4, 0.3]);
+    return s;
+  };
+  const kf = (key: number, index: number): Handle => ({ kind: "keyframe", key, index });
+
+  it("turns matched on only with two key frames, and off with every key it takes", () => {
+    const one = addKeyframeSingular(emptyScene(), 0, "source", [0, 0]);
+    expect(() => setKeyframeTopology(one, true)).toThrow(/two key frames at least \(the design has 1\)/);
+    const s = setKeyframeTopology(two(), true);
+    expect(s.solver).toEqual({ keyframe_topology: "matched" });
+    expect(keyframeTopologyMatched(s)).toBe(true);
+    const linked = linkKeyframeElements(s, kf(0, 0), kf(1, 1));
+    expect(setKeyframeTopology(linked, false).solver).toBeUndefined();
+    // Another generator cannot take "matched": changing to it drops the keys.
+    expect(setGenerator(linked, "constrained").solver).toBeUndefined();
+    expect(setGenerator(linked, "spacetime").solver?.links).toEqual([{ from: [0, 0], to: [1, 1] }]);
+  });
+
+  it("links a key frame's singularity with one of the same type in the next, in either order", () => {
+    const s = linkKeyframeElements(two(), kf(1, 1), kf(0, 0));
+    expect(s.generator).toBe("spacetime");
+    expect(keyframeLinks(s)).toEqual([{ from: [0, 0], to: [1, 1] }]);
+    // A new link of an element replaces its old one.
+    const again = linkKeyframeElements(s, kf(0, 0), kf(1, 1));
+    expect(keyframeLinks(again)).toEqual([{ from: [0, 0], to: [1, 1] }]);
+    const both = linkKeyframeElements(s, kf(0, 1), kf(1, 0));
+    expect(keyframeLinks(both)).toEqual([
+      { from: [0, 0], to: [1, 1] },
+      { from: [0, 1], to: [1, 0] },
+    ]);
+    expect(() => linkKeyframeElements(two(), kf(0, 0), kf(1, 0))).toThrow(/a source cannot be linked with a ccw_center/);
+    expect(() => linkKeyframeElements(two(), kf(0, 0), kf(0, 1))).toThrow(/same key frame/);
+    expect(() => linkKeyframeElements(two(), { kind: "element", index: 0, point: 0 }, kf(1, 1))).toThrow(/key-frame elements/);
+  });
+
+  it("keeps the links on their elements when key frames and elements come and go", () => {
+    const s = linkKeyframeElements(linkKeyframeElements(two(), kf(0, 0), kf(1, 1)), kf(0, 1), kf(1, 0));
+    // A key frame added between the two: the interval is split, the links across it dropped.
+    const middle = addKeyframeSingular(s, 0.5, "sink", [0, 0]);
+    expect(middle.keyframes?.map((k) => k.t)).toEqual([0, 0.5050505050505051, 1]);
+    expect(keyframeLinks(middle)).toEqual([]);
+    // An element added to the first key frame: the links stay where they were.
+    const more = addKeyframeSingular(s, 0, "saddle", [0, 0.5]);
+    expect(keyframeLinks(more)).toEqual(keyframeLinks(s));
+    // The first key frame's source removed: its link goes, the center's index moves down.
+    const removed = removeHandle(s, kf(0, 0));
+    expect(removed.keyframes?.[0].elements?.map((e) => e.type)).toEqual(["ccw_center"]);
+    expect(keyframeLinks(removed)).toEqual([{ from: [0, 0], to: [1, 0] }]);
+    // A whole key frame removed: fewer than two left, so "matched" goes.
+    let gone = removeHandle(s, kf(1, 0));
+    gone = removeHandle(gone, kf(1, 0));
+    expect(gone.keyframes?.length).toBe(1);
+    expect(gone.solver).toBeUndefined();
   });
 });

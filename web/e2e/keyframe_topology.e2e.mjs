@@ -1,0 +1,81 @@
+// Topology between key frames in the designer (issue 20, DESIGN §12): two sources in each of
+// two key frames, linked crosswise with the Link key frames tool (the nearest match would
+// carry each straight up), and "keep topology between key frames". The scene gets
+// solver.keyframe_topology "matched" and the two links, the page says per interval whether
+// it was guided, and the field's analysis has no bifurcation (free: the solve alone fades
+// the sources out and in). Then the checkbox off drops the links with "matched".
+// Usage: node e2e/keyframe_topology.e2e.mjs --tvf PATH/TO/tvf [--out DIR]
+import { check, Designer, finish, start } from "./harness.mjs";
+
+const { a, dir, browser, server } = await start("tvf-keyframe-topology-");
+let failed = false;
+let page;
+try {
+  page = await browser.newPage({ viewport: { width: 1280, height: 860 } });
+  await page.goto(server.url);
+  const d = new Designer(page, server.url);
+  await d.settled();
+  await d.change(() => page.click("#new"));
+  await page.check("#keyframe-mode");
+  await d.tool("singular");
+  await page.selectOption("#singular-type", "source");
+  await d.change(() => d.click([-0.5, -0.2]));
+  await d.change(() => d.click([0.5, -0.2]));
+  const last = (await d.scene()).scene.time.frames - 1;
+  await d.goto(last);
+  await d.change(() => d.click([-0.5, 0.4]));
+  await d.change(() => d.click([0.5, 0.4]));
+  const free = await d.settled();
+  const freeAnalysis = await page.evaluate(() => window.tvf.state.analysis);
+  check(!free.keyframe_intervals, "no interval report while the topology is left to the solve");
+
+  // Linked crosswise: the right source of the last key frame is the left one's, and back.
+  await d.tool("link");
+  await d.click([0.5, 0.4]);
+  check((await page.textContent("#message")).includes("picked"), "the first pick is said");
+  await d.goto(0);
+  await d.change(() => d.click([-0.5, -0.2]));
+  await d.goto(last);
+  await d.click([-0.5, 0.4]);
+  await d.goto(0);
+  const st = await d.change(() => d.click([0.5, -0.2]));
+  const s = (await d.scene()).scene;
+  check(s.solver?.keyframe_topology === "matched", "linking turns the topology between key frames on");
+  const links = JSON.stringify(s.solver?.links);
+  check(
+    links === JSON.stringify([{ from: [0, 0], to: [1, 1] }, { from: [0, 1], to: [1, 0] }]),
+    `the two links, crosswise (${links})`,
+  );
+  check(await page.isChecked("#keep-topology"), "the checkbox shows it");
+  const report = await page.textContent("#keyframe-report");
+  check(st.keyframe_intervals?.length === 1 && st.keyframe_intervals[0].linked === 2, "the status has the interval, 2 linked");
+  check(/key frames 0 → 1: \d+ carried \(2 linked\)/.test(report), `the page says the interval: ${report}`);
+  const guided = st.keyframe_intervals[0].guided;
+  check(guided ? report.includes("guided") : report.includes("not guided"), "and whether it was guided");
+  const analysis = await page.evaluate(() => window.tvf.state.analysis);
+  console.log(
+    `crosswise links: ${guided ? "guided" : `not guided: ${st.keyframe_intervals[0].unguided_reason}`}; ` +
+      `bifurcations ${freeAnalysis.bifurcations.length} free → ${analysis.bifurcations.length} matched`,
+  );
+  check(guided && analysis.bifurcations.length === 0, "guided, and the analysis finds no bifurcation");
+  await d.goto(Math.round(last / 2));
+  await d.settled();
+  await d.shot(a.out, "keyframe_topology_linked.png");
+  await d.goto(0);
+  await d.settled();
+  await d.shot(a.out, "keyframe_topology_links_at_key_frame.png");
+
+  // Off again: "matched" and its links go.
+  await d.change(() => page.click("#keep-topology"));
+  const off = (await d.scene()).scene;
+  check(off.solver?.keyframe_topology === undefined && off.solver?.links === undefined, "unchecked: the keys are gone");
+  check(await page.isHidden("#keyframe-report"), "and so is the interval report");
+} catch (e) {
+  failed = true;
+  console.error(e.message);
+  if (page) await page.screenshot({ path: `${a.out}/failure.png` }).catch(() => {});
+  console.error(server.output());
+} finally {
+  await finish(browser, server, dir);
+}
+process.exit(failed ? 1 : 0);
