@@ -70,6 +70,54 @@ try {
   const off = (await d.scene()).scene;
   check(off.solver?.keyframe_topology === undefined && off.solver?.links === undefined, "unchecked: the keys are gone");
   check(await page.isHidden("#keyframe-report"), "and so is the interval report");
+
+  // The same on the sphere, picked on the surface: two sources in each key frame on the
+  // side the camera faces, linked crosswise.
+  await d.change(() => page.selectOption("#domain", "sphere"));
+  const unit = (v) => v.map((x) => x / Math.hypot(...v));
+  const ends = {
+    a0: unit([-0.35, -1, 0.25]),
+    b0: unit([0.35, -1, 0.25]),
+    a1: unit([-0.35, -1, -0.25]),
+    b1: unit([0.35, -1, -0.25]),
+  };
+  const round = (v) => v.map((x) => Number(x.toFixed(4)));
+  await d.change(async () => {
+    const sc = (await d.scene()).scene;
+    sc.time.frames = 48;
+    sc.keyframes = [
+      { t: 0, elements: [ends.a0, ends.b0].map((at) => ({ kind: "singular", type: "source", at: round(at) })) },
+      { t: 1, elements: [ends.a1, ends.b1].map((at) => ({ kind: "singular", type: "source", at: round(at) })) },
+    ];
+    await page.fill("#scene-json", JSON.stringify(sc, null, 2));
+    await page.click("#apply-json");
+  });
+  check(await page.locator("#surface canvas").isVisible(), "the sphere is shown");
+  const sb = await page.locator("#surface canvas").boundingBox();
+  const clickOnSurface = async (p) => {
+    const [x, y] = await page.evaluate((q) => window.tvf.surface(q), p);
+    await page.mouse.click(sb.x + x, sb.y + y);
+  };
+  await d.goto(0);
+  await d.settled();
+  await clickOnSurface(ends.a0);
+  check((await page.textContent("#message")).includes("keyframes[0].elements[0] picked"), "picked on the surface");
+  await d.goto(47);
+  await d.settled();
+  await d.change(() => clickOnSurface(ends.b1));
+  await clickOnSurface(ends.a1);
+  await d.goto(0);
+  await d.settled();
+  const sphere = await d.change(() => clickOnSurface(ends.b0));
+  const sl = JSON.stringify((await d.scene()).scene.solver?.links);
+  check(sl === JSON.stringify([{ from: [0, 0], to: [1, 1] }, { from: [0, 1], to: [1, 0] }]), `linked crosswise on the sphere (${sl})`);
+  const k = sphere.keyframe_intervals?.[0];
+  const sphereReport = await page.textContent("#keyframe-report");
+  check(k && k.linked === 2 && /key frames 0 → 1: \d+ carried \(2 linked\)/.test(sphereReport), `the sphere's interval said: ${sphereReport}`);
+  const sphereAnalysis = await page.evaluate(() => window.tvf.state.analysis);
+  console.log(`sphere, crosswise links: ${k.guided ? "guided" : `not guided: ${k.unguided_reason}`}; ${sphereAnalysis.bifurcations.length} bifurcations`);
+  check(k.guided && sphereAnalysis.bifurcations.length === 0, "guided on the sphere too, no bifurcation");
+  await d.shot(a.out, "keyframe_topology_sphere_links.png");
 } catch (e) {
   failed = true;
   console.error(e.message);

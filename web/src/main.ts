@@ -186,7 +186,7 @@ function showDesignCurves() {
   if (S.isPlanar(s)) spacetime.setDesign(pathlines);
   if (!S.isPlanar(s) && surface) {
     const j = state.frame;
-    const lines: { points: number[][]; color: string; dashed?: boolean }[] = pathlines.map((points) => ({ points, color: PATHLINE_COLOR }));
+    const lines: { points: number[][]; color: string; dashed?: boolean; ends?: boolean }[] = pathlines.map((points) => ({ points, color: PATHLINE_COLOR }));
     // Singular elements' paths with their control points (the Select tool moves them).
     for (const e of s.elements ?? []) if (e.kind === "singular" && e.path.length > 1) lines.push({ points: e.path, color: "#0f172a", dashed: true });
     // Sketched streaklines: solid at their time t, dashed otherwise (as on the plane).
@@ -194,8 +194,9 @@ function showDesignCurves() {
     for (const e of s.elements ?? []) if (e.kind === "streakline") lines.push({ points: e.points, color: STREAKLINE_COLOR, dashed: Math.abs(e.t - t) >= 0.02 });
     for (const k of s.keyframes ?? [])
       if (S.frameOf(s, k.t) === j) for (const sl of k.streamlines ?? []) lines.push({ points: sl.points, color: STREAMLINE_COLOR });
-    // Links at this key frame (the Link tool): dashed to the partner's place.
-    for (const [here, there] of linksAtFrame(s, j)) lines.push({ points: [here, there], color: LINK_COLOR, dashed: true });
+    // Links at this key frame (the Link tool): a thin tube to the partner's place, over the
+    // surface (the chord would run inside it).
+    for (const [here, there] of linksAtFrame(s, j)) lines.push({ points: overSurface(here, there), color: LINK_COLOR, ends: true });
     surface.setDesign(lines);
   }
 }
@@ -794,6 +795,25 @@ function linksAtFrame(s: S.Scene, j: number): [number[], number[]][] {
     if (S.frameOf(s, s.keyframes![l.to[0]].t) === j) out.push([b, a]);
   }
   return out;
+}
+
+// The segment from a to b with its inner points moved to the nearest mesh vertex (a line
+// drawn over the surface, where the chord between two surface points runs inside it).
+function overSurface(a: number[], b: number[], n = 24): number[][] {
+  const v = state.mesh?.vertices ?? [];
+  const out: number[][] = [a];
+  for (let k = 1; k < n; ++k) {
+    const x = a.map((ai, i) => ai + ((b[i] - ai) * k) / n);
+    let best = -1;
+    let bestD = Infinity;
+    for (let i = 0; 3 * i < v.length; ++i) {
+      const d = (v[3 * i] - x[0]) ** 2 + (v[3 * i + 1] - x[1]) ** 2 + (v[3 * i + 2] - x[2]) ** 2;
+      if (d < bestD) (bestD = d), (best = i);
+    }
+    if (best >= 0) out.push([v[3 * best], v[3 * best + 1], v[3 * best + 2]]);
+  }
+  out.push(b);
+  return out.filter((p, k) => k === 0 || p.some((x, i) => x !== out[k - 1][i]));
 }
 
 // ---- interaction ------------------------------------------------------------------------

@@ -129,7 +129,8 @@ export class SurfaceView {
   // The design's curves on the surface: pathlines and streamlines, [x, y, z, …] points.
   // `dashed`: a thin dashed line through the control points (the singular elements'
   // paths, so that the analysis's time-coloured path under it stays visible).
-  setDesign(lines: { points: number[][]; color: string; dashed?: boolean }[]) {
+  // `ends`: dots at the first and last point only (a link drawn over the surface).
+  setDesign(lines: { points: number[][]; color: string; dashed?: boolean; ends?: boolean }[]) {
     for (const c of [...this.design.children]) {
       this.design.remove(c);
       (c as THREE.Mesh).geometry?.dispose();
@@ -147,7 +148,7 @@ export class SurfaceView {
         l.computeLineDistances();
         this.design.add(l);
       } else this.design.add(new THREE.Mesh(new THREE.TubeGeometry(curve, 8 * pts.length, 0.008 * this.radius, 6, false), material));
-      for (const p of pts) {
+      for (const p of line.ends ? [pts[0], pts[pts.length - 1]] : pts) {
         const dot = new THREE.Mesh(new THREE.SphereGeometry(0.014 * this.radius, 10, 8), material);
         dot.position.copy(p);
         this.design.add(dot);
