@@ -224,8 +224,12 @@ int run_analyze(const AnalyzeArgs& args) {
     if (check) {
       std::printf("%s\n", check->summary().c_str());
       for (const auto& k : check->keyframe_intervals) {
-        std::printf("  key frames %d → %d (t %g → %g): %d bifurcations planned, %zu not asked for\n", k.from_keyframe,
-                    k.to_keyframe, k.t0, k.t1, k.planned, k.extra_bifurcations.size());
+        // Indices past the saddle–node bifurcations are Hopf events (design_check.h).
+        const auto hopf = std::count_if(k.extra_bifurcations.begin(), k.extra_bifurcations.end(),
+                                        [&](int i) { return i >= static_cast<int>(topology.bifurcations.size()); });
+        std::printf("  key frames %d → %d (t %g → %g): %d bifurcations planned, %zu not asked for%s\n", k.from_keyframe,
+                    k.to_keyframe, k.t0, k.t1, k.planned, k.extra_bifurcations.size(),
+                    hopf ? fmt::format(" ({} Hopf)", hopf).c_str() : "");
         if (k.fallback) std::printf("    not guided, left free (key frames only): %s\n", k.unguided_reason.c_str());
       }
       std::printf("  %s\n", cli::design_check_path(args.out).c_str());
