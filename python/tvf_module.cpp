@@ -7,6 +7,7 @@
 #include "tvf/api/design.h"
 #include "tvf/core/error.h"
 #include "tvf/core/error_location.h"
+#include "tvf/design/keyframe_topology.h"
 #include "tvf/scene/scene_json.h"
 #include "tvf/field/animation_export.h"
 #include "tvf/field/world_vectors.h"
@@ -225,6 +226,9 @@ py::dict report_dict(const GenerateReport& r) {
   d["vertices"] = r.vertices;
   d["warnings"] = r.warnings;
   d["edits"] = r.edits;
+  // Topology between key frames (solver.keyframe_topology "matched"): the plan per
+  // interval, as keyframe_topology.json has it; absent otherwise.
+  if (!r.keyframe_intervals.empty()) d["keyframe_intervals"] = to_python(keyframe_intervals_json(r.keyframe_intervals));
   return d;
 }
 
@@ -393,7 +397,7 @@ Arrays are read-only numpy views where the data allows (values, vertices, faces)
       .def_property_readonly("planar", [](const PyField& f) { return f.space->planar(); },
                              "True on planar domains (z = 0 everywhere).")
       .def_property_readonly("report", [](const PyField& f) { return report_dict(f.report); },
-                             "What generation reported: method, seconds, residual, iterations, warnings, edits.")
+                             "What generation reported: method, seconds, residual, iterations, warnings, edits (and keyframe_intervals with solver.keyframe_topology matched).")
       .def(
           "streamline",
           [](const PyField& f, const std::vector<double>& seed, double t, double step, double max_length) {

@@ -233,3 +233,29 @@ def test_vdb_export_refuses_surfaces(tmp_path):
         f.export_vdb(str(tmp_path / "v"))
     assert not (tmp_path / "v").exists() or not any((tmp_path / "v").iterdir())
     assert len(f.export_ply(str(tmp_path / "p"))) == 2
+
+
+def test_the_report_has_the_key_frame_intervals_of_keyframe_topology_json(tmp_path):
+    """With solver.keyframe_topology "matched" the generation's report carries the plan per
+    interval, as the generated folder's keyframe_topology.json has it (issue 20)."""
+    scene = {
+        "tvf": 1,
+        "domain": {"grid": {"size": [17, 17], "min": [-1, -1], "max": [1, 1]}},
+        "time": {"frames": 9, "range": [0, 1]},
+        "generator": "spacetime",
+        "solver": {"region_radius": 0.2, "keyframe_topology": "matched",
+                   "links": [{"from": [0, 0], "to": [1, 0]}]},
+        "keyframes": [
+            {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]}]},
+            {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]}]},
+        ],
+    }
+    report = tvf.generate(scene).report
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(scene))
+    code, text = cli("generate", path, "-o", tmp_path / "out", "-q", "--no-vtk")
+    assert code == 0, text
+    written = json.loads((tmp_path / "out" / "keyframe_topology.json").read_text())
+    assert report["keyframe_intervals"] == written["intervals"]
+    assert report["keyframe_intervals"][0]["matched"][0]["linked"] is True
+    assert "keyframe_intervals" not in tvf.generate(SCENE).report
