@@ -314,8 +314,9 @@ export function linkKeyframeElements(scene: Scene, a: Handle, b: Handle): Scene 
   const eq = scene.keyframes?.[q.key]?.elements?.[q.index];
   if (!ep || !eq) throw new Error("no such key-frame element");
   if (ep.kind !== "singular" || eq.kind !== "singular") throw new Error("only singular elements are linked");
+  // As the engine checks it: the same type, or where a Jacobian is given the same index.
   const index = (e: KeyframeElement) => (e.type ? (e.type === "saddle" ? -1 : 1) : det(e.jacobian) < 0 ? -1 : 1);
-  const same = ep.type && eq.type ? ep.type === eq.type : !ep.type && !eq.type && index(ep) === index(eq);
+  const same = ep.type && eq.type ? ep.type === eq.type : index(ep) === index(eq);
   if (!same)
     throw new Error(`a ${ep.type ?? "Jacobian"} cannot be linked with a ${eq.type ?? "Jacobian"}: linked singularities have the same type`);
   const s = setKeyframeTopology(scene, true);
