@@ -344,6 +344,19 @@ std::vector<HopfEvent> find_hopf_events(const Topology& topo, const std::vector<
     const double half = 0.5 * J.trace();
     return half / std::sqrt(std::max(J.determinant() - half * half, 1e-300));
   };
+  // The nearest index-+1 singularity of frame f within `distance` of x (of those with
+  // complex eigenvalues, if asked), or −1.
+  auto nearest_plus_one = [&](size_t f, const Vec3& x, bool complex_only) {
+    int m = -1;
+    double dm = distance;
+    for (size_t l = 0; l < topo.singularities[f].size(); ++l) {
+      const Singularity& c = topo.singularities[f][l];
+      if (c.index != 1 || (complex_only && !complex_eigen(c.jacobian))) continue;
+      const double d = (c.position - x).norm();
+      if (d <= dm) dm = d, m = static_cast<int>(l);
+    }
+    return m;
+  };
   // Along the focus from singularity k of frame j, frame by frame in direction `dir` (the
   // nearest +1 with complex eigenvalues within `distance`) while its trace keeps the sign
   // `sign`, for `hopf_frames` frames and then while |rate| still grows (a slow ramp of μ
@@ -359,14 +372,7 @@ std::vector<HopfEvent> find_hopf_events(const Topology& topo, const std::vector<
       most = std::max(most, last);
       if ((dir < 0 && j == 0) || (dir > 0 && j + 1 >= N)) break;
       const size_t next = dir < 0 ? j - 1 : j + 1;
-      int m = -1;
-      double dm = distance;
-      for (size_t l = 0; l < topo.singularities[next].size(); ++l) {
-        const Singularity& c = topo.singularities[next][l];
-        if (c.index != 1 || !complex_eigen(c.jacobian)) continue;
-        const double d = (c.position - s.position).norm();
-        if (d <= dm) dm = d, m = static_cast<int>(l);
-      }
+      const int m = nearest_plus_one(next, s.position, true);
       if (m < 0) break;
       j = next;
       k = static_cast<size_t>(m);
@@ -379,13 +385,7 @@ std::vector<HopfEvent> find_hopf_events(const Topology& topo, const std::vector<
     const auto& b = topo.singularities[j + 1];
     for (size_t k = 0; k < a.size(); ++k) {
       if (a[k].index != 1 || !complex_eigen(a[k].jacobian)) continue;
-      int m = -1;
-      double dm = distance;
-      for (size_t l = 0; l < b.size(); ++l) {
-        if (b[l].index != 1) continue;
-        const double d = (b[l].position - a[k].position).norm();
-        if (d <= dm) dm = d, m = static_cast<int>(l);
-      }
+      const int m = nearest_plus_one(j + 1, a[k].position, false);
       if (m < 0) continue;
       const Singularity& s = b[static_cast<size_t>(m)];
       if (!complex_eigen(s.jacobian)) continue;

@@ -112,14 +112,20 @@ TEST(DesignCheck, FindsEveryDesignedFeatureAndNothingElse) {
   EXPECT_TRUE(j.at("extra").at("paths").empty());
 }
 
-TEST(DesignCheck, AHopfElementIsItsFocusAndItsHopfEvent) {
-  // One supercritical Hopf template: its focus at every frame and the Hopf event at t0 are
-  // found, the focus's paths (attracting, center, repelling) are designed, nothing extra;
-  // checked as subcritical, the event is found with the wrong criticality.
+// One supercritical Hopf template at (0.1, 0), t0 = 0.5, on 33² × 21 frames.
+Scene hopf_scene() {
   Scene scene = grid_scene(33, 21, 8);
   BifurcationElement b = bifurcation(BifurcationType::hopf_supercritical, Vec3(0.1, 0, 0), 0.5);
   b.scale = 0.3;
   scene.elements.push_back(b);
+  return scene;
+}
+
+TEST(DesignCheck, AHopfElementIsItsFocusAndItsHopfEvent) {
+  // One supercritical Hopf template: its focus at every frame and the Hopf event at t0 are
+  // found, the focus's paths (attracting, center, repelling) are designed, nothing extra;
+  // checked as subcritical, the event is found with the wrong criticality.
+  const Scene scene = hopf_scene();
   const Generated g = generate_and_analyze(scene);
   const DesignCheck check = check_design(scene, *g.space, g.field, g.topology);
   ASSERT_EQ(check.designed.size(), 2u);
@@ -402,10 +408,7 @@ TEST(DesignCheck, ACancelledPairIsExpectedAbsentAtItsFrame) {
 // of its own without paths that names the feature whose path it is on. (Before, the check
 // read only the saddle–node bifurcations and said "no extras".)
 TEST(DesignCheck, AHopfEventNotDesignedIsAnExtraEvenOnADesignedFocus) {
-  Scene generated = grid_scene(33, 21, 8);
-  BifurcationElement b = bifurcation(BifurcationType::hopf_supercritical, Vec3(0.1, 0, 0), 0.5);
-  b.scale = 0.3;
-  generated.elements.push_back(b);
+  const Scene generated = hopf_scene();
   const Generated g = generate_and_analyze(generated);
   Scene center = grid_scene(33, 21, 8);
   center.elements.push_back(singular(SingularType::ccw_center, {{Vec3(0.1, 0, 0), 0}}));
