@@ -2052,6 +2052,8 @@ struct PhaseDrifts {
 class PathRouter {
 public:
   static constexpr int kSamples = 256;
+  // A pairwise detour's largest offset, in separations (separate()).
+  static constexpr double kMaxDetour = 2;
 
   // keyframe_times: the scene's key frames' times (where the paths' ends are the key
   // frames' singularities; required() never asks a pair for more than those hold it).
@@ -2187,7 +2189,9 @@ public:
 
   // Bends a's and b's paths apart so that they keep what they must; false when no detour
   // (either side, shared by length or taken by one path alone) stays inside the domain.
-  bool separate(Track& a, Track& b, const Approach& ap) const {
+  // `capped`: set when a detour inside the domain was found but none within kMaxDetour.
+  bool separate(Track& a, Track& b, const Approach& ap, bool& capped) const {
+    capped = false;
     const double dt = (ap.to - ap.from) / kSamples;
     const double ta = std::max(ap.from, ap.t - dt), tb = std::min(ap.to, ap.t + dt);
     const Vec3 pa = at(a, ap.t), pb = at(b, ap.t);
@@ -2259,6 +2263,15 @@ public:
         if (!apart(c)) c = hi;
         auto candidate = bent(c);
         if ((wa > 0 && !inside(candidate.first, a)) || (wb > 0 && !inside(candidate.second, b))) continue;
+        // A detour more than kMaxDetour separations off the path's curve does not part the
+        // two where they meet but sends one round the others (CGAL's bear: a saddle pushed
+        // to and fro between two paths, then 1.15 away on a 0.27 path, its walk across the
+        // body jumping): no pairwise detour, and the joint routing is tried instead.
+        if ((wa > 0 && offset_size(candidate.first) > kMaxDetour * separation_) ||
+            (wb > 0 && offset_size(candidate.second) > kMaxDetour * separation_)) {
+          capped = true;
+          continue;
+        }
         // Detours that keep the two apart over their whole common time first.
         const bool everywhere = approach(candidate.first, candidate.second)->ratio >= 1 - 1e-9;
         const double cost = length(candidate.first) - length(a) + length(candidate.second) - length(b) +
@@ -2266,6 +2279,7 @@ public:
         if (cost < best_cost) best_cost = cost, best = std::move(candidate);
       }
     if (!best) return false;
+    capped = false;
     a = std::move(best->first);
     b = std::move(best->second);
     return true;
@@ -2346,9 +2360,11 @@ public:
       std::fill(changed.begin(), changed.end(), 0);
       if (worst >= 1 - 1e-6) break;
       if (round == 0) how = "pairwise";
-      why = round >= rounds                           ? rounds_out
-            : separate(tracks[wi], tracks[wj], wap) ? nullptr
-                                                      : "no detour inside the domain";
+      bool capped = false;
+      why = round >= rounds                                   ? rounds_out
+            : separate(tracks[wi], tracks[wj], wap, capped) ? nullptr
+            : capped ? "no detour within twice the separation of the paths"
+                     : "no detour inside the domain";
       changed[wi - first] = changed[wj - first] = 1;
       if (why) break;
     }
@@ -2942,6 +2958,17 @@ private:
 
   // A bent path stays in the domain, no nearer its boundary than half the separation (or
   // than the straight path already comes).
+  // The largest world offset of a track's bends from its path (before the walk on a surface).
+  static double offset_size(const Track& tr) {
+    double out = 0;
+    for (int k = 0; k <= kSamples; ++k) {
+      const double s = static_cast<double>(k) / kSamples;
+      Vec3 off = Vec3::Zero();
+      for (const Track::Bend& b : tr.bends) off += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
+      out = std::max(out, off.norm());
+    }
+    return out;
+  }
   bool inside(const Track& bent, const Track& before) const {
     if (boundary_.empty()) return true;
     Track straight = before;
@@ -2980,12 +3007,27 @@ KeyframeMatch match_keyframe_singularities(std::span<const Singularity> A, std::
     mb[b] = static_cast<int>(a);
     pairs.emplace_back(a, b);
   }
-  match_nearest(A, B, ma, mb, [](const Singularity& x, const Singularity& y) { return x.type == y.type; }, pairs);
-  match_nearest(A, B, ma, mb,
-                [](const Singularity& x, const Singularity& y) {
-                  return x.index == y.index && stability(x.type) * stability(y.type) >= 0;
-                },
-                pairs);
+  // The same type, or else the same index and stability; the static solve's own
+  // singularities (neither linked nor designed) within carry_reach: farther, the two key
+  // frames' fields have each its own there (CGAL's bear: a saddle and a focus by the head in
+  // one, by the body in the other, carried 0.9 and 1.2 across the others' paths, routed
+  // round them by detours as long as the bear), cancelled and created in pairs below.
+  auto same_type = [](const Singularity& x, const Singularity& y) { return x.type == y.type; };
+  auto same_stability = [](const Singularity& x, const Singularity& y) {
+    return x.index == y.index && stability(x.type) * stability(y.type) >= 0;
+  };
+  auto within = [&](const Singularity& x, const Singularity& y) {
+    const auto a = static_cast<size_t>(&x - A.data()), b = static_cast<size_t>(&y - B.data());
+    const bool designed = (a < rules.designed_a.size() && rules.designed_a[a]) ||
+                          (b < rules.designed_b.size() && rules.designed_b[b]);
+    return designed || (x.position - y.position).norm() <= rules.carry_reach;
+  };
+  auto near_type = [&](const Singularity& x, const Singularity& y) { return same_type(x, y) && within(x, y); };
+  auto near_stability = [&](const Singularity& x, const Singularity& y) {
+    return same_stability(x, y) && within(x, y);
+  };
+  match_nearest(A, B, ma, mb, near_type, pairs);
+  match_nearest(A, B, ma, mb, near_stability, pairs);
   // Two of the static solve's own nodes that trade places (a repelling focus on one ear and
   // an attracting one on the other in the first key frame, the other way round in the
   // second: matching by type carries each across the surface) are matched in place instead
@@ -3046,6 +3088,9 @@ KeyframeMatch match_keyframe_singularities(std::span<const Singularity> A, std::
                   return x.index == y.index && (x.position - y.position).norm() <= rules.stability_reach;
                 },
                 pairs);
+  // What is left (none to pair it with, nor to turn over): carried, however far.
+  match_nearest(A, B, ma, mb, same_type, pairs);
+  match_nearest(A, B, ma, mb, same_stability, pairs);
   return out;
 }
 
@@ -3134,301 +3179,345 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   for (size_t k = 0; k + 1 < nk; ++k) {
     const size_t first_track = tracks_.size();
     const size_t first_template = templates_.size();
-    Guide guide;
-    std::vector<Track> obstacles;  // the interval's templates, for the router
-    const std::vector<Singularity>& A = sing[k];
-    const std::vector<Singularity>& B = sing[k + 1];
-    KeyframeIntervalReport rep;
-    rep.from_keyframe = static_cast<int>(k);
-    rep.to_keyframe = static_cast<int>(k + 1);
-    rep.t0 = scene.keyframes[k].t;
-    rep.t1 = scene.keyframes[k + 1].t;
-    rep.bifurcation_t = k < scene.solver.bifurcation_times.size() ? scene.solver.bifurcation_times[k]
-                                                                   : 0.5 * (rep.t0 + rep.t1);
-    KeyframeMatchRules rules;
-    {
+    const int first_group = groups;
+    // Matched first however far the static solve's own singularities go; where that
+    // interval is not guided and matching them within stability_reach alone pairs some
+    // instead (a saddle and a focus by the head in one key frame and by the body in the
+    // next: CGAL's bear, carried 0.9 and 1.2 across the knot's paths), planned again so.
+    // A sphere's knot carries its static saddle 0.79 and focus 1.33 (diameter 2) and is
+    // guided so: the reach is the second try, not the rule. When neither is guided the
+    // first plan is kept (its report says why).
+    struct Unguided {
+      std::vector<Track> tracks;
+      std::vector<Template> templates;
+      KeyframeIntervalReport rep;
+      int groups = 0;
+    };
+    std::optional<Unguided> unguided;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      Guide guide;
+      std::vector<Track> obstacles;  // the interval's templates, for the router
+      const std::vector<Singularity>& A = sing[k];
+      const std::vector<Singularity>& B = sing[k + 1];
+      KeyframeIntervalReport rep;
+      rep.from_keyframe = static_cast<int>(k);
+      rep.to_keyframe = static_cast<int>(k + 1);
+      rep.t0 = scene.keyframes[k].t;
+      rep.t1 = scene.keyframes[k + 1].t;
+      rep.bifurcation_t = k < scene.solver.bifurcation_times.size() ? scene.solver.bifurcation_times[k]
+                                                                     : 0.5 * (rep.t0 + rep.t1);
+      KeyframeMatchRules rules;
+      {
+        std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
+        for (size_t l = 0; l < scene.solver.links.size(); ++l) {
+          const KeyframeLink& link = scene.solver.links[l];
+          if (link.from_keyframe != static_cast<int>(k)) continue;
+          const size_t a = linked_singularity(l, link.from_keyframe, link.from_element);
+          const size_t b = linked_singularity(l, link.to_keyframe, link.to_element);
+          if (ma[a] >= 0 || mb[b] >= 0)
+            throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
+                              "links a singularity of the key frames' fields that an earlier link already holds (the "
+                              "two elements are too close to tell apart)");
+          if (A[a].index != B[b].index)
+            throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
+                              fmt::format("the key frames' fields have singularities of index {} and {} at the linked "
+                                          "elements; linked singularities must have the same index",
+                                          A[a].index, B[b].index));
+          ma[a] = static_cast<int>(b);
+          mb[b] = static_cast<int>(a);
+          rules.links.emplace_back(a, b);
+        }
+      }
+      rules.designed_a = designed[k];
+      rules.designed_b = designed[k + 1];
+      rules.turnover_cost = separation;
+      rules.stability_reach = stability_reach;
+      if (attempt == 1) rules.carry_reach = stability_reach;
+      const KeyframeMatch matching = match_keyframe_singularities(A, B, rules);
+      const std::vector<std::pair<size_t, size_t>>& pairs = matching.matched;
+      const size_t n_linked = rules.links.size();
+      const std::array<std::vector<std::pair<size_t, size_t>>, 2> side_pairs{matching.cancelled, matching.created};
       std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
-      for (size_t l = 0; l < scene.solver.links.size(); ++l) {
-        const KeyframeLink& link = scene.solver.links[l];
-        if (link.from_keyframe != static_cast<int>(k)) continue;
-        const size_t a = linked_singularity(l, link.from_keyframe, link.from_element);
-        const size_t b = linked_singularity(l, link.to_keyframe, link.to_element);
-        if (ma[a] >= 0 || mb[b] >= 0)
-          throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
-                            "links a singularity of the key frames' fields that an earlier link already holds (the "
-                            "two elements are too close to tell apart)");
-        if (A[a].index != B[b].index)
-          throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
-                            fmt::format("the key frames' fields have singularities of index {} and {} at the linked "
-                                        "elements; linked singularities must have the same index",
-                                        A[a].index, B[b].index));
-        ma[a] = static_cast<int>(b);
-        mb[b] = static_cast<int>(a);
-        rules.links.emplace_back(a, b);
+      for (const auto& [a, b] : pairs) ma[a] = static_cast<int>(b), mb[b] = static_cast<int>(a);
+      for (size_t m = 0; m < pairs.size(); ++m) {
+        const Singularity& a = A[pairs[m].first];
+        const Singularity& b = B[pairs[m].second];
+        add_track(a, b.position, rep.t0, rep.t1, to_linear(b.jacobian), b.where.face);
+        tracks_.back().to_type = b.type;
+        rep.matched.push_back({a.type, a.position, b.position, m < n_linked, 0.0, b.type});
       }
-    }
-    rules.designed_a = designed[k];
-    rules.designed_b = designed[k + 1];
-    rules.turnover_cost = separation;
-    rules.stability_reach = stability_reach;
-    const KeyframeMatch matching = match_keyframe_singularities(A, B, rules);
-    const std::vector<std::pair<size_t, size_t>>& pairs = matching.matched;
-    const size_t n_linked = rules.links.size();
-    const std::array<std::vector<std::pair<size_t, size_t>>, 2> side_pairs{matching.cancelled, matching.created};
-    std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
-    for (const auto& [a, b] : pairs) ma[a] = static_cast<int>(b), mb[b] = static_cast<int>(a);
-    for (size_t m = 0; m < pairs.size(); ++m) {
-      const Singularity& a = A[pairs[m].first];
-      const Singularity& b = B[pairs[m].second];
-      add_track(a, b.position, rep.t0, rep.t1, to_linear(b.jacobian), b.where.face);
-      tracks_.back().to_type = b.type;
-      rep.matched.push_back({a.type, a.position, b.position, m < n_linked, 0.0, b.type});
-    }
 
-    // The unmatched, in pairs: cancelled before t_c, created after.
-    const double tc = rep.bifurcation_t;
-    const double tau = 0.25 * std::min(tc - rep.t0, rep.t1 - tc);
-    const double diam = space.diameter();
-    for (int side = 0; side < 2; ++side) {
-      const std::vector<Singularity>& S = side == 0 ? A : B;
-      const std::vector<int>& matched = side == 0 ? ma : mb;
-      std::vector<char> paired(S.size(), 0);
-      for (const auto& [si, ni] : side_pairs[static_cast<size_t>(side)]) {
-        paired[si] = paired[ni] = 1;
-        const Singularity& saddle = S[si];
-        const Singularity& node = S[ni];
-        // The template's middle and axis: on a surface the middle of the shortest path
-        // from the saddle to the node (the curve the pair's tracks run along) and its
-        // direction there; on the plane the segment's.
-        const std::shared_ptr<const SurfaceCurve> between =
-            space.planar() ? nullptr : surface_curve(space, neighbours, saddle.position, node.position);
-        const Vec3 mid = between ? surface_position(mesh, space.locate(between->at(0.5)))
-                                 : surface_position(mesh, space.locate(0.5 * (saddle.position + node.position)));
-        const int face = space.locate(mid).face;
-        const double dist = (node.position - saddle.position).norm();
-        const double s = std::max(1.5 * h, std::min(0.25 * dist, 0.1 * diam));
-        cplx axis = bundle.world_to_face(face, between ? Vec3(between->at(0.55) - between->at(0.45))
-                                                       : Vec3(node.position - saddle.position));
-        axis = std::abs(axis) > 0 ? axis / std::abs(axis) : cplx(1, 0);
-        const bool sink = stability(node.type) < 0;
-        BifurcationElement b;
-        b.type = side == 0 ? (sink ? BifurcationType::saddle_sink_cancellation : BifurcationType::saddle_source_cancellation)
-                           : (sink ? BifurcationType::saddle_sink_creation : BifurcationType::saddle_source_creation);
-        b.at = {mid, tc};
-        b.scale = s;
-        b.time_scale = tau;
-        b.angle = std::arg(axis);
-        templates_.push_back({CompiledElement(b), tc - tau, tc + tau, std::max(scene.solver.region_radius, 2 * s)});
-        {
-          Track ob;
-          ob.p0 = ob.p1 = mid;
-          ob.t0 = tc - tau;
-          ob.t1 = tc + tau;
-          ob.type = saddle.type;
-          ob.group = groups;
-          obstacles.push_back(ob);
+      // The unmatched, in pairs: cancelled before t_c, created after.
+      const double tc = rep.bifurcation_t;
+      const double tau = 0.25 * std::min(tc - rep.t0, rep.t1 - tc);
+      const double diam = space.diameter();
+      for (int side = 0; side < 2; ++side) {
+        const std::vector<Singularity>& S = side == 0 ? A : B;
+        const std::vector<int>& matched = side == 0 ? ma : mb;
+        std::vector<char> paired(S.size(), 0);
+        for (const auto& [si, ni] : side_pairs[static_cast<size_t>(side)]) {
+          paired[si] = paired[ni] = 1;
+          const Singularity& saddle = S[si];
+          const Singularity& node = S[ni];
+          // The template's middle and axis: on a surface the middle of the shortest path
+          // from the saddle to the node (the curve the pair's tracks run along) and its
+          // direction there; on the plane the segment's.
+          const std::shared_ptr<const SurfaceCurve> between =
+              space.planar() ? nullptr : surface_curve(space, neighbours, saddle.position, node.position);
+          const Vec3 mid = between ? surface_position(mesh, space.locate(between->at(0.5)))
+                                   : surface_position(mesh, space.locate(0.5 * (saddle.position + node.position)));
+          const int face = space.locate(mid).face;
+          const double dist = (node.position - saddle.position).norm();
+          const double s = std::max(1.5 * h, std::min(0.25 * dist, 0.1 * diam));
+          cplx axis = bundle.world_to_face(face, between ? Vec3(between->at(0.55) - between->at(0.45))
+                                                         : Vec3(node.position - saddle.position));
+          axis = std::abs(axis) > 0 ? axis / std::abs(axis) : cplx(1, 0);
+          const bool sink = stability(node.type) < 0;
+          BifurcationElement b;
+          using BT = BifurcationType;
+          b.type = side == 0 ? (sink ? BT::saddle_sink_cancellation : BT::saddle_source_cancellation)
+                             : (sink ? BT::saddle_sink_creation : BT::saddle_source_creation);
+          b.at = {mid, tc};
+          b.scale = s;
+          b.time_scale = tau;
+          b.angle = std::arg(axis);
+          templates_.push_back({CompiledElement(b), tc - tau, tc + tau, std::max(scene.solver.region_radius, 2 * s)});
+          {
+            Track ob;
+            ob.p0 = ob.p1 = mid;
+            ob.t0 = tc - tau;
+            ob.t1 = tc + tau;
+            ob.type = saddle.type;
+            ob.group = groups;
+            obstacles.push_back(ob);
+          }
+          // The template's zeros at |t′| = 1 (node on +axis, saddle on −axis) and its
+          // Jacobians there: R diag(±2, ±1) Rᵀ in the frame of `face`.
+          const Vec3 off = s * bundle.face_to_world(face, axis);
+          const Vec3 node_end = surface_position(mesh, space.locate(mid + off));
+          const Vec3 saddle_end = surface_position(mesh, space.locate(mid - off));
+          const double sign = sink ? -1.0 : 1.0;
+          const cplx rot = axis * axis;
+          const Linear j_node{cplx(sign * 1.5, 0), sign * 0.5 * rot};
+          const Linear j_saddle{cplx(sign * -0.5, 0), sign * -1.5 * rot};
+          KeyframeIntervalReport::Pair pr{saddle.type, node.type, saddle.position, node.position, mid, tc};
+          if (side == 0) {
+            add_track(saddle, saddle_end, rep.t0, tc - tau, j_saddle, face, groups);
+            add_track(node, node_end, rep.t0, tc - tau, j_node, face, groups);
+            rep.cancelled.push_back(pr);
+            guide.pairs.push_back({tracks_.size() - 1, tracks_.size() - 2, cplx(mid.x(), mid.y()),
+                                   cplx(bundle.face_to_world(face, axis).x(), bundle.face_to_world(face, axis).y()), s,
+                                   tc, tau, true});
+          } else {
+            // Carried backwards in time: from the key frame at t1 to the template's zeros at t_c + τ.
+            add_track(saddle, saddle_end, rep.t1, tc + tau, j_saddle, face, groups);
+            add_track(node, node_end, rep.t1, tc + tau, j_node, face, groups);
+            rep.created.push_back(pr);
+            guide.pairs.push_back({tracks_.size() - 1, tracks_.size() - 2, cplx(mid.x(), mid.y()),
+                                   cplx(bundle.face_to_world(face, axis).x(), bundle.face_to_world(face, axis).y()), s,
+                                   tc, tau, false});
+          }
+          ++groups;
         }
-        // The template's zeros at |t′| = 1 (node on +axis, saddle on −axis) and its
-        // Jacobians there: R diag(±2, ±1) Rᵀ in the frame of `face`.
-        const Vec3 off = s * bundle.face_to_world(face, axis);
-        const Vec3 node_end = surface_position(mesh, space.locate(mid + off));
-        const Vec3 saddle_end = surface_position(mesh, space.locate(mid - off));
-        const double sign = sink ? -1.0 : 1.0;
-        const cplx rot = axis * axis;
-        const Linear j_node{cplx(sign * 1.5, 0), sign * 0.5 * rot};
-        const Linear j_saddle{cplx(sign * -0.5, 0), sign * -1.5 * rot};
-        KeyframeIntervalReport::Pair pr{saddle.type, node.type, saddle.position, node.position, mid, tc};
-        if (side == 0) {
-          add_track(saddle, saddle_end, rep.t0, tc - tau, j_saddle, face, groups);
-          add_track(node, node_end, rep.t0, tc - tau, j_node, face, groups);
-          rep.cancelled.push_back(pr);
-          guide.pairs.push_back({tracks_.size() - 1, tracks_.size() - 2, cplx(mid.x(), mid.y()),
-                                 cplx(bundle.face_to_world(face, axis).x(), bundle.face_to_world(face, axis).y()), s,
-                                 tc, tau, true});
-        } else {
-          // Carried backwards in time: from the key frame at t1 to the template's zeros at t_c + τ.
-          add_track(saddle, saddle_end, rep.t1, tc + tau, j_saddle, face, groups);
-          add_track(node, node_end, rep.t1, tc + tau, j_node, face, groups);
-          rep.created.push_back(pr);
-          guide.pairs.push_back({tracks_.size() - 1, tracks_.size() - 2, cplx(mid.x(), mid.y()),
-                                 cplx(bundle.face_to_world(face, axis).x(), bundle.face_to_world(face, axis).y()), s,
-                                 tc, tau, false});
-        }
-        ++groups;
+        for (size_t i = 0; i < S.size(); ++i)
+          if (matched[i] < 0 && !paired[i])
+            (side == 0 ? rep.unpaired_first : rep.unpaired_second).push_back(S[i].position);
       }
-      for (size_t i = 0; i < S.size(); ++i)
-        if (matched[i] < 0 && !paired[i]) (side == 0 ? rep.unpaired_first : rep.unpaired_second).push_back(S[i].position);
-    }
 
-    // On a surface, a path that is no curve on it (leaves_surface: its ends joined by no
-    // edge path, so left the straight segment) cannot be guided; found before the router
-    // spends its time on the interval (which then stays "straight" and falls back).
-    std::string off_surface;
-    if (!space.planar())
-      for (size_t i = first_track; i < tracks_.size() && off_surface.empty(); ++i) {
-        std::vector<SurfacePoint> on(SurfaceGuide::kSamples + 1);
-        for (int q = 0; q <= SurfaceGuide::kSamples; ++q)
-          on[static_cast<size_t>(q)] = space.locate(tracks_[i].raw(static_cast<double>(q) / SurfaceGuide::kSamples));
-        off_surface = leaves_surface(space, tracks_[i], on);
-      }
-    // Paths that would come closer than the separation are bent around each other.
-    const std::string where =
-        scene.solver.path_separation ? "solver.path_separation" : "solver.keyframe_topology";
-    if (off_surface.empty()) {
-      if (auto why = router.route(tracks_, first_track, tracks_.size(), obstacles, scene, where,
-                                  fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1), rep.routing))
-        rep.collision = std::move(*why);
-    }
-    // Where paths were bent, each Jacobian turns with its neighbourhood.
-    if (rep.routing != "straight") router.turn_with_neighbours(tracks_, first_track, tracks_.size());
-    rep.separation = separation;
-    for (size_t m = 0; m < rep.matched.size(); ++m) rep.matched[m].detour = router.detour(tracks_[first_track + m]);
-    for (size_t i = first_track; i < tracks_.size(); ++i)
-      for (size_t j = i + 1; j < tracks_.size(); ++j)
-        if (tracks_[i].group < 0 || tracks_[i].group != tracks_[j].group)
-          rep.closest_approach = std::min(rep.closest_approach, router.closest(tracks_[i], tracks_[j]));
-    // Planar domains: the frames in between are the interval's guide field (Guide), whose
-    // zeros are the plan's alone; not with singularities left unpaired (the guide would
-    // need their zeros too) or nothing carried.
-    guide.first = first_track;
-    guide.last = tracks_.size();
-    guide.t0 = rep.t0;
-    guide.t1 = rep.t1;
-    guide.radius = scene.solver.region_radius;
-    const Guide unbuilt = guide;
-    if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
-        guide.last > guide.first &&
-        build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], guide)) {
-      // A node changing stability turns through one center or the other: the shorter arc
-      // of α, unless the nodes' phases then end whole turns apart (λ_j ends at 2πk_j),
-      // which Λ's Shepard blend cannot take out between them (the frames before the second
-      // key frame were half a turn off it there); then the other way round, kept where the
-      // nodes' ends come closer (its own λ is G's without it: the others' move a turn).
-      auto spread = [&](const Guide& g) {
-        double lo = 0, hi = 0;
-        bool any = false;
-        for (size_t i = g.first; i < g.last; ++i) {
-          if (tracks_[i].index <= 0 || g.lambda[i - g.first].empty()) continue;
-          const double e = g.lambda[i - g.first].back().imag();
-          lo = any ? std::min(lo, e) : e;
-          hi = any ? std::max(hi, e) : e;
-          any = true;
+      // On a surface, a path that is no curve on it (leaves_surface: its ends joined by no
+      // edge path, so left the straight segment) cannot be guided; found before the router
+      // spends its time on the interval (which then stays "straight" and falls back).
+      std::string off_surface;
+      if (!space.planar())
+        for (size_t i = first_track; i < tracks_.size() && off_surface.empty(); ++i) {
+          std::vector<SurfacePoint> on(SurfaceGuide::kSamples + 1);
+          for (int q = 0; q <= SurfaceGuide::kSamples; ++q)
+            on[static_cast<size_t>(q)] = space.locate(tracks_[i].raw(static_cast<double>(q) / SurfaceGuide::kSamples));
+          off_surface = leaves_surface(space, tracks_[i], on);
         }
-        return hi - lo;
-      };
-      for (size_t i = guide.first; i < guide.last; ++i) {
-        if (stability(tracks_[i].type) * stability(tracks_[i].to_type) >= 0 || spread(guide) < std::numbers::pi)
-          continue;
-        tracks_[i].other_way = true;
-        Guide other = unbuilt;
-        if (build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], other) &&
-            spread(other) < spread(guide))
-          guide = std::move(other);
-        else
-          tracks_[i].other_way = false;
+      // Paths that would come closer than the separation are bent around each other.
+      const std::string where =
+          scene.solver.path_separation ? "solver.path_separation" : "solver.keyframe_topology";
+      if (off_surface.empty()) {
+        if (auto why = router.route(tracks_, first_track, tracks_.size(), obstacles, scene, where,
+                                    fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1), rep.routing))
+          rep.collision = std::move(*why);
       }
-      keep_pair_phase_if_resolved(space, tracks_, guide);
-      for (size_t i = guide.first; i < guide.last; ++i) tracks_[i].guided = true;
-      for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
-      rep.guided = true;
-      guides_.push_back(std::move(guide));
-    }
-    // Surfaces: the first key frame's field carried along the paths (SurfaceGuide), where
-    // every singularity of both key frames is matched or in a created or cancelled pair.
-    // Where its frames hold extra zeros, the guide is built again with the weights' ramp
-    // twice as wide (a long path's log R changes by ~|log R| across it, which two edge
-    // lengths did not resolve beside the knot with a pair; the wider tube does not fit
-    // every coarse mesh, so it is the second try), then with the shaped ratio at both
-    // ramps (SurfaceGuide::Path::a: the key frames' own linear parts in R, which a very
-    // anisotropic focus needs at its path's ends, CGAL's bunny; the sphere 3 knot with a
-    // pair is not guided with it, so it comes after the plain ratio): the first with no
-    // wrong frame is kept (PhaseCheck; the key frames' |β|/|α| does not tell beforehand
-    // which scenes need the shaped ratio, docs/benchmarks.md, so the order stays).
-    std::string unbuilt_why = off_surface;  // why the guide could not be built, when it was tried
-    if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
-        guide.last > guide.first && !rep.guided)
-      unbuilt_why = "the guide field has two zeros on one point";
-    if (!space.planar() && off_surface.empty() && rep.collision.empty() && rep.unpaired_first.empty() &&
-        rep.unpaired_second.empty() && tracks_.size() > first_track) {
-      std::optional<SurfaceGuide> best;
-      // The frames the guide will be checked at: the scene's, strictly between the key frames.
-      std::vector<double> frame_times;
-      for (const double t : scene.time.times())
-        if (t > rep.t0 && t < rep.t1) frame_times.push_back(t);
-      const size_t inner_frames = frame_times.size();
-      const PhaseCheck check(space, tracks_, rep.matched.size(), frame_times);
-      std::vector<PhaseCheck::Trial> failed;  // counted on only when no guide is kept
-      TubeCache tubes;
-      for (const auto& [ramp, shaped] : {std::pair{1.0, false}, std::pair{2.0, false}, std::pair{1.0, true}, std::pair{2.0, true}}) {
-        SurfaceGuide sg;
-        sg.t0 = rep.t0;
-        sg.t1 = rep.t1;
-        std::string why;
-        if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
-                                 ramp, shaped, keyframe_fields[k], keyframe_fields[k + 1], tubes, sg, why)) {
-          // The wider ramp widens the same tubes: a path or pair that fits no chart at the
-          // first does not at the second either, so no second try (on the bunny ~0.5 s).
-          if (unbuilt_why.empty()) unbuilt_why = why;
-          break;
+      // Where paths were bent, each Jacobian turns with its neighbourhood.
+      if (rep.routing != "straight") router.turn_with_neighbours(tracks_, first_track, tracks_.size());
+      rep.separation = separation;
+      for (size_t m = 0; m < rep.matched.size(); ++m) rep.matched[m].detour = router.detour(tracks_[first_track + m]);
+      for (size_t i = first_track; i < tracks_.size(); ++i)
+        for (size_t j = i + 1; j < tracks_.size(); ++j)
+          if (tracks_[i].group < 0 || tracks_[i].group != tracks_[j].group)
+            rep.closest_approach = std::min(rep.closest_approach, router.closest(tracks_[i], tracks_[j]));
+      // Planar domains: the frames in between are the interval's guide field (Guide), whose
+      // zeros are the plan's alone; not with singularities left unpaired (the guide would
+      // need their zeros too) or nothing carried.
+      guide.first = first_track;
+      guide.last = tracks_.size();
+      guide.t0 = rep.t0;
+      guide.t1 = rep.t1;
+      guide.radius = scene.solver.region_radius;
+      const Guide unbuilt = guide;
+      if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
+          guide.last > guide.first &&
+          build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], guide)) {
+        // A node changing stability turns through one center or the other: the shorter arc
+        // of α, unless the nodes' phases then end whole turns apart (λ_j ends at 2πk_j),
+        // which Λ's Shepard blend cannot take out between them (the frames before the second
+        // key frame were half a turn off it there); then the other way round, kept where the
+        // nodes' ends come closer (its own λ is G's without it: the others' move a turn).
+        auto spread = [&](const Guide& g) {
+          double lo = 0, hi = 0;
+          bool any = false;
+          for (size_t i = g.first; i < g.last; ++i) {
+            if (tracks_[i].index <= 0 || g.lambda[i - g.first].empty()) continue;
+            const double e = g.lambda[i - g.first].back().imag();
+            lo = any ? std::min(lo, e) : e;
+            hi = any ? std::max(hi, e) : e;
+            any = true;
+          }
+          return hi - lo;
+        };
+        for (size_t i = guide.first; i < guide.last; ++i) {
+          if (stability(tracks_[i].type) * stability(tracks_[i].to_type) >= 0 || spread(guide) < std::numbers::pi)
+            continue;
+          tracks_[i].other_way = true;
+          Guide other = unbuilt;
+          if (build_guide(space, tracks_, keyframe_fields[k], keyframe_fields[k + 1], other) &&
+              spread(other) < spread(guide))
+            guide = std::move(other);
+          else
+            tracks_[i].other_way = false;
         }
-        PhaseCheck::Trial trial = check.start(std::move(sg));
-        if (check.accept(trial)) {
-          best = std::move(trial.g);
-          break;
-        }
-        failed.push_back(std::move(trial));
-      }
-      int fewest_wrong = -1;
-      for (PhaseCheck::Trial& trial : best ? std::span<PhaseCheck::Trial>() : std::span(failed)) {
-        const int wrong = check.fewest(trial);
-        if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong;
-      }
-      if (!best && fewest_wrong >= 0)
-        unbuilt_why = fmt::format("the surface guide's frames hold other singularities than the plan's at {} of the "
-                                  "{} frames between the key frames",
-                                  fewest_wrong, inner_frames);
-      else if (!best && unbuilt_why.empty())
-        unbuilt_why = "the surface guide could not be built";
-      if (best) {
-        // A pair's event happens where its template's zeros meet in the pair's chart: the
-        // middle of the two ends there, which on a curved chart is not the surface middle the
-        // plan first reported (CGAL's bunny: 0.029 apart for ends 0.18 apart). The report
-        // (keyframe_topology.json, the design check) says where the guide puts it.
-        for (const SurfaceGuide::Path& path : best->paths) {
-          if (!path.pair) continue;
-          const std::optional<SurfacePoint> at = chart_locate(mesh, path.coords, path.mid);
-          if (!at) continue;
-          for (KeyframeIntervalReport::Pair& pr : path.cancel ? rep.cancelled : rep.created)
-            if (pr.t == path.tc && pr.saddle == tracks_[path.saddle].p0 && pr.node == tracks_[path.track].p0)
-              pr.at = surface_position(mesh, *at);
-        }
-        for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].guided = true;
+        keep_pair_phase_if_resolved(space, tracks_, guide);
+        for (size_t i = guide.first; i < guide.last; ++i) tracks_[i].guided = true;
         for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
         rep.guided = true;
-        surface_guides_.push_back(std::move(*best));
+        guides_.push_back(std::move(guide));
       }
+      // Surfaces: the first key frame's field carried along the paths (SurfaceGuide), where
+      // every singularity of both key frames is matched or in a created or cancelled pair.
+      // Where its frames hold extra zeros, the guide is built again with the weights' ramp
+      // twice as wide (a long path's log R changes by ~|log R| across it, which two edge
+      // lengths did not resolve beside the knot with a pair; the wider tube does not fit
+      // every coarse mesh, so it is the second try), then with the shaped ratio at both
+      // ramps (SurfaceGuide::Path::a: the key frames' own linear parts in R, which a very
+      // anisotropic focus needs at its path's ends, CGAL's bunny; the sphere 3 knot with a
+      // pair is not guided with it, so it comes after the plain ratio): the first with no
+      // wrong frame is kept (PhaseCheck; the key frames' |β|/|α| does not tell beforehand
+      // which scenes need the shaped ratio, docs/benchmarks.md, so the order stays).
+      std::string unbuilt_why = off_surface;  // why the guide could not be built, when it was tried
+      if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
+          guide.last > guide.first && !rep.guided)
+        unbuilt_why = "the guide field has two zeros on one point";
+      if (!space.planar() && off_surface.empty() && rep.collision.empty() && rep.unpaired_first.empty() &&
+          rep.unpaired_second.empty() && tracks_.size() > first_track) {
+        std::optional<SurfaceGuide> best;
+        // The frames the guide will be checked at: the scene's, strictly between the key frames.
+        std::vector<double> frame_times;
+        for (const double t : scene.time.times())
+          if (t > rep.t0 && t < rep.t1) frame_times.push_back(t);
+        const size_t inner_frames = frame_times.size();
+        const PhaseCheck check(space, tracks_, rep.matched.size(), frame_times);
+        std::vector<PhaseCheck::Trial> failed;  // counted on only when no guide is kept
+        TubeCache tubes;
+        for (const auto& [ramp, shaped] :
+             {std::pair{1.0, false}, std::pair{2.0, false}, std::pair{1.0, true}, std::pair{2.0, true}}) {
+          SurfaceGuide sg;
+          sg.t0 = rep.t0;
+          sg.t1 = rep.t1;
+          std::string why;
+          if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
+                                   ramp, shaped, keyframe_fields[k], keyframe_fields[k + 1], tubes, sg, why)) {
+            // The wider ramp widens the same tubes: a path or pair that fits no chart at the
+            // first does not at the second either, so no second try (on the bunny ~0.5 s).
+            if (unbuilt_why.empty()) unbuilt_why = why;
+            break;
+          }
+          PhaseCheck::Trial trial = check.start(std::move(sg));
+          if (check.accept(trial)) {
+            best = std::move(trial.g);
+            break;
+          }
+          failed.push_back(std::move(trial));
+        }
+        int fewest_wrong = -1;
+        for (PhaseCheck::Trial& trial : best ? std::span<PhaseCheck::Trial>() : std::span(failed)) {
+          const int wrong = check.fewest(trial);
+          if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong;
+        }
+        if (!best && fewest_wrong >= 0)
+          unbuilt_why = fmt::format("the surface guide's frames hold other singularities than the plan's at {} of the "
+                                    "{} frames between the key frames",
+                                    fewest_wrong, inner_frames);
+        else if (!best && unbuilt_why.empty())
+          unbuilt_why = "the surface guide could not be built";
+        if (best) {
+          // A pair's event happens where its template's zeros meet in the pair's chart: the
+          // middle of the two ends there, which on a curved chart is not the surface middle the
+          // plan first reported (CGAL's bunny: 0.029 apart for ends 0.18 apart). The report
+          // (keyframe_topology.json, the design check) says where the guide puts it.
+          for (const SurfaceGuide::Path& path : best->paths) {
+            if (!path.pair) continue;
+            const std::optional<SurfacePoint> at = chart_locate(mesh, path.coords, path.mid);
+            if (!at) continue;
+            for (KeyframeIntervalReport::Pair& pr : path.cancel ? rep.cancelled : rep.created)
+              if (pr.t == path.tc && pr.saddle == tracks_[path.saddle].p0 && pr.node == tracks_[path.track].p0)
+                pr.at = surface_position(mesh, *at);
+          }
+          for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].guided = true;
+          for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
+          rep.guided = true;
+          surface_guides_.push_back(std::move(*best));
+        }
+      }
+      // An interval that could not be guided falls back to "free" (key frames only): carrying
+      // the matched singularities' regions alone leaves the band between them to the solve's
+      // blend of the two key frames, which made far more bifurcations than no constraint at
+      // all (CGAL's elephant: 122 against 8). Its report says so, and why.
+      if (!rep.guided) {
+        const size_t unpaired = rep.unpaired_first.size() + rep.unpaired_second.size();
+        if (tracks_.size() == first_track)
+          rep.unguided_reason = "the key frames have no singularity to carry";
+        else if (!rep.collision.empty())
+          rep.unguided_reason = "two of its paths could not be kept apart (see collision)";
+        else if (unpaired > 0)
+          rep.unguided_reason =
+              fmt::format("{} singularit{} of the key frames left unpaired (the guide would need {} zero{})", unpaired,
+                          unpaired == 1 ? "y" : "ies", unpaired == 1 ? "its" : "their", unpaired == 1 ? "" : "s");
+        else
+          rep.unguided_reason = unbuilt_why.empty() ? std::string("the guide could not be built") : unbuilt_why;
+        rep.fallback = true;
+        for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].free = true;
+        for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].free = true;
+      }
+      if (!rep.guided && attempt == 0 && tracks_.size() > first_track) {
+        KeyframeMatchRules within = rules;
+        within.carry_reach = stability_reach;
+        auto sorted = [](std::vector<std::pair<size_t, size_t>> v) { return std::sort(v.begin(), v.end()), v; };
+        if (sorted(match_keyframe_singularities(A, B, within).matched) != sorted(matching.matched)) {
+          unguided = Unguided{{tracks_.begin() + static_cast<std::ptrdiff_t>(first_track), tracks_.end()},
+                              {templates_.begin() + static_cast<std::ptrdiff_t>(first_template), templates_.end()},
+                              std::move(rep), groups};
+          tracks_.resize(first_track);
+          templates_.erase(templates_.begin() + static_cast<std::ptrdiff_t>(first_template), templates_.end());
+          groups = first_group;
+          continue;
+        }
+      }
+      if (!rep.guided && unguided) {
+        tracks_.resize(first_track);
+        tracks_.insert(tracks_.end(), unguided->tracks.begin(), unguided->tracks.end());
+        templates_.erase(templates_.begin() + static_cast<std::ptrdiff_t>(first_template), templates_.end());
+        templates_.insert(templates_.end(), unguided->templates.begin(), unguided->templates.end());
+        rep = std::move(unguided->rep);
+        groups = unguided->groups;
+      }
+      intervals_.push_back(std::move(rep));
+      break;
     }
-    // An interval that could not be guided falls back to "free" (key frames only): carrying
-    // the matched singularities' regions alone leaves the band between them to the solve's
-    // blend of the two key frames, which made far more bifurcations than no constraint at
-    // all (CGAL's elephant: 122 against 8). Its report says so, and why.
-    if (!rep.guided) {
-      const size_t unpaired = rep.unpaired_first.size() + rep.unpaired_second.size();
-      if (tracks_.size() == first_track)
-        rep.unguided_reason = "the key frames have no singularity to carry";
-      else if (!rep.collision.empty())
-        rep.unguided_reason = "two of its paths could not be kept apart (see collision)";
-      else if (unpaired > 0)
-        rep.unguided_reason =
-            fmt::format("{} singularit{} of the key frames left unpaired (the guide would need {} zero{})", unpaired,
-                        unpaired == 1 ? "y" : "ies", unpaired == 1 ? "its" : "their", unpaired == 1 ? "" : "s");
-      else
-        rep.unguided_reason = unbuilt_why.empty() ? std::string("the guide could not be built") : unbuilt_why;
-      rep.fallback = true;
-      for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].free = true;
-      for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].free = true;
-    }
-    intervals_.push_back(std::move(rep));
   }
 }
 

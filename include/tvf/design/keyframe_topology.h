@@ -142,20 +142,24 @@ struct KeyframeIntervalReport {
 
 // Step 2's and 4's matching of two consecutive key frames' singularities (A: the first's,
 // B: the second's). Matched: the links, then the same type nearest first, then the same
-// index nearest first with the stability kept; then, among the matched nodes that neither a
-// link nor a designed element holds (the static solve's own), two that trade places are
-// matched in place instead where their paths would cross (their relative position passing
-// nearer than half of what either key frame holds them apart) and in place they would not,
-// or else where that carries less, a stability change counting `turnover_cost` more (the
-// static solve's far foci turn over where they are rather than travel across the surface
-// to where the other key frame has one of their kind); then the
-// left over are paired (saddle with node, nearest first, each key frame apart); last, what
-// is neither matched nor paired is matched across stability within `stability_reach`.
+// index nearest first with the stability kept (both: the static solve's own singularities,
+// neither linked nor designed, only within `carry_reach`, which the plan sets on its second
+// try of an interval the first could not guide); then, among the matched nodes
+// that neither a link nor a designed element holds (the static solve's own), two that trade
+// places are matched in place instead where their paths would cross (their relative
+// position passing nearer than half of what either key frame holds them apart) and in place
+// they would not, or else where that carries less, a stability change counting
+// `turnover_cost` more (the static solve's far foci turn over where they are rather than
+// travel across the surface to where the other key frame has one of their kind); then the
+// left over are paired (saddle with node, nearest first, each key frame apart); then what
+// is neither matched nor paired is matched across stability within `stability_reach`; what
+// is still left, by type and then by index and stability, however far.
 struct KeyframeMatchRules {
   std::vector<std::pair<size_t, size_t>> links;  // (in A, in B), checked by the caller
   std::vector<char> designed_a, designed_b;      // the singularity a singular element names (empty: none)
   double turnover_cost = 0;
   double stability_reach = std::numeric_limits<double>::infinity();
+  double carry_reach = std::numeric_limits<double>::infinity();
 };
 struct KeyframeMatch {
   std::vector<std::pair<size_t, size_t>> matched;  // (in A, in B): the links first
