@@ -727,6 +727,19 @@ TEST(KeyframeTopology, AKnotOnARealMeshIsGuided) {
   }
 }
 
+// bench/keyframe_topology_meshes.py's knot on a mesh: a source at p and a center at q
+// trading places (32 frames, falloff 20).
+std::string mesh_knot(const std::filesystem::path& mesh, const std::string& p, const std::string& q, double radius) {
+  return R"({"tvf": 1, "domain": {"mesh": ")" + mesh.string() + R"("},
+    "time": {"frames": 32, "range": [0, 1]}, "generator": "spacetime", "falloff": 20,
+    "solver": {"region_radius": )" + fmt::format("{}", radius) + R"(, "keyframe_topology": "matched"},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": )" + p + R"(},
+                            {"kind": "singular", "type": "ccw_center", "at": )" + q + R"(}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": )" + q + R"(},
+                            {"kind": "singular", "type": "ccw_center", "at": )" + p + R"(}]}]})";
+}
+
 // The knot on CGAL's mushroom (bench/keyframe_topology_meshes.py's scene: a source and a
 // center 0.15 of the diagonal apart on the cap, trading places; the static solve adds a
 // saddle). Bending one pair after the other chased its tail (300 rounds, the closest pair
@@ -747,15 +760,8 @@ TEST(KeyframeTopology, AKnotOnCGALsMushroomIsRoutedTogetherAndGuided) {
   const std::optional<std::filesystem::path> mushroom_off = test::cgal_mesh(dir, "mushroom");
   if (!mushroom_off)
     GTEST_SKIP() << test::kCgalArchive << " is missing or has no data/meshes/mushroom.off (Debian package libcgal-demo)";
-  const std::string p = "[0.226893, 0.000169333, 0.227341]", q = "[0.182076, 0.232276, 0.222321]";
-  const Generated g = run(R"({"tvf": 1, "domain": {"mesh": ")" + mushroom_off->string() + R"("},
-    "time": {"frames": 32, "range": [0, 1]}, "generator": "spacetime", "falloff": 20,
-    "solver": {"region_radius": 0.0744, "keyframe_topology": "matched"},
-    "keyframes": [
-      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": )" + p + R"(},
-                            {"kind": "singular", "type": "ccw_center", "at": )" + q + R"(}]},
-      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": )" + q + R"(},
-                            {"kind": "singular", "type": "ccw_center", "at": )" + p + R"(}]}]})");
+  const Generated g =
+      run(mesh_knot(*mushroom_off, "[0.226893, 0.000169333, 0.227341]", "[0.182076, 0.232276, 0.222321]", 0.0744));
   const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
   ASSERT_EQ(r.matched.size(), 3u);
   EXPECT_EQ(r.routing, "joint");
@@ -796,15 +802,8 @@ TEST(KeyframeTopology, AKnotOnCGALsBearIsGuidedWithItsFarSingularitiesPaired) {
   const std::optional<std::filesystem::path> bear_off = test::cgal_mesh(dir, "bear");
   if (!bear_off)
     GTEST_SKIP() << test::kCgalArchive << " is missing or has no data/meshes/bear.off (Debian package libcgal-demo)";
-  const std::string p = "[-0.362001, 0.103117, 0.079689]", q = "[-0.309168, -0.239971, 0.193769]";
-  const Generated g = run(R"({"tvf": 1, "domain": {"mesh": ")" + bear_off->string() + R"("},
-    "time": {"frames": 32, "range": [0, 1]}, "generator": "spacetime", "falloff": 20,
-    "solver": {"region_radius": 0.1123, "keyframe_topology": "matched"},
-    "keyframes": [
-      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": )" + p + R"(},
-                            {"kind": "singular", "type": "ccw_center", "at": )" + q + R"(}]},
-      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": )" + q + R"(},
-                            {"kind": "singular", "type": "ccw_center", "at": )" + p + R"(}]}]})");
+  const Generated g =
+      run(mesh_knot(*bear_off, "[-0.362001, 0.103117, 0.079689]", "[-0.309168, -0.239971, 0.193769]", 0.1123));
   const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
   EXPECT_EQ(r.matched.size(), 10u);
   ASSERT_EQ(r.cancelled.size(), 1u);
