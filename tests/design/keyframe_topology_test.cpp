@@ -1190,19 +1190,22 @@ TEST(KeyframeTopology, AMatchedPathOnASurfaceIsACurveOnIt) {
   EXPECT_LT(off_circle, h);
 }
 
+// A singularity of a key frame for the matching tests: its type and place (index from the type).
+Singularity singularity_at(SingularityType type, double x, double y) {
+  Singularity s;
+  s.type = type;
+  s.index = type == SingularityType::saddle ? -1 : 1;
+  s.position = Vec3(x, y, 0);
+  return s;
+}
+
 // Matching (match_keyframe_singularities): the static solve's own foci that trade places
 // (a repelling one at p and an attracting one at q in the first key frame, the other way
 // round in the second) turn over where they are instead of each travelling to the other's
 // place; a designed singularity keeps its type (a source and a center trading places are
 // meant to), and so does a linked one.
 TEST(KeyframeTopology, TheStaticSolvesOwnFociTurnOverInPlace) {
-  auto at = [](SingularityType type, double x, double y) {
-    Singularity s;
-    s.type = type;
-    s.index = type == SingularityType::saddle ? -1 : 1;
-    s.position = Vec3(x, y, 0);
-    return s;
-  };
+  const auto at = singularity_at;
   using T = SingularityType;
   // Two far foci swapping stability (1 apart), a source and a center trading places (0.3).
   const std::vector<Singularity> A{at(T::repelling_focus, -0.5, 0.8), at(T::attracting_focus, 0.5, 0.8),
@@ -1255,13 +1258,7 @@ TEST(KeyframeTopology, TheStaticSolvesOwnFociTurnOverInPlace) {
 // others' paths). A designed one is carried however far, and what no pair takes is still
 // carried.
 TEST(KeyframeTopology, TheStaticSolvesOwnAreCarriedOnlyWithinReach) {
-  auto at = [](SingularityType type, double x, double y) {
-    Singularity s;
-    s.type = type;
-    s.index = type == SingularityType::saddle ? -1 : 1;
-    s.position = Vec3(x, y, 0);
-    return s;
-  };
+  const auto at = singularity_at;
   using T = SingularityType;
   using Pairs = std::vector<std::pair<size_t, size_t>>;
   // A saddle and a focus near (-1, 1) in the first key frame, near (1, -1) in the second;
