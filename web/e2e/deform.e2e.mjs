@@ -9,9 +9,7 @@ let failed = false;
 let page;
 try {
   page = await browser.newPage({ viewport: { width: 1280, height: 860 } });
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled();
+  const d = await Designer.open(page, server.url);
   await d.change(() => page.click("#new"));
   await d.tool("singular");
   await page.selectOption("#singular-type", "ccw_center");

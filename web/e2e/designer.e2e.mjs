@@ -13,9 +13,7 @@ try {
   page = await browser.newPage({ viewport: { width: 1280, height: 860 } });
   const errors = [];
   page.on("pageerror", (e) => errors.push(e.message));
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled();
+  const d = await Designer.open(page, server.url);
   check((await page.title()) === "tvf designer", "the page opens");
   await d.shot(a.out, "01_demo_scene.png");
 

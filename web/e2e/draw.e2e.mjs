@@ -48,9 +48,7 @@ try {
   page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
   const errors = [];
   page.on("pageerror", (e) => errors.push(e.message));
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled();
+  const d = await Designer.open(page, server.url);
   const mesh = () => page.evaluate(() => fetch("api/mesh").then((r) => r.json()));
   const frameAt = (j) => page.evaluate((k) => fetch(`api/frame/${k}`).then((r) => r.json()), j);
 
@@ -101,18 +99,11 @@ try {
   // ---- the sphere: a pathline and a streamline drawn on the surface ---------------------
   await d.change(() => page.selectOption("#domain", "sphere"));
   // Fewer frames, so that the video below stays short.
-  await d.change(async () => {
-    const s = (await d.scene()).scene;
+  await d.editScene((s) => {
     s.time.frames = 24;
-    await page.fill("#scene-json", JSON.stringify(s, null, 2));
-    await page.click("#apply-json");
   });
   check(await page.locator("#surface canvas").isVisible(), "the sphere is shown");
-  const sb = await page.locator("#surface canvas").boundingBox();
-  const onSurface = async (p) => {
-    const [x, y] = await page.evaluate((q) => window.tvf.surface(q), p);
-    return [sb.x + x, sb.y + y];
-  };
+  const onSurface = (p) => d.onSurface(p);
   const dragOnSurface = async (p, q, angle, n = 12) => {
     const pts = [];
     for (let k = 0; k <= n; ++k) pts.push(await onSurface(greatCircle(p, q, (angle * k) / n)));

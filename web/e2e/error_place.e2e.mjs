@@ -10,9 +10,7 @@ let page;
 try {
   const context = await browser.newContext({ viewport: { width: 1280, height: 860 } });
   page = await context.newPage();
-  await page.goto(server.url);
-  const D = new Designer(page, server.url);
-  await D.settled();
+  const D = await Designer.open(page, server.url);
   const text = JSON.stringify(
     { tvf: 1, domain: { grid: { size: [33, 33] } }, time: { frames: 10 },
       elements: [{ kind: "singular", type: "sourse", path: [[0, 0, 0]] }] },

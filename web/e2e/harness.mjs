@@ -114,6 +114,27 @@ export class Designer {
     this.page = page;
     this.url = url;
   }
+  // Opens the designer at url in page and waits until it shows the served scene.
+  static async open(page, url, timeout = 120000) {
+    await page.goto(url);
+    const d = new Designer(page, url);
+    await d.settled(timeout);
+    return d;
+  }
+  // Edits the served scene (edit(scene) changes it in place) through the page's scene
+  // JSON editor and waits for its field.
+  async editScene(edit, timeout = 120000) {
+    const scene = (await this.scene()).scene;
+    edit(scene);
+    return this.applyScene(scene, timeout);
+  }
+  // Replaces the scene through the page's scene JSON editor ("Apply") and waits for its field.
+  async applyScene(scene, timeout = 120000) {
+    return this.change(async () => {
+      await this.page.fill("#scene-json", JSON.stringify(scene, null, 2));
+      await this.page.click("#apply-json");
+    }, timeout);
+  }
   async status() {
     return this.page.evaluate(() => fetch("api/status").then((r) => r.json()));
   }
@@ -180,6 +201,15 @@ export class Designer {
   async click(p) {
     const [x, y] = await this.at(p);
     await this.page.mouse.click(x, y);
+  }
+  // Page coordinates of a world point on the surface view (a point of the mesh).
+  async onSurface(p) {
+    const box = await this.page.locator("#surface canvas").boundingBox();
+    const [x, y] = await this.page.evaluate((q) => window.tvf.surface(q), p);
+    return [box.x + x, box.y + y];
+  }
+  async clickSurface(p) {
+    await this.page.mouse.click(...(await this.onSurface(p)));
   }
   async drag(points) {
     const [x0, y0] = await this.at(points[0]);

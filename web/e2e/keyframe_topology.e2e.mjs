@@ -12,9 +12,7 @@ let failed = false;
 let page;
 try {
   page = await browser.newPage({ viewport: { width: 1280, height: 860 } });
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled();
+  const d = await Designer.open(page, server.url);
   await d.change(() => page.click("#new"));
   await page.check("#keyframe-mode");
   await d.tool("singular");
@@ -82,22 +80,15 @@ try {
     b1: unit([0.35, -1, -0.25]),
   };
   const round = (v) => v.map((x) => Number(x.toFixed(4)));
-  await d.change(async () => {
-    const sc = (await d.scene()).scene;
+  await d.editScene((sc) => {
     sc.time.frames = 48;
     sc.keyframes = [
       { t: 0, elements: [ends.a0, ends.b0].map((at) => ({ kind: "singular", type: "source", at: round(at) })) },
       { t: 1, elements: [ends.a1, ends.b1].map((at) => ({ kind: "singular", type: "source", at: round(at) })) },
     ];
-    await page.fill("#scene-json", JSON.stringify(sc, null, 2));
-    await page.click("#apply-json");
   });
   check(await page.locator("#surface canvas").isVisible(), "the sphere is shown");
-  const sb = await page.locator("#surface canvas").boundingBox();
-  const clickOnSurface = async (p) => {
-    const [x, y] = await page.evaluate((q) => window.tvf.surface(q), p);
-    await page.mouse.click(sb.x + x, sb.y + y);
-  };
+  const clickOnSurface = (p) => d.clickSurface(p);
   await d.goto(0);
   await d.settled();
   await clickOnSurface(ends.a0);

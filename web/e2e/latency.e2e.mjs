@@ -182,9 +182,7 @@ try {
     const context = await browser.newContext({ viewport: { width: 1280, height: 860 } });
     page = await context.newPage();
     if (mode === "poll") await page.route("**/api/events", (route) => route.abort());
-    await page.goto(server.url);
-    const d = new Designer(page, server.url);
-    await d.settled();
+    const d = await Designer.open(page, server.url);
     for (const generator of generators) {
       await d.change(() => page.click("#new"));
       if (generator === "deform") {
@@ -232,10 +230,7 @@ try {
           scene.deform = { base: { elements: [vortex] },
                            transform: [{ t: 0, sx: 1, sy: 1, theta: 0 }, { t: 1, sx: 1, sy: 1, theta: 0.5 }] };
         }
-        await d.change(async () => {
-          await page.fill("#scene-json", JSON.stringify(scene, null, 2));
-          await page.click("#apply-json");
-        }, 300000);
+        await d.applyScene(scene, 300000);
         await d.tool("singular");
         await page.uncheck("#keyframe-mode");
         await page.selectOption("#singular-type", "source");

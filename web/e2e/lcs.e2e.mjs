@@ -84,9 +84,7 @@ let failed = false;
 let page;
 try {
   page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled(120000);
+  const d = await Designer.open(page, server.url, 120000);
   await d.goto(0);
   await d.settled();
 

@@ -35,19 +35,14 @@ try {
       return route.fulfill({ response });
     held.push({ route, response, status });
   });
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled();
+  const d = await Designer.open(page, server.url);
   // The per-frame constrained generator on New's 65² design with 250 frames: a solve long
   // enough (about a second) that the page polls for its progress meanwhile.
   await d.change(() => page.click("#new"));
   const scene = (await d.scene()).scene;
   scene.generator = "constrained";
   scene.time.frames = 250;
-  await d.change(async () => {
-    await page.fill("#scene-json", JSON.stringify(scene, null, 2));
-    await page.click("#apply-json");
-  });
+  await d.applyScene(scene);
   await d.tool("singular");
   await page.uncheck("#keyframe-mode");
   await page.selectOption("#singular-type", "source");

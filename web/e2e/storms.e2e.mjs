@@ -11,9 +11,7 @@ let failed = false;
 let page;
 try {
   page = await browser.newPage({ viewport: { width: 1280, height: 860 } });
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled();
+  const d = await Designer.open(page, server.url);
   const started = Date.now();
   await d.change(() => page.click("#new"));
 

@@ -230,13 +230,7 @@ async function sphereCase(browser) {
     const h = surfaceHelpers(page);
     await d.settled();
     const message = async () => (await page.textContent("#message")).trim();
-    const applyScene = (edit) =>
-      d.change(async () => {
-        const s = (await d.scene()).scene;
-        edit(s);
-        await page.fill("#scene-json", JSON.stringify(s, null, 2));
-        await page.click("#apply-json");
-      });
+    const applyScene = (edit) => d.editScene(edit);
     await d.change(() => page.selectOption("#domain", "sphere"));
     // The camera looks at the sphere from (0.2, −1, 0.6): the elements on the side it sees.
     const at = (v) => unit(v).map((x) => Math.round(x * 1e4) / 1e4);

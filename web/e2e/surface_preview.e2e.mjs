@@ -37,9 +37,7 @@ try {
   page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
   const errors = [];
   page.on("pageerror", (e) => errors.push(e.message));
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled();
+  const d = await Designer.open(page, server.url);
   const frameAt = (j) => page.evaluate((k) => fetch(`api/frame/${k}`).then((r) => r.json()), j);
   const analysis = () => page.evaluate(() => fetch("api/analysis").then((r) => r.json()));
   const message = async () => (await page.textContent("#message")).trim();
@@ -77,13 +75,7 @@ try {
       },
       [p, r, warm, planar],
     );
-  const applyScene = (edit) =>
-    d.change(async () => {
-      const s = (await d.scene()).scene;
-      edit(s);
-      await page.fill("#scene-json", JSON.stringify(s, null, 2));
-      await page.click("#apply-json");
-    });
+  const applyScene = (edit) => d.editScene(edit);
 
   // ---- the plane: a source's texture moves outwards, a sink's inwards ---------------------
   await page.evaluate(() => window.tvf.preview.pause(true));
@@ -108,11 +100,7 @@ try {
   check(await page.locator("#timestrip").isVisible(), "with the time strip of the paths");
   // The test steps the preview itself: two pictures a known number of steps apart.
   await page.evaluate(() => window.tvf.preview.pause(true));
-  const sb = await page.locator("#surface canvas").boundingBox();
-  const onSurface = async (p) => {
-    const [x, y] = await page.evaluate((q) => window.tvf.surface(q), p);
-    return [sb.x + x, sb.y + y];
-  };
+  const onSurface = (p) => d.onSurface(p);
   const dragOnSurface = async (p, q, n = 10) => {
     const pts = [];
     for (let k = 0; k <= n; ++k) pts.push(await onSurface(greatCircle(p, q, (angle(p, q) * k) / n)));

@@ -59,20 +59,12 @@ try {
   page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
   const errors = [];
   page.on("pageerror", (e) => errors.push(e.message));
-  await page.goto(server.url);
-  const d = new Designer(page, server.url);
-  await d.settled();
+  const d = await Designer.open(page, server.url);
   const mesh = () => page.evaluate(() => fetch("api/mesh").then((r) => r.json()));
   const frameAt = (j) => page.evaluate((k) => fetch(`api/frame/${k}`).then((r) => r.json()), j);
   const analysis = () => page.evaluate(() => fetch("api/analysis").then((r) => r.json()));
   const message = async () => (await page.textContent("#message")).trim();
-  const applyScene = (edit) =>
-    d.change(async () => {
-      const s = (await d.scene()).scene;
-      edit(s);
-      await page.fill("#scene-json", JSON.stringify(s, null, 2));
-      await page.click("#apply-json");
-    });
+  const applyScene = (edit) => d.editScene(edit);
 
   // ---- moving a bifurcation on the sphere -----------------------------------------------
   await d.change(() => page.selectOption("#domain", "sphere"));
@@ -85,12 +77,8 @@ try {
     s.falloff = 120;
   });
   check(await page.locator("#surface canvas").isVisible(), "the sphere is shown");
-  const sb = await page.locator("#surface canvas").boundingBox();
-  const onSurface = async (p) => {
-    const [x, y] = await page.evaluate((q) => window.tvf.surface(q), p);
-    return [sb.x + x, sb.y + y];
-  };
-  const clickOnSurface = async (p) => page.mouse.click(...(await onSurface(p)));
+  const onSurface = (p) => d.onSurface(p);
+  const clickOnSurface = (p) => d.clickSurface(p);
   const dragOnSurface = async (p, q, n = 10) => {
     const pts = [];
     for (let k = 0; k <= n; ++k) pts.push(await onSurface(greatCircle(p, q, (angle(p, q) * k) / n)));

@@ -15,16 +15,12 @@ try {
   pageA = await context.newPage();
   const pageB = await context.newPage();
   for (const p of [pageA, pageB]) p.on("pageerror", (e) => errors.push(e.message));
-  await pageA.goto(server.url);
-  const A = new Designer(pageA, server.url);
-  await A.settled();
+  const A = await Designer.open(pageA, server.url);
   await A.change(() => pageA.click("#new"));
   // Tab B runs on the polling fallback (its event stream refused, as behind a proxy that
   // cuts streams), so that its polling can be held back below; tab A uses the stream.
   await pageB.route("**/api/events", (route) => route.abort());
-  await pageB.goto(server.url);
-  const B = new Designer(pageB, server.url);
-  await B.settled();
+  const B = await Designer.open(pageB, server.url);
   const types = async () => (await A.scene()).scene.elements.map((e) => e.type);
 
   // Tab B goes stale: its polling is held back, so it does not see A's change.

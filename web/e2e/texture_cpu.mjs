@@ -9,9 +9,7 @@ const dir = tempDir("tvf-cpu-");
 const browser = await launch(a.chromium);
 const server = await startServer(a.tvf, dir);
 const page = await (await browser.newContext({ viewport: { width: 1280, height: 860 } })).newPage();
-await page.goto(server.url);
-const d = new Designer(page, server.url);
-await d.settled();
+const d = await Designer.open(page, server.url);
 await d.change(() => page.click("#new"));
 // CPU seconds (utime + stime, /proc) of this script's browser: the processes below it.
 const cpu = () => {
