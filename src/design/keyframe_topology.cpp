@@ -1330,6 +1330,20 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     std::vector<std::vector<Vec3>> world(lines.size());
     for (size_t l = 0; l < lines.size(); ++l)
       for (const SurfacePoint& p : lines[l]) world[l].push_back(surface_position(mesh, p));
+    // The narrowest tube tried: an edge length where the path runs (the mean of the edges of
+    // the faces holding it), not the mesh's mean. A scanned mesh is finer where it is
+    // curved (CGAL's cow at a static saddle: faces of 0.3 mean edge lengths, those half an
+    // edge length away facing back), and a tube of its own edges holds the path there.
+    double local_sum = 0;
+    int local_count = 0;
+    for (const auto& on : lines)
+      for (const SurfacePoint& p : on) {
+        const Face& c = mesh.face(p.face);
+        for (int k = 0; k < 3; ++k)
+          local_sum += (mesh.position(c[static_cast<size_t>((k + 1) % 3)]) - mesh.position(c[static_cast<size_t>(k)])).norm();
+        local_count += 3;
+      }
+    const double hl = std::min(h, local_sum / std::max(local_count, 1));
     // Every vertex's distance from the path (chord, to the polylines), of those `near` it.
     std::vector<double> dist;
     auto measure = [&](auto near) {
@@ -1359,9 +1373,9 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
         const cplx geo = chart.coords[v];
         return std::isfinite(geo.real()) && std::isfinite(geo.imag()) && std::abs(geo) <= reach + 1.5 * outer;
       });
-      // The widest tube (of inner, outer; then narrower, down to one edge length) whose
-      // faces all face the plane's way.
-      for (double shrink = 1; !found && shrink * inner >= h; shrink *= 0.7) {
+      // The widest tube (of inner, outer; then narrower, down to one edge length where the
+      // path runs) whose faces all face the plane's way.
+      for (double shrink = 1; !found && shrink * inner >= hl; shrink *= 0.7) {
         const double in_r = shrink * inner, out_r = shrink * outer;
         found = true;
         for (int f = 0; f < mesh.num_faces() && found; ++f) {
@@ -1384,31 +1398,61 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
       }
       if (found) return true;
     }
-    // The chart that follows the path (follow_chart): the widest tube whose faces are a disk.
-    measure([&](size_t v) { return (mesh.position(static_cast<int>(v)) - centre).norm() <= reach + 1.5 * outer; });
-    for (double shrink = 1; !found && shrink * outer >= 1.5 * h; shrink *= 0.7) {
-      const double in_r = shrink * inner, out_r = shrink * outer;
-      std::vector<cplx> coords = follow_chart(mesh, dist, out_r, lines[0].front().face, world[0].front(), world[0].back());
-      if (coords.empty()) continue;
-      std::vector<cplx> x;
-      bool on_chart = true;
-      for (const auto& on : lines)
-        for (const SurfacePoint& p : on) {
-          const cplx z = chart_point(mesh, coords, p);
-          on_chart = on_chart && std::isfinite(z.real());
-          if (&on == &lines[0]) x.push_back(z);
+    auto follow = [&] {
+      for (double shrink = 1; !found && shrink * outer >= 1.5 * hl; shrink *= 0.7) {
+        const double in_r = shrink * inner, out_r = shrink * outer;
+        std::vector<cplx> coords = follow_chart(mesh, dist, out_r, lines[0].front().face, world[0].front(), world[0].back());
+        if (coords.empty()) continue;
+        std::vector<cplx> x;
+        bool on_chart = true;
+        for (const auto& on : lines)
+          for (const SurfacePoint& p : on) {
+            const cplx z = chart_point(mesh, coords, p);
+            on_chart = on_chart && std::isfinite(z.real());
+            if (&on == &lines[0]) x.push_back(z);
+          }
+        if (!on_chart) continue;
+        found = true;
+        path.coords = std::move(coords);
+        path.support.clear();
+        path.w.clear();
+        for (size_t v = 0; v < nv; ++v) {
+          if (!std::isfinite(path.coords[v].real())) continue;
+          path.support.push_back(v);
+          path.w.push_back(dist[v] <= in_r ? 1.0 : smoothstep((out_r - dist[v]) / (out_r - in_r)));
         }
-      if (!on_chart) continue;
-      found = true;
-      path.coords = std::move(coords);
-      path.support.clear();
-      path.w.clear();
-      for (size_t v = 0; v < nv; ++v) {
-        if (!std::isfinite(path.coords[v].real())) continue;
-        path.support.push_back(v);
-        path.w.push_back(dist[v] <= in_r ? 1.0 : smoothstep((out_r - dist[v]) / (out_r - in_r)));
+        if (!path.pair) path.x = std::move(x);
       }
-      if (!path.pair) path.x = std::move(x);
+    };
+    // The chart that follows the path (follow_chart): the widest tube whose faces are a disk,
+    // the tube measured in space (chord) and, where no such tube is a disk, on the surface.
+    measure([&](size_t v) { return (mesh.position(static_cast<int>(v)) - centre).norm() <= reach + 1.5 * outer; });
+    follow();
+    if (!found) {
+      // Along the edges from the vertices of the faces holding the path (their chord distance
+      // exact): a thin part's far side (an ear or horn of about the tube's width, CGAL's cow)
+      // is then as far as the way round it, and the tube a strip on its near side.
+      using Item = std::pair<double, int>;
+      std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+      std::vector<double> geo(nv, std::numeric_limits<double>::infinity());
+      for (const auto& on : lines)
+        for (const SurfacePoint& p : on)
+          for (const int v : mesh.face(p.face)) {
+            const auto u = static_cast<size_t>(v);
+            if (geo[u] > dist[u]) geo[u] = dist[u], queue.emplace(dist[u], v);
+          }
+      while (!queue.empty()) {
+        const auto [d, v] = queue.top();
+        queue.pop();
+        if (d > geo[static_cast<size_t>(v)] || d > outer) continue;
+        for (const int out : mesh.outgoing(v))
+          for (const int w : {mesh.head(out), mesh.tail(Mesh::prev(out))}) {
+            const double e = d + (mesh.position(w) - mesh.position(v)).norm();
+            if (e < geo[static_cast<size_t>(w)]) geo[static_cast<size_t>(w)] = e, queue.emplace(e, w);
+          }
+      }
+      dist = std::move(geo);
+      follow();
     }
     return found;  // else neither chart fits within an edge length of the path
   };
@@ -1665,14 +1709,34 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
       at.push_back(h.mid);
     }
   }
+  std::vector<size_t> poles;
   for (size_t v = 0; v < l.size(); ++v) {
     if (fixed[v]) continue;
     const double turn = shepard_at(mesh.position(static_cast<int>(v)), at.size());
     const cplx val = g.f0[v] * std::exp(l[v] + u * g.log_h[v] - cplx(0, turn));
-    if (!std::isfinite(val.real()) || !std::isfinite(val.imag())) continue;  // on a pole: left to the solve
+    if (!std::isfinite(val.real()) || !std::isfinite(val.imag())) {
+      poles.push_back(v);
+      continue;
+    }
     fixed[v] = 1;
     values[v] = val;
   }
+  // A vertex on a pole of the ratio (a key frame's zero placed on it: F₀ / (z − p(t₀)) is
+  // 0/0 there) takes the mean of its neighbours' values, and the acceptance check
+  // (PhaseCheck) reads the frame the solve gets. Left to the solve, it was pulled towards the key frame's zero
+  // there by the temporal term, and the solved frames held a pair around it that the
+  // check had not seen (CGAL's head: a guided knot with 6 events not asked for).
+  const TangentBundle& bundle = space.bundle();
+  std::vector<std::pair<size_t, cplx>> filled;
+  for (const size_t v : poles) {
+    Vec3 sum = Vec3::Zero();
+    int count = 0;
+    for (const int out : mesh.outgoing(static_cast<int>(v)))
+      for (const int w : {mesh.head(out), mesh.tail(Mesh::prev(out))})
+        if (fixed[static_cast<size_t>(w)]) sum += bundle.vertex_to_world(w, values[static_cast<size_t>(w)]), ++count;
+    if (count > 0) filled.emplace_back(v, bundle.world_to_vertex(static_cast<int>(v), sum / count));
+  }
+  for (const auto& [v, val] : filled) fixed[v] = 1, values[v] = val;
 }
 
 // The same with the log factors computed here.
