@@ -2253,9 +2253,13 @@ public:
 
   // Bends a's and b's paths apart so that they keep what they must; false when no detour
   // (either side, shared by length or taken by one path alone) stays inside the domain.
-  // `capped`: set when a detour inside the domain was found but none within kMaxDetour.
-  bool separate(Track& a, Track& b, const Approach& ap, bool& capped) const {
-    capped = false;
+  // `why_not`, when false: none within kMaxDetour (one inside the domain was found), none
+  // inside the domain (one parting them was found), or none parting them at all: on a
+  // closed surface a detour is walked along it, and no walk keeps two points farther apart
+  // in space than the part of the surface they are on is thick (CGAL's man: a knot along
+  // an arm 0.045 thick, the separation 0.11).
+  bool separate(Track& a, Track& b, const Approach& ap, const char*& why_not) const {
+    bool capped = false, parted = false;
     const double dt = (ap.to - ap.from) / kSamples;
     const double ta = std::max(ap.from, ap.t - dt), tb = std::min(ap.to, ap.t + dt);
     const Vec3 pa = at(a, ap.t), pb = at(b, ap.t);
@@ -2320,6 +2324,7 @@ public:
         double hi = ap.required;
         while (!apart(hi) && hi < 2 * space_.diameter()) hi *= 2;
         if (!apart(hi)) continue;
+        parted = true;
         double lo = 0;
         for (int it = 0; it < 40; ++it) (apart(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
         // A margin of 2 % of the detour, so that frames between the samples keep it too.
@@ -2342,8 +2347,13 @@ public:
                             (everywhere ? 0.0 : 4 * space_.diameter());
         if (cost < best_cost) best_cost = cost, best = std::move(candidate);
       }
-    if (!best) return false;
-    capped = false;
+    if (!best) {
+      why_not = capped   ? "no detour within twice the separation of the paths"
+                : parted ? "no detour inside the domain"
+                         : "no detour along the surface";
+      if (space_.planar() && !capped && !parted) why_not = "no detour inside the domain";
+      return false;
+    }
     a = std::move(best->first);
     b = std::move(best->second);
     return true;
@@ -2424,11 +2434,10 @@ public:
       std::fill(changed.begin(), changed.end(), 0);
       if (worst >= 1 - 1e-6) break;
       if (round == 0) how = "pairwise";
-      bool capped = false;
-      why = round >= rounds                                   ? rounds_out
-            : separate(tracks[wi], tracks[wj], wap, capped) ? nullptr
-            : capped ? "no detour within twice the separation of the paths"
-                     : "no detour inside the domain";
+      const char* why_not = nullptr;
+      why = round >= rounds                                    ? rounds_out
+            : separate(tracks[wi], tracks[wj], wap, why_not) ? nullptr
+                                                             : why_not;
       changed[wi - first] = changed[wj - first] = 1;
       if (why) break;
     }
