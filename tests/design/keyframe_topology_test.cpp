@@ -872,7 +872,7 @@ Planned plan_of(const std::string& text) {
 }
 
 // The knot on CGAL's cow (bench/keyframe_topology_meshes.py's scene): the static solves put
-// saddles on an ear and a horn, where the mesh is finer (faces of 0.3 mean edge lengths)
+// saddles on thin parts (a fold, a tip), where the mesh is finer (faces of 0.3 mean edge lengths)
 // and the far side of the thin part lies within the tube's width in space, so neither chart
 // fitted ("the surface folds over the chart of the saddle's path … within an edge length of
 // it"). The tubes are now narrowed down to the edge length where the path runs and, where
