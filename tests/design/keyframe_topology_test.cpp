@@ -825,7 +825,7 @@ TEST(KeyframeTopology, AKnotOnCGALsBearIsGuidedWithItsFarSingularitiesPaired) {
 }
 
 // The knot on CGAL's head (bench/keyframe_topology_meshes.py's scene: its two points are
-// vertices, as a designer's click on a coarse mesh often is). F₀ / (z − p(t₀)) is 0/0 on
+// vertices, as any point typed from the mesh's vertex list). F₀ / (z − p(t₀)) is 0/0 on
 // such a vertex, and the guide left it to the solve, whose temporal term pulled it towards
 // the key frame's zero there: the solved frames held a repelling focus and a saddle round
 // it for five frames (6 saddle–node events not asked for, t = 0.69 … 0.85) that the
