@@ -1722,19 +1722,42 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     values[v] = val;
   }
   // A vertex on a pole of the ratio (a key frame's zero placed on it: F₀ / (z − p(t₀)) is
-  // 0/0 there) takes the mean of its neighbours' values, and the acceptance check
-  // (PhaseCheck) reads the frame the solve gets. Left to the solve, it was pulled towards the key frame's zero
-  // there by the temporal term, and the solved frames held a pair around it that the
-  // check had not seen (CGAL's head: a guided knot with 6 events not asked for).
+  // 0/0 there) takes the value at it of the affine field that fits its neighbours' values
+  // best (least squares in its tangent plane: G is smooth there, and its zero p(t) may be
+  // within an edge of it, next to the key frame, where their mean is far off), and the
+  // acceptance check (PhaseCheck) reads the frame the solve gets. Left to the solve, it was
+  // pulled towards the key frame's zero there by the temporal term, and the solved frames
+  // held a pair around it that the check had not seen (CGAL's head: a guided knot with 6
+  // events not asked for).
   const TangentBundle& bundle = space.bundle();
   std::vector<std::pair<size_t, cplx>> filled;
   for (const size_t v : poles) {
+    const int vi = static_cast<int>(v);
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d re = Eigen::Vector3d::Zero(), im = Eigen::Vector3d::Zero();
     Vec3 sum = Vec3::Zero();
     int count = 0;
-    for (const int out : mesh.outgoing(static_cast<int>(v)))
-      for (const int w : {mesh.head(out), mesh.tail(Mesh::prev(out))})
-        if (fixed[static_cast<size_t>(w)]) sum += bundle.vertex_to_world(w, values[static_cast<size_t>(w)]), ++count;
-    if (count > 0) filled.emplace_back(v, bundle.world_to_vertex(static_cast<int>(v), sum / count));
+    for (const int out : mesh.outgoing(vi))
+      for (const int w : {mesh.head(out), mesh.tail(Mesh::prev(out))}) {
+        if (!fixed[static_cast<size_t>(w)]) continue;
+        const Vec3 world = bundle.vertex_to_world(w, values[static_cast<size_t>(w)]);
+        sum += world;
+        ++count;
+        const cplx d = bundle.world_to_vertex(vi, mesh.position(w) - mesh.position(vi));
+        const cplx gw = bundle.world_to_vertex(vi, world);
+        const Eigen::Vector3d row(1, d.real(), d.imag());
+        normal += row * row.transpose();
+        re += gw.real() * row;
+        im += gw.imag() * row;
+      }
+    if (count == 0) continue;
+    // Fewer than three neighbours, or all on a line: their mean.
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
+    const double scale = normal.diagonal().maxCoeff();
+    if (count >= 3 && ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-9 * scale)
+      filled.emplace_back(v, cplx(ldlt.solve(re)(0), ldlt.solve(im)(0)));
+    else
+      filled.emplace_back(v, bundle.world_to_vertex(vi, sum / count));
   }
   for (const auto& [v, val] : filled) fixed[v] = 1, values[v] = val;
 }
@@ -1754,7 +1777,7 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
 // correction dropped when its frames hold more singularities than the plan carries more
 // often (`matched` throughout, and each pair's two while it exists; not counted within half
 // a frame of a pair's event, where its two zeros are too close to tell). A vertex G leaves
-// to the solve (on a key frame's zero) counts as its neighbours' mean.
+// to the solve (on a key frame's zero, none of its neighbours fixed) counts as their sum.
 // A surface guide is kept only when none of those frames holds another number of
 // singularities than the plan carries: a frame that does is a bifurcation the user did not
 // ask for in the analysis (two, with the pair's birth and death), so the interval is left

@@ -829,9 +829,10 @@ TEST(KeyframeTopology, AKnotOnCGALsBearIsGuidedWithItsFarSingularitiesPaired) {
 // such a vertex, and the guide left it to the solve, whose temporal term pulled it towards
 // the key frame's zero there: the solved frames held a repelling focus and a saddle round
 // it for five frames (6 saddle–node events not asked for, t = 0.69 … 0.85) that the
-// acceptance check, which reads the vertex as its neighbours' mean, had not seen. Now the
-// guide gives it that mean: the check reads what the solve gets, and the analysis finds
-// the three carried singularities in every frame and no event.
+// acceptance check, which reads a free vertex as its neighbours' sum, had not seen. Now the
+// guide fixes it too (the affine fit of its neighbours' values): the check reads what the
+// solve gets, and the analysis finds the three carried singularities in every frame and
+// no event.
 TEST(KeyframeTopology, AKnotOnAVertexOfCGALsHeadHasNoEventNotAskedFor) {
   const test::TempDir dir;
   const std::optional<std::filesystem::path> head_off = test::cgal_mesh(dir, "head");
