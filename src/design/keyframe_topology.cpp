@@ -301,6 +301,19 @@ struct KeyframeTopologyPlan::SurfaceGuide {
   // correction), so a node keeps its type while the configuration turns round it.
   std::vector<size_t> nodes;                // tracks
   std::vector<std::vector<double>> lambda;  // per node
+  // The local correction (PhaseCheck's other choice): each node's λ applied within `inner`
+  // of it and blended to 0 by a smoothstep at reach[n] (less than half its distance from
+  // any other path), instead of Shepard's blend over the whole surface, which sweeps a
+  // switch between nodes whose λ differ across the vertices between them as they move.
+  // Within `inner` of a node (blended out by 2.5 edge lengths) the local choice also takes
+  // the track's own linear field J(t)(z − p(t)), scaled by |G's α| / |J's α| at the node
+  // (`scale`, tabled like λ), as the planar guide does: G's piecewise-linear zero can sit
+  // half an edge off the planned point in a face whose Jacobian is another (CGAL's
+  // mushroom: the carried center a sink at one frame with λ ≈ 0 at the planned face).
+  bool local = false;
+  double inner = 0, linear_reach = 0;
+  std::vector<double> reach;                // per node
+  std::vector<std::vector<double>> scale;   // per node, as lambda
   // A created or cancelled pair's node held to its key frame's type (the planar guide's
   // PairPhase): its λ is the turn of G's α (before the correction) at the node since that
   // key frame, at kSamples + 1 times over [a, b] (where the node is: between t_c and that
@@ -1596,7 +1609,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   for (size_t i = first; i < last; ++i) {
     const Track& tr = tracks[i];
     if (tr.index <= 0 || tr.group >= 0) continue;  // a pair's node: its hold, below
-    std::vector<double> lam;
+    std::vector<double> lam, scale;
     for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
       const double t = g.t0 + (g.t1 - g.t0) * k / SurfaceGuide::kSamples;
       const int f = space.locate(tr.raw(tr.param(t))).face;
@@ -1605,8 +1618,10 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
       if (!(std::abs(a) > 0) || !(std::abs(plan) > 0) || !std::isfinite(std::abs(a))) {
         // A corner on a key frame's zero (G has no value there): the last sample's.
         lam.push_back(lam.empty() ? 0.0 : lam.back());
+        scale.push_back(scale.empty() ? 0.0 : scale.back());
         continue;
       }
+      scale.push_back(std::abs(a) / std::abs(plan));
       const double arg = std::arg(a / plan);
       lam.push_back(lam.empty() ? arg : lam.back() + std::remainder(arg - lam.back(), 2 * std::numbers::pi));
     }
@@ -1616,8 +1631,45 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
       const double u = smoothstep(static_cast<double>(k) / SurfaceGuide::kSamples);
       lam[static_cast<size_t>(k)] -= (1 - u) * a0 + u * b0;
     }
+    // Samples with no value (a corner on a key frame's zero, next to the first key frame):
+    // the nearest later sample's scale, not 0, which made the node's own linear field
+    // vanish there (CGAL's mushroom's and bear's carried centers read trace/√det up to 2.5
+    // and −6.4, a node's, in the frames next to the first key frame; now within 0.1).
+    double later = 1.0;
+    for (size_t k = scale.size(); k-- > 0;) {
+      if (scale[k] > 0)
+        later = scale[k];
+      else
+        scale[k] = later;
+    }
     g.nodes.push_back(i);
     g.lambda.push_back(std::move(lam));
+    g.scale.push_back(std::move(scale));
+  }
+  // The local correction's radii: flat over 1.5 edge lengths (the node's face), falling to
+  // 0 over at least 2 edge lengths, or 4/π edge lengths a radian of the node's largest |λ|
+  // (a quarter turn an edge at most), but never as far as half the node's distance from
+  // another path at any time.
+  g.inner = 1.5 * h;
+  g.linear_reach = 2.5 * h;
+  g.reach.clear();
+  for (size_t n = 0; n < g.nodes.size(); ++n) {
+    double most = 0;
+    for (const double l : g.lambda[n]) most = std::max(most, std::abs(l));
+    double apart = std::numeric_limits<double>::infinity();
+    const Track& tr = tracks[g.nodes[n]];
+    for (int k = 0; k <= SurfaceGuide::kSamples; k += 4) {
+      const double t = g.t0 + (g.t1 - g.t0) * k / SurfaceGuide::kSamples;
+      const Vec3 p = tr.raw(tr.param(t));
+      for (size_t j = first; j < last; ++j) {
+        if (j == g.nodes[n]) continue;
+        const Track& o = tracks[j];
+        const double lo = std::min(o.t0, o.t1), hi = std::max(o.t0, o.t1);
+        apart = std::min(apart, (o.raw(o.param(std::clamp(t, lo, hi))) - p).norm());
+      }
+    }
+    g.reach.push_back(std::max(g.inner + h, std::min(g.inner + std::max(2.0, 4 * most / std::numbers::pi) * h,
+                                                     0.5 * apart)));
   }
   // The pairs' nodes (PairHold): G's α at the node's face, its argument unwrapped, less its
   // value at the key frame where the pair is (there G is that key frame, whose type the
@@ -1693,6 +1745,13 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     return den > 0 ? num / den : 0.0;
   };
   const size_t matched = at.size();
+  // The local correction: the matched nodes' λ near each alone; the holds (if any) by
+  // Shepard's blend with the matched nodes at λ = 0 (as the holds-alone choice has them).
+  std::vector<double> local_lambda;
+  if (g.local) {
+    local_lambda = lambda;
+    std::fill(lambda.begin(), lambda.end(), 0.0);
+  }
   for (const SurfaceGuide::PairHold& h : g.holds) {
     if (t >= h.a && t <= h.b) {
       const double y = (t - h.a) / (h.b - h.a) * SurfaceGuide::kSamples;
@@ -1710,10 +1769,55 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     }
   }
   std::vector<size_t> poles;
+  auto local_at = [&](const Vec3& point) {
+    double out = 0;
+    for (size_t n = 0; n < local_lambda.size(); ++n) {
+      const double d = (point - at[n]).norm();
+      if (d < g.reach[n]) out += local_lambda[n] * (1 - smoothstep01(d, g.inner, g.reach[n]));
+    }
+    return out;
+  };
+  const bool blend = !g.local || at.size() > matched;
+  // The nodes' own linear fields near them (the local choice): J(t)(z − p(t)) in the face
+  // holding p(t), scaled to G's magnitude there, within `inner`, blended into G out to
+  // `linear_reach` (not past the node's `reach`).
+  struct Near {
+    Vec3 p;
+    int face;
+    Linear j;
+    double inner, reach;
+  };
+  std::vector<Near> near;
+  if (g.local) {
+    for (size_t n = 0; n < local_lambda.size() && n < matched; ++n) {
+      const Track& tr = tracks[g.nodes[n]];
+      const int f = space.locate(at[n]).face;
+      Linear j = track_jacobian(space.bundle(), tr, t, f);
+      const std::vector<double>& sc = g.scale[n];
+      const double c = sc[k] + (x - static_cast<double>(k)) * (sc[k + 1] - sc[k]);
+      j.alpha *= c;
+      j.beta *= c;
+      near.push_back({at[n], f, j, g.inner, std::max(std::min(g.linear_reach, g.reach[n]), g.inner + 1e-9)});
+    }
+  }
+  auto linear_at = [&](int v, const Vec3& point, cplx val) {
+    for (const Near& nn : near) {
+      const double d = (point - nn.p).norm();
+      if (d >= nn.reach) continue;
+      const double b = 1 - smoothstep01(d, nn.inner, nn.reach);
+      const cplx z = space.bundle().world_to_face(nn.face, point - nn.p);
+      const cplx lin = space.bundle().world_to_vertex(
+          v, space.bundle().face_to_world(nn.face, nn.j.alpha * z + nn.j.beta * std::conj(z)));
+      val = (1 - b) * val + b * lin;
+    }
+    return val;
+  };
   for (size_t v = 0; v < l.size(); ++v) {
     if (fixed[v]) continue;
-    const double turn = shepard_at(mesh.position(static_cast<int>(v)), at.size());
-    const cplx val = g.f0[v] * std::exp(l[v] + u * g.log_h[v] - cplx(0, turn));
+    const Vec3& point = mesh.position(static_cast<int>(v));
+    const double turn = (blend ? shepard_at(point, at.size()) : 0.0) + (g.local ? local_at(point) : 0.0);
+    cplx val = g.f0[v] * std::exp(l[v] + u * g.log_h[v] - cplx(0, turn));
+    if (g.local) val = linear_at(static_cast<int>(v), point, val);
     if (!std::isfinite(val.real()) || !std::isfinite(val.imag())) {
       poles.push_back(v);
       continue;
@@ -1816,6 +1920,7 @@ class PhaseCheck {
     SurfaceGuide g;
     struct Choice {
       bool nodes = true, holds = true;
+      bool local = false;  // the nodes' correction near each node alone (SurfaceGuide::local)
       int wrong = 0;     // counted so far (int max: not a choice, its nodes end apart)
       size_t next = 0;   // in the check's order, the next frame to count
     };
@@ -1840,18 +1945,24 @@ class PhaseCheck {
     const SurfaceGuide& s = trial.g;
     trial.choices.push_back({true, true});
     if (!s.nodes.empty() || !s.holds.empty()) {
-      if (!s.holds.empty() && !s.nodes.empty()) {
-        trial.choices.push_back({true, false});
-        trial.choices.push_back({false, true});
+      if (!s.holds.empty() && !s.nodes.empty()) trial.choices.push_back({true, false});
+      if (!s.nodes.empty()) {
+        trial.choices.push_back({true, true, true});
+        if (!s.holds.empty()) trial.choices.push_back({true, false, true});
       }
+      if (!s.holds.empty() && !s.nodes.empty()) trial.choices.push_back({false, true});
       trial.choices.push_back({false, false});
     }
-    // The nodes' λ as they are (without the nodes' correction: none, or 0 throughout).
-    bool ends = true;
-    for (const std::vector<double>& lam : s.lambda)
+    // The nodes' λ as they are (without the nodes' correction: none, or 0 throughout). The
+    // local correction needs each node's λ to end at 0 (a whole turn left in a node's
+    // annulus at t₁ is no identity there).
+    bool ends = true, zero = true;
+    for (const std::vector<double>& lam : s.lambda) {
       ends = ends && std::abs(lam.back() - s.lambda.front().back()) <= 1e-6;
+      zero = zero && std::abs(lam.back()) <= 1e-6;
+    }
     for (Trial::Choice& c : trial.choices)
-      if (c.nodes && !ends) c.wrong = std::numeric_limits<int>::max(), c.next = order_.size();
+      if (c.nodes && (c.local ? !zero : !ends)) c.wrong = std::numeric_limits<int>::max(), c.next = order_.size();
     return trial;
   }
 
@@ -1866,7 +1977,7 @@ class PhaseCheck {
     for (Trial::Choice& c : trial.choices) {
       count(trial, c, 1);
       if (c.wrong == 0 && c.nodes && !trial.g.nodes.empty()) {
-        const Trial::Choice plain{false, c.holds};
+        const Trial::Choice plain{false, c.holds, false};
         const double with = roughness(trial.g, variant(trial.g, c));
         const double without = roughness(trial.g, variant(trial.g, plain));
         if (with > 2 * without) {
@@ -1896,6 +2007,7 @@ class PhaseCheck {
   // The guide with a choice's correction (its frame logs shared with g's).
   static SurfaceGuide variant(const SurfaceGuide& g, const Trial::Choice& c) {
     SurfaceGuide v = g;
+    v.local = c.nodes && c.local;
     if (!c.nodes && c.holds)
       for (std::vector<double>& lam : v.lambda) std::fill(lam.begin(), lam.end(), 0.0);
     else if (!c.nodes)
