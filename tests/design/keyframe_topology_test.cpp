@@ -19,7 +19,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <limits>
 #include <string>
 #include <vector>
@@ -710,16 +709,7 @@ TEST(KeyframeTopology, AKnotOnARealMeshIsGuided) {
     GTEST_SKIP() << test::kCgalArchive << " is missing or has no data/meshes/blobby.off (Debian package libcgal-demo)";
   const std::filesystem::path coarse = *blobby_off;
   // The finer mesh: each face split in four, written as OFF.
-  const Mesh fine = subdivide_faces(load_mesh(coarse.string()).mesh, 2).mesh;
-  {
-    std::ofstream out(dir / "fine.off");
-    out << "OFF\n" << fine.num_vertices() << " " << fine.num_faces() << " 0\n";
-    out.precision(17);
-    for (int v = 0; v < fine.num_vertices(); ++v)
-      out << fine.position(v).x() << " " << fine.position(v).y() << " " << fine.position(v).z() << "\n";
-    for (int f = 0; f < fine.num_faces(); ++f)
-      out << "3 " << fine.face(f)[0] << " " << fine.face(f)[1] << " " << fine.face(f)[2] << "\n";
-  }
+  save_mesh(subdivide_faces(load_mesh(coarse.string()).mesh, 2).mesh, (dir / "fine.off").string());
   for (const std::filesystem::path& mesh : {coarse, dir / "fine.off"}) {
     const Generated g = run(surface_knot(R"({"mesh": ")" + mesh.string() + R"("})", Vec3(-0.15, 0, 0.2),
                                          Vec3(0.15, 0, 0.2), 0.05, 60));
@@ -911,16 +901,7 @@ TEST(KeyframeTopology, TheSaddlesOnCGALsCowsThinPartsHaveTheirCharts) {
 // (CGAL's man: a knot along an arm 0.045 thick, the separation 0.11).
 TEST(KeyframeTopology, PathsAlongAPartThinnerThanTheSeparationAreReportedSo) {
   const test::TempDir dir;
-  const Mesh torus = make_torus(96, 12, 1.0, 0.05);
-  {
-    std::ofstream out(dir / "torus.off");
-    out << "OFF\n" << torus.num_vertices() << " " << torus.num_faces() << " 0\n";
-    out.precision(17);
-    for (int v = 0; v < torus.num_vertices(); ++v)
-      out << torus.position(v).x() << " " << torus.position(v).y() << " " << torus.position(v).z() << "\n";
-    for (int f = 0; f < torus.num_faces(); ++f)
-      out << "3 " << torus.face(f)[0] << " " << torus.face(f)[1] << " " << torus.face(f)[2] << "\n";
-  }
+  save_mesh(make_torus(96, 12, 1.0, 0.05), (dir / "torus.off").string());
   const auto on_ring = [](double u) { return fmt::format("[{:.17g}, {:.17g}, 0]", 1.05 * std::cos(u), 1.05 * std::sin(u)); };
   const Planned p = plan_of(mesh_knot(dir / "torus.off", on_ring(0.0), on_ring(0.4), 0.1));
   const KeyframeIntervalReport& r = p.plan->intervals().at(0);
