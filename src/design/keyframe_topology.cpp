@@ -310,7 +310,14 @@ struct KeyframeTopologyPlan::SurfaceGuide {
   // (`scale`, tabled like λ), as the planar guide does: G's piecewise-linear zero can sit
   // half an edge off the planned point in a face whose Jacobian is another (CGAL's
   // mushroom: the carried center a sink at one frame with λ ≈ 0 at the planned face).
+  // A node whose λ ends a whole turn is left as G carries it by the local choice
+  // (`carried`: λ 0 and no linear field of its own, which would be the plan's type against
+  // G's turned one around it); the others are kept to their types. (The sphere's knot: a
+  // source and a center trading places, the source's λ ends −2π, the center's 0, and the
+  // router's phase model finds no route that ends them nearer; the center was a focus
+  // half the interval, trace/√det up to 1.46, and is now a center in every frame.)
   bool local = false;
+  std::vector<char> carried;  // per node, the local choice's
   double inner = 0, linear_reach = 0;
   std::vector<double> reach;                // per node
   std::vector<std::vector<double>> scale;   // per node, as lambda
@@ -1643,6 +1650,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
         scale[k] = later;
     }
     g.nodes.push_back(i);
+    g.carried.push_back(0);
     g.lambda.push_back(std::move(lam));
     g.scale.push_back(std::move(scale));
   }
@@ -1790,6 +1798,7 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   std::vector<Near> near;
   if (g.local) {
     for (size_t n = 0; n < local_lambda.size() && n < matched; ++n) {
+      if (g.carried[n]) continue;
       const Track& tr = tracks[g.nodes[n]];
       const int f = space.locate(at[n]).face;
       Linear j = track_jacobian(space.bundle(), tr, t, f);
@@ -1954,12 +1963,12 @@ class PhaseCheck {
       trial.choices.push_back({false, false});
     }
     // The nodes' λ as they are (without the nodes' correction: none, or 0 throughout). The
-    // local correction needs each node's λ to end at 0 (a whole turn left in a node's
-    // annulus at t₁ is no identity there).
-    bool ends = true, zero = true;
+    // local correction keeps the nodes whose λ ends at 0 (a whole turn left in a node's
+    // annulus at t₁ is no identity there: those are left as G carries them), so it needs one.
+    bool ends = true, zero = false;
     for (const std::vector<double>& lam : s.lambda) {
       ends = ends && std::abs(lam.back() - s.lambda.front().back()) <= 1e-6;
-      zero = zero && std::abs(lam.back()) <= 1e-6;
+      zero = zero || std::abs(lam.back()) <= 1e-6;
     }
     for (Trial::Choice& c : trial.choices)
       if (c.nodes && (c.local ? !zero : !ends)) c.wrong = std::numeric_limits<int>::max(), c.next = order_.size();
@@ -2008,10 +2017,16 @@ class PhaseCheck {
   static SurfaceGuide variant(const SurfaceGuide& g, const Trial::Choice& c) {
     SurfaceGuide v = g;
     v.local = c.nodes && c.local;
+    if (v.local)
+      for (size_t n = 0; n < v.nodes.size(); ++n)
+        if (std::abs(v.lambda[n].back()) > 1e-6) {
+          v.carried[n] = 1;
+          std::fill(v.lambda[n].begin(), v.lambda[n].end(), 0.0);
+        }
     if (!c.nodes && c.holds)
       for (std::vector<double>& lam : v.lambda) std::fill(lam.begin(), lam.end(), 0.0);
     else if (!c.nodes)
-      v.nodes.clear(), v.lambda.clear();
+      v.nodes.clear(), v.lambda.clear(), v.carried.clear();
     if (!c.holds) v.holds.clear();
     return v;
   }
