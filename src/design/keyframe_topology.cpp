@@ -6,6 +6,7 @@
 #include "tvf/design/element_field.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/integrate/surface_walk.h"
+#include "tvf/mesh/edge_paths.h"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseLU>
@@ -1452,26 +1453,11 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
       // Along the edges from the vertices of the faces holding the path (their chord distance
       // exact): a thin part's far side (an ear or horn of about the tube's width, CGAL's cow)
       // is then as far as the way round it, and the tube a strip on its near side.
-      using Item = std::pair<double, int>;
-      std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-      std::vector<double> geo(nv, std::numeric_limits<double>::infinity());
+      std::vector<EdgePathSeed> seeds;
       for (const auto& on : lines)
         for (const SurfacePoint& p : on)
-          for (const int v : mesh.face(p.face)) {
-            const auto u = static_cast<size_t>(v);
-            if (geo[u] > dist[u]) geo[u] = dist[u], queue.emplace(dist[u], v);
-          }
-      while (!queue.empty()) {
-        const auto [d, v] = queue.top();
-        queue.pop();
-        if (d > geo[static_cast<size_t>(v)] || d > outer) continue;
-        for (const int out : mesh.outgoing(v))
-          for (const int w : {mesh.head(out), mesh.tail(Mesh::prev(out))}) {
-            const double e = d + (mesh.position(w) - mesh.position(v)).norm();
-            if (e < geo[static_cast<size_t>(w)]) geo[static_cast<size_t>(w)] = e, queue.emplace(e, w);
-          }
-      }
-      dist = std::move(geo);
+          for (const int v : mesh.face(p.face)) seeds.push_back({v, dist[static_cast<size_t>(v)]});
+      dist = edge_path_distances(mesh, seeds, outer);
       follow();
     }
     return found;  // else neither chart fits within an edge length of the path

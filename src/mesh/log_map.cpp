@@ -2,6 +2,7 @@
 #include "tvf/mesh/heat_distance.h"
 
 #include "tvf/core/error.h"
+#include "tvf/mesh/edge_paths.h"
 #include "tvf/mesh/intrinsic_triangulation.h"
 
 #include <Eigen/SparseCholesky>
@@ -10,7 +11,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <queue>
 #include <utility>
 
 namespace tvf {
@@ -446,39 +446,19 @@ void LogMap::compute_local(const SurfacePoint& p, double radius, LocalChart& cha
   // Edge paths are longer than geodesics, so it holds every vertex geodesically within R
   // / (their ratio, 1.0–1.2 on reasonable meshes) of p.
   const double reach = patch_radius(radius, s.h);
-  std::vector<double> dist(static_cast<size_t>(nv), std::numeric_limits<double>::infinity());
   std::vector<int> in_ball;
-  {
-    using Item = std::pair<double, int>;
-    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-    for (int c : pf) {
-      const double d = (mesh.position(c) - x).norm();
-      if (d < dist[static_cast<size_t>(c)]) {
-        dist[static_cast<size_t>(c)] = d;
-        queue.emplace(d, c);
-      }
-    }
-    const size_t limit = static_cast<size_t>(nv) / 4;
-    while (!queue.empty()) {
-      const auto [d, v] = queue.top();
-      queue.pop();
-      if (d > dist[static_cast<size_t>(v)]) continue;
-      in_ball.push_back(v);
-      if (in_ball.size() > limit) {
-        // The patch would hold a good part of the mesh: the whole mesh's solves are cheaper.
-        compute(p, chart);
-        return;
-      }
-      for (int h : mesh.outgoing(v)) {
-        for (int w : {mesh.head(h), mesh.tail(Mesh::prev(h))}) {
-          const double nd = d + (mesh.position(w) - mesh.position(v)).norm();
-          if (nd <= reach && nd < dist[static_cast<size_t>(w)]) {
-            dist[static_cast<size_t>(w)] = nd;
-            queue.emplace(nd, w);
-          }
-        }
-      }
-    }
+  const std::array<EdgePathSeed, 3> seeds{{{pf[0], (mesh.position(pf[0]) - x).norm()},
+                                           {pf[1], (mesh.position(pf[1]) - x).norm()},
+                                           {pf[2], (mesh.position(pf[2]) - x).norm()}}};
+  const size_t limit = static_cast<size_t>(nv) / 4;
+  edge_path_distances(mesh, seeds, reach, [&](int v, double) {
+    in_ball.push_back(v);
+    return in_ball.size() <= limit;
+  });
+  if (in_ball.size() > limit) {
+    // The patch would hold a good part of the mesh: the whole mesh's solves are cheaper.
+    compute(p, chart);
+    return;
   }
   std::vector<char> ball(static_cast<size_t>(nv), 0);
   for (int v : in_ball) ball[static_cast<size_t>(v)] = 1;

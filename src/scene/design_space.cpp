@@ -2,15 +2,15 @@
 
 #include "tvf/core/error.h"
 #include "tvf/field/field_sampler.h"
+#include "tvf/mesh/edge_paths.h"
 #include "tvf/mesh/grid.h"
 #include "tvf/mesh/mesh_io.h"
 #include "tvf/mesh/primitives.h"
 
 #include <fmt/format.h>
 
+#include <array>
 #include <filesystem>
-#include <limits>
-#include <queue>
 #include <unistd.h>
 
 namespace tvf {
@@ -57,28 +57,15 @@ double DesignSpace::curvature_within(const Vec3& x, double radius) const {
   if (planar()) return 0;
   const SurfacePoint p = locate(x);
   const Vec3 at = surface_position(mesh_, p);
-  std::vector<double> dist(static_cast<size_t>(mesh_.num_vertices()), std::numeric_limits<double>::infinity());
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-  for (const int c : mesh_.face(p.face)) {
-    dist[static_cast<size_t>(c)] = (mesh_.position(c) - at).norm();
-    queue.emplace(dist[static_cast<size_t>(c)], c);
-  }
+  const Face& f = mesh_.face(p.face);
+  const std::array<EdgePathSeed, 3> seeds{{{f[0], (mesh_.position(f[0]) - at).norm()},
+                                           {f[1], (mesh_.position(f[1]) - at).norm()},
+                                           {f[2], (mesh_.position(f[2]) - at).norm()}}};
   double total = 0;
-  while (!queue.empty()) {
-    const auto [d, v] = queue.top();
-    queue.pop();
-    if (d > dist[static_cast<size_t>(v)]) continue;
+  edge_path_distances(mesh_, seeds, radius, [&](int v, double) {
     total += bundle_.angle_defect(v);
-    for (const int h : mesh_.outgoing(v)) {
-      const int w = mesh_.head(h);
-      const double nd = d + (mesh_.position(w) - mesh_.position(v)).norm();
-      if (nd <= radius && nd < dist[static_cast<size_t>(w)]) {
-        dist[static_cast<size_t>(w)] = nd;
-        queue.emplace(nd, w);
-      }
-    }
-  }
+    return true;
+  });
   return total;
 }
 

@@ -32,8 +32,8 @@ public:
   // The point of the domain closest to x (x itself, located in a face, on planar grids).
   SurfacePoint locate(const Vec3& x) const;
   // The Gaussian curvature within edge-path distance `radius` of the domain's point
-  // nearest x: the sum of the angle defects of the vertices reached (Dijkstra from that
-  // point's face corners). 0 on a plane; a whole cap (the end of a tail, a finger) holds
+  // nearest x: the sum of the angle defects of the vertices reached (edge_path_distances
+  // from that point's face corners). 0 on a plane; a whole cap (the end of a tail, a finger) holds
   // 2π, and over π the disk closes round: its circles stop growing.
   double curvature_within(const Vec3& x, double radius) const;
 
