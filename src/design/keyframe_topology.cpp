@@ -2,8 +2,10 @@
 
 #include "design/element_regions.h"
 
+#include "tvf/analysis/topology.h"
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
+#include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/integrate/surface_walk.h"
 #include "tvf/mesh/edge_paths.h"
@@ -14,6 +16,7 @@
 #include <algorithm>
 #include <numeric>
 #include <cstdlib>
+#include <functional>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -1122,16 +1125,51 @@ void frame_logs(const SurfaceGuide& g, size_t i, size_t nv, std::vector<cplx>& o
   for (size_t j = 0; j < logs.tube.size(); ++j) out[logs.tube[j]] = logs.log[i][j];
 }
 
-// G at the corners of face f at time t (before the phase correction), in the face's frame.
+// A vertex on a pole of the ratio (a key frame's zero placed on it: F₀ / (z − p(t₀)) is 0/0
+// there) takes the value at it of the affine field that fits its neighbours' values best
+// (least squares in its tangent plane: G is smooth there, and its zero p(t) may be within an
+// edge of it, next to the key frame, where their mean is far off). `value_at(w)`: a
+// neighbour's value in its own frame, or none. Fewer than three neighbours with a value, or
+// all on a line: their mean; none: no value.
+std::optional<cplx> affine_fill(const Mesh& mesh, const TangentBundle& bundle, int v,
+                                const std::function<std::optional<cplx>(int)>& value_at) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d re = Eigen::Vector3d::Zero(), im = Eigen::Vector3d::Zero();
+  Vec3 sum = Vec3::Zero();
+  int count = 0;
+  for (const int out : mesh.outgoing(v))
+    for (const int w : {mesh.head(out), mesh.tail(Mesh::prev(out))}) {
+      const std::optional<cplx> value = value_at(w);
+      if (!value) continue;
+      const Vec3 world = bundle.vertex_to_world(w, *value);
+      sum += world;
+      ++count;
+      const cplx d = bundle.world_to_vertex(v, mesh.position(w) - mesh.position(v));
+      const cplx gw = bundle.world_to_vertex(v, world);
+      const Eigen::Vector3d row(1, d.real(), d.imag());
+      normal += row * row.transpose();
+      re += gw.real() * row;
+      im += gw.imag() * row;
+    }
+  if (count == 0) return std::nullopt;
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
+  const double scale = normal.diagonal().maxCoeff();
+  if (count >= 3 && ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-9 * scale)
+    return cplx(ldlt.solve(re)(0), ldlt.solve(im)(0));
+  return bundle.world_to_vertex(v, sum / count);
+}
+
+// G at the corners of face f at time t (before the phase correction), in the face's frame;
+// a corner on a pole of the ratio (next to the first key frame) filled as apply_surface_guide
+// fills it (affine_fill), so that the nodes' λ and scale have values there too.
 std::array<cplx, 3> surface_guide_on_face(const DesignSpace& space, const std::vector<Track>& tracks,
                                           const SurfaceGuide& g, double t, int f) {
   const Mesh& mesh = space.mesh();
   const double u = smoothstep01(t, g.t0, g.t1);
-  std::array<cplx, 3> out;
   std::vector<PathNow> now;
   for (const SurfaceGuide::Path& path : g.paths) now.push_back(path_now(space, tracks, path, t));
-  for (int c = 0; c < 3; ++c) {
-    const auto v = static_cast<size_t>(mesh.face(f)[static_cast<size_t>(c)]);
+  // G at vertex v, in its frame (non-finite on a pole).
+  auto at_vertex = [&](size_t v) {
     cplx l = u * g.log_h[v];
     for (size_t j = 0; j < g.paths.size(); ++j) {
       const SurfaceGuide::Path& path = g.paths[j];
@@ -1139,7 +1177,21 @@ std::array<cplx, 3> surface_guide_on_face(const DesignSpace& space, const std::v
       if (it == path.support.end() || *it != v) continue;
       l += path_log(g, path, static_cast<size_t>(it - path.support.begin()), now[j]);
     }
-    out[static_cast<size_t>(c)] = space.bundle().corner_to_face(3 * f + c) * g.f0[v] * std::exp(l);
+    return g.f0[v] * std::exp(l);
+  };
+  auto finite = [](cplx z) { return std::isfinite(z.real()) && std::isfinite(z.imag()); };
+  std::array<cplx, 3> out;
+  for (int c = 0; c < 3; ++c) {
+    const int v = mesh.face(f)[static_cast<size_t>(c)];
+    cplx value = at_vertex(static_cast<size_t>(v));
+    if (!finite(value)) {
+      const std::optional<cplx> filled = affine_fill(mesh, space.bundle(), v, [&](int w) -> std::optional<cplx> {
+        const cplx gw = at_vertex(static_cast<size_t>(w));
+        return finite(gw) ? std::optional<cplx>(gw) : std::nullopt;
+      });
+      if (filled) value = *filled;
+    }
+    out[static_cast<size_t>(c)] = space.bundle().corner_to_face(3 * f + c) * value;
   }
   return out;
 }
@@ -1602,38 +1654,48 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   for (size_t i = first; i < last; ++i) {
     const Track& tr = tracks[i];
     if (tr.index <= 0 || tr.group >= 0) continue;  // a pair's node: its hold, below
+    // λ and the scale at each sample; NaN where G's or the plan's α has no value (a degenerate
+    // face; a corner on a key frame's zero has affine_fill's).
+    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
     std::vector<double> lam, scale;
+    std::optional<double> valued;
     for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
       const double t = g.t0 + (g.t1 - g.t0) * k / SurfaceGuide::kSamples;
       const int f = space.locate(tr.raw(tr.param(t))).face;
       const cplx a = face_alpha(space, f, surface_guide_on_face(space, tracks, g, t, f));
       const cplx plan = track_jacobian(space.bundle(), tr, t, f).alpha;
       if (!(std::abs(a) > 0) || !(std::abs(plan) > 0) || !std::isfinite(std::abs(a))) {
-        // A corner on a key frame's zero (G has no value there): the last sample's.
-        lam.push_back(lam.empty() ? 0.0 : lam.back());
-        scale.push_back(scale.empty() ? 0.0 : scale.back());
+        lam.push_back(kNone);
+        scale.push_back(kNone);
         continue;
       }
       scale.push_back(std::abs(a) / std::abs(plan));
       const double arg = std::arg(a / plan);
-      lam.push_back(lam.empty() ? arg : lam.back() + std::remainder(arg - lam.back(), 2 * std::numbers::pi));
+      lam.push_back(valued ? *valued + std::remainder(arg - *valued, 2 * std::numbers::pi) : arg);
+      valued = lam.back();
     }
+    // A sample with no value takes the nearest earlier sample's, the first ones the first
+    // valued one's (none at all: λ 0, scale 1). (A scale of 0 there made the node's own linear
+    // field vanish: CGAL's mushroom's and bear's carried centers read trace/√det up to 2.5
+    // and −6.4 in the frames next to the first key frame, before its corners were filled.)
+    auto fill_gaps = [](std::vector<double>& x, double none) {
+      const auto it = std::find_if(x.begin(), x.end(), [](double y) { return !std::isnan(y); });
+      const double lead = it == x.end() ? none : *it;
+      double prev = lead;
+      for (double& y : x) {
+        if (std::isnan(y))
+          y = prev;
+        else
+          prev = y;
+      }
+    };
+    fill_gaps(lam, 0.0);
+    fill_gaps(scale, 1.0);
     const double a0 = std::remainder(lam.front(), 2 * std::numbers::pi);
     const double b0 = std::remainder(lam.back(), 2 * std::numbers::pi);
     for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
       const double u = smoothstep(static_cast<double>(k) / SurfaceGuide::kSamples);
       lam[static_cast<size_t>(k)] -= (1 - u) * a0 + u * b0;
-    }
-    // Samples with no value (a corner on a key frame's zero, next to the first key frame):
-    // the nearest later sample's scale, not 0, which made the node's own linear field
-    // vanish there (CGAL's mushroom's and bear's carried centers read trace/√det up to 2.5
-    // and −6.4, a node's, in the frames next to the first key frame; now within 0.1).
-    double later = 1.0;
-    for (size_t k = scale.size(); k-- > 0;) {
-      if (scale[k] > 0)
-        later = scale[k];
-      else
-        scale[k] = later;
     }
     g.nodes.push_back(i);
     g.carried.push_back(0);
@@ -1668,8 +1730,8 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   // The pairs' nodes (PairHold): G's α at the node's face, its argument unwrapped, less its
   // value at the key frame where the pair is (there G is that key frame, whose type the
   // node keeps). In the template's window the node is Q's zero on +axis, √−μ from the
-  // middle, found in the chart; a face where G has no value (a corner on a key frame's
-  // zero) repeats the last sample's turn.
+  // middle, found in the chart; a face where G has no value (a degenerate one; a corner on
+  // a key frame's zero has affine_fill's) repeats the last sample's turn.
   for (const SurfaceGuide::Path& path : g.paths) {
     if (!path.pair) continue;
     SurfaceGuide::PairHold hold;
@@ -1820,43 +1882,19 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     fixed[v] = 1;
     values[v] = val;
   }
-  // A vertex on a pole of the ratio (a key frame's zero placed on it: F₀ / (z − p(t₀)) is
-  // 0/0 there) takes the value at it of the affine field that fits its neighbours' values
-  // best (least squares in its tangent plane: G is smooth there, and its zero p(t) may be
-  // within an edge of it, next to the key frame, where their mean is far off), and the
-  // acceptance check (PhaseCheck) reads the frame the solve gets. Left to the solve, it was
-  // pulled towards the key frame's zero there by the temporal term, and the solved frames
-  // held a pair around it that the check had not seen (CGAL's head: a guided knot with 6
-  // events not asked for).
-  const TangentBundle& bundle = space.bundle();
+  // A vertex on a pole of the ratio (a key frame's zero on it) takes the affine fit of its
+  // fixed neighbours' values (affine_fill), and the acceptance check (PhaseCheck) reads the
+  // frame the solve gets. Left to the solve, it was pulled towards the key frame's zero there
+  // by the temporal term, and the solved frames held a pair around it that the check had not
+  // seen (CGAL's head: a guided knot with 6 events not asked for).
   std::vector<std::pair<size_t, cplx>> filled;
   for (const size_t v : poles) {
-    const int vi = static_cast<int>(v);
-    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d re = Eigen::Vector3d::Zero(), im = Eigen::Vector3d::Zero();
-    Vec3 sum = Vec3::Zero();
-    int count = 0;
-    for (const int out : mesh.outgoing(vi))
-      for (const int w : {mesh.head(out), mesh.tail(Mesh::prev(out))}) {
-        if (!fixed[static_cast<size_t>(w)]) continue;
-        const Vec3 world = bundle.vertex_to_world(w, values[static_cast<size_t>(w)]);
-        sum += world;
-        ++count;
-        const cplx d = bundle.world_to_vertex(vi, mesh.position(w) - mesh.position(vi));
-        const cplx gw = bundle.world_to_vertex(vi, world);
-        const Eigen::Vector3d row(1, d.real(), d.imag());
-        normal += row * row.transpose();
-        re += gw.real() * row;
-        im += gw.imag() * row;
-      }
-    if (count == 0) continue;
-    // Fewer than three neighbours, or all on a line: their mean.
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
-    const double scale = normal.diagonal().maxCoeff();
-    if (count >= 3 && ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 1e-9 * scale)
-      filled.emplace_back(v, cplx(ldlt.solve(re)(0), ldlt.solve(im)(0)));
-    else
-      filled.emplace_back(v, bundle.world_to_vertex(vi, sum / count));
+    const std::optional<cplx> value =
+        affine_fill(mesh, space.bundle(), static_cast<int>(v), [&](int w) -> std::optional<cplx> {
+          if (!fixed[static_cast<size_t>(w)]) return std::nullopt;
+          return values[static_cast<size_t>(w)];
+        });
+    if (value) filled.emplace_back(v, *value);
   }
   for (const auto& [v, val] : filled) fixed[v] = 1, values[v] = val;
 }
@@ -1920,6 +1958,9 @@ class PhaseCheck {
       size_t next = 0;   // in the check's order, the next frame to count
     };
     std::vector<Choice> choices;
+    // The most saddle–node events not planned that the tracking found in a choice with no
+    // wrong frame (accept()), 0 if none was tracked or none had any.
+    int unplanned = 0;
   };
 
   // The matched nodes' correction and the pairs' holds, each kept only where it adds no
@@ -1981,7 +2022,13 @@ class PhaseCheck {
         }
       }
       if (c.wrong == 0) {
-        trial.g = variant(trial.g, c);
+        const SurfaceGuide guide = variant(trial.g, c);
+        if (const int extra = unplanned_events(trial.g, guide); extra > 0) {
+          trial.unplanned = std::max(trial.unplanned, extra);
+          c.wrong = std::numeric_limits<int>::max(), c.next = order_.size();
+          continue;
+        }
+        trial.g = guide;
         return true;
       }
     }
@@ -2050,9 +2097,7 @@ class PhaseCheck {
   // Whether frame i of `guide` (a choice of g's) holds another number of singularities
   // than the plan carries (false within half a frame of a pair's event).
   bool wrong_frame(const SurfaceGuide& g, const SurfaceGuide& guide, size_t i) const {
-    const Mesh& mesh = space_.mesh();
-    const TangentBundle& bundle = space_.bundle();
-    const auto nv = static_cast<size_t>(mesh.num_vertices());
+    const auto nv = static_cast<size_t>(space_.mesh().num_vertices());
     const double t = times_[i];
     if (!(t > guide.t0 && t < guide.t1)) return false;
     // Half the frames' spacing (the pair's event is not told within it).
@@ -2065,11 +2110,20 @@ class PhaseCheck {
       if (p.cancel ? t < p.tc : t > p.tc) carried += 2;
     }
     if (at_event) return false;
+    std::vector<cplx> values(nv, cplx(0, 0));
+    frame_values(g, guide, i, values);
+    return find_singularities(space_.bundle(), values, curvature_).size() != carried;
+  }
+
+  // A choice's frame i as counted: G at every vertex it fixes, the others their fixed
+  // neighbours' mean.
+  void frame_values(const SurfaceGuide& g, const SurfaceGuide& guide, size_t i, std::span<cplx> values) const {
+    const TangentBundle& bundle = space_.bundle();
+    const auto nv = static_cast<size_t>(space_.mesh().num_vertices());
     std::vector<cplx> l;
     frame_logs(g, i, nv, l);
     std::vector<char> fixed(nv, 0);
-    std::vector<cplx> values(nv, cplx(0, 0));
-    apply_surface_guide(space_, tracks_, guide, t, l, fixed, values);
+    apply_surface_guide(space_, tracks_, guide, times_[i], l, fixed, values);
     for (size_t v = 0; v < nv; ++v) {
       if (fixed[v]) continue;
       Vec3 sum = Vec3::Zero();
@@ -2077,7 +2131,26 @@ class PhaseCheck {
         if (fixed[w]) sum += bundle.vertex_to_world(static_cast<int>(w), values[w]);
       values[v] = bundle.world_to_vertex(static_cast<int>(v), sum);
     }
-    return find_singularities(bundle, values, curvature_).size() != carried;
+  }
+
+  // The saddle–node events the analysis's tracking (analyze_topology) finds in a choice's
+  // frames beyond the plan's pairs' events among them. The frame count holds every frame to
+  // the plan's number of zeros, but not where they are: on a coarse mesh (the sphere knot at
+  // 42 vertices, its far pairs created and cancelled at t = 0.5) a pair's zeros sat 2.4 edge
+  // lengths from where the plan carries them, jumping from frame to frame, and the analysis
+  // of the solved field tracked four events not asked for.
+  int unplanned_events(const SurfaceGuide& g, const SurfaceGuide& guide) const {
+    if (times_.size() < 2) return 0;
+    const int n = static_cast<int>(times_.size());
+    Field frames(TimeSampling{times_.front(), times_.back(), n}, space_.mesh().num_vertices());
+    for (int i = 0; i < n; ++i) frame_values(g, guide, static_cast<size_t>(i), frames.frame(i));
+    TopologyOptions options;
+    options.parallel = false;
+    const Topology topology = analyze_topology(space_.bundle(), frames, options);
+    int planned = 0;
+    for (const SurfaceGuide::Path& p : guide.paths)
+      if (p.pair && p.tc > times_.front() && p.tc < times_.back()) ++planned;
+    return std::max(0, static_cast<int>(topology.bifurcations.size()) - planned);
   }
 
   const DesignSpace& space_;
@@ -3657,10 +3730,16 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
           const int wrong = check.fewest(trial);
           if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong;
         }
-        if (!best && fewest_wrong >= 0)
+        int unplanned = 0;
+        for (const PhaseCheck::Trial& trial : failed) unplanned = std::max(unplanned, trial.unplanned);
+        if (!best && fewest_wrong >= 0 && fewest_wrong < std::numeric_limits<int>::max())
           unbuilt_why = fmt::format("the surface guide's frames hold other singularities than the plan's at {} of the "
                                     "{} frames between the key frames",
                                     fewest_wrong, inner_frames);
+        else if (!best && unplanned > 0)
+          unbuilt_why = fmt::format("the surface guide's singularities jump from frame to frame where the plan carries "
+                                    "them smoothly: {} saddle–node events the plan does not have",
+                                    unplanned);
         else if (!best && unbuilt_why.empty())
           unbuilt_why = "the surface guide could not be built";
         if (best) {

@@ -548,7 +548,11 @@ TEST(KeyframeTopology, AKnotOnASphereIsGuided) {
 // subdivisions 1 (42 vertices): 8 of the 30 frames (counting each try only to its first
 // wrong frame says 1). Both plans fail there, the static saddle and focus carried and
 // paired (the second, which guides the knot at subdivisions 2 since session 21), and the
-// report is the first's. At subdivisions 2 this test had 6 of 30.
+// report is the first's. At subdivisions 2 this test had 6 of 30. The second plan's frames
+// hold the right number of zeros since session 23 (λ read at the poles' corners too), but
+// its pairs' zeros jump 2.4 edge lengths from where it carries them, so the check's
+// tracking (PhaseCheck::unplanned_events: 4 saddle–node events the plan does not have, as
+// the analysis of the solved field found when it was kept) sets it aside too.
 TEST(KeyframeTopology, AGuideRejectedAtEveryTryCountsAllItsWrongFrames) {
   const double z = std::sqrt(0.75);
   const Generated g =
