@@ -122,6 +122,9 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
         notes.push_back(
             fmt::format("{} bent{} to keep {:g} apart", bent, k.routing == "joint" ? " together" : "", k.separation));
       if (turning > 0) notes.push_back(fmt::format("{} changing stability through a center", turning));
+      // Nodes the guide does not hold to their types (the warning above says which).
+      const auto whole = std::count_if(k.matched.begin(), k.matched.end(), [](const auto& m) { return m.phase_turns != 0; });
+      if (whole > 0) notes.push_back(fmt::format("{} turning a whole turn", whole));
       std::printf("  key frames %d → %d (t %g → %g): %zu matched%s, %zu pairs created and %zu cancelled at t = %g%s\n",
                   k.from_keyframe, k.to_keyframe, k.t0, k.t1, k.matched.size(),
                   notes.empty() ? "" : fmt::format(" ({})", fmt::join(notes, "; ")).c_str(),

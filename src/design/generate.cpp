@@ -21,6 +21,7 @@
 #include <cmath>
 #include <exception>
 #include <mutex>
+#include <numbers>
 #include <string>
 
 namespace tvf {
@@ -541,6 +542,25 @@ void require_converged(const Scene& scene, const SolveReport& r) {
                                   r.residual, r.iterations, scene.solver.tolerance));
 }
 
+// A node the surface guide leaves turning (KeyframeIntervalReport::Match::phase_turns):
+// the designer should know that it passes through the other types, and what takes it out.
+std::string keyframe_turn_warning(const KeyframeIntervalReport& k, const KeyframeIntervalReport::Match& m) {
+  const auto at = [](const Vec3& p) {
+    const auto r = [](double v) { return std::round(v * 1000) / 1000 + 0.0; };  // no "-0.000"
+    return fmt::format("({:.3f}, {:.3f}, {:.3f})", r(p.x()), r(p.y()), r(p.z()));
+  };
+  const std::string what = fmt::format("between keyframes[{}] and keyframes[{}] the {} carried from {} to {} is not "
+                                       "held to its type: ",
+                                       k.from_keyframe, k.to_keyframe, to_string(m.type), at(m.from), at(m.to));
+  if (m.phase_turns != 0)
+    return what + fmt::format("it turns {} whole turn{} on the way (a center, the other stability, a center, and back), "
+                              "which the two key frames set, not its path; a key frame between them, or a designed "
+                              "change of its stability, takes it out",
+                              std::abs(m.phase_turns), std::abs(m.phase_turns) == 1 ? "" : "s");
+  return what + fmt::format("it turns up to {:.2f} rad from it on the way (past a center to the other stability and back)",
+                            m.phase_swing);
+}
+
 void report_spacetime(GenerateReport* report, const Scene& scene, int nv, std::chrono::steady_clock::time_point start,
                       const std::string& method, const SolveReport& r,
                       std::vector<KeyframeIntervalReport> intervals) {
@@ -552,8 +572,12 @@ void report_spacetime(GenerateReport* report, const Scene& scene, int nv, std::c
   }
   finish_report(report, scene, nv, start);
   if (report)
-    for (const KeyframeIntervalReport& k : report->keyframe_intervals)
+    for (const KeyframeIntervalReport& k : report->keyframe_intervals) {
       if (!k.collision.empty()) report->warnings.push_back(k.collision);
+      for (const KeyframeIntervalReport::Match& m : k.matched)
+        if (m.phase_turns != 0 || m.phase_swing > std::numbers::pi / 2)
+          report->warnings.push_back(keyframe_turn_warning(k, m));
+    }
 }
 
 // The spacetime generator under mpirun (solve/distributed.h), method cg or auto: no rank

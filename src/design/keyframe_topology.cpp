@@ -322,6 +322,14 @@ struct KeyframeTopologyPlan::SurfaceGuide {
   // half the interval, trace/√det up to 1.46, and is now a center in every frame.)
   bool local = false;
   std::vector<char> carried;  // per node, the local choice's
+  // The nodes the kept choice does not hold to their types (every node of a choice without
+  // the nodes' correction; a carried one of the local choice): their λ as G leaves it, the
+  // turn of their linear part from the plan's type (the report's phase_turns, phase_swing).
+  struct Turning {
+    size_t track = 0;
+    double end = 0, swing = 0;  // λ at t₁ (a whole number of turns), its largest |λ|
+  };
+  std::vector<Turning> turning;
   double inner = 0, linear_reach = 0;
   std::vector<double> reach;                // per node
   std::vector<std::vector<double>> scale;   // per node, as lambda
@@ -2050,6 +2058,15 @@ class PhaseCheck {
   static SurfaceGuide variant(const SurfaceGuide& g, const Trial::Choice& c) {
     SurfaceGuide v = g;
     v.local = c.nodes && c.local;
+    v.turning.clear();
+    for (size_t n = 0; n < g.nodes.size(); ++n) {
+      const std::vector<double>& lam = g.lambda[n];
+      const bool carried_turn = v.local && std::abs(lam.back()) > 1e-6;
+      if (c.nodes && !carried_turn) continue;
+      double swing = 0;
+      for (const double l : lam) swing = std::max(swing, std::abs(l));
+      v.turning.push_back({g.nodes[n], lam.back(), swing});
+    }
     if (v.local)
       for (size_t n = 0; n < v.nodes.size(); ++n)
         if (std::abs(v.lambda[n].back()) > 1e-6) {
@@ -3526,7 +3543,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         const Singularity& b = B[pairs[m].second];
         add_track(a, b.position, rep.t0, rep.t1, to_linear(b.jacobian), b.where.face);
         tracks_.back().to_type = b.type;
-        rep.matched.push_back({a.type, a.position, b.position, m < n_linked, 0.0, b.type});
+        rep.matched.push_back({a.type, a.position, b.position, m < n_linked, 0.0, b.type, 0, 0.0});
       }
 
       // The unmatched, in pairs: cancelled before t_c, created after.
@@ -3755,6 +3772,13 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
               if (pr.t == path.tc && pr.saddle == tracks_[path.saddle].p0 && pr.node == tracks_[path.track].p0)
                 pr.at = surface_position(mesh, *at);
           }
+          // The nodes the guide leaves turning (their type going round, or passing a center).
+          for (const SurfaceGuide::Turning& turn : best->turning)
+            if (turn.track >= first_track && turn.track - first_track < rep.matched.size()) {
+              KeyframeIntervalReport::Match& m = rep.matched[turn.track - first_track];
+              m.phase_turns = static_cast<int>(std::lround(turn.end / (2 * std::numbers::pi)));
+              m.phase_swing = turn.swing;
+            }
           for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].guided = true;
           for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].guided = true;
           rep.guided = true;
@@ -3874,6 +3898,11 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
                               {"linked", m.linked},
                               {"detour", m.detour},
                               {"to_type", to_string(m.to_type)}});
+    if (r.guided)
+      for (size_t m = 0; m < r.matched.size(); ++m) {
+        j["matched"][m]["phase_turns"] = r.matched[m].phase_turns;
+        j["matched"][m]["phase_swing"] = r.matched[m].phase_swing;
+      }
     for (const char* key : {"created", "cancelled"}) {
       j[key] = json::array();
       for (const auto& p : std::string(key) == "created" ? r.created : r.cancelled)
@@ -3922,7 +3951,8 @@ std::optional<std::vector<KeyframeIntervalReport>> keyframe_intervals_from_json(
       r.bifurcation_t = j.at("bifurcation_t").get<double>();
       for (const json& m : j.at("matched"))
         r.matched.push_back({type(m.at("type")), xyz(m.at("from")), xyz(m.at("to")), m.at("linked").get<bool>(),
-                             m.at("detour").get<double>(), type(m.at("to_type"))});
+                             m.at("detour").get<double>(), type(m.at("to_type")), m.value("phase_turns", 0),
+                             m.value("phase_swing", 0.0)});
       for (const char* key : {"created", "cancelled"})
         for (const json& p : j.at(key)) {
           KeyframeIntervalReport::Pair pair;

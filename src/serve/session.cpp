@@ -772,7 +772,10 @@ json Session::status() const {
                   {"matched", k.matched.size()},
                   {"linked", std::count_if(k.matched.begin(), k.matched.end(), [](const auto& m) { return m.linked; })},
                   {"created", k.created.size()},
-                  {"cancelled", k.cancelled.size()}};
+                  {"cancelled", k.cancelled.size()},
+                  // Nodes the guide leaves turning a whole turn (the warning says which).
+                  {"turning", std::count_if(k.matched.begin(), k.matched.end(),
+                                            [](const auto& m) { return m.phase_turns != 0; })}};
         if (!k.unguided_reason.empty()) i["unguided_reason"] = k.unguided_reason;
         intervals.push_back(std::move(i));
       }

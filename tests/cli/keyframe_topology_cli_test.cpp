@@ -48,22 +48,35 @@ GeneratedAndAnalysed generate_and_analyze(const test::TempDir& dir, const std::s
 // frame (the nearest +1 to where it was), is a center in each of `frames` frames:
 // |trace| / √|det| of its Jacobian below 0.25 (a focus turning one way or the other is
 // above; a node 2).
-void expect_center_followed(const nlohmann::json& analysis, std::array<double, 3> center, size_t frames) {
+// A +1 singularity followed frame by frame from `start` (the nearest of index +1 to its
+// place in the frame before): trace/√det of its Jacobian per frame (0 a center, 2 a
+// source, −2 a sink).
+std::vector<double> followed_node_ratios(const nlohmann::json& analysis, std::array<double, 3> start, size_t frames) {
+  std::vector<double> ratios;
   for (size_t f = 0; f < frames; ++f) {
     const nlohmann::json* nearest = nullptr;
     double best = 1e300;
     for (const auto& s : analysis.at("singularities")) {
       if (s.at("frame").get<size_t>() != f || s.at("index").get<int>() != 1) continue;
       const auto p = s.at("position").get<std::array<double, 3>>();
-      const double d = std::hypot(p[0] - center[0], p[1] - center[1], p[2] - center[2]);
+      const double d = std::hypot(p[0] - start[0], p[1] - start[1], p[2] - start[2]);
       if (d < best) best = d, nearest = &s;
     }
-    ASSERT_NE(nearest, nullptr) << "frame " << f;
-    center = nearest->at("position").get<std::array<double, 3>>();
+    if (!nearest) {
+      ADD_FAILURE() << "no +1 singularity at frame " << f;
+      return ratios;
+    }
+    start = nearest->at("position").get<std::array<double, 3>>();
     const auto j = nearest->at("jacobian").get<std::array<std::array<double, 2>, 2>>();
-    const double ratio = (j[0][0] + j[1][1]) / std::sqrt(std::abs(j[0][0] * j[1][1] - j[0][1] * j[1][0]));
-    EXPECT_LT(std::abs(ratio), 0.25) << "the designed center at frame " << f;
+    ratios.push_back((j[0][0] + j[1][1]) / std::sqrt(std::abs(j[0][0] * j[1][1] - j[0][1] * j[1][0])));
   }
+  return ratios;
+}
+
+void expect_center_followed(const nlohmann::json& analysis, std::array<double, 3> center, size_t frames) {
+  const std::vector<double> ratios = followed_node_ratios(analysis, center, frames);
+  EXPECT_EQ(ratios.size(), frames);
+  for (size_t f = 0; f < ratios.size(); ++f) EXPECT_LT(std::abs(ratios[f]), 0.25) << "the designed center at frame " << f;
 }
 
 TEST(CliKeyframeTopology, Example26ReportsItsIntervalAndTheAnalysisAgrees) {
@@ -239,6 +252,26 @@ TEST(CliKeyframeTopology, Example26KnotOnASphereIsGuided) {
   }
   for (const auto& b : analysis.at("bifurcations")) EXPECT_EQ(b.at("kind"), "hopf") << b;
   expect_center_followed(analysis, {0.5, 0.0, std::sqrt(0.75)}, 32);
+  // The source is the node the guide leaves turning (its λ ends a whole turn: the key
+  // frames set it, docs/architecture.md). The report and the warning say so, and the
+  // analysis agrees: followed from its first place, it is attracting in some frame.
+  for (const auto& m : i.at("matched")) {
+    const bool source = m.at("type") == "source";
+    EXPECT_EQ(std::abs(m.at("phase_turns").get<int>()), source ? 1 : 0) << m;
+    if (source) EXPECT_GT(m.at("phase_swing").get<double>(), 6.0) << m;
+    else EXPECT_EQ(m.at("phase_swing").get<double>(), 0.0) << m;
+  }
+  EXPECT_NE(r.generated.output.find("1 turning a whole turn"), std::string::npos) << r.generated.output;
+  EXPECT_NE(r.generated.output.find("warning: between keyframes[0] and keyframes[1] the source carried from (-0.500, "),
+            std::string::npos)
+      << r.generated.output;
+  EXPECT_NE(r.generated.output.find("is not held to its type: it turns 1 whole turn"), std::string::npos)
+      << r.generated.output;
+  const std::vector<double> source = followed_node_ratios(analysis, {-0.5, 0.0, std::sqrt(0.75)}, 32);
+  ASSERT_EQ(source.size(), 32u);
+  EXPECT_GT(source.front(), 1.5);
+  EXPECT_GT(source.back(), 1.5);
+  EXPECT_LT(*std::min_element(source.begin(), source.end()), -0.5) << "the source never attracting";
   // Coherent in time up to the second key frame: no frame-to-frame step above 3× the
   // median (1.3× now; 5.7× with a phase correction whose nodes ended on different whole
   // turns, the last step reversing the vectors between them).
@@ -249,6 +282,38 @@ TEST(CliKeyframeTopology, Example26KnotOnASphereIsGuided) {
   EXPECT_LE(largest, 3 * steps[steps.size() / 2]) << analysis.at("coherence");
 }
 
+
+// Example 26's knot_sphere_middle.json: the same knot with a key frame at t = 0.5, the
+// source and the center half-way round their trade. What the warning above advises takes
+// the source's whole turn out: both intervals are guided with no node left turning (every
+// phase_turns and phase_swing 0, no warning), and the analysis agrees: the source, followed
+// from its first place, is a source in every frame (trace/√det > 1.5; it dipped to −2 with
+// two key frames) and the center a center, four singularities per frame, no event.
+TEST(CliKeyframeTopology, Example26KnotOnASphereWithAMiddleKeyFrameHoldsEveryNode) {
+  test::TempDir dir;
+  const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/knot_sphere_middle.json";
+  const GeneratedAndAnalysed r = generate_and_analyze(dir, scene, " --no-plots");
+  ASSERT_FALSE(r.analysis.is_null());
+  EXPECT_EQ(r.generated.output.find("warning"), std::string::npos) << r.generated.output;
+  EXPECT_EQ(r.generated.output.find("turning"), std::string::npos) << r.generated.output;
+  ASSERT_EQ(r.topology.at("intervals").size(), 2u);
+  for (const auto& i : r.topology.at("intervals")) {
+    EXPECT_TRUE(i.at("guided").get<bool>()) << i;
+    ASSERT_EQ(i.at("matched").size(), 4u) << i;
+    for (const auto& m : i.at("matched")) {
+      EXPECT_EQ(m.at("phase_turns").get<int>(), 0) << m;
+      EXPECT_EQ(m.at("phase_swing").get<double>(), 0.0) << m;
+    }
+  }
+  EXPECT_TRUE(r.analysis.at("bifurcations").empty()) << r.analysis.at("bifurcations");
+  std::vector<int> count(32, 0);
+  for (const auto& s : r.analysis.at("singularities")) ++count.at(s.at("frame").get<size_t>());
+  for (size_t f = 0; f < count.size(); ++f) EXPECT_EQ(count[f], 4) << "frame " << f;
+  const std::vector<double> source = followed_node_ratios(r.analysis, {-0.5, 0.0, std::sqrt(0.75)}, 32);
+  ASSERT_EQ(source.size(), 32u);
+  for (size_t f = 0; f < source.size(); ++f) EXPECT_GT(source[f], 1.5) << "the source at frame " << f;
+  expect_center_followed(r.analysis, {0.5, 0.0, std::sqrt(0.75)}, 32);
+}
 
 // Example 26's knot_bunny.json: the knot on CGAL's bunny. Its paths are curves on the
 // surface; with the plain ratio R = (z − p(t)) / (z − p(t₀)) the guide's frames held an extra

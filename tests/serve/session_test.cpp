@@ -118,6 +118,28 @@ TEST(ServeSession, TheStatusSaysPerKeyFrameIntervalWhetherItWasGuided) {
   EXPECT_FALSE(plain.status().contains("keyframe_intervals"));
 }
 
+// Example 26's sphere knot: the guide leaves the source turning a whole turn (the key frames
+// set it). The status says how many nodes turn, for the designer's interval line, and its
+// warnings say which.
+TEST(ServeSession, TheStatusSaysWhichIntervalLeavesANodeTurning) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.initial_scene = test::read_text(test::source_dir() + "/examples/26_keyframe_topology/knot_sphere.json");
+  ASSERT_FALSE(o.initial_scene.empty());
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(180));
+  const json st = s.status();
+  ASSERT_EQ(st["state"], "ready") << st;
+  ASSERT_EQ(st.at("keyframe_intervals").size(), 1u) << st;
+  EXPECT_EQ(st["keyframe_intervals"][0].at("turning"), 1) << st;
+  EXPECT_TRUE(st["keyframe_intervals"][0].at("guided").get<bool>()) << st;
+  const auto& warnings = st.at("warnings");
+  EXPECT_TRUE(std::any_of(warnings.begin(), warnings.end(), [](const json& w) {
+    return w.get<std::string>().find("the source carried from") != std::string::npos &&
+           w.get<std::string>().find("turns 1 whole turn") != std::string::npos;
+  })) << warnings;
+}
+
 // Issue 15: the field is published before its analysis, which follows on its own thread:
 // a frame read before the analysis has the same singularities (found for that frame alone,
 // "path" −1), the analysis then arrives for that revision, and the domain id stays while

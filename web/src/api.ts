@@ -132,6 +132,7 @@ export interface Status {
     linked: number;
     created: number;
     cancelled: number;
+    turning?: number; // nodes the guide leaves turning a whole turn
     unguided_reason?: string;
   }[];
   seconds?: number;

@@ -102,6 +102,13 @@ struct KeyframeIntervalReport {
     // At the second key frame: the same as `type`, or of the other stability (a node
     // matched as the last resort, its type changing through a center on the way).
     SingularityType to_type = SingularityType::source;
+    // A node of a guided interval on a surface that the guide does not hold to its type:
+    // the turn of its linear part from the plan's (radians; a turn of π/2 is a center, π
+    // the other stability). phase_turns: whole turns at the second key frame (its type
+    // going round source, center, sink, center, source; the key frames set it, not the
+    // route: docs/architecture.md); phase_swing: the largest turn on the way. 0 where held.
+    int phase_turns = 0;
+    double phase_swing = 0;
   };
   struct Pair {
     SingularityType saddle_type = SingularityType::saddle, node_type = SingularityType::source;
@@ -203,7 +210,8 @@ private:
 };
 
 // {"interval": [t0, t1], "keyframes": [k0, k1], "bifurcation_t", "matched": [{"type",
-// "from", "to", "linked", "detour", "to_type"}], "created": [{"t", "at", "saddle", "node",
+// "from", "to", "linked", "detour", "to_type", "phase_turns", "phase_swing" (guided
+// intervals)}], "created": [{"t", "at", "saddle", "node",
 // "node_type"}], "cancelled": [same], "separation", "closest_approach" (when two or more
 // are carried), "collision" (when not empty), "routing", "guided", "fallback" (not guided:
 // the interval left free), "unguided_reason" (when not guided), "unpaired": [[x, y, z],
