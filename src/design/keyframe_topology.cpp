@@ -1364,15 +1364,29 @@ std::string leaves_surface(const DesignSpace& space, const Track& tr, const std:
                      jump / h, on.size());
 }
 
-// Builds a surface guide for the tracks [first, last) (spanning [t0, t1]; the tracks of
-// `pairs` are created or cancelled pairs', the others matched); false when a path leaves
-// its chart or a key frame's field has a zero no track carries. `ramp` widens the band
-// where the factors' weights fall from 1 to 0.
 // A path's tube and chart (SurfaceGuide::Path before its `a`) by (a pair's, track or pair
 // index, ramp): the same at every try with that ramp (the shaped ratio's tries reuse the
 // plain ratio's tubes).
 using TubeCache = std::map<std::tuple<bool, size_t, double>, KeyframeTopologyPlan::SurfaceGuide::Path>;
 
+// Tabled samples with no value (NaN: G had none there) take the nearest earlier sample's,
+// the leading ones the first valued one's (`none` when no sample has a value): the nodes'
+// λ and scale, the pairs' holds' turns.
+void fill_gaps(std::vector<double>& x, double none) {
+  const auto it = std::find_if(x.begin(), x.end(), [](double y) { return !std::isnan(y); });
+  double prev = it == x.end() ? none : *it;
+  for (double& y : x) {
+    if (std::isnan(y))
+      y = prev;
+    else
+      prev = y;
+  }
+}
+
+// Builds a surface guide for the tracks [first, last) (spanning [t0, t1]; the tracks of
+// `pairs` are created or cancelled pairs', the others matched); false when a path leaves
+// its chart or a key frame's field has a zero no track carries. `ramp` widens the band
+// where the factors' weights fall from 1 to 0.
 bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, size_t first, size_t last,
                          const std::vector<Guide::Pair>& pairs, double radius, double ramp, bool shaped,
                          const std::vector<cplx>& f0, const std::vector<cplx>& f1, TubeCache& tubes,
@@ -1682,21 +1696,9 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
       lam.push_back(valued ? *valued + std::remainder(arg - *valued, 2 * std::numbers::pi) : arg);
       valued = lam.back();
     }
-    // A sample with no value takes the nearest earlier sample's, the first ones the first
-    // valued one's (none at all: λ 0, scale 1). (A scale of 0 there made the node's own linear
-    // field vanish: CGAL's mushroom's and bear's carried centers read trace/√det up to 2.5
-    // and −6.4 in the frames next to the first key frame, before its corners were filled.)
-    auto fill_gaps = [](std::vector<double>& x, double none) {
-      const auto it = std::find_if(x.begin(), x.end(), [](double y) { return !std::isnan(y); });
-      const double lead = it == x.end() ? none : *it;
-      double prev = lead;
-      for (double& y : x) {
-        if (std::isnan(y))
-          y = prev;
-        else
-          prev = y;
-      }
-    };
+    // (A scale of 0 where G has no value made the node's own linear field vanish: CGAL's
+    // mushroom's and bear's carried centers read trace/√det up to 2.5 and −6.4 in the frames
+    // next to the first key frame, before its corners were filled.)
     fill_gaps(lam, 0.0);
     fill_gaps(scale, 1.0);
     const double a0 = std::remainder(lam.front(), 2 * std::numbers::pi);
@@ -1739,7 +1741,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   // value at the key frame where the pair is (there G is that key frame, whose type the
   // node keeps). In the template's window the node is Q's zero on +axis, √−μ from the
   // middle, found in the chart; a face where G has no value (a degenerate one; a corner on
-  // a key frame's zero has affine_fill's) repeats the last sample's turn.
+  // a key frame's zero has affine_fill's) takes the nearest valued sample's turn (fill_gaps).
   for (const SurfaceGuide::Path& path : g.paths) {
     if (!path.pair) continue;
     SurfaceGuide::PairHold hold;
@@ -1753,6 +1755,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     if (!mid) continue;
     hold.mid = surface_position(mesh, *mid);
     std::vector<double> arg;
+    std::optional<double> valued;  // the last sample with a value
     for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
       const double t = hold.a + (hold.b - hold.a) * k / SurfaceGuide::kSamples;
       const SurfaceGuide::PairState q = pair_state(space, tracks, path, t);
@@ -1767,12 +1770,14 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
       hold.at.push_back(surface_position(mesh, *at));
       const cplx a = face_alpha(space, at->face, surface_guide_on_face(space, tracks, g, t, at->face));
       if (!(std::abs(a) > 0) || !std::isfinite(std::abs(a))) {
-        arg.push_back(arg.empty() ? 0.0 : arg.back());
+        arg.push_back(std::numeric_limits<double>::quiet_NaN());
         continue;
       }
-      arg.push_back(arg.empty() ? std::arg(a) : arg.back() + std::remainder(std::arg(a) - arg.back(), 2 * std::numbers::pi));
+      arg.push_back(valued ? *valued + std::remainder(std::arg(a) - *valued, 2 * std::numbers::pi) : std::arg(a));
+      valued = arg.back();
     }
     if (hold.at.size() != static_cast<size_t>(SurfaceGuide::kSamples + 1)) continue;
+    fill_gaps(arg, 0.0);
     const double key = path.cancel ? arg.front() : arg.back();
     for (const double x : arg) hold.turn.push_back(x - key);
     g.holds.push_back(std::move(hold));
