@@ -301,7 +301,10 @@ async function showStatus(st: Status) {
   if (st.state === "running") label.textContent = `rev ${st.revision} · solving ${st.progress[0]}/${st.progress[1]}…`;
   else if (st.state === "failed") label.textContent = `rev ${st.revision} · failed: ${st.error}`;
   else label.textContent = `rev ${st.revision} · ready in ${(st.seconds ?? 0).toFixed(2)} s`;
-  if (st.state !== "running") showKeyframeReport(st);
+  if (st.state !== "running") {
+    showKeyframeReport(st);
+    showWarnings(st);
+  }
   // Another tab or client changed the scene: show it (not while changes of ours are
   // under way or an element is dragged).
   if (state.scene && st.revision !== state.scene.revision && !queue.busy && !state.drag) {
@@ -340,6 +343,15 @@ function showKeyframeReport(st: Status) {
       return `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
     })
     .join("\n");
+}
+
+// The generator's warnings on the shown result (paths that could not be kept apart, a node
+// the guide leaves turning, a solve short of its tolerance), one per line.
+function showWarnings(st: Status) {
+  const box = $("warnings");
+  const warnings = st.state === "ready" ? (st.warnings ?? []) : [];
+  box.hidden = warnings.length === 0;
+  box.textContent = warnings.map((w) => `warning: ${w}`).join("\n");
 }
 
 // A change of this page under way (its request not answered yet), or its revision being
