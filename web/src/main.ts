@@ -338,7 +338,7 @@ function showKeyframeReport(st: Status) {
   box.textContent = intervals
     .map((k) => {
       const what = `key frames ${k.keyframes[0]} → ${k.keyframes[1]}: ${k.matched} carried${k.linked ? ` (${k.linked} linked)` : ""}, ${k.created} pairs created, ${k.cancelled} cancelled`;
-      const turning = k.turning ? `; ${k.turning} node${k.turning > 1 ? "s" : ""} turning a whole turn (a key frame between the two holds ${k.turning > 1 ? "them" : "it"})` : "";
+      const turning = k.turning ? `; ${k.turning} node${k.turning > 1 ? "s" : ""} turning a whole turn (a key frame between the two can hold ${k.turning > 1 ? "them" : "it"})` : "";
       if (k.guided) return `${what}; guided (${k.routing} routing): no bifurcation but these${turning}`;
       return `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
     })
