@@ -553,9 +553,8 @@ std::string keyframe_turn_warning(const KeyframeIntervalReport& k, const Keyfram
                                        "held to its type: ",
                                        k.from_keyframe, k.to_keyframe, to_string(m.type), at(m.from), at(m.to));
   if (m.phase_turns != 0)
-    return what + fmt::format("it turns {} whole turn{} on the way (through every node type: source, center, sink, center), "
-                              "which the two key frames set, not its path; a key frame between them can hold it (as "
-                              "in example 26's knot_sphere_middle.json)",
+    return what + fmt::format("it turns {} whole turn{} on the way (through every node type: source, center, sink, center); "
+                              "a key frame between them can hold it (as in example 26's knot_sphere_middle.json)",
                               std::abs(m.phase_turns), std::abs(m.phase_turns) == 1 ? "" : "s");
   return what + fmt::format("it turns up to {:.2f} rad from it on the way (past a center to the other stability and back)",
                             m.phase_swing);

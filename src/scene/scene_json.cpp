@@ -963,7 +963,9 @@ void Reader::keyframe_topology(const json& solver, Scene& s) const {
   const auto nk = static_cast<long long>(s.keyframes.size());
   if (const json* links = get(solver, "links")) {
     array(*links, "solver.links", 0, "links {\"from\": [k, i], \"to\": [k + 1, j]}");
-    std::vector<std::pair<long long, long long>> used;
+    // (side, key frame, element): an element is carried from at most once and into at most
+    // once, so a middle key frame's element may be linked both ways (a chain k−1 → k → k+1).
+    std::vector<std::tuple<int, long long, long long>> used;
     for (size_t m = 0; m < links->size(); ++m) {
       const std::string path = join_index("solver.links", m);
       const json& l = (*links)[m];
@@ -985,8 +987,9 @@ void Reader::keyframe_topology(const json& solver, Scene& s) const {
         if (s.keyframes[static_cast<size_t>(ends[e][0])].elements[static_cast<size_t>(ends[e][1])].kind != "singular")
           fail(p, fmt::format("{} is a regular element; only singular elements are linked", where[e]));
         for (const auto& u : used)
-          if (u.first == ends[e][0] && u.second == ends[e][1])
-            fail(p, fmt::format("{} is already linked by an earlier link", where[e]));
+          if (u == std::tuple(e, ends[e][0], ends[e][1]))
+            fail(p, fmt::format("{} is already linked {} by an earlier link", where[e],
+                                e == 0 ? "into the next key frame" : "from the previous key frame"));
       }
       if (ends[1][0] != ends[0][0] + 1)
         fail(join_key(path, "to"), fmt::format("links key frame {} with key frame {}; a link joins a key frame "
@@ -1003,8 +1006,8 @@ void Reader::keyframe_topology(const json& solver, Scene& s) const {
       if (!same)
         fail(path, fmt::format("links a {} ({}) with a {} ({}); linked singularities must have the same type", name(a),
                                where[0], name(b), where[1]));
-      used.emplace_back(ends[0][0], ends[0][1]);
-      used.emplace_back(ends[1][0], ends[1][1]);
+      used.emplace_back(0, ends[0][0], ends[0][1]);
+      used.emplace_back(1, ends[1][0], ends[1][1]);
       s.solver.links.push_back({static_cast<int>(ends[0][0]), static_cast<int>(ends[0][1]),
                                 static_cast<int>(ends[1][0]), static_cast<int>(ends[1][1])});
     }

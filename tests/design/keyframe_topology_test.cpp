@@ -424,6 +424,38 @@ TEST(KeyframeTopology, CrossingPathsWithNoRoomAreReported) {
   EXPECT_EQ(keyframe_intervals_json(g.report.keyframe_intervals)[0]["collision"], r.collision);
 }
 
+// Three key frames, the middle one's elements linked both ways (a chain 0 → 1 → 2, the
+// links crosswise in each interval): accepted (an element is carried from once and into
+// once; the check refused the chain until session 24, and the designer dropped a middle
+// element's first link when the second was made), and each interval carries its two links.
+TEST(KeyframeTopology, AMiddleKeyFramesElementsAreLinkedBothWays) {
+  const std::string text = R"({"tvf": 1, "domain": {"grid": {"size": [33, 33], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 21, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.15, "keyframe_topology": "matched",
+               "links": [{"from": [0, 0], "to": [1, 1]}, {"from": [0, 1], "to": [1, 0]},
+                         {"from": [1, 0], "to": [2, 1]}, {"from": [1, 1], "to": [2, 0]}]},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, -0.3]},
+                            {"kind": "singular", "type": "source", "at": [0.5, -0.3]}]},
+      {"t": 0.5, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0.1]},
+                              {"kind": "singular", "type": "source", "at": [0.5, 0.1]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0.5]},
+                            {"kind": "singular", "type": "source", "at": [0.5, 0.5]}]}]})";
+  const Scene scene = parse_scene(text, "scene.json");
+  ASSERT_EQ(scene.solver.links.size(), 4u);
+  const Generated g = run(text);
+  ASSERT_EQ(g.report.keyframe_intervals.size(), 2u);
+  for (const KeyframeIntervalReport& r : g.report.keyframe_intervals) {
+    const auto linked = std::count_if(r.matched.begin(), r.matched.end(), [](const auto& m) { return m.linked; });
+    EXPECT_EQ(linked, 2) << r.from_keyframe;
+    // Crosswise: the linked sources trade sides.
+    for (const auto& m : r.matched) {
+      if (!m.linked) continue;
+      EXPECT_LT(m.from.x() * m.to.x(), 0.0) << r.from_keyframe;
+    }
+  }
+}
+
 TEST(KeyframeTopology, BadLinksAndTimesAreRefusedInOneSentence) {
   auto err = [](const std::string& solver_extra) {
     return test::error_of([&] { parse_scene(move_scene(17, solver_extra), "scene.json"); });
@@ -442,7 +474,11 @@ TEST(KeyframeTopology, BadLinksAndTimesAreRefusedInOneSentence) {
             "scene.json: solver.links[0].to: links key frame 1 with key frame 0; a link joins a key frame with the "
             "next one (k and k + 1)");
   EXPECT_EQ(err(R"(, "keyframe_topology": "matched", "links": [{"from": [0, 0], "to": [1, 0]}, {"from": [0, 0], "to": [1, 0]}])"),
-            "scene.json: solver.links[1].from: keyframes[0].elements[0] is already linked by an earlier link");
+            "scene.json: solver.links[1].from: keyframes[0].elements[0] is already linked into the next key frame by "
+            "an earlier link");
+  EXPECT_EQ(err(R"(, "keyframe_topology": "matched", "links": [{"from": [0, 1], "to": [1, 1]}, {"from": [0, 0], "to": [1, 1]}])"),
+            "scene.json: solver.links[1].to: keyframes[1].elements[1] is already linked from the previous key frame by "
+            "an earlier link");
   EXPECT_EQ(err(R"(, "keyframe_topology": "matched", "bifurcation_times": [1.5])"),
             "scene.json: solver.bifurcation_times[0]: t = 1.5 is not inside the interval (0, 1) between keyframes[0] "
             "and keyframes[1]");

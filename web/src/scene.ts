@@ -300,7 +300,9 @@ export function setGenerator(scene: Scene, generator: string): Scene {
 
 // Links two key-frame singular elements of consecutive key frames (picked in either
 // order): the one of the earlier key frame is carried into the other, whatever is nearest
-// (solver.links). A link either of them had is replaced. Turns "matched" on.
+// (solver.links). The earlier one's link into that key frame and the later one's link from
+// it are replaced; a middle key frame's element keeps its link on the other side (a chain
+// k − 1 → k → k + 1). Turns "matched" on.
 export function linkKeyframeElements(scene: Scene, a: Handle, b: Handle): Scene {
   if (a.kind !== "keyframe" || b.kind !== "keyframe") throw new Error("links join key-frame elements: pick a square of a key frame");
   const [p, q] = a.key <= b.key ? [a, b] : [b, a];
@@ -321,9 +323,9 @@ export function linkKeyframeElements(scene: Scene, a: Handle, b: Handle): Scene 
     throw new Error(`a ${ep.type ?? "Jacobian"} cannot be linked with a ${eq.type ?? "Jacobian"}: linked singularities have the same type`);
   const s = setKeyframeTopology(scene, true);
   const solver = s.solver!;
-  const involves = (l: KeyframeLink, h: Handle & { kind: "keyframe" }) =>
-    (l.from[0] === h.key && l.from[1] === h.index) || (l.to[0] === h.key && l.to[1] === h.index);
-  const links = ((solver.links as KeyframeLink[] | undefined) ?? []).filter((l) => !involves(l, p) && !involves(l, q));
+  const replaced = (l: KeyframeLink) =>
+    (l.from[0] === p.key && l.from[1] === p.index) || (l.to[0] === q.key && l.to[1] === q.index);
+  const links = ((solver.links as KeyframeLink[] | undefined) ?? []).filter((l) => !replaced(l));
   links.push({ from: [p.key, p.index], to: [q.key, q.index] });
   solver.links = links;
   return s;

@@ -211,6 +211,13 @@ describe("topology between key frames", () => {
       { from: [0, 0], to: [1, 1] },
       { from: [0, 1], to: [1, 0] },
     ]);
+    // A middle key frame's element linked both ways: the chain 0 → 1 → 2 keeps both links.
+    const three = addKeyframeSingular(two(), 0.5, "source", [0, 0]);
+    const chain = linkKeyframeElements(linkKeyframeElements(three, kf(0, 0), kf(1, 0)), kf(1, 0), kf(2, 1));
+    expect(keyframeLinks(chain)).toEqual([
+      { from: [0, 0], to: [1, 0] },
+      { from: [1, 0], to: [2, 1] },
+    ]);
     expect(() => linkKeyframeElements(two(), kf(0, 0), kf(1, 0))).toThrow(/a source cannot be linked with a ccw_center/);
     expect(() => linkKeyframeElements(two(), kf(0, 0), kf(0, 1))).toThrow(/same key frame/);
     expect(() => linkKeyframeElements(two(), { kind: "element", index: 0, point: 0 }, kf(1, 1))).toThrow(/key-frame elements/);

@@ -105,8 +105,9 @@ struct KeyframeIntervalReport {
     // A node of a guided interval on a surface that the guide does not hold to its type:
     // the turn of its linear part from the plan's (radians; a turn of π/2 is a center, π
     // the other stability). phase_turns: whole turns at the second key frame (its type
-    // going round source, center, sink, center, source; the key frames set it, not the
-    // route: docs/architecture.md); phase_swing: the largest turn on the way. 0 where held.
+    // going round source, center, sink, center, source; on the sphere's knot every route
+    // tried gives the same: docs/architecture.md); phase_swing: the largest turn on the
+    // way. 0 where held.
     int phase_turns = 0;
     double phase_swing = 0;
   };
