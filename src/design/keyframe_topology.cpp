@@ -2063,6 +2063,8 @@ class PhaseCheck {
   static SurfaceGuide variant(const SurfaceGuide& g, const Trial::Choice& c) {
     SurfaceGuide v = g;
     v.local = c.nodes && c.local;
+    // A node the choice does not hold (none of its nodes' correction, or a whole turn the
+    // local one carries): its λ recorded for the report; a carried one's λ zeroed.
     v.turning.clear();
     for (size_t n = 0; n < g.nodes.size(); ++n) {
       const std::vector<double>& lam = g.lambda[n];
@@ -2071,13 +2073,11 @@ class PhaseCheck {
       double swing = 0;
       for (const double l : lam) swing = std::max(swing, std::abs(l));
       v.turning.push_back({g.nodes[n], lam.back(), swing});
+      if (carried_turn) {
+        v.carried[n] = 1;
+        std::fill(v.lambda[n].begin(), v.lambda[n].end(), 0.0);
+      }
     }
-    if (v.local)
-      for (size_t n = 0; n < v.nodes.size(); ++n)
-        if (std::abs(v.lambda[n].back()) > 1e-6) {
-          v.carried[n] = 1;
-          std::fill(v.lambda[n].begin(), v.lambda[n].end(), 0.0);
-        }
     if (!c.nodes && c.holds)
       for (std::vector<double>& lam : v.lambda) std::fill(lam.begin(), lam.end(), 0.0);
     else if (!c.nodes)
