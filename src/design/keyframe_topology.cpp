@@ -5,6 +5,7 @@
 #include "tvf/analysis/topology.h"
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
+#include "tvf/design/keyframes.h"
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
 #include "tvf/integrate/surface_walk.h"
@@ -64,6 +65,32 @@ double smoothstep(double u) {
   return u * u * (3 - 2 * u);
 }
 
+// The time warp of one key-frame interval: u(τ), τ = (t − t0)/(t1 − t0) clamped to [0, 1],
+// the cubic Hermite curve from 0 to 1 with slopes m0 and m1 at its ends (monotone for
+// slopes in [0, 3]). At the scene's first and last key frames the slope is 0 (smoothstep:
+// the motion starts and stops there); at a middle key frame it is 1, the rate of the linear
+// interpolation the paper's spacetime solve makes there, so the paths and the field go on
+// through it instead of pausing (a track's speed at the key frame is then its path's
+// length over the interval's duration on each side: C⁰ in velocity, not C¹).
+struct Ease {
+  double m0 = 0, m1 = 0;
+  double operator()(double tau) const {
+    const double x = std::clamp(tau, 0.0, 1.0);
+    return x * x * (3 - 2 * x) + (m0 * (1 - x) - m1 * x) * x * (1 - x);
+  }
+  double at(double t, double t0, double t1) const { return (*this)((t - t0) / (t1 - t0)); }
+};
+
+// The warp of an interval (or of a path) from time a to time b: slope 1 at an end that is a
+// key frame strictly between the scene's first and last (keyframe_times ascending).
+Ease interval_ease(const std::vector<double>& keyframe_times, double a, double b) {
+  auto middle = [&](double t) {
+    return keyframe_times.size() > 2 && t > keyframe_times.front() && t < keyframe_times.back() &&
+           std::find(keyframe_times.begin(), keyframe_times.end(), t) != keyframe_times.end();
+  };
+  return {middle(a) ? 1.0 : 0.0, middle(b) ? 1.0 : 0.0};
+}
+
 // +1 repelling, −1 attracting, 0 neither (saddles and centers).
 int stability(SingularityType t) {
   switch (t) {
@@ -76,14 +103,14 @@ int stability(SingularityType t) {
 }
 
 // The detour's profile along a path: 0 at both ends, 1 over [rise, fall] (inside (0, 1)),
-// smoothstep up before it and down after, so the path stays C¹ and its ends keep their
-// zero speed.
+// smoothstep up before it and down after, so the path stays C¹ and its ends keep the
+// velocity of the undetoured path (zero at the first and last key frames).
 double bump(double s, double rise, double fall) {
   return s < rise ? smoothstep(s / rise) : s > fall ? smoothstep((1 - s) / (1 - fall)) : 1.0;
 }
 
 // The joint detour's shapes: sin(πs) sin(kπs), k = 1, 2, …: zero with zero slope at both
-// ends (the key frames keep their positions and the zero speed there), k = 1 a bump, the
+// ends (the key frames keep their positions and the undetoured path's velocity there), k = 1 a bump, the
 // higher ones moving it earlier or later and sharpening it.
 double wave_shape(int k, double s) {
   return std::sin(std::numbers::pi * s) * std::sin(k * std::numbers::pi * s);
@@ -161,8 +188,9 @@ struct KeyframeTopologyPlan::Track {
   // of the track's time; empty: the Jacobian is interpolated between the two ends alone.
   std::vector<double> turn;
 
-  // Path parameter at time t: smoothstep in time from the key frame's end.
-  double param(double t) const { return smoothstep((t - t0) / (t1 - t0)); }
+  // Path parameter at time t: the interval's warp (Ease) from the key frame's end.
+  Ease ease;
+  double param(double t) const { return ease.at(t, t0, t1); }
   // The path before any detour at parameter s: the straight segment's point, or on a
   // surface the curve's point at arclength fraction s.
   Vec3 base(double s) const {
@@ -214,7 +242,7 @@ struct KeyframeTopologyPlan::Template {
 // |w|² + μ(t) + 2is Im w, w = (z − mid) conj(axis), μ from −s² to s² (the two zeros ±√−μ
 // on the axis meet at t_c; the product of the two linear factors at t_c − τ). h has no
 // zero: h_k = F_k / Π g_k(t_k) at the two key frames, h(t) = h₀ exp(u(t) log(h₁/h₀)) with
-// the logarithm lifted continuously over the mesh and u the tracks' smoothstep in time. So
+// the logarithm lifted continuously over the mesh and u the tracks' warp of time (Ease). So
 // G's zeros are exactly the plan's, each of its index, and nothing else; G equals the key
 // frames at both ends. Near a matched node the phase h Π_{k≠j} g_k would turn its type
 // (a source into a centre): G is multiplied by exp(−Λ(z, t)), Λ the nodes' λ_j(t)
@@ -227,6 +255,7 @@ struct KeyframeTopologyPlan::Guide {
   static constexpr int kTable = 256;
   size_t first = 0, last = 0;  // the interval's tracks
   double t0 = 0, t1 = 0;
+  Ease ease;  // the interval's time warp (its tracks' too)
   double radius = 0;
   struct Pair {
     size_t node = 0, saddle = 0;  // tracks
@@ -271,6 +300,7 @@ struct KeyframeTopologyPlan::Guide {
 // log R_j is along the path) and is single-valued off the zeros' sweep.
 struct KeyframeTopologyPlan::SurfaceGuide {
   double t0 = 0, t1 = 0;
+  Ease ease;  // the interval's time warp (its tracks' too)
   std::vector<cplx> f0, log_h;  // per vertex (f0 in vertex bases)
   // A pair's factor at one time: (z − n) conj(z − s), or |w|² + μ + 2iσ Im w.
   struct PairState {
@@ -428,7 +458,7 @@ using Track = KeyframeTopologyPlan::Track;
 // point): |α| and |β| blended, their arguments along the shorter arc, β turned with the
 // neighbourhood where the track has a turn, then carried from the track's reference frame.
 Linear track_jacobian(const TangentBundle& bundle, const Track& tr, double t, int face) {
-  const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
+  const double s = tr.param(t);
   Linear j{blend(tr.j0.alpha, tr.j1.alpha, s), blend(tr.j0.beta, tr.j1.beta, s)};
   if (tr.other_way && std::abs(tr.j0.alpha) > 0 && std::abs(tr.j1.alpha) > 0) {
     // The longer arc: through the other center (a source's α turning clockwise instead).
@@ -722,7 +752,7 @@ bool build_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
   std::vector<std::vector<cplx>> logc(g.last - g.first);
   for (int k = 0; k <= Guide::kTable; ++k) {
     const double t = g.t0 + (g.t1 - g.t0) * k / Guide::kTable;
-    const double u = smoothstep01(t, g.t0, g.t1);
+    const double u = g.ease.at(t, g.t0, g.t1);
     const std::vector<Factor> factors = guide_factors(space, tracks, g, t);
     for (const Factor& fa : factors) {
       if (fa.track < 0) continue;
@@ -740,7 +770,7 @@ bool build_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
     if (logc[i].empty()) continue;
     std::vector<cplx>& lam = g.lambda[i];
     for (int k = 0; k <= Guide::kTable; ++k) {
-      const double u = smoothstep(static_cast<double>(k) / Guide::kTable);
+      const double u = g.ease(static_cast<double>(k) / Guide::kTable);
       // The ends' values taken within (−π, π]: the whole turns in between are what the
       // correction takes out (at the ends exp(−λ) is then 1).
       const cplx a = logc[i].front(), b = logc[i].back();
@@ -764,7 +794,7 @@ bool build_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
     for (int k = 0; k <= Guide::kTable; ++k) {
       const double t = ph.a + (ph.b - ph.a) * k / Guide::kTable;
       const std::vector<Factor> factors = guide_factors(space, tracks, g, t);
-      const double u = smoothstep01(t, g.t0, g.t1);
+      const double u = g.ease.at(t, g.t0, g.t1);
       const cplx p = pair_node(tracks, pr, t).value_or(pr.mid);
       auto value = [&](cplx z) {
         cplx val = guide_h(mesh, g, space.locate(Vec3(z.real(), z.imag(), 0)), u);
@@ -792,7 +822,7 @@ void apply_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
   const Mesh& mesh = space.mesh();
   const TangentBundle& bundle = space.bundle();
   const std::vector<Factor> factors = guide_factors(space, tracks, g, t);
-  const double u = smoothstep01(t, g.t0, g.t1);
+  const double u = g.ease.at(t, g.t0, g.t1);
   const std::vector<PhaseNode> nodes = phase_nodes(tracks, g, factors, t);
   // The tracks' own linear fields within `outer` (G's nonlinear terms matter farther out
   // for a weak saddle): the whole face around the point inside `inner`.
@@ -1027,7 +1057,7 @@ std::optional<Linear> chart_jacobian(const DesignSpace& space, const Track& tr, 
   return Linear{l.alpha / d, l.beta / d};
 }
 
-// The time at which a track's smoothstep parameter is s (bisection).
+// The time at which a track's path parameter (its warp of time, Ease) is s (bisection).
 double time_at(const Track& tr, double s) {
   double lo = tr.t0, hi = tr.t1;
   for (int i = 0; i < 60; ++i) {
@@ -1173,7 +1203,7 @@ std::optional<cplx> affine_fill(const Mesh& mesh, const TangentBundle& bundle, i
 std::array<cplx, 3> surface_guide_on_face(const DesignSpace& space, const std::vector<Track>& tracks,
                                           const SurfaceGuide& g, double t, int f) {
   const Mesh& mesh = space.mesh();
-  const double u = smoothstep01(t, g.t0, g.t1);
+  const double u = g.ease.at(t, g.t0, g.t1);
   std::vector<PathNow> now;
   for (const SurfaceGuide::Path& path : g.paths) now.push_back(path_now(space, tracks, path, t));
   // G at vertex v, in its frame (non-finite on a pole).
@@ -1704,7 +1734,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     const double a0 = std::remainder(lam.front(), 2 * std::numbers::pi);
     const double b0 = std::remainder(lam.back(), 2 * std::numbers::pi);
     for (int k = 0; k <= SurfaceGuide::kSamples; ++k) {
-      const double u = smoothstep(static_cast<double>(k) / SurfaceGuide::kSamples);
+      const double u = g.ease(static_cast<double>(k) / SurfaceGuide::kSamples);
       lam[static_cast<size_t>(k)] -= (1 - u) * a0 + u * b0;
     }
     g.nodes.push_back(i);
@@ -1791,7 +1821,7 @@ bool build_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
 void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tracks, const SurfaceGuide& g,
                          double t, const std::vector<cplx>& l, std::span<char> fixed, std::span<cplx> values) {
   const Mesh& mesh = space.mesh();
-  const double u = smoothstep01(t, g.t0, g.t1);
+  const double u = g.ease.at(t, g.t0, g.t1);
   const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * SurfaceGuide::kSamples;
   const auto k = std::min(static_cast<size_t>(x), static_cast<size_t>(SurfaceGuide::kSamples - 1));
   std::vector<Vec3> at;
@@ -2793,6 +2823,7 @@ public:
     for (const Track& tr : items) tmin = std::min({tmin, tr.t0, tr.t1}), tmax = std::max({tmax, tr.t0, tr.t1});
     std::vector<double> grid(kSamples + 1);
     for (int g = 0; g <= kSamples; ++g) grid[static_cast<size_t>(g)] = tmin + (tmax - tmin) * g / kSamples;
+    const Ease warp = interval_ease(keyframe_times_, tmin, tmax);
     auto present = [&](const Track& tr, double t) { return t >= std::min(tr.t0, tr.t1) && t <= std::max(tr.t0, tr.t1); };
     struct Sample {
       size_t i, j;
@@ -2907,7 +2938,7 @@ public:
           const size_t i = plus[q];
           const double end_drift = targets[q];
           for (size_t g = 4; g < static_cast<size_t>(kSamples); g += 4) {
-            const double r = wph * (drift(i, g) - smoothstep(static_cast<double>(g) / kSamples) * end_drift);
+            const double r = wph * (drift(i, g) - warp(static_cast<double>(g) / kSamples) * end_drift);
             row.clear();
             if (jtj)
               for (size_t w = 0; w < whole.size(); ++w) {
@@ -3125,10 +3156,10 @@ public:
   }
   // The drift of the +1 tracks' phases from their mean (D_i(g) = Φ_i(g) − Φ_i(0) −
   // mean_k(Φ_k(g) − Φ_k(0))) beyond what the key frames need (u(g) · T_i, T_i the
-  // phase_targets() of the D_i(end), u the smoothstep of time): the largest over the +1
-  // tracks of `whole` and the samples.
+  // phase_targets() of the D_i(end), u the interval's warp of time, Ease): the largest over
+  // the +1 tracks of `whole` and the samples.
   double phase_error(const std::vector<Track>& items, const PhaseSet& whole,
-                     const std::vector<std::vector<Vec3>>& pos) const {
+                     const std::vector<std::vector<Vec3>>& pos, const Ease& warp) const {
     std::vector<size_t> plus;
     for (const size_t i : whole)
       if (items[i].index > 0) plus.push_back(i);
@@ -3143,7 +3174,7 @@ public:
       const size_t i = plus[q];
       const double target = targets[q];
       for (size_t g = 0; g < G; ++g)
-        out = std::max(out, std::abs(drift(i, g) - smoothstep(static_cast<double>(g) / (G - 1)) * target));
+        out = std::max(out, std::abs(drift(i, g) - warp(static_cast<double>(g) / static_cast<double>(G - 1)) * target));
     }
     return out;
   }
@@ -3169,7 +3200,8 @@ public:
                                    tracks.begin() + static_cast<std::ptrdiff_t>(last));
     if (items.empty()) return 0;
     const auto [tmin, tmax] = span_of(items);
-    return phase_error(items, whole_tracks(items, items.size(), tmin, tmax), on_grid(items, tmin, tmax));
+    return phase_error(items, whole_tracks(items, items.size(), tmin, tmax), on_grid(items, tmin, tmax),
+                       interval_ease(keyframe_times_, tmin, tmax));
   }
 
   // Fills the `turn` of each saddle that spans the whole interval: in the product model
@@ -3454,6 +3486,15 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       }
     }
   }
+  // The key frames' times as the field has them: each is held at the nearest frame
+  // (keyframe_frame), so the paths run between those frames' times; a path planned to the
+  // key frame's own time between two frames would reach it half a frame early or late (the
+  // sphere knot's middle key frame at t = 0.5 of 32 frames: the field's change 3.4 just
+  // before it and 10.9 just after, against 6 to 8).
+  std::vector<double> keyframe_times;
+  const std::vector<double> scene_times = scene.time.times();
+  for (const Keyframe& key : scene.keyframes)
+    keyframe_times.push_back(scene_times[static_cast<size_t>(keyframe_frame(scene, key.t))]);
   auto add_track = [&](const Singularity& a, const Vec3& p1, double t0, double t1, const Linear& j1_in_face,
                        int face1, int group = -1) {
     Track tr;
@@ -3465,6 +3506,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     tr.p1 = p1;
     tr.t0 = t0;
     tr.t1 = t1;
+    tr.ease = interval_ease(keyframe_times, t0, t1);
     if (!space.planar()) tr.curve = surface_curve(space, neighbours, tr.p0, tr.p1);
     tr.ref_e1 = bundle.face_e1(a.where.face);
     tr.j0 = to_linear(a.jacobian);
@@ -3476,8 +3518,6 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   // How far a node that changes stability may be carried (the last resort below): a
   // quarter of the domain's diameter, at least the separation.
   const double stability_reach = std::max(0.25 * space.diameter(), separation);
-  std::vector<double> keyframe_times;
-  for (const Keyframe& key : scene.keyframes) keyframe_times.push_back(key.t);
   const PathRouter router(space, separation, keyframe_times);
   int groups = 0;
   for (size_t k = 0; k + 1 < nk; ++k) {
@@ -3506,10 +3546,14 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       KeyframeIntervalReport rep;
       rep.from_keyframe = static_cast<int>(k);
       rep.to_keyframe = static_cast<int>(k + 1);
-      rep.t0 = scene.keyframes[k].t;
-      rep.t1 = scene.keyframes[k + 1].t;
-      rep.bifurcation_t = k < scene.solver.bifurcation_times.size() ? scene.solver.bifurcation_times[k]
-                                                                     : 0.5 * (rep.t0 + rep.t1);
+      rep.t0 = keyframe_times[k];
+      rep.t1 = keyframe_times[k + 1];
+      // A bifurcation time given between the scene's key-frame times keeps its place
+      // between the frames that hold them (the same time where those are on frames).
+      const double key0 = scene.keyframes[k].t, key1 = scene.keyframes[k + 1].t;
+      rep.bifurcation_t = k < scene.solver.bifurcation_times.size()
+                              ? rep.t0 + (scene.solver.bifurcation_times[k] - key0) / (key1 - key0) * (rep.t1 - rep.t0)
+                              : 0.5 * (rep.t0 + rep.t1);
       KeyframeMatchRules rules;
       {
         std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
@@ -3662,6 +3706,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       guide.last = tracks_.size();
       guide.t0 = rep.t0;
       guide.t1 = rep.t1;
+      guide.ease = interval_ease(keyframe_times, rep.t0, rep.t1);
       guide.radius = scene.solver.region_radius;
       const Guide unbuilt = guide;
       if (space.planar() && rep.collision.empty() && rep.unpaired_first.empty() && rep.unpaired_second.empty() &&
@@ -3732,6 +3777,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
           SurfaceGuide sg;
           sg.t0 = rep.t0;
           sg.t1 = rep.t1;
+          sg.ease = interval_ease(keyframe_times, rep.t0, rep.t1);
           std::string why;
           if (!build_surface_guide(space, tracks_, first_track, tracks_.size(), guide.pairs, scene.solver.region_radius,
                                    ramp, shaped, keyframe_fields[k], keyframe_fields[k + 1], tubes, sg, why)) {
@@ -3845,7 +3891,7 @@ void KeyframeTopologyPlan::constrain(const DesignSpace& space, const Scene& scen
   for (const Track& tr : tracks_) {
     const double lo = std::min(tr.t0, tr.t1), hi = std::max(tr.t0, tr.t1);
     if (tr.guided || tr.free || !(t > lo && t < hi)) continue;
-    const double s = smoothstep((t - tr.t0) / (tr.t1 - tr.t0));
+    const double s = tr.param(t);
     ElementState st;
     st.active = true;
     st.position = tr.raw(s);

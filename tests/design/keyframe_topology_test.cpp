@@ -456,6 +456,67 @@ TEST(KeyframeTopology, AMiddleKeyFramesElementsAreLinkedBothWays) {
   }
 }
 
+// Through a middle key frame the paths and the field go on moving: each interval's warp of
+// time has slope 1 there (the rate of the free solve's linear interpolation), not the
+// smoothstep's 0, which stopped every singularity and the whole field at every key frame
+// (the sphere knot with its middle key frame: coherence 0.4 there against 5 to 11). A
+// source carried straight up, −0.4 → 0 → 0.4, at even speed through t = 0.5: its steps
+// next to the middle key frame are those of the rest of its way (with the smoothstep, a
+// fifth of them), and so is the field's change there. With 20 frames t = 0.5 falls between
+// frames 9 and 10: the key frame is held at frame 10 (t = 0.526), and the intervals meet
+// there (planned to meet at t = 0.5, the steps next to frame 10 were half the others).
+TEST(KeyframeTopology, PathsGoOnThroughAMiddleKeyFrame) {
+  for (const auto& [n, frames] : {std::pair{33, 21}, std::pair{65, 21}, std::pair{33, 20}}) {
+    const std::string text = R"({"tvf": 1, "domain": {"grid": {"size": [)" + std::to_string(n) + ", " +
+                             std::to_string(n) + R"(], "min": [-1, -1], "max": [1, 1]}},
+      "time": {"frames": )" + std::to_string(frames) + R"(, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+      "solver": {"region_radius": 0.15, "keyframe_topology": "matched"},
+      "keyframes": [
+        {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, -0.4]},
+                              {"kind": "singular", "type": "ccw_center", "at": [0.5, 0.4]}]},
+        {"t": 0.5, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0.0]},
+                                {"kind": "singular", "type": "ccw_center", "at": [0.5, 0.0]}]},
+        {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0.4]},
+                              {"kind": "singular", "type": "ccw_center", "at": [0.5, -0.4]}]}]})";
+    const Generated g = run(text);
+    ASSERT_EQ(g.report.keyframe_intervals.size(), 2u);
+    for (const KeyframeIntervalReport& r : g.report.keyframe_intervals) ASSERT_FALSE(r.fallback) << n;
+    ASSERT_EQ(g.topology.bifurcations.size(), 0u) << n;
+    // The source: the repelling singularity nearest x = −0.5 in each frame.
+    std::vector<double> y;
+    for (const auto& frame : g.topology.singularities) {
+      double best = std::numeric_limits<double>::infinity(), at = 0;
+      for (const Singularity& s : frame)
+        if ((s.type == SingularityType::source || s.type == SingularityType::repelling_focus) &&
+            std::abs(s.position.x() + 0.5) < best)
+          best = std::abs(s.position.x() + 0.5), at = s.position.y();
+      ASSERT_LT(best, 0.1) << n << ", " << frames << " frames";
+      y.push_back(at);
+    }
+    std::vector<double> steps;
+    for (size_t j = 0; j + 1 < y.size(); ++j) steps.push_back(y[j + 1] - y[j]);
+    std::vector<double> sorted = steps;
+    std::sort(sorted.begin(), sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    EXPECT_NEAR(median, 0.8 / (frames - 1), 0.015) << n;  // 0.8 over the steps, the ends eased
+    // The key frame's frame (10 of 21 at t = 0.5; 10 of 20 at t = 0.526) and the steps
+    // into and out of it.
+    EXPECT_NEAR(g.report.keyframe_intervals[0].t1, 10.0 / (frames - 1), 1e-12) << n;
+    EXPECT_NEAR(y[10], 0.0, 0.01) << n;
+    for (const size_t j : {size_t{9}, size_t{10}})
+      EXPECT_GT(steps[j], 0.6 * median) << n << ", " << frames << " frames: step " << j << " of "
+                                        << ::testing::PrintToString(steps);
+    // The field's change at the middle key frame against the rest (coherence y_i).
+    std::vector<double> c = g.topology.coherence;
+    ASSERT_EQ(c.size(), static_cast<size_t>(frames - 1));
+    std::vector<double> cs = c;
+    std::sort(cs.begin(), cs.end());
+    const double c_median = cs[cs.size() / 2];
+    for (const size_t j : {size_t{9}, size_t{10}})
+      EXPECT_GT(c[j], 0.5 * c_median) << n << ", " << frames << " frames: coherence " << ::testing::PrintToString(c);
+  }
+}
+
 TEST(KeyframeTopology, BadLinksAndTimesAreRefusedInOneSentence) {
   auto err = [](const std::string& solver_extra) {
     return test::error_of([&] { parse_scene(move_scene(17, solver_extra), "scene.json"); });
