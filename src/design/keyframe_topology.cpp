@@ -246,9 +246,10 @@ struct KeyframeTopologyPlan::Template {
 // G's zeros are exactly the plan's, each of its index, and nothing else; G equals the key
 // frames at both ends. Near a matched node the phase h Π_{k≠j} g_k would turn its type
 // (a source into a centre): G is multiplied by exp(−Λ(z, t)), Λ the nodes' λ_j(t)
-// interpolated by Shepard's weights |z − p_j|⁻⁴ (λ_j = log c_j less its two ends' values
-// taken within (−π, π]; c_j: G's factor over the node's own linear field at its point,
-// tabled at kTable + 1 times and unwrapped), and within min(0.7 radius, 1.5 h) of a node
+// interpolated by Shepard's weights |z − p_j|⁻⁴, the real part (the size) only near the
+// nodes (near_magnitude) (λ_j = log c_j less its two ends' values taken within (−π, π];
+// c_j: G's factor over the node's own linear field at its point, tabled at kTable + 1
+// times and unwrapped), and within min(0.7 radius, 1.5 h) of a node
 // the value is the node's linear field itself (blended out to min(radius, 2.5 h)).
 // Saddles keep G's own phase (a saddle stays a saddle).
 struct KeyframeTopologyPlan::Guide {
@@ -624,10 +625,28 @@ std::vector<cplx> factor_lambda(const Guide& g, const std::vector<Factor>& facto
 // Λ(z): the nodes' λ, interpolated by Shepard's weights |z − p|⁻⁴ (Λ(p_j) = λ_j with zero
 // slope there). Saddles keep their type whatever the phase: G's own (their axes turn with
 // the neighbourhood, and no linear region is blended in, which for a weak saddle made
-// zeros where G's quadratic terms take over).
+// zeros where G's quadratic terms take over). The phase (Im λ, what keeps a node's type) is
+// spread so; the size (Re λ) only near its node (near_magnitude).
 struct PhaseNode {
   cplx p, lambda;
 };
+// Λ's real part at z: the nodes' Re λ_j (the size of G against the node's own linear
+// field, which apply_guide blends in near it: the two must agree in size there, or the
+// blend can hold extra zeros), by Shepard's weights |z − p_j|⁻⁴ beside a weight (2r)⁻⁴ of
+// 0 (r the region radius): Re λ_j at its node, half of it 2r away, nothing far off.
+// exp(−Re Λ) is positive, so it moves no zero. Spread over the whole domain like the phase
+// (until session 25), the nodes' size set the far field's: half-way between example 26's
+// knot's key frames its median size was 15 times theirs (65²; now 1.2), and a node crossing
+// a ridge of h (a key frame's region edge) changed the size of the whole field at once.
+double near_magnitude(const std::vector<PhaseNode>& nodes, double radius, cplx z) {
+  double num = 0, den = 1 / std::pow(2 * radius, 4);
+  for (const PhaseNode& n : nodes) {
+    const double w = 1 / std::pow(std::max(std::abs(z - n.p), 1e-12 * radius), 4);
+    num += w * n.lambda.real();
+    den += w;
+  }
+  return num / den;
+}
 cplx shepard(const std::vector<PhaseNode>& nodes, double radius, cplx z) {
   cplx num{0, 0};
   double den = 0;
@@ -676,7 +695,7 @@ std::vector<PhaseNode> phase_nodes(const std::vector<Track>& tracks, const Guide
       const std::vector<PhaseNode> others(nodes.begin(), nodes.begin() + static_cast<std::ptrdiff_t>(matched));
       const double r = pr.cancel ? smoothstep01(t, g.t1, pr.tc) : smoothstep01(t, g.t0, pr.tc);
       const cplx at_tc(0, pr.cancel ? ph.turn.back() : ph.turn.front());
-      nodes.push_back({pr.mid, r * at_tc + (1 - r) * shepard(others, g.radius, pr.mid)});
+      nodes.push_back({pr.mid, r * at_tc + (1 - r) * cplx(0, shepard(others, g.radius, pr.mid).imag())});
     }
   }
   return nodes;
@@ -841,7 +860,7 @@ void apply_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
       const double r = std::abs(z - factors[m].p);
       if (r < rn) rn = r, nearest = m;
     }
-    val *= std::exp(-shepard(nodes, g.radius, z));
+    val *= std::exp(-cplx(near_magnitude(nodes, g.radius, z), shepard(nodes, g.radius, z).imag()));
     if (nearest < factors.size() && factors[nearest].index > 0 && rn < outer) {
       const double w = rn <= inner ? 1.0 : smoothstep01(rn, outer, inner);
       val = w * factors[nearest](z) + (1 - w) * val;
