@@ -247,7 +247,7 @@ struct KeyframeTopologyPlan::Template {
 // frames at both ends. Near a matched node the phase h Π_{k≠j} g_k would turn its type
 // (a source into a centre): G is multiplied by exp(−Λ(z, t)), Λ the nodes' λ_j(t)
 // interpolated by Shepard's weights |z − p_j|⁻⁴, the real part (the size) only near the
-// nodes (near_magnitude) (λ_j = log c_j less its two ends' values taken within (−π, π];
+// nodes (lambda_at) (λ_j = log c_j less its two ends' values taken within (−π, π];
 // c_j: G's factor over the node's own linear field at its point, tabled at kTable + 1
 // times and unwrapped), and within min(0.7 radius, 1.5 h) of a node
 // the value is the node's linear field itself (blended out to min(radius, 2.5 h)).
@@ -626,11 +626,11 @@ std::vector<cplx> factor_lambda(const Guide& g, const std::vector<Factor>& facto
 // slope there). Saddles keep their type whatever the phase: G's own (their axes turn with
 // the neighbourhood, and no linear region is blended in, which for a weak saddle made
 // zeros where G's quadratic terms take over). The phase (Im λ, what keeps a node's type) is
-// spread so; the size (Re λ) only near its node (near_magnitude).
+// spread so; the size (Re λ) only near its node (lambda_at).
 struct PhaseNode {
   cplx p, lambda;
 };
-// Λ's real part at z: the nodes' Re λ_j (the size of G against the node's own linear
+// Λ at z. Its real part: the nodes' Re λ_j (the size of G against the node's own linear
 // field, which apply_guide blends in near it: the two must agree in size there, or the
 // blend can hold extra zeros), by Shepard's weights |z − p_j|⁻⁴ beside a weight (2r)⁻⁴ of
 // 0 (r the region radius): Re λ_j at its node, half of it 2r away, nothing far off.
@@ -638,24 +638,17 @@ struct PhaseNode {
 // (until session 25), the nodes' size set the far field's: half-way between example 26's
 // knot's key frames its median size was 15 times theirs (65²; now 1.2), and a node crossing
 // a ridge of h (a key frame's region edge) changed the size of the whole field at once.
-double near_magnitude(const std::vector<PhaseNode>& nodes, double radius, cplx z) {
-  double num = 0, den = 1 / std::pow(2 * radius, 4);
+// Its imaginary part: the nodes' Im λ_j by Shepard's weights alone (0 without nodes).
+cplx lambda_at(const std::vector<PhaseNode>& nodes, double radius, cplx z) {
+  double size = 0, size_den = 1 / std::pow(2 * radius, 4), phase = 0, phase_den = 0;
   for (const PhaseNode& n : nodes) {
     const double w = 1 / std::pow(std::max(std::abs(z - n.p), 1e-12 * radius), 4);
-    num += w * n.lambda.real();
-    den += w;
+    size += w * n.lambda.real();
+    size_den += w;
+    phase += w * n.lambda.imag();
+    phase_den += w;
   }
-  return num / den;
-}
-cplx shepard(const std::vector<PhaseNode>& nodes, double radius, cplx z) {
-  cplx num{0, 0};
-  double den = 0;
-  for (const PhaseNode& n : nodes) {
-    const double w = 1 / std::pow(std::max(std::abs(z - n.p), 1e-12 * radius), 4);
-    num += w * n.lambda;
-    den += w;
-  }
-  return den > 0 ? num / den : cplx(0, 0);
+  return {size / size_den, phase_den > 0 ? phase / phase_den : 0.0};
 }
 
 // A created or cancelled pair's node at time t (world plane), where it is: on its track
@@ -695,7 +688,7 @@ std::vector<PhaseNode> phase_nodes(const std::vector<Track>& tracks, const Guide
       const std::vector<PhaseNode> others(nodes.begin(), nodes.begin() + static_cast<std::ptrdiff_t>(matched));
       const double r = pr.cancel ? smoothstep01(t, g.t1, pr.tc) : smoothstep01(t, g.t0, pr.tc);
       const cplx at_tc(0, pr.cancel ? ph.turn.back() : ph.turn.front());
-      nodes.push_back({pr.mid, r * at_tc + (1 - r) * cplx(0, shepard(others, g.radius, pr.mid).imag())});
+      nodes.push_back({pr.mid, r * at_tc + (1 - r) * cplx(0, lambda_at(others, g.radius, pr.mid).imag())});
     }
   }
   return nodes;
@@ -860,7 +853,7 @@ void apply_guide(const DesignSpace& space, const std::vector<Track>& tracks, con
       const double r = std::abs(z - factors[m].p);
       if (r < rn) rn = r, nearest = m;
     }
-    val *= std::exp(-cplx(near_magnitude(nodes, g.radius, z), shepard(nodes, g.radius, z).imag()));
+    val *= std::exp(-lambda_at(nodes, g.radius, z));
     if (nearest < factors.size() && factors[nearest].index > 0 && rn < outer) {
       const double w = rn <= inner ? 1.0 : smoothstep01(rn, outer, inner);
       val = w * factors[nearest](z) + (1 - w) * val;
