@@ -881,11 +881,15 @@ std::string mesh_knot(const std::filesystem::path& mesh, const std::string& p, c
 // stays a node (≥ 1.74 in every frame). The guide's node correction is then possible but
 // turned single vertices six times the field's mean magnitude from frame to frame
 // (coherence max/median 4.1, a saddle–node pair at t = 0.55), so it is not kept
-// (PhaseCheck::accept). The local correction is (each node's λ near it alone, and within
-// 1.5 edge lengths its own linear field scaled to G's magnitude): the center stays a
-// center, |trace|/√det ≤ 0.1 in every frame. Before session 22 it wandered −2.4 … 1.5
-// without limit cycles (a sink at one frame), and with the local correction but the scale
-// 0 next to the first key frame (no value at a corner on the key frame's zero) up to 2.5.
+// (PhaseCheck::accept). Since session 26 its far λ are averaged in time and it passes that
+// bound (0.125 against 0.068 uncorrected), but the local correction is smoother (0.091) and
+// kept; Shepard's blend, kept, left the center a focus in frames 7, 8, 12, 20 and 23
+// (trace/√det 0.83 and −1.65 at 7 and 8) and the analysis found a Hopf event. The local
+// correction (each node's λ near it alone, and within 1.5 edge lengths its own linear field
+// scaled to G's magnitude) keeps the center a center, |trace|/√det ≤ 0.1 in every frame.
+// Before session 22 it wandered −2.4 … 1.5 without limit cycles (a sink at one frame), and
+// with the local correction but the scale 0 next to the first key frame (no value at a
+// corner on the key frame's zero) up to 2.5.
 TEST(KeyframeTopology, AKnotOnCGALsMushroomIsRoutedTogetherAndGuided) {
   const test::TempDir dir;
   const std::optional<std::filesystem::path> mushroom_off = test::cgal_mesh(dir, "mushroom");
@@ -976,10 +980,17 @@ TEST(KeyframeTopology, AKnotOnCGALsBearIsGuidedWithItsFarSingularitiesPaired) {
     EXPECT_LT(std::abs(ratio), 0.25) << "at t = " << nearest->t;
     center_most = std::max(center_most, std::abs(ratio));
   }
+  // The smoother of the two node corrections is kept (PhaseCheck::accept): here the local
+  // one (roughness 0.136), change max/median 1.46; Shepard's blend (0.166), which also passes
+  // since its far λ are averaged in time (session 26), peaks mid-interval at 1.76.
+  std::vector<double> c = g.topology.coherence;
+  std::sort(c.begin(), c.end());
+  const double ratio = c.back() / c[c.size() / 2];
+  EXPECT_LT(ratio, 1.6);
   std::printf("  bear: routed %s, %zu matched, bifurcations at t = %.3g and %.3g, the center's |trace|/√det at most "
-              "%.3f\n",
+              "%.3f, change max/median %.2f\n",
               r.routing.c_str(), r.matched.size(), g.topology.bifurcations[0].t, g.topology.bifurcations[1].t,
-              center_most);
+              center_most, ratio);
 }
 
 // The knot on CGAL's head (bench/keyframe_topology_meshes.py's scene: its two points are
