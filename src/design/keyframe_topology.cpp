@@ -1859,17 +1859,25 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   const double u = g.ease.at(t, g.t0, g.t1);
   const double x = std::clamp((t - g.t0) / (g.t1 - g.t0), 0.0, 1.0) * SurfaceGuide::kSamples;
   const auto k = std::min(static_cast<size_t>(x), static_cast<size_t>(SurfaceGuide::kSamples - 1));
+  const double floor = 1e-12 * space.diameter(), mesh_h = mesh.mean_edge_length();
+  // Each matched node's λ in two parts: `lambda`, blended over the surface by Shepard's
+  // weights, and `local_lambda`, applied near the node alone, flat within `inner` and falling
+  // to 0 at `local_reach`. The local choice: λ near each node alone (out to its `reach`; the
+  // holds, if any, by Shepard's blend with the matched nodes at λ = 0, as the holds-alone
+  // choice has them). Shepard's choice: the far values (far_lambda) blended, and near each
+  // node what they leave out, so that the node's face sees its exact λ (out to an edge length
+  // past `inner`).
   std::vector<Vec3> at;
-  std::vector<double> lambda, jitter;  // Λ's far values (far_lambda) and what they leave out
+  std::vector<double> lambda, local_lambda, local_reach;
   for (size_t n = 0; n < g.nodes.size(); ++n) {
     const Track& tr = tracks[g.nodes[n]];
     at.push_back(surface_position(mesh, space.locate(tr.raw(tr.param(t)))));
     const std::vector<double>& lam = g.lambda[n];
     const double exact = lam[k] + (x - static_cast<double>(k)) * (lam[k + 1] - lam[k]);
-    lambda.push_back(g.local ? exact : far_lambda(lam, x));
-    jitter.push_back(exact - lambda.back());
+    lambda.push_back(g.local ? 0.0 : far_lambda(lam, x));
+    local_lambda.push_back(exact - lambda.back());
+    local_reach.push_back(g.local ? g.reach[n] : g.inner + mesh_h);
   }
-  const double floor = 1e-12 * space.diameter(), mesh_h = mesh.mean_edge_length();
   // Λ at a point from the nodes so far (Shepard's weights |x − p|⁻⁴).
   auto shepard_at = [&](const Vec3& point, size_t count) {
     double num = 0, den = 0;
@@ -1881,13 +1889,6 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     return den > 0 ? num / den : 0.0;
   };
   const size_t matched = at.size();
-  // The local correction: the matched nodes' λ near each alone; the holds (if any) by
-  // Shepard's blend with the matched nodes at λ = 0 (as the holds-alone choice has them).
-  std::vector<double> local_lambda;
-  if (g.local) {
-    local_lambda = lambda;
-    std::fill(lambda.begin(), lambda.end(), 0.0);
-  }
   for (const SurfaceGuide::PairHold& h : g.holds) {
     if (t >= h.a && t <= h.b) {
       const double y = (t - h.a) / (h.b - h.a) * SurfaceGuide::kSamples;
@@ -1909,7 +1910,7 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     double out = 0;
     for (size_t n = 0; n < local_lambda.size(); ++n) {
       const double d = (point - at[n]).norm();
-      if (d < g.reach[n]) out += local_lambda[n] * (1 - smoothstep01(d, g.inner, g.reach[n]));
+      if (d < local_reach[n]) out += local_lambda[n] * (1 - smoothstep01(d, g.inner, local_reach[n]));
     }
     return out;
   };
@@ -1949,21 +1950,10 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
     }
     return val;
   };
-  // The exact λ near its node: what the far values leave out, within `inner` (the node's
-  // face), blended to 0 an edge length further.
-  auto near_jitter = [&](const Vec3& point) {
-    double out = 0;
-    for (size_t n = 0; n < jitter.size(); ++n) {
-      const double d = (point - at[n]).norm();
-      if (d < g.inner + mesh_h) out += jitter[n] * (1 - smoothstep01(d, g.inner, g.inner + mesh_h));
-    }
-    return out;
-  };
   for (size_t v = 0; v < l.size(); ++v) {
     if (fixed[v]) continue;
     const Vec3& point = mesh.position(static_cast<int>(v));
-    const double turn = (blend ? shepard_at(point, at.size()) + near_jitter(point) : 0.0) +
-                        (g.local ? local_at(point) : 0.0);
+    const double turn = (blend ? shepard_at(point, at.size()) : 0.0) + local_at(point);
     cplx val = g.f0[v] * std::exp(l[v] + u * g.log_h[v] - cplx(0, turn));
     if (g.local) val = linear_at(static_cast<int>(v), point, val);
     if (!std::isfinite(val.real()) || !std::isfinite(val.imag())) {
