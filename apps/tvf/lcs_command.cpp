@@ -60,6 +60,12 @@ nlohmann::json points_json(const Streakline& s) {
   return points;
 }
 
+// A time option as given: positive and finite (left out, it is 0: the library's default).
+void check_positive_time(const CLI::App& sub, const char* name, double value) {
+  if ((sub.count(name) > 0 || value != 0) && !(value > 0 && std::isfinite(value)))
+    throw Error(fmt::format("{} {}: must be a positive time", name, value));
+}
+
 // Runs what integrates the input's field; the library's refusals (a field too fast for its
 // time range, a seed off the domain) name the input.
 template <class F>
@@ -152,7 +158,7 @@ int LcsCommand::run() {
 int LcsCommand::run_ftle() {
   if (!(horizon_ > 0) || !std::isfinite(horizon_))
     throw Error(fmt::format("--horizon {}: must be a positive time", horizon_));
-  if (!(dt_ >= 0) || !std::isfinite(dt_)) throw Error(fmt::format("--dt {}: must be a positive time", dt_));
+  check_positive_time(*ftle_, "--dt", dt_);
   if (pictures_ < 0) throw Error(fmt::format("--pictures {}: must be 0 or more", pictures_));
   if (every_ < 1) throw Error(fmt::format("--every {}: must be at least 1", every_));
   if (size_ < 16 || size_ > 16384) throw Error(fmt::format("--size {}: must be in [16, 16384] pixels", size_));
@@ -264,9 +270,8 @@ int LcsCommand::run_ftle() {
 
 int LcsCommand::run_streaklines() {
   check_output_file(out_);  // before the work, not after it
-  if (!(spacing_ >= 0) || !std::isfinite(spacing_))
-    throw Error(fmt::format("--release-spacing {}: must be a positive time", spacing_));
-  if (!(dt_ >= 0) || !std::isfinite(dt_)) throw Error(fmt::format("--dt {}: must be a positive time", dt_));
+  check_positive_time(*streak_, "--release-spacing", spacing_);
+  check_positive_time(*streak_, "--dt", dt_);
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf streaklines", show);
   RenderInput in = load_render_input(input_, progress, "streaklines", true);
@@ -345,9 +350,10 @@ int LcsCommand::run_streaklines() {
 int LcsCommand::run_timelines() {
   check_output_file(out_);  // before the work, not after it
   if (line_.size() == 5) throw Error("--line: give X0 Y0 X1 Y1 (planar) or X0 Y0 Z0 X1 Y1 Z1 (surfaces)");
-  if (count_ < 2) throw Error(fmt::format("--count {}: a timeline needs at least 2 particles", count_));
+  if (const int most = TimelineOptions{}.max_points; count_ < 2 || count_ > most)
+    throw Error(fmt::format("--count {}: a timeline has 2 to {} particles", count_, most));
   if (!(max_gap_ >= 0) || !std::isfinite(max_gap_)) throw Error(fmt::format("--max-gap {}: must be positive", max_gap_));
-  if (!(dt_ >= 0) || !std::isfinite(dt_)) throw Error(fmt::format("--dt {}: must be a positive time", dt_));
+  check_positive_time(*timeline_, "--dt", dt_);
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf timelines", show);
   RenderInput in = load_render_input(input_, progress, "timelines", true);

@@ -35,7 +35,7 @@ DyeInjector::DyeInjector(const TangentBundle& bundle, const Field& field, std::s
     throw Error(fmt::format("dye release spacing {} must be a positive time", options.release_spacing));
   spacing_ = options.release_spacing > 0 ? options.release_spacing : 0.25 * frame_dt;
   if (!(spacing_ > 0)) spacing_ = 1.0;
-  if (span / spacing_ > 1e6)
+  if (span / spacing_ > kMaxReleases)
     throw Error(fmt::format("dye release spacing {} would release more than a million particles per seed over the "
                             "field's time range [{}, {}]",
                             spacing_, std::min(time.t0, time.t1), std::max(time.t0, time.t1)));

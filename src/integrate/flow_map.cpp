@@ -75,6 +75,13 @@ FlowMap::FlowMap(const TangentBundle& bundle, const Field& field, const FlowMapO
   const double frame_dt = time.frames > 1 ? span / (time.frames - 1) : span;
   dt_ = options.dt > 0 ? options.dt : 0.5 * frame_dt;
   if (!(dt_ > 0)) dt_ = 1.0;
+  // A step given so small that a particle carried across the time range would take more
+  // than kMaxSteps of them (1e-12 over [0, 20]: 2e13, days of RK4 for a command that seems
+  // hung). The default, half the frame spacing, is two steps per frame.
+  if (options.dt > 0 && span / dt_ > kMaxSteps)
+    throw Error(fmt::format("flow map time step {:g} would take {:.3g} RK4 steps over the field's time range of {:g}, "
+                            "more than {:g}: give a step of at least {:.3g}",
+                            dt_, span / dt_, span, kMaxSteps, span / kMaxSteps));
   // At most kReachEdges mean edge lengths per step at the field's largest speed.
   double vmax = 0;
   for (const cplx& z : field.data()) vmax = std::max(vmax, std::abs(z));

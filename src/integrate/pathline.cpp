@@ -40,8 +40,16 @@ Pathline trace_pathline(const TangentBundle& bundle, const Field& field, const S
       throw Error(fmt::format("pathline time {} is outside the field's time range [{}, {}]", t, lo, hi));
   const double span = options.t_end - options.t_start;
   const double frame_dt = time.frames > 1 ? (hi - lo) / (time.frames - 1) : (hi - lo);
+  if (!(options.dt >= 0) || !std::isfinite(options.dt))
+    throw Error(fmt::format("pathline time step {} must be positive (or 0 for a quarter of the frame spacing)",
+                            options.dt));
   double dt = options.dt > 0 ? options.dt : 0.25 * frame_dt;
   if (!(dt > 0)) dt = std::abs(span) > 0 ? std::abs(span) : 1.0;
+  if (std::abs(span) / dt > PathlineOptions::kMaxSteps)
+    throw Error(fmt::format("pathline time step {:g} would take {:.3g} RK4 steps from t = {} to {}, more than {:g}: "
+                            "give a step of at least {:.3g}",
+                            dt, std::abs(span) / dt, options.t_start, options.t_end, PathlineOptions::kMaxSteps,
+                            std::abs(span) / PathlineOptions::kMaxSteps));
   const double sign = span < 0 ? -1.0 : 1.0;
   double vmax = 0;  // the whole field's largest |V|: only needed for a non-zero stop speed
   if (options.stop_speed > 0)

@@ -44,6 +44,10 @@ Streakline trace_streakline(const TangentBundle& bundle, const Field& field, con
   const double spacing = options.release_spacing > 0 ? options.release_spacing : 0.25 * frame_dt;
   if (!(options.release_spacing >= 0) || !std::isfinite(options.release_spacing) || !(spacing > 0))
     throw Error(fmt::format("release spacing {} must be a positive time", options.release_spacing));
+  if ((options.t1 - options.t0) / spacing > kMaxReleases)
+    throw Error(fmt::format("release spacing {:g} would release {:.3g} particles over [{}, {}], more than {:g}: give a "
+                            "larger spacing",
+                            spacing, (options.t1 - options.t0) / spacing, options.t0, options.t1, kMaxReleases));
   const PointLocator locator(bundle.mesh());
   const SurfacePoint start = locate(bundle, locator, seed, "streakline seed");
 
@@ -79,6 +83,9 @@ Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const
   check_range(field, options.t0, "timeline start time");
   check_range(field, options.t1, "timeline time");
   if (options.count < 2) throw Error(fmt::format("a timeline needs at least 2 particles, not {}", options.count));
+  if (options.count > options.max_points)
+    throw Error(fmt::format("a timeline of {} particles is more than its limit of {}", options.count,
+                            options.max_points));
   const Mesh& mesh = bundle.mesh();
   const PointLocator locator(mesh);
   locate(bundle, locator, a, "timeline's first point");

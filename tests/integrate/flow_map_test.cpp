@@ -115,5 +115,25 @@ TEST(FlowMap, StepsAtMostAnEdgeAtTheFastestPointAndRefusesAFieldFarTooFast) {
   }
 }
 
+TEST(FlowMap, RefusesAGivenStepThatWouldTakeOverAMillionStepsAcrossTheTimeRange) {
+  // [0, 1] in steps of 1e-12 is 1e12 RK4 steps per particle: a command that never ends,
+  // refused at once, naming the step and the least one allowed. 1e-6 is exactly the bound.
+  const Mesh grid = make_grid(GridSpec{11, 11, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 5}, [](const Vec3&, double) { return Vec3(0.1, 0, 0); });
+  FlowMapOptions o;
+  o.dt = 1e-12;
+  try {
+    const FlowMap flow(bundle, field, o);
+    ADD_FAILURE() << "not refused";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("time step 1e-12"), std::string::npos) << what;
+    EXPECT_NE(what.find("at least 1e-06"), std::string::npos) << what;
+  }
+  o.dt = 1e-6;
+  EXPECT_DOUBLE_EQ(FlowMap(bundle, field, o).dt(), 1e-6);
+}
+
 }  // namespace
 }  // namespace tvf

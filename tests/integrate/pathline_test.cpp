@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace tvf {
 namespace {
 
@@ -30,6 +32,31 @@ TEST(Pathline, OfAUniformFieldIsStraightWithTheRightLength) {
     EXPECT_NEAR((p.points[k] - expect).norm(), 0.0, 1e-12) << k;
   }
   EXPECT_NEAR(p.length(), std::abs(v), 1e-12);
+}
+
+TEST(Pathline, RefusesAStepThatIsNegativeOrTakesOverAMillionSteps) {
+  // 1e-12 over [0, 1]: 1e12 steps, each point kept (80 TB); refused at once, naming the step.
+  const Mesh grid = make_grid(GridSpec{11, 11, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = constant_field(grid, TimeSampling{0, 1, 5}, cplx(0.1, 0));
+  PathlineOptions o;
+  o.dt = 1e-12;
+  try {
+    trace_pathline(bundle, field, Vec3(0, 0, 0), o);
+    ADD_FAILURE() << "not refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pathline time step 1e-12 would take 1e+12 RK4 steps"), std::string::npos)
+        << e.what();
+  }
+  o.dt = -0.1;
+  EXPECT_THROW(trace_pathline(bundle, field, Vec3(0, 0, 0), o), Error);
+  o.dt = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(trace_pathline(bundle, field, Vec3(0, 0, 0), o), Error);
+  // Exactly a million steps is allowed (and the last point is at t_end).
+  o.dt = 1e-6;
+  o.t_end = 1;
+  o.stop_speed = 0;
+  EXPECT_DOUBLE_EQ(trace_pathline(bundle, field, Vec3(-0.9, 0, 0), o).times.back(), 1.0);
 }
 
 TEST(Pathline, BackwardsInTimeAndPartOfTheRange) {

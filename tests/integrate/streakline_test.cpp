@@ -96,6 +96,22 @@ TEST(Streakline, RefusesBadTimesAndSeeds) {
   EXPECT_THROW(trace_streakline(bundle, field, Vec3(2, 0, 0), o), Error);
   o.release_spacing = -0.1;
   EXPECT_THROW(trace_streakline(bundle, field, Vec3(0, 0, 0), o), Error);
+  // More releases than kMaxReleases over [t0, t1]: refused before anything is allocated
+  // (1e-9 over [0, 1] would be a billion particles, 100 GB).
+  o.release_spacing = 1e-9;
+  try {
+    trace_streakline(bundle, field, Vec3(0, 0, 0), o);
+    ADD_FAILURE() << "not refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("release spacing 1e-09 would release 1e+09 particles"), std::string::npos)
+        << e.what();
+  }
+  // A timeline of more particles than its limit.
+  TimelineOptions t;
+  t.t0 = 0;
+  t.t1 = 1;
+  t.count = t.max_points + 1;
+  EXPECT_THROW(trace_timeline(bundle, field, Vec3(-0.5, 0, 0), Vec3(0.5, 0, 0), t), Error);
 }
 
 TEST(Streakline, OnTheSphereStaysOnTheSeedsLatitude) {

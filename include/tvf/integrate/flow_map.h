@@ -14,11 +14,11 @@
 // range would wrap the walk round the mesh; one step for every particle, not one per
 // particle's own speed, keeps the flow map smooth from particle to particle, which FTLE
 // differentiates). A field whose speed would need over kMaxSteps such steps across its
-// time range is refused. Every stage walks along the surface (surface_walk.h), so planar
-// domains and surfaces share one integrator. A step that meets the domain's boundary
-// slides along it when the remaining displacement is tangential there (rounding); one
-// whose displacement points out of the domain leaves it: the particle is then reported as
-// gone (FlowMapResult::left).
+// time range is refused, as is a given `dt` that would. Every stage walks along the
+// surface (surface_walk.h), so planar domains and surfaces share one integrator. A step
+// that meets the domain's boundary slides along it when the remaining displacement is
+// tangential there (rounding); one whose displacement points out of the domain leaves it:
+// the particle is then reported as gone (FlowMapResult::left).
 //
 // On a planar regular grid (one made by make_grid, grid.h) the same steps run on the grid
 // directly: the point is located by dividing by the spacing instead of walking, and the
@@ -58,8 +58,9 @@ public:
   // time range (see above).
   static constexpr double kReachEdges = 4;
   static constexpr double kMaxSteps = 1e6;
-  // Throws tvf::Error on a non-positive dt, a field that does not fit the mesh, or one too
-  // fast for its time range (over kMaxSteps steps of kReachEdges mean edge lengths).
+  // Throws tvf::Error on a non-positive dt or one that takes over kMaxSteps steps across the
+  // field's time range, a field that does not fit the mesh, or one too fast for its time
+  // range (over kMaxSteps steps of kReachEdges mean edge lengths).
   FlowMap(const TangentBundle& bundle, const Field& field, const FlowMapOptions& options = {});
 
   // The particle at p at time t0, carried to t1 (t1 < t0: backwards in time). t0 and t1

@@ -13,6 +13,8 @@
 namespace tvf {
 
 struct PathlineOptions {
+  // The most RK4 steps one pathline takes (every step's point is kept: about 80 MB).
+  static constexpr double kMaxSteps = 1e6;
   double t_start = 0.0;       // release time
   double t_end = 1.0;         // end time; t_end < t_start integrates backwards in time
   double dt = 0.0;            // time step; 0: a quarter of the frame spacing
@@ -30,7 +32,8 @@ struct Pathline {
 };
 
 // The seed is snapped to the closest point of the surface; a seed outside a planar
-// domain, or a time outside the field's range, is an error (tvf::Error).
+// domain, a time outside the field's range, a negative or non-finite dt, or one that would
+// take over kMaxSteps steps from t_start to t_end is an error (tvf::Error).
 Pathline trace_pathline(const TangentBundle& bundle, const Field& field, const Vec3& seed,
                         const PathlineOptions& options = {});
 Pathline trace_pathline(const TangentBundle& bundle, const Field& field, const SurfacePoint& seed,

@@ -18,6 +18,11 @@
 
 namespace tvf {
 
+// The most particles one streakline releases (and a dye seed over the field's time range,
+// dye.h): a spacing that would release more is refused, not allocated (a million carried
+// particles take about 100 MB and minutes of RK4 on 2 cores).
+inline constexpr double kMaxReleases = 1e6;
+
 struct StreaklineOptions {
   double t0 = 0.0;               // first release
   double t1 = 1.0;               // the streakline's time; t0 ≤ t1
@@ -42,7 +47,8 @@ struct Streakline {
 };
 
 // Throws tvf::Error on t0 > t1, times outside the field's range, a non-positive release
-// spacing, or (planar domains) a seed outside the domain; all name the value.
+// spacing or one that would release more than kMaxReleases particles over [t0, t1], or
+// (planar domains) a seed outside the domain; all name the value.
 Streakline trace_streakline(const TangentBundle& bundle, const Field& field, const Vec3& seed,
                             const StreaklineOptions& options);
 
@@ -58,6 +64,8 @@ struct TimelineOptions {
 };
 
 // The segment from a to b at t0, carried to t1; release = the parameter along the segment.
+// Throws tvf::Error on times outside the field's range, a count below 2 or above
+// max_points, or (planar domains) an end outside the domain.
 Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const Vec3& a, const Vec3& b,
                           const TimelineOptions& options);
 
