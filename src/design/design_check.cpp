@@ -240,7 +240,11 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
   std::vector<HopfFeature> hopf_features;
   // Template elements' features (index into out.designed) with the template's scale: one
   // not found gets a hint when the scale spans too few edges for the mesh to resolve it.
-  std::vector<std::pair<size_t, double>> template_scales;
+  struct TemplateScale {
+    size_t feature = 0;
+    double scale = 0, resolved_edges = 0;  // template_resolved_edges (generate.h)
+  };
+  std::vector<TemplateScale> template_scales;
   for (size_t k = 0; k < scene.elements.size(); ++k) {
     const Element& e = scene.elements[k];
     const std::string source = fmt::format("elements[{}]", k);
@@ -265,10 +269,10 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
         J << mu, -1, 1, mu;
         expected.push_back(expect(j, h->at.position, J));
       }
-      template_scales.emplace_back(out.designed.size(), h->scale);
+      template_scales.push_back({out.designed.size(), h->scale, template_resolved_edges(h->type)});
       add_singularity(source, to_string(h->type), expected, 1, on_domain(h->at.position), false);
       if (N < 2 || h->at.t <= topo.times.front() || h->at.t >= topo.times.back()) continue;
-      template_scales.emplace_back(out.designed.size(), h->scale);
+      template_scales.push_back({out.designed.size(), h->scale, template_resolved_edges(h->type)});
       hopf_features.push_back({out.designed.size(), h->type == BifurcationType::hopf_supercritical});
       DesignedFeature f;
       f.kind = FeatureKind::bifurcation;
@@ -290,7 +294,7 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
                             b->type == BifurcationType::saddle_source_creation;
       const bool sink = b->type == BifurcationType::saddle_sink_creation ||
                         b->type == BifurcationType::saddle_sink_cancellation;
-      template_scales.emplace_back(out.designed.size(), b->scale);
+      template_scales.push_back({out.designed.size(), b->scale, template_resolved_edges(b->type)});
       bifurcation_features.push_back(
           {out.designed.size(), creation ? BifurcationKind::creation : BifurcationKind::cancellation, sink, true});
       out.designed.push_back(std::move(f));
@@ -615,20 +619,16 @@ DesignCheck check_design(const Scene& scene, const DesignSpace& space, const Fie
     }
   }
 
-  // A template a few edges wide: its cubic terms at one edge from the zero are then of
-  // the order of its linear part near t0, so the piecewise-linear field keeps the old
-  // stability or pair for a few frames (a Hopf template of 3.8 edges on CGAL's cow was found
-  // a tenth of its time scale late; at 8 edges within a frame step or two).
-  constexpr double kResolvedEdges = 6;
-  for (const auto& [feature, scale] : template_scales) {
+  // A template a few edges wide (template_resolved_edges, generate.h).
+  for (const auto& [feature, scale, resolved_edges] : template_scales) {
     DesignedFeature& f = out.designed[feature];
     const double edges = scale / mesh.mean_edge_length();
     // Not where an event was matched but of the other kind (the note says which).
     const bool unmatched = f.kind == FeatureKind::singularity || f.bifurcation < 0;
-    if (!f.found && !f.expected_absent && unmatched && edges < kResolvedEdges)
+    if (!f.found && !f.expected_absent && unmatched && edges < resolved_edges)
       f.note += fmt::format("{}its scale {:.3g} spans {:.1f} mean edge lengths: the mesh resolves a template "
                             "from about {:g}",
-                            f.note.empty() ? "" : "; ", scale, edges, kResolvedEdges);
+                            f.note.empty() ? "" : "; ", scale, edges, resolved_edges);
     // Or the surface closes round within it (placed on the end of a tail or a leg): the
     // template's normal form lives in a plane, and its cycles and ramps do not fit there.
     if (!f.found && !f.expected_absent && unmatched && !space.planar()) {

@@ -155,10 +155,18 @@ std::vector<std::string> design_warnings(const Scene& scene) {
 
 std::vector<std::string> domain_warnings(const DesignSpace& space, const Scene& scene) {
   std::vector<std::string> out;
-  if (space.planar()) return out;
+  const double h = space.mesh().mean_edge_length();
   for (size_t i = 0; i < scene.elements.size(); ++i) {
     const auto* b = std::get_if<BifurcationElement>(&scene.elements[i]);
     if (!b) continue;
+    if (const double edges = b->scale / h; edges < template_resolved_edges(b->type))
+      out.push_back(fmt::format("{}: elements[{}]: the template's scale {:.3g} spans {:.1f} mean edge lengths, and the "
+                                "mesh resolves a{} template from about {:g}: its {} will not be as designed; give a "
+                                "larger scale or a finer mesh",
+                                scene.label(), i, b->scale, edges, is_hopf(b->type) ? " Hopf" : " saddle–node",
+                                template_resolved_edges(b->type),
+                                is_hopf(b->type) ? "cycle and event" : "pair and event"));
+    if (space.planar()) continue;
     const double curvature = space.curvature_within(b->at.position, 0.5 * b->scale);
     if (curvature > kTemplateMostCurvature)
       out.push_back(fmt::format("{}: elements[{}]: the surface within half the template's scale ({:.3g}) of its "

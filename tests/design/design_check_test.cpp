@@ -5,6 +5,8 @@
 // where the first-order shift puts them.
 #include "tvf/design/design_check.h"
 
+#include "support/test_paths.h"
+
 #include "tvf/analysis/topology.h"
 #include "tvf/core/error.h"
 #include "tvf/design/element_field.h"
@@ -51,11 +53,12 @@ struct Generated {
   std::unique_ptr<DesignSpace> space;
   Field field;
   Topology topology;
+  GenerateReport report;
 };
 Generated generate_and_analyze(const Scene& scene) {
   Generated g;
   g.space = make_design_space(scene);
-  g.field = generate(*g.space, scene);
+  g.field = generate(*g.space, scene, {}, &g.report);
   g.topology = analyze_topology(g.space->bundle(), g.field);
   return g;
 }
@@ -168,6 +171,45 @@ TEST(DesignCheck, ATemplateTooSmallForTheMeshIsNotFoundAndSaysSo) {
     } else {
       EXPECT_TRUE(check.all_found()) << check.summary();
       EXPECT_EQ(event.note.find("mean edge lengths"), std::string::npos) << event.note;
+    }
+    // Generation warns of it too, before any analysis (template_resolved_edges: 6 for a
+    // Hopf template).
+    const bool warned = std::any_of(g.report.warnings.begin(), g.report.warnings.end(), [](const std::string& w) {
+      return w.find("elements[0]: the template's scale 0.19 spans 2.7 mean edge lengths, and the mesh resolves a Hopf "
+                    "template from about 6") != std::string::npos;
+    });
+    EXPECT_EQ(warned, scale < 0.3) << fmt::format("{}", fmt::join(g.report.warnings, "\n"));
+  }
+}
+
+TEST(DesignCheck, ASaddleNodeTemplateBesideOtherElementsIsResolvedFromOneAndAHalfEdgeLengths) {
+  // Quadratic, not cubic: the demo scene (examples/02, 65² grid, mean edge 0.0355) with its
+  // saddle–sink creation at 1.75 grid spacings (1.54 edges) keeps every designed feature
+  // and generation does not warn; at 1 spacing (0.88 edges) the other elements' fields
+  // move its pair off and the event is lost, the check says why and generation warns.
+  for (const double spacings : {1.0, 1.75}) {
+    SCOPED_TRACE(spacings);
+    Scene scene = load_scene(test::source_dir() + "/examples/02_combined_elements/scene.json");
+    scene.time.frames = 41;
+    auto& b = std::get<BifurcationElement>(scene.elements[3]);
+    b.scale = spacings * 2.0 / 64;
+    const Generated g = generate_and_analyze(scene);
+    const DesignCheck check = check_design(scene, *g.space, g.field, g.topology);
+    const auto event = std::find_if(check.designed.begin(), check.designed.end(), [](const DesignedFeature& f) {
+      return f.source == "elements[3]";
+    });
+    ASSERT_NE(event, check.designed.end());
+    const bool warned = std::any_of(g.report.warnings.begin(), g.report.warnings.end(), [](const std::string& w) {
+      return w.find("elements[3]: the template's scale") != std::string::npos &&
+             w.find("the mesh resolves a saddle–node template from about 1.5") != std::string::npos;
+    });
+    if (spacings < 1.5) {
+      EXPECT_FALSE(event->found);
+      EXPECT_NE(event->note.find("spans 0.9 mean edge lengths"), std::string::npos) << event->note;
+      EXPECT_TRUE(warned);
+    } else {
+      EXPECT_TRUE(check.all_found()) << check.summary();
+      EXPECT_FALSE(warned) << fmt::format("{}", fmt::join(g.report.warnings, "\n"));
     }
   }
 }
