@@ -196,7 +196,7 @@ inline constexpr double kTemplateMostCurvature = 3.141592653589793;
 inline double template_resolved_edges(BifurcationType type) { return is_hopf(type) ? 6.0 : 1.5; }
 
 // Checks that need the domain: template elements narrower than the mesh resolves
-// (kTemplateResolvedEdges), or placed where the surface closes round within half their
+// (template_resolved_edges), or placed where the surface closes round within half their
 // scale. One warning per element and problem.
 std::vector<std::string> domain_warnings(const DesignSpace& space, const Scene& scene);
 
