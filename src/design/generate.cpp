@@ -159,13 +159,14 @@ std::vector<std::string> domain_warnings(const DesignSpace& space, const Scene& 
   for (size_t i = 0; i < scene.elements.size(); ++i) {
     const auto* b = std::get_if<BifurcationElement>(&scene.elements[i]);
     if (!b) continue;
+    // (Edges to 3 digits: 5.99 is not "6.0 … from about 6".)
     if (const double edges = b->scale / h; edges < template_resolved_edges(b->type))
-      out.push_back(fmt::format("{}: elements[{}]: the template's scale {:.3g} spans {:.1f} mean edge lengths, and the "
-                                "mesh resolves a{} template from about {:g}: its {} will not be as designed; give a "
-                                "larger scale or a finer mesh",
-                                scene.label(), i, b->scale, edges, is_hopf(b->type) ? " Hopf" : " saddle–node",
-                                template_resolved_edges(b->type),
-                                is_hopf(b->type) ? "cycle and event" : "pair and event"));
+      out.push_back(fmt::format("{}: elements[{}]: the template's scale {:.3g} spans {:.3g} mean edge lengths, and the "
+                                "mesh resolves a {} template from about {:g}: {}; give a larger scale or a finer mesh",
+                                scene.label(), i, b->scale, edges,
+                                is_hopf(b->type) ? "Hopf" : "saddle–node", template_resolved_edges(b->type),
+                                is_hopf(b->type) ? "its event may come late (by a part of its time scale) or not at all"
+                                                 : "its pair may be lost among the other elements' fields"));
     if (space.planar()) continue;
     const double curvature = space.curvature_within(b->at.position, 0.5 * b->scale);
     if (curvature > kTemplateMostCurvature)

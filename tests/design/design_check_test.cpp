@@ -175,7 +175,7 @@ TEST(DesignCheck, ATemplateTooSmallForTheMeshIsNotFoundAndSaysSo) {
     // Generation warns of it too, before any analysis (template_resolved_edges: 6 for a
     // Hopf template).
     const bool warned = std::any_of(g.report.warnings.begin(), g.report.warnings.end(), [](const std::string& w) {
-      return w.find("elements[0]: the template's scale 0.19 spans 2.7 mean edge lengths, and the mesh resolves a Hopf "
+      return w.find("elements[0]: the template's scale 0.19 spans 2.68 mean edge lengths, and the mesh resolves a Hopf "
                     "template from about 6") != std::string::npos;
     });
     EXPECT_EQ(warned, scale < 0.3) << fmt::format("{}", fmt::join(g.report.warnings, "\n"));
