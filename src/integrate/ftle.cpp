@@ -98,9 +98,31 @@ std::vector<float> ftle_from_flow_map(const TangentBundle& bundle, const std::ve
 
 namespace {
 
-void check_horizon(double horizon) {
+// A horizon so short that the flow map moves no particle by a millionth of an edge: the
+// fit's φ(u) − φ(v) is then the rounding of the positions (relative error ~1e-16 of the
+// coordinates over an edge), not the flow's stretch, and σ comes out 0 or noise (the double
+// gyre at T = 1e-300: 0 everywhere; the limit T → 0 is the largest eigenvalue of ∇V's
+// symmetric part, ~1 there). At a millionth of an edge the rounding is ~1e-5 of the
+// stretch on a 100-edge domain. A field that is zero everywhere moves nothing at any
+// horizon, and its σ = 0 is faithful.
+void check_horizon(const Mesh& mesh, const Field& field, double horizon) {
   if (!(horizon > 0) || !std::isfinite(horizon))
     throw Error(fmt::format("FTLE horizon {} must be a positive time", horizon));
+  double speed = 0.0;
+  for (const cplx& v : field.data()) speed = std::max(speed, std::abs(v));
+  const double resolved = 1e-6 * mesh.mean_edge_length();
+  if (speed > 0 && std::isfinite(speed) && speed * horizon < resolved)
+    throw Error(fmt::format("FTLE horizon {:.3g} carries no particle further than {:.3g} (the field's largest "
+                            "speed {:.3g} times the horizon), under a millionth of the mean edge length {:.3g}: "
+                            "the flow map's stretch is lost to rounding; give a horizon of at least {:.3g}",
+                            horizon, speed * horizon, speed, mesh.mean_edge_length(), resolved / speed));
+  // t ± T must differ from t as a double, or every window is empty (NaN).
+  const TimeSampling& time = field.time();
+  const double latest = std::max(std::abs(time.t0), std::abs(time.t1));
+  if ((latest + horizon) - latest < 0.5 * horizon)
+    throw Error(fmt::format("FTLE horizon {:.3g} is below the resolution of the field's times (up to {:.3g}): "
+                            "t + T rounds to t; give a longer horizon",
+                            horizon, latest));
 }
 
 // One time, one direction, with the flow map and the vertices' start points made once.
@@ -234,7 +256,7 @@ void compose_series(const TangentBundle& bundle, const Field& field, const FlowM
 
 FtleSlice compute_ftle_at(const TangentBundle& bundle, const Field& field, double t, double horizon, int direction,
                           HorizonPolicy policy, const FlowMapOptions& flow_options) {
-  check_horizon(horizon);
+  check_horizon(bundle.mesh(), field, horizon);
   if (direction != 1 && direction != -1)
     throw Error(fmt::format("FTLE direction {} must be +1 (forward) or -1 (backward)", direction));
   const TimeSampling& time = field.time();
@@ -247,7 +269,7 @@ FtleSlice compute_ftle_at(const TangentBundle& bundle, const Field& field, doubl
 
 FtleResult compute_ftle(const TangentBundle& bundle, const Field& field, const FtleOptions& options) {
   const Mesh& mesh = bundle.mesh();
-  check_horizon(options.horizon);
+  check_horizon(mesh, field, options.horizon);
   const int n = field.frames();
   std::vector<int> frames = options.frames;
   if (frames.empty())

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 namespace tvf {
@@ -147,6 +148,42 @@ TEST(Ftle, HorizonPastTheRangeIsCutOrNaN) {
   o.horizon = 0.5;
   o.frames = {5};
   EXPECT_THROW(compute_ftle(bundle, field, o), Error);
+}
+
+TEST(Ftle, AHorizonTooShortToMoveAParticleIsRefusedAndAShortOneIsTheRate) {
+  // V = (a x, −a y): σ = a at any horizon. At T = 1e-6 the particles move ~1e-6 (20 millionths
+  // of an edge) and the fit still gives a; at T = 1e-300 they move nothing a double can hold,
+  // and σ came out 0 everywhere: refused, naming the horizon that would do.
+  constexpr double a = 0.8;
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 11},
+                                 [](const Vec3& x, double) { return Vec3(a * x.x(), -a * x.y(), 0); });
+  FtleOptions o;
+  o.frames = {5};
+  o.horizon = 1e-6;
+  const FtleResult r = compute_ftle(bundle, field, o);
+  const int centre = 20 * 41 + 20;
+  EXPECT_NEAR(r.at(r.forward, 5, centre), a, 1e-4);
+  EXPECT_NEAR(r.at(r.backward, 5, centre), a, 1e-4);
+  for (const double short_horizon : {1e-300, 1e-9}) {
+    o.horizon = short_horizon;
+    try {
+      compute_ftle(bundle, field, o);
+      ADD_FAILURE() << "horizon " << short_horizon << " taken";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("give a horizon of at least"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(compute_ftle_at(bundle, field, 0.5, short_horizon, 1), Error);
+  }
+  // A field that is zero everywhere moves nothing at any horizon: σ = 0 is its value. A
+  // horizon under the times' resolution (0.5 + T rounds to 0.5) is refused for any field.
+  const Field still = field_from(bundle, TimeSampling{0, 1, 11}, [](const Vec3&, double) { return Vec3(0, 0, 0); });
+  o.horizon = 1e-300;
+  EXPECT_THROW(compute_ftle(bundle, still, o), Error);
+  o.horizon = 1e-9;
+  const FtleResult z = compute_ftle(bundle, still, o);
+  EXPECT_EQ(z.at(z.forward, 5, centre), 0.0f);
 }
 
 // The planar-grid fast path (grid_flow.h) takes the same RK4 steps as the surface walk:

@@ -71,7 +71,9 @@ struct FtleResult {
   }
 };
 
-// Throws tvf::Error on a horizon that is not positive and finite, or a frame out of range.
+// Throws tvf::Error on a horizon that is not positive and finite or so short that no
+// particle moves a millionth of the mean edge length (the fit would see rounding, not
+// stretch), or a frame out of range.
 FtleResult compute_ftle(const TangentBundle& bundle, const Field& field, const FtleOptions& options);
 
 // The FTLE at one time t (a frame's or any in the field's range) in one direction
@@ -83,8 +85,8 @@ struct FtleSlice {
   bool cut = false;           // the window reached past the range's end
   long left = 0;              // vertices whose particle left the domain
 };
-// Throws tvf::Error on a horizon that is not positive and finite, t outside the range,
-// or a direction other than ±1.
+// Throws tvf::Error on a horizon as compute_ftle does, t outside the range, or a
+// direction other than ±1.
 FtleSlice compute_ftle_at(const TangentBundle& bundle, const Field& field, double t, double horizon, int direction,
                           HorizonPolicy policy = HorizonPolicy::clamp, const FlowMapOptions& flow = {});
 
