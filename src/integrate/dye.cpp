@@ -36,9 +36,10 @@ DyeInjector::DyeInjector(const TangentBundle& bundle, const Field& field, std::s
   spacing_ = options.release_spacing > 0 ? options.release_spacing : 0.25 * frame_dt;
   if (!(spacing_ > 0)) spacing_ = 1.0;
   if (span / spacing_ > kMaxReleases)
-    throw Error(fmt::format("dye release spacing {} would release more than a million particles per seed over the "
-                            "field's time range [{}, {}]",
-                            spacing_, std::min(time.t0, time.t1), std::max(time.t0, time.t1)));
+    throw Error(fmt::format("dye release spacing {:g} would release {:.3g} particles per seed over the field's "
+                            "time range [{}, {}], more than {:g}: give a larger spacing",
+                            spacing_, span / spacing_, std::min(time.t0, time.t1), std::max(time.t0, time.t1),
+                            kMaxReleases));
   if (!(options.max_seed_distance >= 0) || !std::isfinite(options.max_seed_distance))
     throw Error(fmt::format("dye seed distance {} must be a positive length", options.max_seed_distance));
 
