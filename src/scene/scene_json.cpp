@@ -14,6 +14,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/LU>
@@ -36,6 +37,47 @@ constexpr BifurcationType kBifurcationTypes[] = {
     BifurcationType::saddle_source_cancellation, BifurcationType::saddle_sink_creation,
     BifurcationType::saddle_source_creation, BifurcationType::saddle_sink_cancellation,
     BifurcationType::hopf_supercritical, BifurcationType::hopf_subcritical};
+// Where a planar polyline (x, y of `p`) crosses or touches itself: the first points of
+// two segments that meet although they are not neighbours, or of two neighbours that fold
+// back onto each other (collinear, the second turning back along the first). Zero-length
+// segments are skipped (the segments either side of one are neighbours), and a closed
+// polyline's first and last segments are neighbours at the point they share. Orientation
+// tests with a tolerance of 1e-12 of the polyline's extent.
+std::optional<std::pair<size_t, size_t>> self_crossing(const std::vector<Vec3>& p) {
+  std::vector<size_t> seg;  // segments seg[k] → seg[k] + 1
+  for (size_t i = 0; i + 1 < p.size(); ++i)
+    if (p[i].head<2>() != p[i + 1].head<2>()) seg.push_back(i);
+  if (seg.size() < 2) return std::nullopt;
+  double extent = 0;
+  for (const Vec3& x : p) extent = std::max(extent, (x - p.front()).head<2>().norm());
+  const double eps = 1e-12 * extent * extent;
+  auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) { return u.x() * v.y() - u.y() * v.x(); };
+  auto at = [&](size_t i) -> Eigen::Vector2d { return p[i].head<2>(); };
+  // Whether c, known to be on the line through a and b, lies within the segment ab.
+  auto within = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+    return (c - a).dot(b - a) >= -eps && (c - b).dot(a - b) >= -eps;
+  };
+  auto meet = [&](size_t i, size_t j) {
+    const Eigen::Vector2d a = at(i), b = at(i + 1), c = at(j), d = at(j + 1);
+    const double o1 = cross(b - a, c - a), o2 = cross(b - a, d - a), o3 = cross(d - c, a - c), o4 = cross(d - c, b - c);
+    auto sign = [&](double o) { return std::abs(o) <= eps ? 0 : (o > 0 ? 1 : -1); };
+    const int s1 = sign(o1), s2 = sign(o2), s3 = sign(o3), s4 = sign(o4);
+    if (s1 * s2 < 0 && s3 * s4 < 0) return true;
+    return (s1 == 0 && within(a, b, c)) || (s2 == 0 && within(a, b, d)) || (s3 == 0 && within(c, d, a)) ||
+           (s4 == 0 && within(c, d, b));
+  };
+  const bool closed = p.front().head<2>() == p.back().head<2>();
+  for (size_t k = 0; k + 1 < seg.size(); ++k) {
+    const Eigen::Vector2d u = at(seg[k] + 1) - at(seg[k]), v = at(seg[k + 1] + 1) - at(seg[k + 1]);
+    if (std::abs(cross(u, v)) <= 1e-12 * u.norm() * v.norm() && u.dot(v) < 0) return std::pair{seg[k], seg[k + 1]};
+    for (size_t l = k + 2; l < seg.size(); ++l) {
+      if (closed && k == 0 && l + 1 == seg.size()) continue;
+      if (meet(seg[k], seg[l])) return std::pair{seg[k], seg[l]};
+    }
+  }
+  return std::nullopt;
+}
+
 constexpr Generator kGenerators[] = {Generator::basis, Generator::constrained,
                                      Generator::spacetime, Generator::deform};
 constexpr Weights kWeights[] = {Weights::cotan, Weights::uniform, Weights::mean_value};
@@ -825,6 +867,15 @@ StreaklineElement Reader::streakline(const json& j, const std::string& path) con
     if (i > 0) length += (e.points[i] - e.points[i - 1]).norm();
   }
   if (!(length > 0)) fail(points_path, "must have a length > 0 (its points are all the same)");
+  // At t the dye released at τ is one particle at one point, and tvf carries it along the
+  // sketch away from the seed (streakline_design.h): two parts of the sketch at one point
+  // would be two particles there at once, which no field can carry (they would be one).
+  if (planar_)
+    if (const auto crossing = self_crossing(e.points))
+      fail(points_path, fmt::format("the sketch crosses or folds back onto itself (its segments from points[{}] "
+                                    "and points[{}]): two parts of the dye cannot be at one point at t; sketch a "
+                                    "streakline that does not meet itself",
+                                    crossing->first, crossing->second));
   e.t = key_time(j, path, "the time at which the dye has the sketched shape");
   const std::string from_path = join_key(path, "from");
   e.from = number(need(j, path, "from", "the time the dye's release starts, before t"), from_path);

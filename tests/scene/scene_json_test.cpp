@@ -707,6 +707,19 @@ json planar_base() {
   })");
 }
 
+// What the self-crossing check lets through: a sharp V (its sides meet only at the
+// corner they share), a repeated point, a closed loop (the oldest dye back at the seed as
+// the youngest is released), a hairpin whose sides stay apart.
+TEST(SceneJson, StreaklineSketchesThatDoNotMeetThemselvesAreTaken) {
+  json j = planar_base();
+  for (const char* points : {"[[-0.6, -0.5], [0.2, -0.5], [-0.6, -0.45]]", "[[-0.5, 0], [0, 0], [0, 0], [0.5, 0]]",
+                             "[[-0.5, -0.5], [0.5, -0.5], [0, 0.5], [-0.5, -0.5]]",
+                             "[[-0.5, -0.5], [0.5, -0.5], [-0.5, -0.4999]]"}) {
+    j["elements"][3]["points"] = json::parse(points);
+    EXPECT_NO_THROW(scene_from_json(j, "scene.json")) << points;
+  }
+}
+
 json sphere_base() {
   return json::parse(R"({
     "tvf": 1,
@@ -888,6 +901,18 @@ std::vector<BadCase> bad_cases() {
        "elements[3].t", "t = 2 is outside the time range [0, 1]", false},
       {"streakline without from", planar([](json& j) { j["elements"][3].erase("from"); }), "elements[3]",
        "missing key \"from\" (the time the dye's release starts, before t)", true},
+      // Two parts of the dye at one point at t: a crossing, a fold back along itself, a
+      // touch (a corner on another segment), also across a repeated point.
+      {"streakline crossing itself",
+       planar([](json& j) { j["elements"][3]["points"] = {{-0.6, -0.6}, {0.6, 0.6}, {0.6, -0.6}, {-0.6, 0.6}}; }),
+       "elements[3].points", "the sketch crosses or folds back onto itself (its segments from points[0] and points[2])",
+       false},
+      {"streakline folding back",
+       planar([](json& j) { j["elements"][3]["points"] = {{-0.5, -0.5}, {0.5, -0.5}, {0.5, -0.5}, {0, -0.5}}; }),
+       "elements[3].points", "(its segments from points[0] and points[2])", false},
+      {"streakline touching itself",
+       planar([](json& j) { j["elements"][3]["points"] = {{-0.5, 0}, {0.5, 0}, {0.5, 0.5}, {0, 0.5}, {0, 0}}; }),
+       "elements[3].points", "(its segments from points[0] and points[3])", false},
       {"streakline of zero length", planar([](json& j) { j["elements"][3]["points"] = {{0.1, 0.2}, {0.1, 0.2}}; }),
        "elements[3].points", "must have a length > 0", false},
       {"streakline point as a path point", planar([](json& j) { j["elements"][3]["points"][0] = {0.1, 0.2, 0.3}; }),
