@@ -317,6 +317,7 @@ int LcsCommand::run_streaklines() {
     j["sketch"] = {{"element", element_},
                    {"hausdorff", match.hausdorff},
                    {"mean", match.mean},
+                   {"frechet", match.frechet},
                    {"mean_edge_length", h}};
   }
   std::string picture;
@@ -338,8 +339,9 @@ int LcsCommand::run_streaklines() {
     std::printf("streakline at t = %g: %d particles released from t = %g", s.t, s.released, o.t0);
     if (s.left > 0) std::printf(", %d of them left the domain", s.left);
     if (sketch)
-      std::printf("; from elements[%d]'s sketch: Hausdorff %.4g (%.2f edge lengths), mean %.4g (%.2f)", element_,
-                  match.hausdorff, match.hausdorff / h, match.mean, match.mean / h);
+      std::printf("; from elements[%d]'s sketch: Hausdorff %.4g (%.2f edge lengths), mean %.4g (%.2f), Fréchet %.4g (%.2f)",
+                  element_, match.hausdorff, match.hausdorff / h, match.mean, match.mean / h, match.frechet,
+                  match.frechet / h);
     std::printf("; wrote %s", fs::absolute(out_).lexically_normal().c_str());
     if (!picture.empty()) std::printf(" and %s", fs::absolute(picture).lexically_normal().c_str());
     std::printf("\n");

@@ -108,7 +108,7 @@ double distance_to_polyline(const Vec3& x, std::span<const Vec3> line) {
 StreaklineMatch compare_streakline(std::span<const Vec3> sketch, std::span<const Vec3> traced) {
   StreaklineMatch m;
   if (sketch.empty() || traced.size() < 2) {
-    m.hausdorff = m.mean = std::numeric_limits<double>::infinity();
+    m.hausdorff = m.mean = m.frechet = std::numeric_limits<double>::infinity();
     return m;
   }
   double sum = 0;
@@ -123,6 +123,42 @@ StreaklineMatch compare_streakline(std::span<const Vec3> sketch, std::span<const
     for (int q = 0; q < 12; ++q) add(distance_to_polyline(sketch[i] + (sketch[i + 1] - sketch[i]) * (q / 12.0), traced));
   add(distance_to_polyline(sketch.back(), traced));
   m.mean = sum / static_cast<double>(count);
+  // The Fréchet distance, the sketch from its seed against the traced dye from its
+  // youngest particle (traced is oldest first): both resampled into pieces of at most
+  // a 1/kPieces of the longer one's length, and the discrete Fréchet distance of those
+  // points (Eiter & Mannila 1994), one row of the table at a time.
+  constexpr double kPieces = 2000;
+  auto length = [](std::span<const Vec3> line) {
+    double l = 0;
+    for (size_t i = 0; i + 1 < line.size(); ++i) l += (line[i + 1] - line[i]).norm();
+    return l;
+  };
+  const double step = std::max(length(sketch), length(traced)) / kPieces;
+  auto resample = [&](std::span<const Vec3> line, bool reverse) {
+    std::vector<Vec3> p(line.begin(), line.end());
+    if (reverse) std::reverse(p.begin(), p.end());
+    std::vector<Vec3> out{p.front()};
+    for (size_t i = 0; i + 1 < p.size(); ++i) {
+      const int pieces = step > 0 ? std::max(1, static_cast<int>(std::ceil((p[i + 1] - p[i]).norm() / step))) : 1;
+      for (int q = 1; q <= pieces; ++q) out.push_back(p[i] + (p[i + 1] - p[i]) * (static_cast<double>(q) / pieces));
+    }
+    return out;
+  };
+  const std::vector<Vec3> a = resample(sketch, false), b = resample(traced, true);
+  std::vector<double> row(b.size()), next(b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    for (size_t j = 0; j < b.size(); ++j) {
+      const double d = (a[i] - b[j]).norm();
+      double reach;
+      if (i == 0 && j == 0) reach = d;
+      else if (i == 0) reach = next[j - 1];
+      else if (j == 0) reach = row[0];
+      else reach = std::min({row[j], row[j - 1], next[j - 1]});
+      next[j] = std::max(reach, d);
+    }
+    std::swap(row, next);
+  }
+  m.frechet = row.back();
   return m;
 }
 

@@ -166,6 +166,8 @@ TEST(CliLcs, StreaklinesOfASketchedElementDrawTheSketchAndMeasureTheDistance) {
   EXPECT_EQ(j["seed"], nlohmann::json::parse("[-0.5, -0.3, 0.0]"));
   EXPECT_EQ(j["sketch"]["element"], 1);
   EXPECT_LT(j["sketch"]["hausdorff"].get<double>(), 0.5 * j["sketch"]["mean_edge_length"].get<double>()) << j["sketch"];
+  EXPECT_LT(j["sketch"]["frechet"].get<double>(), 0.5 * j["sketch"]["mean_edge_length"].get<double>()) << j["sketch"];
+  EXPECT_NE(r.output.find(", Fréchet "), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir / "s.png"));
   const std::pair<std::string, std::string> bad[] = {
       {" --element 0", "--element 0: the scene has no streakline element at that index"},

@@ -136,6 +136,25 @@ TEST(CompareStreakline, MeasuresBothWays) {
   EXPECT_TRUE(std::isinf(compare_streakline(sketch_line, std::vector<Vec3>{Vec3(0, 0, 0)}).hausdorff));
 }
 
+TEST(CompareStreakline, TheFrechetDistanceWalksBothCurvesFromTheSeed) {
+  // The traced dye is oldest first (trace_streakline): the oldest particle is furthest
+  // along the sketch. Parallel 0.1 apart: 0.1. Covering the sketch's first half: 0.5 (the
+  // sketch's end against the oldest particle). The same points youngest first: the curves
+  // walked against each other, 1.
+  const std::vector<Vec3> sketch_line{Vec3(0, 0, 0), Vec3(1, 0, 0)};
+  EXPECT_NEAR(compare_streakline(sketch_line, std::vector<Vec3>{Vec3(1, 0.1, 0), Vec3(0, 0.1, 0)}).frechet, 0.1, 1e-12);
+  EXPECT_NEAR(compare_streakline(sketch_line, std::vector<Vec3>{Vec3(0.5, 0, 0), Vec3(0, 0, 0)}).frechet, 0.5, 1e-12);
+  EXPECT_NEAR(compare_streakline(sketch_line, std::vector<Vec3>{Vec3(0, 0, 0), Vec3(1, 0, 0)}).frechet, 1.0, 1e-12);
+  // A sketch that goes out and comes back 0.01 beside itself, against dye that only went
+  // out: Hausdorff and mean are about the gap, the Fréchet distance is the whole way back.
+  const std::vector<Vec3> hairpin{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0.01, 0)};
+  const StreaklineMatch m = compare_streakline(hairpin, std::vector<Vec3>{Vec3(1, 0, 0), Vec3(0, 0, 0)});
+  EXPECT_LT(m.hausdorff, 0.011);
+  EXPECT_LT(m.mean, 0.011);
+  EXPECT_NEAR(m.frechet, 1.0, 1e-3);
+  EXPECT_TRUE(std::isinf(compare_streakline(sketch_line, std::vector<Vec3>{Vec3(0, 0, 0)}).frechet));
+}
+
 // --- what the user sees: the traced streakline against the sketch
 
 // A curved sketch: nine points on a half circle of radius 0.55 about (−0.1, −0.5), from
@@ -166,7 +185,7 @@ Scene curved_scene(int n, const std::string& generator, bool with_streakline, do
 }
 
 struct Match {
-  double hausdorff = 0, mean = 0;  // world units
+  double hausdorff = 0, mean = 0, frechet = 0;  // world units
   int points = 0, left = 0;
 };
 
@@ -187,6 +206,7 @@ Match compare(const Scene& scene) {
   const StreaklineMatch d = compare_streakline(sketch(), line);
   m.hausdorff = d.hausdorff;
   m.mean = d.mean;
+  m.frechet = d.frechet;
   return m;
 }
 
@@ -203,6 +223,8 @@ TEST(StreaklineDesign, TheTracedStreaklineLiesOnTheSketchAt33And65) {
     // at 65²). The release and the dye front are exact in time.
     EXPECT_LT(m.hausdorff, 1.0 * h);
     EXPECT_LT(m.mean, 0.25 * h);
+    // In order too: the dye released at each time lies along the sketch from the seed.
+    EXPECT_LT(m.frechet, 1.0 * h);
     EXPECT_EQ(m.left, 0);
   }
 }
@@ -277,7 +299,7 @@ Match compare_on_sphere(bool with_streakline, double* h) {
   std::vector<Vec3> line;
   for (const StreakPoint& p : traced.points) line.push_back(p.position);
   const StreaklineMatch d = compare_streakline(sphere_sketch(), line);
-  return {d.hausdorff, d.mean, static_cast<int>(line.size()), traced.left};
+  return {d.hausdorff, d.mean, d.frechet, static_cast<int>(line.size()), traced.left};
 }
 
 TEST(StreaklineDesign, OnTheSphereTheTracedStreaklineLiesOnTheSketch) {
@@ -287,6 +309,7 @@ TEST(StreaklineDesign, OnTheSphereTheTracedStreaklineLiesOnTheSketch) {
                            m.hausdorff / h, m.mean, m.mean / h, m.points));
   EXPECT_LT(m.hausdorff, 1.0 * h);
   EXPECT_LT(m.mean, 0.25 * h);
+  EXPECT_LT(m.frechet, 1.0 * h);
   EXPECT_EQ(m.left, 0);
   const Match free = compare_on_sphere(false, &h);
   EXPECT_GT(free.hausdorff, 0.3) << "without the streakline the dye goes elsewhere";

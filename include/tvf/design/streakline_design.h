@@ -46,10 +46,16 @@ namespace tvf {
 // sketch, both ways, in world units: every traced point's distance to the sketched
 // polyline, and the sketch's (sampled at 12 points per segment and its end) distance to the
 // traced polyline (consecutive points joined). Hausdorff is the largest of all those, mean
-// their average. An empty or one-point traced curve is infinitely far.
+// their average. Both are blind to order: a sketch that folds back along itself is near a
+// dye that only went out. The Fréchet distance is not: the largest gap between the two
+// curves walked together from the seed (the traced one is oldest first, as
+// trace_streakline gives it, so it is walked from its end), each forward only, resampled
+// at a 2000th of the longer length (so within that of the continuous distance). An empty
+// or one-point traced curve is infinitely far.
 struct StreaklineMatch {
   double hausdorff = 0;
   double mean = 0;
+  double frechet = 0;
 };
 StreaklineMatch compare_streakline(std::span<const Vec3> sketch, std::span<const Vec3> traced);
 
