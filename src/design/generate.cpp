@@ -156,6 +156,28 @@ std::vector<std::string> design_warnings(const Scene& scene) {
 std::vector<std::string> domain_warnings(const DesignSpace& space, const Scene& scene) {
   std::vector<std::string> out;
   const double h = space.mesh().mean_edge_length();
+  // A sketched streakline whose parts come too close for the dye to keep to one of them
+  // (kSketchApartEdges), for the generators that reproduce it.
+  if (scene.generator == Generator::constrained || scene.generator == Generator::spacetime)
+    for (size_t i = 0; i < scene.elements.size(); ++i) {
+      const auto* sl = std::get_if<StreaklineElement>(&scene.elements[i]);
+      if (!sl) continue;
+      std::vector<Vec3> p;
+      for (const Vec3& x : sl->points) p.push_back(surface_position(space.mesh(), space.locate(x)));
+      const SketchSelfApproach a = sketch_self_approach(p, h);
+      const double apart = sl->attach > 0 ? kSketchApartEdges : kSketchApartEdgesUnattached;
+      if (!(a.distance < apart * h)) continue;
+      auto point = [&](const Vec3& x) {
+        return space.planar() ? fmt::format("({:.3g}, {:.3g})", x.x(), x.y())
+                              : fmt::format("({:.3g}, {:.3g}, {:.3g})", x.x(), x.y(), x.z());
+      };
+      out.push_back(fmt::format(
+          "{}: elements[{}].points: the sketch comes within {:.3g} mean edge lengths of itself, at {} and {} "
+          "({:.3g} edge lengths apart along it), and the traced dye keeps to one part of it only from about "
+          "{:g}{}: there it will not follow the sketch; draw those parts further apart{} or use a finer mesh",
+          scene.label(), i, a.distance / h, point(a.a), point(a.b), a.along / h, apart,
+          sl->attach > 0 ? "" : " without `attach` (1 with it)", sl->attach > 0 ? "" : ", give `attach` > 0"));
+    }
   for (size_t i = 0; i < scene.elements.size(); ++i) {
     const auto* b = std::get_if<BifurcationElement>(&scene.elements[i]);
     if (!b) continue;

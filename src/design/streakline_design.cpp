@@ -105,6 +105,36 @@ double distance_to_polyline(const Vec3& x, std::span<const Vec3> line) {
 
 }  // namespace
 
+SketchSelfApproach sketch_self_approach(std::span<const Vec3> points, double h) {
+  SketchSelfApproach out;
+  double length = 0;
+  for (size_t i = 0; i + 1 < points.size(); ++i) length += (points[i + 1] - points[i]).norm();
+  if (!(length > 0) || !(h > 0)) return out;
+  const double step = std::max(0.25 * h, length / 4000);
+  std::vector<Vec3> x;
+  std::vector<double> s;
+  double s0 = 0;
+  for (size_t i = 0; i + 1 < points.size(); ++i) {
+    const double len = (points[i + 1] - points[i]).norm();
+    const int pieces = std::max(1, static_cast<int>(std::ceil(len / step)));
+    for (int q = 0; q < pieces; ++q) {
+      x.push_back(points[i] + (points[i + 1] - points[i]) * (static_cast<double>(q) / pieces));
+      s.push_back(s0 + len * q / pieces);
+    }
+    s0 += len;
+  }
+  x.push_back(points.back());
+  s.push_back(length);
+  for (size_t i = 0; i < x.size(); ++i)
+    for (size_t j = i + 1; j < x.size(); ++j) {
+      const double along = s[j] - s[i];
+      if (along <= 8 * h) continue;
+      const double d = (x[j] - x[i]).norm();
+      if (along > 8 * d && d < out.distance) out = {d, along, x[i], x[j]};
+    }
+  return out;
+}
+
 StreaklineMatch compare_streakline(std::span<const Vec3> sketch, std::span<const Vec3> traced) {
   StreaklineMatch m;
   if (sketch.empty() || traced.size() < 2) {

@@ -7,6 +7,7 @@
 #include "tvf/analysis/coherence.h"
 #include "tvf/design/generate.h"
 #include "tvf/integrate/streakline.h"
+#include "tvf/mesh/grid.h"
 #include "tvf/scene/scene_json.h"
 
 #include <fmt/format.h>
@@ -156,7 +157,6 @@ TEST(CompareStreakline, TheFrechetDistanceWalksBothCurvesFromTheSeed) {
 }
 
 // --- what the user sees: the traced streakline against the sketch
-
 // A curved sketch: nine points on a half circle of radius 0.55 about (−0.1, −0.5), from
 // the seed (−0.65, −0.5) over the top to (0.45, −0.5); released over [0.2, 0.8]. Beside it
 // a counter-clockwise centre at (0.5, 0.5), so that without the streakline the field is
@@ -182,6 +182,79 @@ Scene curved_scene(int n, const std::string& generator, bool with_streakline, do
     j["elements"].push_back({{"kind", "streakline"}, {"points", points}, {"t", 0.8}, {"from", 0.2}, {"attach", attach}});
   }
   return scene_from_json(j, "curved.json");
+}
+
+TEST(SketchSelfApproach, IsTheClosestPairOfPartsThatAreNotOneStretch) {
+  const double h = 0.05;
+  // A U whose sides are 0.03 apart: its seed and its end.
+  const std::vector<Vec3> u{Vec3(-0.5, 0, 0), Vec3(0.5, 0, 0), Vec3(0.5, 0.03, 0), Vec3(-0.5, 0.03, 0)};
+  const SketchSelfApproach a = sketch_self_approach(u, h);
+  EXPECT_NEAR(a.distance, 0.03, 1e-12);
+  EXPECT_NEAR(a.along, 2.03, 1e-12);
+  EXPECT_LT((a.a - u.front()).norm(), 1e-12);
+  EXPECT_LT((a.b - u.back()).norm(), 1e-12);
+  // A corner of 20° is one stretch of curve (its sides part at sin 10° > 1/8 of the way
+  // along); one of 10° is two parts, 8h along and 0.7h apart.
+  auto v = [](double degrees) {
+    const double r = degrees * std::numbers::pi / 180;
+    return std::vector<Vec3>{Vec3(-0.6, 0, 0), Vec3(0.2, 0, 0), Vec3(0.2 - 0.8 * std::cos(r), 0.8 * std::sin(r), 0)};
+  };
+  EXPECT_TRUE(std::isinf(sketch_self_approach(v(20), h).distance));
+  const double ten = sketch_self_approach(v(10), h).distance;  // 8h sin 5° = 0.70h, to the sampling (h/4)
+  EXPECT_GT(ten, 0.69 * h);
+  EXPECT_LT(ten, 0.76 * h);
+  EXPECT_TRUE(std::isinf(sketch_self_approach(sketch(), h).distance)) << "the half circle";
+}
+
+// A U on 33² (31 frames, spacetime) whose sides are `edges` mean edge lengths apart, with
+// the given attach: the generation's warnings and the Fréchet distance, in mean edge
+// lengths, of the dye traced over [0.2, 0.8] from the sketch.
+struct Apart {
+  bool warned = false;
+  double frechet = 0;
+};
+Apart u_sketch(double edges, double attach) {
+  json j = json::parse(R"({"tvf": 1, "domain": {"grid": {"size": [33, 33]}}, "time": {"frames": 31},
+    "generator": "spacetime", "solver": {"region_radius": 0.1}, "falloff": 8,
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[0.45, 0.55, 0]]}]})");
+  const double h = make_grid(GridSpec{33, 33, {-1, -1}, {1, 1}}).mean_edge_length(), d = edges * h;
+  const std::vector<Vec3> u{Vec3(-0.5, -0.5, 0), Vec3(0.5, -0.5, 0), Vec3(0.5, -0.5 + d, 0), Vec3(-0.5, -0.5 + d, 0)};
+  json points = json::array();
+  for (const Vec3& p : u) points.push_back({p.x(), p.y()});
+  j["elements"].push_back({{"kind", "streakline"}, {"points", points}, {"t", 0.8}, {"from", 0.2}, {"attach", attach}});
+  const Scene scene = scene_from_json(j, "u.json");
+  const auto space = make_design_space(scene);
+  GenerateReport report;
+  const Field field = generate(*space, scene, {}, &report);
+  StreaklineOptions o;
+  o.t0 = 0.2;
+  o.t1 = 0.8;
+  const Streakline traced = trace_streakline(space->bundle(), field, u.front(), o);
+  std::vector<Vec3> line;
+  for (const StreakPoint& p : traced.points) line.push_back(p.position);
+  Apart out;
+  out.frechet = compare_streakline(u, line).frechet / space->mesh().mean_edge_length();
+  for (const std::string& w : report.warnings) out.warned |= w.find("the sketch comes within") != std::string::npos;
+  return out;
+}
+
+TEST(StreaklineDesign, ASketchWhosePartsComeTooCloseIsWarnedOfAndIsNotFollowed) {
+  // Measured (kSketchApartEdges): with attach 20 at 0.75 edge lengths apart the dye is 10
+  // off, at 1.25 0.7; without attach at 1 edge 4.7 off, at 6 1.9.
+  const struct {
+    double edges, attach;
+    bool warned;
+  } cases[] = {{0.75, 20, true}, {1.25, 20, false}, {1.0, 0, true}, {6.0, 0, false}};
+  for (const auto& c : cases) {
+    const Apart a = u_sketch(c.edges, c.attach);
+    SCOPED_TRACE(fmt::format("{} edge lengths apart, attach {}: Fréchet {:.2f} edge lengths", c.edges, c.attach,
+                             a.frechet));
+    EXPECT_EQ(a.warned, c.warned);
+    if (c.warned)
+      EXPECT_GT(a.frechet, 3.0);
+    else
+      EXPECT_LT(a.frechet, 2.5);
+  }
 }
 
 struct Match {

@@ -37,6 +37,7 @@
 #include "tvf/scene/design_space.h"
 #include "tvf/scene/scene.h"
 
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -58,6 +59,27 @@ struct StreaklineMatch {
   double frechet = 0;
 };
 StreaklineMatch compare_streakline(std::span<const Vec3> sketch, std::span<const Vec3> traced);
+
+// Where a sketch comes closest to itself between two parts of it that are not one
+// stretch of curve: the polyline sampled every quarter of `h` (at most 4000 samples), and
+// of the sample pairs further apart along it than max(8h, 8d), d their distance (so a
+// corner sharper than 14° counts, a wider one does not), the closest. distance is +∞
+// when no pair is that far apart along it.
+struct SketchSelfApproach {
+  double distance = std::numeric_limits<double>::infinity();
+  double along = 0;  // their distance along the sketch
+  Vec3 a = Vec3::Zero(), b = Vec3::Zero();
+};
+SketchSelfApproach sketch_self_approach(std::span<const Vec3> points, double h);
+
+// How close, in mean edge lengths, two such parts of a sketch may come for the traced dye
+// to follow it (measured by the Fréchet distance on a U whose two sides are d apart, at
+// 33², 65² and 129², 31 frames): with `attach` > 0 it is followed from 1 edge length at
+// every grid (at 0.75: 10, 18 and 33 edge lengths off); without, dye that strays by the
+// linear interpolation is carried onto the other side from further away, up to 3 edge
+// lengths at 129² (at 1 edge: 4.7, 9.2 and 28 off; at 3 on 129²: 5.7). generate() warns.
+inline constexpr double kSketchApartEdges = 1.0;
+inline constexpr double kSketchApartEdgesUnattached = 4.0;
 
 class StreaklineConstraints {
 public:
