@@ -339,7 +339,8 @@ int LcsCommand::run_streaklines() {
     std::printf("streakline at t = %g: %d particles released from t = %g", s.t, s.released, o.t0);
     if (s.left > 0) std::printf(", %d of them left the domain", s.left);
     if (sketch)
-      std::printf("; from elements[%d]'s sketch: Hausdorff %.4g (%.2f edge lengths), mean %.4g (%.2f), Fréchet %.4g (%.2f)",
+      std::printf("; from elements[%d]'s sketch: Hausdorff %.4g (%.2f edge lengths), mean %.4g (%.2f), "
+                  "Fréchet %.4g (%.2f)",
                   element_, match.hausdorff, match.hausdorff / h, match.mean, match.mean / h, match.frechet,
                   match.frechet / h);
     std::printf("; wrote %s", fs::absolute(out_).lexically_normal().c_str());

@@ -37,6 +37,7 @@ constexpr BifurcationType kBifurcationTypes[] = {
     BifurcationType::saddle_source_cancellation, BifurcationType::saddle_sink_creation,
     BifurcationType::saddle_source_creation, BifurcationType::saddle_sink_cancellation,
     BifurcationType::hopf_supercritical, BifurcationType::hopf_subcritical};
+
 // Where a planar polyline (x, y of `p`) crosses or touches itself: the first points of
 // two segments that meet although they are not neighbours, or of two neighbours that fold
 // back onto each other (collinear, the second turning back along the first). Zero-length
