@@ -11,7 +11,9 @@
 #include "tvf/scene/scene_json.h"
 #include "tvf/field/animation_export.h"
 #include "tvf/field/world_vectors.h"
+#include "tvf/integrate/ftle.h"
 #include "tvf/integrate/pathline.h"
+#include "tvf/integrate/streakline.h"
 #include "tvf/integrate/streamline.h"
 #include "tvf/mesh/mesh.h"
 #include "tvf/render/texture_animation.h"
@@ -258,6 +260,26 @@ py::dict curve_dict(const std::vector<Vec3>& points, const std::vector<double>* 
   return d;
 }
 
+// A streakline or timeline (integrate/streakline.h) as a dict of arrays: where each
+// particle is at t1, its release time (or parameter), whether a particle before it left.
+py::dict streak_dict(const Streakline& s, const char* release_key) {
+  std::vector<Vec3> points;
+  std::vector<double> release;
+  py::array_t<bool> gap(static_cast<py::ssize_t>(s.points.size()));
+  for (size_t i = 0; i < s.points.size(); ++i) {
+    points.push_back(s.points[i].position);
+    release.push_back(s.points[i].release);
+    gap.mutable_at(static_cast<py::ssize_t>(i)) = s.points[i].gap_before;
+  }
+  py::dict d = curve_dict(points, nullptr);
+  d[release_key] = py::array_t<double>(static_cast<py::ssize_t>(release.size()), release.data());
+  d["gap_before"] = gap;
+  d["t"] = s.t;
+  d["released"] = s.released;
+  d["left"] = s.left;
+  return d;
+}
+
 std::vector<std::string> strings(const std::vector<std::filesystem::path>& paths) {
   std::vector<std::string> out;
   for (const auto& p : paths) out.push_back(p.string());
@@ -435,6 +457,97 @@ Returns {"points": (K, 3) array ordered along the flow, "seed": index of the see
           R"(The pathline (dx/dt = V(x, t)) released at `seed` at t_start, to t_end (default: the
 end of the time range; earlier integrates backwards). Returns {"points": (K, 3),
 "times": (K,), "stop": why it ended}.)")
+      .def(
+          "ftle",
+          [](const PyField& f, double horizon, const std::string& direction, const std::optional<std::vector<int>>& frames,
+             const std::string& beyond_range, bool compose, double dt) {
+            if (direction != "both" && direction != "forward" && direction != "backward")
+              throw py::value_error("ftle: direction must be \"both\", \"forward\" or \"backward\", got \"" +
+                                    direction + "\"");
+            if (beyond_range != "clamp" && beyond_range != "nan")
+              throw py::value_error("ftle: beyond_range must be \"clamp\" or \"nan\", got \"" + beyond_range + "\"");
+            FtleOptions o;
+            o.horizon = horizon;
+            o.forward = direction != "backward";
+            o.backward = direction != "forward";
+            o.beyond_range = beyond_range == "nan" ? HorizonPolicy::nan : HorizonPolicy::clamp;
+            if (frames) o.frames = *frames;
+            o.compose = compose;
+            o.flow.dt = dt;
+            const FtleResult r = compute_ftle(f.bundle(), *f.field, o);
+            const std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(r.frames), static_cast<py::ssize_t>(r.vertices)};
+            auto values = [&](const std::vector<float>& v) -> py::object {
+              if (v.empty()) return py::none();
+              py::array_t<float> a(shape);
+              std::copy(v.begin(), v.end(), a.mutable_data());
+              return a;
+            };
+            auto spans = [](const std::vector<double>& v) -> py::object {
+              if (v.empty()) return py::none();
+              return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
+            };
+            py::dict d;
+            d["horizon"] = r.horizon;
+            d["forward"] = values(r.forward);
+            d["backward"] = values(r.backward);
+            d["forward_span"] = spans(r.forward_span);
+            d["backward_span"] = spans(r.backward_span);
+            d["forward_cut"] = r.forward_cut;
+            d["backward_cut"] = r.backward_cut;
+            d["forward_left"] = r.forward_left;
+            d["backward_left"] = r.backward_left;
+            return d;
+          },
+          py::arg("horizon"), py::kw_only(), py::arg("direction") = "both", py::arg("frames") = py::none(),
+          py::arg("beyond_range") = "clamp", py::arg("compose") = false, py::arg("dt") = 0.0,
+          R"(Finite-time Lyapunov exponents, as `tvf ftle` (integrate/ftle.h): for every frame t
+and vertex, ln(largest singular value of the flow map's gradient over [t, t ± horizon]) /
+horizon. Returns {"forward", "backward": (N, |V|) float32 arrays (None for a direction not
+asked; NaN where a particle left the domain, for frames not in `frames`, and with
+beyond_range "nan" for windows past the time range), "forward_span", "backward_span": (N,)
+the time integrated per frame (cut at the range's end by "clamp"), "forward_cut",
+"backward_cut": frames whose window was cut, "forward_left", "backward_left": vertex-frames
+whose particle left, "horizon"}. direction: "both", "forward" (repelling LCS) or
+"backward" (attracting LCS); frames: the frames to compute (default all); compose: planar
+grids, compose per-frame flow maps (faster, less accurate on ridges); dt: largest RK4 step
+(0: half the frame spacing). A horizon too short to move a particle a millionth of an edge
+raises ValueError naming the shortest one resolved.)")
+      .def(
+          "streakline",
+          [](const PyField& f, const std::vector<double>& seed, std::optional<double> t_start,
+             std::optional<double> t_end, double release_spacing, double dt) {
+            StreaklineOptions o;
+            o.t0 = t_start ? *t_start : f.field->time().t0;
+            o.t1 = t_end ? *t_end : f.field->time().t1;
+            o.release_spacing = release_spacing;
+            o.flow.dt = dt;
+            return streak_dict(trace_streakline(f.bundle(), *f.field, vec3_of(seed, "seed"), o), "release");
+          },
+          py::arg("seed"), py::arg("t_start") = py::none(), py::arg("t_end") = py::none(), py::kw_only(),
+          py::arg("release_spacing") = 0.0, py::arg("dt") = 0.0,
+          R"(The streakline of dye released continuously at `seed` ([x, y] or [x, y, z]) over
+[t_start, t_end] (default: the time range), as `tvf streaklines`: where each released
+particle is at t_end. Returns {"points": (K, 3) oldest release first, "release": (K,) each
+particle's release time, "gap_before": (K,) a particle between it and the one before left
+the domain, "t", "released", "left"}. release_spacing: time between releases (0: a
+quarter of the frame spacing; over a million releases is refused); dt: largest RK4 step.)")
+      .def(
+          "timeline",
+          [](const PyField& f, const std::vector<double>& a, const std::vector<double>& b, std::optional<double> t_start,
+             std::optional<double> t_end, int count) {
+            TimelineOptions o;
+            o.t0 = t_start ? *t_start : f.field->time().t0;
+            o.t1 = t_end ? *t_end : f.field->time().t1;
+            o.count = count;
+            return streak_dict(trace_timeline(f.bundle(), *f.field, vec3_of(a, "a"), vec3_of(b, "b"), o), "parameter");
+          },
+          py::arg("a"), py::arg("b"), py::arg("t_start") = py::none(), py::arg("t_end") = py::none(), py::kw_only(),
+          py::arg("count") = 100,
+          R"(The timeline: the segment from a to b drawn at t_start (default: the start of the time
+range), carried by the flow to t_end (default: its end; earlier carries it backwards), as
+`tvf timelines`; `count` particles on the segment, refined where neighbours part by more
+than a mean edge length. Returns {"points": (K, 3) along the line, "parameter": (K,) each
+particle's place on the initial segment in [0, 1], "gap_before", "t", "released", "left"}.)")
       .def(
           "export_vdb",
           [](const PyField& f, const std::string& dir) {

@@ -165,6 +165,60 @@ def test_streamline_and_pathline_of_a_radial_field():
     assert np.all(np.diff(p["points"][:, 0]) > 0)  # moving away from the source
 
 
+def test_ftle_streakline_and_timeline_give_the_command_lines_numbers(tmp_path, generated):
+    f = tvf.load(str(generated))
+    r = f.ftle(0.5)
+    code, text = cli("ftle", generated, "--horizon", 0.5, "-o", tmp_path / "ftle", "-q", "--pictures", 0,
+                     "--no-vtk")
+    assert code == 0, text
+    for direction in ("forward", "backward"):
+        assert r[direction].shape == (5, 17 * 17) and r[direction].dtype == np.float32
+        assert np.array_equal(r[direction], np.load(tmp_path / "ftle" / f"ftle_{direction}.npy"), equal_nan=True)
+    assert r["forward_cut"] == 2 and r["forward_span"][0] == 0.5  # the windows from 0.75 and 1 reach past 1
+    assert np.isfinite(r["forward"][0]).sum() > 0
+    only = f.ftle(0.5, direction="backward", frames=[4])
+    assert only["forward"] is None and np.isnan(only["backward"][:4]).all()
+    assert np.array_equal(only["backward"][4], r["backward"][4], equal_nan=True)
+
+    s = f.streakline([-0.6, -0.3], 0.0, 0.5)
+    code, text = cli("streaklines", generated, "--seed", -0.6, -0.3, "--from", 0, "--to", 0.5, "-o",
+                     tmp_path / "s.json", "-q", "--no-picture")
+    assert code == 0, text
+    j = json.loads((tmp_path / "s.json").read_text())
+    assert np.array_equal(s["points"], np.array(j["points"])[:, :3])
+    assert np.array_equal(s["release"], np.array(j["points"])[:, 3])
+    assert s["t"] == 0.5 and s["released"] == j["released"] and s["left"] == j["left"]
+    assert np.all(np.diff(s["release"]) > 0)  # oldest first
+
+    tl = f.timeline([-0.5, 0.0], [0.5, 0.0], 0.0, 1.0)
+    code, text = cli("timelines", generated, "--line", -0.5, 0, 0.5, 0, "--from", 0, "--to", 1, "-o",
+                     tmp_path / "t.json", "-q", "--no-picture")
+    assert code == 0, text
+    j = json.loads((tmp_path / "t.json").read_text())
+    assert np.array_equal(tl["points"], np.array(j["points"])[:, :3])
+    assert tl["parameter"][0] == 0.0 and tl["parameter"][-1] == 1.0
+
+    with pytest.raises(ValueError, match="give a horizon of at least"):
+        f.ftle(1e-300)
+    with pytest.raises(ValueError, match="direction"):
+        f.ftle(0.5, direction="sideways")
+    with pytest.raises(ValueError, match="outside the domain"):
+        f.streakline([3.0, 0.0])
+
+
+def test_a_streakline_of_a_steady_field_is_its_streamline():
+    # A source that stays put: dye released on the x axis stays on it (the streamline through
+    # the seed is the ray), oldest furthest out.
+    one_source = {**SCENE, "generator": "basis",
+                  "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 0]]}]}
+    f = tvf.generate(one_source)
+    s = f.streakline([0.25, 0.0], 0.0, 0.5)
+    line = f.streamline([0.25, 0.0], 0.0)
+    assert np.abs(s["points"][:, 1]).max() < 1e-9 and np.abs(line["points"][:, 1]).max() < 1e-9
+    assert np.all(np.diff(s["points"][:, 0]) < 0) and s["points"][-1, 0] == 0.25
+    assert s["points"][0, 0] <= line["points"][:, 0].max() + 1e-12
+
+
 def read_ply(path):
     data = path.read_bytes()
     end = data.index(b"end_header\n") + len(b"end_header\n")
