@@ -112,6 +112,13 @@ LcsCommand::LcsCommand(CLI::App& app) {
       ->capture_default_str();
   ftle_->add_option("-s,--size", size_, "Pixels on the long side of the pictures")->capture_default_str();
   ftle_->add_flag("--no-vtk", no_vtk_, "Skip the VTK series (ftle.pvd)");
+  auto camera = [&](CLI::App* sub, const char* view_help) {
+    sub->add_option("--view", view_, view_help)->delimiter(',')->expected(3);
+    sub->add_option("--up", up_, "Surfaces: the direction that points up in the picture, X,Y,Z (default 0,0,1)")
+        ->delimiter(',')
+        ->expected(3);
+  };
+  camera(ftle_, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default 1,-0.6,0.5)");
   ftle_->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
 
   auto common = [&](CLI::App* sub) {
@@ -123,6 +130,8 @@ LcsCommand::LcsCommand(CLI::App& app) {
     sub->add_option("-s,--size", size_, "Pixels on the long side of the picture")->capture_default_str();
     sub->add_flag("--no-picture", no_picture_, "Skip the picture");
     sub->add_flag("-q,--quiet", quiet_, "Print nothing but errors and warnings");
+    camera(sub, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default: from the centre towards "
+                "the curve)");
   };
   streak_ = app.add_subcommand(
       "streaklines", "A streakline: where dye released continuously from a seed over [--from, --to] is at --to (JSON "
@@ -155,6 +164,21 @@ int LcsCommand::run() {
   return 1;
 }
 
+SurfaceView LcsCommand::surface_view(bool& given) const {
+  SurfaceView v;
+  auto vector = [](const std::vector<double>& x, const char* name) {
+    const Vec3 d(x[0], x[1], x[2]);
+    if (!d.allFinite() || !(d.norm() > 0))
+      throw Error(fmt::format("{} {},{},{}: must be a direction, three finite numbers not all zero", name, x[0], x[1],
+                              x[2]));
+    return d;
+  };
+  given = !view_.empty();
+  if (given) v.direction = vector(view_, "--view");
+  if (!up_.empty()) v.up = vector(up_, "--up");
+  return v;
+}
+
 int LcsCommand::run_ftle() {
   if (!(horizon_ > 0) || !std::isfinite(horizon_))
     throw Error(fmt::format("--horizon {}: must be a positive time", horizon_));
@@ -162,6 +186,8 @@ int LcsCommand::run_ftle() {
   if (pictures_ < 0) throw Error(fmt::format("--pictures {}: must be 0 or more", pictures_));
   if (every_ < 1) throw Error(fmt::format("--every {}: must be at least 1", every_));
   if (size_ < 16 || size_ > 16384) throw Error(fmt::format("--size {}: must be in [16, 16384] pixels", size_));
+  bool view_given = false;
+  const SurfaceView view = surface_view(view_given);
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf ftle", show);
   RenderInput in = load_render_input(input_, progress, "ftle", true);
@@ -214,6 +240,7 @@ int LcsCommand::run_ftle() {
       if (spans[static_cast<size_t>(j)] > 0) have.push_back(j);
     ScalarPictureOptions po;
     po.size = size_;
+    po.surface = view;
     std::tie(po.lo, po.hi) = range;
     const int k_max = std::min(pictures_, static_cast<int>(have.size()));
     for (int k = 0; k < k_max; ++k) {
@@ -272,6 +299,8 @@ int LcsCommand::run_streaklines() {
   check_output_file(out_);  // before the work, not after it
   check_positive_time(*streak_, "--release-spacing", spacing_);
   check_positive_time(*streak_, "--dt", dt_);
+  bool view_given = false;
+  const SurfaceView view = surface_view(view_given);
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf streaklines", show);
   RenderInput in = load_render_input(input_, progress, "streaklines", true);
@@ -326,6 +355,8 @@ int LcsCommand::run_streaklines() {
     progress.note("drawing");
     CurvePictureOptions po;
     po.size = size_;
+    po.surface = view;
+    po.face_curves = !view_given;
     if (sketch) po.under = {sketch->points};
     const Image img = curve_picture(bundle, in.field, s.t, {positions(s)}, std::vector<Vec3>{seed}, po);
     const fs::path out(out_);
@@ -357,6 +388,8 @@ int LcsCommand::run_timelines() {
     throw Error(fmt::format("--count {}: a timeline has 2 to {} particles", count_, most));
   if (!(max_gap_ >= 0) || !std::isfinite(max_gap_)) throw Error(fmt::format("--max-gap {}: must be positive", max_gap_));
   check_positive_time(*timeline_, "--dt", dt_);
+  bool view_given = false;
+  const SurfaceView view = surface_view(view_given);
   const bool show = !quiet_ && progress_wanted();
   Progress progress("tvf timelines", show);
   RenderInput in = load_render_input(input_, progress, "timelines", true);
@@ -384,6 +417,8 @@ int LcsCommand::run_timelines() {
     progress.note("drawing");
     CurvePictureOptions po;
     po.size = size_;
+    po.surface = view;
+    po.face_curves = !view_given;
     po.dots = false;
     // The line breaks where particles left the domain: draw the pieces.
     std::vector<std::vector<Vec3>> pieces(1);

@@ -3,6 +3,8 @@
 // exponents, integrate/ftle.h), `tvf streaklines` and `tvf timelines`
 // (integrate/streakline.h). INPUT is a folder written by `tvf generate`, its field.tvff,
 // or a scene (generated first), as `tvf analyze` takes it.
+#include "tvf/render/texture_animation.h"
+
 #include <CLI/CLI.hpp>
 
 #include <string>
@@ -22,6 +24,9 @@ private:
   int run_ftle();
   int run_streaklines();
   int run_timelines();
+  // The surface pictures' camera from --view and --up (checked: three finite numbers, not
+  // all zero); `given` says whether --view was.
+  SurfaceView surface_view(bool& given) const;
   CLI::App* ftle_ = nullptr;
   CLI::App* streak_ = nullptr;
   CLI::App* timeline_ = nullptr;
@@ -29,6 +34,7 @@ private:
   bool quiet_ = false, no_picture_ = false, no_vtk_ = false;
   double dt_ = 0;
   int size_ = 800;
+  std::vector<double> view_, up_;  // surfaces: the camera (empty: the default)
   // ftle
   double horizon_ = 0;
   std::string direction_ = "both", beyond_ = "clamp";

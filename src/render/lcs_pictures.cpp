@@ -1,5 +1,7 @@
 #include "tvf/render/lcs_pictures.h"
 
+#include "tvf/field/point_locator.h"
+
 #include "tvf/core/error.h"
 #include "tvf/render/mesh_renderer.h"
 
@@ -161,6 +163,22 @@ Image planar_scalar(const Mesh& mesh, std::span<const float> values, double lo, 
   return img;
 }
 
+// The direction from which the curves and seeds face the camera: the sum of the surface's
+// unit normals at (up to 512 of) their points. Where they wrap round the mesh so that the
+// normals cancel (the sum under a tenth of their count), `fallback`.
+Vec3 facing(const Mesh& mesh, const std::vector<std::vector<Vec3>>& curves, std::span<const Vec3> seeds,
+            const Vec3& fallback) {
+  std::vector<Vec3> points(seeds.begin(), seeds.end());
+  for (const auto& c : curves) points.insert(points.end(), c.begin(), c.end());
+  if (points.empty()) return fallback;
+  const PointLocator locator(mesh);
+  const size_t stride = std::max<size_t>(1, points.size() / 512);
+  Vec3 sum = Vec3::Zero();
+  size_t n = 0;
+  for (size_t i = 0; i < points.size(); i += stride, ++n) sum += mesh.face_normal(locator.closest(points[i]).face);
+  return sum.allFinite() && sum.norm() > 0.1 * static_cast<double>(n) ? sum : fallback;
+}
+
 Camera surface_camera(const Mesh& mesh, const SurfaceView& view) {
   return Camera::framing(std::span<const Vec3>(mesh.positions()), view.direction, view.up, 1.0, view.fov);
 }
@@ -216,7 +234,9 @@ Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
     RenderOptions ro;
     ro.width = ro.height = o.size;
     ro.lighting = o.surface.lighting;
-    return renderer.render(surface_camera(mesh, o.surface), ro, lines, markers);
+    SurfaceView view = o.surface;
+    if (o.face_curves) view.direction = facing(mesh, curves, seeds, view.direction);
+    return renderer.render(surface_camera(mesh, view), ro, lines, markers);
   }
   TextureOptions texture = o.texture;
   texture.size = o.size;

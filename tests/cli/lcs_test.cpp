@@ -247,6 +247,11 @@ TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {
       {"timelines " + in + " --line 0 0 0.5 0 --count 2000000000 -o " + quoted(dir / "out.json"),
        "--count 2000000000: a timeline has 2 to 20000 particles"},
       {"timelines " + in + " --line 0 0 5 0 -o " + quoted(dir / "out.json"), "is outside the domain"},
+      // The surface pictures' camera.
+      {"timelines " + in + " --line 0 0 0.5 0 --view 0,0,0 -o " + quoted(dir / "out.json"),
+       "--view 0,0,0: must be a direction, three finite numbers not all zero"},
+      {"ftle " + in + " --horizon 0.5 --up 1,nan,0 -o " + quoted(dir / "out"), "--up 1,nan,0: must be a direction"},
+      {"ftle " + in + " --horizon 1e-300 -o " + quoted(dir / "out"), "give a horizon of at least"},
       {"timelines " + in + " --line 0 0 0.5 0 --from -1 -o " + quoted(dir / "out.json"),
        "--from -1 is outside the field's time range"},
       // Outputs refused before the work: a folder given as the file, a file in the way.

@@ -94,5 +94,30 @@ TEST(LcsPictures, SurfacesAreDrawnByTheMeshRenderer) {
   EXPECT_EQ(img.at(0, 0), 0xFFFFFFu);
 }
 
+// A curve on the side of the sphere away from the default camera (direction 1, −0.6, 0.5):
+// hidden from it, shown when the picture faces the curve (the mean normal at its points).
+TEST(LcsPictures, OnSurfacesTheCameraFacesTheCurves) {
+  const Mesh& sphere = test::icosphere_mesh();
+  const TangentBundle bundle(sphere);
+  const Field field = test::field_from(bundle, TimeSampling{0, 1, 3}, [](const Vec3& x, double) {
+    return Vec3(-x.y(), x.x(), 0);
+  });
+  std::vector<Vec3> arc;  // on the unit sphere about (−1, 0.6, −0.5)
+  const Vec3 c = Vec3(-1, 0.6, -0.5).normalized(), t = c.cross(Vec3::UnitZ()).normalized();
+  for (int k = -8; k <= 8; ++k) arc.push_back((c + 0.04 * k * t).normalized());
+  CurvePictureOptions o;
+  o.size = 128;
+  o.line_width = 4;
+  auto curve_pixels = [&](bool face) {
+    o.face_curves = face;
+    const Image img = curve_picture(bundle, field, 0.5, {arc}, std::vector<Vec3>{}, o);
+    int n = 0;
+    for (const std::uint32_t p : img.pixels) n += (p & 0xFFFFFFu) == o.color;
+    return n;
+  };
+  EXPECT_EQ(curve_pixels(false), 0) << "behind the sphere from the default camera";
+  EXPECT_GT(curve_pixels(true), 50);
+}
+
 }  // namespace
 }  // namespace tvf

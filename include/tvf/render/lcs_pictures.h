@@ -54,6 +54,11 @@ struct CurvePictureOptions {
   std::uint32_t under_color = 0x3FD0F0;
   TextureOptions texture;          // planar: the LIC texture under the curves (its size is `size`)
   SurfaceView surface;             // surfaces: the camera
+  // Surfaces: look from the curves' side, along the mean of the surface's normals at their
+  // points (the whole mesh still framed; surface.direction where they wrap round it so
+  // that the normals cancel), instead of surface.direction alone, whose fixed default hid
+  // a timeline on the bunny's neck. Off when the caller gives a view (tvf streaklines --view).
+  bool face_curves = true;
 };
 
 // Draws curves (planar world positions; consecutive points joined, a dark casing under the
