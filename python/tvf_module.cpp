@@ -4,6 +4,7 @@
 // Long calls run on a worker thread while the calling thread keeps the GIL free, shows
 // progress and watches for Ctrl-C: a KeyboardInterrupt cancels the solve
 // (GenerateOptions::cancel) and is raised once the worker has stopped.
+#include "tvf/analysis/topology.h"
 #include "tvf/api/design.h"
 #include "tvf/core/error.h"
 #include "tvf/core/error_location.h"
@@ -124,6 +125,9 @@ void run_interruptible(const py::object& progress, const py::object& cancel, Wor
       throw py::error_already_set();
     } catch (const RenderCancelled&) {
       PyErr_SetString(cancelled_type, "rendering cancelled");
+      throw py::error_already_set();
+    } catch (const AnalysisCancelled&) {
+      PyErr_SetString(cancelled_type, "analysis cancelled");
       throw py::error_already_set();
     }
   }
@@ -460,7 +464,8 @@ end of the time range; earlier integrates backwards). Returns {"points": (K, 3),
       .def(
           "ftle",
           [](const PyField& f, double horizon, const std::string& direction, const std::optional<std::vector<int>>& frames,
-             const std::string& beyond_range, bool compose, double dt) {
+             const std::string& beyond_range, bool compose, double dt, const py::object& progress,
+             const py::object& cancel) {
             if (direction != "both" && direction != "forward" && direction != "backward")
               throw py::value_error("ftle: direction must be \"both\", \"forward\" or \"backward\", got \"" +
                                     direction + "\"");
@@ -474,7 +479,15 @@ end of the time range; earlier integrates backwards). Returns {"points": (K, 3),
             if (frames) o.frames = *frames;
             o.compose = compose;
             o.flow.dt = dt;
-            const FtleResult r = compute_ftle(f.bundle(), *f.field, o);
+            FtleResult r;
+            run_interruptible(progress, cancel, [&](GenerateOptions& g) {
+              // After each frame and direction: its count, and a stop once cancelled.
+              o.progress = [&](int done, int total) {
+                g.progress(done, total);
+                check_analysis_cancel(g.cancel);
+              };
+              r = compute_ftle(f.bundle(), *f.field, o);
+            });
             const std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(r.frames), static_cast<py::ssize_t>(r.vertices)};
             auto values = [&](const std::vector<float>& v) -> py::object {
               if (v.empty()) return py::none();
@@ -500,6 +513,7 @@ end of the time range; earlier integrates backwards). Returns {"points": (K, 3),
           },
           py::arg("horizon"), py::kw_only(), py::arg("direction") = "both", py::arg("frames") = py::none(),
           py::arg("beyond_range") = "clamp", py::arg("compose") = false, py::arg("dt") = 0.0,
+          py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
           R"(Finite-time Lyapunov exponents, as `tvf ftle` (integrate/ftle.h): for every frame t
 and vertex, ln(largest singular value of the flow map's gradient over [t, t ± horizon]) /
 horizon. Returns {"forward", "backward": (N, |V|) float32 arrays (None for a direction not
@@ -511,7 +525,9 @@ whose particle left, "horizon"}. direction: "both", "forward" (repelling LCS) or
 "backward" (attracting LCS); frames: the frames to compute (default all); compose: planar
 grids, compose per-frame flow maps (faster, less accurate on ridges); dt: largest RK4 step
 (0: half the frame spacing). A horizon too short to move a particle a millionth of an edge
-raises ValueError naming the shortest one resolved.)")
+raises ValueError naming the shortest one resolved. progress(done, total) and cancel as in
+tvf.generate (after each frame and direction; Ctrl-C stops it too, tvf.Cancelled once
+cancelled).)")
       .def(
           "streakline",
           [](const PyField& f, const std::vector<double>& seed, std::optional<double> t_start,

@@ -198,6 +198,15 @@ def test_ftle_streakline_and_timeline_give_the_command_lines_numbers(tmp_path, g
     assert np.array_equal(tl["points"], np.array(j["points"])[:, :3])
     assert tl["parameter"][0] == 0.0 and tl["parameter"][-1] == 1.0
 
+    # Progress after each frame and direction; a set cancel stops it (tvf.Cancelled).
+    calls = []
+    f.ftle(0.5, progress=lambda done, total: calls.append((done, total)))
+    assert calls and calls[-1] == (10, 10)
+    stop = threading.Event()
+    stop.set()
+    with pytest.raises(tvf.Cancelled, match="analysis cancelled"):
+        f.ftle(0.5, cancel=stop)
+
     with pytest.raises(ValueError, match="give a horizon of at least"):
         f.ftle(1e-300)
     with pytest.raises(ValueError, match="direction"):
