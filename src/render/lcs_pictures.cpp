@@ -235,7 +235,11 @@ Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
     ro.width = ro.height = o.size;
     ro.lighting = o.surface.lighting;
     SurfaceView view = o.surface;
-    if (o.face_curves) view.direction = facing(mesh, curves, seeds, view.direction);
+    if (o.face_curves) {
+      std::vector<std::vector<Vec3>> shown = curves;  // the sketch under them too
+      shown.insert(shown.end(), o.under.begin(), o.under.end());
+      view.direction = facing(mesh, shown, seeds, view.direction);
+    }
     return renderer.render(surface_camera(mesh, view), ro, lines, markers);
   }
   TextureOptions texture = o.texture;

@@ -55,7 +55,7 @@ struct CurvePictureOptions {
   TextureOptions texture;          // planar: the LIC texture under the curves (its size is `size`)
   SurfaceView surface;             // surfaces: the camera
   // Surfaces: look from the curves' side, along the mean of the surface's normals at their
-  // points (the whole mesh still framed; surface.direction where they wrap round it so
+  // points and the `under` curves' (the whole mesh still framed; surface.direction where they wrap round it so
   // that the normals cancel), instead of surface.direction alone, whose fixed default hid
   // a timeline on the bunny's neck. Off when the caller gives a view (tvf streaklines --view).
   bool face_curves = true;
