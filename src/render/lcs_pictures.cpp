@@ -224,7 +224,7 @@ Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
     renderer.set_colors(std::vector<std::uint32_t>(static_cast<size_t>(mesh.num_vertices()), 0xD9D9D9u));
     std::vector<RenderLine> lines;
     std::vector<RenderMarker> markers;
-    for (const auto& c : o.under) lines.push_back({c, o.under_color, 3 * width, true});
+    for (const auto& c : o.under) lines.push_back({c, o.under_color, 3 * width, true, true});
     for (const auto& c : curves) {
       lines.push_back({c, o.color, width, true});
       if (o.dots)

@@ -568,10 +568,14 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
   };
   for (const auto& line : lines)
     if (line.casing) add_line(line, 2.2 * line.width, 0x000000, 1.0);
-  // Casings are drawn without writing depth, so that the coloured lines over them are not
-  // hidden by them (their caps and depths differ a little).
+  // Casings and underlays are drawn without writing depth, so that the coloured lines over
+  // them are not hidden by them (their caps and depths differ a little; an underlay three
+  // times as wide is lifted three times as far and hid the line traced over it).
+  for (const auto& line : lines)
+    if (line.underlay) add_line(line, line.width, line.color, 1.5);
   const size_t casing_vertices = quads.size();
-  for (const auto& line : lines) add_line(line, line.width, line.color, 1.5);
+  for (const auto& line : lines)
+    if (!line.underlay) add_line(line, line.width, line.color, 1.5);
   for (const auto& mk : markers) {
     Eigen::Vector4d c = clip_of(mk.position, 1.0, 2 * mk.radius);
     if (c.w() <= 0) continue;

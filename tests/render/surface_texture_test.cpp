@@ -139,6 +139,21 @@ TEST(MeshRenderer, LinesAndMarkersShowInFrontAndHideBehind) {
   }
   EXPECT_EQ(red_cased, red_plain);
   EXPECT_GT(black, red_plain / 2);
+  // An underlay three times as wide under the same points: the line keeps every pixel
+  // (drawn as an ordinary line first, it hid every one of them), the underlay shows round it.
+  RenderLine under = front;
+  under.color = 0x0000FF;
+  under.width = 12;
+  under.casing = true;
+  under.underlay = true;
+  const Image over = renderer.render(cam, o, std::vector<RenderLine>{under, front});
+  int red_over = 0, blue_over = 0;
+  for (const auto p : over.pixels) {
+    red_over += p == 0xFF0000u;
+    blue_over += p == 0x0000FFu;
+  }
+  EXPECT_EQ(red_over, red_plain);
+  EXPECT_GT(blue_over, red_plain);
 }
 
 TEST(MeshRenderer, RefusesBadInput) {

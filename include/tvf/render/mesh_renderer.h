@@ -59,6 +59,9 @@ struct RenderLine {
   std::uint32_t color = 0x000000;  // 0xRRGGBB
   double width = 2.0;              // pixels
   bool casing = false;
+  // Drawn under every other line: without writing depth, after the casings and before the
+  // others (a sketch under the curve traced from it). The mesh still hides it.
+  bool underlay = false;
 };
 
 // A disc facing the camera, `radius` pixels, with a thin black outline.
