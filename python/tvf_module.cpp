@@ -281,6 +281,9 @@ py::dict streak_dict(const Streakline& s, const char* release_key) {
   d["t"] = s.t;
   d["released"] = s.released;
   d["left"] = s.left;
+  d["resolution"] = s.resolution;
+  d["largest_gap"] = s.largest_gap;
+  d["unresolved"] = s.unresolved;
   return d;
 }
 
@@ -531,39 +534,47 @@ cancelled).)")
       .def(
           "streakline",
           [](const PyField& f, const std::vector<double>& seed, std::optional<double> t_start,
-             std::optional<double> t_end, double release_spacing, double dt) {
+             std::optional<double> t_end, double release_spacing, double max_gap, double dt) {
             StreaklineOptions o;
             o.t0 = t_start ? *t_start : f.field->time().t0;
             o.t1 = t_end ? *t_end : f.field->time().t1;
             o.release_spacing = release_spacing;
+            o.max_gap = max_gap;
             o.flow.dt = dt;
             return streak_dict(trace_streakline(f.bundle(), *f.field, vec3_of(seed, "seed"), o), "release");
           },
           py::arg("seed"), py::arg("t_start") = py::none(), py::arg("t_end") = py::none(), py::kw_only(),
-          py::arg("release_spacing") = 0.0, py::arg("dt") = 0.0,
+          py::arg("release_spacing") = 0.0, py::arg("max_gap") = 0.0, py::arg("dt") = 0.0,
           R"(The streakline of dye released continuously at `seed` ([x, y] or [x, y, z]) over
 [t_start, t_end] (default: the time range), as `tvf streaklines`: where each released
 particle is at t_end. Returns {"points": (K, 3) oldest release first, "release": (K,) each
 particle's release time, "gap_before": (K,) a particle between it and the one before left
-the domain, "t", "released", "left"}. release_spacing: time between releases (0: a
-quarter of the frame spacing; over a million releases is refused); dt: largest RK4 step.)")
+the domain, "t", "released", "left", "resolution", "largest_gap", "unresolved"}.
+release_spacing: time between releases (0: a quarter of the frame spacing; over a million
+releases is refused); max_gap: where neighbours end further apart, a particle released
+halfway between them is added (0: a mean edge length; at most 20,000 added;
+"unresolved" counts the neighbours still further apart, "largest_gap" the largest
+distance between them); dt: largest RK4 step.)")
       .def(
           "timeline",
           [](const PyField& f, const std::vector<double>& a, const std::vector<double>& b, std::optional<double> t_start,
-             std::optional<double> t_end, int count) {
+             std::optional<double> t_end, int count, double max_gap) {
             TimelineOptions o;
             o.t0 = t_start ? *t_start : f.field->time().t0;
             o.t1 = t_end ? *t_end : f.field->time().t1;
             o.count = count;
+            o.max_gap = max_gap;
             return streak_dict(trace_timeline(f.bundle(), *f.field, vec3_of(a, "a"), vec3_of(b, "b"), o), "parameter");
           },
           py::arg("a"), py::arg("b"), py::arg("t_start") = py::none(), py::arg("t_end") = py::none(), py::kw_only(),
-          py::arg("count") = 100,
+          py::arg("count") = 100, py::arg("max_gap") = 0.0,
           R"(The timeline: the segment from a to b drawn at t_start (default: the start of the time
 range), carried by the flow to t_end (default: its end; earlier carries it backwards), as
 `tvf timelines`; `count` particles on the segment, refined where neighbours part by more
-than a mean edge length. Returns {"points": (K, 3) along the line, "parameter": (K,) each
-particle's place on the initial segment in [0, 1], "gap_before", "t", "released", "left"}.)")
+than max_gap (0: a mean edge length; 20,000 particles at most). Returns {"points": (K, 3)
+along the line, "parameter": (K,) each particle's place on the initial segment in [0, 1],
+"gap_before", "t", "released", "left", "resolution", "largest_gap", "unresolved"}; both
+ends at one point raise ValueError.)")
       .def(
           "export_vdb",
           [](const PyField& f, const std::string& dir) {

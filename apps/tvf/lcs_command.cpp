@@ -66,6 +66,12 @@ void check_positive_time(const CLI::App& sub, const char* name, double value) {
     throw Error(fmt::format("{} {}: must be a positive time", name, value));
 }
 
+// --max-gap as given: a positive finite distance (left out, 0: a mean edge length).
+void check_max_gap(const CLI::App& sub, double value) {
+  if ((sub.count("--max-gap") > 0 || value != 0) && !(value > 0 && std::isfinite(value)))
+    throw Error(fmt::format("--max-gap {}: must be a positive distance", value));
+}
+
 // Runs what integrates the input's field; the library's refusals (a field too fast for its
 // time range, a seed off the domain) name the input.
 template <class F>
@@ -81,6 +87,23 @@ std::vector<Vec3> positions(const Streakline& s) {
   std::vector<Vec3> out;
   for (const StreakPoint& p : s.points) out.push_back(p.position);
   return out;
+}
+
+// The curve in pieces, broken where particles between neighbours left the domain.
+std::vector<std::vector<Vec3>> pieces(const Streakline& s) {
+  std::vector<std::vector<Vec3>> out(1);
+  for (const StreakPoint& p : s.points) {
+    if (p.gap_before && !out.back().empty()) out.emplace_back();
+    out.back().push_back(p.position);
+  }
+  return out;
+}
+
+// How well the points resolve the curve (streakline.h), in the JSON.
+void add_resolution(nlohmann::json& j, const Streakline& s) {
+  j["resolution"] = s.resolution;
+  j["largest_gap"] = s.largest_gap;
+  j["unresolved"] = s.unresolved;
 }
 
 }  // namespace
@@ -144,6 +167,9 @@ LcsCommand::LcsCommand(CLI::App& app) {
                       "interval and time by default, its sketch drawn under the traced streakline, and the "
                       "distance between the two reported");
   streak_->add_option("--release-spacing", spacing_, "Time between releases (default: a quarter of the frame spacing)");
+  streak_->add_option("--max-gap", max_gap_,
+                      "Distance between neighbours at --to above which a particle released halfway between them is "
+                      "added (default: the mean edge length)");
 
   timeline_ = app.add_subcommand(
       "timelines", "A timeline: the segment --line drawn at --from, carried by the flow to --to (JSON and a picture)");
@@ -299,6 +325,7 @@ int LcsCommand::run_streaklines() {
   check_output_file(out_);  // before the work, not after it
   check_positive_time(*streak_, "--release-spacing", spacing_);
   check_positive_time(*streak_, "--dt", dt_);
+  check_max_gap(*streak_, max_gap_);
   bool view_given = false;
   const SurfaceView view = surface_view(view_given);
   const bool show = !quiet_ && progress_wanted();
@@ -329,6 +356,7 @@ int LcsCommand::run_streaklines() {
   if (o.t0 > o.t1)
     throw Error(fmt::format("--from {} is after --to {}: dye is released over [--from, --to]", o.t0, o.t1));
   o.release_spacing = spacing_;
+  o.max_gap = max_gap_;
   o.flow.dt = dt_;
   const Vec3 seed = point_option(seed_, 0, seed_.size());
   progress.note("releasing");
@@ -339,6 +367,7 @@ int LcsCommand::run_streaklines() {
                       {"released", s.released},
                       {"left", s.left},
                       {"points", points_json(s)}};
+  add_resolution(j, s);
   StreaklineMatch match;
   const double h = bundle.mesh().mean_edge_length();
   if (sketch) {
@@ -358,7 +387,7 @@ int LcsCommand::run_streaklines() {
     po.surface = view;
     po.face_curves = !view_given;
     if (sketch) po.under = {sketch->points};
-    const Image img = curve_picture(bundle, in.field, s.t, {positions(s)}, std::vector<Vec3>{seed}, po);
+    const Image img = curve_picture(bundle, in.field, s.t, pieces(s), std::vector<Vec3>{seed}, po);
     const fs::path out(out_);
     picture = (out.parent_path() / out.stem()).string() + ".png";
     write_png(picture, img);
@@ -366,6 +395,12 @@ int LcsCommand::run_streaklines() {
   write_file_atomically(out_, j.dump() + "\n");
   progress.finish();
   for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (s.unresolved > 0)
+    std::fprintf(stderr,
+                 "warning: %d pairs of neighbouring particles are further apart at t = %g than the mean edge length "
+                 "%.3g (up to %.3g): the streakline is drawn as straight chords between them; give a smaller "
+                 "--release-spacing\n",
+                 s.unresolved, s.t, s.resolution, s.largest_gap);
   if (!quiet_) {
     std::printf("streakline at t = %g: %d particles released from t = %g", s.t, s.released, o.t0);
     if (s.left > 0) std::printf(", %d of them left the domain", s.left);
@@ -386,7 +421,7 @@ int LcsCommand::run_timelines() {
   if (line_.size() == 5) throw Error("--line: give X0 Y0 X1 Y1 (planar) or X0 Y0 Z0 X1 Y1 Z1 (surfaces)");
   if (const int most = TimelineOptions{}.max_points; count_ < 2 || count_ > most)
     throw Error(fmt::format("--count {}: a timeline has 2 to {} particles", count_, most));
-  if (!(max_gap_ >= 0) || !std::isfinite(max_gap_)) throw Error(fmt::format("--max-gap {}: must be positive", max_gap_));
+  check_max_gap(*timeline_, max_gap_);
   check_positive_time(*timeline_, "--dt", dt_);
   bool view_given = false;
   const SurfaceView view = surface_view(view_given);
@@ -405,12 +440,13 @@ int LcsCommand::run_timelines() {
   const Vec3 a = point_option(line_, 0, dims), b = point_option(line_, dims, dims);
   progress.note("carrying");
   const Streakline s = on_input(input_, [&] { return trace_timeline(bundle, in.field, a, b, o); });
-  const nlohmann::json j = {{"t", s.t},
-                            {"from", o.t0},
-                            {"line", {{a.x(), a.y(), a.z()}, {b.x(), b.y(), b.z()}}},
-                            {"released", s.released},
-                            {"left", s.left},
-                            {"points", points_json(s)}};
+  nlohmann::json j = {{"t", s.t},
+                      {"from", o.t0},
+                      {"line", {{a.x(), a.y(), a.z()}, {b.x(), b.y(), b.z()}}},
+                      {"released", s.released},
+                      {"left", s.left},
+                      {"points", points_json(s)}};
+  add_resolution(j, s);
   std::string picture;
   create_output_folder_for(out_);
   if (!no_picture_) {
@@ -420,13 +456,7 @@ int LcsCommand::run_timelines() {
     po.surface = view;
     po.face_curves = !view_given;
     po.dots = false;
-    // The line breaks where particles left the domain: draw the pieces.
-    std::vector<std::vector<Vec3>> pieces(1);
-    for (const StreakPoint& p : s.points) {
-      if (p.gap_before && !pieces.back().empty()) pieces.emplace_back();
-      pieces.back().push_back(p.position);
-    }
-    const Image img = curve_picture(bundle, in.field, s.t, pieces, std::vector<Vec3>{}, po);
+    const Image img = curve_picture(bundle, in.field, s.t, pieces(s), std::vector<Vec3>{}, po);
     const fs::path out(out_);
     picture = (out.parent_path() / out.stem()).string() + ".png";
     write_png(picture, img);
@@ -434,6 +464,20 @@ int LcsCommand::run_timelines() {
   write_file_atomically(out_, j.dump() + "\n");
   progress.finish();
   for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  if (s.unresolved > 0) {
+    if (s.unresolved_by == Streakline::Refinement::out_of_particles)
+      std::fprintf(stderr,
+                   "warning: the timeline needs more than %d particles to keep neighbours within %.3g of each other at "
+                   "t = %g: %d pairs are further apart (up to %.3g), drawn as straight chords; give a shorter interval "
+                   "or a larger --max-gap\n",
+                   TimelineOptions{}.max_points, s.resolution, s.t, s.unresolved, s.largest_gap);
+    else
+      std::fprintf(stderr,
+                   "warning: the flow tears the timeline apart: %d pairs of neighbours within 1e-12 of each other "
+                   "along the line at t = %g are further apart than %.3g at t = %g (up to %.3g), drawn as straight "
+                   "chords\n",
+                   s.unresolved, o.t0, s.resolution, s.t, s.largest_gap);
+  }
   if (!quiet_) {
     std::printf("timeline at t = %g: %zu particles from the line at t = %g", s.t, s.points.size(), o.t0);
     if (s.left > 0) std::printf(" (%d more left the domain)", s.left);

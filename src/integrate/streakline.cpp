@@ -30,6 +30,94 @@ SurfacePoint locate(const TangentBundle& bundle, const PointLocator& locator, co
   return p;
 }
 
+// Fills the resolution fields of a traced curve (streakline.h).
+void measure_gaps(Streakline& s, double resolution) {
+  s.resolution = resolution;
+  for (size_t k = 1; k < s.points.size(); ++k) {
+    if (s.points[k].gap_before) continue;
+    const double d = (s.points[k].position - s.points[k - 1].position).norm();
+    s.largest_gap = std::max(s.largest_gap, d);
+    if (d > resolution) ++s.unresolved;
+  }
+}
+
+// A particle of a curve: its parameter s (a release time, or the place along a timeline's
+// segment), where it starts (x0 in space) and where it is at t1.
+struct Sample {
+  double s = 0.0;
+  SurfacePoint start;
+  Vec3 x0 = Vec3::Zero();
+  FlowMapResult m;
+  Vec3 x = Vec3::Zero();
+
+  static Sample starting(double s, const SurfacePoint& start, const Vec3& x0) {
+    Sample out;
+    out.s = s;
+    out.start = start;
+    out.x0 = x0;
+    return out;
+  }
+};
+
+// Carries the samples' starts to t1 (fills m and x), in parallel.
+template <class Advect>
+void carry(std::vector<Sample>& samples, const Mesh& mesh, Advect&& advect) {
+  tbb::parallel_for(size_t{0}, samples.size(), [&](size_t k) {
+    samples[k].m = advect(samples[k]);
+    samples[k].x = surface_position(mesh, samples[k].m.where);
+  });
+}
+
+// Starting from `line` (carried, sorted by s), halves every interval whose ends are further
+// apart than max_gap at t1 — mid(p, q) is the particle between them, carried by advect —
+// until none is, `most` particles are carried or the interval is shorter than `finest`
+// in s (each round at least halves the shortest interval, so this ends in ~40 rounds at
+// most); then the curve, broken where particles left, with its resolution measured.
+template <class Mid, class Advect>
+Streakline refined_curve(std::vector<Sample> line, Mid&& mid, Advect&& advect, const Mesh& mesh, double max_gap,
+                         double finest, long most, double t1) {
+  long released = static_cast<long>(line.size());
+  bool out_of_particles = false;
+  for (;;) {
+    std::vector<Sample> added;
+    for (size_t k = 0; k + 1 < line.size(); ++k) {
+      const Sample& p = line[k];
+      const Sample& q = line[k + 1];
+      if (p.m.left || q.m.left || !((p.x - q.x).norm() > max_gap) || q.s - p.s < finest) continue;
+      if (released + static_cast<long>(added.size()) >= most) {
+        out_of_particles = true;
+        break;
+      }
+      added.push_back(mid(p, q));
+    }
+    if (added.empty()) break;
+    released += static_cast<long>(added.size());
+    carry(added, mesh, advect);
+    std::vector<Sample> merged;
+    merged.reserve(line.size() + added.size());
+    std::merge(line.begin(), line.end(), added.begin(), added.end(), std::back_inserter(merged),
+               [](const Sample& x, const Sample& y) { return x.s < y.s; });
+    line = std::move(merged);
+  }
+  Streakline out;
+  out.t = t1;
+  out.released = static_cast<int>(released);
+  bool gap = false;
+  for (const Sample& s : line) {
+    if (s.m.left) {
+      ++out.left;
+      gap = !out.points.empty();
+      continue;
+    }
+    out.points.push_back({s.x, s.m.where, s.s, gap});
+    gap = false;
+  }
+  measure_gaps(out, max_gap);
+  if (out.unresolved > 0)
+    out.unresolved_by = out_of_particles ? Streakline::Refinement::out_of_particles : Streakline::Refinement::torn;
+  return out;
+}
+
 }  // namespace
 
 Streakline trace_streakline(const TangentBundle& bundle, const Field& field, const Vec3& seed,
@@ -52,28 +140,32 @@ Streakline trace_streakline(const TangentBundle& bundle, const Field& field, con
   const SurfacePoint start = locate(bundle, locator, seed, "streakline seed");
 
   // Release times t0, t0 + Δ, …, and t1 (the particle still at the seed).
-  std::vector<double> releases;
   const long steps = static_cast<long>(std::floor((options.t1 - options.t0) / spacing + 1e-9));
-  for (long k = 0; k <= steps; ++k) releases.push_back(options.t0 + spacing * static_cast<double>(k));
-  if (releases.back() < options.t1 - 1e-12 * std::max(1.0, std::abs(options.t1))) releases.push_back(options.t1);
-  releases.back() = std::min(releases.back(), options.t1);
+  std::vector<double> releases(static_cast<size_t>(steps) + 1);
+  for (long k = 0; k <= steps; ++k) releases[static_cast<size_t>(k)] = options.t0 + spacing * static_cast<double>(k);
+  if (const double last = releases[static_cast<size_t>(steps)];
+      last < options.t1 - 1e-12 * std::max(1.0, std::abs(options.t1)))
+    releases.push_back(options.t1);
+  else
+    releases[static_cast<size_t>(steps)] = std::min(last, options.t1);
 
+  if (std::isnan(options.max_gap) || options.max_gap < 0)
+    throw Error(fmt::format("the streakline's largest gap {} must be positive", options.max_gap));
+  const double max_gap = options.max_gap > 0 ? options.max_gap : bundle.mesh().mean_edge_length();
   const FlowMap flow(bundle, field, options.flow);
-  std::vector<FlowMapResult> mapped(releases.size());
-  tbb::parallel_for(size_t{0}, releases.size(),
-                    [&](size_t k) { mapped[k] = flow.advect(start, releases[k], options.t1); });
-  Streakline out;
-  out.t = options.t1;
-  out.released = static_cast<int>(releases.size());
-  bool gap = false;
-  for (size_t k = 0; k < releases.size(); ++k) {
-    if (mapped[k].left) {
-      ++out.left;
-      gap = !out.points.empty();
-      continue;
-    }
-    out.points.push_back({surface_position(bundle.mesh(), mapped[k].where), mapped[k].where, releases[k], gap});
-    gap = false;
+  const Vec3 at = surface_position(bundle.mesh(), start);
+  auto advect = [&](const Sample& p) { return flow.advect(p.start, p.s, options.t1); };
+  std::vector<Sample> line(releases.size());
+  for (size_t k = 0; k < releases.size(); ++k) line[k] = Sample::starting(releases[k], start, at);
+  carry(line, bundle.mesh(), advect);
+  auto mid = [&](const Sample& p, const Sample& q) { return Sample::starting(0.5 * (p.s + q.s), start, at); };
+  const double finest = 1e-12 * std::max(1.0, std::abs(options.t1));
+  Streakline out = refined_curve(std::move(line), mid, advect, bundle.mesh(), max_gap, finest,
+                                 static_cast<long>(releases.size()) + options.max_added, options.t1);
+  if (!std::isfinite(max_gap)) {  // not refined: judged by the mean edge length all the same
+    out.largest_gap = 0;
+    out.unresolved = 0;
+    measure_gaps(out, bundle.mesh().mean_edge_length());
   }
   return out;
 }
@@ -88,63 +180,47 @@ Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const
                             options.max_points));
   const Mesh& mesh = bundle.mesh();
   const PointLocator locator(mesh);
-  locate(bundle, locator, a, "timeline's first point");
-  locate(bundle, locator, b, "timeline's last point");
+  const Vec3 pa = surface_position(mesh, locate(bundle, locator, a, "timeline's first point"));
+  const Vec3 pb = surface_position(mesh, locate(bundle, locator, b, "timeline's last point"));
+  // Both ends at one point is no line: every particle would be the same one.
+  if ((pa - pb).norm() <= 1e-12 * std::max(1.0, mesh.diameter())) {
+    auto show = [&](const Vec3& x) {
+      return bundle.is_flat() ? fmt::format("({}, {})", x.x(), x.y()) : fmt::format("({}, {}, {})", x.x(), x.y(), x.z());
+    };
+    throw Error(fmt::format("the timeline's ends {} and {} are one point of the domain: give two different points",
+                            show(a), show(b)));
+  }
+  if (std::isnan(options.max_gap) || options.max_gap < 0)
+    throw Error(fmt::format("the timeline's largest gap {} must be positive", options.max_gap));
   const double max_gap = options.max_gap > 0 ? options.max_gap : mesh.mean_edge_length();
   const FlowMap flow(bundle, field, options.flow);
 
-  struct Sample {
-    double s;
-    FlowMapResult m;
-    Vec3 x;
+  // The segment's points snapped onto the domain; one added between two neighbours starts
+  // at the midpoint of their starts, snapped: on a planar domain the segment's own point,
+  // on a surface a point between them where the segment's snapped points jump (a chord
+  // over a hollow, whose closest points jump across it).
+  auto snapped = [&](double s, const Vec3& x) {
+    const SurfacePoint p = locator.closest(x);
+    return Sample::starting(s, p, surface_position(mesh, p));
   };
-  auto carry = [&](const std::vector<double>& params) {
-    std::vector<Sample> out(params.size());
-    tbb::parallel_for(size_t{0}, params.size(), [&](size_t k) {
-      const double s = params[k];
-      const SurfacePoint p = locator.closest((1.0 - s) * a + s * b);
-      out[k].s = s;
-      out[k].m = flow.advect(p, options.t0, options.t1);
-      out[k].x = surface_position(mesh, out[k].m.where);
-    });
-    return out;
-  };
-  std::vector<double> params;
-  for (int k = 0; k < options.count; ++k) params.push_back(static_cast<double>(k) / (options.count - 1));
-  std::vector<Sample> line = carry(params);
-  int released = options.count;
-  for (int round = 0; round < 16; ++round) {
-    std::vector<double> mids;
-    for (size_t k = 0; k + 1 < line.size(); ++k) {
-      const Sample& p = line[k];
-      const Sample& q = line[k + 1];
-      if (p.m.left || q.m.left || (p.x - q.x).norm() <= max_gap || q.s - p.s < 1e-12) continue;
-      if (released + static_cast<int>(mids.size()) >= options.max_points) break;
-      mids.push_back(0.5 * (p.s + q.s));
-    }
-    if (mids.empty()) break;
-    released += static_cast<int>(mids.size());
-    std::vector<Sample> added = carry(mids);
-    std::vector<Sample> merged;
-    merged.reserve(line.size() + added.size());
-    std::merge(line.begin(), line.end(), added.begin(), added.end(), std::back_inserter(merged),
-               [](const Sample& x, const Sample& y) { return x.s < y.s; });
-    line = std::move(merged);
+  auto mid = [&](const Sample& p, const Sample& q) { return snapped(0.5 * (p.s + q.s), 0.5 * (p.x0 + q.x0)); };
+  std::vector<Sample> line;
+  for (int k = 0; k < options.count; ++k) {
+    const double s = static_cast<double>(k) / (options.count - 1);
+    line.push_back(snapped(s, (1.0 - s) * a + s * b));
   }
-  Streakline out;
-  out.t = options.t1;
-  out.released = released;
-  bool gap = false;
-  for (const Sample& s : line) {
-    if (s.m.left) {
-      ++out.left;
-      gap = !out.points.empty();
-      continue;
-    }
-    out.points.push_back({s.x, s.m.where, s.s, gap});
-    gap = false;
-  }
-  return out;
+  // The line where it starts: filled in until neighbours are within max_gap there too; one
+  // still torn (snapped midpoints that land on an end) is no line to carry.
+  auto stay = [&](const Sample& p) { return FlowMapResult{p.start, false, options.t0}; };
+  carry(line, mesh, stay);
+  const Streakline start = refined_curve(line, mid, stay, mesh, max_gap, 1e-12, options.max_points, options.t0);
+  if (start.unresolved_by == Streakline::Refinement::torn)
+    throw Error(fmt::format("the segment between the timeline's ends, snapped onto the surface, breaks apart (its "
+                            "points jump up to {:.3g} across it): give ends closer together",
+                            start.largest_gap));
+  auto advect = [&](const Sample& p) { return flow.advect(p.start, options.t0, options.t1); };
+  carry(line, mesh, advect);
+  return refined_curve(std::move(line), mid, advect, mesh, max_gap, 1e-12, options.max_points, options.t1);
 }
 
 }  // namespace tvf

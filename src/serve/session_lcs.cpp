@@ -61,8 +61,11 @@ json curve(const Streakline& s, bool planar, long long revision, double seconds)
     points.push_back(planar ? json::array({x.x(), x.y()}) : json::array({x.x(), x.y(), x.z()}));
     if (s.points[i].gap_before) gaps.push_back(i);
   }
-  return {{"revision", revision}, {"t", s.t},           {"points", points},  {"gaps", gaps},
-          {"released", s.released}, {"left", s.left}, {"seconds", seconds}};
+  return {{"revision", revision},       {"t", s.t},
+          {"points", points},           {"gaps", gaps},
+          {"released", s.released},     {"left", s.left},
+          {"resolution", s.resolution}, {"largest_gap", s.largest_gap},
+          {"unresolved", s.unresolved}, {"seconds", seconds}};
 }
 
 double since(std::chrono::steady_clock::time_point start) {

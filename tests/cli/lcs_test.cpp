@@ -117,6 +117,19 @@ TEST(CliLcs, StreaklineOfARotationIsTheCircleThroughTheSeed) {
     EXPECT_NEAR(p[1].get<double>(), 0.5 * std::sin(angle), 1e-4);
     EXPECT_EQ(p[2], 0.0);
   }
+  // Neighbours 0.1 rad apart on the circle of radius 0.5: within a mean edge length.
+  EXPECT_NEAR(j["largest_gap"].get<double>(), std::sin(0.05), 1e-4);
+  EXPECT_EQ(j["unresolved"], 0);
+  EXPECT_GT(j["resolution"].get<double>(), j["largest_gap"].get<double>());
+  // Asked for neighbours a millionth apart, the 20,000 added releases fall short: said so.
+  const auto fine = run_tvf("streaklines " + quoted(dir / "rot") + " --seed 0.5 0 --from 0.5 --to 2 " +
+                            "--max-gap 1e-6 --no-picture -q -o " + quoted(dir / "fine.json"));
+  ASSERT_EQ(fine.exit_code, 0) << fine.output;
+  EXPECT_NE(fine.output.find("further apart at t = 2 than"), std::string::npos) << fine.output;
+  EXPECT_NE(fine.output.find("give a smaller --release-spacing"), std::string::npos) << fine.output;
+  const nlohmann::json fj = nlohmann::json::parse(test::read_text(dir / "fine.json"));
+  EXPECT_EQ(fj["resolution"], 1e-6);
+  EXPECT_GT(fj["unresolved"].get<int>(), 0);
   // A timeline across the centre turns with it: by 2 radians from t = 0.
   const auto t = run_tvf("timelines " + quoted(dir / "rot") + " --line -0.5 0 0.5 0 --count 11 --max-gap 1 --to 2 -s 200 -o " +
                          quoted(dir / "time.json"));
@@ -247,6 +260,12 @@ TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {
       {"timelines " + in + " --line 0 0 0.5 0 --count 2000000000 -o " + quoted(dir / "out.json"),
        "--count 2000000000: a timeline has 2 to 20000 particles"},
       {"timelines " + in + " --line 0 0 5 0 -o " + quoted(dir / "out.json"), "is outside the domain"},
+      {"timelines " + in + " --line 0.2 0.2 0.2 0.2 -o " + quoted(dir / "out.json"),
+       "the timeline's ends (0.2, 0.2) and (0.2, 0.2) are one point of the domain: give two different points"},
+      {"streaklines " + in + " --seed 0 0 --max-gap 0 -o " + quoted(dir / "out.json"),
+       "--max-gap 0: must be a positive distance"},
+      {"timelines " + in + " --line 0 0 0.5 0 --max-gap inf -o " + quoted(dir / "out.json"),
+       "--max-gap inf: must be a positive distance"},
       // The surface pictures' camera.
       {"timelines " + in + " --line 0 0 0.5 0 --view 0,0,0 -o " + quoted(dir / "out.json"),
        "--view 0,0,0: must be a direction, three finite numbers not all zero"},

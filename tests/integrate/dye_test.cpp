@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@ void expect_same(const DyeInjector& dye, const TangentBundle& bundle, const Fiel
   o.t0 = dye.start();
   o.t1 = dye.time();
   o.release_spacing = dye.release_spacing();
+  o.max_gap = std::numeric_limits<double>::infinity();  // the dye's particles: its releases only
   const Streakline ref = trace_streakline(bundle, field, seed, o);
   const Streakline got = dye.streakline(0);
   EXPECT_DOUBLE_EQ(got.t, ref.t) << where;
@@ -125,6 +127,7 @@ TEST(Dye, EqualsTracingTheStreaklineAtEveryPicture) {
       so.t0 = 1.0;
       so.t1 = dye.time();
       so.release_spacing = 0.1;
+      so.max_gap = std::numeric_limits<double>::infinity();
       so.flow.dt = dt;
       const Streakline ref = trace_streakline(bundle, field, seed, so);
       so.flow.dt = dt / 8;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace tvf {
 namespace {
@@ -74,11 +75,53 @@ TEST(Streakline, DropsWhatLeavesTheDomain) {
   o.t0 = 0;
   o.t1 = 2;
   o.release_spacing = 0.25;
+  o.max_gap = std::numeric_limits<double>::infinity();  // the releases only
   const Streakline s = trace_streakline(bundle, field, Vec3(0, 0, 0), o);
   // Released at τ, at x = 2 − τ at t1: inside for τ ≥ 1 (x = 1 is on the boundary: in).
   EXPECT_EQ(s.released, 9);
   EXPECT_EQ(s.left, 4);
   EXPECT_EQ(s.points.size(), 5u);
+  // Neighbours 0.25 apart, more than the mean edge length: counted, and the largest gap.
+  EXPECT_EQ(s.unresolved, 4);
+  EXPECT_NEAR(s.largest_gap, 0.25, 1e-9);
+  EXPECT_DOUBLE_EQ(s.resolution, grid.mean_edge_length());
+}
+
+TEST(Streakline, ReleasesAreAddedWhereNeighboursPartEachWhereItsReleaseTimeSays) {
+  // Uniform flow to +x: the particle released at τ is at x = 2 − τ at t1 = 2. Releases a
+  // quarter apart end a quarter apart, more than the mean edge length (about 0.12): releases
+  // are added halfway until neighbours are within it, each where its own time puts it.
+  const Mesh grid = make_grid(GridSpec{41, 21, {-1, -1}, {3, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 2, 9}, [](const Vec3&, double) { return Vec3(1, 0, 0); });
+  StreaklineOptions o;
+  o.t0 = 0;
+  o.t1 = 2;
+  o.release_spacing = 0.25;
+  const Streakline s = trace_streakline(bundle, field, Vec3(0, 0, 0), o);
+  const double h = grid.mean_edge_length();
+  EXPECT_GT(s.released, 9);
+  EXPECT_EQ(s.left, 0);
+  EXPECT_EQ(s.unresolved, 0);
+  EXPECT_LE(s.largest_gap, h);
+  EXPECT_DOUBLE_EQ(s.resolution, h);
+  ASSERT_EQ(s.points.size(), static_cast<size_t>(s.released));
+  for (size_t k = 0; k < s.points.size(); ++k) {
+    EXPECT_NEAR((s.points[k].position - Vec3(2.0 - s.points[k].release, 0, 0)).norm(), 0.0, 1e-9);
+    if (k > 0) {
+      EXPECT_GT(s.points[k].release, s.points[k - 1].release);
+      EXPECT_LE((s.points[k].position - s.points[k - 1].position).norm(), h + 1e-12);
+    }
+  }
+  // Out of additions: what is left too far apart is counted.
+  o.max_added = 3;
+  const Streakline few = trace_streakline(bundle, field, Vec3(0, 0, 0), o);
+  EXPECT_EQ(few.released, 12);
+  EXPECT_GT(few.unresolved, 0);
+  EXPECT_NEAR(few.largest_gap, 0.25, 1e-9);
+  // A negative or NaN gap is no distance.
+  o.max_gap = -1;
+  EXPECT_THROW(trace_streakline(bundle, field, Vec3(0, 0, 0), o), Error);
 }
 
 TEST(Streakline, RefusesBadTimesAndSeeds) {
@@ -160,7 +203,64 @@ TEST(Timeline, IsTheSegmentCarriedAndRefinedWhereItStretches) {
       EXPECT_LE((s.points[k].position - s.points[k - 1].position).norm(), 0.05 + 1e-9);
     }
   }
+  EXPECT_EQ(s.unresolved, 0);
+  EXPECT_EQ(s.unresolved_by, Streakline::Refinement::resolved);
   EXPECT_THROW(trace_timeline(bundle, saddle, Vec3(-3, 0, 0), Vec3(0, 0, 0), o), Error);
+  // Out of particles: the gaps left are counted and the reason named.
+  o.max_points = 8;
+  const Streakline few = trace_timeline(bundle, saddle, Vec3(-0.3, 0.5, 0), Vec3(0.3, 0.5, 0), o);
+  EXPECT_EQ(few.released, 8);
+  EXPECT_GT(few.unresolved, 0);
+  EXPECT_GT(few.largest_gap, 0.05);
+  EXPECT_EQ(few.unresolved_by, Streakline::Refinement::out_of_particles);
+  // Both ends at one point: no line.
+  EXPECT_THROW(trace_timeline(bundle, saddle, Vec3(0.2, 0.2, 0), Vec3(0.2, 0.2, 0), o), Error);
+}
+
+TEST(Timeline, OnASurfaceTheSnappedSegmentIsFilledInWhereItJumps) {
+  // A chord through the sphere's centre: its points snap to either pole, (±1, 0, 0); the
+  // particles added between them start at their midpoints snapped, so the line at t0 runs
+  // over the sphere from one pole to the other, every neighbour within a mean edge length.
+  const Mesh& sphere = test::icosphere_mesh();
+  const TangentBundle bundle(sphere);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 5}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  TimelineOptions o;
+  o.t0 = 0;
+  o.t1 = 0;
+  const Streakline pole_to_pole = trace_timeline(bundle, field, Vec3(1, 0, 0), Vec3(-1, 0, 0), o);
+  EXPECT_EQ(pole_to_pole.unresolved, 0);
+  EXPECT_LE(pole_to_pole.largest_gap, sphere.mean_edge_length());
+  EXPECT_NEAR((pole_to_pole.points.front().position - Vec3(1, 0, 0)).norm(), 0.0, 0.02);
+  EXPECT_NEAR((pole_to_pole.points.back().position - Vec3(-1, 0, 0)).norm(), 0.0, 0.02);
+  for (const StreakPoint& p : pole_to_pole.points) EXPECT_NEAR(p.position.norm(), 1.0, 0.02);
+  // A chord over a quarter of the equator snaps to one arc: carried round the axis by 1 rad.
+  o.t1 = 1;
+  const Streakline s = trace_timeline(bundle, field, Vec3(1, 0, 0), Vec3(0, 1, 0), o);
+  EXPECT_EQ(s.unresolved, 0);
+  EXPECT_NEAR(std::atan2(s.points.front().position.y(), s.points.front().position.x()), 1.0, 0.05);
+  EXPECT_NEAR(std::atan2(s.points.back().position.y(), s.points.back().position.x()), 1.0 + M_PI / 2, 0.05);
+}
+
+TEST(Timeline, ASegmentBetweenPiecesOfASurfaceIsRefused) {
+  // Two unit squares ten apart: the segment from one to the other snaps to either, and every
+  // midpoint between their points snaps back onto one of them: no line.
+  const Mesh squares({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 10}, {1, 0, 10}, {1, 1, 10}, {0, 1, 10}},
+                     {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}});
+  const TangentBundle bundle(squares);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 3}, [](const Vec3&, double) { return Vec3(0.1, 0, 0); });
+  TimelineOptions o;
+  o.t0 = 0;
+  o.t1 = 1;
+  try {
+    trace_timeline(bundle, field, Vec3(0.5, 0.5, 0), Vec3(0.5, 0.5, 10), o);
+    ADD_FAILURE() << "not refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("snapped onto the surface, breaks apart (its points jump up to 10"),
+              std::string::npos)
+        << e.what();
+  }
+  // Within one square the segment is taken.
+  EXPECT_EQ(trace_timeline(bundle, field, Vec3(0.2, 0.5, 10), Vec3(0.8, 0.5, 10), o).left, 0);
 }
 
 }  // namespace

@@ -3,8 +3,8 @@
 //  - a streakline at time t1 is where the dye released continuously from a seed over
 //    [t0, t1] is at t1: particles released every `release_spacing` (release times
 //    t0, t0 + Δ, …, and t1 itself, the particle at the seed) carried by the flow map
-//    (flow_map.h) to t1. Ordered by release time, oldest first, so consecutive points are
-//    neighbours along the streak.
+//    (flow_map.h) to t1, with releases added between neighbours that drift apart. Ordered
+//    by release time, oldest first, so consecutive points are neighbours along the streak.
 //  - a timeline at time t1 is a material line: the points of a curve at t0 (a segment
 //    between two points, straight in the plane; on a surface its points are snapped to
 //    the surface) carried to t1, refined where neighbours drift apart.
@@ -27,6 +27,13 @@ struct StreaklineOptions {
   double t0 = 0.0;               // first release
   double t1 = 1.0;               // the streakline's time; t0 ≤ t1
   double release_spacing = 0.0;  // time between releases; 0: a quarter of the frame spacing
+  // Where neighbours are further apart at t1 than max_gap (world distance; 0: the mean edge
+  // length), a particle released halfway between them is added, at most max_added in all:
+  // dye released continuously is one curve, but release times close together can end far
+  // apart (the double gyre's stretching). Infinity: the regular releases only (the dye
+  // renderers' particles, dye.h).
+  double max_gap = 0.0;
+  long max_added = 20000;
   FlowMapOptions flow;
 };
 
@@ -44,11 +51,26 @@ struct Streakline {
   std::vector<StreakPoint> points; // oldest release first (timelines: by parameter)
   int released = 0;                // particles released
   int left = 0;                    // of which left the domain before t1
+  // How well the points resolve the curve: between neighbours the curve is drawn as a
+  // straight chord, faithful only where they are close. resolution: the distance
+  // neighbours should keep (the options' max_gap; the mean edge length where that is 0, or
+  // infinite for a streakline);
+  // largest_gap: the largest distance at t1 between neighbours not broken by a particle
+  // that left; unresolved: how many such neighbours are further apart than resolution.
+  double resolution = 0.0;
+  double largest_gap = 0.0;
+  int unresolved = 0;
+  // What stopped the refinement short of resolution (unresolved > 0): the particles ran out
+  // (max_points, max_added), or neighbours 1e-12 apart in parameter are still too far apart
+  // at t1 (the flow map tears the curve there).
+  enum class Refinement { resolved, out_of_particles, torn };
+  Refinement unresolved_by = Refinement::resolved;
 };
 
 // Throws tvf::Error on t0 > t1, times outside the field's range, a non-positive release
-// spacing or one that would release more than kMaxReleases particles over [t0, t1], or
-// (planar domains) a seed outside the domain; all name the value.
+// spacing or one that would release more than kMaxReleases particles over [t0, t1], a
+// negative or NaN max_gap, or (planar domains) a seed outside the domain; all name the
+// value.
 Streakline trace_streakline(const TangentBundle& bundle, const Field& field, const Vec3& seed,
                             const StreaklineOptions& options);
 
@@ -64,8 +86,14 @@ struct TimelineOptions {
 };
 
 // The segment from a to b at t0, carried to t1; release = the parameter along the segment.
+// On a surface the segment's points are snapped onto it; where they jump (a chord over a
+// hollow or through the inside) the particles added between neighbours start at their
+// midpoints snapped, so the line runs over the surface.
 // Throws tvf::Error on times outside the field's range, a count below 2 or above
-// max_points, or (planar domains) an end outside the domain.
+// max_points, a negative or NaN max_gap, both ends at one point of the domain (on a
+// surface: once snapped to it), ends whose snapped midpoints cannot bridge the jump
+// between them (separate pieces of a surface), or (planar domains) an end outside the
+// domain.
 Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const Vec3& a, const Vec3& b,
                           const TimelineOptions& options);
 
