@@ -139,6 +139,8 @@ json Session::streakline(const json& request) const {
   if ((o.t1 - o.t0) / o.release_spacing > kMaxParticles)
     throw RequestError(400, fmt::format("streakline: (to − from)/spacing = {:.0f} releases, more than {:.0f}",
                                         (o.t1 - o.t0) / o.release_spacing, kMaxParticles));
+  // Releases added where neighbours part (trace_streakline) stay within the same bound.
+  o.max_added = static_cast<long>(kMaxParticles - std::floor((o.t1 - o.t0) / o.release_spacing));
   const auto start = std::chrono::steady_clock::now();
   try {
     return curve(trace_streakline(*f.bundle, *f.field, x, o), f.planar, f.revision, since(start));

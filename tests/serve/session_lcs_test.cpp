@@ -122,6 +122,9 @@ TEST(ServeLcs, StreaklinesAndTimelinesAreTheLibrarys) {
   const Streakline want = trace_streakline(bundle, f.field, Vec3(0.5, 0.5, 0), o);
   EXPECT_EQ(a["released"].get<int>(), want.released);
   EXPECT_EQ(a["left"].get<int>(), want.left);
+  EXPECT_EQ(a["resolution"].get<double>(), want.resolution);
+  EXPECT_EQ(a["largest_gap"].get<double>(), want.largest_gap);
+  EXPECT_EQ(a["unresolved"].get<int>(), want.unresolved);
   ASSERT_EQ(a["points"].size(), want.points.size());
   ASSERT_GT(want.points.size(), 50u);
   for (size_t i = 0; i < want.points.size(); ++i) {
@@ -137,6 +140,8 @@ TEST(ServeLcs, StreaklinesAndTimelinesAreTheLibrarys) {
   const json line = s.post("/api/timeline", {{"line", {{-0.5, 0.5}, {0.5, 0.5}}}, {"from", 0.0}, {"to", 0.5}}, 200);
   EXPECT_GE(line["points"].size(), 100u);
   EXPECT_DOUBLE_EQ(line["t"].get<double>(), 0.5);
+  EXPECT_EQ(line["unresolved"].get<int>(), 0);
+  EXPECT_LE(line["largest_gap"].get<double>(), line["resolution"].get<double>());
 
   auto error = [&](const char* path, const json& body, int status = 400) {
     return s.post(path, body, status)["error"].get<std::string>();
@@ -154,6 +159,9 @@ TEST(ServeLcs, StreaklinesAndTimelinesAreTheLibrarys) {
             "timeline: \"line\" must be two positions [a, b]");
   EXPECT_EQ(error("/api/timeline", {{"line", {{0, 0}, {0.5, 0}}}, {"from", 0}, {"to", 1}, {"count", 1}}),
             "timeline: \"count\" must be a whole number of particles in [2, 2000]");
+  EXPECT_NE(error("/api/timeline", {{"line", {{0.2, 0.2}, {0.2, 0.2}}}, {"from", 0}, {"to", 1}}, 422)
+                .find("timeline: the timeline's ends (0.2, 0.2) and (0.2, 0.2) are one point of the domain"),
+            std::string::npos);
 }
 
 }  // namespace
