@@ -671,10 +671,16 @@ line's sentence ("scene: elements[0].type: ...").)");
          const std::string& speed, double pixels_per_frame, double contrast, std::uint64_t seed,
          const std::vector<std::string>& overlay, const std::optional<std::vector<double>>& view,
          const std::optional<std::vector<double>>& up, double fps,
-         const std::vector<std::vector<double>>& streaklines, double time_scale,
+         const std::vector<std::vector<double>>& streaklines,
+         const std::vector<std::vector<std::vector<double>>>& timelines, double time_scale,
          const py::object& progress) -> py::object {
         TextureAnimationOptions o;
         for (const auto& p : streaklines) o.streakline_seeds.push_back(vec3_of(p, "render_texture: a streaklines seed"));
+        for (const auto& line : timelines) {
+          if (line.size() != 2) throw Error("render_texture: a timeline is two points [a, b]");
+          o.timelines.push_back({vec3_of(line[0], "render_texture: a timeline's first point"),
+                                 vec3_of(line[1], "render_texture: a timeline's last point")});
+        }
         o.dye_time_scale = time_scale;
         o.texture.size = size;
         o.texture.alpha = alpha;
@@ -747,7 +753,8 @@ line's sentence ("scene: elements[0].type: ...").)");
       py::arg("pixels_per_frame") = 0.0, py::arg("contrast") = 1.0, py::arg("seed") = 1,
       py::arg("overlay") = std::vector<std::string>{}, py::arg("view") = py::none(), py::arg("up") = py::none(),
       py::arg("fps") = 25.0, py::arg("streaklines") = std::vector<std::vector<double>>{},
-      py::arg("time_scale") = 1.0, py::arg("progress") = py::none(),
+      py::arg("timelines") = std::vector<std::vector<std::vector<double>>>{}, py::arg("time_scale") = 1.0,
+      py::arg("progress") = py::none(),
       R"(The texture animation of a field (`tvf render texture`: LIC over advected noise on
 planar grids, the image-space texture on surfaces) as pictures in memory.
 
@@ -765,8 +772,9 @@ noise_scale, speed ("uniform" | "physical"), pixels_per_frame, contrast, seed: a
 "streamlines", "orbits" (planar only); view, up: the camera on surfaces (from the
 mesh's centre towards the eye; up in the picture). streaklines: dye seeds, [x, y] on
 planar domains or [x, y, z] on or near a surface, whose dye, released from the first
-picture on, is drawn in every picture (`--streakline`); time_scale: how far the field
-carries that dye (`--time-scale`). progress(done, total) as pictures
+picture on, is drawn in every picture (`--streakline`); timelines: segments [a, b]
+drawn at the first picture and carried with the dye, in light blue (`--timeline`);
+time_scale: how far the field carries that dye and those lines (`--time-scale`). progress(done, total) as pictures
 are made; returning False from it stops the animation before its next picture and
 raises tvf.Cancelled, as Ctrl-C stops it with KeyboardInterrupt: either way no file is
 left (the PNG folder appears complete or not at all, a partial MP4 is removed). Bad

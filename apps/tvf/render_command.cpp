@@ -18,8 +18,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -53,6 +55,10 @@ RenderCommand::RenderCommand(CLI::App& app) {
                        "Inject dye at X,Y (planar domains) or X,Y,Z (surfaces: a point on or near the surface) from "
                        "the start of the animation and draw its streakline in every picture (give it again for more "
                        "seeds)");
+  texture_->add_option("--timeline", timelines_,
+                       "Draw the segment X0,Y0,X1,Y1 (planar) or X0,Y0,Z0,X1,Y1,Z1 (surfaces) at the start of the "
+                       "animation and carry it with the dye: a material line in light blue in every picture (give it "
+                       "again for more)");
   texture_->add_option("--time-scale", time_scale_,
                        "How far the field carries the --streakline dye: it travels as the field would carry it over "
                        "this many times its time range while the field itself changes at its own pace")
@@ -143,6 +149,10 @@ RenderCommand::RenderCommand(CLI::App& app) {
                          "Inject dye at X,Y (planar domains) or X,Y,Z (surfaces: a point on or near the surface) from "
                          "the start of the animation, carried with the leaves and drawn as fading smoke in every "
                          "picture (give it again for more seeds)");
+  particles_->add_option("--timeline", timelines_,
+                         "Draw the segment X0,Y0,X1,Y1 (planar) or X0,Y0,Z0,X1,Y1,Z1 (surfaces) at the start of the "
+                         "animation and carry it with the leaves: a material line in light blue in every picture "
+                         "(give it again for more)");
   particles_->add_option("--view", view_, "Surfaces: direction from the mesh's centre to the camera, X,Y,Z (default 1,-0.6,0.5)")
       ->delimiter(',')
       ->expected(3);
@@ -241,6 +251,33 @@ std::vector<Vec3> parse_dye_seeds(const std::vector<std::string>& texts, const M
     seeds.push_back(Vec3(x, y, three ? z : 0.0));
   }
   return seeds;
+}
+
+// The --timeline segments: X0,Y0,X1,Y1 on a planar domain, X0,Y0,Z0,X1,Y1,Z1 on a surface.
+std::vector<std::array<Vec3, 2>> parse_timelines(const std::vector<std::string>& texts, const Mesh& mesh) {
+  const bool planar = mesh.is_planar_xy();
+  const size_t want = planar ? 4 : 6;
+  std::vector<std::array<Vec3, 2>> lines;
+  for (const auto& text : texts) {
+    std::vector<double> v;
+    bool ok = true;
+    for (size_t at = 0; ok && at <= text.size();) {
+      const size_t comma = std::min(text.find(',', at), text.size());
+      const std::string word = text.substr(at, comma - at);
+      double x = 0;
+      const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), x);
+      ok = !word.empty() && ec == std::errc() && end == word.data() + word.size() && std::isfinite(x);
+      v.push_back(x);
+      at = comma + 1;
+    }
+    if (!ok || v.size() != want)
+      throw Error(fmt::format("--timeline {}: expected {}", text,
+                              planar ? "X0,Y0,X1,Y1 (two points of the planar domain)"
+                                     : "X0,Y0,Z0,X1,Y1,Z1 (two points on or near the surface)"));
+    const size_t d = want / 2;
+    lines.push_back({Vec3(v[0], v[1], planar ? 0.0 : v[2]), Vec3(v[d], v[d + 1], planar ? 0.0 : v[d + 2])});
+  }
+  return lines;
 }
 
 }  // namespace
@@ -361,6 +398,7 @@ int RenderCommand::run_particles() {
   options.surface.fov = fov_;
   RenderInput in = load_render_input(input_, progress, "particles", true);
   options.dye_seeds = parse_dye_seeds(streaklines_, in.mesh);
+  options.timelines = parse_timelines(timelines_, in.mesh);
   const TangentBundle bundle(in.mesh);
   progress.note("rendering");
   options.progress = [&](int done, int total) { progress.update(done, total); };
@@ -453,6 +491,7 @@ int RenderCommand::run_texture() {
 
   RenderInput in = load_render_input(input_, progress, "texture", true);
   options.streakline_seeds = parse_dye_seeds(streaklines_, in.mesh);
+  options.timelines = parse_timelines(timelines_, in.mesh);
   options.dye_time_scale = time_scale_;
   const std::vector<std::string>& warnings = in.warnings;
   const Field& field = in.field;

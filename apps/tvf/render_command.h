@@ -52,6 +52,7 @@ private:
   bool physical_ = false;
   std::vector<double> view_, up_;  // surfaces
   std::vector<std::string> streaklines_;  // dye seeds: X,Y (planar) or X,Y,Z (surfaces)
+  std::vector<std::string> timelines_;    // --timeline segments
   double fov_ = 30, spacing_ = 1.0;
   // painterly
   std::string image_, mask_;

@@ -71,7 +71,8 @@ def render_texture(field: Field, size: int = 512, frames: int = ..., *, frames_d
                    pixels_per_frame: float = 0.0, contrast: float = 1.0, seed: int = 1,
                    overlay: Sequence[str] = (), view: Optional[Sequence[float]] = None,
                    up: Optional[Sequence[float]] = None, fps: float = 25.0,
-                   streaklines: Sequence[Sequence[float]] = (), time_scale: float = 1.0,
+                   streaklines: Sequence[Sequence[float]] = (),
+                   timelines: Sequence[Sequence[Sequence[float]]] = (), time_scale: float = 1.0,
                    progress: Optional[Progress] = None) -> Image: ...
 @overload
 def render_texture(field: Field, size: int = 512, frames: Optional[Sequence[int]] = None, *,
@@ -80,7 +81,8 @@ def render_texture(field: Field, size: int = 512, frames: Optional[Sequence[int]
                    speed: Literal["uniform", "physical"] = "uniform", pixels_per_frame: float = 0.0,
                    contrast: float = 1.0, seed: int = 1, overlay: Sequence[str] = (),
                    view: Optional[Sequence[float]] = None, up: Optional[Sequence[float]] = None,
-                   fps: float = 25.0, streaklines: Sequence[Sequence[float]] = (), time_scale: float = 1.0,
+                   fps: float = 25.0, streaklines: Sequence[Sequence[float]] = (),
+                   timelines: Sequence[Sequence[Sequence[float]]] = (), time_scale: float = 1.0,
                    progress: Optional[Progress] = None) -> list[Image]: ...
 
 class Design:

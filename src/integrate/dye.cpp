@@ -47,24 +47,32 @@ DyeInjector::DyeInjector(const TangentBundle& bundle, const Field& field, std::s
   if (mesh.num_faces() == 0) throw_input_error(mesh.source(), "", "the domain has no faces");
   const PointLocator locator(mesh);
   const double reach = options.max_seed_distance > 0 ? options.max_seed_distance : 3.0 * mesh.mean_edge_length();
-  for (const Vec3& x : seeds) {
-    if (!x.allFinite()) throw Error("a dye seed must have finite coordinates");
+  auto place = [&](const Vec3& x, const char* what) {
+    if (!x.allFinite()) throw Error(fmt::format("a {} must have finite coordinates", what));
     const SurfacePoint p = locator.closest(x);
     const Vec3 on = surface_position(mesh, p);
     if (bundle.is_flat()) {
       // As trace_streakline: only x and y count on a planar domain.
       if ((on - x).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
-        throw Error(fmt::format("the dye seed ({}, {}) is outside the domain", x.x(), x.y()));
+        throw Error(fmt::format("the {} ({}, {}) is outside the domain", what, x.x(), x.y()));
     } else {
       const double d = (on - x).norm();
       if (!(d <= reach))
-        throw Error(fmt::format("the dye seed ({}, {}, {}) is {:.3g} from the surface, farther than {:.3g}{}: give a "
+        throw Error(fmt::format("the {} ({}, {}, {}) is {:.3g} from the surface, farther than {:.3g}{}: give a "
                                 "point on or near the surface",
-                                x.x(), x.y(), x.z(), d, reach,
+                                what, x.x(), x.y(), x.z(), d, reach,
                                 options.max_seed_distance > 0 ? "" : " (three edge lengths)"));
     }
-    seeds_.push_back(p);
+    return p;
+  };
+  for (const Vec3& x : seeds) seeds_.push_back(place(x, "dye seed"));
+  for (const auto& [a, b] : options.timelines) {
+    place(a, "timeline's first point");
+    place(b, "timeline's last point");
+    lines_.push_back({a, b});
   }
+  lines_now_.resize(lines_.size());
+  line_flow_ = options.flow;
   dye_.resize(seeds_.size());
   advance(t0);
 }
@@ -99,6 +107,13 @@ void DyeInjector::advance(double t) {
       p.left = m.left;
     }
   });
+  for (size_t l = 0; l < lines_.size(); ++l) {
+    TimelineOptions o;
+    o.t0 = t0_;
+    o.t1 = t;
+    o.flow = line_flow_;
+    lines_now_[l] = trace_timeline(bundle_, flow_.field(), lines_[l][0], lines_[l][1], o);
+  }
 }
 
 Streakline DyeInjector::streakline(size_t s) const {

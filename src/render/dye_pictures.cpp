@@ -13,6 +13,7 @@ namespace tvf {
 namespace {
 
 constexpr std::uint32_t kDyeColours[] = {0xE8402A, 0x2A62E8, 0x1E9A46, 0x8E36C8, 0xF08C00, 0x0A9A9A};
+constexpr std::uint32_t kTimelineColour = 0x0EA5E9;  // the designer's timelines' light blue
 
 void check_style(const DyeStyle& s) {
   if (!(std::isfinite(s.width) && s.width > 0 && s.width <= 1000))
@@ -73,6 +74,23 @@ std::vector<Run> runs_of(const DyeInjector& dye, const DyeStyle& style, std::vec
       run.points.push_back(b.position);
     }
     flush();
+  }
+  // The timelines: unfaded, in light blue, broken where particles left or parted.
+  for (size_t l = 0; l < dye.num_timelines(); ++l) {
+    Run run;
+    run.colour = kTimelineColour;
+    const Streakline& line = dye.timeline(l);
+    for (size_t i = 0; i < line.points.size(); ++i) {
+      const bool joined = i > 0 && !line.points[i].gap_before &&
+                          (style.max_gap <= 0 ||
+                           (line.points[i].position - line.points[i - 1].position).norm() <= style.max_gap);
+      if (!joined) {
+        if (run.points.size() >= 2) runs.push_back(run);
+        run.points.clear();
+      }
+      run.points.push_back(line.points[i].position);
+    }
+    if (run.points.size() >= 2) runs.push_back(run);
   }
   return runs;
 }

@@ -209,9 +209,10 @@ Image ParticleSystem::picture() const { return impl_->picture(); }
 std::optional<DyeInjector> particle_dye(const TangentBundle& bundle, const Field& carried,
                                         const ParticleAnimationOptions& options, int pictures) {
   std::optional<DyeInjector> dye;
-  if (options.dye_seeds.empty()) return dye;
+  if (options.dye_seeds.empty() && options.timelines.empty()) return dye;
   const TimeSampling& ts = carried.time();
   DyeOptions o;
+  o.timelines = options.timelines;
   o.release_spacing = options.dye_release_spacing != 0.0 ? options.dye_release_spacing
                       : pictures > 1                     ? 0.25 * (ts.t1 - ts.t0) / (pictures - 1)
                                                          : 0.0;

@@ -581,7 +581,7 @@ std::optional<Field> texture_dye_field(const Field& field, const TextureAnimatio
   check_option(std::isfinite(options.dye_time_scale) && options.dye_time_scale > 0, "dye time scale",
                fmt::format("{} is not a positive number", options.dye_time_scale));
   std::optional<Field> scaled;
-  if (options.streakline_seeds.empty() || options.dye_time_scale == 1.0) return scaled;
+  if ((options.streakline_seeds.empty() && options.timelines.empty()) || options.dye_time_scale == 1.0) return scaled;
   scaled.emplace(field);
   for (cplx& z : scaled->data()) z *= options.dye_time_scale;
   return scaled;
@@ -590,9 +590,10 @@ std::optional<Field> texture_dye_field(const Field& field, const TextureAnimatio
 std::optional<DyeInjector> texture_dye(const TangentBundle& bundle, const Field& carried,
                                        const TextureAnimationOptions& options, int pictures) {
   std::optional<DyeInjector> dye;
-  if (options.streakline_seeds.empty()) return dye;
+  if (options.streakline_seeds.empty() && options.timelines.empty()) return dye;
   const TimeSampling& ts = carried.time();
   DyeOptions o;
+  o.timelines = options.timelines;
   if (pictures > 1) o.release_spacing = 0.25 * (ts.t1 - ts.t0) / (pictures - 1);
   dye.emplace(bundle, carried, options.streakline_seeds, ts.t0, o);
   return dye;
@@ -641,7 +642,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
   const std::uint32_t bg = options.texture.background;
   const bool gray_background = ((bg >> 16) & 0xFF) == ((bg >> 8) & 0xFF) && ((bg >> 8) & 0xFF) == (bg & 0xFF);
   video.gray = gray_background && !options.overlay_paths && !options.overlay_orbits &&
-               !options.overlay_singularities && options.streakline_seeds.empty();
+               !options.overlay_singularities && options.streakline_seeds.empty() && options.timelines.empty();
   FrameOutput out(options.frames_dir, options.video, animator.width(), animator.height(), options.fps,
                   options.on_picture, video);
 

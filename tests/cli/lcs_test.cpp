@@ -221,6 +221,53 @@ TEST(CliLcs, TextureAnimationInjectsDye) {
   EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
+TEST(CliLcs, TextureAnimationCarriesATimeline) {
+  // `tvf render texture --timeline X0,Y0,X1,Y1`: the segment at the first picture, carried
+  // by the rotation (−y, x), is the segment turned by t: at t = 2 every light-blue pixel
+  // (the gray texture has red = green = blue) lies on the segment turned by 2 radians.
+  TempDir dir;
+  write_field(dir / "rot", GridSpec{17, 17, {-1, -1}, {1, 1}}, TimeSampling{0, 2, 9},
+              [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  const auto r = run_tvf("render texture " + quoted(dir / "rot") + " --timeline -0.5,0,0.5,0 --range 8:8 -s 128 -q -o " +
+                         quoted(dir / "line"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Image img = read_png((dir / "line" / "frame_00008.png").string());
+  const Vec2 along(std::cos(2.0), std::sin(2.0));
+  int blue = 0;
+  double farthest = 0;
+  for (int row = 0; row < img.height; ++row)
+    for (int col = 0; col < img.width; ++col) {
+      const std::uint32_t c = img.pixels[static_cast<size_t>(row) * img.width + col];
+      const int red = (c >> 16) & 0xFF, green = (c >> 8) & 0xFF, b = c & 0xFF;
+      if (b < red + 100 || green < red + 60) continue;
+      ++blue;
+      // Pixel centres in the domain [−1, 1]², y up.
+      const Vec2 x(-1 + 2 * (col + 0.5) / img.width, 1 - 2 * (row + 0.5) / img.height);
+      const double s = std::clamp(x.dot(along), -0.5, 0.5);
+      farthest = std::max(farthest, (x - s * along).norm());
+    }
+  EXPECT_GT(blue, 40);
+  EXPECT_LT(farthest, 0.05);
+  // Both renderers take it; a malformed or misplaced one is one sentence.
+  const auto leaves = run_tvf("render particles " + quoted(dir / "rot") + " --timeline -0.5,0,0.5,0 --frames 3 -s 128 -q -o " +
+                              quoted(dir / "leaves"));
+  EXPECT_EQ(leaves.exit_code, 0) << leaves.output;
+  EXPECT_TRUE(fs::exists(dir / "leaves" / "frame_00002.png"));
+  const std::pair<std::string, std::string> bad[] = {
+      {"--timeline 0,0,0.5", "--timeline 0,0,0.5: expected X0,Y0,X1,Y1 (two points of the planar domain)"},
+      {"--timeline 0,0,x,1", "--timeline 0,0,x,1: expected X0,Y0,X1,Y1"},
+      {"--timeline 0,0,5,0", "the timeline's last point (5, 0) is outside the domain"},
+      {"--timeline 0.2,0.2,0.2,0.2", "are one point of the domain"},
+  };
+  for (const auto& [option, message] : bad) {
+    const auto out = run_tvf("render texture " + quoted(dir / "rot") + " " + option + " -q -o " + quoted(dir / "bad"));
+    EXPECT_NE(out.exit_code, 0) << option;
+    EXPECT_EQ(count_lines(out.output), 1) << out.output;
+    EXPECT_NE(out.output.find(message), std::string::npos) << out.output;
+    EXPECT_FALSE(fs::exists(dir / "bad")) << option;
+  }
+}
+
 TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {
   TempDir dir;
   write_field(dir / "f", GridSpec{9, 9, {-1, -1}, {1, 1}}, TimeSampling{0, 1, 5},

@@ -172,6 +172,36 @@ TEST(Dye, DropsWhatLeavesTheDomainAsTracingDoes) {
   EXPECT_EQ(dye.alive(), 5);
 }
 
+TEST(Dye, TimelinesAreTracedAtEveryAdvance) {
+  // A timeline beside the dye (none needed): at each time, trace_timeline's from the start.
+  const Mesh grid = make_grid(GridSpec{21, 21, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 2, 9}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  DyeOptions o;
+  o.timelines = {{Vec3(-0.5, 0, 0), Vec3(0.5, 0, 0)}};
+  DyeInjector dye(bundle, field, std::vector<Vec3>{}, 0.5, o);
+  EXPECT_EQ(dye.num_seeds(), 0u);
+  ASSERT_EQ(dye.num_timelines(), 1u);
+  for (const double t : {0.5, 1.0, 2.0}) {
+    dye.advance(t);
+    TimelineOptions to;
+    to.t0 = 0.5;
+    to.t1 = t;
+    const Streakline want = trace_timeline(bundle, field, Vec3(-0.5, 0, 0), Vec3(0.5, 0, 0), to);
+    const Streakline& got = dye.timeline(0);
+    ASSERT_EQ(got.points.size(), want.points.size());
+    for (size_t k = 0; k < want.points.size(); ++k)
+      EXPECT_EQ(got.points[k].position, want.points[k].position);
+    // The rotation turns it by t − 0.5.
+    EXPECT_NEAR(std::atan2(got.points.back().position.y(), got.points.back().position.x()), t - 0.5, 1e-3);
+  }
+  // Its ends placed as seeds are: outside the domain, or one point, refused.
+  o.timelines = {{Vec3(-0.5, 0, 0), Vec3(3, 0, 0)}};
+  EXPECT_THROW(DyeInjector(bundle, field, std::vector<Vec3>{}, 0.0, o), Error);
+  o.timelines = {{Vec3(0.2, 0.2, 0), Vec3(0.2, 0.2, 0)}};
+  EXPECT_THROW(DyeInjector(bundle, field, std::vector<Vec3>{}, 0.0, o), Error);
+}
+
 TEST(Dye, RefusesSeedsOutsideAndTimesBackwards) {
   const Mesh grid = make_grid(GridSpec{11, 11, {-1, -1}, {1, 1}});
   const TangentBundle bundle(grid);

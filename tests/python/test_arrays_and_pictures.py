@@ -313,6 +313,24 @@ def test_render_texture_injects_dye(tmp_path):
         tvf.render_texture(field, 64, frames=5, streaklines=[[0.3]])
 
 
+def test_render_texture_carries_timelines(tmp_path):
+    """timelines: segments drawn at the first picture and carried, in light blue over the
+    gray texture; malformed or misplaced ones are ValueErrors."""
+    v, f = planar_grid(9)
+    field = tvf.generate(GRID_SCENE, vertices=v, faces=f)
+
+    def blues(p):
+        p = p.astype(int)
+        return int(((p[..., 2] > p[..., 0] + 100) & (p[..., 1] > p[..., 0] + 60)).sum())
+
+    assert blues(tvf.render_texture(field, 64, frames=5)) == 0
+    assert blues(tvf.render_texture(field, 64, frames=5, timelines=[[[-0.5, 0.1], [0.5, 0.1]]])) > 10
+    with pytest.raises(ValueError, match=r"the timeline's last point \(3, 0\) is outside the domain"):
+        tvf.render_texture(field, 64, frames=5, timelines=[[[0, 0], [3, 0]]])
+    with pytest.raises(ValueError, match="a timeline is two points"):
+        tvf.render_texture(field, 64, frames=5, timelines=[[[0, 0]]])
+
+
 def test_render_stops_between_pictures_and_leaves_no_output(tmp_path):
     """progress returning False (tvf.Cancelled) or raising KeyboardInterrupt stops the
     animation before its next picture: no frame folder, no video, no temporaries."""

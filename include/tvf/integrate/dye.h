@@ -16,14 +16,15 @@
 // rounding when the times advanced to are the field's frame times (the flow map splits its
 // steps there anyway) and to the integration error otherwise (tests/integrate/dye_test).
 //
-// Seeds: on a planar domain a seed's x and y must lie in the domain (z is ignored); on a
-// surface a seed is moved to its closest point of the surface, and refused when that is
-// farther than max_seed_distance.
+// Seeds (and timelines' ends): on a planar domain a seed's x and y must lie in the domain
+// (z is ignored); on a surface a seed is moved to its closest point of the surface, and
+// refused when that is farther than max_seed_distance.
 #include "tvf/field/field.h"
 #include "tvf/integrate/flow_map.h"
 #include "tvf/integrate/streakline.h"
 #include "tvf/mesh/tangent_bundle.h"
 
+#include <array>
 #include <span>
 #include <vector>
 
@@ -33,7 +34,11 @@ struct DyeOptions {
   double release_spacing = 0.0;    // time between releases; 0: a quarter of the field's frame
                                    // spacing (trace_streakline's default)
   double max_seed_distance = 0.0;  // surfaces: how far (world units) a seed may be from the
-                                   // surface; 0: three mean edge lengths
+                                   // surface; 0: three mean edge lengths (timelines' ends too)
+  // Material lines drawn at t0 beside the dye: each segment (its ends as seeds are placed)
+  // is trace_timeline's from t0 to the dye's time, traced afresh at each advance (each
+  // costs its particles' RK4 from t0, so a long animation's last frames cost the most).
+  std::vector<std::array<Vec3, 2>> timelines;
   FlowMapOptions flow;
 };
 
@@ -60,6 +65,10 @@ public:
   Vec3 seed_position(size_t s) const;
   // The dye of seed s at time(), as trace_streakline gives it.
   Streakline streakline(size_t s) const;
+  // The timelines (DyeOptions::timelines) at time(): trace_timeline(bundle, field, a, b,
+  // {start(), time()}), refined where neighbours part.
+  size_t num_timelines() const { return lines_.size(); }
+  const Streakline& timeline(size_t l) const { return lines_now_[l]; }
   // Particles released so far over all seeds (at the seed at time() included), and of
   // those the ones still in the domain.
   long released() const;
@@ -78,6 +87,9 @@ private:
   double t0_ = 0, t_ = 0, spacing_ = 0;
   long next_ = 0;  // the next release index k (time t0 + kΔ), the same for every seed
   std::vector<SurfacePoint> seeds_;
+  std::vector<std::array<Vec3, 2>> lines_;  // the timelines' ends, placed on the domain
+  std::vector<Streakline> lines_now_;       // and the lines at t_
+  FlowMapOptions line_flow_;
   std::vector<std::vector<Particle>> dye_;  // per seed, by release
 };
 

@@ -7,7 +7,8 @@
 // drifts away. Where the flow has pulled two consecutive particles farther apart than
 // max_gap the line is broken (a straight chord across a stretched streak would cross
 // places no dye has been); particles left alone between breaks are drawn as dots on
-// planar pictures. Lines are stroked in runs of equal fading (16 steps).
+// planar pictures. Lines are stroked in runs of equal fading (16 steps). The injector's
+// timelines are drawn the same way in light blue, unfaded.
 //  - draw_dye: Cairo onto a planar picture (the particle and texture renderers), a
 //    domain point x at pixel to_pixel(x).
 //  - dye_overlay: lines and markers for MeshRenderer::render on surfaces (hidden where the

@@ -15,6 +15,7 @@
 #include "tvf/render/painterly.h"
 #include "tvf/render/texture_animation.h"
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -83,6 +84,9 @@ struct ParticleAnimationOptions {
   // (within three edge lengths), moved onto it. tvf::Error before anything is written
   // otherwise.
   std::vector<Vec3> dye_seeds;
+  // Timelines: segments [a, b] at the field's first time carried with the dye and drawn
+  // in light blue (TextureAnimationOptions::timelines).
+  std::vector<std::array<Vec3, 2>> timelines;
   double dye_release_spacing = 0.0;  // time; 0: a quarter of the pictures' spacing
   std::function<void(int done, int total)> progress;
 };

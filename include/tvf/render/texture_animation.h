@@ -30,6 +30,7 @@
 #include "tvf/render/dye_pictures.h"
 #include "tvf/render/image.h"
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -182,6 +183,10 @@ struct TextureAnimationOptions {
   // in the domain (z ignored); surfaces: a point on or near the surface (within three edge
   // lengths), moved onto it, the dye drawn on the surface (hidden behind it).
   std::vector<Vec3> streakline_seeds;
+  // Timelines: segments [a, b] drawn at the field's first time (ends placed as the seeds;
+  // on surfaces snapped onto it, trace_timeline), carried by the same flow as the dye and
+  // drawn in light blue in every picture: material lines stretching with the flow.
+  std::vector<std::array<Vec3, 2>> timelines;
   // How far the field carries the dye (> 0): its velocities times this, as the particle
   // renderer's time_scale (designed fields are often slow; the texture itself moves at
   // its own speed, TextureOptions::pixels_per_frame).
