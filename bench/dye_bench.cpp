@@ -5,6 +5,9 @@
 // frame further); BM_DyeRetraced traces every frame's streaklines from scratch with
 // trace_streakline (what the planar texture overlay did before). The *Walk variants force
 // the surface walk, the integrator every surface uses (FlowMapOptions::walk).
+// BM_TimelineIncremental and BM_TimelineRetraced do the same for a timeline across
+// y = 0.5 drawn at t = 0: MaterialLine advanced frame by frame (the renderers' --timeline)
+// against trace_timeline from t = 0 at every frame.
 #include "bench_scenes.h"
 #include "tvf/integrate/dye.h"
 #include "tvf/integrate/streakline.h"
@@ -13,6 +16,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -43,6 +47,7 @@ void retraced(benchmark::State& state, bool walk) {
   const DoubleGyre& g = bench::double_gyre();
   StreaklineOptions o;
   o.flow.walk = walk;
+  o.max_gap = std::numeric_limits<double>::infinity();  // the injector's releases, none added
   long points = 0;
   for (auto _ : state) {
     points = 0;
@@ -54,6 +59,41 @@ void retraced(benchmark::State& state, bool walk) {
   }
   state.counters["points_drawn"] = static_cast<double>(points);
 }
+
+const Vec3 line_a(0.1, 0.5, 0), line_b(1.9, 0.5, 0);
+
+void BM_TimelineIncremental(benchmark::State& state) {
+  const DoubleGyre& g = bench::double_gyre();
+  const FlowMap flow(g.bundle, g.field);
+  long points = 0;
+  for (auto _ : state) {
+    MaterialLine line(flow, line_a, line_b, TimelineOptions{});
+    points = 0;
+    for (int k = 1; k < g.field.frames(); ++k) {
+      line.advance(g.field.time().time(k));
+      points += static_cast<long>(line.line().points.size());
+    }
+    benchmark::DoNotOptimize(points);
+  }
+  state.counters["points_drawn"] = static_cast<double>(points);
+}
+BENCHMARK(BM_TimelineIncremental)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+void BM_TimelineRetraced(benchmark::State& state) {
+  const DoubleGyre& g = bench::double_gyre();
+  long points = 0;
+  for (auto _ : state) {
+    points = 0;
+    for (int k = 1; k < g.field.frames(); ++k) {
+      TimelineOptions o;
+      o.t1 = g.field.time().time(k);
+      points += static_cast<long>(trace_timeline(g.bundle, g.field, line_a, line_b, o).points.size());
+    }
+    benchmark::DoNotOptimize(points);
+  }
+  state.counters["points_drawn"] = static_cast<double>(points);
+}
+BENCHMARK(BM_TimelineRetraced)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime()->Iterations(1);
 
 void BM_DyeIncremental(benchmark::State& state) { incremental(state, false); }
 BENCHMARK(BM_DyeIncremental)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();

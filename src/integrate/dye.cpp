@@ -69,10 +69,10 @@ DyeInjector::DyeInjector(const TangentBundle& bundle, const Field& field, std::s
   for (const auto& [a, b] : options.timelines) {
     place(a, "timeline's first point");
     place(b, "timeline's last point");
-    lines_.push_back({a, b});
+    TimelineOptions o;
+    o.t0 = t0;
+    lines_.emplace_back(flow_, a, b, o);
   }
-  lines_now_.resize(lines_.size());
-  line_flow_ = options.flow;
   dye_.resize(seeds_.size());
   advance(t0);
 }
@@ -107,13 +107,7 @@ void DyeInjector::advance(double t) {
       p.left = m.left;
     }
   });
-  for (size_t l = 0; l < lines_.size(); ++l) {
-    TimelineOptions o;
-    o.t0 = t0_;
-    o.t1 = t;
-    o.flow = line_flow_;
-    lines_now_[l] = trace_timeline(bundle_, flow_.field(), lines_[l][0], lines_[l][1], o);
-  }
+  for (MaterialLine& line : lines_) line.advance(t);
 }
 
 Streakline DyeInjector::streakline(size_t s) const {

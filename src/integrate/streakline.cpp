@@ -42,24 +42,18 @@ void measure_gaps(Streakline& s, double resolution) {
 }
 
 // A particle of a curve: its parameter s (a release time, or the place along a timeline's
-// segment), where it starts (x0 in space) and where it is at t1.
-struct Sample {
-  double s = 0.0;
-  SurfacePoint start;
-  Vec3 x0 = Vec3::Zero();
-  FlowMapResult m;
-  Vec3 x = Vec3::Zero();
+// segment), where it starts (x0 in space) and where it is at the curve's time.
+using Sample = MaterialLine::Particle;
 
-  static Sample starting(double s, const SurfacePoint& start, const Vec3& x0) {
-    Sample out;
-    out.s = s;
-    out.start = start;
-    out.x0 = x0;
-    return out;
-  }
-};
+Sample starting(double s, const SurfacePoint& start, const Vec3& x0) {
+  Sample out;
+  out.s = s;
+  out.start = start;
+  out.x0 = x0;
+  return out;
+}
 
-// Carries the samples' starts to t1 (fills m and x), in parallel.
+// Carries the samples' starts to the curve's time (fills m and x), in parallel.
 template <class Advect>
 void carry(std::vector<Sample>& samples, const Mesh& mesh, Advect&& advect) {
   tbb::parallel_for(size_t{0}, samples.size(), [&](size_t k) {
@@ -68,15 +62,14 @@ void carry(std::vector<Sample>& samples, const Mesh& mesh, Advect&& advect) {
   });
 }
 
-// Starting from `line` (carried, sorted by s), halves every interval whose ends are further
-// apart than max_gap at t1 — mid(p, q) is the particle between them, carried by advect —
-// until none is, `most` particles are carried or the interval is shorter than `finest`
-// in s (each round at least halves the shortest interval, so this ends in ~40 rounds at
-// most); then the curve, broken where particles left, with its resolution measured.
+// Halves every interval of `line` (carried, sorted by s) whose ends are further apart than
+// max_gap — mid(p, q) is the particle between them, carried by advect — until none is,
+// `most` particles are carried or the interval is shorter than `finest` in s (each round at
+// least halves the shortest interval, so this ends in ~40 rounds at most). Returns whether
+// it ran out of particles.
 template <class Mid, class Advect>
-Streakline refined_curve(std::vector<Sample> line, Mid&& mid, Advect&& advect, const Mesh& mesh, double max_gap,
-                         double finest, long most, double t1) {
-  long released = static_cast<long>(line.size());
+bool refine(std::vector<Sample>& line, Mid&& mid, Advect&& advect, const Mesh& mesh, double max_gap, double finest,
+            long most) {
   bool out_of_particles = false;
   for (;;) {
     std::vector<Sample> added;
@@ -84,14 +77,13 @@ Streakline refined_curve(std::vector<Sample> line, Mid&& mid, Advect&& advect, c
       const Sample& p = line[k];
       const Sample& q = line[k + 1];
       if (p.m.left || q.m.left || !((p.x - q.x).norm() > max_gap) || q.s - p.s < finest) continue;
-      if (released + static_cast<long>(added.size()) >= most) {
+      if (static_cast<long>(line.size() + added.size()) >= most) {
         out_of_particles = true;
         break;
       }
       added.push_back(mid(p, q));
     }
-    if (added.empty()) break;
-    released += static_cast<long>(added.size());
+    if (added.empty()) return out_of_particles;
     carry(added, mesh, advect);
     std::vector<Sample> merged;
     merged.reserve(line.size() + added.size());
@@ -99,9 +91,14 @@ Streakline refined_curve(std::vector<Sample> line, Mid&& mid, Advect&& advect, c
                [](const Sample& x, const Sample& y) { return x.s < y.s; });
     line = std::move(merged);
   }
+}
+
+// The curve of a refined line at t1, broken where particles left, with its resolution
+// measured against max_gap.
+Streakline curve(const std::vector<Sample>& line, double max_gap, bool out_of_particles, double t1) {
   Streakline out;
   out.t = t1;
-  out.released = static_cast<int>(released);
+  out.released = static_cast<int>(line.size());
   bool gap = false;
   for (const Sample& s : line) {
     if (s.m.left) {
@@ -156,12 +153,13 @@ Streakline trace_streakline(const TangentBundle& bundle, const Field& field, con
   const Vec3 at = surface_position(bundle.mesh(), start);
   auto advect = [&](const Sample& p) { return flow.advect(p.start, p.s, options.t1); };
   std::vector<Sample> line(releases.size());
-  for (size_t k = 0; k < releases.size(); ++k) line[k] = Sample::starting(releases[k], start, at);
+  for (size_t k = 0; k < releases.size(); ++k) line[k] = starting(releases[k], start, at);
   carry(line, bundle.mesh(), advect);
-  auto mid = [&](const Sample& p, const Sample& q) { return Sample::starting(0.5 * (p.s + q.s), start, at); };
+  auto mid = [&](const Sample& p, const Sample& q) { return starting(0.5 * (p.s + q.s), start, at); };
   const double finest = 1e-12 * std::max(1.0, std::abs(options.t1));
-  Streakline out = refined_curve(std::move(line), mid, advect, bundle.mesh(), max_gap, finest,
-                                 static_cast<long>(releases.size()) + options.max_added, options.t1);
+  const bool out_of_particles = refine(line, mid, advect, bundle.mesh(), max_gap, finest,
+                                       static_cast<long>(releases.size()) + options.max_added);
+  Streakline out = curve(line, max_gap, out_of_particles, options.t1);
   if (!std::isfinite(max_gap)) {  // not refined: judged by the mean edge length all the same
     out.largest_gap = 0;
     out.unresolved = 0;
@@ -174,14 +172,23 @@ Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const
                           const TimelineOptions& options) {
   check_range(field, options.t0, "timeline start time");
   check_range(field, options.t1, "timeline time");
+  MaterialLine line(FlowMap(bundle, field, options.flow), a, b, options);
+  line.advance(options.t1);
+  return line.line();
+}
+
+MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, const TimelineOptions& options)
+    : flow_(flow), t0_(options.t0), t_(options.t0), max_points_(options.max_points) {
+  const TangentBundle& bundle = flow.bundle();
+  check_range(flow.field(), options.t0, "timeline start time");
   if (options.count < 2) throw Error(fmt::format("a timeline needs at least 2 particles, not {}", options.count));
   if (options.count > options.max_points)
     throw Error(fmt::format("a timeline of {} particles is more than its limit of {}", options.count,
                             options.max_points));
   const Mesh& mesh = bundle.mesh();
-  const PointLocator locator(mesh);
-  const Vec3 pa = surface_position(mesh, locate(bundle, locator, a, "timeline's first point"));
-  const Vec3 pb = surface_position(mesh, locate(bundle, locator, b, "timeline's last point"));
+  locator_ = std::make_shared<const PointLocator>(mesh);
+  const Vec3 pa = surface_position(mesh, locate(bundle, *locator_, a, "timeline's first point"));
+  const Vec3 pb = surface_position(mesh, locate(bundle, *locator_, b, "timeline's last point"));
   // Both ends at one point is no line: every particle would be the same one.
   if ((pa - pb).norm() <= 1e-12 * std::max(1.0, mesh.diameter())) {
     auto show = [&](const Vec3& x) {
@@ -192,35 +199,51 @@ Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const
   }
   if (std::isnan(options.max_gap) || options.max_gap < 0)
     throw Error(fmt::format("the timeline's largest gap {} must be positive", options.max_gap));
-  const double max_gap = options.max_gap > 0 ? options.max_gap : mesh.mean_edge_length();
-  const FlowMap flow(bundle, field, options.flow);
+  max_gap_ = options.max_gap > 0 ? options.max_gap : mesh.mean_edge_length();
 
-  // The segment's points snapped onto the domain; one added between two neighbours starts
-  // at the midpoint of their starts, snapped: on a planar domain the segment's own point,
-  // on a surface a point between them where the segment's snapped points jump (a chord
-  // over a hollow, whose closest points jump across it).
-  auto snapped = [&](double s, const Vec3& x) {
-    const SurfacePoint p = locator.closest(x);
-    return Sample::starting(s, p, surface_position(mesh, p));
-  };
-  auto mid = [&](const Sample& p, const Sample& q) { return snapped(0.5 * (p.s + q.s), 0.5 * (p.x0 + q.x0)); };
-  std::vector<Sample> line;
+  // The segment's points snapped onto the domain, filled in until neighbours are within
+  // max_gap there too (refine() at t0); one still torn (snapped midpoints that land on an
+  // end) is no line to carry.
   for (int k = 0; k < options.count; ++k) {
     const double s = static_cast<double>(k) / (options.count - 1);
-    line.push_back(snapped(s, (1.0 - s) * a + s * b));
+    const SurfacePoint p = locator_->closest((1.0 - s) * a + s * b);
+    particles_.push_back(starting(s, p, surface_position(mesh, p)));
   }
-  // The line where it starts: filled in until neighbours are within max_gap there too; one
-  // still torn (snapped midpoints that land on an end) is no line to carry.
-  auto stay = [&](const Sample& p) { return FlowMapResult{p.start, false, options.t0}; };
-  carry(line, mesh, stay);
-  const Streakline start = refined_curve(line, mid, stay, mesh, max_gap, 1e-12, options.max_points, options.t0);
-  if (start.unresolved_by == Streakline::Refinement::torn)
+  for (Sample& p : particles_) {
+    p.m = FlowMapResult{p.start, false, t0_};
+    p.x = p.x0;
+  }
+  refine();
+  if (line_.unresolved_by == Streakline::Refinement::torn)
     throw Error(fmt::format("the segment between the timeline's ends, snapped onto the surface, breaks apart (its "
                             "points jump up to {:.3g} across it): give ends closer together",
-                            start.largest_gap));
-  auto advect = [&](const Sample& p) { return flow.advect(p.start, options.t0, options.t1); };
-  carry(line, mesh, advect);
-  return refined_curve(std::move(line), mid, advect, mesh, max_gap, 1e-12, options.max_points, options.t1);
+                            line_.largest_gap));
+}
+
+void MaterialLine::advance(double t) {
+  check_range(flow_.field(), t, "timeline time");
+  const double from = t_;
+  auto onward = [&](const Sample& p) { return p.m.left ? p.m : flow_.advect(p.m.where, from, t); };
+  carry(particles_, flow_.bundle().mesh(), onward);
+  t_ = t;
+  refine();
+}
+
+// Adds particles where neighbours at time() are more than max_gap apart: each starts at the
+// midpoint of its neighbours' starts, snapped (on a planar domain the segment's own point,
+// on a surface a point between them where the segment's snapped points jump — a chord over
+// a hollow, whose closest points jump across it), carried from t0. Then measures the line.
+void MaterialLine::refine() {
+  const Mesh& mesh = flow_.bundle().mesh();
+  auto mid = [&](const Sample& p, const Sample& q) {
+    const SurfacePoint at = locator_->closest(0.5 * (p.x0 + q.x0));
+    return starting(0.5 * (p.s + q.s), at, surface_position(mesh, at));
+  };
+  auto from_start = [&](const Sample& p) {
+    return t_ == t0_ ? FlowMapResult{p.start, false, t0_} : flow_.advect(p.start, t0_, t_);
+  };
+  const bool out_of_particles = tvf::refine(particles_, mid, from_start, mesh, max_gap_, 1e-12, max_points_);
+  line_ = curve(particles_, max_gap_, out_of_particles, t_);
 }
 
 }  // namespace tvf

@@ -173,7 +173,8 @@ TEST(Dye, DropsWhatLeavesTheDomainAsTracingDoes) {
 }
 
 TEST(Dye, TimelinesAreTracedAtEveryAdvance) {
-  // A timeline beside the dye (none needed): at each time, trace_timeline's from the start.
+  // A timeline beside the dye (none needed): at each time, trace_timeline's from the start
+  // (the times are frame times, so the positions agree to rounding).
   const Mesh grid = make_grid(GridSpec{21, 21, {-1, -1}, {1, 1}});
   const TangentBundle bundle(grid);
   const Field field = field_from(bundle, TimeSampling{0, 2, 9}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
@@ -190,8 +191,10 @@ TEST(Dye, TimelinesAreTracedAtEveryAdvance) {
     const Streakline want = trace_timeline(bundle, field, Vec3(-0.5, 0, 0), Vec3(0.5, 0, 0), to);
     const Streakline& got = dye.timeline(0);
     ASSERT_EQ(got.points.size(), want.points.size());
-    for (size_t k = 0; k < want.points.size(); ++k)
-      EXPECT_EQ(got.points[k].position, want.points[k].position);
+    for (size_t k = 0; k < want.points.size(); ++k) {
+      EXPECT_EQ(got.points[k].release, want.points[k].release);
+      EXPECT_NEAR((got.points[k].position - want.points[k].position).norm(), 0.0, 1e-12);
+    }
     // The rotation turns it by t − 0.5.
     EXPECT_NEAR(std::atan2(got.points.back().position.y(), got.points.back().position.x()), t - 0.5, 1e-3);
   }

@@ -263,5 +263,57 @@ TEST(Timeline, ASegmentBetweenPiecesOfASurfaceIsRefused) {
   EXPECT_EQ(trace_timeline(bundle, field, Vec3(0.2, 0.5, 10), Vec3(0.8, 0.5, 10), o).left, 0);
 }
 
+TEST(MaterialLine, IsRefinedAsItStretchesEachParticleAtItsParametersImage) {
+  // The saddle V = (x, −y) stretches a segment along y = 0.5 by e^{t − t0}. Advanced picture
+  // by picture (times between frames too), every particle sits at its parameter's image, the
+  // particles added at earlier times stay, neighbours are within max_gap at every time, and
+  // the line agrees with trace_timeline's at the end.
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field saddle = field_from(bundle, TimeSampling{0, 1, 11}, [](const Vec3& x, double) { return Vec3(x.x(), -x.y(), 0); });
+  const FlowMap flow(bundle, saddle);
+  TimelineOptions o;
+  o.t0 = 0;
+  o.count = 5;
+  o.max_gap = 0.05;
+  const Vec3 a(-0.3, 0.5, 0), b(0.3, 0.5, 0);
+  MaterialLine line(flow, a, b, o);
+  // Refined where it is drawn: 0.6 long, so at least 13 particles.
+  EXPECT_EQ(line.time(), 0.0);
+  EXPECT_GE(line.line().points.size(), 13u);
+  EXPECT_EQ(line.line().unresolved, 0);
+  size_t before = line.line().points.size();
+  for (const double t : {0.25, 0.5, 0.55, 0.8, 1.0}) {
+    line.advance(t);
+    const Streakline& s = line.line();
+    EXPECT_EQ(s.t, t);
+    EXPECT_GE(s.points.size(), before);
+    before = s.points.size();
+    EXPECT_EQ(s.unresolved, 0);
+    EXPECT_LE(s.largest_gap, 0.05);
+    for (size_t k = 0; k < s.points.size(); ++k) {
+      const double x0 = -0.3 + 0.6 * s.points[k].release;
+      EXPECT_NEAR((s.points[k].position - Vec3(x0 * std::exp(t), 0.5 * std::exp(-t), 0)).norm(), 0.0, 1e-6);
+      if (k > 0) {
+        EXPECT_GT(s.points[k].release, s.points[k - 1].release);
+      }
+    }
+  }
+  o.t1 = 1;
+  const Streakline once = trace_timeline(bundle, saddle, a, b, o);
+  EXPECT_GE(line.line().points.size(), once.points.size());
+  // (0.55 is no frame time: the steps split there, so the two agree to the RK4 error.)
+  EXPECT_NEAR((line.line().points.front().position - once.points.front().position).norm(), 0.0, 1e-6);
+  // Backwards to t0: each particle where it started, to the integration error.
+  line.advance(0);
+  for (const StreakPoint& p : line.line().points)
+    EXPECT_NEAR((p.position - ((1 - p.release) * a + p.release * b)).norm(), 0.0, 1e-6);
+  EXPECT_THROW(line.advance(1.5), Error);
+  // Refused as trace_timeline refuses.
+  EXPECT_THROW(MaterialLine(flow, a, a, o), Error);
+  o.count = 1;
+  EXPECT_THROW(MaterialLine(flow, a, b, o), Error);
+}
+
 }  // namespace
 }  // namespace tvf

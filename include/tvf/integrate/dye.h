@@ -35,9 +35,9 @@ struct DyeOptions {
                                    // spacing (trace_streakline's default)
   double max_seed_distance = 0.0;  // surfaces: how far (world units) a seed may be from the
                                    // surface; 0: three mean edge lengths (timelines' ends too)
-  // Material lines drawn at t0 beside the dye: each segment (its ends as seeds are placed)
-  // is trace_timeline's from t0 to the dye's time, traced afresh at each advance (each
-  // costs its particles' RK4 from t0, so a long animation's last frames cost the most).
+  // Material lines drawn at t0 beside the dye: each segment (its ends placed as seeds are)
+  // is a MaterialLine (streakline.h) advanced with the dye: its particles are carried from
+  // picture to picture, and those added where it stretches from t0.
   std::vector<std::array<Vec3, 2>> timelines;
   FlowMapOptions flow;
 };
@@ -66,9 +66,9 @@ public:
   // The dye of seed s at time(), as trace_streakline gives it.
   Streakline streakline(size_t s) const;
   // The timelines (DyeOptions::timelines) at time(): trace_timeline(bundle, field, a, b,
-  // {start(), time()}), refined where neighbours part.
+  // {start(), time()}) along the curve, refined where neighbours part (MaterialLine).
   size_t num_timelines() const { return lines_.size(); }
-  const Streakline& timeline(size_t l) const { return lines_now_[l]; }
+  const Streakline& timeline(size_t l) const { return lines_[l].line(); }
   // Particles released so far over all seeds (at the seed at time() included), and of
   // those the ones still in the domain.
   long released() const;
@@ -87,9 +87,7 @@ private:
   double t0_ = 0, t_ = 0, spacing_ = 0;
   long next_ = 0;  // the next release index k (time t0 + kΔ), the same for every seed
   std::vector<SurfacePoint> seeds_;
-  std::vector<std::array<Vec3, 2>> lines_;  // the timelines' ends, placed on the domain
-  std::vector<Streakline> lines_now_;       // and the lines at t_
-  FlowMapOptions line_flow_;
+  std::vector<MaterialLine> lines_;  // the timelines
   std::vector<std::vector<Particle>> dye_;  // per seed, by release
 };
 

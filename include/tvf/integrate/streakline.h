@@ -14,9 +14,12 @@
 #include "tvf/integrate/flow_map.h"
 #include "tvf/mesh/tangent_bundle.h"
 
+#include <memory>
 #include <vector>
 
 namespace tvf {
+
+class PointLocator;
 
 // The most particles one streakline releases (and a dye seed over the field's time range,
 // dye.h): a spacing that would release more is refused, not allocated (a million carried
@@ -78,9 +81,9 @@ struct TimelineOptions {
   double t0 = 0.0;         // when the line is drawn
   double t1 = 1.0;         // when it is shown (t1 < t0: backwards)
   int count = 100;         // particles on the initial segment (at least 2)
-  double max_gap = 0.0;    // world distance between neighbours at t1 above which a midpoint
-                           // is added (and carried); 0: a mean edge length. At most
-                           // max_points in all.
+  double max_gap = 0.0;    // world distance between neighbours above which a midpoint is
+                           // added (and carried), at t0 and at t1; 0: a mean edge length.
+                           // At most max_points in all.
   int max_points = 20000;
   FlowMapOptions flow;
 };
@@ -88,7 +91,9 @@ struct TimelineOptions {
 // The segment from a to b at t0, carried to t1; release = the parameter along the segment.
 // On a surface the segment's points are snapped onto it; where they jump (a chord over a
 // hollow or through the inside) the particles added between neighbours start at their
-// midpoints snapped, so the line runs over the surface.
+// midpoints snapped, so the line runs over the surface. The line is refined at t0 (so it is
+// one line where it starts) and again at t1 where the flow parts neighbours (MaterialLine
+// with one advance).
 // Throws tvf::Error on times outside the field's range, a count below 2 or above
 // max_points, a negative or NaN max_gap, both ends at one point of the domain (on a
 // surface: once snapped to it), ends whose snapped midpoints cannot bridge the jump
@@ -96,5 +101,49 @@ struct TimelineOptions {
 // domain.
 Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const Vec3& a, const Vec3& b,
                           const TimelineOptions& options);
+
+// A timeline kept up to date while time goes on (the renderers' timelines, dye.h): advance(t)
+// carries its particles from time() to t and then adds particles where neighbours are more
+// than max_gap apart, each carried from t0 (the parts that stretch are refined as they
+// stretch, and particles once added stay). Across a clip each particle is carried once,
+// where tracing the timeline afresh at every picture carries every particle from t0 each
+// time. line() agrees with trace_timeline(bundle, field, a, b, {t0, time()}) along the
+// curve: positions of one parameter agree to rounding when the times advanced to are the
+// field's frame times (the flow map splits its steps there) and to the integration error
+// otherwise; it may hold more particles (those added at earlier times).
+class MaterialLine {
+public:
+  // The segment at options.t0 (options.t1 and options.flow are not used: `flow` carries it),
+  // refined there. Throws as trace_timeline.
+  MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, const TimelineOptions& options);
+
+  // Carries the line from time() to t (t < time(): backwards) and refines it at t. t must lie
+  // in the field's time range (tvf::Error otherwise).
+  void advance(double t);
+
+  double time() const { return t_; }
+  double start() const { return t0_; }
+  // The line at time(), ordered by parameter, broken where particles left the domain.
+  const Streakline& line() const { return line_; }
+
+  // A particle: its parameter s along the segment, where it starts (on the mesh and in
+  // space) and where it is at time().
+  struct Particle {
+    double s = 0.0;
+    SurfacePoint start;
+    Vec3 x0 = Vec3::Zero();
+    FlowMapResult m;
+    Vec3 x = Vec3::Zero();
+  };
+
+private:
+  void refine();
+  FlowMap flow_;
+  std::shared_ptr<const PointLocator> locator_;
+  double t0_ = 0.0, t_ = 0.0, max_gap_ = 0.0;
+  int max_points_ = 0;
+  std::vector<Particle> particles_;
+  Streakline line_;
+};
 
 }  // namespace tvf
