@@ -60,16 +60,11 @@ nlohmann::json points_json(const Streakline& s) {
   return points;
 }
 
-// A time option as given: positive and finite (left out, it is 0: the library's default).
-void check_positive_time(const CLI::App& sub, const char* name, double value) {
+// A time or distance option as given: positive and finite (left out, it is 0: the
+// library's default — half a frame, a quarter frame, a mean edge length).
+void check_positive(const CLI::App& sub, const char* name, double value, const char* what) {
   if ((sub.count(name) > 0 || value != 0) && !(value > 0 && std::isfinite(value)))
-    throw Error(fmt::format("{} {}: must be a positive time", name, value));
-}
-
-// --max-gap as given: a positive finite distance (left out, 0: a mean edge length).
-void check_max_gap(const CLI::App& sub, double value) {
-  if ((sub.count("--max-gap") > 0 || value != 0) && !(value > 0 && std::isfinite(value)))
-    throw Error(fmt::format("--max-gap {}: must be a positive distance", value));
+    throw Error(fmt::format("{} {}: must be a positive {}", name, value, what));
 }
 
 // Runs what integrates the input's field; the library's refusals (a field too fast for its
@@ -208,7 +203,7 @@ SurfaceView LcsCommand::surface_view(bool& given) const {
 int LcsCommand::run_ftle() {
   if (!(horizon_ > 0) || !std::isfinite(horizon_))
     throw Error(fmt::format("--horizon {}: must be a positive time", horizon_));
-  check_positive_time(*ftle_, "--dt", dt_);
+  check_positive(*ftle_, "--dt", dt_, "time");
   if (pictures_ < 0) throw Error(fmt::format("--pictures {}: must be 0 or more", pictures_));
   if (every_ < 1) throw Error(fmt::format("--every {}: must be at least 1", every_));
   if (size_ < 16 || size_ > 16384) throw Error(fmt::format("--size {}: must be in [16, 16384] pixels", size_));
@@ -323,9 +318,9 @@ int LcsCommand::run_ftle() {
 
 int LcsCommand::run_streaklines() {
   check_output_file(out_);  // before the work, not after it
-  check_positive_time(*streak_, "--release-spacing", spacing_);
-  check_positive_time(*streak_, "--dt", dt_);
-  check_max_gap(*streak_, max_gap_);
+  check_positive(*streak_, "--release-spacing", spacing_, "time");
+  check_positive(*streak_, "--dt", dt_, "time");
+  check_positive(*streak_, "--max-gap", max_gap_, "distance");
   bool view_given = false;
   const SurfaceView view = surface_view(view_given);
   const bool show = !quiet_ && progress_wanted();
@@ -421,8 +416,8 @@ int LcsCommand::run_timelines() {
   if (line_.size() == 5) throw Error("--line: give X0 Y0 X1 Y1 (planar) or X0 Y0 Z0 X1 Y1 Z1 (surfaces)");
   if (const int most = TimelineOptions{}.max_points; count_ < 2 || count_ > most)
     throw Error(fmt::format("--count {}: a timeline has 2 to {} particles", count_, most));
-  check_max_gap(*timeline_, max_gap_);
-  check_positive_time(*timeline_, "--dt", dt_);
+  check_positive(*timeline_, "--max-gap", max_gap_, "distance");
+  check_positive(*timeline_, "--dt", dt_, "time");
   bool view_given = false;
   const SurfaceView view = surface_view(view_given);
   const bool show = !quiet_ && progress_wanted();
