@@ -284,6 +284,8 @@ py::dict streak_dict(const Streakline& s, const char* release_key) {
   d["resolution"] = s.resolution;
   d["largest_gap"] = s.largest_gap;
   d["unresolved"] = s.unresolved;
+  const char* by = refinement_name(s.unresolved_by);
+  d["unresolved_by"] = by ? py::object(py::str(by)) : py::object(py::none());
   return d;
 }
 
@@ -549,12 +551,14 @@ cancelled).)")
 [t_start, t_end] (default: the time range), as `tvf streaklines`: where each released
 particle is at t_end. Returns {"points": (K, 3) oldest release first, "release": (K,) each
 particle's release time, "gap_before": (K,) a particle between it and the one before left
-the domain, "t", "released", "left", "resolution", "largest_gap", "unresolved"}.
+the domain, "t", "released", "left", "resolution", "largest_gap", "unresolved",
+"unresolved_by"}.
 release_spacing: time between releases (0: a quarter of the frame spacing; over a million
 releases is refused); max_gap: where neighbours end further apart, a particle released
 halfway between them is added (0: a mean edge length; at most 20,000 added;
 "unresolved" counts the neighbours still further apart, "largest_gap" the largest
-distance between them); dt: largest RK4 step.)")
+distance between them, "unresolved_by" what stopped the refinement: None when resolved,
+"particles" or "torn"); dt: largest RK4 step.)")
       .def(
           "timeline",
           [](const PyField& f, const std::vector<double>& a, const std::vector<double>& b, std::optional<double> t_start,
@@ -573,7 +577,8 @@ range), carried by the flow to t_end (default: its end; earlier carries it backw
 `tvf timelines`; `count` particles on the segment, refined where neighbours part by more
 than max_gap (0: a mean edge length; 20,000 particles at most). Returns {"points": (K, 3)
 along the line, "parameter": (K,) each particle's place on the initial segment in [0, 1],
-"gap_before", "t", "released", "left", "resolution", "largest_gap", "unresolved"}; both
+"gap_before", "t", "released", "left", "resolution", "largest_gap", "unresolved",
+"unresolved_by"}; both
 ends at one point raise ValueError.)")
       .def(
           "export_vdb",

@@ -99,6 +99,26 @@ void add_resolution(nlohmann::json& j, const Streakline& s) {
   j["resolution"] = s.resolution;
   j["largest_gap"] = s.largest_gap;
   j["unresolved"] = s.unresolved;
+  const char* by = refinement_name(s.unresolved_by);
+  j["unresolved_by"] = by ? nlohmann::json(by) : nlohmann::json();
+}
+
+// The warning for a curve left with neighbours further apart than its resolution, saying
+// what stopped the refinement (streakline.h): the particles ran out (`limit`; `advice` then
+// says what else to give) or the flow tears the curve (`torn`: which particles end apart).
+void warn_unresolved(const Streakline& s, const char* what, const std::string& limit, const std::string& torn,
+                     const char* advice) {
+  if (s.unresolved == 0) return;
+  if (s.unresolved_by == Streakline::Refinement::out_of_particles)
+    std::fprintf(stderr,
+                 "warning: the %s needs more than %s to keep neighbours within %.3g of each other at t = %g: %d "
+                 "pairs are further apart (up to %.3g), drawn as straight chords; give %s or a larger --max-gap\n",
+                 what, limit.c_str(), s.resolution, s.t, s.unresolved, s.largest_gap, advice);
+  else
+    std::fprintf(stderr,
+                 "warning: the flow tears the %s apart: %d pairs of %s are further apart than %.3g at t = %g (up to "
+                 "%.3g), drawn as straight chords\n",
+                 what, s.unresolved, torn.c_str(), s.resolution, s.t, s.largest_gap);
 }
 
 }  // namespace
@@ -390,12 +410,9 @@ int LcsCommand::run_streaklines() {
   write_file_atomically(out_, j.dump() + "\n");
   progress.finish();
   for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-  if (s.unresolved > 0)
-    std::fprintf(stderr,
-                 "warning: %d pairs of neighbouring particles are further apart at t = %g than the mean edge length "
-                 "%.3g (up to %.3g): the streakline is drawn as straight chords between them; give a smaller "
-                 "--release-spacing\n",
-                 s.unresolved, s.t, s.resolution, s.largest_gap);
+  warn_unresolved(s, "streakline",
+                  fmt::format("{} added releases", StreaklineOptions{}.max_added),
+                  "particles released within 1e-12 of each other", "a smaller --release-spacing");
   if (!quiet_) {
     std::printf("streakline at t = %g: %d particles released from t = %g", s.t, s.released, o.t0);
     if (s.left > 0) std::printf(", %d of them left the domain", s.left);
@@ -459,20 +476,9 @@ int LcsCommand::run_timelines() {
   write_file_atomically(out_, j.dump() + "\n");
   progress.finish();
   for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-  if (s.unresolved > 0) {
-    if (s.unresolved_by == Streakline::Refinement::out_of_particles)
-      std::fprintf(stderr,
-                   "warning: the timeline needs more than %d particles to keep neighbours within %.3g of each other at "
-                   "t = %g: %d pairs are further apart (up to %.3g), drawn as straight chords; give a shorter interval "
-                   "or a larger --max-gap\n",
-                   TimelineOptions{}.max_points, s.resolution, s.t, s.unresolved, s.largest_gap);
-    else
-      std::fprintf(stderr,
-                   "warning: the flow tears the timeline apart: %d pairs of neighbours within 1e-12 of each other "
-                   "along the line at t = %g are further apart than %.3g at t = %g (up to %.3g), drawn as straight "
-                   "chords\n",
-                   s.unresolved, o.t0, s.resolution, s.t, s.largest_gap);
-  }
+  warn_unresolved(s, "timeline", fmt::format("{} particles", TimelineOptions{}.max_points),
+                  fmt::format("neighbours within 1e-12 of each other along the line at t = {}", o.t0),
+                  "a shorter interval");
   if (!quiet_) {
     std::printf("timeline at t = %g: %zu particles from the line at t = %g", s.t, s.points.size(), o.t0);
     if (s.left > 0) std::printf(" (%d more left the domain)", s.left);

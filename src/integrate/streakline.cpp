@@ -117,6 +117,15 @@ Streakline curve(const std::vector<Sample>& line, double max_gap, bool out_of_pa
 
 }  // namespace
 
+const char* refinement_name(Streakline::Refinement r) {
+  switch (r) {
+    case Streakline::Refinement::out_of_particles: return "particles";
+    case Streakline::Refinement::torn: return "torn";
+    case Streakline::Refinement::resolved: break;
+  }
+  return nullptr;
+}
+
 Streakline trace_streakline(const TangentBundle& bundle, const Field& field, const Vec3& seed,
                             const StreaklineOptions& options) {
   check_range(field, options.t0, "streakline start time");

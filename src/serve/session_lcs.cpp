@@ -55,6 +55,7 @@ Vec3 position(const json& p, bool planar, const char* what, const std::string& k
 }
 
 json curve(const Streakline& s, bool planar, long long revision, double seconds) {
+  const char* by = refinement_name(s.unresolved_by);
   json points = json::array(), gaps = json::array();
   for (size_t i = 0; i < s.points.size(); ++i) {
     const Vec3& x = s.points[i].position;
@@ -65,7 +66,8 @@ json curve(const Streakline& s, bool planar, long long revision, double seconds)
           {"points", points},           {"gaps", gaps},
           {"released", s.released},     {"left", s.left},
           {"resolution", s.resolution}, {"largest_gap", s.largest_gap},
-          {"unresolved", s.unresolved}, {"seconds", seconds}};
+          {"unresolved", s.unresolved}, {"unresolved_by", by ? json(by) : json()},
+          {"seconds", seconds}};
 }
 
 double since(std::chrono::steady_clock::time_point start) {

@@ -120,16 +120,22 @@ TEST(CliLcs, StreaklineOfARotationIsTheCircleThroughTheSeed) {
   // Neighbours 0.1 rad apart on the circle of radius 0.5: within a mean edge length.
   EXPECT_NEAR(j["largest_gap"].get<double>(), std::sin(0.05), 1e-4);
   EXPECT_EQ(j["unresolved"], 0);
+  EXPECT_TRUE(j["unresolved_by"].is_null());
   EXPECT_GT(j["resolution"].get<double>(), j["largest_gap"].get<double>());
   // Asked for neighbours a millionth apart, the 20,000 added releases fall short: said so.
   const auto fine = run_tvf("streaklines " + quoted(dir / "rot") + " --seed 0.5 0 --from 0.5 --to 2 " +
                             "--max-gap 1e-6 --no-picture -q -o " + quoted(dir / "fine.json"));
   ASSERT_EQ(fine.exit_code, 0) << fine.output;
-  EXPECT_NE(fine.output.find("further apart at t = 2 than"), std::string::npos) << fine.output;
-  EXPECT_NE(fine.output.find("give a smaller --release-spacing"), std::string::npos) << fine.output;
+  EXPECT_NE(fine.output.find("needs more than 20000 added releases to keep neighbours within 1e-06 of each other at "
+                             "t = 2"),
+            std::string::npos)
+      << fine.output;
+  EXPECT_NE(fine.output.find("give a smaller --release-spacing or a larger --max-gap"), std::string::npos)
+      << fine.output;
   const nlohmann::json fj = nlohmann::json::parse(test::read_text(dir / "fine.json"));
   EXPECT_EQ(fj["resolution"], 1e-6);
   EXPECT_GT(fj["unresolved"].get<int>(), 0);
+  EXPECT_EQ(fj["unresolved_by"], "particles");
   // A timeline across the centre turns with it: by 2 radians from t = 0.
   const auto t = run_tvf("timelines " + quoted(dir / "rot") + " --line -0.5 0 0.5 0 --count 11 --max-gap 1 --to 2 -s 200 -o " +
                          quoted(dir / "time.json"));

@@ -188,7 +188,7 @@ def test_ftle_streakline_and_timeline_give_the_command_lines_numbers(tmp_path, g
     assert np.array_equal(s["points"], np.array(j["points"])[:, :3])
     assert np.array_equal(s["release"], np.array(j["points"])[:, 3])
     assert s["t"] == 0.5 and s["released"] == j["released"] and s["left"] == j["left"]
-    assert all(s[k] == j[k] for k in ("resolution", "largest_gap", "unresolved"))
+    assert all(s[k] == j[k] for k in ("resolution", "largest_gap", "unresolved", "unresolved_by"))
     assert np.all(np.diff(s["release"]) > 0)  # oldest first
 
     tl = f.timeline([-0.5, 0.0], [0.5, 0.0], 0.0, 1.0)
@@ -198,11 +198,15 @@ def test_ftle_streakline_and_timeline_give_the_command_lines_numbers(tmp_path, g
     j = json.loads((tmp_path / "t.json").read_text())
     assert np.array_equal(tl["points"], np.array(j["points"])[:, :3])
     assert tl["parameter"][0] == 0.0 and tl["parameter"][-1] == 1.0
-    assert all(tl[k] == j[k] for k in ("resolution", "largest_gap", "unresolved"))
+    assert all(tl[k] == j[k] for k in ("resolution", "largest_gap", "unresolved", "unresolved_by"))
     gaps = np.linalg.norm(np.diff(tl["points"], axis=0), axis=1)
     assert tl["unresolved"] == np.count_nonzero(gaps > tl["resolution"]) and tl["largest_gap"] == gaps.max()
     coarse = f.timeline([-0.5, 0.0], [0.5, 0.0], 0.0, 1.0, count=2, max_gap=10.0)
     assert len(coarse["points"]) == 2 and coarse["resolution"] == 10.0
+    assert coarse["unresolved_by"] is None
+    # Neighbours asked to be 1e-9 apart: the 20,000 particles fall short, and it says which limit.
+    fine = f.timeline([-0.5, 0.0], [0.5, 0.0], 0.0, 1.0, max_gap=1e-9)
+    assert fine["unresolved"] > 0 and fine["unresolved_by"] == "particles" and len(fine["points"]) == 20000
 
     # Progress after each frame and direction; a set cancel stops it (tvf.Cancelled).
     calls = []

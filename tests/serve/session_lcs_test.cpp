@@ -125,6 +125,7 @@ TEST(ServeLcs, StreaklinesAndTimelinesAreTheLibrarys) {
   EXPECT_EQ(a["resolution"].get<double>(), want.resolution);
   EXPECT_EQ(a["largest_gap"].get<double>(), want.largest_gap);
   EXPECT_EQ(a["unresolved"].get<int>(), want.unresolved);
+  EXPECT_TRUE(a["unresolved_by"].is_null());
   ASSERT_EQ(a["points"].size(), want.points.size());
   ASSERT_GT(want.points.size(), 50u);
   for (size_t i = 0; i < want.points.size(); ++i) {
@@ -141,6 +142,7 @@ TEST(ServeLcs, StreaklinesAndTimelinesAreTheLibrarys) {
   EXPECT_GE(line["points"].size(), 100u);
   EXPECT_DOUBLE_EQ(line["t"].get<double>(), 0.5);
   EXPECT_EQ(line["unresolved"].get<int>(), 0);
+  EXPECT_TRUE(line["unresolved_by"].is_null());
   EXPECT_LE(line["largest_gap"].get<double>(), line["resolution"].get<double>());
 
   auto error = [&](const char* path, const json& body, int status = 400) {

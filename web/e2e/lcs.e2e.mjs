@@ -210,6 +210,27 @@ try {
   check(carried.points.length > drawn.points.length && Math.max(...ys) - Math.min(...ys) > 0.3,
     `five time units later it is carried and stretched (${carried.points.length} points, y over ${Math.min(...ys).toFixed(2)}–${Math.max(...ys).toFixed(2)})`);
   await d.shot(a.out, "lcs_timeline_t10.png");
+  // Resolved (the server's answers say so): no note under the view.
+  check(carried.unresolved === 0 && carried.unresolved_by === null && (await page.isHidden("#lcs-notes")),
+    `the resolved timeline is not noted (largest gap ${carried.largest_gap.toFixed(3)}, resolution ${carried.resolution.toFixed(3)})`);
+  // An answer with neighbours left apart (the server's own, with its resolution keys set as
+  // a torn line's are: no designed field on this grid tears one at 1e-12) is said under the
+  // view, with what stopped it; the next resolved answer takes the note away.
+  await page.route("**/api/timeline", async (route) => {
+    const response = await route.fetch();
+    const json = await response.json();
+    Object.assign(json, { unresolved: 2, largest_gap: 0.25, unresolved_by: "torn" });
+    await route.fulfill({ response, json });
+  });
+  await d.goto(19);
+  await page.waitForSelector("#lcs-notes:not([hidden])", { timeout: 60000 });
+  const note = await page.textContent("#lcs-notes");
+  check(/^note: timeline 1 at t = 9\.5\d*: 2 neighbours are further apart than [\d.]+ \(up to 0\.25\), drawn as straight lines; the flow tears it apart/.test(note),
+    `an unresolved timeline is noted: ${note}`);
+  await d.shot(a.out, "lcs_timeline_note.png");
+  await page.unroute("**/api/timeline");
+  await d.goto(20);
+  await page.waitForSelector("#lcs-notes[hidden]", { state: "attached", timeout: 60000 });
   await d.goto(10);
   // With the FTLE under it.
   await page.selectOption("#lcs-mode", "forward");

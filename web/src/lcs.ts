@@ -35,6 +35,13 @@ export interface CurveAnswer {
   gaps: number[];
   released: number;
   left: number;
+  // How well the points resolve the curve (docs/file_formats.md): neighbours further apart
+  // than `resolution` are drawn as straight chords; `unresolved` counts them, and
+  // `unresolved_by` says what stopped the server refining them.
+  resolution: number;
+  largest_gap: number;
+  unresolved: number;
+  unresolved_by: "particles" | "torn" | null;
   seconds: number;
 }
 
@@ -169,6 +176,7 @@ export class LcsOverlay {
     if (this.seeds.length === 0 && this.lines.length === 0) {
       this.dye = [];
       this.timelines = [];
+      this.onChange();  // the surface view and the notes drop what was shown
       return;
     }
     try {
@@ -232,6 +240,29 @@ export class LcsOverlay {
     for (const d of this.timelines) for (const points of curveRuns(d)) out.push({ points, color: TIMELINE_COLOR });
     return out;
   }
+}
+
+// One line per dye streakline or timeline the server could not resolve (neighbours left
+// further apart than its resolution, drawn as straight chords), saying which and why; none
+// when every curve is resolved. Dye lines are numbered in the order their seeds were
+// placed, timelines in the order they were drawn.
+export function unresolvedNotes(dye: CurveAnswer[], timelines: CurveAnswer[]): string[] {
+  const g = (x: number) => String(Number(x.toPrecision(3)));
+  const note = (what: string, c: CurveAnswer, torn: string, particles: string) => {
+    const pairs = `${c.unresolved} neighbour${c.unresolved > 1 ? "s are" : " is"} further apart than ${g(c.resolution)} (up to ${g(c.largest_gap)}), drawn as straight lines`;
+    const why = c.unresolved_by === "torn" ? `the flow tears it apart (${torn} end up that far apart)` : particles;
+    return `${what} at t = ${g(c.t)}: ${pairs}; ${why}`;
+  };
+  const out: string[] = [];
+  dye.forEach((c, i) => {
+    if (c.unresolved > 0)
+      out.push(note(`dye ${i + 1}`, c, "releases within 1e-12 of each other in time", "more than the server's 20,000 added releases are needed"));
+  });
+  timelines.forEach((c, i) => {
+    if (c.unresolved > 0)
+      out.push(note(`timeline ${i + 1}`, c, "particles within 1e-12 of each other on the line", "more than the server's 20,000 particles are needed"));
+  });
+  return out;
 }
 
 // A streakline or timeline cut where particles left the domain (its `gaps`: the indices

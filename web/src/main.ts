@@ -23,7 +23,7 @@ import { bifurcationAt, boundingRadius, surfaceHandleAt as handleOnSurface } fro
 import { TimeStrip } from "./surface/timestrip";
 import { resample } from "./stroke";
 import { rounded, View } from "./view";
-import { DYE_COLOR, drawLegend, LcsOverlay, vertexColors } from "./lcs";
+import { DYE_COLOR, drawLegend, LcsOverlay, unresolvedNotes, vertexColors } from "./lcs";
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -101,9 +101,18 @@ const lcs = new LcsOverlay(
   () => {
     redraw();
     showLcsOnSurface();
+    showLcsNotes();
   },
   (m) => say(m, true),
 );
+// Under the view: which dye lines and timelines the server could not resolve, and why
+// (their chords are not the flow's curve there).
+function showLcsNotes() {
+  const box = $("lcs-notes");
+  const notes = unresolvedNotes(lcs.dye, lcs.timelines);
+  box.hidden = notes.length === 0;
+  box.textContent = notes.map((n) => `note: ${n}`).join("\n");
+}
 function refreshLcs() {
   if (state.resultRevision < 0 || !state.mesh || !state.analysis) return;
   void lcs.update(currentTime(), state.analysis.times[0], state.mesh.grid);

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { curveRuns, legendLabels, magma, vertexColors, type FtleAnswer } from "../src/lcs";
+import { curveRuns, legendLabels, magma, unresolvedNotes, vertexColors, type CurveAnswer, type FtleAnswer } from "../src/lcs";
 
 // The overlay's colours are tvf ftle's (render/lcs_pictures.cpp's magma stops).
 describe("magma", () => {
@@ -58,5 +58,35 @@ describe("legendLabels", () => {
   it("names the direction, the horizon (cut where the window was shortened) and the range", () => {
     expect(legendLabels(answer([], [0.0123456, 2.5]))).toEqual({ title: "FTLE forward, T = 1", low: "0.0123", high: "2.50" });
     expect(legendLabels(answer([], [0, 1], { direction: "backward", horizon: 2, span: 0.75, cut: true })).title).toBe("FTLE backward, T = 0.750 (cut)");
+  });
+});
+
+describe("unresolvedNotes", () => {
+  const curve = (over: Partial<CurveAnswer> = {}): CurveAnswer => ({
+    revision: 1,
+    t: 2,
+    points: [],
+    gaps: [],
+    released: 10,
+    left: 0,
+    resolution: 0.03125,
+    largest_gap: 0.01,
+    unresolved: 0,
+    unresolved_by: null,
+    seconds: 0,
+    ...over,
+  });
+  it("says nothing when every curve is resolved", () => {
+    expect(unresolvedNotes([curve()], [curve(), curve()])).toEqual([]);
+  });
+  it("names each unresolved curve, its gaps and why", () => {
+    const notes = unresolvedNotes(
+      [curve(), curve({ unresolved: 3, largest_gap: 0.5, unresolved_by: "particles" })],
+      [curve({ t: 20, unresolved: 1, largest_gap: 0.0858, unresolved_by: "torn" })],
+    );
+    expect(notes).toEqual([
+      "dye 2 at t = 2: 3 neighbours are further apart than 0.0313 (up to 0.5), drawn as straight lines; more than the server's 20,000 added releases are needed",
+      "timeline 1 at t = 20: 1 neighbour is further apart than 0.0313 (up to 0.0858), drawn as straight lines; the flow tears it apart (particles within 1e-12 of each other on the line end up that far apart)",
+    ]);
   });
 });

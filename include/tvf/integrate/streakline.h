@@ -70,6 +70,10 @@ struct Streakline {
   Refinement unresolved_by = Refinement::resolved;
 };
 
+// unresolved_by as the JSON answers and Python's dicts give it (DESIGN §12 keys): null when
+// resolved, "particles" (out of particles) or "torn".
+const char* refinement_name(Streakline::Refinement r);
+
 // Throws tvf::Error on t0 > t1, times outside the field's range, a non-positive release
 // spacing or one that would release more than kMaxReleases particles over [t0, t1], a
 // negative or NaN max_gap, or (planar domains) a seed outside the domain; all name the
