@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 namespace tvf {
 
@@ -65,31 +67,49 @@ void carry(std::vector<Sample>& samples, const Mesh& mesh, Advect&& advect) {
 // Halves every interval of `line` (carried, sorted by s) whose ends are further apart than
 // max_gap — mid(p, q) is the particle between them, carried by advect — until none is,
 // `most` particles are carried or the interval is shorter than `finest` in s (each round at
-// least halves the shortest interval, so this ends in ~40 rounds at most). Returns whether
-// it ran out of particles.
+// least halves the shortest interval, so this ends in ~40 rounds at most). The widest
+// intervals are halved first, and when a round wants more particles than are left the
+// widest get them: a budget that runs out leaves the line's largest gaps halved, not one
+// stretch refined to max_gap and another left coarse.
+// Returns whether it ran out of particles.
 template <class Mid, class Advect>
 bool refine(std::vector<Sample>& line, Mid&& mid, Advect&& advect, const Mesh& mesh, double max_gap, double finest,
             long most) {
-  bool out_of_particles = false;
   for (;;) {
-    std::vector<Sample> added;
+    std::vector<std::pair<double, size_t>> wide;  // (gap, k): line[k] and line[k + 1] too far apart
     for (size_t k = 0; k + 1 < line.size(); ++k) {
       const Sample& p = line[k];
       const Sample& q = line[k + 1];
-      if (p.m.left || q.m.left || !((p.x - q.x).norm() > max_gap) || q.s - p.s < finest) continue;
-      if (static_cast<long>(line.size() + added.size()) >= most) {
-        out_of_particles = true;
-        break;
-      }
-      added.push_back(mid(p, q));
+      const double gap = (p.x - q.x).norm();
+      if (p.m.left || q.m.left || !(gap > max_gap) || q.s - p.s < finest) continue;
+      wide.emplace_back(gap, k);
     }
-    if (added.empty()) return out_of_particles;
+    if (wide.empty()) return false;
+    // Widest first: only those wider than half the widest this round. Every interval wider
+    // than max_gap is halved in the end either way (the particles within budget are the
+    // same), but a budget that runs out leaves the line evenly resolved.
+    double widest = 0;
+    for (const auto& w : wide) widest = std::max(widest, w.first);
+    std::erase_if(wide, [&](const auto& w) { return !(w.first > 0.5 * widest); });
+    const long room = std::max(0L, most - static_cast<long>(line.size()));
+    const bool out_of_particles = static_cast<long>(wide.size()) > room;
+    if (out_of_particles) {
+      const auto keep = wide.begin() + room;
+      std::nth_element(wide.begin(), keep, wide.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+      wide.erase(keep, wide.end());
+      if (wide.empty()) return true;
+    }
+    std::vector<Sample> added;
+    added.reserve(wide.size());
+    for (const auto& [gap, k] : wide) added.push_back(mid(line[k], line[k + 1]));
     carry(added, mesh, advect);
     std::vector<Sample> merged;
     merged.reserve(line.size() + added.size());
+    std::sort(added.begin(), added.end(), [](const Sample& x, const Sample& y) { return x.s < y.s; });
     std::merge(line.begin(), line.end(), added.begin(), added.end(), std::back_inserter(merged),
                [](const Sample& x, const Sample& y) { return x.s < y.s; });
     line = std::move(merged);
+    if (out_of_particles) return true;
   }
 }
 
@@ -210,9 +230,11 @@ MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, co
     throw Error(fmt::format("the timeline's largest gap {} must be positive", options.max_gap));
   max_gap_ = options.max_gap > 0 ? options.max_gap : mesh.mean_edge_length();
 
-  // The segment's points snapped onto the domain, filled in until neighbours are within
-  // max_gap there too (refine() at t0); one still torn (snapped midpoints that land on an
-  // end) is no line to carry.
+  // The segment's points snapped onto the domain, filled in until neighbours are within a
+  // mean edge length (or max_gap, if that is larger) there: a line on the surface, where the
+  // snapped points jump over a hollow. One still torn (snapped midpoints that land on an
+  // end) is no line to carry. Refining further at t0 would spend the particles evenly
+  // along the segment before the flow shows where they are needed.
   for (int k = 0; k < options.count; ++k) {
     const double s = static_cast<double>(k) / (options.count - 1);
     const SurfacePoint p = locator_->closest((1.0 - s) * a + s * b);
@@ -222,7 +244,7 @@ MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, co
     p.m = FlowMapResult{p.start, false, t0_};
     p.x = p.x0;
   }
-  refine();
+  refine(std::max(max_gap_, mesh.mean_edge_length()));
   if (line_.unresolved_by == Streakline::Refinement::torn)
     throw Error(fmt::format("the segment between the timeline's ends, snapped onto the surface, breaks apart (its "
                             "points jump up to {:.3g} across it): give ends closer together",
@@ -235,14 +257,15 @@ void MaterialLine::advance(double t) {
   auto onward = [&](const Sample& p) { return p.m.left ? p.m : flow_.advect(p.m.where, from, t); };
   carry(particles_, flow_.bundle().mesh(), onward);
   t_ = t;
-  refine();
+  refine(max_gap_);
 }
 
-// Adds particles where neighbours at time() are more than max_gap apart: each starts at the
+// Adds particles where neighbours at time() are more than `gap` apart: each starts at the
 // midpoint of its neighbours' starts, snapped (on a planar domain the segment's own point,
 // on a surface a point between them where the segment's snapped points jump — a chord over
-// a hollow, whose closest points jump across it), carried from t0. Then measures the line.
-void MaterialLine::refine() {
+// a hollow, whose closest points jump across it), carried from t0. Then measures the line
+// against `gap`.
+void MaterialLine::refine(double gap) {
   const Mesh& mesh = flow_.bundle().mesh();
   auto mid = [&](const Sample& p, const Sample& q) {
     const SurfacePoint at = locator_->closest(0.5 * (p.x0 + q.x0));
@@ -251,8 +274,8 @@ void MaterialLine::refine() {
   auto from_start = [&](const Sample& p) {
     return t_ == t0_ ? FlowMapResult{p.start, false, t0_} : flow_.advect(p.start, t0_, t_);
   };
-  const bool out_of_particles = tvf::refine(particles_, mid, from_start, mesh, max_gap_, 1e-12, max_points_);
-  line_ = curve(particles_, max_gap_, out_of_particles, t_);
+  const bool out_of_particles = tvf::refine(particles_, mid, from_start, mesh, gap, 1e-12, max_points_);
+  line_ = curve(particles_, gap, out_of_particles, t_);
 }
 
 }  // namespace tvf

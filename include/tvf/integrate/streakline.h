@@ -85,9 +85,9 @@ struct TimelineOptions {
   double t0 = 0.0;         // when the line is drawn
   double t1 = 1.0;         // when it is shown (t1 < t0: backwards)
   int count = 100;         // particles on the initial segment (at least 2)
-  double max_gap = 0.0;    // world distance between neighbours above which a midpoint is
-                           // added (and carried), at t0 and at t1; 0: a mean edge length.
-                           // At most max_points in all.
+  double max_gap = 0.0;    // world distance between neighbours at t1 above which a midpoint
+                           // is added (and carried); 0: a mean edge length. At most
+                           // max_points in all.
   int max_points = 20000;
   FlowMapOptions flow;
 };
@@ -95,9 +95,9 @@ struct TimelineOptions {
 // The segment from a to b at t0, carried to t1; release = the parameter along the segment.
 // On a surface the segment's points are snapped onto it; where they jump (a chord over a
 // hollow or through the inside) the particles added between neighbours start at their
-// midpoints snapped, so the line runs over the surface. The line is refined at t0 (so it is
-// one line where it starts) and again at t1 where the flow parts neighbours (MaterialLine
-// with one advance).
+// midpoints snapped, so the line runs over the surface. The line is filled in at t0 to a
+// mean edge length (so it is one line on the surface where it starts) and refined at t1
+// where the flow parts neighbours (MaterialLine with one advance).
 // Throws tvf::Error on times outside the field's range, a count below 2 or above
 // max_points, a negative or NaN max_gap, both ends at one point of the domain (on a
 // surface: once snapped to it), ends whose snapped midpoints cannot bridge the jump
@@ -118,7 +118,9 @@ Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const
 class MaterialLine {
 public:
   // The segment at options.t0 (options.t1 and options.flow are not used: `flow` carries it),
-  // refined there. Throws as trace_timeline.
+  // filled in there until neighbours are within a mean edge length (or max_gap if larger;
+  // line() is measured against that until the first advance, which refines to max_gap).
+  // Throws as trace_timeline.
   MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, const TimelineOptions& options);
 
   // Carries the line from time() to t (t < time(): backwards) and refines it at t. t must lie
@@ -141,7 +143,7 @@ public:
   };
 
 private:
-  void refine();
+  void refine(double gap);
   FlowMap flow_;
   std::shared_ptr<const PointLocator> locator_;
   double t0_ = 0.0, t_ = 0.0, max_gap_ = 0.0;
