@@ -574,7 +574,8 @@ distance between them, "unresolved_by" what stopped the refinement: None when re
           py::arg("count") = 100, py::arg("max_gap") = 0.0,
           R"(The timeline: the segment from a to b drawn at t_start (default: the start of the time
 range), carried by the flow to t_end (default: its end; earlier carries it backwards), as
-`tvf timelines`; `count` particles on the segment, refined where neighbours part by more
+`tvf timelines` (on a surface the line is the shortest path over it between a and b);
+`count` particles on the line, refined where neighbours part by more
 than max_gap (0: a mean edge length; 20,000 particles at most). Returns {"points": (K, 3)
 along the line, "parameter": (K,) each particle's place on the initial segment in [0, 1],
 "gap_before", "t", "released", "left", "resolution", "largest_gap", "unresolved",

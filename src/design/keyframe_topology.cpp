@@ -8,6 +8,7 @@
 #include "tvf/design/keyframes.h"
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
+#include "tvf/integrate/surface_path.h"
 #include "tvf/integrate/surface_walk.h"
 #include "tvf/mesh/edge_paths.h"
 
@@ -2270,101 +2271,23 @@ class PhaseCheck {
   std::vector<size_t> order_;  // the frames' order of counting: from both ends inwards
 };
 
-// The shortest path on a surface from p to q (points on it), as a curve on the surface: the
-// shortest path along the mesh's edges (Dijkstra from the corners of p's face to those of
-// q's), resampled at about an edge length apart (at most kCurvePoints segments), then
-// straightened on the surface: Gauss–Seidel sweeps move each inner point towards the
-// middle of its two neighbours by that displacement's part in its face's plane (over-
-// relaxed; walk_surface, so a point never leaves the surface, whatever the chord between
-// its neighbours runs through), until no point moves more than 1e-6 edge lengths. Its
-// fixed points are polylines whose turn at every point is normal to the surface, evenly
-// spaced: a discrete geodesic, in the edge path's homotopy class. Null when no edge path
-// joins them (another connected component) or the curve has no length: then the path is
-// the straight segment.
+// The shortest path on a surface from p to q (points on it), as a curve on the surface:
+// SurfacePaths::between (integrate/surface_path.h: the edge path resampled at about an
+// edge length apart, at most kCurvePoints segments, straightened into a discrete geodesic).
+// Null when no edge path joins them (another connected component) or the curve has no
+// length: then the path is the straight segment.
 constexpr int kCurvePoints = 96;
 
-std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, const std::vector<std::vector<int>>& nbr,
-                                                  const Vec3& p, const Vec3& q) {
-  const Mesh& mesh = space.mesh();
-  const TangentBundle& bundle = space.bundle();
-  const double h = mesh.mean_edge_length();
-  const SurfacePoint sp = space.locate(p), sq = space.locate(q);
-  // The edge path: p, the vertices, q.
-  std::vector<Vec3> line{p};
-  if (sp.face != sq.face) {
-    const auto nv = static_cast<size_t>(mesh.num_vertices());
-    std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
-    std::vector<int> from(nv, -1);
-    using Item = std::pair<double, int>;
-    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-    for (const int c : mesh.face(sp.face)) {
-      dist[static_cast<size_t>(c)] = (mesh.position(c) - p).norm();
-      queue.emplace(dist[static_cast<size_t>(c)], c);
-    }
-    auto is_goal = [&](int v) {
-      const Face& f = mesh.face(sq.face);
-      return v == f[0] || v == f[1] || v == f[2];
-    };
-    double best = std::numeric_limits<double>::infinity();
-    int end = -1;
-    while (!queue.empty()) {
-      const auto [d, v] = queue.top();
-      queue.pop();
-      if (d > dist[static_cast<size_t>(v)]) continue;
-      if (d >= best) break;
-      if (is_goal(v) && d + (mesh.position(v) - q).norm() < best) best = d + (mesh.position(v) - q).norm(), end = v;
-      for (const int w : nbr[static_cast<size_t>(v)]) {
-        const double nd = d + (mesh.position(w) - mesh.position(v)).norm();
-        if (nd < dist[static_cast<size_t>(w)]) {
-          dist[static_cast<size_t>(w)] = nd;
-          from[static_cast<size_t>(w)] = v;
-          queue.emplace(nd, w);
-        }
-      }
-    }
-    if (end < 0) return nullptr;
-    std::vector<Vec3> vertices;
-    for (int v = end; v >= 0; v = from[static_cast<size_t>(v)]) vertices.push_back(mesh.position(v));
-    line.insert(line.end(), vertices.rbegin(), vertices.rend());
-  }
-  line.push_back(q);
-  std::vector<double> cum(line.size(), 0.0);
-  for (size_t k = 1; k < line.size(); ++k) cum[k] = cum[k - 1] + (line[k] - line[k - 1]).norm();
-  const double total = cum.back();
+std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, const SurfacePaths& paths, const Vec3& p,
+                                                  const Vec3& q) {
+  std::vector<Vec3> x = paths.between(p, q, kCurvePoints);
+  if (x.empty()) return nullptr;
   auto curve = std::make_shared<SurfaceCurve>();
   curve->space = &space;
-  if (!(total > 0)) {
+  if (x.size() == 2 && !((x[1] - x[0]).norm() > 0)) {  // p and q one point
     curve->points = {p, q};
     curve->along = {0.0, 1.0};
     return curve;
-  }
-  // Resampled evenly along the edge path (every point on the surface: on an edge, or in
-  // p's or q's face).
-  const int n = std::clamp(static_cast<int>(std::ceil(total / h)), 2, kCurvePoints);
-  std::vector<Vec3> x(static_cast<size_t>(n) + 1);
-  std::vector<SurfacePoint> on(x.size());
-  for (int i = 0, k = 0; i <= n; ++i) {
-    const double a = total * i / n;
-    while (k + 2 < static_cast<int>(line.size()) && cum[static_cast<size_t>(k) + 1] < a) ++k;
-    const auto ku = static_cast<size_t>(k);
-    const double w = cum[ku + 1] > cum[ku] ? std::clamp((a - cum[ku]) / (cum[ku + 1] - cum[ku]), 0.0, 1.0) : 0.0;
-    x[static_cast<size_t>(i)] = i == 0 ? p : i == n ? q : Vec3(line[ku] + w * (line[ku + 1] - line[ku]));
-    on[static_cast<size_t>(i)] = space.locate(x[static_cast<size_t>(i)]);
-    x[static_cast<size_t>(i)] = i == 0 ? p : i == n ? q : surface_position(mesh, on[static_cast<size_t>(i)]);
-  }
-  // Straightened on the surface.
-  const double omega = std::min(1.9, 2 / (1 + std::sin(std::numbers::pi / n)));
-  for (int sweep = 0; sweep < 20 * n + 200; ++sweep) {
-    double moved = 0;
-    for (size_t i = 1; i + 1 < x.size(); ++i) {
-      const Vec3 d = 0.5 * (x[i - 1] + x[i + 1]) - x[i];
-      const cplx step = omega * bundle.world_to_face(on[i].face, d);
-      if (std::abs(step) == 0) continue;
-      on[i] = walk_surface(bundle, on[i], step).end;
-      x[i] = surface_position(mesh, on[i]);
-      moved = std::max(moved, std::abs(step));
-    }
-    if (moved < 1e-6 * h) break;
   }
   curve->points = std::move(x);
   curve->along.assign(curve->points.size(), 0.0);
@@ -3530,18 +3453,9 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       if (const int s = e.kind == "singular" ? element_singularity(k, e.at) : -1; s >= 0) designed[k][static_cast<size_t>(s)] = 1;
   }
 
-  // The mesh's vertex neighbours (surface_curve's edge paths).
-  std::vector<std::vector<int>> neighbours;
-  if (!space.planar()) {
-    neighbours.resize(static_cast<size_t>(mesh.num_vertices()));
-    for (int e = 0; e < mesh.num_halfedges(); ++e) {
-      const int a = mesh.tail(e), b = mesh.head(e);
-      for (const auto& [u, w] : {std::pair{a, b}, std::pair{b, a}}) {
-        std::vector<int>& list = neighbours[static_cast<size_t>(u)];
-        if (std::find(list.begin(), list.end(), w) == list.end()) list.push_back(w);
-      }
-    }
-  }
+  // Shortest paths over the surface (surface_curve).
+  std::optional<SurfacePaths> paths;
+  if (!space.planar()) paths.emplace(space.bundle(), space.locator());
   // The key frames' times as the field has them: each is held at the nearest frame
   // (keyframe_frame), so the paths run between those frames' times; a path planned to the
   // key frame's own time between two frames would reach it half a frame early or late (the
@@ -3563,7 +3477,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     tr.t0 = t0;
     tr.t1 = t1;
     tr.ease = interval_ease(keyframe_times, t0, t1);
-    if (!space.planar()) tr.curve = surface_curve(space, neighbours, tr.p0, tr.p1);
+    if (!space.planar()) tr.curve = surface_curve(space, *paths, tr.p0, tr.p1);
     tr.ref_e1 = bundle.face_e1(a.where.face);
     tr.j0 = to_linear(a.jacobian);
     tr.j1 = {j1_in_face.alpha, beta_in_frame(bundle, face1, tr.ref_e1, j1_in_face.beta)};
@@ -3667,7 +3581,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
           // from the saddle to the node (the curve the pair's tracks run along) and its
           // direction there; on the plane the segment's.
           const std::shared_ptr<const SurfaceCurve> between =
-              space.planar() ? nullptr : surface_curve(space, neighbours, saddle.position, node.position);
+              space.planar() ? nullptr : surface_curve(space, *paths, saddle.position, node.position);
           const Vec3 mid = between ? surface_position(mesh, space.locate(between->at(0.5)))
                                    : surface_position(mesh, space.locate(0.5 * (saddle.position + node.position)));
           const int face = space.locate(mid).face;

@@ -2,6 +2,7 @@
 
 #include "tvf/core/error.h"
 #include "tvf/field/point_locator.h"
+#include "tvf/integrate/surface_path.h"
 
 #include <tbb/parallel_for.h>
 
@@ -218,11 +219,11 @@ MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, co
   locator_ = std::make_shared<const PointLocator>(mesh);
   const Vec3 pa = surface_position(mesh, locate(bundle, *locator_, a, "timeline's first point"));
   const Vec3 pb = surface_position(mesh, locate(bundle, *locator_, b, "timeline's last point"));
+  auto show = [&](const Vec3& x) {
+    return bundle.is_flat() ? fmt::format("({}, {})", x.x(), x.y()) : fmt::format("({}, {}, {})", x.x(), x.y(), x.z());
+  };
   // Both ends at one point is no line: every particle would be the same one.
   if ((pa - pb).norm() <= 1e-12 * std::max(1.0, mesh.diameter())) {
-    auto show = [&](const Vec3& x) {
-      return bundle.is_flat() ? fmt::format("({}, {})", x.x(), x.y()) : fmt::format("({}, {}, {})", x.x(), x.y(), x.z());
-    };
     throw Error(fmt::format("the timeline's ends {} and {} are one point of the domain: give two different points",
                             show(a), show(b)));
   }
@@ -230,23 +231,40 @@ MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, co
     throw Error(fmt::format("the timeline's largest gap {} must be positive", options.max_gap));
   max_gap_ = options.max_gap > 0 ? options.max_gap : mesh.mean_edge_length();
 
-  // The segment's points snapped onto the domain, filled in until neighbours are within a
-  // mean edge length (or max_gap, if that is larger) there: a line on the surface, where the
-  // snapped points jump over a hollow. One still torn (snapped midpoints that land on an
-  // end) is no line to carry. Refining further at t0 would spend the particles evenly
-  // along the segment before the flow shows where they are needed.
-  for (int k = 0; k < options.count; ++k) {
-    const double s = static_cast<double>(k) / (options.count - 1);
-    const SurfacePoint p = locator_->closest((1.0 - s) * a + s * b);
-    particles_.push_back(starting(s, p, surface_position(mesh, p)));
+  // The line where it is drawn: on a planar domain the segment from a to b; on a surface the
+  // shortest path over it between the ends' closest points (a discrete geodesic,
+  // surface_path.h), which is what a segment drawn on the surface means (the chord between
+  // them runs through the inside, and its closest points jump across hollows).
+  if (bundle.is_flat()) {
+    path_ = {a, b};
+  } else {
+    path_ = SurfacePaths(bundle, *locator_).between(pa, pb, kPathSegments);
+    if (path_.empty())
+      throw Error(fmt::format("the timeline's ends {} and {} lie on separate pieces of the surface: no path over it "
+                              "joins them",
+                              show(a), show(b)));
   }
+  along_.assign(path_.size(), 0.0);
+  for (size_t k = 1; k < path_.size(); ++k) along_[k] = along_[k - 1] + (path_[k] - path_[k - 1]).norm();
+  if (!(along_.back() > 0)) {  // straightened to a point (a closed surface's antipodes, say): the chord
+    path_ = {pa, pb};
+    along_ = {0.0, (pb - pa).norm()};
+  }
+  for (double& x : along_) x /= along_.back();
+
+  // The line's points, filled in until neighbours are within a mean edge length (or
+  // max_gap, if that is larger) there: where the path's chords are longer than that, their
+  // points snapped to the surface could jump. One still torn (points that land on an end)
+  // is no line to carry. Refining further at t0 would spend the particles evenly along the
+  // line before the flow shows where they are needed.
+  for (int k = 0; k < options.count; ++k) particles_.push_back(start_at(static_cast<double>(k) / (options.count - 1)));
   for (Sample& p : particles_) {
     p.m = FlowMapResult{p.start, false, t0_};
     p.x = p.x0;
   }
   refine(std::max(max_gap_, mesh.mean_edge_length()));
   if (line_.unresolved_by == Streakline::Refinement::torn)
-    throw Error(fmt::format("the segment between the timeline's ends, snapped onto the surface, breaks apart (its "
+    throw Error(fmt::format("the line between the timeline's ends, snapped onto the surface, breaks apart (its "
                             "points jump up to {:.3g} across it): give ends closer together",
                             line_.largest_gap));
 }
@@ -260,17 +278,22 @@ void MaterialLine::advance(double t) {
   refine(max_gap_);
 }
 
+// The particle at parameter s of the line where it is drawn: the path's point at that
+// fraction of its length, snapped onto the domain (on a planar domain the segment's own
+// point).
+MaterialLine::Particle MaterialLine::start_at(double s) const {
+  const auto k = static_cast<size_t>(std::upper_bound(along_.begin() + 1, along_.end() - 1, s) - along_.begin()) - 1;
+  const double w = along_[k + 1] > along_[k] ? std::clamp((s - along_[k]) / (along_[k + 1] - along_[k]), 0.0, 1.0) : 0.0;
+  const SurfacePoint at = locator_->closest((1.0 - w) * path_[k] + w * path_[k + 1]);
+  return starting(s, at, surface_position(flow_.bundle().mesh(), at));
+}
+
 // Adds particles where neighbours at time() are more than `gap` apart: each starts at the
-// midpoint of its neighbours' starts, snapped (on a planar domain the segment's own point,
-// on a surface a point between them where the segment's snapped points jump — a chord over
-// a hollow, whose closest points jump across it), carried from t0. Then measures the line
-// against `gap`.
+// line's point halfway between theirs in parameter (start_at), carried from t0. Then
+// measures the line against `gap`.
 void MaterialLine::refine(double gap) {
   const Mesh& mesh = flow_.bundle().mesh();
-  auto mid = [&](const Sample& p, const Sample& q) {
-    const SurfacePoint at = locator_->closest(0.5 * (p.x0 + q.x0));
-    return starting(0.5 * (p.s + q.s), at, surface_position(mesh, at));
-  };
+  auto mid = [&](const Sample& p, const Sample& q) { return start_at(0.5 * (p.s + q.s)); };
   auto from_start = [&](const Sample& p) {
     return t_ == t0_ ? FlowMapResult{p.start, false, t0_} : flow_.advect(p.start, t0_, t_);
   };

@@ -240,10 +240,10 @@ TEST(Timeline, ABudgetThatRunsOutHalvesTheWidestGapsFirst) {
   EXPECT_LT(s.largest_gap, 2.0 * length / 99);
 }
 
-TEST(Timeline, OnASurfaceTheSnappedSegmentIsFilledInWhereItJumps) {
-  // A chord through the sphere's centre: its points snap to either pole, (±1, 0, 0); the
-  // particles added between them start at their midpoints snapped, so the line at t0 runs
-  // over the sphere from one pole to the other, every neighbour within a mean edge length.
+TEST(Timeline, OnASurfaceIsTheShortestPathOverIt) {
+  // Ends at either pole, (±1, 0, 0): the chord between them runs through the centre, but the
+  // line at t0 is the shortest path over the sphere, half a great circle (length π, less
+  // the icosphere's faceting), every neighbour within a mean edge length.
   const Mesh& sphere = test::icosphere_mesh();
   const TangentBundle bundle(sphere);
   const Field field = field_from(bundle, TimeSampling{0, 1, 5}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
@@ -256,6 +256,10 @@ TEST(Timeline, OnASurfaceTheSnappedSegmentIsFilledInWhereItJumps) {
   EXPECT_NEAR((pole_to_pole.points.front().position - Vec3(1, 0, 0)).norm(), 0.0, 0.02);
   EXPECT_NEAR((pole_to_pole.points.back().position - Vec3(-1, 0, 0)).norm(), 0.0, 0.02);
   for (const StreakPoint& p : pole_to_pole.points) EXPECT_NEAR(p.position.norm(), 1.0, 0.02);
+  double length = 0;
+  for (size_t k = 1; k < pole_to_pole.points.size(); ++k)
+    length += (pole_to_pole.points[k].position - pole_to_pole.points[k - 1].position).norm();
+  EXPECT_NEAR(length, M_PI, 0.02 * M_PI);
   // A chord over a quarter of the equator snaps to one arc: carried round the axis by 1 rad.
   o.t1 = 1;
   const Streakline s = trace_timeline(bundle, field, Vec3(1, 0, 0), Vec3(0, 1, 0), o);
@@ -265,8 +269,8 @@ TEST(Timeline, OnASurfaceTheSnappedSegmentIsFilledInWhereItJumps) {
 }
 
 TEST(Timeline, ASegmentBetweenPiecesOfASurfaceIsRefused) {
-  // Two unit squares ten apart: the segment from one to the other snaps to either, and every
-  // midpoint between their points snaps back onto one of them: no line.
+  // Two unit squares ten apart: no path over the surface joins a point of one to a point of
+  // the other, so there is no line.
   const Mesh squares({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 10}, {1, 0, 10}, {1, 1, 10}, {0, 1, 10}},
                      {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}});
   const TangentBundle bundle(squares);
@@ -278,7 +282,7 @@ TEST(Timeline, ASegmentBetweenPiecesOfASurfaceIsRefused) {
     trace_timeline(bundle, field, Vec3(0.5, 0.5, 0), Vec3(0.5, 0.5, 10), o);
     ADD_FAILURE() << "not refused";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("snapped onto the surface, breaks apart (its points jump up to 10"),
+    EXPECT_NE(std::string(e.what()).find("lie on separate pieces of the surface: no path over it joins them"),
               std::string::npos)
         << e.what();
   }

@@ -6,8 +6,8 @@
 //    (flow_map.h) to t1, with releases added between neighbours that drift apart. Ordered
 //    by release time, oldest first, so consecutive points are neighbours along the streak.
 //  - a timeline at time t1 is a material line: the points of a curve at t0 (a segment
-//    between two points, straight in the plane; on a surface its points are snapped to
-//    the surface) carried to t1, refined where neighbours drift apart.
+//    between two points, straight in the plane; on a surface the shortest path over it
+//    between them) carried to t1, refined where neighbours drift apart.
 // Particles that leave the domain before t1 are dropped and counted. In a steady field a
 // streakline is the streamline through the seed (the tests check both closed forms).
 #include "tvf/field/field.h"
@@ -92,17 +92,16 @@ struct TimelineOptions {
   FlowMapOptions flow;
 };
 
-// The segment from a to b at t0, carried to t1; release = the parameter along the segment.
-// On a surface the segment's points are snapped onto it; where they jump (a chord over a
-// hollow or through the inside) the particles added between neighbours start at their
-// midpoints snapped, so the line runs over the surface. The line is filled in at t0 to a
-// mean edge length (so it is one line on the surface where it starts) and refined at t1
+// The segment from a to b at t0, carried to t1; release = the parameter along it (its
+// arclength over the whole). On a surface the ends are moved to their closest points and
+// the line is the shortest path over the surface between them (SurfacePaths,
+// surface_path.h: the chord between them runs through the inside, and its closest points
+// jump across hollows). The line is filled in at t0 to a mean edge length and refined at t1
 // where the flow parts neighbours (MaterialLine with one advance).
 // Throws tvf::Error on times outside the field's range, a count below 2 or above
 // max_points, a negative or NaN max_gap, both ends at one point of the domain (on a
-// surface: once snapped to it), ends whose snapped midpoints cannot bridge the jump
-// between them (separate pieces of a surface), or (planar domains) an end outside the
-// domain.
+// surface: once moved onto it), ends on separate pieces of a surface (no path over it
+// joins them), or (planar domains) an end outside the domain.
 Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const Vec3& a, const Vec3& b,
                           const TimelineOptions& options);
 
@@ -143,11 +142,16 @@ public:
   };
 
 private:
+  // A surface timeline's path: at most this many segments (about an edge length each).
+  static constexpr int kPathSegments = 256;
+  Particle start_at(double s) const;
   void refine(double gap);
   FlowMap flow_;
   std::shared_ptr<const PointLocator> locator_;
   double t0_ = 0.0, t_ = 0.0, max_gap_ = 0.0;
   int max_points_ = 0;
+  std::vector<Vec3> path_;     // the line at t0: the segment, or the path over the surface
+  std::vector<double> along_;  // each path point's arclength over the whole (0 … 1)
   std::vector<Particle> particles_;
   Streakline line_;
 };

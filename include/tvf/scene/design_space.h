@@ -31,6 +31,7 @@ public:
   double diameter() const { return diameter_; }
   // The point of the domain closest to x (x itself, located in a face, on planar grids).
   SurfacePoint locate(const Vec3& x) const;
+  const PointLocator& locator() const { return locator_; }
   // The Gaussian curvature within edge-path distance `radius` of the domain's point
   // nearest x: the sum of the angle defects of the vertices reached (edge_path_distances
   // from that point's face corners). 0 on a plane; a whole cap (the end of a tail, a finger) holds
