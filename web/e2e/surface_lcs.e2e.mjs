@@ -9,7 +9,8 @@
 //   back at the current time, its newest point at the click, every point on the mesh
 //   (distance to the nearest face), carried away from the seed, drawn in dye green where
 //   the camera sees it, and younger when the slider goes back; a Dye drag: a timeline,
-//   on the mesh, the dragged segment at the time it was drawn, carried later;
+//   on the mesh, the shortest path over it between the drag's ends at the time it was
+//   drawn (within 0.05 of the chord), carried later;
 // - the Streakline tool: an S dragged on the sphere at t = 0.8 becomes a streakline
 //   element of [x, y, z] points, and the dye traced in the new field (POST
 //   /api/streakline) lies on the sketch (Hausdorff distance within 1.5 mean edge lengths).
@@ -290,7 +291,7 @@ async function sphereCase(browser) {
     const line = await page.evaluate(() => window.tvf.lcs.lines[0].line);
     const chord = Math.max(...drawn.points.map((q) => toPolyline(q, line)));
     check(drawn.points.length >= 50 && dist(drawn.points[0], line[0]) < 1e-3 && dist(drawn.points.at(-1), line[1]) < 1e-3 && chord < 0.05,
-      `a Dye drag draws a timeline: at its time the dragged segment snapped to the mesh (${drawn.points.length} points, within ${chord.toFixed(3)} of the chord)`);
+      `a Dye drag draws a timeline: at its time the shortest path over the mesh between the drag's ends (${drawn.points.length} points, within ${chord.toFixed(3)} of the chord)`);
     check(offMesh(mesh, drawn.points, edge) < 1e-6, "its points lie on the mesh");
     await d.goto(30); // t = 0.75
     await page.waitForFunction(() => Math.abs(window.tvf.lcs.timelines[0]?.t - 0.75) < 1e-9, null, { timeout: 120000 });
