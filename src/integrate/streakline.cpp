@@ -67,8 +67,9 @@ void carry(std::vector<Sample>& samples, const Mesh& mesh, Advect&& advect) {
 
 // Halves every interval of `line` (carried, sorted by s) whose ends are further apart than
 // max_gap — mid(p, q) is the particle between them, carried by advect — until none is,
-// `most` particles are carried or the interval is shorter than `finest` in s (each round at
-// least halves the shortest interval, so this ends in ~40 rounds at most). The widest
+// `most` particles are carried or the interval is shorter than `finest` in s (every
+// interval halved is at most half as long in s, so none is halved more than ~40 times:
+// this ends). The widest
 // intervals are halved first, and when a round wants more particles than are left the
 // widest get them: a budget that runs out leaves the line's largest gaps halved, not one
 // stretch refined to max_gap and another left coarse.
@@ -246,7 +247,7 @@ MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, co
   }
   along_.assign(path_.size(), 0.0);
   for (size_t k = 1; k < path_.size(); ++k) along_[k] = along_[k - 1] + (path_[k] - path_[k - 1]).norm();
-  if (!(along_.back() > 0)) {  // straightened to a point (a closed surface's antipodes, say): the chord
+  if (!(along_.back() > 0)) {  // a path of no length (only by rounding: the ends are apart): the chord
     path_ = {pa, pb};
     along_ = {0.0, (pb - pa).norm()};
   }
