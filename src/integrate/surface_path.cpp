@@ -13,17 +13,7 @@
 namespace tvf {
 
 SurfacePaths::SurfacePaths(const TangentBundle& bundle, const PointLocator& locator)
-    : bundle_(bundle), locator_(locator) {
-  const Mesh& mesh = bundle.mesh();
-  neighbours_.resize(static_cast<size_t>(mesh.num_vertices()));
-  for (int e = 0; e < mesh.num_halfedges(); ++e) {
-    const int a = mesh.tail(e), b = mesh.head(e);
-    for (const auto& [u, w] : {std::pair{a, b}, std::pair{b, a}}) {
-      std::vector<int>& list = neighbours_[static_cast<size_t>(u)];
-      if (std::find(list.begin(), list.end(), w) == list.end()) list.push_back(w);
-    }
-  }
-}
+    : bundle_(bundle), locator_(locator) {}
 
 std::vector<Vec3> SurfacePaths::between(const Vec3& p, const Vec3& q, int max_segments) const {
   const Mesh& mesh = bundle_.mesh();
@@ -53,14 +43,17 @@ std::vector<Vec3> SurfacePaths::between(const Vec3& p, const Vec3& q, int max_se
       if (d > dist[static_cast<size_t>(v)]) continue;
       if (d >= best) break;
       if (is_goal(v) && d + (mesh.position(v) - q).norm() < best) best = d + (mesh.position(v) - q).norm(), end = v;
-      for (const int w : neighbours_[static_cast<size_t>(v)]) {
-        const double nd = d + (mesh.position(w) - mesh.position(v)).norm();
-        if (nd < dist[static_cast<size_t>(w)]) {
-          dist[static_cast<size_t>(w)] = nd;
-          from[static_cast<size_t>(w)] = v;
-          queue.emplace(nd, w);
+      // The one ring (as edge_paths.cpp walks it): each outgoing halfedge's head, and the
+      // tail of the halfedge before it (on the boundary, the one no outgoing halfedge reaches).
+      for (const int e : mesh.outgoing(v))
+        for (const int w : {mesh.head(e), mesh.tail(Mesh::prev(e))}) {
+          const double nd = d + (mesh.position(w) - mesh.position(v)).norm();
+          if (nd < dist[static_cast<size_t>(w)]) {
+            dist[static_cast<size_t>(w)] = nd;
+            from[static_cast<size_t>(w)] = v;
+            queue.emplace(nd, w);
+          }
         }
-      }
     }
     if (end < 0) return {};
     std::vector<Vec3> vertices;
@@ -69,8 +62,8 @@ std::vector<Vec3> SurfacePaths::between(const Vec3& p, const Vec3& q, int max_se
   }
   line.push_back(q);
   std::vector<double> cum(line.size(), 0.0);
-  for (size_t k = 1; k < line.size(); ++k) cum[k] = cum[k - 1] + (line[k] - line[k - 1]).norm();
-  const double total = cum.back();
+  double total = 0;
+  for (size_t k = 1; k < line.size(); ++k) cum[k] = total += (line[k] - line[k - 1]).norm();
   if (!(total > 0)) return {p, q};
   // Resampled evenly along the edge path (every point on the surface: on an edge, or in
   // p's or q's face).

@@ -19,8 +19,7 @@ namespace tvf {
 
 class SurfacePaths {
 public:
-  // The mesh's vertex neighbours are gathered once, for every path asked of it. `locator`
-  // must be the mesh's and outlive this.
+  // `locator` must be the mesh's and outlive this.
   SurfacePaths(const TangentBundle& bundle, const PointLocator& locator);
 
   // The path from p to q (points on the surface; the first point is p and the last q, as
@@ -32,7 +31,6 @@ public:
 private:
   const TangentBundle& bundle_;
   const PointLocator& locator_;
-  std::vector<std::vector<int>> neighbours_;
 };
 
 }  // namespace tvf
