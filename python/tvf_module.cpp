@@ -743,11 +743,18 @@ line's sentence ("scene: elements[0].type: ...").)");
         o.on_picture = [&](int k, const Image& img) {
           if (keep.count(k)) made.emplace(k, img);
         };
+        TextureAnimationReport report;
         run_interruptible(progress, py::none(), [&](GenerateOptions& g) {
           o.progress = g.progress;
           o.cancel = g.cancel;
-          write_texture_animation(f.bundle(), *f.field, o);
+          report = write_texture_animation(f.bundle(), *f.field, o);
         });
+        // A timeline drawn unresolved at some pictures: a RuntimeWarning, as the CLI warns.
+        for (size_t l = 0; l < report.timelines.size(); ++l) {
+          const std::string note =
+              unresolved_note(report.timelines[l], "timelines[" + std::to_string(l) + "]", TimelineOptions{}.max_points);
+          if (!note.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, note.c_str(), 1) < 0) throw py::error_already_set();
+        }
         if (single) return rgb_array(made.at(wanted.front()));
         py::list out;
         for (int k : wanted) out.append(rgb_array(made.at(k)));
@@ -779,7 +786,8 @@ noise_scale, speed ("uniform" | "physical"), pixels_per_frame, contrast, seed: a
 mesh's centre towards the eye; up in the picture). streaklines: dye seeds, [x, y] on
 planar domains or [x, y, z] on or near a surface, whose dye, released from the first
 picture on, is drawn in every picture (`--streakline`); timelines: segments [a, b]
-drawn at the first picture and carried with the dye, in light blue (`--timeline`);
+drawn at the first picture and carried with the dye, in light blue (`--timeline`;
+a RuntimeWarning says which were not resolved at some pictures, and why);
 time_scale: how far the field carries that dye and those lines (`--time-scale`). progress(done, total) as pictures
 are made; returning False from it stops the animation before its next picture and
 raises tvf.Cancelled, as Ctrl-C stops it with KeyboardInterrupt: either way no file is

@@ -280,6 +280,15 @@ std::vector<std::array<Vec3, 2>> parse_timelines(const std::vector<std::string>&
   return lines;
 }
 
+// A --timeline drawn unresolved at some pictures: the picture alone does not say so. Warnings
+// go to stderr even with --quiet, as the input's warnings do.
+void warn_unresolved_timelines(const std::vector<TimelineRecord>& records, const std::vector<std::string>& texts) {
+  for (size_t l = 0; l < records.size() && l < texts.size(); ++l) {
+    const std::string note = unresolved_note(records[l], "--timeline " + texts[l], TimelineOptions{}.max_points);
+    if (!note.empty()) std::fprintf(stderr, "warning: %s\n", note.c_str());
+  }
+}
+
 }  // namespace
 
 // --frames as given (refused below 1), or 0 for the field's own frames.
@@ -405,6 +414,7 @@ int RenderCommand::run_particles() {
   const AnimationReport report = write_particle_animation(bundle, in.field, options);
   progress.finish();
   for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  warn_unresolved_timelines(report.timelines, timelines_);
   if (!quiet_) print_report("particle", report.frames, report.width, report.height, report.seconds, report.files);
   return 0;
 }
@@ -502,6 +512,7 @@ int RenderCommand::run_texture() {
   const TextureAnimationReport report = write_texture_animation(bundle, field, options);
   progress.finish();
   for (const auto& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  warn_unresolved_timelines(report.timelines, timelines_);
   if (!quiet_) {
     std::printf("rendered %d frames of %d×%d pixels in %.2f s", report.frames, report.width, report.height,
                 report.seconds);

@@ -74,7 +74,9 @@ DyeInjector::DyeInjector(const TangentBundle& bundle, const Field& field, std::s
     lines_.emplace_back(flow_, a, b, o);
   }
   dye_.resize(seeds_.size());
+  records_.resize(lines_.size());
   advance(t0);
+  records_.assign(lines_.size(), {});  // the records count the caller's advances (its pictures)
 }
 
 Vec3 DyeInjector::seed_position(size_t s) const { return surface_position(bundle_.mesh(), seeds_[s]); }
@@ -107,7 +109,20 @@ void DyeInjector::advance(double t) {
       p.left = m.left;
     }
   });
-  for (MaterialLine& line : lines_) line.advance(t);
+  for (size_t l = 0; l < lines_.size(); ++l) {
+    lines_[l].advance(t);
+    const Streakline& line = lines_[l].line();
+    TimelineRecord& r = records_[l];
+    ++r.times;
+    if (line.unresolved == 0) continue;
+    if (r.unresolved++ == 0) r.first_unresolved = t;
+    if (line.largest_gap > r.largest_gap || r.unresolved == 1) {
+      r.worst_time = t;
+      r.largest_gap = line.largest_gap;
+      r.resolution = line.resolution;
+      r.unresolved_by = line.unresolved_by;
+    }
+  }
 }
 
 Streakline DyeInjector::streakline(size_t s) const {
@@ -144,6 +159,18 @@ long DyeInjector::alive() const {
   long n = 0;
   for (size_t s = 0; s < dye_.size(); ++s) n += static_cast<long>(streakline(s).points.size());
   return n;
+}
+
+std::string unresolved_note(const TimelineRecord& r, const std::string& name, int max_points) {
+  if (r.unresolved == 0) return {};
+  const std::string why =
+      r.unresolved_by == Streakline::Refinement::out_of_particles
+          ? fmt::format("it needs more than {} particles there", max_points)
+          : std::string("the flow tears it apart there (particles that started 1e-12 apart along it end further apart)");
+  return fmt::format("{} is not resolved at {} of {} pictures, from t = {:g}: at t = {:g} neighbours are up to {:.3g} "
+                     "apart (more than {:.3g}); {}, so there it is drawn as straight chords, or broken where they are "
+                     "far apart in the picture",
+                     name, r.unresolved, r.times, r.first_unresolved, r.worst_time, r.largest_gap, r.resolution, why);
 }
 
 }  // namespace tvf

@@ -83,7 +83,11 @@ bool refine(std::vector<Sample>& line, Mid&& mid, Advect&& advect, const Mesh& m
       const Sample& p = line[k];
       const Sample& q = line[k + 1];
       const double gap = (p.x - q.x).norm();
-      if (p.m.left || q.m.left || !(gap > max_gap) || q.s - p.s < finest) continue;
+      // A pair one of which left the domain is halved too, measured to where that one left
+      // (its x): the curve runs on inside from the other towards the boundary, and as the pair
+      // closes in on the particle that leaves just at t1, both ends approach its exit. Both
+      // left: the curve is broken there (what stays between them is not looked for).
+      if ((p.m.left && q.m.left) || !(gap > max_gap) || q.s - p.s < finest) continue;
       wide.emplace_back(gap, k);
     }
     if (wide.empty()) return false;

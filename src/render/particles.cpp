@@ -260,6 +260,7 @@ AnimationReport write_particle_animation(const TangentBundle& bundle, const Fiel
   AnimationReport report;
   report.files = out.finish();
   report.frames = total;
+  if (dye) report.timelines = dye->timeline_records();
   report.width = system.width();
   report.height = system.height();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

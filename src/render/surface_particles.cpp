@@ -183,6 +183,7 @@ AnimationReport write_surface_particle_animation(const TangentBundle& bundle, co
   AnimationReport report;
   report.files = out.finish();
   report.frames = total;
+  if (dye) report.timelines = dye->timeline_records();
   report.width = ro.width;
   report.height = ro.height;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -788,6 +788,7 @@ TextureAnimationReport write_surface_texture_animation(const TangentBundle& bund
       });
   report.files = out.finish();
   report.frames = done;
+  if (dye) report.timelines = dye->timeline_records();
   report.seconds = std::chrono::duration<double>(clock::now() - start).count();
   return report;
 }

@@ -679,6 +679,7 @@ TextureAnimationReport write_texture_animation(const TangentBundle& bundle, cons
       });
   report.files = out.finish();
   report.frames = done;
+  if (dye) report.timelines = dye->timeline_records();
   report.texture_seconds = texture_seconds;
   report.warmup_seconds = warmup_seconds;
   report.seconds = std::chrono::duration<double>(clock::now() - start).count();

@@ -274,6 +274,31 @@ TEST(CliLcs, TextureAnimationCarriesATimeline) {
   }
 }
 
+TEST(CliLcs, RenderersWarnOfATimelineTornApart) {
+  // The saddle V = (27x, −27y): a timeline across its stable separatrix x = 0 is torn apart
+  // at t = 1 (Dye.RecordsWhereATimelineWasNotResolved). Both renderers draw it and say once
+  // which line, at how many pictures and why (stderr, even with -q); one that does not cross
+  // the separatrix says nothing.
+  TempDir dir;
+  write_field(dir / "saddle", GridSpec{21, 21, {-1, -1}, {1, 1}}, TimeSampling{0, 1, 11},
+              [](const Vec3& x, double) { return Vec3(27 * x.x(), -27 * x.y(), 0); });
+  for (const char* renderer : {"texture", "particles"}) {
+    const auto torn = run_tvf(std::string("render ") + renderer + " " + quoted(dir / "saddle") +
+                              " --timeline=-0.3,0.6,0.5,0.6 -s 64 -q -o " + quoted(dir / (std::string(renderer) + "_torn")));
+    ASSERT_EQ(torn.exit_code, 0) << torn.output;
+    EXPECT_EQ(count_lines(torn.output), 1) << torn.output;
+    EXPECT_NE(torn.output.find("warning: --timeline -0.3,0.6,0.5,0.6 is not resolved at 1 of 11 pictures, from t = 1: "
+                               "at t = 1 neighbours are up to"),
+              std::string::npos)
+        << renderer << ": " << torn.output;
+    EXPECT_NE(torn.output.find("the flow tears it apart"), std::string::npos) << torn.output;
+    const auto whole = run_tvf(std::string("render ") + renderer + " " + quoted(dir / "saddle") +
+                               " --timeline 0.2,0.5,0.6,0.5 -s 64 -q -o " + quoted(dir / (std::string(renderer) + "_whole")));
+    ASSERT_EQ(whole.exit_code, 0) << whole.output;
+    EXPECT_EQ(whole.output, "") << renderer;
+  }
+}
+
 TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {
   TempDir dir;
   write_field(dir / "f", GridSpec{9, 9, {-1, -1}, {1, 1}}, TimeSampling{0, 1, 5},

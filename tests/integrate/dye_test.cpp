@@ -205,6 +205,53 @@ TEST(Dye, TimelinesAreTracedAtEveryAdvance) {
   EXPECT_THROW(DyeInjector(bundle, field, std::vector<Vec3>{}, 0.0, o), Error);
 }
 
+TEST(Dye, RecordsWhereATimelineWasNotResolved) {
+  // The saddle V = (λx, −λy), λ = 27, over t ∈ [0, 1]: a timeline across its stable manifold
+  // x = 0 parts there by e^{λt}. Early on the refinement keeps neighbours within a mean edge
+  // length; by t = 1 neighbours 1e-12 apart across x = 0 end e^27 × 1e-12 ≈ 0.5 apart while
+  // still in the domain: torn. The record says at which pictures, from when and the worst.
+  const Mesh grid = make_grid(GridSpec{21, 21, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  constexpr double lambda = 27;
+  const Field field =
+      field_from(bundle, TimeSampling{0, 1, 11}, [](const Vec3& x, double) { return Vec3(lambda * x.x(), -lambda * x.y(), 0); });
+  DyeOptions o;
+  o.timelines = {{Vec3(-0.3, 0.6, 0), Vec3(0.5, 0.6, 0)}, {Vec3(0.2, 0.5, 0), Vec3(0.6, 0.5, 0)}};
+  DyeInjector dye(bundle, field, std::vector<Vec3>{}, 0.0, o);
+  ASSERT_EQ(dye.timeline_records().size(), 2u);
+  EXPECT_EQ(dye.timeline_records()[0].times, 0);  // the constructor's own advance is not a picture
+  int unresolved = 0;
+  double first = -1, worst = -1, largest = 0;
+  for (int k = 0; k <= 10; ++k) {
+    const double t = 0.1 * k;
+    dye.advance(t);
+    const Streakline& line = dye.timeline(0);
+    if (line.unresolved == 0) continue;
+    EXPECT_EQ(line.unresolved_by, Streakline::Refinement::torn) << "t = " << t;
+    if (unresolved++ == 0) first = t;
+    if (line.largest_gap > largest) {
+      largest = line.largest_gap;
+      worst = t;
+    }
+  }
+  const TimelineRecord& r = dye.timeline_records()[0];
+  EXPECT_EQ(r.times, 11);
+  ASSERT_GT(unresolved, 0);
+  EXPECT_GT(first, 0.5);  // e^{λt} × 1e-12 stays below a mean edge length until t ≈ 0.94
+  EXPECT_EQ(r.unresolved, unresolved);
+  EXPECT_DOUBLE_EQ(r.first_unresolved, first);
+  EXPECT_DOUBLE_EQ(r.worst_time, worst);
+  EXPECT_DOUBLE_EQ(r.largest_gap, largest);
+  EXPECT_GT(r.largest_gap, r.resolution);
+  EXPECT_EQ(r.unresolved_by, Streakline::Refinement::torn);
+  // The second line does not cross x = 0: its particles leave the domain (the line is broken,
+  // not unresolved) and what stays is resolved.
+  const TimelineRecord& r2 = dye.timeline_records()[1];
+  EXPECT_EQ(r2.times, 11);
+  EXPECT_EQ(r2.unresolved, 0);
+  EXPECT_TRUE(std::isnan(r2.first_unresolved));
+}
+
 TEST(Dye, RefusesSeedsOutsideAndTimesBackwards) {
   const Mesh grid = make_grid(GridSpec{11, 11, {-1, -1}, {1, 1}});
   const TangentBundle bundle(grid);

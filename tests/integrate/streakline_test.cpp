@@ -240,6 +240,35 @@ TEST(Timeline, ABudgetThatRunsOutHalvesTheWidestGapsFirst) {
   EXPECT_LT(s.largest_gap, 2.0 * length / 99);
 }
 
+TEST(Timeline, RunsOnInsideUpToWhereItLeavesTheDomain) {
+  // V = (x², 0) carries x0 to x0 / (1 − x0 t): of the segment [0.2, 0.9] on y = 0 the part
+  // x0 < 0.5 is inside at t = 1, stretched over [0.25, 1]. With 5 particles at t0 only
+  // 0.2 and 0.375 stay (at 0.25 and 0.6); the pair of which one left is halved as well, so
+  // the line runs on to the wall x = 1, every point where the closed form puts it.
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 11}, [](const Vec3& x, double) { return Vec3(x.x() * x.x(), 0, 0); });
+  TimelineOptions o;
+  o.t0 = 0;
+  o.t1 = 1;
+  o.count = 5;
+  const Streakline s = trace_timeline(bundle, field, Vec3(0.2, 0, 0), Vec3(0.9, 0, 0), o);
+  ASSERT_GE(s.points.size(), 2u);
+  EXPECT_GT(s.left, 0);
+  EXPECT_EQ(s.unresolved, 0);
+  EXPECT_LE(s.largest_gap, s.resolution);
+  double last = 0;
+  for (const StreakPoint& p : s.points) {
+    EXPECT_FALSE(p.gap_before);  // one piece: what left, left past its end
+    const double x0 = 0.2 + 0.7 * p.release;
+    EXPECT_NEAR(p.position.x(), x0 / (1 - x0), 3e-3) << "s = " << p.release;  // x² sampled piecewise linearly
+    EXPECT_NEAR(p.position.y(), 0.0, 1e-12);
+    last = std::max(last, p.position.x());
+  }
+  EXPECT_NEAR(s.points.front().position.x(), 0.25, 3e-3);
+  EXPECT_GT(last, 1.0 - s.resolution);
+}
+
 TEST(Timeline, OnASurfaceIsTheShortestPathOverIt) {
   // Ends at either pole, (±1, 0, 0): the chord between them runs through the centre, but the
   // line at t0 is the shortest path over the sphere, half a great circle (length π, less

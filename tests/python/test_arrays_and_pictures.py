@@ -331,6 +331,44 @@ def test_render_texture_carries_timelines(tmp_path):
         tvf.render_texture(field, 64, frames=5, timelines=[[[0, 0]]])
 
 
+def write_saddle_field(path, n=21, rate=27.0, frames=11):
+    """The saddle V = (rate x, -rate y) on an n x n grid over [-1, 1]^2, t in [0, 1], as a
+    field file (docs/file_formats.md: vertex iy*n + ix, each cell cut along its diagonal;
+    vectors in world x, y): no generator designs a flow this fast."""
+    x = np.linspace(-1.0, 1.0, n)
+    xx, yy = np.meshgrid(x, x)
+    positions = np.stack([xx.ravel(), yy.ravel(), np.zeros(n * n)], axis=1).astype("<f8")
+    ix, iy = np.meshgrid(np.arange(n - 1), np.arange(n - 1))
+    v00 = (iy * n + ix).ravel()
+    faces = np.empty((2 * v00.size, 3), dtype="<i4")
+    faces[0::2] = np.stack([v00, v00 + 1, v00 + n + 1], axis=1)
+    faces[1::2] = np.stack([v00, v00 + n + 1, v00 + n], axis=1)
+    field = np.empty((frames, n * n, 2), dtype="<f8")
+    field[:, :, 0] = rate * positions[:, 0]
+    field[:, :, 1] = -rate * positions[:, 1]
+    header = json.dumps({"vertices": n * n, "faces": int(faces.shape[0]), "frames": frames, "t0": 0.0, "t1": 1.0,
+                         "scene": None}).encode()
+    header += b" " * ((8 - (20 + len(header)) % 8) % 8)  # arrays 8-byte aligned
+    with open(path, "wb") as out:
+        out.write(b"TVFFIELD" + struct.pack("<IQ", 1, len(header)) + header)
+        out.write(positions.tobytes() + faces.tobytes() + field.tobytes())
+
+
+def test_render_texture_warns_of_a_timeline_torn_apart(tmp_path):
+    """A timeline across a fast saddle's stable separatrix is torn apart by t = 1 (neighbours
+    1e-12 apart at the start end further apart than an edge): a RuntimeWarning names it and
+    says at how many pictures and why; one that does not cross the separatrix gives none."""
+    write_saddle_field(tmp_path / "field.tvff")
+    field = tvf.load(str(tmp_path / "field.tvff"))
+    with pytest.warns(RuntimeWarning, match=r"timelines\[0\] is not resolved at [0-9]+ of 11 pictures, from t = "
+                                            r"[0-9.]+: .*the flow tears it apart"):
+        tvf.render_texture(field, 64, frames=[0, 10], pictures=11, timelines=[[[-0.3, 0.6], [0.5, 0.6]]])
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tvf.render_texture(field, 64, frames=[0, 10], pictures=11, timelines=[[[0.2, 0.5], [0.6, 0.5]]])
+
+
 def test_render_stops_between_pictures_and_leaves_no_output(tmp_path):
     """progress returning False (tvf.Cancelled) or raising KeyboardInterrupt stops the
     animation before its next picture: no frame folder, no video, no temporaries."""

@@ -25,7 +25,9 @@
 #include "tvf/mesh/tangent_bundle.h"
 
 #include <array>
+#include <limits>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace tvf {
@@ -41,6 +43,27 @@ struct DyeOptions {
   std::vector<std::array<Vec3, 2>> timelines;
   FlowMapOptions flow;
 };
+
+// How a timeline fared over the advances so far. A renderer draws the line at every picture,
+// and a chord drawn at some pictures is worth saying even when the last one is resolved:
+// the renderers return these and the CLI warns from them.
+struct TimelineRecord {
+  int times = 0;       // advances the line was measured after (the pictures drawn)
+  int unresolved = 0;  // of which it was not resolved (Streakline::unresolved > 0)
+  double first_unresolved = std::numeric_limits<double>::quiet_NaN();  // the first such time
+  // The worst of those (the largest gap): its time, its gap, the resolution asked and what
+  // stopped the refinement there.
+  double worst_time = std::numeric_limits<double>::quiet_NaN();
+  double largest_gap = 0.0;
+  double resolution = 0.0;
+  Streakline::Refinement unresolved_by = Streakline::Refinement::resolved;
+};
+
+// One sentence for a timeline a renderer drew unresolved at some pictures (which, at how many,
+// from when, how far apart and why), naming it `name` (the CLI's "--timeline X0,Y0,X1,Y1",
+// Python's "timelines[0]"); empty when it was resolved at every picture. `max_points`: the
+// particle budget it had.
+std::string unresolved_note(const TimelineRecord& record, const std::string& name, int max_points);
 
 class DyeInjector {
 public:
@@ -69,6 +92,8 @@ public:
   // {start(), time()}) along the curve, refined where neighbours part (MaterialLine).
   size_t num_timelines() const { return lines_.size(); }
   const Streakline& timeline(size_t l) const { return lines_[l].line(); }
+  // Each timeline's record over the advances so far (one per timeline, in order).
+  const std::vector<TimelineRecord>& timeline_records() const { return records_; }
   // Particles released so far over all seeds (at the seed at time() included), and of
   // those the ones still in the domain.
   long released() const;
@@ -88,6 +113,7 @@ private:
   long next_ = 0;  // the next release index k (time t0 + kΔ), the same for every seed
   std::vector<SurfacePoint> seeds_;
   std::vector<MaterialLine> lines_;  // the timelines
+  std::vector<TimelineRecord> records_;  // and how they fared
   std::vector<std::vector<Particle>> dye_;  // per seed, by release
 };
 

@@ -19,6 +19,7 @@
 //     the picture itself (which shows through any gap).
 #include "tvf/field/field.h"
 #include "tvf/field/field_sampler.h"
+#include "tvf/integrate/dye.h"
 #include "tvf/mesh/tangent_bundle.h"
 #include "tvf/render/image.h"
 
@@ -98,6 +99,7 @@ struct AnimationReport {
   int width = 0, height = 0;
   double seconds = 0;
   std::vector<std::string> files;  // what was written
+  std::vector<TimelineRecord> timelines;  // particles: each --timeline over the pictures
 };
 
 // Renders the animation to PNG frames and/or MP4. Throws tvf::Error on bad options or a

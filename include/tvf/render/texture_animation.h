@@ -237,6 +237,7 @@ struct TextureAnimationReport {
   double warmup_seconds = 0;      // of which the warm-up and the first picture
   double texture_seconds = 0;     // and the texture and pictures of the other frames
   std::vector<std::string> files; // what was written
+  std::vector<TimelineRecord> timelines;  // each of options.timelines over the pictures
 };
 
 // Renders the animation and writes PNG frames (into a folder that appears complete or not
