@@ -73,23 +73,32 @@ void carry(std::vector<Sample>& samples, const Mesh& mesh, Advect&& advect) {
 // intervals are halved first, and when a round wants more particles than are left the
 // widest get them: a budget that runs out leaves the line's largest gaps halved, not one
 // stretch refined to max_gap and another left coarse.
+// A pair one of which left the domain is halved too, measured to where that one left (its
+// x): the curve runs on inside from the other towards the boundary, and as the pair closes in
+// on the particle that leaves just at t1, both ends approach its exit.
+// between_left: pairs that both left are halved as well where they left more than max_gap
+// apart, with what particles are left once nothing else is wide (a timeline across a
+// saddle's stable separatrix whose every particle went through the walls, one to either
+// side: the material between them that stays runs along the unstable one; dye released
+// at a seed beside it the same). Without it the curve is broken there and what stays
+// between them is not looked for.
 // Returns whether it ran out of particles.
 template <class Mid, class Advect>
 bool refine(std::vector<Sample>& line, Mid&& mid, Advect&& advect, const Mesh& mesh, double max_gap, double finest,
-            long most) {
+            long most, bool between_left) {
   for (;;) {
     std::vector<std::pair<double, size_t>> wide;  // (gap, k): line[k] and line[k + 1] too far apart
-    for (size_t k = 0; k + 1 < line.size(); ++k) {
-      const Sample& p = line[k];
-      const Sample& q = line[k + 1];
-      const double gap = (p.x - q.x).norm();
-      // A pair one of which left the domain is halved too, measured to where that one left
-      // (its x): the curve runs on inside from the other towards the boundary, and as the pair
-      // closes in on the particle that leaves just at t1, both ends approach its exit. Both
-      // left: the curve is broken there (what stays between them is not looked for).
-      if ((p.m.left && q.m.left) || !(gap > max_gap) || q.s - p.s < finest) continue;
-      wide.emplace_back(gap, k);
-    }
+    auto gather = [&](bool both_left) {
+      for (size_t k = 0; k + 1 < line.size(); ++k) {
+        const Sample& p = line[k];
+        const Sample& q = line[k + 1];
+        const double gap = (p.x - q.x).norm();
+        if ((p.m.left && q.m.left) != both_left || !(gap > max_gap) || q.s - p.s < finest) continue;
+        wide.emplace_back(gap, k);
+      }
+    };
+    gather(false);
+    if (wide.empty() && between_left) gather(true);
     if (wide.empty()) return false;
     // Widest first: only those wider than half the widest this round. Every interval wider
     // than max_gap is halved in the end either way (the particles within budget are the
@@ -193,7 +202,7 @@ Streakline trace_streakline(const TangentBundle& bundle, const Field& field, con
   auto mid = [&](const Sample& p, const Sample& q) { return starting(0.5 * (p.s + q.s), start, at); };
   const double finest = 1e-12 * std::max(1.0, std::abs(options.t1));
   const bool out_of_particles = refine(line, mid, advect, bundle.mesh(), max_gap, finest,
-                                       static_cast<long>(releases.size()) + options.max_added);
+                                       static_cast<long>(releases.size()) + options.max_added, true);
   Streakline out = curve(line, max_gap, out_of_particles, options.t1);
   if (!std::isfinite(max_gap)) {  // not refined: judged by the mean edge length all the same
     out.largest_gap = 0;
@@ -302,7 +311,7 @@ void MaterialLine::refine(double gap) {
   auto from_start = [&](const Sample& p) {
     return t_ == t0_ ? FlowMapResult{p.start, false, t0_} : flow_.advect(p.start, t0_, t_);
   };
-  const bool out_of_particles = tvf::refine(particles_, mid, from_start, mesh, gap, 1e-12, max_points_);
+  const bool out_of_particles = tvf::refine(particles_, mid, from_start, mesh, gap, 1e-12, max_points_, true);
   line_ = curve(particles_, gap, out_of_particles, t_);
 }
 

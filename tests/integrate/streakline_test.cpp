@@ -269,6 +269,33 @@ TEST(Timeline, RunsOnInsideUpToWhereItLeavesTheDomain) {
   EXPECT_GT(last, 1.0 - s.resolution);
 }
 
+TEST(Timeline, FindsWhatStaysBetweenParticlesThatLeft) {
+  // The saddle V = (27x, −27y): of the segment y = 0.6, x ∈ [−0.3, 0.5] only the particles
+  // within e^{−13.5}·… of its stable separatrix x = 0 are inside at t = 0.5, and every one of
+  // the 100 placed at t0 has gone through the left or right wall. The pair that left on
+  // either side is halved until particles that stay are found; they lie along the unstable
+  // separatrix y = 0 from wall to wall, resolved (one point before).
+  const Mesh grid = make_grid(GridSpec{21, 21, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field field =
+      field_from(bundle, TimeSampling{0, 1, 11}, [](const Vec3& x, double) { return Vec3(27 * x.x(), -27 * x.y(), 0); });
+  TimelineOptions o;
+  o.t0 = 0;
+  o.t1 = 0.5;
+  const Streakline s = trace_timeline(bundle, field, Vec3(-0.3, 0.6, 0), Vec3(0.5, 0.6, 0), o);
+  ASSERT_GE(s.points.size(), 10u);
+  EXPECT_GE(s.left, 100);
+  EXPECT_EQ(s.unresolved, 0);
+  double lo = 1, hi = -1;
+  for (const StreakPoint& p : s.points) {
+    EXPECT_NEAR(p.position.y(), 0.6 * std::exp(-27 * 0.5), 1e-4);
+    lo = std::min(lo, p.position.x());
+    hi = std::max(hi, p.position.x());
+  }
+  EXPECT_LT(lo, -1 + s.resolution);
+  EXPECT_GT(hi, 1 - s.resolution);
+}
+
 TEST(Timeline, OnASurfaceIsTheShortestPathOverIt) {
   // Ends at either pole, (±1, 0, 0): the chord between them runs through the centre, but the
   // line at t0 is the shortest path over the sphere, half a great circle (length π, less

@@ -34,7 +34,9 @@ struct StreaklineOptions {
   // length), a particle released halfway between them is added, at most max_added in all:
   // dye released continuously is one curve, but release times close together can end far
   // apart (the double gyre's stretching). Infinity: the regular releases only (the dye
-  // renderers' particles, dye.h).
+  // renderers' particles, dye.h). A neighbour that left the domain counts where it left,
+  // so the curve runs on to the boundary; two that left far apart are halved with what
+  // additions are left over, to find what stayed between them.
   double max_gap = 0.0;
   long max_added = 20000;
   FlowMapOptions flow;
@@ -87,7 +89,7 @@ struct TimelineOptions {
   int count = 100;         // particles on the initial segment (at least 2)
   double max_gap = 0.0;    // world distance between neighbours at t1 above which a midpoint
                            // is added (and carried); 0: a mean edge length. At most
-                           // max_points in all.
+                           // max_points in all. Particles that left: as for streaklines.
   int max_points = 20000;
   FlowMapOptions flow;
 };
