@@ -818,6 +818,16 @@ void check_cancelled(const GenerateOptions& options) {
 Field generate_unedited(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                         GenerateReport* report) {
   check_cancelled(options);
+  // Sketched streaklines that meet themselves: the scene reader refuses them on planar
+  // domains; on a surface the sketch is known only once it is snapped onto it.
+  if (!space.planar())
+    for (size_t i = 0; i < scene.elements.size(); ++i)
+      if (const auto* sl = std::get_if<StreaklineElement>(&scene.elements[i]))
+        if (const auto crossing = surface_sketch_crossing(space, sl->points))
+          throw Error(fmt::format("{}: elements[{}].points: the sketch crosses or folds back onto itself on the "
+                                  "surface (its segments from points[{}] and points[{}]): two parts of the dye "
+                                  "cannot be at one point at t; sketch a streakline that does not meet itself",
+                                  scene.label(), i, crossing->first, crossing->second));
   switch (scene.generator) {
     case Generator::basis: return generate_basis_sum(space, scene, options, report);
     case Generator::constrained: return generate_constrained(space, scene, options, report);

@@ -105,6 +105,123 @@ double distance_to_polyline(const Vec3& x, std::span<const Vec3> line) {
 
 }  // namespace
 
+namespace {
+
+// The closest points of segments ab and cd (the clamped least-squares parameters, as in
+// Ericson's Real-Time Collision Detection §5.1.9).
+std::pair<Vec3, Vec3> closest_points(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 d1 = b - a, d2 = d - c, r = a - c;
+  const double A = d1.squaredNorm(), E = d2.squaredNorm(), F = d2.dot(r);
+  double u = 0, v = 0;
+  if (A <= 0 && E <= 0) return {a, c};
+  if (A <= 0) {
+    v = std::clamp(F / E, 0.0, 1.0);
+  } else {
+    const double C = d1.dot(r);
+    if (E <= 0) {
+      u = std::clamp(-C / A, 0.0, 1.0);
+    } else {
+      const double B = d1.dot(d2), denom = A * E - B * B;
+      u = denom > 0 ? std::clamp((B * F - C * E) / denom, 0.0, 1.0) : 0.0;
+      v = (B * u + F) / E;
+      if (v < 0) {
+        v = 0;
+        u = std::clamp(-C / A, 0.0, 1.0);
+      } else if (v > 1) {
+        v = 1;
+        u = std::clamp((B - C) / A, 0.0, 1.0);
+      }
+    }
+  }
+  return {a + u * d1, c + v * d2};
+}
+
+// Whether segments ab and cd, projected onto the plane normal to n, cross or touch; a point
+// within tol of the other's line counts as on it.
+bool meet_in_plane(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, const Vec3& n, double tol) {
+  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  auto at = [&](const Vec3& x) { return Eigen::Vector2d((x - a).dot(e1), (x - a).dot(e2)); };
+  const Eigen::Vector2d A = at(a), B = at(b), C = at(c), D = at(d);
+  auto side = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& x) {
+    const Eigen::Vector2d u = q - p;
+    const double len = u.norm();
+    if (!(len > 0)) return 0;
+    const double o = (u.x() * (x - p).y() - u.y() * (x - p).x()) / len;  // signed distance
+    return std::abs(o) <= tol ? 0 : (o > 0 ? 1 : -1);
+  };
+  auto within = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& x) {
+    const Eigen::Vector2d u = q - p;
+    const double len = u.norm();
+    return len > 0 && (x - p).dot(u) >= -tol * len && (x - q).dot(-u) >= -tol * len;
+  };
+  const int s1 = side(A, B, C), s2 = side(A, B, D), s3 = side(C, D, A), s4 = side(C, D, B);
+  if (s1 * s2 < 0 && s3 * s4 < 0) return true;
+  return (s1 == 0 && within(A, B, C)) || (s2 == 0 && within(A, B, D)) || (s3 == 0 && within(C, D, A)) ||
+         (s4 == 0 && within(C, D, B));
+}
+
+}  // namespace
+
+std::optional<std::pair<size_t, size_t>> surface_sketch_crossing(const DesignSpace& space,
+                                                                 std::span<const Vec3> points) {
+  const Mesh& mesh = space.mesh();
+  const double h = mesh.mean_edge_length();
+  const double tol = 1e-6 * h;
+  // The pieces: ends snapped onto the surface, each with the sketch segment it belongs to
+  // and the surface normal at its start.
+  struct Piece {
+    Vec3 a, b, n;
+    size_t segment;
+  };
+  std::vector<Piece> pieces;
+  auto on_surface = [&](const Vec3& x, Vec3& n) {
+    const SurfacePoint p = space.locate(x);
+    n = mesh.face_normal(p.face);
+    return surface_position(mesh, p);
+  };
+  double length = 0;
+  for (size_t i = 0; i + 1 < points.size(); ++i) length += (points[i + 1] - points[i]).norm();
+  const double step = std::max(0.25 * h, length / 4000);  // at most ~4000 pieces in all
+  for (size_t i = 0; i + 1 < points.size(); ++i) {
+    const double len = (points[i + 1] - points[i]).norm();
+    if (!(len > 0)) continue;
+    const int count = std::max(1, static_cast<int>(std::ceil(len / step)));
+    Vec3 n;
+    Vec3 x = on_surface(points[i], n);
+    for (int q = 1; q <= count; ++q) {
+      Vec3 next_n;
+      const Vec3 y = on_surface(points[i] + (points[i + 1] - points[i]) * (static_cast<double>(q) / count), next_n);
+      if (y != x) pieces.push_back({x, y, n, i});
+      x = y;
+      n = next_n;
+    }
+  }
+  if (pieces.size() < 2) return std::nullopt;
+  const bool closed = (points.front() - points.back()).norm() <= tol;
+  // Neighbours that fold back: in the plane normal at their shared point the second runs back
+  // along the first.
+  for (size_t k = 0; k + 1 < pieces.size(); ++k) {
+    const Piece& p = pieces[k];
+    const Piece& q = pieces[k + 1];
+    const Vec3& n = q.n;
+    const Vec3 u = (p.b - p.a) - n * n.dot(p.b - p.a), v = (q.b - q.a) - n * n.dot(q.b - q.a);
+    if (u.cross(v).norm() <= 1e-9 * u.norm() * v.norm() && u.dot(v) < 0)
+      return std::pair{p.segment, q.segment};
+  }
+  // Pieces that are not neighbours, near each other on the same side of the surface.
+  for (size_t k = 0; k + 2 < pieces.size(); ++k)
+    for (size_t l = k + 2; l < pieces.size(); ++l) {
+      if (closed && k == 0 && l + 1 == pieces.size()) continue;
+      const Piece& p = pieces[k];
+      const Piece& q = pieces[l];
+      if ((p.a - q.a).norm() > 0.5 * h + (p.b - p.a).norm() + (q.b - q.a).norm()) continue;
+      const auto [x, y] = closest_points(p.a, p.b, q.a, q.b);
+      if ((x - y).norm() > 0.5 * h || p.n.dot(q.n) < 0.5) continue;
+      if (meet_in_plane(p.a, p.b, q.a, q.b, (p.n + q.n).normalized(), tol)) return std::pair{p.segment, q.segment};
+    }
+  return std::nullopt;
+}
+
 SketchSelfApproach sketch_self_approach(std::span<const Vec3> points, double h) {
   SketchSelfApproach out;
   double length = 0;

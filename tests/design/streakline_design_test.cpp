@@ -5,6 +5,7 @@
 #include "tvf/design/streakline_design.h"
 
 #include "tvf/analysis/coherence.h"
+#include "tvf/core/error.h"
 #include "tvf/design/generate.h"
 #include "tvf/integrate/streakline.h"
 #include "tvf/mesh/grid.h"
@@ -386,6 +387,50 @@ TEST(StreaklineDesign, OnTheSphereTheTracedStreaklineLiesOnTheSketch) {
   EXPECT_EQ(m.left, 0);
   const Match free = compare_on_sphere(false, &h);
   EXPECT_GT(free.hausdorff, 0.3) << "without the streakline the dye goes elsewhere";
+}
+
+TEST(StreaklineDesign, OnASurfaceASketchThatMeetsItselfIsRefused) {
+  // On the sphere (subdivisions 4) the reader cannot test a sketch (it is known only once
+  // snapped onto the surface): generate refuses one that crosses itself, or folds back along
+  // itself, with the JSON place and the two segments, and takes a sharp V, a closed loop and
+  // a path that passes the other side of the sphere (close in space through the inside, far
+  // over the surface).
+  auto sketch_scene = [](const std::vector<Vec3>& sketch) {
+    json j = json::parse(R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 4}}, "time": {"frames": 5},
+      "generator": "constrained", "elements": [{"kind": "singular", "type": "ccw_center", "path": [[0, 0, 1, 0]]}]})");
+    json points = json::array();
+    for (const Vec3& p : sketch) points.push_back({p.x(), p.y(), p.z()});
+    j["elements"].push_back({{"kind", "streakline"}, {"points", points}, {"t", 0.8}, {"from", 0.2}});
+    return scene_from_json(j, "sphere.json");
+  };
+  // Points on the unit sphere by longitude and latitude (degrees).
+  auto at = [](double lon, double lat) {
+    const double a = lon * std::numbers::pi / 180, b = lat * std::numbers::pi / 180;
+    return Vec3(std::cos(b) * std::cos(a), std::cos(b) * std::sin(a), std::sin(b));
+  };
+  const Scene crossing = sketch_scene({at(0, 0), at(40, 30), at(40, 0), at(0, 30)});  
+  const auto space = make_design_space(crossing);
+  auto refusal = [&](const Scene& scene) {
+    try {
+      generate(*space, scene);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // The segments 0 (0,0)→(40,30) and 2 (40,0)→(0,30) cross.
+  EXPECT_EQ(refusal(crossing),
+            "scene: elements[1].points: the sketch crosses or folds back onto itself on the surface (its "
+            "segments from points[0] and points[2]): two parts of the dye cannot be at one point at t; sketch a "
+            "streakline that does not meet itself");
+  const std::string folds = refusal(sketch_scene({at(0, 0), at(40, 0), at(20, 0)}));  // along the equator
+  EXPECT_NE(folds.find("(its segments from points[0] and points[1])"), std::string::npos) << folds;
+  const std::string touches = refusal(sketch_scene({at(0, 0), at(40, 0), at(40, 30), at(20, 0)}));  // ends on segment 0
+  EXPECT_NE(touches.find("(its segments from points[0] and points[2])"), std::string::npos) << touches;
+  EXPECT_EQ(refusal(sketch_scene({at(0, 0), at(40, 30), at(41, 0)})), "");            // a sharp V
+  EXPECT_EQ(refusal(sketch_scene({at(0, 0), at(40, 0), at(20, 30), at(0, 0)})), "");  // a closed loop
+  EXPECT_EQ(refusal(sketch_scene({at(0, 20), at(90, 20), at(180, 20), at(270, 20), at(355, 20)})), "");  // round
+  EXPECT_EQ(refusal(sketch_scene({at(0, 0), at(0, 60), at(180, 60), at(180, 0)})), "");  // over the pole and down
 }
 
 }  // namespace

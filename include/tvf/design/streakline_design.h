@@ -38,7 +38,9 @@
 #include "tvf/scene/scene.h"
 
 #include <limits>
+#include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace tvf {
@@ -80,6 +82,20 @@ SketchSelfApproach sketch_self_approach(std::span<const Vec3> points, double h);
 // lengths at 129² (at 1 edge: 4.7, 9.2 and 28 off; at 3 on 129²: 5.7). generate() warns.
 inline constexpr double kSketchApartEdges = 1.0;
 inline constexpr double kSketchApartEdgesUnattached = 4.0;
+
+// Where a sketch on a surface crosses or folds back onto itself (planar sketches are refused
+// by the scene reader, exactly): at t each released particle is at one point, so two parts
+// of the sketch at one point would be two particles there at once. The sketch's chords are
+// cut into pieces of at most a quarter edge length whose ends are snapped onto the surface
+// (a long chord runs through the inside); two pieces that are not neighbours, come within
+// half an edge length of each other and face the same way (not the two sides of a thin
+// part) are projected onto the plane normal to the surface between them and tested there,
+// as the reader tests planar segments; two neighbours fold back when,
+// in the plane normal at their shared point, the second turns back along the first. Returns
+// the indices of the two sketch points whose segments meet, or nothing. A closed sketch
+// (last point on the seed) is not a crossing.
+std::optional<std::pair<size_t, size_t>> surface_sketch_crossing(const DesignSpace& space,
+                                                                 std::span<const Vec3> points);
 
 class StreaklineConstraints {
 public:
