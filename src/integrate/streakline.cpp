@@ -276,7 +276,7 @@ MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, co
     p.m = FlowMapResult{p.start, false, t0_};
     p.x = p.x0;
   }
-  refine(std::max(max_gap_, mesh.mean_edge_length()));
+  refine(std::max(max_gap_, mesh.mean_edge_length()), false);
   if (line_.unresolved_by == Streakline::Refinement::torn)
     throw Error(fmt::format("the line between the timeline's ends, snapped onto the surface, breaks apart (its "
                             "points jump up to {:.3g} across it): give ends closer together",
@@ -289,7 +289,35 @@ void MaterialLine::advance(double t) {
   auto onward = [&](const Sample& p) { return p.m.left ? p.m : flow_.advect(p.m.where, from, t); };
   carry(particles_, flow_.bundle().mesh(), onward);
   t_ = t;
-  refine(max_gap_);
+  coarsen(max_gap_);
+  refine(max_gap_, true);
+}
+
+// Drops particles an advance added (refine) where the line has drawn together since: one
+// whose path from the particle before it to the one after is within half `gap`. The line is
+// then drawn within a quarter gap of where it was, and refine does not add it back (the
+// chord is within half the gap). At most one of two neighbours goes per advance, so each
+// dropped particle's neighbours are the ones it was tested against. The particles the line
+// was made with stay (tracing afresh keeps them: trace_timeline, one advance, is unchanged),
+// as do particles beside one that left the domain (the refinement at the walls measures to
+// them).
+void MaterialLine::coarsen(double gap) {
+  if (!std::isfinite(gap) || particles_.size() < 3) return;
+  std::vector<Sample> kept;
+  kept.reserve(particles_.size());
+  kept.push_back(particles_.front());
+  bool dropped = false;
+  for (size_t k = 1; k + 1 < particles_.size(); ++k) {
+    const Sample& p = kept.back();
+    const Sample& x = particles_[k];
+    const Sample& q = particles_[k + 1];
+    const bool drop = !dropped && x.added && !p.m.left && !x.m.left && !q.m.left &&
+                      (x.x - p.x).norm() + (q.x - x.x).norm() <= 0.5 * gap;
+    if (!drop) kept.push_back(x);
+    dropped = drop;
+  }
+  kept.push_back(particles_.back());
+  particles_ = std::move(kept);
 }
 
 // The particle at parameter s of the line where it is drawn: the path's point at that
@@ -303,11 +331,15 @@ MaterialLine::Particle MaterialLine::start_at(double s) const {
 }
 
 // Adds particles where neighbours at time() are more than `gap` apart: each starts at the
-// line's point halfway between theirs in parameter (start_at), carried from t0. Then
-// measures the line against `gap`.
-void MaterialLine::refine(double gap) {
+// line's point halfway between theirs in parameter (start_at), carried from t0, marked
+// `added` when mark_added (an advance's). Then measures the line against `gap`.
+void MaterialLine::refine(double gap, bool mark_added) {
   const Mesh& mesh = flow_.bundle().mesh();
-  auto mid = [&](const Sample& p, const Sample& q) { return start_at(0.5 * (p.s + q.s)); };
+  auto mid = [&](const Sample& p, const Sample& q) {
+    Sample x = start_at(0.5 * (p.s + q.s));
+    x.added = mark_added;
+    return x;
+  };
   auto from_start = [&](const Sample& p) {
     return t_ == t0_ ? FlowMapResult{p.start, false, t0_} : flow_.advect(p.start, t0_, t_);
   };

@@ -3,12 +3,14 @@
 #include "support/test_fields.h"
 #include "support/test_meshes.h"
 #include "tvf/core/error.h"
+#include "tvf/field/point_locator.h"
 #include "tvf/mesh/grid.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace tvf {
 namespace {
@@ -344,6 +346,47 @@ TEST(Timeline, ASegmentBetweenPiecesOfASurfaceIsRefused) {
   }
   // Within one square the segment is taken.
   EXPECT_EQ(trace_timeline(bundle, field, Vec3(0.2, 0.5, 10), Vec3(0.8, 0.5, 10), o).left, 0);
+}
+
+TEST(MaterialLine, DropsWhatItAddedWhereTheLineDrawsTogetherAgain) {
+  // The saddle V = c(t) (x, −y), c = 6 sin 2πt, stretches the segment y = 0.5,
+  // x ∈ [−0.1, 0.1] along x by e^K, K = 6 (1 − cos 2πt) / 2π: to 6.7 times its length at
+  // t = 0.5, and brings it back by t = 1. Advanced frame by frame, the particles added while it stretched go again as it
+  // draws together: at t = 1 the line holds about what tracing it afresh holds, not the
+  // particles of its longest time; it is resolved at every frame and each particle sits
+  // where the flow map carries its parameter's start.
+  const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
+  const TangentBundle bundle(grid);
+  const Field saddle = field_from(bundle, TimeSampling{0, 1, 41}, [](const Vec3& x, double t) -> Vec3 {
+    return 6 * std::sin(2 * std::numbers::pi * t) * Vec3(x.x(), -x.y(), 0);
+  });
+  const FlowMap flow(bundle, saddle);
+  TimelineOptions o;
+  o.t0 = 0;
+  o.count = 5;
+  o.max_gap = 0.02;
+  const Vec3 a(-0.1, 0.5, 0), b(0.1, 0.5, 0);
+  MaterialLine line(flow, a, b, o);
+  const PointLocator locator(grid);
+  size_t most = 0;
+  for (int k = 1; k <= 40; ++k) {
+    const double t = k / 40.0;
+    line.advance(t);
+    const Streakline& s = line.line();
+    most = std::max(most, s.points.size());
+    EXPECT_EQ(s.unresolved, 0) << "t = " << t;
+    EXPECT_LE(s.largest_gap, 0.02) << "t = " << t;
+    for (const StreakPoint& p : s.points) {
+      const Vec3 start = (1 - p.release) * a + p.release * b;
+      const Vec3 there = surface_position(grid, flow.advect(locator.closest(start), 0, t).where);
+      EXPECT_NEAR((p.position - there).norm(), 0.0, 1e-9) << "t = " << t << ", s = " << p.release;
+    }
+  }
+  o.t1 = 1;
+  const Streakline once = trace_timeline(bundle, saddle, a, b, o);
+  EXPECT_GE(most, 4 * once.points.size());  // it did stretch
+  EXPECT_LE(line.line().points.size(), 2 * once.points.size());
+  EXPECT_GE(line.line().points.size(), once.points.size());
 }
 
 TEST(MaterialLine, IsRefinedAsItStretchesEachParticleAtItsParametersImage) {

@@ -110,12 +110,14 @@ Streakline trace_timeline(const TangentBundle& bundle, const Field& field, const
 // A timeline kept up to date while time goes on (the renderers' timelines, dye.h): advance(t)
 // carries its particles from time() to t and then adds particles where neighbours are more
 // than max_gap apart, each carried from t0 (the parts that stretch are refined as they
-// stretch, and particles once added stay). Across a clip each particle is carried once,
-// where tracing the timeline afresh at every picture carries every particle from t0 each
-// time. line() agrees with trace_timeline(bundle, field, a, b, {t0, time()}) along the
-// curve: positions of one parameter agree to rounding when the times advanced to are the
-// field's frame times (the flow map splits its steps there) and to the integration error
-// otherwise; it may hold more particles (those added at earlier times).
+// stretch). Particles an advance added are dropped again where the line draws together
+// (coarsen), so a long clip holds about what its time needs, not every particle it ever
+// needed. Across a clip each particle is carried once, where tracing the timeline afresh
+// at every picture carries every particle from t0 each time. line() agrees with
+// trace_timeline(bundle, field, a, b, {t0, time()}) along the curve: positions of one
+// parameter agree to rounding when the times advanced to are the field's frame times (the
+// flow map splits its steps there) and to the integration error otherwise; it may hold
+// more particles (those added at earlier times and not yet drawn together).
 class MaterialLine {
 public:
   // The segment at options.t0 (options.t1 and options.flow are not used: `flow` carries it),
@@ -141,13 +143,15 @@ public:
     Vec3 x0 = Vec3::Zero();
     FlowMapResult m;
     Vec3 x = Vec3::Zero();
+    bool added = false;  // by an advance's refinement: coarsen() may drop it again
   };
 
 private:
   // A surface timeline's path: at most this many segments (about an edge length each).
   static constexpr int kPathSegments = 256;
   Particle start_at(double s) const;
-  void refine(double gap);
+  void refine(double gap, bool mark_added);
+  void coarsen(double gap);
   FlowMap flow_;
   std::shared_ptr<const PointLocator> locator_;
   double t0_ = 0.0, t_ = 0.0, max_gap_ = 0.0;
