@@ -36,6 +36,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 namespace fs = std::filesystem;
 using namespace tvf;
@@ -244,12 +245,18 @@ int run_analyze(const AnalyzeArgs& args) {
 
 int run_validate(const std::string& path, bool with_domain) {
   const Scene scene = load_scene(path);
+  // With the domain, what only it tells too (points far off a surface, a sketched
+  // streakline that meets itself on it), before the scene is called valid.
+  std::optional<Design> design;
+  if (with_domain) {
+    design.emplace(scene);
+    check_scene_on_domain(design->space(), scene);
+  }
   std::printf("%s: valid tvf scene: %zu elements, %zu key frames, %d frames on [%g, %g], %s generator\n",
               path.c_str(), scene.elements.size(), scene.keyframes.size(), scene.time.frames,
               scene.time.t0, scene.time.t1, to_string(scene.generator));
-  if (with_domain) {
-    Design design(scene);
-    const Mesh& mesh = design.space().mesh();
+  if (design) {
+    const Mesh& mesh = design->space().mesh();
     std::printf("domain: %d vertices, %d faces, %s, Euler characteristic %d\n", mesh.num_vertices(),
                 mesh.num_faces(), mesh.is_closed() ? "closed" : "with boundary", mesh.euler_characteristic());
   }
@@ -294,7 +301,9 @@ int main(int argc, char** argv) {
   bool validate_domain = false;
   auto* validate_cmd = app.add_subcommand("validate", "Check a scene file (and, with --domain, its mesh)");
   validate_cmd->add_option("scene", validate_path, "Scene file (JSON)")->required();
-  validate_cmd->add_flag("--domain", validate_domain, "Also build the domain (loads and checks the mesh)");
+  validate_cmd->add_flag("--domain", validate_domain,
+                         "Also build the domain: loads and checks the mesh, and the scene on it (points far off a "
+                         "surface, a sketched streakline that meets itself on it)");
 
   cli::EditArgs edit;
   auto* edit_cmd = cli::add_edit_command(app, edit);

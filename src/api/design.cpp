@@ -279,7 +279,9 @@ void Design::set_scene(Scene scene) { s_->commit(std::move(scene), nullptr); }
 
 void Design::set_scene(const nlohmann::json& scene, const std::string& label) {
   const std::string source = s_->scene ? s_->scene->source_path : std::string();
-  set_scene(scene_from_json(scene, label, source));
+  Scene next = scene_from_json(scene, label, source);
+  if (const auto space = space_for(next)) check_scene_on_domain(*space, next, label);
+  set_scene(std::move(next));
 }
 
 void Design::save(const std::string& path) const {
@@ -304,6 +306,13 @@ void Design::save(const std::string& path) const {
 const DesignSpace& Design::space() {
   if (!s_->scene && s_->space) return *s_->space;
   return *s_->domain();
+}
+
+std::shared_ptr<const DesignSpace> Design::space_for(const Scene& scene) const {
+  const std::string key = domain_key(scene);
+  if (s_->space && key == s_->space_key) return s_->space;
+  if (s_->given_space && key == s_->given_key) return s_->given_space;
+  return nullptr;
 }
 
 const Field& Design::generate(GenerateOptions options) { return s_->made(std::move(options)).field; }

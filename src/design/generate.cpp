@@ -815,19 +815,58 @@ void check_cancelled(const GenerateOptions& options) {
   if (options.cancel && options.cancel->load(std::memory_order_relaxed)) throw GenerationCancelled();
 }
 
+void check_scene_on_domain(const DesignSpace& space, const Scene& scene, const std::string& label) {
+  if (space.planar()) return;
+  const std::string name = label.empty() ? scene.label() : label;
+  const Mesh& mesh = space.mesh();
+  const double far = 0.25 * space.diameter();
+  auto check = [&](const Vec3& x, const std::string& where) {
+    const double d = (surface_position(mesh, space.locate(x)) - x).norm();
+    if (!(d <= far))
+      throw_input_error(name, where,
+                        fmt::format("({}, {}, {}) is {:.3g} from the surface, more than a quarter of its size ({:.3g}, "
+                                    "its bounding box's diagonal over 4): points are moved onto the surface, but one "
+                                    "this far off lands wherever the nearest part of it happens to be; give a point "
+                                    "on the surface (was the scene made for another mesh, or in other units?)",
+                                    x.x(), x.y(), x.z(), d, far));
+  };
+  auto elements = [&](const std::vector<Element>& list, const std::string& prefix) {
+    for (size_t i = 0; i < list.size(); ++i) {
+      const std::string at = fmt::format("{}[{}]", prefix, i);
+      if (const auto* e = std::get_if<SingularElement>(&list[i]))
+        for (size_t k = 0; k < e->path.size(); ++k) check(e->path[k].position, fmt::format("{}.path[{}]", at, k));
+      else if (const auto* r = std::get_if<RegularElement>(&list[i]))
+        for (size_t k = 0; k < r->pathline.size(); ++k)
+          check(r->pathline[k].position, fmt::format("{}.pathline[{}]", at, k));
+      else if (const auto* b = std::get_if<BifurcationElement>(&list[i]))
+        check(b->at.position, at + ".at");
+      else if (const auto* sl = std::get_if<StreaklineElement>(&list[i]))
+        for (size_t k = 0; k < sl->points.size(); ++k) check(sl->points[k], fmt::format("{}.points[{}]", at, k));
+    }
+  };
+  elements(scene.elements, "elements");
+  for (size_t k = 0; k < scene.keyframes.size(); ++k) {
+    const Keyframe& f = scene.keyframes[k];
+    for (size_t j = 0; j < f.elements.size(); ++j)
+      check(f.elements[j].at, fmt::format("keyframes[{}].elements[{}].at", k, j));
+    for (size_t j = 0; j < f.streamlines.size(); ++j)
+      for (size_t m = 0; m < f.streamlines[j].points.size(); ++m)
+        check(f.streamlines[j].points[m], fmt::format("keyframes[{}].streamlines[{}].points[{}]", k, j, m));
+  }
+  if (scene.deform) {
+    elements(scene.deform->base, "deform.base.elements");
+    for (size_t j = 0; j < scene.deform->streamlines.size(); ++j)
+      check(scene.deform->streamlines[j].seed, fmt::format("deform.streamlines[{}].seed", j));
+  }
+  // Sketched streaklines that meet themselves: the scene reader refuses them on planar
+  // domains; on a surface the sketch is known only once it is snapped onto it.
+  check_surface_sketches(space, scene, name);
+}
+
 Field generate_unedited(const DesignSpace& space, const Scene& scene, const GenerateOptions& options,
                         GenerateReport* report) {
   check_cancelled(options);
-  // Sketched streaklines that meet themselves: the scene reader refuses them on planar
-  // domains; on a surface the sketch is known only once it is snapped onto it.
-  if (!space.planar())
-    for (size_t i = 0; i < scene.elements.size(); ++i)
-      if (const auto* sl = std::get_if<StreaklineElement>(&scene.elements[i]))
-        if (const auto crossing = surface_sketch_crossing(space, sl->points))
-          throw Error(fmt::format("{}: elements[{}].points: the sketch crosses or folds back onto itself on the "
-                                  "surface (its segments from points[{}] and points[{}]): two parts of the dye "
-                                  "cannot be at one point at t; sketch a streakline that does not meet itself",
-                                  scene.label(), i, crossing->first, crossing->second));
+  check_scene_on_domain(space, scene);
   switch (scene.generator) {
     case Generator::basis: return generate_basis_sum(space, scene, options, report);
     case Generator::constrained: return generate_constrained(space, scene, options, report);

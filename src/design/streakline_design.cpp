@@ -3,6 +3,8 @@
 #include "tvf/core/error.h"
 #include "tvf/field/field_sampler.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -182,28 +184,37 @@ std::optional<std::pair<size_t, size_t>> surface_sketch_crossing(const DesignSpa
   double length = 0;
   for (size_t i = 0; i + 1 < points.size(); ++i) length += (points[i + 1] - points[i]).norm();
   const double step = std::max(0.25 * h, length / 4000);  // at most ~4000 pieces in all
+  // Where a chord leaves the surface (round a corner, off-surface points) several of its
+  // points snap to nearly one place: pieces shorter than `join` are joined to the next, or
+  // the two pieces either side of them would read as touching.
+  const double join = 0.01 * h;
+  Vec3 from = Vec3::Zero(), from_n = Vec3::Zero(), last = Vec3::Zero();
+  bool started = false;
   for (size_t i = 0; i + 1 < points.size(); ++i) {
     const double len = (points[i + 1] - points[i]).norm();
     if (!(len > 0)) continue;
     const int count = std::max(1, static_cast<int>(std::ceil(len / step)));
-    Vec3 n;
-    Vec3 x = on_surface(points[i], n);
+    if (!started) from = last = on_surface(points[i], from_n), started = true;
     for (int q = 1; q <= count; ++q) {
-      Vec3 next_n;
-      const Vec3 y = on_surface(points[i] + (points[i + 1] - points[i]) * (static_cast<double>(q) / count), next_n);
-      if (y != x) pieces.push_back({x, y, n, i});
-      x = y;
-      n = next_n;
+      Vec3 n;
+      last = on_surface(points[i] + (points[i + 1] - points[i]) * (static_cast<double>(q) / count), n);
+      if ((last - from).norm() <= join) continue;
+      pieces.push_back({from, last, from_n, i});
+      from = last;
+      from_n = n;
     }
   }
+  if (!pieces.empty()) pieces.back().b = last;  // the sketch's end, however close
   if (pieces.size() < 2) return std::nullopt;
   const bool closed = (points.front() - points.back()).norm() <= tol;
-  // Neighbours that fold back: in the plane normal at their shared point the second runs back
-  // along the first.
+  // Neighbours that fold back: in the plane normal to both pieces' faces the second runs back
+  // along the first. (A projection keeps a fold a fold; projecting onto one face's plane
+  // would also fold a path that turns round a crease, as round a cube's corner.)
   for (size_t k = 0; k + 1 < pieces.size(); ++k) {
     const Piece& p = pieces[k];
     const Piece& q = pieces[k + 1];
-    const Vec3& n = q.n;
+    const Vec3 both = p.n + q.n;
+    const Vec3 n = both.norm() > 1e-6 ? Vec3(both.normalized()) : q.n;
     const Vec3 u = (p.b - p.a) - n * n.dot(p.b - p.a), v = (q.b - q.a) - n * n.dot(q.b - q.a);
     if (u.cross(v).norm() <= 1e-9 * u.norm() * v.norm() && u.dot(v) < 0)
       return std::pair{p.segment, q.segment};
@@ -220,6 +231,31 @@ std::optional<std::pair<size_t, size_t>> surface_sketch_crossing(const DesignSpa
       if (meet_in_plane(p.a, p.b, q.a, q.b, (p.n + q.n).normalized(), tol)) return std::pair{p.segment, q.segment};
     }
   return std::nullopt;
+}
+
+void check_surface_sketches(const DesignSpace& space, const Scene& scene, const std::string& label) {
+  if (space.planar()) return;
+  const Mesh& mesh = space.mesh();
+  for (size_t i = 0; i < scene.elements.size(); ++i) {
+    const auto* sl = std::get_if<StreaklineElement>(&scene.elements[i]);
+    if (!sl) continue;
+    // As the reader refuses a planar sketch of no length: here once snapped (points far off
+    // a convex corner all land on it).
+    double length = 0;
+    for (size_t k = 0; k + 1 < sl->points.size(); ++k)
+      length += (surface_position(mesh, space.locate(sl->points[k + 1])) -
+                 surface_position(mesh, space.locate(sl->points[k])))
+                    .norm();
+    if (!(length > 1e-9 * mesh.mean_edge_length()))
+      throw_input_error(label.empty() ? scene.label() : label, fmt::format("elements[{}].points", i),
+                        "must have a length > 0 on the surface (its points all land on one point of it)");
+    if (const auto crossing = surface_sketch_crossing(space, sl->points))
+      throw_input_error(label.empty() ? scene.label() : label, fmt::format("elements[{}].points", i),
+                        fmt::format("the sketch crosses or folds back onto itself on the surface (its segments "
+                                    "from points[{}] and points[{}]): two parts of the dye cannot be at one point "
+                                    "at t; sketch a streakline that does not meet itself",
+                                    crossing->first, crossing->second));
+  }
 }
 
 SketchSelfApproach sketch_self_approach(std::span<const Vec3> points, double h) {

@@ -607,6 +607,19 @@ json Session::put_scene(const json& j, long long on_revision) {
     check_revision(on_revision, s_->design->revision(), "scene");
   }
   Scene next = s_->parse(j);
+  // What only the domain tells (a point far off the surface, a sketched streakline that
+  // meets itself on it) is refused now, as the reader refuses it on grids, when the domain
+  // is built already: not taken and left to fail in the solve.
+  std::shared_ptr<const DesignSpace> space;
+  {
+    std::lock_guard lock(s_->mutex);
+    space = s_->design->space_for(next);
+  }
+  if (space) try {
+      check_scene_on_domain(*space, next, s_->options.scene);
+    } catch (const Error& e) {
+      throw RequestError(400, e.what(), location_of(e));
+    }
   if (!s_->options.solve_while_saving) {
     // Saved first (before_change), then the solve is scheduled.
     std::lock_guard change(s_->change_mutex);

@@ -147,6 +147,25 @@ TEST(Design, RefusedAndInvalidEditsChangeNothing) {
   EXPECT_TRUE(bitwise_equal(design.field(), before));
 }
 
+TEST(Design, ASceneWhoseSurfaceSketchMeetsItselfIsRefusedOnTheDomainItHas) {
+  // set_scene(json) validates as the reader does and, on the domain the Design has built,
+  // tests a surface sketch as generate() would: refused there, the Design unchanged.
+  Design design(scene_of(json::parse(R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 3}}, "time": {"frames": 5},
+    "generator": "constrained", "elements": [{"kind": "singular", "type": "ccw_center", "path": [[0, 0, 1, 0]]}]})")));
+  design.generate();
+  const long long revision = design.revision();
+  json next = scene_to_json(design.scene());
+  // (0°, 0°) → (40°, 30°) → (40°, 0°) → (0°, 30°) in longitude and latitude: an X.
+  next["elements"].push_back(json::parse(R"({"kind": "streakline", "t": 0.8, "from": 0.2,
+    "points": [[1, 0, 0], [0.663414, 0.556670, 0.5], [0.766044, 0.642788, 0], [0.866025, 0, 0.5]]})"));
+  const std::string refused = test::error_of([&] { design.set_scene(next, "edited.json"); });
+  EXPECT_EQ(refused.rfind("edited.json: elements[1].points: the sketch crosses or folds back onto itself on the surface", 0),
+            0u)
+      << refused;
+  EXPECT_EQ(design.revision(), revision);
+  EXPECT_TRUE(design.has_field());
+}
+
 TEST(Design, CancelledGenerationLeavesTheDesignAsItWas) {
   Design design(scene_of(small_scene("spacetime")));
   std::atomic<bool> stop{true};

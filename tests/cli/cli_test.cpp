@@ -271,6 +271,17 @@ TEST(Cli, ValidateReportsTheDomain) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("10242 vertices"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("Euler characteristic 2"), std::string::npos) << r.output;
+  // With the domain, the scene on it: a point far off the sphere is refused in one line
+  // naming its JSON place, and the scene is not called valid.
+  const test::TempDir dir;
+  test::write_text(dir / "far.json", R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 2}}, "time": {"frames": 3},
+    "elements": [{"kind": "singular", "type": "source", "path": [[0, 0, 1, 0], [0, 4, 0, 1]]}]})");
+  const auto far = run_tvf("validate '" + (dir / "far.json").string() + "' --domain");
+  EXPECT_NE(far.exit_code, 0);
+  EXPECT_EQ(count_lines(far.output), 1) << far.output;
+  EXPECT_NE(far.output.find("far.json: elements[0].path[1]: (0, 4, 0) is 3 from the surface"), std::string::npos)
+      << far.output;
+  EXPECT_EQ(run_tvf("validate '" + (dir / "far.json").string() + "'").exit_code, 0);  // the reader alone takes it
 }
 
 }  // namespace

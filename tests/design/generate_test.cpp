@@ -253,6 +253,51 @@ TEST(Generate, RefusesFieldsThatWouldNotFitInMemory) {
   }
 }
 
+TEST(Generate, RefusesPointsFarOffTheSurface) {
+  // The unit sphere (bounding-box diagonal 2√3, a quarter 0.87): points are moved onto the
+  // surface, 0.5 off is taken (along the radius), 2 off is refused with the JSON place —
+  // in the elements, the key frames and the deform block.
+  auto sphere_scene = [] {
+    Scene s;
+    s.domain.sphere = SphereSpec{};
+    s.domain.sphere->subdivisions = 2;
+    s.time.frames = 3;
+    s.source_path = "sphere.json";
+    return s;
+  };
+  auto refusal = [](const Scene& s) {
+    try {
+      generate(*make_design_space(s), s);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  Scene near = sphere_scene();
+  near.elements.push_back(singular(SingularType::source, {{{0, 0, 1.5}, 0}}));
+  EXPECT_EQ(refusal(near), "");
+  Scene far = sphere_scene();
+  far.elements.push_back(singular(SingularType::source, {{{0, 0, 1}, 0}, {{0, 3, 0}, 1}}));
+  EXPECT_EQ(refusal(far).rfind("sphere.json: elements[0].path[1]: (0, 3, 0) is 2 from the surface, more than a "
+                               "quarter of its size (0.866,",
+                               0),
+            0u)
+      << refusal(far);
+  Scene keyframe = sphere_scene();
+  keyframe.generator = Generator::spacetime;
+  keyframe.keyframes.push_back(Keyframe{0.5, {}, {KeyframeStreamline{{{1, 0, 0}, {0, 1, 0}, {0, 0, -3}}, 1.0}}, ""});
+  EXPECT_NE(refusal(keyframe).find("sphere.json: keyframes[0].streamlines[0].points[2]: (0, 0, -3) is 2 from"),
+            std::string::npos)
+      << refusal(keyframe);
+  Scene deform = sphere_scene();
+  deform.generator = Generator::deform;
+  deform.deform = Deform{};
+  deform.deform->base.push_back(singular(SingularType::ccw_center, {{{0, 0, 1}, 0}}));
+  deform.deform->streamlines.push_back(DeformStreamline{{-4, 0, 0}, {StreamlineKey{}}});
+  EXPECT_NE(refusal(deform).find("sphere.json: deform.streamlines[0].seed: (-4, 0, 0) is 3 from"), std::string::npos)
+      << refusal(deform);
+}
+
 TEST(DesignWarnings, PathEndingInsideTheRangeWithoutBifurcation) {
   Scene s = grid_scene(5, 1.0, 10);
   s.elements.push_back(singular(SingularType::source, {{Vec3(0, 0, 0), 0}, {Vec3(0.2, 0, 0), 0.5}}));

@@ -9,14 +9,21 @@
 #include "tvf/design/generate.h"
 #include "tvf/integrate/streakline.h"
 #include "tvf/mesh/grid.h"
+#include "tvf/mesh/mesh_io.h"
 #include "tvf/scene/scene_json.h"
+
+#include "support/test_paths.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <numbers>
+#include <string>
+#include <vector>
 
 namespace tvf {
 namespace {
@@ -431,6 +438,83 @@ TEST(StreaklineDesign, OnASurfaceASketchThatMeetsItselfIsRefused) {
   EXPECT_EQ(refusal(sketch_scene({at(0, 0), at(40, 0), at(20, 30), at(0, 0)})), "");  // a closed loop
   EXPECT_EQ(refusal(sketch_scene({at(0, 20), at(90, 20), at(180, 20), at(270, 20), at(355, 20)})), "");  // round
   EXPECT_EQ(refusal(sketch_scene({at(0, 0), at(0, 60), at(180, 60), at(180, 0)})), "");  // over the pole and down
+}
+
+// The unit cube [0, 1]³, 4 × 4 squares a face, written as an OFF file in `dir`.
+std::string unit_cube(const test::TempDir& dir) {
+  std::vector<Vec3> positions;
+  std::vector<Face> faces;
+  std::map<std::array<int, 3>, int> index;  // vertices by their coordinates in quarters
+  auto vertex = [&](std::array<int, 3> q) {
+    const auto [it, added] = index.try_emplace(q, static_cast<int>(positions.size()));
+    if (added) positions.emplace_back(q[0] / 4.0, q[1] / 4.0, q[2] / 4.0);
+    return it->second;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side <= 1; ++side)
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+          auto at = [&](int a, int b) {
+            std::array<int, 3> q{};
+            q[axis] = 4 * side, q[(axis + 1) % 3] = a, q[(axis + 2) % 3] = b;
+            return vertex(q);
+          };
+          const int v00 = at(i, j), v10 = at(i + 1, j), v11 = at(i + 1, j + 1), v01 = at(i, j + 1);
+          if (side == 1)
+            faces.push_back({v00, v10, v11}), faces.push_back({v00, v11, v01});
+          else
+            faces.push_back({v00, v11, v10}), faces.push_back({v00, v01, v11});
+        }
+  const std::string path = (dir / "cube.off").string();
+  save_mesh(Mesh(positions, faces), path);
+  return path;
+}
+
+// What generate says of a streakline sketched on the cube ("" when it generates).
+std::string cube_sketch_refusal(const std::string& cube, const std::vector<Vec3>& sketch) {
+  json j = {{"tvf", 1}, {"domain", {{"mesh", cube}}}, {"time", {{"frames", 5}}}, {"generator", "constrained"},
+            {"elements", json::array({{{"kind", "singular"}, {"type", "ccw_center"}, {"path", {{0.5, 0.5, 0, 0}}}}})}};
+  json points = json::array();
+  for (const Vec3& p : sketch) points.push_back({p.x(), p.y(), p.z()});
+  j["elements"].push_back({{"kind", "streakline"}, {"points", points}, {"t", 0.8}, {"from", 0.2}});
+  const Scene scene = scene_from_json(j, "cube.json");
+  const auto space = make_design_space(scene);
+  try {
+    generate(*space, scene);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(StreaklineDesign, OnASurfaceASketchRoundACreaseIsNotAFold) {
+  // A sketch off the cube (within a quarter of its diagonal: nearer is moved onto it, farther
+  // refused) whose points snap onto an edge or a corner and then go on over the next face is
+  // a simple path on the surface. Seen folded (and refused) before: the turn at
+  // a crease tested in one face's plane (round the corner), and pieces a hair long where the
+  // sketch's points snap onto nearly one point of an edge (the two pieces either side then
+  // touched).
+  const test::TempDir dir;
+  const std::string cube = unit_cube(dir);
+  // Up the face x = 1 along its diagonal to the corner (1, 1, 1), then down the edge
+  // x = y = 1 and over the face y = 1: a 135° turn on the surface.
+  EXPECT_EQ(cube_sketch_refusal(cube, {{1, 0.5, 0.5}, {1.1, 1.1, 1.1}, {1.15, 1.125, 1.1}, {0.5, 1, 0.5}}), "");
+  // Along z = 0.6 over the edge x = y = 1; the middle segment's points all snap to within
+  // 1e-7 of (1, 1, 0.6).
+  EXPECT_EQ(cube_sketch_refusal(cube, {{1, 0.5, 0.6}, {1.2, 1.2, 0.6}, {1.3, 1.1, 0.6000001}, {0.5, 1, 0.6}}), "");
+  // A real fold: up the edge x = y = 1 to z = 0.8 and back down it.
+  const std::string folds = cube_sketch_refusal(cube, {{1, 0.5, 0.6}, {1.2, 1.1, 0.8}, {1.1, 1.2, 0.8}, {0.5, 1, 0.6}});
+  EXPECT_NE(folds.find("crosses or folds back onto itself on the surface"), std::string::npos) << folds;
+}
+
+TEST(StreaklineDesign, OnASurfaceASketchOfNoLengthIsRefused) {
+  // Points off the cube's corner (1, 1, 1), in the cone of directions that snap onto it: the
+  // sketch has no length on the surface, as a planar sketch of equal points (which the
+  // reader refuses).
+  const test::TempDir dir;
+  EXPECT_EQ(cube_sketch_refusal(unit_cube(dir), {{1.1, 1.1, 1.1}, {1.15, 1.125, 1.1}, {1.125, 1.15, 1.1}}),
+            "scene: elements[1].points: must have a length > 0 on the surface (its points all land on one "
+            "point of it)");
 }
 
 }  // namespace

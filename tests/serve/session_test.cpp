@@ -21,6 +21,7 @@
 #include <future>
 #include <memory>
 #include <mutex>
+#include <numbers>
 #include <thread>
 #include <fstream>
 
@@ -835,6 +836,50 @@ TEST(ServeSession, StaleTemporariesOfACrashedSessionAreRemovedAtStart) {
   EXPECT_FALSE(fs::exists(dir / stale));
   EXPECT_TRUE(fs::exists(dir / live));
   EXPECT_TRUE(fs::exists(dir / ".notes.tmp-x"));
+}
+
+// A sketched streakline that meets itself on a surface: the reader cannot tell (the sketch
+// is known only once snapped onto the surface), but the session holds the domain the last
+// solve built and refuses the change as the reader refuses one on a grid — 400 with the
+// JSON place, the scene and its field kept — rather than take it and fail in the solve.
+TEST(ServeSession, OnASurfaceASketchThatMeetsItselfIsRefusedBeforeItIsTaken) {
+  test::TempDir dir;
+  SessionOptions o;
+  o.dir = dir.path();
+  o.initial_scene = R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 3}}, "time": {"frames": 5},
+    "generator": "constrained", "elements": [{"kind": "singular", "type": "ccw_center", "path": [[0, 0, 1, 0]]}]})";
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(60));
+  ASSERT_EQ(s.status()["state"], "ready") << s.status();
+  const long long revision = s.status()["revision"];
+  // Points on the unit sphere by longitude and latitude (degrees).
+  auto at = [](double lon, double lat) {
+    const double a = lon * std::numbers::pi / 180, b = lat * std::numbers::pi / 180;
+    return json::array({std::cos(b) * std::cos(a), std::cos(b) * std::sin(a), std::sin(b)});
+  };
+  json next = s.scene()["scene"];
+  next["elements"].push_back({{"kind", "streakline"}, {"points", {at(0, 0), at(40, 30), at(40, 0), at(0, 30)}},
+                              {"t", 0.8}, {"from", 0.2}});
+  try {
+    s.put_scene(next);
+    ADD_FAILURE() << "the crossing sketch was taken";
+  } catch (const RequestError& e) {
+    EXPECT_EQ(e.status(), 400);
+    EXPECT_EQ(e.location().json_path, "elements[1].points");
+    EXPECT_NE(std::string(e.what()).find("crosses or folds back onto itself on the surface (its segments from "
+                                         "points[0] and points[2])"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(s.status()["revision"], revision);
+  EXPECT_EQ(s.status()["state"], "ready");
+  EXPECT_EQ(s.scene()["scene"]["elements"].size(), 1u);
+  // A V there is taken and solved.
+  next["elements"][1]["points"] = {at(0, 0), at(40, 30), at(41, 0)};
+  s.put_scene(next);
+  ASSERT_TRUE(s.wait_idle(60));
+  EXPECT_EQ(s.status()["state"], "ready") << s.status();
+  EXPECT_EQ(s.status()["revision"], revision + 1);
 }
 
 }  // namespace

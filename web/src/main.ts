@@ -250,6 +250,12 @@ function showErrorPlace(e: unknown) {
   if (!range) return;
   sceneText.focus();
   sceneText.setSelectionRange(range.start, range.end);
+  // The browser scrolls to the selection's end; a value over many lines (a sketch's points)
+  // would show only its last line: scroll its first line into view, a third down.
+  const line = sceneText.value.slice(0, range.start).split("\n").length - 1;
+  const style = getComputedStyle(sceneText);
+  const lineHeight = parseFloat(style.lineHeight) || 1.2 * parseFloat(style.fontSize) || 16;
+  sceneText.scrollTop = Math.max(0, line * lineHeight - sceneText.clientHeight / 3);
 }
 
 // Export, render and edits use the field of the current revision: while it is being

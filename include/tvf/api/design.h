@@ -102,7 +102,10 @@ public:
   // for; the domain is kept when the new scene's domain is the same).
   void set_scene(Scene scene);
   // The same from scene JSON, validated as a file would be (errors name `label` and the
-  // JSON path). Mesh paths resolve against the current scene's file.
+  // JSON path), and on a domain already built what only it tells refused too
+  // (check_scene_on_domain: a point far off the surface, a sketched streakline that meets
+  // itself on it), as generate() would (the Design unchanged). Mesh paths resolve
+  // against the current scene's file.
   void set_scene(const nlohmann::json& scene, const std::string& label = "scene");
   // Writes the scene (atomically, scene_json.h's save_scene) to `path`, or to the file it
   // was read from when `path` is empty. A mesh given to the constructor (as arrays) is
@@ -111,6 +114,10 @@ public:
 
   // The domain of the scene, built on first use (make_design_space).
   const DesignSpace& space();
+  // The domain of `scene`'s domain when the Design has it built (the current scene's, or a
+  // mesh given in code), else null: what a client needs to test a change that only the
+  // domain can tell (check_scene_on_domain) before taking it, without building anything.
+  std::shared_ptr<const DesignSpace> space_for(const Scene& scene) const;
 
   // The field of the current scene: generated (generator, edits, projection; generate.h)
   // unless it is already there. options.cache is the Design's own; options.parallel is

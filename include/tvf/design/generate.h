@@ -195,6 +195,17 @@ inline constexpr double kTemplateMostCurvature = 3.141592653589793;
 // a 65² grid: |V| up to 5e21). generate() warns; the design check's note says so.
 inline double template_resolved_edges(BifurcationType type) { return is_hopf(type) ? 6.0 : 1.5; }
 
+// What only the domain tells of a scene, refused (tvf::Error naming `label`, empty:
+// scene.label(), and the JSON place): on a surface, a point of an element, a key frame or
+// the deform block farther from the surface than a quarter of its bounding box's diagonal
+// (points are moved onto the surface, but one that far off lands wherever the nearest part
+// of it happens to be: a scene made for another mesh, another unit); a sketched streakline
+// of no length or that meets itself once snapped (check_surface_sketches). generate()
+// calls it first; tvf serve and Design::set_scene call it on the domain they have built,
+// to refuse a change before taking it. Nothing on planar domains (the reader has tested
+// the points there).
+void check_scene_on_domain(const DesignSpace& space, const Scene& scene, const std::string& label = "");
+
 // Checks that need the domain: template elements narrower than the mesh resolves
 // (template_resolved_edges), or placed where the surface closes round within half their
 // scale. One warning per element and problem.

@@ -40,6 +40,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -90,12 +91,17 @@ inline constexpr double kSketchApartEdgesUnattached = 4.0;
 // (a long chord runs through the inside); two pieces that are not neighbours, come within
 // half an edge length of each other and face the same way (not the two sides of a thin
 // part) are projected onto the plane normal to the surface between them and tested there,
-// as the reader tests planar segments; two neighbours fold back when,
-// in the plane normal at their shared point, the second turns back along the first. Returns
-// the indices of the two sketch points whose segments meet, or nothing. A closed sketch
-// (last point on the seed) is not a crossing.
+// as the reader tests planar segments; two neighbours fold back when, in the plane normal
+// to both their faces, the second turns back along the first. Returns the indices of the
+// two sketch points whose segments meet, or nothing. A closed sketch (last point on the
+// seed) is not a crossing.
 std::optional<std::pair<size_t, size_t>> surface_sketch_crossing(const DesignSpace& space,
                                                                  std::span<const Vec3> points);
+// Refuses (tvf::Error located at "elements[i].points", one sentence) the first streakline
+// element of `scene` whose sketch meets itself on `space`'s surface; nothing on planar
+// domains (the reader has tested them). The sentence names `label` (empty: scene.label()),
+// as the reader's name the label it was given. check_scene_on_domain (generate.h) calls it.
+void check_surface_sketches(const DesignSpace& space, const Scene& scene, const std::string& label = "");
 
 class StreaklineConstraints {
 public:
