@@ -278,9 +278,13 @@ SketchSelfApproach sketch_self_approach(std::span<const Vec3> points, double h) 
   }
   x.push_back(points.back());
   s.push_back(length);
+  // A closed sketch (its last point on the seed, as the readers take it) is one stretch of
+  // curve round its closing point: distances along it are taken round the loop, the
+  // shorter way, so the seed and the oldest dye beside it are not two parts that meet.
+  const bool closed = (points.front() - points.back()).norm() <= 1e-6 * h;
   for (size_t i = 0; i < x.size(); ++i)
     for (size_t j = i + 1; j < x.size(); ++j) {
-      const double along = s[j] - s[i];
+      const double along = closed ? std::min(s[j] - s[i], length - (s[j] - s[i])) : s[j] - s[i];
       if (along <= 8 * h) continue;
       const double d = (x[j] - x[i]).norm();
       if (along > 8 * d && d < out.distance) out = {d, along, x[i], x[j]};

@@ -212,6 +212,17 @@ TEST(SketchSelfApproach, IsTheClosestPairOfPartsThatAreNotOneStretch) {
   EXPECT_GT(ten, 0.69 * h);
   EXPECT_LT(ten, 0.76 * h);
   EXPECT_TRUE(std::isinf(sketch_self_approach(sketch(), h).distance)) << "the half circle";
+  // A closed loop (a square of side 0.5, last point on the seed) is one stretch round its
+  // closing point; pinched to 0.02 across its middle, the pinch is the approach.
+  const std::vector<Vec3> square{Vec3(0, 0, 0), Vec3(0.5, 0, 0), Vec3(0.5, 0.5, 0), Vec3(0, 0.5, 0), Vec3(0, 0, 0)};
+  EXPECT_TRUE(std::isinf(sketch_self_approach(square, h).distance)) << sketch_self_approach(square, h).distance;
+  const std::vector<Vec3> pinched{Vec3(0, 0, 0),     Vec3(0.5, 0, 0),   Vec3(0.5, 0.5, 0), Vec3(0.26, 0.5, 0),
+                                  Vec3(0.26, 0.2, 0), Vec3(0.24, 0.2, 0), Vec3(0.24, 0.5, 0), Vec3(0, 0.5, 0),
+                                  Vec3(0, 0, 0)};
+  const SketchSelfApproach p = sketch_self_approach(pinched, h);
+  EXPECT_NEAR(p.distance, 0.02, 1e-9);
+  EXPECT_NEAR(p.a.x(), 0.26, 1e-9);
+  EXPECT_NEAR(p.b.x(), 0.24, 1e-9);
 }
 
 // A U on 33² (31 frames, spacetime) whose sides are `edges` mean edge lengths apart, with
@@ -263,6 +274,38 @@ TEST(StreaklineDesign, ASketchWhosePartsComeTooCloseIsWarnedOfAndIsNotFollowed) 
     else
       EXPECT_LT(a.frechet, 2.5);
   }
+}
+
+TEST(StreaklineDesign, AClosedLoopIsNotWarnedOfWhereItCloses) {
+  // A loop sketched round a centre, its last point on the seed (the readers take it): the
+  // seed and the oldest dye beside it are one stretch of curve, not two parts that come
+  // close, so generate does not warn (it said "comes within 0 mean edge lengths of itself"
+  // of every closed loop); the dye traced in the field follows the loop.
+  json j = json::parse(R"({"tvf": 1, "domain": {"grid": {"size": [33, 33]}}, "time": {"frames": 21},
+    "generator": "spacetime", "falloff": 4,
+    "elements": [{"kind": "singular", "type": "ccw_center", "path": [[0, 0, 0]]}]})");
+  std::vector<Vec3> loop;
+  for (int k = 0; k <= 24; ++k) {
+    const double a = 2 * std::numbers::pi * (k % 24) / 24;
+    loop.emplace_back(0.5 * std::cos(a), 0.5 * std::sin(a), 0);
+  }
+  json points = json::array();
+  for (const Vec3& p : loop) points.push_back({p.x(), p.y()});
+  j["elements"].push_back({{"kind", "streakline"}, {"points", points}, {"t", 0.8}, {"from", 0.2}, {"attach", 20}});
+  const Scene scene = scene_from_json(j, "loop.json");
+  const auto space = make_design_space(scene);
+  GenerateReport report;
+  const Field field = generate(*space, scene, {}, &report);
+  for (const std::string& w : report.warnings) EXPECT_EQ(w.find("the sketch comes within"), std::string::npos) << w;
+  StreaklineOptions o;
+  o.t0 = 0.2;
+  o.t1 = 0.8;
+  const Streakline traced = trace_streakline(space->bundle(), field, loop.front(), o);
+  std::vector<Vec3> line;
+  for (const StreakPoint& p : traced.points) line.push_back(p.position);
+  const double h = space->mesh().mean_edge_length();
+  const StreaklineMatch m = compare_streakline(loop, line);
+  EXPECT_LT(m.frechet, 2 * h) << "Fréchet " << m.frechet / h << " edge lengths";
 }
 
 struct Match {

@@ -67,7 +67,9 @@ StreaklineMatch compare_streakline(std::span<const Vec3> sketch, std::span<const
 // stretch of curve: the polyline sampled every quarter of `h` (at most 4000 samples), and
 // of the sample pairs further apart along it than max(8h, 8d), d their distance (so a
 // corner sharper than 14° counts, a wider one does not), the closest. distance is +∞
-// when no pair is that far apart along it.
+// when no pair is that far apart along it. On a closed sketch (last point on the first)
+// distances along it are taken round the loop, the shorter way: the closing point is not
+// an approach.
 struct SketchSelfApproach {
   double distance = std::numeric_limits<double>::infinity();
   double along = 0;  // their distance along the sketch
