@@ -117,11 +117,20 @@ struct Design::State {
     ++revision;
   }
 
+  // The domain already built for domain key `key` (the last one built, or a mesh given in
+  // code), or null.
+  std::shared_ptr<const DesignSpace> built(const std::string& key) const {
+    if (space && key == space_key) return space;
+    if (given_space && key == given_key) return given_space;
+    return nullptr;
+  }
+
   const std::shared_ptr<const DesignSpace>& domain() {
     const Scene& s = need_scene();
     const std::string key = domain_key(s);
     if (!space || key != space_key) {
-      space = given_space && key == given_key ? given_space : std::shared_ptr<const DesignSpace>(make_design_space(s));
+      auto have = built(key);
+      space = have ? std::move(have) : std::shared_ptr<const DesignSpace>(make_design_space(s));
       space_key = key;
     }
     return space;
@@ -309,10 +318,7 @@ const DesignSpace& Design::space() {
 }
 
 std::shared_ptr<const DesignSpace> Design::space_for(const Scene& scene) const {
-  const std::string key = domain_key(scene);
-  if (s_->space && key == s_->space_key) return s_->space;
-  if (s_->given_space && key == s_->given_key) return s_->given_space;
-  return nullptr;
+  return s_->built(domain_key(scene));
 }
 
 const Field& Design::generate(GenerateOptions options) { return s_->made(std::move(options)).field; }

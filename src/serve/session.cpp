@@ -615,11 +615,13 @@ json Session::put_scene(const json& j, long long on_revision) {
     std::lock_guard lock(s_->mutex);
     space = s_->design->space_for(next);
   }
-  if (space) try {
+  if (space) {
+    try {
       check_scene_on_domain(*space, next, s_->options.scene);
     } catch (const Error& e) {
       throw RequestError(400, e.what(), location_of(e));
     }
+  }
   if (!s_->options.solve_while_saving) {
     // Saved first (before_change), then the solve is scheduled.
     std::lock_guard change(s_->change_mutex);
