@@ -328,7 +328,7 @@ TEST(Cli, GenerationIsTheSameBitsOnOneCpuAndOnAll) {
                  {"kind": "singular", "type": "saddle", "path": [[0.3, -0.5, 0], [-0.2, -0.4, 1]]}],
     "keyframes": [{"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [0, 0.5]}]}],
     "edits": [{"op": "smooth", "strength": 0.5}]})");
-  const std::string cli = std::string("'") + TVF_CLI_PATH + "'";
+  const std::string cli = test::quoted(test::cli_path());
   const auto scene = test::quoted(dir / "scene.json");
   const auto one = test::run_command("taskset -c 0 " + cli + " generate " + scene + " -o " +
                                      test::quoted(dir / "one") + " --no-vtk -q");

@@ -33,7 +33,7 @@ std::pair<double, double> field_difference(const std::filesystem::path& a, const
 void expect_same_outputs_on_two_ranks(const std::string& scene_text, const char* method = "PETSc CG") {
   test::TempDir dir;
   test::write_text(dir / "scene.json", scene_text);
-  const std::string cli = std::string("'") + TVF_CLI_PATH + "'";
+  const std::string cli = test::quoted(test::cli_path());
   const auto scene = test::quoted(dir / "scene.json");
   const auto one = test::run_command(cli + " generate " + scene + " -o " + test::quoted(dir / "one"));
   ASSERT_EQ(one.exit_code, 0) << one.output;
@@ -138,7 +138,7 @@ TEST(CliMpi, AnInputErrorIsPrintedOnceAndFailsTheRun) {
     "time": {"frames": 8, "range": [0, 1]},
     "generator": "spacetime",
     "solver": {"tolerance": -1}})");
-  const std::string cli = std::string("'") + TVF_CLI_PATH + "'";
+  const std::string cli = test::quoted(test::cli_path());
   const auto one = test::run_command(cli + " generate " + test::quoted(dir / "scene.json") + " -o " +
                                      test::quoted(dir / "one"));
   ASSERT_NE(one.exit_code, 0) << one.output;
@@ -161,7 +161,7 @@ TEST(CliMpi, AnInputErrorIsPrintedOnceAndFailsTheRun) {
 // launcher's environment variable, without mpirun, on a copy of tvf in a folder of its own).
 TEST(CliMpi, MissingMpiProgramIsOneSentence) {
   test::TempDir dir;
-  std::filesystem::copy_file(TVF_CLI_PATH, dir / "tvf");
+  std::filesystem::copy_file(test::cli_path(), dir / "tvf");
   const auto run = test::run_command("OMPI_COMM_WORLD_SIZE=1 " + test::quoted(dir / "tvf") + " --help");
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_EQ(occurrences(run.output, "tvf: error: launched by mpirun, but "), 1u) << run.output;

@@ -43,7 +43,7 @@ TEST(CliServe, StopsCleanlyOnSigtermWithTheDesignSaved) {
   const auto work = dir / "work";
   const auto log = dir / "log.txt";
   // Start it, wait for its address, send SIGTERM, and report its exit status.
-  const std::string script = "'" TVF_CLI_PATH "' serve --dir " + quoted(work) + " --port 0 > " + quoted(log) +
+  const std::string script = test::quoted(test::cli_path()) + " serve --dir " + quoted(work) + " --port 0 > " + quoted(log) +
                              " 2>&1 & pid=$!; for i in $(seq 300); do grep -q 'open http' " + quoted(log) +
                              " && break; sleep 0.1; done; kill -TERM $pid; wait $pid; echo exit=$?";
   const auto r = test::run_command(script);

@@ -50,6 +50,7 @@ std::string quoted(const std::filesystem::path& path) {
 }
 
 std::string source_dir() { return TVF_SOURCE_DIR; }
+std::string cli_path() { return TVF_CLI_PATH; }
 std::string test_data_dir() { return TVF_TEST_DATA_DIR; }
 std::string python() { return TVF_PYTHON; }
 

@@ -37,6 +37,7 @@ CommandResult run_tvf(const std::string& arguments);
 std::string quoted(const std::filesystem::path& path);
 
 std::string source_dir();
+std::string cli_path();  // the tvf program this build made
 std::string test_data_dir();
 std::string python();  // Debian's python3 with numpy and vtk, or "" when not found
 
