@@ -349,6 +349,7 @@ int LcsCommand::run_streaklines() {
   const TangentBundle& bundle = in.space->bundle();
   // --element: the scene's sketched streakline gives what the options leave out.
   const StreaklineElement* sketch = nullptr;
+  bool seed_from_sketch = false;
   if (element_ >= 0 || streak_->count("--element") > 0) {
     if (!in.scene)
       throw Error(fmt::format("--element {}: {} has no scene to take the element from", element_, input_));
@@ -357,6 +358,7 @@ int LcsCommand::run_streaklines() {
         !(sketch = std::get_if<StreaklineElement>(&in.scene->elements[k])))
       throw Error(fmt::format("--element {}: the scene has no streakline element at that index", element_));
     if (seed_.empty()) {
+      seed_from_sketch = true;
       const Vec3& s0 = sketch->points.front();
       seed_ = bundle.is_flat() ? std::vector<double>{s0.x(), s0.y()} : std::vector<double>{s0.x(), s0.y(), s0.z()};
     }
@@ -373,7 +375,10 @@ int LcsCommand::run_streaklines() {
   o.release_spacing = spacing_;
   o.max_gap = max_gap_;
   o.flow.dt = dt_;
-  const Vec3 seed = point_option(seed_, 0, seed_.size());
+  Vec3 seed = point_option(seed_, 0, seed_.size());
+  // The sketch's seed is where the generator took it: its closest point of the surface (the
+  // scene's own check bounds how far off it may be).
+  if (seed_from_sketch && !bundle.is_flat()) seed = surface_position(bundle.mesh(), in.space->locate(seed));
   progress.note("releasing");
   const Streakline s = on_input(input_, [&] { return trace_streakline(bundle, in.field, seed, o); });
   nlohmann::json j = {{"t", s.t},

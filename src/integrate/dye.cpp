@@ -46,31 +46,11 @@ DyeInjector::DyeInjector(const TangentBundle& bundle, const Field& field, std::s
   const Mesh& mesh = bundle.mesh();
   if (mesh.num_faces() == 0) throw_input_error(mesh.source(), "", "the domain has no faces");
   const PointLocator locator(mesh);
-  const double reach = options.max_seed_distance > 0 ? options.max_seed_distance : 3.0 * mesh.mean_edge_length();
-  auto place = [&](const Vec3& x, const char* what) {
-    if (!x.allFinite()) throw Error(fmt::format("a {} must have finite coordinates", what));
-    const SurfacePoint p = locator.closest(x);
-    const Vec3 on = surface_position(mesh, p);
-    if (bundle.is_flat()) {
-      // As trace_streakline: only x and y count on a planar domain.
-      if ((on - x).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
-        throw Error(fmt::format("the {} ({}, {}) is outside the domain", what, x.x(), x.y()));
-    } else {
-      const double d = (on - x).norm();
-      if (!(d <= reach))
-        throw Error(fmt::format("the {} ({}, {}, {}) is {:.3g} from the surface, farther than {:.3g}{}: give a "
-                                "point on or near the surface",
-                                what, x.x(), x.y(), x.z(), d, reach,
-                                options.max_seed_distance > 0 ? "" : " (three edge lengths)"));
-    }
-    return p;
-  };
-  for (const Vec3& x : seeds) seeds_.push_back(place(x, "dye seed"));
+  for (const Vec3& x : seeds) seeds_.push_back(locate_seed(bundle, locator, x, "dye seed", options.max_seed_distance));
   for (const auto& [a, b] : options.timelines) {
-    place(a, "timeline's first point");
-    place(b, "timeline's last point");
     TimelineOptions o;
     o.t0 = t0;
+    o.max_seed_distance = options.max_seed_distance;  // the ends are placed as seeds are
     lines_.emplace_back(flow_, a, b, o);
   }
   dye_.resize(seeds_.size());

@@ -23,15 +23,31 @@ void check_range(const Field& field, double t, const char* what) {
     throw Error(fmt::format("{} {} is outside the field's time range [{}, {}]", what, t, lo, hi));
 }
 
-// x on the mesh; on a planar domain x must lie in it.
-SurfacePoint locate(const TangentBundle& bundle, const PointLocator& locator, const Vec3& x, const char* what) {
+}  // namespace
+
+SurfacePoint locate_seed(const TangentBundle& bundle, const PointLocator& locator, const Vec3& x, const char* what,
+                         double max_distance) {
   const Mesh& mesh = bundle.mesh();
+  if (!x.allFinite()) throw Error(fmt::format("the {} must have finite coordinates", what));
+  if (!(max_distance >= 0) || !std::isfinite(max_distance))
+    throw Error(fmt::format("the {}'s distance {} from the surface must be a positive length", what, max_distance));
   const SurfacePoint p = locator.closest(x);
   if (p.face < 0) throw_input_error(mesh.source(), "", "the domain has no faces");
-  if (bundle.is_flat() && (surface_position(mesh, p) - x).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
-    throw Error(fmt::format("the {} ({}, {}) is outside the domain", what, x.x(), x.y()));
+  const Vec3 on = surface_position(mesh, p);
+  if (bundle.is_flat()) {
+    if ((on - x).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
+      throw Error(fmt::format("the {} ({}, {}) is outside the domain", what, x.x(), x.y()));
+    return p;
+  }
+  const double reach = max_distance > 0 ? max_distance : 3.0 * mesh.mean_edge_length();
+  if (const double d = (on - x).norm(); !(d <= reach))
+    throw Error(fmt::format("the {} ({}, {}, {}) is {:.3g} from the surface, farther than {:.3g}{}: give a point on or "
+                            "near the surface",
+                            what, x.x(), x.y(), x.z(), d, reach, max_distance > 0 ? "" : " (three edge lengths)"));
   return p;
 }
+
+namespace {
 
 // Fills the resolution fields of a traced curve (streakline.h).
 void measure_gaps(Streakline& s, double resolution) {
@@ -178,7 +194,7 @@ Streakline trace_streakline(const TangentBundle& bundle, const Field& field, con
                             "larger spacing",
                             spacing, (options.t1 - options.t0) / spacing, options.t0, options.t1, kMaxReleases));
   const PointLocator locator(bundle.mesh());
-  const SurfacePoint start = locate(bundle, locator, seed, "streakline seed");
+  const SurfacePoint start = locate_seed(bundle, locator, seed, "streakline seed", options.max_seed_distance);
 
   // Release times t0, t0 + Δ, …, and t1 (the particle still at the seed).
   const long steps = static_cast<long>(std::floor((options.t1 - options.t0) / spacing + 1e-9));
@@ -231,8 +247,10 @@ MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, co
                             options.max_points));
   const Mesh& mesh = bundle.mesh();
   locator_ = std::make_shared<const PointLocator>(mesh);
-  const Vec3 pa = surface_position(mesh, locate(bundle, *locator_, a, "timeline's first point"));
-  const Vec3 pb = surface_position(mesh, locate(bundle, *locator_, b, "timeline's last point"));
+  const Vec3 pa =
+      surface_position(mesh, locate_seed(bundle, *locator_, a, "timeline's first point", options.max_seed_distance));
+  const Vec3 pb =
+      surface_position(mesh, locate_seed(bundle, *locator_, b, "timeline's last point", options.max_seed_distance));
   auto show = [&](const Vec3& x) {
     return bundle.is_flat() ? fmt::format("({}, {})", x.x(), x.y()) : fmt::format("({}, {}, {})", x.x(), x.y(), x.z());
   };

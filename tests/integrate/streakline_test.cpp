@@ -172,6 +172,44 @@ TEST(Streakline, OnTheSphereStaysOnTheSeedsLatitude) {
   EXPECT_NEAR(std::atan2(s.points.front().position.y(), s.points.front().position.x()), 2.0, 0.06);
 }
 
+// On a surface a seed or a line's end is moved to its closest point, within three mean edge
+// lengths (as the dye renderers' seeds): one far off would land wherever the nearest part
+// of the surface happens to be (a seed at (5, 5, 5) by CGAL's camel, whose box is ±0.5,
+// was traced from its back without a word).
+TEST(Streakline, OnASurfaceASeedFarOffIsRefused) {
+  const Mesh& sphere = test::icosphere_mesh();
+  const TangentBundle bundle(sphere);
+  const Field field = field_from(bundle, TimeSampling{0, 1, 5}, [](const Vec3& x, double) { return Vec3(-x.y(), x.x(), 0); });
+  const double h = sphere.mean_edge_length();
+  auto refusal = [&](auto&& trace) {
+    try {
+      trace();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("not refused");
+  };
+  StreaklineOptions o;
+  o.t0 = 0;
+  o.t1 = 1;
+  const std::string far = refusal([&] { trace_streakline(bundle, field, Vec3(3, 3, 3), o); });
+  EXPECT_NE(far.find("the streakline seed (3, 3, 3) is 4.2"), std::string::npos) << far;
+  EXPECT_NE(far.find("from the surface, farther than"), std::string::npos) << far;
+  EXPECT_NE(far.find("(three edge lengths)"), std::string::npos) << far;
+  const std::string nan = refusal([&] { trace_streakline(bundle, field, Vec3(NAN, 0, 1), o); });
+  EXPECT_NE(nan.find("the streakline seed must have finite coordinates"), std::string::npos) << nan;
+  // Two edge lengths above the pole: moved onto it and traced; a larger reach given takes more.
+  EXPECT_EQ(trace_streakline(bundle, field, Vec3(0, 0, 1 + 2 * h), o).left, 0);
+  o.max_seed_distance = 5;
+  EXPECT_EQ(trace_streakline(bundle, field, Vec3(3, 3, 3), o).left, 0);
+  TimelineOptions t;
+  t.t0 = 0;
+  t.t1 = 1;
+  const std::string end = refusal([&] { trace_timeline(bundle, field, Vec3(1, 0, 0), Vec3(0, 0, -3), t); });
+  EXPECT_NE(end.find("the timeline's last point (0, 0, -3) is 2"), std::string::npos) << end;
+  EXPECT_NE(trace_timeline(bundle, field, Vec3(1 + h, 0, 0), Vec3(0, 1, 0), t).points.size(), 0u);
+}
+
 TEST(Timeline, IsTheSegmentCarriedAndRefinedWhereItStretches) {
   const Mesh grid = make_grid(GridSpec{41, 41, {-1, -1}, {1, 1}});
   const TangentBundle bundle(grid);

@@ -39,6 +39,9 @@ struct StreaklineOptions {
   // additions are left over, to find what stayed between them.
   double max_gap = 0.0;
   long max_added = 20000;
+  // Surfaces: how far (world units) the seed may be from the surface (it is moved to its
+  // closest point); farther is refused. 0: three mean edge lengths (as the dye renderers).
+  double max_seed_distance = 0.0;
   FlowMapOptions flow;
 };
 
@@ -72,14 +75,21 @@ struct Streakline {
   Refinement unresolved_by = Refinement::resolved;
 };
 
+// Where a seed (or a line's end) `x` lies on the domain: on a planar domain the face under
+// its x and y (z is ignored), refused outside the domain; on a surface its closest point,
+// refused when that is farther than max_distance (0: three mean edge lengths): a point that
+// far off lands wherever the nearest part of the surface happens to be. Non-finite
+// coordinates are refused. Errors name the point as `what` ("streakline seed").
+SurfacePoint locate_seed(const TangentBundle& bundle, const PointLocator& locator, const Vec3& x, const char* what,
+                         double max_distance = 0.0);
+
 // unresolved_by as the JSON answers and Python's dicts give it (DESIGN §12 keys): null when
 // resolved, "particles" (out of particles) or "torn".
 const char* refinement_name(Streakline::Refinement r);
 
 // Throws tvf::Error on t0 > t1, times outside the field's range, a non-positive release
 // spacing or one that would release more than kMaxReleases particles over [t0, t1], a
-// negative or NaN max_gap, or (planar domains) a seed outside the domain; all name the
-// value.
+// negative or NaN max_gap, or a seed off the domain (locate_seed); all name the value.
 Streakline trace_streakline(const TangentBundle& bundle, const Field& field, const Vec3& seed,
                             const StreaklineOptions& options);
 
@@ -91,6 +101,8 @@ struct TimelineOptions {
                            // is added (and carried); 0: a mean edge length. At most
                            // max_points in all. Particles that left: as for streaklines.
   int max_points = 20000;
+  // Surfaces: how far the line's ends may be from the surface (StreaklineOptions).
+  double max_seed_distance = 0.0;
   FlowMapOptions flow;
 };
 
