@@ -311,28 +311,32 @@ void MaterialLine::advance(double t) {
   refine(max_gap_, true);
 }
 
-// Drops particles an advance added (refine) where the line has drawn together since: one
-// whose path from the particle before it to the one after is within half `gap`. The line is
-// then drawn within a quarter gap of where it was, and refine does not add it back (the
-// chord is within half the gap). At most one of two neighbours goes per advance, so each
-// dropped particle's neighbours are the ones it was tested against. The particles the line
-// was made with stay (tracing afresh keeps them: trace_timeline, one advance, is unchanged),
-// as do particles beside one that left the domain (the refinement at the walls measures to
-// them).
+// Drops particles an advance added (refine) where the line has drawn together since: a run
+// of them between two kept particles p and q goes when the line's path from p through the
+// run to q is within half `gap`. Every point of that path is then within a quarter gap of
+// the chord p–q that replaces it (|p − x| + |x − q| ≤ gap/2 puts x within gap/4 of it), and
+// refine does not add it back (the chord is within half the gap). The whole contraction of
+// one advance is taken at once, however many particles it drew together (one of two
+// neighbours per advance lagged a fast contraction by several pictures). The particles the
+// line was made with stay (tracing afresh keeps them: trace_timeline, one advance, is
+// unchanged), as do particles beside one that left the domain (the refinement at the walls
+// measures to them).
 void MaterialLine::coarsen(double gap) {
   if (!std::isfinite(gap) || particles_.size() < 3) return;
   std::vector<Sample> kept;
   kept.reserve(particles_.size());
   kept.push_back(particles_.front());
-  bool dropped = false;
+  double run = 0;  // the path from the last kept particle to particles_[k]
   for (size_t k = 1; k + 1 < particles_.size(); ++k) {
     const Sample& p = kept.back();
     const Sample& x = particles_[k];
     const Sample& q = particles_[k + 1];
-    const bool drop = !dropped && x.added && !p.m.left && !x.m.left && !q.m.left &&
-                      (x.x - p.x).norm() + (q.x - x.x).norm() <= 0.5 * gap;
-    if (!drop) kept.push_back(x);
-    dropped = drop;
+    run += (x.x - particles_[k - 1].x).norm();
+    const bool drop = x.added && !p.m.left && !x.m.left && !q.m.left && run + (q.x - x.x).norm() <= 0.5 * gap;
+    if (!drop) {
+      kept.push_back(x);
+      run = 0;
+    }
   }
   kept.push_back(particles_.back());
   particles_ = std::move(kept);
