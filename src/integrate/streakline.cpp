@@ -3,6 +3,7 @@
 #include "tvf/core/error.h"
 #include "tvf/field/point_locator.h"
 #include "tvf/integrate/surface_path.h"
+#include "tvf/integrate/surface_walk.h"
 
 #include <tbb/parallel_for.h>
 
@@ -270,16 +271,22 @@ MaterialLine::MaterialLine(const FlowMap& flow, const Vec3& a, const Vec3& b, co
   if (bundle.is_flat()) {
     path_ = {a, b};
   } else {
-    path_ = SurfacePaths(bundle, *locator_).between(pa, pb, kPathSegments);
+    SurfacePaths::Route route = SurfacePaths(bundle, *locator_).route(pa, pb, kPathSegments);
+    path_ = std::move(route.points);
+    path_starts_ = std::move(route.starts);
+    path_steps_ = std::move(route.steps);
     if (path_.empty())
       throw Error(fmt::format("the timeline's ends {} and {} lie on separate pieces of the surface: no path over it "
                               "joins them",
                               show(a), show(b)));
   }
   along_.assign(path_.size(), 0.0);
-  for (size_t k = 1; k < path_.size(); ++k) along_[k] = along_[k - 1] + (path_[k] - path_[k - 1]).norm();
+  // Arclength: over a surface the walks' lengths, the path's own.
+  for (size_t k = 1; k < path_.size(); ++k)
+    along_[k] = along_[k - 1] + (path_steps_.empty() ? (path_[k] - path_[k - 1]).norm() : std::abs(path_steps_[k - 1]));
   if (!(along_.back() > 0)) {  // a path of no length (only by rounding: the ends are apart): the chord
     path_ = {pa, pb};
+    path_starts_.clear(), path_steps_.clear();
     along_ = {0.0, (pb - pa).norm()};
   }
   for (double& x : along_) x /= along_.back();
@@ -343,12 +350,19 @@ void MaterialLine::coarsen(double gap) {
 }
 
 // The particle at parameter s of the line where it is drawn: the path's point at that
-// fraction of its length, snapped onto the domain (on a planar domain the segment's own
-// point).
+// fraction of its length. On a surface, walked that fraction of its segment's step from
+// the segment's start (SurfacePaths::Route), so the line is continuous in s: the chord's
+// point snapped to its closest surface point jumped across thin parts (the tip of CGAL's
+// camel's tail, whose line to a hoof was refused as torn). On a planar domain the
+// segment's own point.
 MaterialLine::Particle MaterialLine::start_at(double s) const {
   const auto k = static_cast<size_t>(std::upper_bound(along_.begin() + 1, along_.end() - 1, s) - along_.begin()) - 1;
   const double w = along_[k + 1] > along_[k] ? std::clamp((s - along_[k]) / (along_[k + 1] - along_[k]), 0.0, 1.0) : 0.0;
-  const SurfacePoint at = locator_->closest((1.0 - w) * path_[k] + w * path_[k + 1]);
+  SurfacePoint at;
+  if (path_starts_.empty())
+    at = locator_->closest((1.0 - w) * path_[k] + w * path_[k + 1]);
+  else
+    at = w > 0 ? walk_surface(flow_.bundle(), path_starts_[k], w * path_steps_[k]).end : path_starts_[k];
   return starting(s, at, surface_position(flow_.bundle().mesh(), at));
 }
 

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -363,6 +364,33 @@ TEST(Timeline, OnASurfaceIsTheShortestPathOverIt) {
   EXPECT_EQ(s.unresolved, 0);
   EXPECT_NEAR(std::atan2(s.points.front().position.y(), s.points.front().position.x()), 1.0, 0.05);
   EXPECT_NEAR(std::atan2(s.points.back().position.y(), s.points.back().position.x()), 1.0 + M_PI / 2, 0.05);
+}
+
+TEST(Timeline, OnAThinPartGoesOverItsRimNotThroughIt) {
+  // From the top of a slab a fiftieth of an edge length thick to the point under it on the
+  // bottom: the line at t0 runs to the rim, over it and back (about 0.5 long),
+  // every particle on the surface and each within a mean edge length of the next. Its
+  // particles were the closest surface points of the chords of a path straightened
+  // through the slab: a line 0.04 long whose particles jumped from one sheet to the other.
+  const Mesh& slab = test::slab_mesh();
+  const TangentBundle bundle(slab);
+  const Field still = field_from(bundle, TimeSampling{0, 1, 3}, [](const Vec3&, double) { return Vec3(0, 0, 0); });
+  TimelineOptions o;
+  o.t0 = 0;
+  o.t1 = 0;
+  const Vec3 p(0.75, 0.52, test::kSlabThickness), q(0.75, 0.48, 0);
+  const Streakline line = trace_timeline(bundle, still, p, q, o);
+  EXPECT_EQ(line.unresolved, 0);
+  EXPECT_LE(line.largest_gap, slab.mean_edge_length());
+  double length = 0, rim = 0;
+  for (size_t k = 1; k < line.points.size(); ++k) {
+    length += (line.points[k].position - line.points[k - 1].position).norm();
+    rim = std::max(rim, line.points[k].position.x());
+  }
+  // Particles on either side of the rim, their chord short of the path over it by at most
+  // their distance along it.
+  EXPECT_GT(rim, 1 - line.largest_gap);
+  EXPECT_NEAR(length, std::hypot(0.5 + test::kSlabThickness, 0.04), 2 * line.largest_gap);
 }
 
 TEST(Timeline, ASegmentBetweenPiecesOfASurfaceIsRefused) {

@@ -4,6 +4,7 @@
 #include "tvf/mesh/primitives.h"
 
 #include <map>
+#include <utility>
 
 namespace tvf::test {
 
@@ -42,6 +43,39 @@ const Mesh& hemisphere_mesh() {
       faces.push_back(g);
     }
     return Mesh(std::move(pos), std::move(faces), "hemisphere");
+  }();
+  return m;
+}
+
+const Mesh& slab_mesh() {
+  static const Mesh m = [] {
+    const int n = 11;
+    std::vector<Vec3> x;
+    std::vector<Face> faces;
+    const auto id = [n](int layer, int i, int j) { return layer * n * n + j * n + i; };
+    for (int layer = 0; layer < 2; ++layer)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) x.emplace_back(i / (n - 1.0), j / (n - 1.0), layer == 0 ? kSlabThickness : 0.0);
+    for (int j = 0; j + 1 < n; ++j)
+      for (int i = 0; i + 1 < n; ++i) {
+        faces.push_back({id(0, i, j), id(0, i + 1, j), id(0, i + 1, j + 1)});
+        faces.push_back({id(0, i, j), id(0, i + 1, j + 1), id(0, i, j + 1)});
+        faces.push_back({id(1, i, j), id(1, i + 1, j + 1), id(1, i + 1, j)});
+        faces.push_back({id(1, i, j), id(1, i, j + 1), id(1, i + 1, j + 1)});
+      }
+    // The top's rim: its directed edges whose reverse no top face holds.
+    std::map<std::pair<int, int>, int> top;
+    for (size_t f = 0; f < faces.size(); f += 4)
+      for (size_t g = f; g < f + 2; ++g)
+        for (size_t k = 0; k < 3; ++k) ++top[{faces[g][k], faces[g][(k + 1) % 3]}];
+    const int below = n * n;
+    for (const auto& [edge, count] : top) {
+      const auto [u, v] = edge;
+      if (top.contains({v, u})) continue;
+      faces.push_back({v, u, u + below});
+      faces.push_back({v, u + below, v + below});
+    }
+    return Mesh(std::move(x), std::move(faces), "slab");
   }();
   return m;
 }

@@ -169,6 +169,8 @@ private:
   double t0_ = 0.0, t_ = 0.0, max_gap_ = 0.0;
   int max_points_ = 0;
   std::vector<Vec3> path_;     // the line at t0: the segment, or the path over the surface
+  std::vector<SurfacePoint> path_starts_;  // on a surface: the path's segments as walks over it
+  std::vector<cplx> path_steps_;           // (SurfacePaths::Route)
   std::vector<double> along_;  // each path point's arclength over the whole (0 … 1)
   std::vector<Particle> particles_;
   Streakline line_;
