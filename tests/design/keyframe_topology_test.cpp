@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -1063,7 +1064,8 @@ TEST(KeyframeTopology, TheSaddlesOnCGALsCowsThinPartsHaveTheirCharts) {
 }
 
 // Two paths on a part of a closed surface thinner than the separation cannot be kept that
-// far apart in space by any detour walked along the surface, and the collision says so:
+// far apart in space by any detour walked along the surface, and the collision says so,
+// with the part's width:
 // a source and a center trading places along a torus's tube 0.1 thick, the separation
 // 0.2. It said "no detour inside the domain", which on a closed surface reads as a bug
 // (CGAL's man: a knot along an arm 0.045 thick, the separation 0.11).
@@ -1075,6 +1077,12 @@ TEST(KeyframeTopology, PathsAlongAPartThinnerThanTheSeparationAreReportedSo) {
   const KeyframeIntervalReport& r = p.plan->intervals().at(0);
   EXPECT_FALSE(r.guided);
   EXPECT_NE(r.collision.find("no detour along the surface keeps them 0.2 apart"), std::string::npos) << r.collision;
+  // ... and names the part's width: the tube's cross-section where they pass, 0.1 across
+  // (its 12-gon's widest chord, cut between its vertices).
+  std::smatch across;
+  std::regex_search(r.collision, across, std::regex("on a part of the surface ([0-9.e-]+) across"));
+  ASSERT_EQ(across.size(), 2u) << r.collision;
+  EXPECT_NEAR(std::stod(across[1].str()), 0.1, 0.005) << r.collision;
 }
 
 // Between guided key frames every vertex is fixed to a finite value, also the key frames'
