@@ -192,11 +192,21 @@ struct KeyframeTopologyPlan::Track {
   // Path parameter at time t: the interval's warp (Ease) from the key frame's end.
   Ease ease;
   double param(double t) const { return ease.at(t, t0, t1); }
+  // Through a middle key frame the path goes on in the direction it leaves in (C¹; see
+  // through_velocity): Hermite terms added to the segment (on a surface walked from the
+  // curve's point like a detour), s(1 − s)² · through0 − s²(1 − s) · through1, which change
+  // its derivative at s = 0 by through0 and at s = 1 by through1 and nothing else at the
+  // ends. World vectors, tangent to the domain at p0 and p1; zero at the scene's first and
+  // last key frames and where the singularity is not carried on both sides.
+  Vec3 through0 = Vec3::Zero(), through1 = Vec3::Zero();
+  bool bent_through() const { return through0 != Vec3::Zero() || through1 != Vec3::Zero(); }
+  Vec3 through(double s) const { return s * (1 - s) * (1 - s) * through0 - s * s * (1 - s) * through1; }
   // The path before any detour at parameter s: the straight segment's point, or on a
-  // surface the curve's point at arclength fraction s.
+  // surface the curve's point at arclength fraction s; turned at a middle key frame by
+  // the Hermite terms.
   Vec3 base(double s) const {
-    if (curve) return curve->at(s);
-    return p0 + s * (p1 - p0);
+    if (curve) return bent_through() ? curve->walked(curve->at(s), through(s)) : curve->at(s);
+    return p0 + s * (p1 - p0) + through(s);
   }
   // The path's length before any detour.
   double base_length() const { return curve ? curve->length : (p1 - p0).norm(); }
@@ -206,8 +216,8 @@ struct KeyframeTopologyPlan::Track {
   // the paths meet) is walked along the surface from the curve's point (SurfaceCurve::walked).
   Vec3 raw(double s) const {
     if (curve) {
-      if (bends.empty() && wave.empty()) return curve->at(s);
-      Vec3 offset = Vec3::Zero();
+      if (bends.empty() && wave.empty()) return base(s);
+      Vec3 offset = through(s);
       for (const Bend& b : bends) offset += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
       for (size_t k = 0; k < wave.size(); ++k) offset += wave_shape(static_cast<int>(k) + 1, s) * wave[k];
       return curve->walked(curve->at(s), offset);
@@ -2299,6 +2309,36 @@ std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, cons
   return curve;
 }
 
+// A path's derivative in its parameter at its first end (at_end false) or its last, before
+// any Hermite term or detour: the segment's p1 − p0; on a surface the curve's direction
+// there (its first or last chord, about an edge length) times its length, in the plane
+// normal to `normal` (the surface's at that end).
+Vec3 end_velocity(const Vec3& p0, const Vec3& p1, const SurfaceCurve* curve, bool at_end, const Vec3& normal) {
+  Vec3 d = p1 - p0;
+  if (curve) {
+    const std::vector<Vec3>& x = curve->points;
+    const Vec3 chord = at_end ? Vec3(x[x.size() - 1] - x[x.size() - 2]) : Vec3(x[1] - x[0]);
+    d = chord.norm() > 0 ? Vec3(chord.normalized() * curve->length) : Vec3::Zero();
+  }
+  return d - d.dot(normal) * normal;
+}
+
+// The velocity a singularity carried through a middle key frame has there: Bessel's
+// tangent, the slope at the key frame of the parabola through its three places, (Δt₂ v₁ +
+// Δt₁ v₂)/(Δt₁ + Δt₂) from the velocities v₁ = leg/Δt₁ it arrives with and v₂ it leaves
+// with (the way an animation curve's key is smoothed: straight on where the two legs run
+// on; a quarter turn round a pole each way, as example 26's sphere knot does, goes round
+// in an arc instead of a corner; a reversal comes to rest). No more than twice the slower
+// leg's speed, so a singularity that stays put on one side (a hold before it moves) sets
+// off from rest instead of drifting off before the key frame, and a short leg is not
+// swung out far by a long one (a monotone spline's limit, as Fritsch and Carlson's).
+Vec3 through_velocity(const Vec3& v1, const Vec3& v2, double dt1, double dt2) {
+  Vec3 v = (dt2 * v1 + dt1 * v2) / (dt1 + dt2);
+  const double cap = 2 * std::min(v1.norm(), v2.norm());
+  if (v.norm() > cap) v *= cap / v.norm();
+  return v;
+}
+
 // Where the +1 singularities' phase drifts (each one's phase change less their mean, so
 // summing to 0) must end for the key frames' types with no whole turn between two of them:
 // each drift's value within (−π, π], unwrapped across the largest gap on the circle (the
@@ -2802,7 +2842,8 @@ public:
       ax1[i] = space_.planar() ? Vec3::UnitX() : space_.bundle().face_e1(f);
       ax2[i] = normal.cross(ax1[i]);
       // The path's direction at its middle (on a surface its curve's; planar the segment's).
-      const Vec3 d = items[i].curve ? Vec3(items[i].base(0.51) - items[i].base(0.49)) : Vec3(items[i].p1 - items[i].p0);
+      const Vec3 d = items[i].curve || items[i].bent_through() ? Vec3(items[i].base(0.51) - items[i].base(0.49))
+                                                               : Vec3(items[i].p1 - items[i].p0);
       const Vec3 l = normal.cross(d);
       if (l.norm() > 1e-9 * space_.diameter()) left[i] = l.normalized();
     }
@@ -3550,7 +3591,53 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   // quarter of the domain's diameter, at least the separation.
   const double stability_reach = std::max(0.25 * space.diameter(), separation);
   const PathRouter router(space, separation, keyframe_times);
+  // The matching rules of the interval from key frame k to k + 1 (the links checked).
+  auto interval_rules = [&](size_t k) {
+    KeyframeMatchRules rules;
+    const std::vector<Singularity>& A = sing[k];
+    const std::vector<Singularity>& B = sing[k + 1];
+    std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
+    for (size_t l = 0; l < scene.solver.links.size(); ++l) {
+      const KeyframeLink& link = scene.solver.links[l];
+      if (link.from_keyframe != static_cast<int>(k)) continue;
+      const size_t a = linked_singularity(l, link.from_keyframe, link.from_element);
+      const size_t b = linked_singularity(l, link.to_keyframe, link.to_element);
+      if (ma[a] >= 0 || mb[b] >= 0)
+        throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
+                          "links a singularity of the key frames' fields that an earlier link already holds (the "
+                          "two elements are too close to tell apart)");
+      if (A[a].index != B[b].index)
+        throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
+                          fmt::format("the key frames' fields have singularities of index {} and {} at the linked "
+                                      "elements; linked singularities must have the same index",
+                                      A[a].index, B[b].index));
+      ma[a] = static_cast<int>(b);
+      mb[b] = static_cast<int>(a);
+      rules.links.emplace_back(a, b);
+    }
+    rules.designed_a = designed[k];
+    rules.designed_b = designed[k + 1];
+    rules.turnover_cost = separation;
+    rules.stability_reach = stability_reach;
+    return rules;
+  };
+  // Where each singularity of a middle key frame goes next (its match in the next key
+  // frame by the next interval's first try; −1: none, it is cancelled or turns over), so
+  // that the path into the key frame ends in the direction the path out of it starts in.
+  std::vector<std::vector<int>> next_of(nk);
+  for (size_t k = 1; k + 1 < nk; ++k) {
+    next_of[k].assign(sing[k].size(), -1);
+    for (const auto& [a, b] : match_keyframe_singularities(sing[k], sing[k + 1], interval_rules(k)).matched)
+      next_of[k][a] = static_cast<int>(b);
+  }
+  // A path's velocity at one of its ends in time, before the Hermite terms (the warp's
+  // slope at a middle key frame is 1).
+  auto leg_velocity = [&](const Vec3& p0, const Vec3& p1, const SurfaceCurve* curve, double dt, bool at_end) {
+    const Vec3 n = space.planar() ? Vec3::UnitZ() : bundle.face_normal(space.locate(at_end ? p1 : p0).face);
+    return Vec3(end_velocity(p0, p1, curve, at_end, n) / dt);
+  };
   int groups = 0;
+  size_t previous_first = 0;  // the previous interval's first track
   for (size_t k = 0; k + 1 < nk; ++k) {
     const size_t first_track = tracks_.size();
     const size_t first_template = templates_.size();
@@ -3585,32 +3672,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       rep.bifurcation_t = k < scene.solver.bifurcation_times.size()
                               ? rep.t0 + (scene.solver.bifurcation_times[k] - key0) / (key1 - key0) * (rep.t1 - rep.t0)
                               : 0.5 * (rep.t0 + rep.t1);
-      KeyframeMatchRules rules;
-      {
-        std::vector<int> ma(A.size(), -1), mb(B.size(), -1);
-        for (size_t l = 0; l < scene.solver.links.size(); ++l) {
-          const KeyframeLink& link = scene.solver.links[l];
-          if (link.from_keyframe != static_cast<int>(k)) continue;
-          const size_t a = linked_singularity(l, link.from_keyframe, link.from_element);
-          const size_t b = linked_singularity(l, link.to_keyframe, link.to_element);
-          if (ma[a] >= 0 || mb[b] >= 0)
-            throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
-                              "links a singularity of the key frames' fields that an earlier link already holds (the "
-                              "two elements are too close to tell apart)");
-          if (A[a].index != B[b].index)
-            throw_input_error(scene.label(), fmt::format("solver.links[{}]", l),
-                              fmt::format("the key frames' fields have singularities of index {} and {} at the linked "
-                                          "elements; linked singularities must have the same index",
-                                          A[a].index, B[b].index));
-          ma[a] = static_cast<int>(b);
-          mb[b] = static_cast<int>(a);
-          rules.links.emplace_back(a, b);
-        }
-      }
-      rules.designed_a = designed[k];
-      rules.designed_b = designed[k + 1];
-      rules.turnover_cost = separation;
-      rules.stability_reach = stability_reach;
+      KeyframeMatchRules rules = interval_rules(k);
       if (attempt == 1) rules.carry_reach = stability_reach;
       const KeyframeMatch matching = match_keyframe_singularities(A, B, rules);
       const std::vector<std::pair<size_t, size_t>>& pairs = matching.matched;
@@ -3624,6 +3686,32 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         add_track(a, b.position, rep.t0, rep.t1, to_linear(b.jacobian), b.where.face);
         tracks_.back().to_type = b.type;
         rep.matched.push_back({a.type, a.position, b.position, m < n_linked, 0.0, b.type, 0, 0.0});
+      }
+      // Through a middle key frame each matched path goes on in one direction
+      // (through_velocity): at the start, the one the previous interval's path arrives by;
+      // at the end, the one the next interval's first matching carries it on by (the same
+      // velocity both sides compute, so the two paths join C¹ unless that interval is
+      // matched differently on its second try).
+      for (size_t m = 0; m < pairs.size(); ++m) {
+        Track& tr = tracks_[first_track + m];
+        const double dt = tr.t1 - tr.t0;
+        const Vec3 out0 = leg_velocity(tr.p0, tr.p1, tr.curve.get(), dt, false);
+        const Vec3 in1 = leg_velocity(tr.p0, tr.p1, tr.curve.get(), dt, true);
+        if (tr.ease.m0 > 0)
+          for (size_t i = previous_first; i < first_track; ++i) {
+            const Track& prev = tracks_[i];
+            if (prev.group >= 0 || prev.t1 != tr.t0 || prev.p1 != tr.p0) continue;
+            const Vec3 in = leg_velocity(prev.p0, prev.p1, prev.curve.get(), prev.t1 - prev.t0, true);
+            tr.through0 = (through_velocity(in, out0, prev.t1 - prev.t0, dt) - out0) * dt;
+            break;
+          }
+        if (const int next = tr.ease.m1 > 0 ? next_of[k + 1][pairs[m].second] : -1; next >= 0) {
+          const Vec3& q = sing[k + 2][static_cast<size_t>(next)].position;
+          const double dt2 = keyframe_times[k + 2] - keyframe_times[k + 1];
+          const std::shared_ptr<const SurfaceCurve> on = space.planar() ? nullptr : surface_curve(space, *paths, tr.p1, q);
+          const Vec3 out = leg_velocity(tr.p1, q, on.get(), dt2, false);
+          tr.through1 = (through_velocity(in1, out, dt, dt2) - in1) * dt;
+        }
       }
 
       // The unmatched, in pairs: cancelled before t_c, created after.
@@ -3912,6 +4000,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       intervals_.push_back(std::move(rep));
       break;
     }
+    previous_first = first_track;
   }
 }
 

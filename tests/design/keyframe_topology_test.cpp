@@ -1487,6 +1487,136 @@ TEST(KeyframeTopology, AMatchedPathOnASurfaceIsACurveOnIt) {
   EXPECT_LT(off_circle, h);
 }
 
+// Through a middle key frame a carried singularity goes on in one direction (C¹): the path
+// into it ends with the velocity the path out of it starts with, Bessel's tangent (the
+// slope of the parabola through its three places), no more than twice the slower leg's
+// speed. Until session 36 each path ran straight to the key frame and turned there: a
+// source carried right, 0.6 in half the time, then up 0.6, turned 90° in one frame step
+// (65², 33 frames) and arrived at 1.2 going right, left at 1.2 going up. Now it arrives and
+// leaves at (0.6, 0.6) (the two legs' mean: equal times), and the analysis of the field
+// finds it turning at most 15° between steps, with no bifurcation. A singularity that stays
+// put on one side sets off from rest (the cap: the hold's speed is 0) and stays put there;
+// one that turns back comes to rest at the key frame. The sphere's knot with its middle
+// key frame (example 26) is C¹ through it too: the source's steps turned 81° at the key
+// frame, now under 30° every frame.
+std::string corner_scene(int n, const std::string& last) {
+  return R"({"tvf": 1, "domain": {"grid": {"size": [)" + std::to_string(n) + ", " + std::to_string(n) +
+         R"(], "min": [-1, -1], "max": [1, 1]}},
+    "time": {"frames": 33, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.15, "keyframe_topology": "matched"},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.6, -0.4]},
+                            {"kind": "singular", "type": "sink", "at": [0.6, 0.6]}]},
+      {"t": 0.5, "elements": [{"kind": "singular", "type": "source", "at": [0.0, -0.4]},
+                              {"kind": "singular", "type": "sink", "at": [0.6, 0.6]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": )" +
+         last + R"(},
+                            {"kind": "singular", "type": "sink", "at": [0.6, 0.6]}]}]})";
+}
+
+// The largest turn (degrees) between consecutive steps of the repelling node nearest the
+// previous frame's, over the frames, and the frames where it was not found within 0.1.
+std::pair<double, int> largest_step_turn(const Topology& topo, Vec3 at) {
+  std::vector<Vec3> path;
+  int lost = 0;
+  for (const auto& frame : topo.singularities) {
+    double best = 0.1;
+    const Singularity* found = nullptr;
+    for (const Singularity& s : frame)
+      if ((s.type == SingularityType::source || s.type == SingularityType::repelling_focus) &&
+          (s.position - at).norm() < best)
+        best = (s.position - at).norm(), found = &s;
+    if (!found) {
+      ++lost;
+      continue;
+    }
+    at = found->position;
+    path.push_back(at);
+  }
+  double worst = 0;
+  for (size_t k = 0; k + 2 < path.size(); ++k) {
+    const Vec3 a = path[k + 1] - path[k], b = path[k + 2] - path[k + 1];
+    if (a.norm() < 1e-9 || b.norm() < 1e-9) continue;
+    worst = std::max(worst, std::acos(std::clamp(a.dot(b) / (a.norm() * b.norm()), -1.0, 1.0)) * 180 / std::numbers::pi);
+  }
+  return {worst, lost};
+}
+
+TEST(KeyframeTopology, ASingularityGoesOnThroughAMiddleKeyFrameInOneDirection) {
+  // The plan's velocity of the path nearest `near` just before and just after the middle key
+  // frame's time (one-sided differences over 1e-5).
+  auto velocities = [](const KeyframeTopologyPlan& plan, const Vec3& near, double key_t = 0.5) {
+    auto nearest = [&](double t) {
+      Vec3 best = Vec3::Constant(std::numeric_limits<double>::infinity());
+      for (const Vec3& x : plan.carried(t))
+        if ((x - near).norm() < (best - near).norm()) best = x;
+      return best;
+    };
+    const double e = 1e-5;
+    return std::pair{Vec3((nearest(key_t - e) - nearest(key_t - 2 * e)) / e),
+                     Vec3((nearest(key_t + 2 * e) - nearest(key_t + e)) / e)};
+  };
+  const Vec3 key(0, -0.4, 0);
+  for (const int n : kGridSides) {
+    const std::string text = corner_scene(n, "[0.0, 0.2]");
+    const Planned p = plan_of(text);
+    const auto [in, out] = velocities(*p.plan, key);
+    EXPECT_LT((in - Vec3(0.6, 0.6, 0)).norm(), 0.01) << n << ": arrives at " << in.transpose();
+    EXPECT_LT((out - Vec3(0.6, 0.6, 0)).norm(), 0.01) << n << ": leaves at " << out.transpose();
+    // The key frames' places are kept.
+    const Generated g = run(text);
+    for (const KeyframeIntervalReport& r : g.report.keyframe_intervals) EXPECT_TRUE(r.guided) << n << ": " << r.unguided_reason;
+    EXPECT_EQ(g.topology.bifurcations.size(), 0u) << n;
+    const auto [turn, lost] = largest_step_turn(g.topology, Vec3(-0.6, -0.4, 0));
+    std::printf("  corner, %d²: arrives (%.3f, %.3f), leaves (%.3f, %.3f); the analysed source turns at most %.1f° a "
+                "step\n",
+                n, in.x(), in.y(), out.x(), out.y(), turn);
+    EXPECT_EQ(lost, 0) << n;
+    EXPECT_LT(turn, 30.0) << n;
+  }
+  // A hold after the key frame: the source comes to rest there and stays put after it.
+  {
+    const Planned p = plan_of(corner_scene(33, "[0.0, -0.4]"));
+    const auto [in, out] = velocities(*p.plan, key);
+    EXPECT_LT(in.norm(), 1e-3) << in.transpose();
+    EXPECT_LT(out.norm(), 1e-9) << out.transpose();
+    // (Where the key frames' field has it: within a hair of the element's place.)
+    std::vector<Vec3> held;
+    for (const double t : {0.6, 0.75, 0.9})
+      for (const Vec3& x : p.plan->carried(t))
+        if ((x - key).norm() < 1e-3) held.push_back(x);
+    ASSERT_EQ(held.size(), 3u);
+    EXPECT_EQ(held[0], held[1]);
+    EXPECT_EQ(held[0], held[2]);
+  }
+  // Turning back: at rest at the key frame.
+  {
+    const Planned p = plan_of(corner_scene(33, "[-0.6, -0.4]"));
+    const auto [in, out] = velocities(*p.plan, key);
+    EXPECT_LT(in.norm(), 1e-3) << in.transpose();
+    EXPECT_LT(out.norm(), 1e-3) << out.transpose();
+  }
+  // The sphere's knot with its middle key frame: C¹ on the surface too (32 frames: the key
+  // frame at t = 0.5 is held at frame 16, t = 16/31).
+  const std::string text =
+      test::read_text(test::source_dir() + "/examples/26_keyframe_topology/knot_sphere_middle.json");
+  const Planned p = plan_of(text);
+  const Vec3 sphere_key(0, -0.5, 0.8660254037844386);
+  const auto [in_faces, out_faces] = velocities(*p.plan, sphere_key, 16.0 / 31);
+  // Tangent to the sphere (either side runs on its own faces of the mesh, bent 0.03 off
+  // the tangent plane one way and the other).
+  const Vec3 normal = sphere_key.normalized();
+  const Vec3 in = in_faces - in_faces.dot(normal) * normal, out = out_faces - out_faces.dot(normal) * normal;
+  EXPECT_GT(in.norm(), 0.5);
+  EXPECT_LT((in - out).norm(), 0.02 * in.norm()) << in.transpose() << " against " << out.transpose();
+  const Generated g = run(text);
+  const auto [turn, lost] = largest_step_turn(g.topology, Vec3(-0.5, 0, 0.8660254037844386));
+  std::printf("  the sphere knot with its middle key frame: arrives at %.3f, leaves at %.3f; turns at most %.1f° a step\n",
+              in.norm(), out.norm(), turn);
+  EXPECT_EQ(lost, 0);
+  EXPECT_LT(turn, 30.0);
+}
+
 // A singularity of a key frame for the matching tests: its type and place (index from the type).
 Singularity singularity_at(SingularityType type, double x, double y) {
   Singularity s;
