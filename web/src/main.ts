@@ -354,7 +354,9 @@ function showKeyframeReport(st: Status) {
     .map((k) => {
       const what = `key frames ${k.keyframes[0]} → ${k.keyframes[1]}: ${k.matched} carried${k.linked ? ` (${k.linked} linked)` : ""}, ${k.created} pairs created, ${k.cancelled} cancelled`;
       const turning = k.turning ? `; ${k.turning} node${k.turning > 1 ? "s" : ""} turning a whole turn (a key frame between the two can hold ${k.turning > 1 ? "them" : "it"})` : "";
-      if (k.guided) return `${what}; guided (${k.routing} routing): no bifurcation but these${turning}`;
+      // Guided: the analysis should show the planned pairs' events and nothing else.
+      const events = k.created + k.cancelled > 0 ? "no bifurcation but the pairs'" : "no bifurcation";
+      if (k.guided) return `${what}; guided (${k.routing} routing): ${events}${turning}`;
       return `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
     })
     .join("\n");
