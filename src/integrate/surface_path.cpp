@@ -18,21 +18,17 @@ SurfacePaths::SurfacePaths(const TangentBundle& bundle, const PointLocator& loca
 
 namespace {
 
-// A face that holds both vertices u and v of an edge, and u's barycentric place in it.
-SurfacePoint corner_in_face_with(const Mesh& mesh, int u, int v) {
-  for (const int e : mesh.outgoing(u))
-    if (mesh.head(e) == v || mesh.tail(Mesh::prev(e)) == v) {
-      const int face = e / 3;
-      const Face& f = mesh.face(face);
-      return {face, Vec3(f[0] == u ? 1.0 : 0.0, f[1] == u ? 1.0 : 0.0, f[2] == u ? 1.0 : 0.0)};
-    }
-  return {-1, Vec3::Zero()};
-}
-
 // v's barycentric place in `face`, one of its corners.
 SurfacePoint corner_of(const Mesh& mesh, int face, int v) {
   const Face& f = mesh.face(face);
   return {face, Vec3(f[0] == v ? 1.0 : 0.0, f[1] == v ? 1.0 : 0.0, f[2] == v ? 1.0 : 0.0)};
+}
+
+// A face that holds both vertices u and v of an edge, and u's barycentric place in it.
+SurfacePoint corner_in_face_with(const Mesh& mesh, int u, int v) {
+  for (const int e : mesh.outgoing(u))
+    if (mesh.head(e) == v || mesh.tail(Mesh::prev(e)) == v) return corner_of(mesh, e / 3, u);
+  return {-1, Vec3::Zero()};
 }
 
 }  // namespace
