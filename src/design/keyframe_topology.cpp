@@ -3794,14 +3794,28 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       // On a surface, a path that is no curve on it (leaves_surface: its ends joined by no
       // edge path, so left the straight segment) cannot be guided; found before the router
       // spends its time on the interval (which then stays "straight" and falls back).
-      std::string off_surface;
-      if (!space.planar())
-        for (size_t i = first_track; i < tracks_.size() && off_surface.empty(); ++i) {
-          std::vector<SurfacePoint> on(SurfaceGuide::kSamples + 1);
-          for (int q = 0; q <= SurfaceGuide::kSamples; ++q)
-            on[static_cast<size_t>(q)] = space.locate(tracks_[i].raw(static_cast<double>(q) / SurfaceGuide::kSamples));
-          off_surface = leaves_surface(space, tracks_[i], on);
-        }
+      auto leaving_surface = [&] {
+        std::string why;
+        if (!space.planar())
+          for (size_t i = first_track; i < tracks_.size() && why.empty(); ++i) {
+            std::vector<SurfacePoint> on(SurfaceGuide::kSamples + 1);
+            for (int q = 0; q <= SurfaceGuide::kSamples; ++q)
+              on[static_cast<size_t>(q)] = space.locate(tracks_[i].raw(static_cast<double>(q) / SurfaceGuide::kSamples));
+            why = leaves_surface(space, tracks_[i], on);
+          }
+        return why;
+      };
+      std::string off_surface = leaving_surface();
+      // The Hermite terms through a middle key frame are walked from the curve in one
+      // direction for the whole leg; on a long leg round a thin part (a static solve's focus
+      // carried from a camel's body down a leg) the walk can cross it. Then the interval's
+      // paths meet their key frames with a corner, as before the terms, rather than fail.
+      if (!off_surface.empty() &&
+          std::any_of(tracks_.begin() + static_cast<std::ptrdiff_t>(first_track), tracks_.end(),
+                      [](const Track& tr) { return tr.bent_through(); })) {
+        for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].through0 = tracks_[i].through1 = Vec3::Zero();
+        off_surface = leaving_surface();
+      }
       // Paths that would come closer than the separation are bent around each other.
       const std::string where =
           scene.solver.path_separation ? "solver.path_separation" : "solver.keyframe_topology";
