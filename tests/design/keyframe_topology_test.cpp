@@ -1781,6 +1781,48 @@ TEST(KeyframeTopology, TheStaticSolvesOwnAreCarriedOnlyWithinReach) {
   EXPECT_EQ(m.matched, (Pairs{{0, 0}}));
 }
 
+// Matching: a node the key frame leaves to a saddle–node pair takes the match of a node
+// carried far where that moves the singularities less in all (CGAL's elephant: a sink was
+// carried 0.49 to where a repelling focus turns attracting in place, and that focus
+// cancelled with a saddle 0.47 away, where the sink and a saddle beside it are the pair).
+// The same for a pair created in the second key frame; a designed node keeps its pair.
+TEST(KeyframeTopology, ANodeLeftToAPairTakesTheMatchOfOneCarriedFar) {
+  const auto at = singularity_at;
+  using T = SingularityType;
+  using Pairs = std::vector<std::pair<size_t, size_t>>;
+  KeyframeMatchRules rules;
+  rules.turnover_cost = 0.2;
+  // First key frame: a repelling focus at the origin, a sink at (1, 0), a saddle by it; the
+  // second: an attracting focus at the origin. By stability the sink is carried 1.0 and the
+  // focus cancelled with the saddle 1.1 away (2.1 in all); in place 0.01 + 0.2 + 0.1.
+  const std::vector<Singularity> A{at(T::repelling_focus, 0, 0), at(T::sink, 1, 0), at(T::saddle, 1.1, 0)};
+  const std::vector<Singularity> B{at(T::attracting_focus, 0, 0.01)};
+  KeyframeMatch m = match_keyframe_singularities(A, B, rules);
+  EXPECT_EQ(m.matched, (Pairs{{0, 0}}));
+  EXPECT_EQ(m.cancelled, (Pairs{{2, 1}}));
+  EXPECT_TRUE(m.created.empty());
+  // The same with the key frames' order reversed: the pair is created beside the sink.
+  m = match_keyframe_singularities(B, A, rules);
+  EXPECT_EQ(m.matched, (Pairs{{0, 0}}));
+  EXPECT_EQ(m.created, (Pairs{{2, 1}}));
+  EXPECT_TRUE(m.cancelled.empty());
+  // Where the turnover costs more than it saves (2.61 against 2.1 in all), carried as before.
+  rules.turnover_cost = 2.5;
+  m = match_keyframe_singularities(A, B, rules);
+  EXPECT_EQ(m.matched, (Pairs{{1, 0}}));
+  EXPECT_EQ(m.cancelled, (Pairs{{2, 0}}));
+  // The focus designed (the user placed it, then cancels it with the saddle): kept.
+  rules.turnover_cost = 0.2;
+  rules.designed_a = {1, 0, 0};
+  m = match_keyframe_singularities(A, B, rules);
+  EXPECT_EQ(m.matched, (Pairs{{1, 0}}));
+  EXPECT_EQ(m.cancelled, (Pairs{{2, 0}}));
+  // The sink designed (carried however far, as the user placed it): kept.
+  rules.designed_a = {0, 1, 0};
+  m = match_keyframe_singularities(A, B, rules);
+  EXPECT_EQ(m.matched, (Pairs{{1, 0}}));
+}
+
 // Two singularities the key frames hold closer than path_separation and that barely move
 // are not bent apart in between: two whose straight paths do not approach keep what those
 // keep (the static solve's own saddles and foci on scanned meshes sit that close and barely

@@ -159,7 +159,9 @@ struct KeyframeIntervalReport {
 // they would not, or else where that carries less, a stability change counting
 // `turnover_cost` more (the static solve's far foci turn over where they are rather than
 // travel across the surface to where the other key frame has one of their kind); then the
-// left over are paired (saddle with node, nearest first, each key frame apart); then what
+// left over are paired (saddle with node, nearest first, each key frame apart), and a
+// static solve's own node carried far exchanges roles with a paired node (not designed)
+// where the carry plus the pair's distance is lower so (turnover_cost counted); then what
 // is neither matched nor paired is matched across stability within `stability_reach`; what
 // is still left, by type and then by index and stability, however far.
 struct KeyframeMatchRules {
