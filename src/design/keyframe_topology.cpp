@@ -150,6 +150,45 @@ struct SurfaceCurve {
     const double w = along[k + 1] > along[k] ? (s - along[k]) / (along[k + 1] - along[k]) : 0.0;
     return points[k] + w * (points[k + 1] - points[k]);
   }
+  // The curve's chord at arclength fraction s (the first at 0, the last at 1).
+  Vec3 chord_at(double s) const {
+    const auto k = std::min(
+        static_cast<size_t>(std::max<std::ptrdiff_t>(std::upper_bound(along.begin(), along.end(), s) - along.begin() - 1, 0)),
+        points.size() - 2);
+    return points[k + 1] - points[k];
+  }
+  // The curve's frame at the surface point `on` (the curve's point at s): its direction
+  // there in the face's plane and the face normal × it (zero where the chord is normal to
+  // the face).
+  std::pair<Vec3, Vec3> frame(double s, const SurfacePoint& on) const {
+    const Vec3 n = space->bundle().face_normal(on.face);
+    Vec3 t = chord_at(s);
+    t -= t.dot(n) * n;
+    if (!(t.norm() > 0)) return {Vec3::Zero(), Vec3::Zero()};
+    t.normalize();
+    return {t, n.cross(t)};
+  }
+  // walked() from the curve's point at s moved `in_frame` in the curve's frame (its real
+  // part along the curve: the point at arclength fraction s + Re/length, straight on past
+  // an end; its imaginary part across it, to the left), plus the world offset `extra`.
+  // An offset so given is carried along the curve as it turns over the surface (a
+  // geodesic's frame is parallel) and its part along the curve stays on it, where one
+  // world vector of an end, projected into a long leg's far faces, pointed anywhere and
+  // walked the path off the surface (CGAL's man: static saddles coming to rest, offsets
+  // 0.08 along curves 1.0 long round the body).
+  Vec3 walked_from(double s, cplx in_frame, const Vec3& extra) const {
+    if (in_frame == cplx{0, 0}) return walked(at(s), extra);
+    const double u = s + in_frame.real() / length;
+    const double past = u < 0 ? u : u > 1 ? u - 1 : 0.0;  // beyond an end, in fractions of the length
+    const double v = std::clamp(u, 0.0, 1.0);
+    const Vec3 p = at(v);
+    const SurfacePoint on = space->locate(p);
+    const auto [t, b] = frame(v, on);
+    const Vec3 offset = extra + past * length * t + in_frame.imag() * b;
+    const cplx d = space->bundle().world_to_face(on.face, offset);
+    if (std::abs(d) == 0) return p;
+    return surface_position(space->mesh(), walk_surface(space->bundle(), on, d).end);
+  }
 };
 
 }  // namespace
@@ -193,19 +232,37 @@ struct KeyframeTopologyPlan::Track {
   Ease ease;
   double param(double t) const { return ease.at(t, t0, t1); }
   // Through a middle key frame the path goes on in the direction it leaves in (C¹; see
-  // through_velocity): Hermite terms added to the segment (on a surface walked from the
-  // curve's point like a detour), s(1 − s)² · through0 − s²(1 − s) · through1, which change
-  // its derivative at s = 0 by through0 and at s = 1 by through1 and nothing else at the
-  // ends. World vectors, tangent to the domain at p0 and p1; zero at the scene's first and
-  // last key frames and where the singularity is not carried on both sides.
+  // through_velocity): Hermite terms added to the segment, s(1 − s)² · through0 − s²(1 −
+  // s) · through1, which change its derivative at s = 0 by through0 and at s = 1 by
+  // through1 and nothing else at the ends. World vectors, tangent to the domain at p0 and
+  // p1; zero at the scene's first and last key frames and where the singularity is not
+  // carried on both sides. On a surface the two are kept in the curve's frame at their ends
+  // (along it, across it: set_through_frames) and the terms are carried along the curve in
+  // its frame and walked from its point like a detour (SurfaceCurve::walked_from): a world
+  // vector of one end, projected into the faces of a long leg's other end (a camel's body
+  // down a leg), pointed anywhere there and walked the path off the surface.
   Vec3 through0 = Vec3::Zero(), through1 = Vec3::Zero();
+  cplx through_frame0{0, 0}, through_frame1{0, 0};
   bool bent_through() const { return through0 != Vec3::Zero() || through1 != Vec3::Zero(); }
   Vec3 through(double s) const { return s * (1 - s) * (1 - s) * through0 - s * s * (1 - s) * through1; }
+  cplx through_in_frame(double s) const {
+    return s * (1 - s) * (1 - s) * through_frame0 - s * s * (1 - s) * through_frame1;
+  }
+  void set_through_frames() {
+    if (!curve) return;
+    auto in_frame = [&](const Vec3& c, double s, const Vec3& p) {
+      if (c == Vec3::Zero()) return cplx{0, 0};
+      const auto [t, b] = curve->frame(s, curve->space->locate(p));
+      return cplx{c.dot(t), c.dot(b)};
+    };
+    through_frame0 = in_frame(through0, 0, p0);
+    through_frame1 = in_frame(through1, 1, p1);
+  }
   // The path before any detour at parameter s: the straight segment's point, or on a
   // surface the curve's point at arclength fraction s; turned at a middle key frame by
   // the Hermite terms.
   Vec3 base(double s) const {
-    if (curve) return bent_through() ? curve->walked(curve->at(s), through(s)) : curve->at(s);
+    if (curve) return bent_through() ? curve->walked_from(s, through_in_frame(s), Vec3::Zero()) : curve->at(s);
     return p0 + s * (p1 - p0) + through(s);
   }
   // The path's length before any detour.
@@ -217,10 +274,10 @@ struct KeyframeTopologyPlan::Track {
   Vec3 raw(double s) const {
     if (curve) {
       if (bends.empty() && wave.empty()) return base(s);
-      Vec3 offset = through(s);
+      Vec3 offset = Vec3::Zero();
       for (const Bend& b : bends) offset += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
       for (size_t k = 0; k < wave.size(); ++k) offset += wave_shape(static_cast<int>(k) + 1, s) * wave[k];
-      return curve->walked(curve->at(s), offset);
+      return curve->walked_from(s, through_in_frame(s), offset);
     }
     Vec3 p = base(s);
     for (const Bend& b : bends) p += b.amplitude * bump(s, b.rise, b.fall) * b.dir;
@@ -3756,6 +3813,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
           const Vec3 out = leg_velocity(tr.p1, q, on.get(), dt2, false);
           tr.through1 = (through_velocity(in1, out, dt, dt2) - in1) * dt;
         }
+        tr.set_through_frames();
       }
 
       // The unmatched, in pairs: cancelled before t_c, created after.
@@ -3850,14 +3908,18 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         return why;
       };
       std::string off_surface = leaving_surface();
-      // The Hermite terms through a middle key frame are walked from the curve in one
-      // direction for the whole leg; on a long leg round a thin part (a static solve's focus
-      // carried from a camel's body down a leg) the walk can cross it. Then the interval's
-      // paths meet their key frames with a corner, as before the terms, rather than fail.
+      // The Hermite terms through a middle key frame are carried along the curve in its
+      // frame (SurfaceCurve::walked_from); where a path bent so still leaves the surface
+      // (CGAL's man: its source's curve itself, straightened across a crease, leaves it with
+      // or without them) the interval's paths meet their key frames with a corner, as before
+      // the terms, rather than fail for them.
       if (!off_surface.empty() &&
           std::any_of(tracks_.begin() + static_cast<std::ptrdiff_t>(first_track), tracks_.end(),
                       [](const Track& tr) { return tr.bent_through(); })) {
-        for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].through0 = tracks_[i].through1 = Vec3::Zero();
+        for (size_t i = first_track; i < tracks_.size(); ++i) {
+          tracks_[i].through0 = tracks_[i].through1 = Vec3::Zero();
+          tracks_[i].set_through_frames();
+        }
         off_surface = leaving_surface();
       }
       // Paths that would come closer than the separation are bent around each other.

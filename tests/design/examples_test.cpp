@@ -194,8 +194,8 @@ TEST_P(EveryExample, HasItsDesignedSingularities) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Examples, EveryExample, ::testing::ValuesIn(example_scenes()),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                           std::string name = fs::path(info.param).parent_path().filename().string();
+                         [](const ::testing::TestParamInfo<std::string>& scene) {
+                           std::string name = fs::path(scene.param).parent_path().filename().string();
                            for (char& c : name)
                              if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
                            return name;

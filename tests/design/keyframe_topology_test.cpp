@@ -1635,11 +1635,14 @@ std::string mesh_knot_with_middle(const std::filesystem::path& mesh, const std::
 // and the center a quarter turn round their middle (as example 26's sphere knot), is guided
 // in both intervals with no bifurcation, and the source passes the key frame without
 // turning on the spot (59° between the steps into and out of it before session 36). The
-// Hermite terms are walked from the curve for the whole leg, and on a long leg round a thin
-// part that walk crossed it: CGAL's camel with such a key frame has a static solve's focus
-// carried from the body down to a hoof (0.76), whose bent path then left the surface (its
-// nearest points jumped 0.039, 3 edge lengths) where the straight legs only collided. There
-// the interval's paths keep their corners instead (not guided either way: the collision).
+// Hermite terms were one world vector per end, walked from the curve over the whole leg,
+// and on a long leg round a thin part that walk crossed it: CGAL's camel with such a key
+// frame has a static solve's focus carried from the body down to a hoof (0.76), whose bent
+// path then left the surface (its nearest points jumped 0.039, 3 edge lengths) where the
+// straight legs only collided; such an interval keeps its corners (not guided either way:
+// the collision). Since session 37 they are carried along the curve in its frame
+// (ASingularityThatTurnsBackAtAMiddleKeyFrameStaysOnItsCurve) and kept on the camel; where
+// a path still leaves the surface with them they are dropped for its interval.
 TEST(KeyframeTopology, OnScannedSurfacesTheMiddleKeyFramesPathsAreC1WhereTheyStayOnTheSurface) {
   const test::TempDir dir;
   const std::optional<std::filesystem::path> mushroom_off = test::cgal_mesh(dir, "mushroom");
@@ -1677,6 +1680,71 @@ TEST(KeyframeTopology, OnScannedSurfacesTheMiddleKeyFramesPathsAreC1WhereTheySta
   ASSERT_EQ(camel.plan->intervals().size(), 2u);
   for (const KeyframeIntervalReport& r : camel.plan->intervals())
     EXPECT_EQ(r.unguided_reason.find("leaves the surface"), std::string::npos) << r.unguided_reason;
+}
+
+// Through a middle key frame where a singularity turns back (it comes to rest there), its
+// Hermite term lies along its path, and carried along the curve in the curve's frame it
+// keeps the singularity on the curve it came by: on a torus, whose shortest paths twist
+// (no plane holds them), a source carried from the top of the tube down its side and back
+// runs on the same curve as the plan with the two key frames alone. (Before session 37
+// each term was one world vector of its end, projected into the faces along the way: it
+// turned sideways off the curve where the curve twists.)
+TEST(KeyframeTopology, ASingularityThatTurnsBackAtAMiddleKeyFrameStaysOnItsCurve) {
+  const double R = 1.0, r = 0.4;
+  auto on_torus = [&](double u, double v) {
+    return Vec3((R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v));
+  };
+  const Vec3 a = on_torus(0.0, 1.5), b = on_torus(0.8, -0.6), c = on_torus(3.0, 0.0);
+  auto json_of = [](const Vec3& p) { return fmt::format("[{:.9g}, {:.9g}, {:.9g}]", p.x(), p.y(), p.z()); };
+  auto keyframe = [&](double t, const Vec3& source) {
+    return fmt::format(R"({{"t": {}, "elements": [{{"kind": "singular", "type": "source", "at": {}}},
+                                                   {{"kind": "singular", "type": "ccw_center", "at": {}}}]}})",
+                       t, json_of(source), json_of(c));
+  };
+  auto scene = [&](const std::string& keyframes) {
+    return R"({"tvf": 1, "domain": {"torus": {"nu": 96, "nv": 32, "major_radius": 1, "minor_radius": 0.4}},
+      "time": {"frames": 32, "range": [0, 1]}, "generator": "spacetime", "falloff": 20,
+      "solver": {"region_radius": 0.1, "keyframe_topology": "matched"}, "keyframes": [)" +
+           keyframes + "]}";
+  };
+  const Planned two = plan_of(scene(keyframe(0, a) + "," + keyframe(1, b)));
+  const Planned three = plan_of(scene(keyframe(0, a) + "," + keyframe(0.5, b) + "," + keyframe(1, a)));
+  ASSERT_EQ(three.plan->intervals().size(), 2u);
+  for (const KeyframeIntervalReport& rep : three.plan->intervals()) ASSERT_TRUE(rep.guided) << rep.unguided_reason;
+  ASSERT_TRUE(two.plan->intervals().front().guided) << two.plan->intervals().front().unguided_reason;
+  // The source followed through the carried points from a, nearest first.
+  auto source_path = [&](const KeyframeTopologyPlan& plan, double t0, double t1, int n) {
+    std::vector<Vec3> out;
+    Vec3 at = a;
+    for (int k = 1; k < n; ++k) {
+      const std::vector<Vec3> now = plan.carried(t0 + (t1 - t0) * k / n);
+      if (now.empty()) continue;
+      at = *std::min_element(now.begin(), now.end(),
+                             [&](const Vec3& x, const Vec3& y) { return (x - at).norm() < (y - at).norm(); });
+      out.push_back(at);
+    }
+    return out;
+  };
+  const std::vector<Vec3> curve = source_path(*two.plan, 0, 1, 800);
+  const std::vector<Vec3> there = source_path(*three.plan, 0, 0.5, 200);
+  ASSERT_GT(curve.size(), 700u);
+  ASSERT_GT(there.size(), 150u);
+  double length = 0, off = 0;
+  for (size_t k = 1; k < curve.size(); ++k) length += (curve[k] - curve[k - 1]).norm();
+  for (const Vec3& p : there) {
+    double d = std::numeric_limits<double>::infinity();
+    for (size_t k = 1; k < curve.size(); ++k) {
+      const Vec3 e = curve[k] - curve[k - 1];
+      const double u = std::clamp((p - curve[k - 1]).dot(e) / e.squaredNorm(), 0.0, 1.0);
+      d = std::min(d, (p - curve[k - 1] - u * e).norm());
+    }
+    off = std::max(off, d);
+  }
+  std::printf("  torus: the source's path %.3f long; with the middle key frame at most %.2g off it (%.3g from b at "
+              "the end)\n",
+              length, off, (there.back() - b).norm());
+  EXPECT_LT((there.back() - b).norm(), 0.02);  // it gets there
+  EXPECT_LT(off, 0.01 * length);               // 0.066 before session 37
 }
 
 // A singularity of a key frame for the matching tests: its type and place (index from the type).
