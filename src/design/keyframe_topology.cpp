@@ -141,13 +141,22 @@ struct SurfaceCurve {
     if (std::abs(d) == 0) return p;
     return surface_position(space->mesh(), walk_surface(space->bundle(), at, d).end);
   }
+  // Where the polyline's chords cut across the surface (surface_curve): the walks that
+  // join its points (SurfacePaths::Route: walking steps[k] from starts[k] reaches
+  // points[k + 1]); empty otherwise.
+  std::vector<SurfacePoint> starts;
+  std::vector<cplx> steps;
   // The point at arclength fraction s (linear between the polyline's points: within a
-  // hair of the surface, which locate() snaps).
+  // hair of the surface, which locate() snaps; along the walk between them where the curve
+  // is a route).
   Vec3 at(double s) const {
     if (s <= 0) return points.front();
     if (s >= 1) return points.back();
     const auto k = static_cast<size_t>(std::upper_bound(along.begin(), along.end(), s) - along.begin()) - 1;
     const double w = along[k + 1] > along[k] ? (s - along[k]) / (along[k + 1] - along[k]) : 0.0;
+    if (!steps.empty())
+      return w > 0 ? surface_position(space->mesh(), walk_surface(space->bundle(), starts[k], w * steps[k]).end)
+                   : points[k];
     return points[k] + w * (points[k + 1] - points[k]);
   }
   // The curve's chord at arclength fraction s (the first at 0, the last at 1).
@@ -2356,14 +2365,41 @@ std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, cons
     curve->along = {0.0, 1.0};
     return curve;
   }
+  auto lengths = [](SurfaceCurve& c) {
+    c.along.assign(c.points.size(), 0.0);
+    for (size_t k = 1; k < c.points.size(); ++k)
+      c.along[k] = c.along[k - 1] +
+                   (c.steps.empty() ? (c.points[k] - c.points[k - 1]).norm() : std::abs(c.steps[k - 1]));
+    c.length = c.along.back();
+    if (!(c.length > 0)) return false;
+    for (double& a : c.along) a /= c.length;
+    return true;
+  };
   curve->points = std::move(x);
-  curve->along.assign(curve->points.size(), 0.0);
-  for (size_t k = 1; k < curve->points.size(); ++k)
-    curve->along[k] = curve->along[k - 1] + (curve->points[k] - curve->points[k - 1]).norm();
-  curve->length = curve->along.back();
-  if (!(curve->length > 0)) return nullptr;  // straightened to a point: the segment
-  for (double& a : curve->along) a /= curve->length;
-  return curve;
+  if (!lengths(*curve)) return nullptr;  // straightened to a point: the segment
+  // Where a chord of the straightened polyline cuts across a fold or a concave crease, its
+  // points' nearest surface points jump to the other side (CGAL's man: a curve pulled out
+  // of the armpit, two points 3.6 edge lengths apart on either side of it), and the path
+  // leaves the surface; the route (every segment a walk on the surface) goes round instead.
+  const Mesh& mesh = space.mesh();
+  const double h = mesh.mean_edge_length();
+  Vec3 last = curve->points.front();
+  bool jumps = false;
+  for (int k = 1; k <= 256 && !jumps; ++k) {
+    const Vec3 on = surface_position(mesh, space.locate(curve->at(k / 256.0)));
+    jumps = (on - last).norm() > 2 * h;
+    last = on;
+  }
+  if (!jumps) return curve;
+  SurfacePaths::Route r = paths.route(p, q, kCurvePoints);
+  if (r.steps.empty()) return curve;
+  auto routed = std::make_shared<SurfaceCurve>();
+  routed->space = &space;
+  routed->points = std::move(r.points);
+  routed->starts = std::move(r.starts);
+  routed->steps = std::move(r.steps);
+  if (!lengths(*routed)) return curve;
+  return routed;
 }
 
 // A path's derivative in its parameter at its first end (at_end false) or its last, before
