@@ -3945,10 +3945,9 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       };
       std::string off_surface = leaving_surface();
       // The Hermite terms through a middle key frame are carried along the curve in its
-      // frame (SurfaceCurve::walked_from); where a path bent so still leaves the surface
-      // (CGAL's man: its source's curve itself, straightened across a crease, leaves it with
-      // or without them) the interval's paths meet their key frames with a corner, as before
-      // the terms, rather than fail for them.
+      // frame (SurfaceCurve::walked_from); where a path bent so still leaves the surface (a
+      // sideways term walked across a thin part) the interval's paths meet their key frames
+      // with a corner, as before the terms, rather than fail for them.
       if (!off_surface.empty() &&
           std::any_of(tracks_.begin() + static_cast<std::ptrdiff_t>(first_track), tracks_.end(),
                       [](const Track& tr) { return tr.bent_through(); })) {
