@@ -2221,6 +2221,59 @@ class PhaseCheck {
     return best;
   }
 
+  // Where the first wrong frame (in time) of the trial's choice with the fewest (fewest()
+  // counted them) goes wrong, for the report: "the first at t = …: N singularities where the
+  // plan carries M; an extra saddle at (…), 0.031 from the nearest the plan carries" (or the
+  // plan's singularity farthest from any found, where the frame holds fewer). Empty when no
+  // choice has a countable wrong frame.
+  std::string first_wrong(const Trial& trial, const std::function<std::string(const Vec3&)>& describe) const {
+    const Trial::Choice* best = nullptr;
+    for (const Trial::Choice& c : trial.choices)
+      if (c.wrong < std::numeric_limits<int>::max() && (!best || c.wrong < best->wrong)) best = &c;
+    if (!best || best->wrong == 0) return {};
+    const SurfaceGuide guide = variant(trial.g, *best);
+    for (size_t i = 0; i < times_.size(); ++i) {
+      if (!wrong_frame(trial.g, guide, i)) continue;
+      const double t = times_[i];
+      // Every singularity the plan has at t: the interval's tracks present then (those that
+      // stay put too, which the guide keeps through H rather than a path; the plan's tracks
+      // end with this interval's while it is being built).
+      std::vector<Vec3> planned;
+      std::vector<SingularityType> planned_type;
+      for (const Track& tr : tracks_)
+        if (t > std::min(tr.t0, tr.t1) && t < std::max(tr.t0, tr.t1)) {
+          planned.push_back(tr.raw(tr.param(t)));
+          planned_type.push_back(tr.type);
+        }
+      std::vector<cplx> values(static_cast<size_t>(space_.mesh().num_vertices()), cplx(0, 0));
+      frame_values(trial.g, guide, i, values);
+      const std::vector<Singularity> found = find_singularities(space_.bundle(), values, curvature_);
+      auto nearest = [](const Vec3& x, auto&& points) {
+        double d = std::numeric_limits<double>::infinity();
+        for (const auto& y : points) d = std::min(d, (x - y).norm());
+        return d;
+      };
+      std::vector<Vec3> found_at;
+      for (const Singularity& f : found) found_at.push_back(f.position);
+      std::string where;
+      double farthest = -1;
+      if (found.size() > planned.size()) {
+        for (const Singularity& f : found)
+          if (const double d = nearest(f.position, planned); d > farthest)
+            farthest = d, where = fmt::format("an extra {} at {}, {:.2g} from the nearest the plan carries",
+                                              to_string(f.type), describe(f.position), d);
+      } else {
+        for (size_t k = 0; k < planned.size(); ++k)
+          if (const double d = nearest(planned[k], found_at); d > farthest)
+            farthest = d, where = fmt::format("the plan's {} at {} has none within {:.2g}", to_string(planned_type[k]),
+                                              describe(planned[k]), d);
+      }
+      return fmt::format("the first at t = {:.3g}: {} singularities where the plan carries {}; {}", t, found.size(),
+                         planned.size(), where);
+    }
+    return {};
+  }
+
  private:
   // The guide with a choice's correction (its frame logs shared with g's).
   static SurfaceGuide variant(const SurfaceGuide& g, const Trial::Choice& c) {
@@ -4068,16 +4121,23 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
           failed.push_back(std::move(trial));
         }
         int fewest_wrong = -1;
+        const PhaseCheck::Trial* fewest_trial = nullptr;
         for (PhaseCheck::Trial& trial : best ? std::span<PhaseCheck::Trial>() : std::span(failed)) {
           const int wrong = check.fewest(trial);
-          if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong;
+          if (fewest_wrong < 0 || wrong < fewest_wrong) fewest_wrong = wrong, fewest_trial = &trial;
         }
         int unplanned = 0;
         for (const PhaseCheck::Trial& trial : failed) unplanned = std::max(unplanned, trial.unplanned);
-        if (!best && fewest_wrong >= 0 && fewest_wrong < std::numeric_limits<int>::max())
+        if (!best && fewest_wrong >= 0 && fewest_wrong < std::numeric_limits<int>::max()) {
           unbuilt_why = fmt::format("the surface guide's frames hold other singularities than the plan's at {} of the "
                                     "{} frames between the key frames",
                                     fewest_wrong, inner_frames);
+          // Where, so that a user knows where a link, a key frame or a smaller region helps.
+          if (const std::string first = check.first_wrong(
+                  *fewest_trial, [](const Vec3& p) { return describe_point(p, false, 1); });
+              !first.empty())
+            unbuilt_why += " (" + first + ")";
+        }
         else if (!best && unplanned > 0)
           unbuilt_why = fmt::format("the surface guide's singularities jump from frame to frame where the plan carries "
                                     "them smoothly: {} saddle–node events the plan does not have",

@@ -686,7 +686,8 @@ TEST(KeyframeTopology, AKnotOnASphereIsGuided) {
 // hold the right number of zeros since session 23 (λ read at the poles' corners too), but
 // its pairs' zeros jump 2.4 edge lengths from where it carries them, so the check's
 // tracking (PhaseCheck::unplanned_events: 4 saddle–node events the plan does not have, as
-// the analysis of the solved field found when it was kept) sets it aside too.
+// the analysis of the solved field found when it was kept) sets it aside too. The reason
+// says where the first wrong frame goes wrong (session 37).
 TEST(KeyframeTopology, AGuideRejectedAtEveryTryCountsAllItsWrongFrames) {
   const double z = std::sqrt(0.75);
   const Generated g =
@@ -695,9 +696,20 @@ TEST(KeyframeTopology, AGuideRejectedAtEveryTryCountsAllItsWrongFrames) {
   EXPECT_FALSE(r.guided);
   EXPECT_TRUE(r.fallback);
   EXPECT_EQ(r.matched.size(), 4u);
-  EXPECT_EQ(r.unguided_reason,
-            "the surface guide's frames hold other singularities than the plan's at 8 of the 30 frames between the "
-            "key frames");
+  EXPECT_EQ(r.unguided_reason.rfind(
+                "the surface guide's frames hold other singularities than the plan's at 8 of the 30 frames between "
+                "the key frames (the first at t = ",
+                0),
+            0u)
+      << r.unguided_reason;
+  // Where the first wrong frame goes wrong: the count it holds against the plan's, and the
+  // singularity farthest from where the plan has one (an extra, or one the plan carries
+  // that the frame lacks), so that the user knows where a link or a key frame would help.
+  EXPECT_NE(r.unguided_reason.find(" singularities where the plan carries 4; "), std::string::npos)
+      << r.unguided_reason;
+  EXPECT_TRUE(r.unguided_reason.find("; an extra ") != std::string::npos ||
+              r.unguided_reason.find("; the plan's ") != std::string::npos)
+      << r.unguided_reason;
 }
 
 // The same knot at subdivisions 2 (162 vertices): carrying the static solve's saddle and
