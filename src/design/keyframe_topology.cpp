@@ -4137,8 +4137,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
                   *fewest_trial, [](const Vec3& p) { return describe_point(p, false, 1); });
               !first.empty())
             unbuilt_why += " (" + first + ")";
-        }
-        else if (!best && unplanned > 0)
+        } else if (!best && unplanned > 0)
           unbuilt_why = fmt::format("the surface guide's singularities jump from frame to frame where the plan carries "
                                     "them smoothly: {} saddle–node events the plan does not have",
                                     unplanned);
