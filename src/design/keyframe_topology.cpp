@@ -2245,28 +2245,53 @@ class PhaseCheck {
           planned.push_back(tr.raw(tr.param(t)));
           planned_type.push_back(tr.type);
         }
+      // A created or cancelled pair between its tracks and its event: its template's two
+      // zeros, √−μ either side of its middle in its chart (the node on +axis), which the
+      // count holds as the plan's (CGAL's cow: the cancelled pair's saddle was named the
+      // extra singularity, 1.2 region radii from every track).
+      const Mesh& mesh = space_.mesh();
+      for (const SurfaceGuide::Path& p : guide.paths) {
+        if (!p.pair) continue;
+        const SurfaceGuide::PairState q = pair_state(space_, tracks_, p, t);
+        if (q.linear || q.mu >= 0) continue;
+        for (const double side : {1.0, -1.0})
+          if (const std::optional<SurfacePoint> on = chart_locate(mesh, p.coords, p.mid + side * std::sqrt(-q.mu) * p.axis)) {
+            planned.push_back(surface_position(mesh, *on));
+            planned_type.push_back(side > 0 ? tracks_[p.track].type : SingularityType::saddle);
+          }
+      }
       std::vector<cplx> values(static_cast<size_t>(space_.mesh().num_vertices()), cplx(0, 0));
       frame_values(trial.g, guide, i, values);
       const std::vector<Singularity> found = find_singularities(space_.bundle(), values, curvature_);
-      auto nearest = [](const Vec3& x, auto&& points) {
-        double d = std::numeric_limits<double>::infinity();
-        for (const auto& y : points) d = std::min(d, (x - y).norm());
-        return d;
+      // The distance from x to the nearest of `points`, and its index (∞ and 0 when none).
+      auto nearest = [](const Vec3& x, const std::vector<Vec3>& points) {
+        std::pair<double, size_t> out{std::numeric_limits<double>::infinity(), 0};
+        for (size_t k = 0; k < points.size(); ++k) out = std::min(out, std::pair{(x - points[k]).norm(), k});
+        return out;
       };
       std::vector<Vec3> found_at;
       for (const Singularity& f : found) found_at.push_back(f.position);
       std::string where;
       double farthest = -1;
       if (found.size() > planned.size()) {
-        for (const Singularity& f : found)
-          if (const double d = nearest(f.position, planned); d > farthest)
-            farthest = d, where = fmt::format("an extra {} at {}, {:.2g} from the nearest the plan carries",
-                                              to_string(f.type), describe(f.position), d);
+        for (const Singularity& f : found) {
+          const auto [d, k] = nearest(f.position, planned);
+          if (d <= farthest) continue;
+          farthest = d;
+          where = planned.empty() ? fmt::format("an extra {} at {}", to_string(f.type), describe(f.position))
+                                  : fmt::format("an extra {} at {}, {:.2g} from the plan's {}", to_string(f.type),
+                                                describe(f.position), d, to_string(planned_type[k]));
+        }
       } else {
-        for (size_t k = 0; k < planned.size(); ++k)
-          if (const double d = nearest(planned[k], found_at); d > farthest)
-            farthest = d, where = fmt::format("the plan's {} at {} has none within {:.2g}", to_string(planned_type[k]),
+        for (size_t k = 0; k < planned.size(); ++k) {
+          const double d = nearest(planned[k], found_at).first;
+          if (d <= farthest) continue;
+          farthest = d;
+          where = found.empty() ? fmt::format("the plan's {} at {} has none", to_string(planned_type[k]),
+                                              describe(planned[k]))
+                                : fmt::format("the plan's {} at {} has none within {:.2g}", to_string(planned_type[k]),
                                               describe(planned[k]), d);
+        }
       }
       return fmt::format("the first at t = {:.3g}: {} singularities where the plan carries {}; {}", t, found.size(),
                          planned.size(), where);
