@@ -135,11 +135,12 @@ struct SurfaceCurve {
   // straight line unfolded across the edges it meets): a detour that stays on the surface
   // however it curves, where p + offset's nearest surface point would jump to another
   // sheet beyond a fold or across a thin part.
-  Vec3 walked(const Vec3& p, const Vec3& offset) const {
-    const SurfacePoint at = space->locate(p);
-    const cplx d = space->bundle().world_to_face(at.face, offset);
+  Vec3 walked(const Vec3& p, const Vec3& offset) const { return walked(p, space->locate(p), offset); }
+  // The same from p already located (`on`, its surface point).
+  Vec3 walked(const Vec3& p, const SurfacePoint& on, const Vec3& offset) const {
+    const cplx d = space->bundle().world_to_face(on.face, offset);
     if (std::abs(d) == 0) return p;
-    return surface_position(space->mesh(), walk_surface(space->bundle(), at, d).end);
+    return surface_position(space->mesh(), walk_surface(space->bundle(), on, d).end);
   }
   // Where the polyline's chords cut across the surface (surface_curve): the walks that
   // join its points (SurfacePaths::Route: walking steps[k] from starts[k] reaches
@@ -193,10 +194,7 @@ struct SurfaceCurve {
     const Vec3 p = at(v);
     const SurfacePoint on = space->locate(p);
     const auto [t, b] = frame(v, on);
-    const Vec3 offset = extra + past * length * t + in_frame.imag() * b;
-    const cplx d = space->bundle().world_to_face(on.face, offset);
-    if (std::abs(d) == 0) return p;
-    return surface_position(space->mesh(), walk_surface(space->bundle(), on, d).end);
+    return walked(p, on, extra + past * length * t + in_frame.imag() * b);
   }
 };
 
@@ -1472,13 +1470,25 @@ std::vector<cplx> follow_chart(const Mesh& mesh, const std::vector<double>& dist
 // CGAL's elephant's leg before the paths were curves on it), or where a long detour walked
 // across a thin part is not continuous along the path (the walk passing a vertex or a
 // fold on one side, then the other: 0.093 on an elephant, docs/benchmarks.md).
+// A sampled path or curve leaves the surface where two consecutive samples' surface points
+// are more than this many mean edge lengths apart (its largest step, below): a path's
+// samples are a few hundredths of an edge length apart where they stay on the surface.
+constexpr double kSurfaceJumpEdges = 2;
+
+// The largest distance between consecutive points.
+double largest_step(const std::vector<Vec3>& points) {
+  double out = 0;
+  for (size_t k = 0; k + 1 < points.size(); ++k) out = std::max(out, (points[k + 1] - points[k]).norm());
+  return out;
+}
+
 std::string leaves_surface(const DesignSpace& space, const Track& tr, const std::vector<SurfacePoint>& on) {
   const Mesh& mesh = space.mesh();
   const double h = mesh.mean_edge_length();
-  double jump = 0;
-  for (size_t k = 0; k + 1 < on.size(); ++k)
-    jump = std::max(jump, (surface_position(mesh, on[k + 1]) - surface_position(mesh, on[k])).norm());
-  if (jump <= 2 * h) return {};
+  std::vector<Vec3> points;
+  for (const SurfacePoint& p : on) points.push_back(surface_position(mesh, p));
+  const double jump = largest_step(points);
+  if (jump <= kSurfaceJumpEdges * h) return {};
   return fmt::format("the {}'s path from {} to {} leaves the surface (its nearest surface points jump {:.2g}, "
                      "{:.0f} edge lengths, between two of its {} samples)",
                      to_string(tr.type), describe_point(tr.p0, false, 1), describe_point(tr.p1, false, 1), jump,
@@ -2459,16 +2469,11 @@ std::shared_ptr<const SurfaceCurve> surface_curve(const DesignSpace& space, cons
   // points' nearest surface points jump to the other side (CGAL's man: a curve pulled out
   // of the armpit, two points 3.6 edge lengths apart on either side of it), and the path
   // leaves the surface; the route (every segment a walk on the surface) goes round instead.
+  // (The same test as leaves_surface's, on the curve's own 257 samples.)
   const Mesh& mesh = space.mesh();
-  const double h = mesh.mean_edge_length();
-  Vec3 last = curve->points.front();
-  bool jumps = false;
-  for (int k = 1; k <= 256 && !jumps; ++k) {
-    const Vec3 on = surface_position(mesh, space.locate(curve->at(k / 256.0)));
-    jumps = (on - last).norm() > 2 * h;
-    last = on;
-  }
-  if (!jumps) return curve;
+  std::vector<Vec3> on{curve->points.front()};
+  for (int k = 1; k <= 256; ++k) on.push_back(surface_position(mesh, space.locate(curve->at(k / 256.0))));
+  if (largest_step(on) <= kSurfaceJumpEdges * mesh.mean_edge_length()) return curve;
   SurfacePaths::Route r = paths.route(p, q, kCurvePoints);
   if (r.steps.empty()) return curve;
   auto routed = std::make_shared<SurfaceCurve>();

@@ -71,6 +71,20 @@ Generated run(const std::string& text) {
   return g;
 }
 
+// A node (index +1) followed through the analysed frames from `at`: in each frame the one
+// nearest to where it was in the last (null in a frame that has none).
+std::vector<const Singularity*> node_followed_from(const Topology& topology, Vec3 at) {
+  std::vector<const Singularity*> out;
+  for (const auto& frame : topology.singularities) {
+    const Singularity* best = nullptr;
+    for (const Singularity& s : frame)
+      if (s.index == 1 && (!best || (s.position - at).norm() < (best->position - at).norm())) best = &s;
+    if (best) at = best->position;
+    out.push_back(best);
+  }
+  return out;
+}
+
 // The largest, over consecutive frames, of the mean angle (radians) the field's direction
 // turns from one frame to the next at vertices farther than `keep_out` from every
 // singularity of both frames: the frame-to-frame coherence away from the singularities.
@@ -981,14 +995,9 @@ TEST(KeyframeTopology, AKnotOnCGALsBearIsGuidedWithItsFarSingularitiesPaired) {
   // local correction).
   const PeriodicOrbits orbits = find_periodic_orbits(g.space->bundle(), g.field, g.topology);
   EXPECT_TRUE(orbits.hopf.empty()) << orbits.hopf.size() << " Hopf events, the first at t = " << orbits.hopf.front().t;
-  Vec3 at(-0.309168, -0.239971, 0.193769);
   double center_most = 0;
-  for (const auto& frame : g.topology.singularities) {
-    const Singularity* nearest = nullptr;
-    for (const Singularity& s : frame)
-      if (s.index == 1 && (!nearest || (s.position - at).norm() < (nearest->position - at).norm())) nearest = &s;
+  for (const Singularity* nearest : node_followed_from(g.topology, Vec3(-0.309168, -0.239971, 0.193769))) {
     ASSERT_NE(nearest, nullptr);
-    at = nearest->position;
     const double ratio = nearest->jacobian.trace() / std::sqrt(std::abs(nearest->jacobian.determinant()));
     EXPECT_LT(std::abs(ratio), 0.25) << "at t = " << nearest->t;
     center_most = std::max(center_most, std::abs(ratio));
@@ -1688,14 +1697,9 @@ TEST(KeyframeTopology, OnScannedSurfacesTheMiddleKeyFramesPathsAreC1WhereTheySta
   EXPECT_TRUE(g.topology.bifurcations.empty());
   // The source (repelling) from frame 15 through the key frame's (16 of 32) to 17.
   std::vector<Vec3> source;
-  Vec3 at(0.226893, 0.000169333, 0.227341);
-  for (const auto& frame : g.topology.singularities) {
-    const Singularity* best = nullptr;
-    for (const Singularity& s : frame)
-      if (s.index == 1 && (!best || (s.position - at).norm() < (best->position - at).norm())) best = &s;
-    ASSERT_NE(best, nullptr);
-    at = best->position;
-    source.push_back(at);
+  for (const Singularity* s : node_followed_from(g.topology, Vec3(0.226893, 0.000169333, 0.227341))) {
+    ASSERT_NE(s, nullptr);
+    source.push_back(s->position);
   }
   double worst = 0;
   for (const size_t k : {size_t{15}, size_t{16}}) {
