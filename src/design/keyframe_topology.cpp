@@ -2279,6 +2279,20 @@ class PhaseCheck {
         for (size_t k = 0; k < points.size(); ++k) out = std::min(out, std::pair{(x - points[k]).norm(), k});
         return out;
       };
+      // Where the mesh is coarse (a face's longest edge two mean edge lengths or more), the
+      // reason says so: the extras of CGAL's cow, homer and elephant knots lie in faces 2.1 to
+      // 2.8 mean edge lengths long (6–14% of those meshes' faces), beside a carried
+      // singularity whose zero splits into three there (docs/benchmarks.md, session 38).
+      auto coarse = [&](int face) -> std::string {
+        const Mesh& m = space_.mesh();
+        double longest = 0;
+        for (int c = 0; c < 3; ++c)
+          longest = std::max(longest, (m.position(m.face(face)[static_cast<size_t>(c)]) -
+                                       m.position(m.face(face)[static_cast<size_t>((c + 1) % 3)]))
+                                          .norm());
+        const double ratio = longest / m.mean_edge_length();
+        return ratio >= 2 ? fmt::format(", in a face {:.1f} mean edge lengths long", ratio) : std::string();
+      };
       std::vector<Vec3> found_at;
       for (const Singularity& f : found) found_at.push_back(f.position);
       std::string where;
@@ -2288,19 +2302,21 @@ class PhaseCheck {
           const auto [d, k] = nearest(f.position, planned);
           if (d <= farthest) continue;
           farthest = d;
-          where = planned.empty() ? fmt::format("an extra {} at {}", to_string(f.type), describe(f.position))
-                                  : fmt::format("an extra {} at {}, {:.2g} from the plan's {}", to_string(f.type),
-                                                describe(f.position), d, to_string(planned_type[k]));
+          where = (planned.empty() ? fmt::format("an extra {} at {}", to_string(f.type), describe(f.position))
+                                   : fmt::format("an extra {} at {}, {:.2g} from the plan's {}", to_string(f.type),
+                                                 describe(f.position), d, to_string(planned_type[k]))) +
+                  coarse(f.where.face);
         }
       } else {
         for (size_t k = 0; k < planned.size(); ++k) {
           const double d = nearest(planned[k], found_at).first;
           if (d <= farthest) continue;
           farthest = d;
-          where = found.empty() ? fmt::format("the plan's {} at {} has none", to_string(planned_type[k]),
-                                              describe(planned[k]))
-                                : fmt::format("the plan's {} at {} has none within {:.2g}", to_string(planned_type[k]),
-                                              describe(planned[k]), d);
+          where = (found.empty() ? fmt::format("the plan's {} at {} has none", to_string(planned_type[k]),
+                                               describe(planned[k]))
+                                 : fmt::format("the plan's {} at {} has none within {:.2g}",
+                                               to_string(planned_type[k]), describe(planned[k]), d)) +
+                  coarse(space_.locate(planned[k]).face);
         }
       }
       return fmt::format("the first at t = {:.3g}: {} singularities where the plan carries {}; {}", t, found.size(),
