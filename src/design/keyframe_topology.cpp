@@ -1462,14 +1462,6 @@ std::vector<cplx> follow_chart(const Mesh& mesh, const std::vector<double>& dist
   return coords;
 }
 
-// Why a track's path is no curve on the surface, in one sentence (empty when it is): its
-// points at kSamples + 1 parameters, `on` (snapped to the surface), jump more than two edge
-// lengths between two of them. The path's curve (surface_curve) is on the surface, so this
-// fires only where no edge path joined its ends (the straight segment then runs through
-// the solid, and its nearest surface points jump across, as every path's did through
-// CGAL's elephant's leg before the paths were curves on it), or where a long detour walked
-// across a thin part is not continuous along the path (the walk passing a vertex or a
-// fold on one side, then the other: 0.093 on an elephant, docs/benchmarks.md).
 // A sampled path or curve leaves the surface where two consecutive samples' surface points
 // are more than this many mean edge lengths apart (its largest step, below): a path's
 // samples are a few hundredths of an edge length apart where they stay on the surface.
@@ -1482,6 +1474,14 @@ double largest_step(const std::vector<Vec3>& points) {
   return out;
 }
 
+// Why a track's path is no curve on the surface, in one sentence (empty when it is): its
+// points at kSamples + 1 parameters, `on` (snapped to the surface), jump more than two edge
+// lengths between two of them. The path's curve (surface_curve) is on the surface, so this
+// fires only where no edge path joined its ends (the straight segment then runs through
+// the solid, and its nearest surface points jump across, as every path's did through
+// CGAL's elephant's leg before the paths were curves on it), or where a long detour walked
+// across a thin part is not continuous along the path (the walk passing a vertex or a
+// fold on one side, then the other: 0.093 on an elephant, docs/benchmarks.md).
 std::string leaves_surface(const DesignSpace& space, const Track& tr, const std::vector<SurfacePoint>& on) {
   const Mesh& mesh = space.mesh();
   const double h = mesh.mean_edge_length();
@@ -2265,12 +2265,13 @@ class PhaseCheck {
         const SurfaceGuide::PairState q = pair_state(space_, tracks_, p, t);
         if (q.linear || q.mu >= 0) continue;
         for (const double side : {1.0, -1.0})
-          if (const std::optional<SurfacePoint> on = chart_locate(mesh, p.coords, p.mid + side * std::sqrt(-q.mu) * p.axis)) {
+          if (const std::optional<SurfacePoint> on =
+                  chart_locate(mesh, p.coords, p.mid + side * std::sqrt(-q.mu) * p.axis)) {
             planned.push_back(surface_position(mesh, *on));
             planned_type.push_back(side > 0 ? tracks_[p.track].type : SingularityType::saddle);
           }
       }
-      std::vector<cplx> values(static_cast<size_t>(space_.mesh().num_vertices()), cplx(0, 0));
+      std::vector<cplx> values(static_cast<size_t>(mesh.num_vertices()), cplx(0, 0));
       frame_values(trial.g, guide, i, values);
       const std::vector<Singularity> found = find_singularities(space_.bundle(), values, curvature_);
       // The distance from x to the nearest of `points`, and its index (∞ and 0 when none).
@@ -2284,13 +2285,10 @@ class PhaseCheck {
       // 2.8 mean edge lengths long (6–14% of those meshes' faces), beside a carried
       // singularity whose zero splits into three there (docs/benchmarks.md, session 38).
       auto coarse = [&](int face) -> std::string {
-        const Mesh& m = space_.mesh();
         double longest = 0;
         for (int c = 0; c < 3; ++c)
-          longest = std::max(longest, (m.position(m.face(face)[static_cast<size_t>(c)]) -
-                                       m.position(m.face(face)[static_cast<size_t>((c + 1) % 3)]))
-                                          .norm());
-        const double ratio = longest / m.mean_edge_length();
+          longest = std::max(longest, mesh.edge_length(3 * face + c));
+        const double ratio = longest / mesh.mean_edge_length();
         return ratio >= 2 ? fmt::format(", in a face {:.1f} mean edge lengths long", ratio) : std::string();
       };
       std::vector<Vec3> found_at;
