@@ -2073,6 +2073,24 @@ void apply_surface_guide(const DesignSpace& space, const std::vector<Track>& tra
   apply_surface_guide(space, tracks, g, t, surface_log_factors(space, tracks, g, t), fixed, values);
 }
 
+// A wrong frame in words, for unguided_reason: "the first at t = 0.452: 30 singularities
+// where the plan carries 26; an extra saddle at (…), 0.038 from the plan's saddle, in a face
+// 2.8 mean edge lengths long" (the face's size where it is two mean edge lengths or more),
+// or "… the plan's source at (…) has none within 0.05".
+std::string wrong_frame_sentence(const KeyframeIntervalReport::WrongFrame& w) {
+  const std::string at = describe_point(w.at, false, 1);
+  const bool other = std::isfinite(w.distance);
+  std::string where =
+      w.extra ? (other ? fmt::format("an extra {} at {}, {:.2g} from the plan's {}", to_string(w.type), at,
+                                     w.distance, to_string(w.nearest_type))
+                       : fmt::format("an extra {} at {}", to_string(w.type), at))
+              : (other ? fmt::format("the plan's {} at {} has none within {:.2g}", to_string(w.type), at, w.distance)
+                       : fmt::format("the plan's {} at {} has none", to_string(w.type), at));
+  if (w.face_edges >= 2) where += fmt::format(", in a face {:.1f} mean edge lengths long", w.face_edges);
+  return fmt::format("the first at t = {:.3g}: {} singularities where the plan carries {}; {}", w.t, w.found,
+                     w.planned, where);
+}
+
 // The phase correction turns G by a field that varies by the nodes' whole turns (2π for
 // the knot's center) over their distance, which a coarse mesh does not resolve: the
 // faces between the nodes then hold extra zeros. So it is kept only where it does no
@@ -2232,16 +2250,17 @@ class PhaseCheck {
   }
 
   // Where the first wrong frame (in time) of the trial's choice with the fewest (fewest()
-  // counted them) goes wrong, for the report: "the first at t = …: N singularities where the
-  // plan carries M; an extra saddle at (…), 0.031 from the nearest the plan carries" (or the
-  // plan's singularity farthest from any found, where the frame holds fewer). Empty when no
-  // choice has a countable wrong frame.
-  std::string first_wrong(const Trial& trial, const std::function<std::string(const Vec3&)>& describe) const {
+  // counted them) goes wrong, for the report (KeyframeIntervalReport::WrongFrame; in words
+  // by wrong_frame_sentence): the count the frame holds against the plan's, and the
+  // singularity found farthest from every planned one (or the plan's farthest from any
+  // found, where the frame holds fewer). None when no choice has a countable wrong frame.
+  std::optional<KeyframeIntervalReport::WrongFrame> first_wrong(const Trial& trial) const {
     const Trial::Choice* best = nullptr;
     for (const Trial::Choice& c : trial.choices)
       if (c.wrong < std::numeric_limits<int>::max() && (!best || c.wrong < best->wrong)) best = &c;
-    if (!best || best->wrong == 0) return {};
+    if (!best || best->wrong == 0) return std::nullopt;
     const SurfaceGuide guide = variant(trial.g, *best);
+    const Mesh& mesh = space_.mesh();
     for (size_t i = 0; i < times_.size(); ++i) {
       if (!wrong_frame(trial.g, guide, i)) continue;
       const double t = times_[i];
@@ -2259,7 +2278,6 @@ class PhaseCheck {
       // zeros, √−μ either side of its middle in its chart (the node on +axis), which the
       // count holds as the plan's (CGAL's cow: the cancelled pair's saddle was named the
       // extra singularity, 1.2 region radii from every track).
-      const Mesh& mesh = space_.mesh();
       for (const SurfaceGuide::Path& p : guide.paths) {
         if (!p.pair) continue;
         const SurfaceGuide::PairState q = pair_state(space_, tracks_, p, t);
@@ -2274,53 +2292,44 @@ class PhaseCheck {
       std::vector<cplx> values(static_cast<size_t>(mesh.num_vertices()), cplx(0, 0));
       frame_values(trial.g, guide, i, values);
       const std::vector<Singularity> found = find_singularities(space_.bundle(), values, curvature_);
-      // The distance from x to the nearest of `points`, and its index (∞ and 0 when none).
-      auto nearest = [](const Vec3& x, const std::vector<Vec3>& points) {
-        std::pair<double, size_t> out{std::numeric_limits<double>::infinity(), 0};
-        for (size_t k = 0; k < points.size(); ++k) out = std::min(out, std::pair{(x - points[k]).norm(), k});
-        return out;
-      };
-      // Where the mesh is coarse (a face's longest edge two mean edge lengths or more), the
-      // reason says so: the extras of CGAL's cow, homer and elephant knots lie in faces 2.1 to
-      // 2.8 mean edge lengths long (6–14% of those meshes' faces), beside a carried
-      // singularity whose zero splits into three there (docs/benchmarks.md, session 38).
-      auto coarse = [&](int face) -> std::string {
-        double longest = 0;
-        for (int c = 0; c < 3; ++c)
-          longest = std::max(longest, mesh.edge_length(3 * face + c));
-        const double ratio = longest / mesh.mean_edge_length();
-        return ratio >= 2 ? fmt::format(", in a face {:.1f} mean edge lengths long", ratio) : std::string();
-      };
       std::vector<Vec3> found_at;
-      for (const Singularity& f : found) found_at.push_back(f.position);
-      std::string where;
+      std::vector<SingularityType> found_type;
+      for (const Singularity& f : found) found_at.push_back(f.position), found_type.push_back(f.type);
+      // The longest edge of a face in mean edge lengths: the extras of CGAL's cow, homer and
+      // elephant knots lie in faces 2.1 to 2.8 long (6–14% of those meshes' faces), beside a
+      // carried singularity whose zero splits into three there (docs/benchmarks.md, session 38).
+      auto face_edges = [&](int face) {
+        double longest = 0;
+        for (int c = 0; c < 3; ++c) longest = std::max(longest, mesh.edge_length(3 * face + c));
+        return longest / mesh.mean_edge_length();
+      };
+      KeyframeIntervalReport::WrongFrame w;
+      w.t = t;
+      w.found = static_cast<int>(found.size());
+      w.planned = static_cast<int>(planned.size());
+      w.extra = found.size() > planned.size();
+      // The point of `from` farthest from every point of `to`, its distance and the nearest's type.
+      const std::vector<Vec3>& from = w.extra ? found_at : planned;
+      const std::vector<Vec3>& to = w.extra ? planned : found_at;
+      const std::vector<SingularityType>& from_type = w.extra ? found_type : planned_type;
+      const std::vector<SingularityType>& to_type = w.extra ? planned_type : found_type;
       double farthest = -1;
-      if (found.size() > planned.size()) {
-        for (const Singularity& f : found) {
-          const auto [d, k] = nearest(f.position, planned);
-          if (d <= farthest) continue;
-          farthest = d;
-          where = (planned.empty() ? fmt::format("an extra {} at {}", to_string(f.type), describe(f.position))
-                                   : fmt::format("an extra {} at {}, {:.2g} from the plan's {}", to_string(f.type),
-                                                 describe(f.position), d, to_string(planned_type[k]))) +
-                  coarse(f.where.face);
-        }
-      } else {
-        for (size_t k = 0; k < planned.size(); ++k) {
-          const double d = nearest(planned[k], found_at).first;
-          if (d <= farthest) continue;
-          farthest = d;
-          where = (found.empty() ? fmt::format("the plan's {} at {} has none", to_string(planned_type[k]),
-                                               describe(planned[k]))
-                                 : fmt::format("the plan's {} at {} has none within {:.2g}",
-                                               to_string(planned_type[k]), describe(planned[k]), d)) +
-                  coarse(space_.locate(planned[k]).face);
-        }
+      for (size_t a = 0; a < from.size(); ++a) {
+        double d = std::numeric_limits<double>::infinity();
+        size_t near = 0;
+        for (size_t b = 0; b < to.size(); ++b)
+          if (const double e = (from[a] - to[b]).norm(); e < d) d = e, near = b;
+        if (d <= farthest) continue;
+        farthest = d;
+        w.type = from_type[a];
+        w.at = from[a];
+        w.distance = d;
+        if (!to.empty()) w.nearest_type = to_type[near];
+        w.face_edges = face_edges(w.extra ? found[a].where.face : space_.locate(planned[a]).face);
       }
-      return fmt::format("the first at t = {:.3g}: {} singularities where the plan carries {}; {}", t, found.size(),
-                         planned.size(), where);
+      return w;
     }
-    return {};
+    return std::nullopt;
   }
 
  private:
@@ -4177,10 +4186,8 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
                                     "{} frames between the key frames",
                                     fewest_wrong, inner_frames);
           // Where, so that a user knows where a link, a key frame or a smaller region helps.
-          if (const std::string first = check.first_wrong(
-                  *fewest_trial, [](const Vec3& p) { return describe_point(p, false, 1); });
-              !first.empty())
-            unbuilt_why += " (" + first + ")";
+          rep.first_wrong = check.first_wrong(*fewest_trial);
+          if (rep.first_wrong) unbuilt_why += " (" + wrong_frame_sentence(*rep.first_wrong) + ")";
         } else if (!best && unplanned > 0)
           unbuilt_why = fmt::format("the surface guide's singularities jump from frame to frame where the plan carries "
                                     "them smoothly: {} saddle–node events the plan does not have",
@@ -4310,6 +4317,18 @@ std::vector<Vec3> KeyframeTopologyPlan::carried(double t) const {
   return out;
 }
 
+nlohmann::json wrong_frame_json(const KeyframeIntervalReport::WrongFrame& w) {
+  nlohmann::json out = {{"t", w.t},
+                        {"found", w.found},
+                        {"planned", w.planned},
+                        {"extra", w.extra},
+                        {"type", to_string(w.type)},
+                        {"at", {w.at.x(), w.at.y(), w.at.z()}},
+                        {"face_edges", w.face_edges}};
+  if (std::isfinite(w.distance)) out["distance"] = w.distance, out["nearest_type"] = to_string(w.nearest_type);
+  return out;
+}
+
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals) {
   using nlohmann::json;
   auto xyz = [](const Vec3& p) { return json::array({p.x(), p.y(), p.z()}); };
@@ -4348,6 +4367,7 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
     j["guided"] = r.guided;
     j["fallback"] = r.fallback;
     if (!r.unguided_reason.empty()) j["unguided_reason"] = r.unguided_reason;
+    if (r.first_wrong) j["first_wrong"] = wrong_frame_json(*r.first_wrong);
     j["unpaired"] = json::array();
     for (const auto& p : r.unpaired_first) j["unpaired"].push_back(xyz(p));
     for (const auto& p : r.unpaired_second) j["unpaired"].push_back(xyz(p));
@@ -4399,6 +4419,19 @@ std::optional<std::vector<KeyframeIntervalReport>> keyframe_intervals_from_json(
       r.guided = j.at("guided").get<bool>();
       r.fallback = j.value("fallback", false);
       r.unguided_reason = j.value("unguided_reason", std::string());
+      if (j.contains("first_wrong")) {
+        const json& fw = j.at("first_wrong");
+        KeyframeIntervalReport::WrongFrame w;
+        w.t = fw.at("t").get<double>();
+        w.found = fw.at("found").get<int>();
+        w.planned = fw.at("planned").get<int>();
+        w.extra = fw.at("extra").get<bool>();
+        w.type = type(fw.at("type"));
+        w.at = xyz(fw.at("at"));
+        if (fw.contains("distance")) w.distance = fw.at("distance").get<double>(), w.nearest_type = type(fw.at("nearest_type"));
+        w.face_edges = fw.at("face_edges").get<double>();
+        r.first_wrong = w;
+      }
       for (const json& p : j.at("unpaired")) r.unpaired_first.push_back(xyz(p));
       out.push_back(std::move(r));
     }

@@ -792,6 +792,7 @@ json Session::status() const {
                   {"turning", std::count_if(k.matched.begin(), k.matched.end(),
                                             [](const auto& m) { return m.phase_turns != 0; })}};
         if (!k.unguided_reason.empty()) i["unguided_reason"] = k.unguided_reason;
+        if (k.first_wrong) i["first_wrong"] = wrong_frame_json(*k.first_wrong);
         intervals.push_back(std::move(i));
       }
       j["keyframe_intervals"] = std::move(intervals);

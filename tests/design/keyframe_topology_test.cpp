@@ -724,6 +724,16 @@ TEST(KeyframeTopology, AGuideRejectedAtEveryTryCountsAllItsWrongFrames) {
   EXPECT_TRUE(r.unguided_reason.find("; an extra ") != std::string::npos ||
               r.unguided_reason.find("; the plan's ") != std::string::npos)
       << r.unguided_reason;
+  // The report's first_wrong is what the sentence says.
+  ASSERT_TRUE(r.first_wrong.has_value());
+  EXPECT_EQ(r.first_wrong->planned, 4);
+  EXPECT_NE(r.first_wrong->found, 4);
+  EXPECT_EQ(r.first_wrong->extra, r.first_wrong->found > 4);
+  EXPECT_NE(r.unguided_reason.find(fmt::format("(the first at t = {:.3g}: {} singularities", r.first_wrong->t,
+                                               r.first_wrong->found)),
+            std::string::npos)
+      << r.unguided_reason;
+  EXPECT_TRUE(keyframe_intervals_json(g.report.keyframe_intervals)[0].contains("first_wrong"));
 }
 
 // The same knot at subdivisions 2 (162 vertices): carrying the static solve's saddle and
@@ -1104,6 +1114,32 @@ TEST(KeyframeTopology, TheSaddlesOnCGALsCowsThinPartsHaveTheirCharts) {
   const KeyframeIntervalReport::Pair& pair = r.cancelled[0];
   for (const Vec3& q : {pair.at, pair.node, pair.saddle})
     EXPECT_GT((at - q).norm(), 0.02) << r.unguided_reason << " names the cancelled pair's template";
+  // The same in keyframe_topology.json's "first_wrong" (for tools and the designer), which
+  // reads back as it was.
+  ASSERT_TRUE(r.first_wrong.has_value());
+  const KeyframeIntervalReport::WrongFrame& w = *r.first_wrong;
+  EXPECT_TRUE(w.extra);
+  EXPECT_EQ(w.planned, static_cast<int>(r.matched.size() + 2));
+  EXPECT_GT(w.found, w.planned);
+  EXPECT_LT((w.at - at).norm(), 1e-3);
+  EXPECT_GE(w.face_edges, 2.0);
+  EXPECT_TRUE(std::isfinite(w.distance));
+  const nlohmann::json j = keyframe_intervals_json(p.plan->intervals());
+  ASSERT_TRUE(j[0].contains("first_wrong"));
+  EXPECT_EQ(j[0]["first_wrong"]["found"], w.found);
+  EXPECT_EQ(j[0]["first_wrong"]["type"], to_string(w.type));
+  const std::optional<std::vector<KeyframeIntervalReport>> back = keyframe_intervals_from_json({{"intervals", j}});
+  ASSERT_TRUE(back.has_value());
+  ASSERT_TRUE(back->at(0).first_wrong.has_value());
+  const KeyframeIntervalReport::WrongFrame& b = *back->at(0).first_wrong;
+  EXPECT_EQ(b.t, w.t);
+  EXPECT_EQ(b.found, w.found);
+  EXPECT_EQ(b.planned, w.planned);
+  EXPECT_EQ(b.type, w.type);
+  EXPECT_EQ(b.nearest_type, w.nearest_type);
+  EXPECT_EQ(b.at, w.at);
+  EXPECT_EQ(b.distance, w.distance);
+  EXPECT_EQ(b.face_edges, w.face_edges);
 }
 
 // Two paths on a part of a closed surface thinner than the separation cannot be kept that

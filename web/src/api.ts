@@ -134,6 +134,18 @@ export interface Status {
     cancelled: number;
     turning?: number; // nodes the guide leaves turning a whole turn
     unguided_reason?: string;
+    // Turned down by the surface guide's check: where its first wrong frame goes wrong.
+    first_wrong?: {
+      t: number;
+      found: number;
+      planned: number;
+      extra: boolean;
+      type: string;
+      at: [number, number, number];
+      distance?: number;
+      nearest_type?: string;
+      face_edges: number;
+    };
   }[];
   seconds?: number;
   // The result's domain id (changes when the mesh does: GET /api/mesh again), its

@@ -146,6 +146,25 @@ struct KeyframeIntervalReport {
   // zeros).
   bool fallback = false;
   std::string unguided_reason;
+  // Turned down by the surface guide's check (its frames hold other singularities than the
+  // plan's): where the first such frame goes wrong, as unguided_reason says it in words.
+  // `extra`: the frame holds more than the plan carries, and `type` at `at` is the one
+  // farthest from every planned singularity (`distance` from the nearest, of `nearest_type`);
+  // else `type` at `at` is the plan's singularity farthest from any the frame holds
+  // (`distance` from the nearest found). `distance` is infinite, and `nearest_type` means
+  // nothing, when the other side holds none. `face_edges`: the longest edge of the face
+  // holding `at`, in mean edge lengths (the extras found so far lay in coarse faces).
+  struct WrongFrame {
+    double t = 0;
+    int found = 0, planned = 0;
+    bool extra = true;
+    SingularityType type = SingularityType::saddle;
+    Vec3 at = Vec3::Zero();
+    double distance = std::numeric_limits<double>::infinity();
+    SingularityType nearest_type = SingularityType::saddle;
+    double face_edges = 0;
+  };
+  std::optional<WrongFrame> first_wrong;
 };
 
 // Step 2's and 4's matching of two consecutive key frames' singularities (A: the first's,
@@ -217,9 +236,15 @@ private:
 // intervals)}], "created": [{"t", "at", "saddle", "node",
 // "node_type"}], "cancelled": [same], "separation", "closest_approach" (when two or more
 // are carried), "collision" (when not empty), "routing", "guided", "fallback" (not guided:
-// the interval left free), "unguided_reason" (when not guided), "unpaired": [[x, y, z],
-// ...]} per interval.
+// the interval left free), "unguided_reason" (when not guided), "first_wrong": {"t",
+// "found", "planned", "extra", "type", "at", "distance", "nearest_type" (the last two when
+// the other side holds any), "face_edges"} (when the guide's check turned it down),
+// "unpaired": [[x, y, z], ...]} per interval.
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals);
+
+// An interval's "first_wrong" object (the same in keyframe_topology.json and the server's
+// status).
+nlohmann::json wrong_frame_json(const KeyframeIntervalReport::WrongFrame& w);
 
 // The intervals back from keyframe_topology.json ({"intervals": keyframe_intervals_json}),
 // as the design check uses them (what was matched, created and cancelled, guided or left
