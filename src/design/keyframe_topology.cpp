@@ -2313,6 +2313,7 @@ class PhaseCheck {
       const std::vector<Vec3>& to = w.extra ? planned : found_at;
       const std::vector<SingularityType>& from_type = w.extra ? found_type : planned_type;
       const std::vector<SingularityType>& to_type = w.extra ? planned_type : found_type;
+      if (from.empty()) continue;  // neither holds one (the count disagrees all the same): no place to name
       double farthest = -1;
       for (size_t a = 0; a < from.size(); ++a) {
         double d = std::numeric_limits<double>::infinity();
@@ -4428,7 +4429,10 @@ std::optional<std::vector<KeyframeIntervalReport>> keyframe_intervals_from_json(
         w.extra = fw.at("extra").get<bool>();
         w.type = type(fw.at("type"));
         w.at = xyz(fw.at("at"));
-        if (fw.contains("distance")) w.distance = fw.at("distance").get<double>(), w.nearest_type = type(fw.at("nearest_type"));
+        if (fw.contains("distance")) {
+          w.distance = fw.at("distance").get<double>();
+          w.nearest_type = type(fw.at("nearest_type"));
+        }
         w.face_edges = fw.at("face_edges").get<double>();
         r.first_wrong = w;
       }
