@@ -5,7 +5,8 @@
 // it was guided, and the field's analysis has no bifurcation (free: the solve alone fades
 // the sources out and in). Then the checkbox off drops the links with "matched". On a sphere
 // the same by clicks on the surface: the guide leaves one source turning, which the
-// interval's line counts and a warning names; none with a key frame half-way.
+// interval's line counts and a warning names; none with a key frame half-way. A knot the
+// surface guide's check turns down: "show where" rings the place of its first wrong frame.
 // Usage: node e2e/keyframe_topology.e2e.mjs --tvf PATH/TO/tvf [--out DIR]
 import { readFileSync } from "node:fs";
 import { check, Designer, finish, start } from "./harness.mjs";
@@ -125,6 +126,66 @@ try {
   check(/key frames 1 → 2: 4 carried/.test(middle), `the knot with a key frame half-way: ${middle}`);
   check(!middle.includes("turning") && (await page.locator("#warnings").isHidden()), "no node turns, no warning");
   await d.shot(a.out, "keyframe_topology_sphere_middle.png");
+
+  // An interval the surface guide's check turns down (the knot of the C++ test
+  // AGuideRejectedAtEveryTryCountsAllItsWrongFrames: a source and a center trading places on
+  // the 42-vertex sphere): its line says why and has "show where", which goes to the first
+  // wrong frame, turns the camera to the place and rings it; "hide" takes the ring away.
+  const z = Math.sqrt(0.75);
+  const knot = (first, second) => [
+    { kind: "singular", type: "source", at: first },
+    { kind: "singular", type: "ccw_center", at: second },
+  ];
+  const rejected = await d.applyScene({
+    tvf: 1,
+    domain: { sphere: { subdivisions: 1, radius: 1 } },
+    time: { frames: 32, range: [0, 1] },
+    generator: "spacetime",
+    falloff: 8,
+    solver: { region_radius: 0.15, keyframe_topology: "matched" },
+    keyframes: [
+      { t: 0, elements: knot([-0.5, 0, z], [0.5, 0, z]) },
+      { t: 1, elements: knot([0.5, 0, z], [-0.5, 0, z]) },
+    ],
+  });
+  const w = rejected.keyframe_intervals?.[0]?.first_wrong;
+  const rejectedReport = await page.textContent("#keyframe-report");
+  check(w && !rejected.keyframe_intervals[0].guided, `the guide is turned down, its first wrong frame in the status: ${rejectedReport}`);
+  check(rejectedReport.includes(`not guided, left free (key frames only): the surface guide's frames hold other singularities`), "the line says why");
+  const show = page.locator("#keyframe-report button.show-wrong");
+  check((await show.textContent()) === "show where", "and offers to show where");
+  // Pixels of the ring's colour (#06b6d4) in a box around the place on the picture.
+  const ringPixels = () =>
+    page.evaluate(async (p) => {
+      await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+      const gl = document.querySelector("#surface canvas");
+      const c = document.createElement("canvas");
+      c.width = gl.width;
+      c.height = gl.height;
+      const g = c.getContext("2d");
+      g.drawImage(gl, 0, 0);
+      const s = gl.width / gl.clientWidth;
+      const [x, y] = window.tvf.surface(p).map((v) => Math.round(v * s));
+      const half = Math.round(40 * s);
+      const px = g.getImageData(x - half, y - half, 2 * half, 2 * half).data;
+      let n = 0;
+      for (let i = 0; i < px.length; i += 4) if (Math.abs(px[i] - 6) < 30 && Math.abs(px[i + 1] - 182) < 30 && Math.abs(px[i + 2] - 212) < 30) ++n;
+      return n;
+    }, w.at);
+  const before = await ringPixels();
+  await show.click();
+  const frameWanted = Math.round(w.t * 31);
+  await page.waitForFunction((j) => window.tvf.state.frame === j, frameWanted);
+  await d.settled();
+  const after = await ringPixels();
+  const seen = await page.evaluate((p) => window.tvf.surfaceVisible(p), w.at);
+  console.log(`first wrong frame t = ${w.t.toFixed(3)} (frame ${frameWanted}), ${w.extra ? "an extra" : "a missing"} ${w.type}; ring pixels ${before} → ${after}`);
+  check(seen, "the camera turned to the place: it is seen");
+  check(before === 0 && after > 50, `and it is ringed (${before} → ${after} pixels of the ring's colour)`);
+  check((await show.textContent()) === "hide", "the button now hides it");
+  await d.shot(a.out, "keyframe_topology_show_where.png");
+  await show.click();
+  check((await ringPixels()) === 0 && (await show.textContent()) === "show where", "hidden again");
 } catch (e) {
   failed = true;
   console.error(e.message);

@@ -19,3 +19,6 @@ export const BIFURCATION_COLOR = "#f59e0b";
 export const PATHLINE_COLOR = "#0d9488";
 export const STREAMLINE_COLOR = "#2563eb";
 export const STREAKLINE_COLOR = "#db2777";  // sketched streaklines (issue 20)
+// Where a surface guide went wrong first (the key-frame report's "show where"): a colour
+// no singularity type, design curve or bifurcation has.
+export const WRONG_PLACE_COLOR = "#06b6d4";

@@ -76,6 +76,9 @@ interface State {
   stroke?: S.Vec[];
   cancelPicks: number[][];
   linkFrom?: S.Handle; // Link tool: the key-frame element picked first
+  // The place marked on the surface by an interval's "show where" (the surface guide's
+  // first wrong frame, status keyframe_intervals[interval].first_wrong) of that result.
+  wrongPlace?: { revision: number; interval: number; at: number[] };
   playing: boolean;
   jsonDirty: boolean;
 }
@@ -344,22 +347,54 @@ async function showStatus(st: Status) {
   if (st.analysis === "failed" && st.result_revision === state.resultRevision) say(`the analysis failed: ${st.analysis_error ?? ""}`, true);
 }
 
-// Topology between key frames: one line per interval of the shown result.
+// Topology between key frames: one line per interval of the shown result. An interval the
+// surface guide's check turned down has "show where": it goes to the first frame where the
+// guide went wrong and marks the place on the surface (where a link, a key frame or a
+// smaller region would help); the mark stays until it is hidden or the result changes.
 function showKeyframeReport(st: Status) {
   const box = $("keyframe-report");
   const intervals = st.state === "ready" ? (st.keyframe_intervals ?? []) : [];
+  if (state.wrongPlace && (state.wrongPlace.revision !== st.result_revision || !intervals[state.wrongPlace.interval]?.first_wrong))
+    markWrongPlace(undefined);
   box.hidden = intervals.length === 0;
   box.classList.toggle("fallback", intervals.some((k) => k.fallback));
-  box.textContent = intervals
-    .map((k) => {
+  box.replaceChildren(
+    ...intervals.map((k, i) => {
+      const line = document.createElement("div");
+      line.className = "interval";
       const what = `key frames ${k.keyframes[0]} → ${k.keyframes[1]}: ${k.matched} carried${k.linked ? ` (${k.linked} linked)` : ""}, ${k.created} pairs created, ${k.cancelled} cancelled`;
       const turning = k.turning ? `; ${k.turning} node${k.turning > 1 ? "s" : ""} turning a whole turn (a key frame between the two can hold ${k.turning > 1 ? "them" : "it"})` : "";
       // Guided: the analysis should show the planned pairs' events and nothing else.
       const events = k.created + k.cancelled > 0 ? "no bifurcation but the pairs'" : "no bifurcation";
-      if (k.guided) return `${what}; guided (${k.routing} routing): ${events}${turning}`;
-      return `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
-    })
-    .join("\n");
+      line.textContent = k.guided
+        ? `${what}; guided (${k.routing} routing): ${events}${turning}`
+        : `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
+      const w = k.first_wrong;
+      if (w && !k.guided && surface && !planar()) {
+        const shown = state.wrongPlace?.interval === i;
+        const button = document.createElement("button");
+        button.className = "show-wrong";
+        button.textContent = shown ? "hide" : "show where";
+        button.title = shown ? "Remove the mark from the surface" : `Go to t = ${w.t.toFixed(3)} and mark on the surface where the guide's ${w.extra ? "extra" : "missing"} ${w.type.replace(/_/g, " ")} lay`;
+        button.onclick = () => {
+          if (shown) markWrongPlace(undefined);
+          else {
+            markWrongPlace({ revision: st.result_revision, interval: i, at: w.at });
+            surface?.face(w.at);
+            void showFrame(S.frameOf(scene(), w.t));
+          }
+          showKeyframeReport(st);
+        };
+        line.append(" ", button);
+      }
+      return line;
+    }),
+  );
+}
+
+function markWrongPlace(place: State["wrongPlace"]) {
+  state.wrongPlace = place;
+  surface?.setMark(place?.at);
 }
 
 // The generator's warnings on the shown result (paths that could not be kept apart, a node

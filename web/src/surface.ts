@@ -13,7 +13,7 @@
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import type { Analysis, Frame, MeshData } from "./api";
-import { typeColor } from "./colors";
+import { typeColor, WRONG_PLACE_COLOR } from "./colors";
 import { pathObjects } from "./surface/paths";
 import { SurfaceTexture } from "./surface/preview";
 
@@ -57,6 +57,8 @@ export class SurfaceView {
   private readonly ftleMaterial = new THREE.ShaderMaterial({ vertexShader: ftleVertex, fragmentShader: ftleFragment, side: THREE.DoubleSide });
   private ftleOn = false;
   private readonly dye = new THREE.Group();
+  private readonly mark = new THREE.Group();
+  private markAt: number[] | undefined;
   private mode: SurfaceMode = "texture";
   private frame: Frame | undefined;
   private markers: number[][] = [];
@@ -92,6 +94,7 @@ export class SurfaceView {
     this.scene.add(this.design);
     this.scene.add(this.paths);
     this.scene.add(this.dye);
+    this.scene.add(this.mark);
     this.strokeLine = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0xf97316, depthTest: false }));
     this.strokeLine.renderOrder = 2;
     this.scene.add(this.strokeLine);
@@ -221,6 +224,8 @@ export class SurfaceView {
     this.ftleOn = false;
     this.surface = new THREE.Mesh(g, this.material());
     this.scene.add(this.surface);
+    this.markAt = undefined;
+    this.drawMark();
     this.controls.target.copy(s.center);
     this.camera.position.copy(s.center).add(new THREE.Vector3(0.2, -1, 0.6).normalize().multiplyScalar(3 * s.radius));
     this.controls.update();
@@ -273,6 +278,68 @@ export class SurfaceView {
       ball.position.set(p[0], p[1], p[2]);
       this.dye.add(ball);
     }
+    this.render();
+  }
+
+  // A place to point at (the key-frame report's first wrong frame of a surface guide): a
+  // ring around p in the surface's tangent plane and a dot at p, or undefined for none.
+  setMark(p: number[] | undefined) {
+    this.markAt = p;
+    this.drawMark();
+  }
+
+  private drawMark() {
+    for (const c of [...this.mark.children]) {
+      this.mark.remove(c);
+      (c as THREE.Mesh).geometry?.dispose();
+      ((c as THREE.Mesh).material as THREE.Material | undefined)?.dispose();
+    }
+    const p = this.markAt;
+    if (p && this.surface) {
+      const at = new THREE.Vector3(p[0], p[1], p[2]);
+      // The ring is drawn over everything (the faces round a coarse mesh's point tilt away
+      // from the vertex normal and would hide part of it; orbited away, it shows through
+      // where the place is); the dot at the point itself is hidden by what is in front.
+      const n = this.normalNear(at);
+      const ringMaterial = new THREE.MeshBasicMaterial({ color: WRONG_PLACE_COLOR, depthTest: false });
+      const ring = new THREE.Mesh(new THREE.TorusGeometry(0.06 * this.radius, 0.008 * this.radius, 8, 48), ringMaterial);
+      ring.renderOrder = 3;
+      ring.position.copy(at);
+      ring.quaternion.setFromUnitVectors(new THREE.Vector3(0, 0, 1), n);
+      const dot = new THREE.Mesh(new THREE.SphereGeometry(0.012 * this.radius, 10, 8), new THREE.MeshBasicMaterial({ color: WRONG_PLACE_COLOR }));
+      dot.position.copy(at);
+      this.mark.add(ring, dot);
+    }
+    this.render();
+  }
+
+  // The normal of the mesh's vertex nearest to p (the view's smooth normals).
+  private normalNear(p: THREE.Vector3): THREE.Vector3 {
+    const normals = this.surface?.geometry.getAttribute("normal");
+    let best = -1;
+    let bestD = Infinity;
+    for (let v = 0; v < this.positions.length / 3; ++v) {
+      const d = (this.positions[3 * v] - p.x) ** 2 + (this.positions[3 * v + 1] - p.y) ** 2 + (this.positions[3 * v + 2] - p.z) ** 2;
+      if (d < bestD) (bestD = d), (best = v);
+    }
+    if (best < 0 || !normals) return new THREE.Vector3(0, 0, 1);
+    const n = new THREE.Vector3(normals.getX(best), normals.getY(best), normals.getZ(best));
+    return n.lengthSq() > 0 ? n.normalize() : new THREE.Vector3(0, 0, 1);
+  }
+
+  // Turns the camera about the mesh's centre (at the same distance) to look at p from
+  // outside: along the direction from the centre to p, tilted towards the surface's normal
+  // at p, so that a point on a concave or far side comes into view.
+  face(p: number[]) {
+    const at = new THREE.Vector3(p[0], p[1], p[2]);
+    const center = this.controls.target;
+    const out = at.clone().sub(center);
+    const dir = (out.lengthSq() > 0 ? out.normalize() : new THREE.Vector3()).add(this.normalNear(at));
+    if (dir.lengthSq() === 0) return;
+    const distance = this.camera.position.distanceTo(center);
+    this.camera.position.copy(center).addScaledVector(dir.normalize(), distance);
+    this.controls.update();
+    this.texture.invalidate();
     this.render();
   }
 
