@@ -583,12 +583,23 @@ std::string keyframe_turn_warning(const KeyframeIntervalReport& k, const Keyfram
   const std::string what = fmt::format("between keyframes[{}] and keyframes[{}] the {} carried from {} to {} is not "
                                        "held to its type: ",
                                        k.from_keyframe, k.to_keyframe, to_string(m.type), at(m.from), at(m.to));
+  // The key frame the plan offers (its elements where it carries them half-way), else
+  // the advice alone.
+  std::string advice = "a key frame between them can hold it (as in example 26's knot_sphere_middle.json)";
+  if (k.middle_keyframe) {
+    std::string held;
+    for (const KeyframeElement& e : k.middle_keyframe->keyframe.elements)
+      held += fmt::format("{}the {} at {}", held.empty() ? "" : ", ", e.type ? to_string(*e.type) : "singular element",
+                          at(e.at));
+    advice = fmt::format("a key frame at t = {:.4g} holding {}, where the plan carries them then, can hold it "
+                         "(keyframe_topology.json's \"middle_keyframe\"; the designer's \"add this key frame\")",
+                         k.middle_keyframe->keyframe.t, held);
+  }
   if (m.phase_turns != 0)
-    return what + fmt::format("it turns {} whole turn{} on the way (through every node type: source, center, sink, center); "
-                              "a key frame between them can hold it (as in example 26's knot_sphere_middle.json)",
-                              std::abs(m.phase_turns), std::abs(m.phase_turns) == 1 ? "" : "s");
-  return what + fmt::format("it turns up to {:.2f} rad from it on the way (past a center to the other stability and back)",
-                            m.phase_swing);
+    return what + fmt::format("it turns {} whole turn{} on the way (through every node type: source, center, sink, center); {}",
+                              std::abs(m.phase_turns), std::abs(m.phase_turns) == 1 ? "" : "s", advice);
+  return what + fmt::format("it turns up to {:.2f} rad from it on the way (past a center to the other stability and back){}",
+                            m.phase_swing, k.middle_keyframe ? "; " + advice : std::string());
 }
 
 void report_spacetime(GenerateReport* report, const Scene& scene, int nv, std::chrono::steady_clock::time_point start,

@@ -11,6 +11,7 @@
 #include "tvf/integrate/surface_path.h"
 #include "tvf/integrate/surface_walk.h"
 #include "tvf/mesh/edge_paths.h"
+#include "tvf/scene/scene_json.h"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseLU>
@@ -3880,6 +3881,49 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     const Vec3 n = space.planar() ? Vec3::UnitZ() : bundle.face_normal(space.locate(at_end ? p1 : p0).face);
     return Vec3(end_velocity(p0, p1, curve, at_end, n) / dt);
   };
+  // Where the guide leaves a node turning a whole turn: the key frame that would hold it
+  // (KeyframeIntervalReport::middle_keyframe), each singular element of key frame k where
+  // its track is at the frame nearest the middle. The paths then stay near the plan's, and
+  // each node is given its type half-way, so no interval's phases end a whole turn apart
+  // (the sphere's knot: its source a source in every frame). Not offered for a node that
+  // only swings past a center and back: no case of that has been seen held so.
+  auto middle_keyframe = [&](size_t k, const KeyframeIntervalReport& rep,
+                             const std::vector<std::pair<size_t, size_t>>& pairs,
+                             size_t first_track) -> std::optional<KeyframeIntervalReport::MiddleKeyframe> {
+    const bool turning = std::any_of(rep.matched.begin(), rep.matched.end(), [](const auto& m) {
+      return m.phase_turns != 0;
+    });
+    if (!turning || !rep.created.empty() || !rep.cancelled.empty()) return std::nullopt;
+    const Keyframe& first = scene.keyframes[k];
+    const Keyframe& second = scene.keyframes[k + 1];
+    for (const Keyframe* key : {&first, &second})
+      if (!key->field.empty() || !key->streamlines.empty() || key->elements.empty() ||
+          std::any_of(key->elements.begin(), key->elements.end(), [](const auto& e) { return e.kind != "singular"; }))
+        return std::nullopt;
+    // The frame nearest the middle, strictly inside the interval.
+    double t_mid = 0, best = std::numeric_limits<double>::infinity();
+    for (const double t : scene_times)
+      if (t > rep.t0 && t < rep.t1 && std::abs(t - 0.5 * (rep.t0 + rep.t1)) < best)
+        best = std::abs(t - 0.5 * (rep.t0 + rep.t1)), t_mid = t;
+    if (!std::isfinite(best)) return std::nullopt;
+    KeyframeIntervalReport::MiddleKeyframe out;
+    out.keyframe.t = t_mid;
+    for (size_t e = 0; e < first.elements.size(); ++e) {
+      const int s = element_singularity(k, first.elements[e].at);
+      const auto m = std::find_if(pairs.begin(), pairs.end(), [&](const auto& p) { return static_cast<int>(p.first) == s; });
+      if (s < 0 || m == pairs.end()) return std::nullopt;  // an element not carried
+      int to = -1;
+      for (size_t f = 0; f < second.elements.size() && to < 0; ++f)
+        if (element_singularity(k + 1, second.elements[f].at) == static_cast<int>(m->second)) to = static_cast<int>(f);
+      const Track& tr = tracks_[first_track + static_cast<size_t>(m - pairs.begin())];
+      KeyframeElement element = first.elements[e];
+      element.at = space.planar() ? tr.raw(tr.param(t_mid)) : surface_position(mesh, space.locate(tr.raw(tr.param(t_mid))));
+      out.keyframe.elements.push_back(element);
+      out.from.push_back(static_cast<int>(e));
+      out.to.push_back(to);
+    }
+    return out;
+  };
   int groups = 0;
   size_t previous_first = 0;  // the previous interval's first track
   for (size_t k = 0; k + 1 < nk; ++k) {
@@ -4263,6 +4307,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         rep = std::move(unguided->rep);
         groups = unguided->groups;
       }
+      if (rep.guided) rep.middle_keyframe = middle_keyframe(k, rep, pairs, first_track);
       intervals_.push_back(std::move(rep));
       break;
     }
@@ -4330,6 +4375,10 @@ nlohmann::json wrong_frame_json(const KeyframeIntervalReport::WrongFrame& w) {
   return out;
 }
 
+nlohmann::json middle_keyframe_json(const KeyframeIntervalReport::MiddleKeyframe& m) {
+  return {{"keyframe", keyframe_to_json(m.keyframe, false)}, {"from", m.from}, {"to", m.to}};
+}
+
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals) {
   using nlohmann::json;
   auto xyz = [](const Vec3& p) { return json::array({p.x(), p.y(), p.z()}); };
@@ -4369,6 +4418,7 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
     j["fallback"] = r.fallback;
     if (!r.unguided_reason.empty()) j["unguided_reason"] = r.unguided_reason;
     if (r.first_wrong) j["first_wrong"] = wrong_frame_json(*r.first_wrong);
+    if (r.middle_keyframe) j["middle_keyframe"] = middle_keyframe_json(*r.middle_keyframe);
     j["unpaired"] = json::array();
     for (const auto& p : r.unpaired_first) j["unpaired"].push_back(xyz(p));
     for (const auto& p : r.unpaired_second) j["unpaired"].push_back(xyz(p));
@@ -4435,6 +4485,29 @@ std::optional<std::vector<KeyframeIntervalReport>> keyframe_intervals_from_json(
         }
         w.face_edges = fw.at("face_edges").get<double>();
         r.first_wrong = w;
+      }
+      if (j.contains("middle_keyframe")) {
+        const json& mk = j.at("middle_keyframe");
+        KeyframeIntervalReport::MiddleKeyframe m;
+        m.keyframe.t = mk.at("keyframe").at("t").get<double>();
+        for (const json& e : mk.at("keyframe").at("elements")) {
+          KeyframeElement element;
+          element.kind = e.at("kind").get<std::string>();
+          if (e.contains("type")) {
+            element.type = singular_type_from_string(e.at("type").get<std::string>());
+            if (!element.type) throw std::invalid_argument("unknown singular type");
+            element.jacobian = jacobian_of(*element.type);
+          } else {
+            const json& a = e.at("jacobian");
+            element.jacobian << a.at(0).at(0).get<double>(), a.at(0).at(1).get<double>(), a.at(1).at(0).get<double>(),
+                a.at(1).at(1).get<double>();
+          }
+          element.at = xyz(e.at("at"));
+          m.keyframe.elements.push_back(element);
+        }
+        m.from = mk.at("from").get<std::vector<int>>();
+        m.to = mk.at("to").get<std::vector<int>>();
+        r.middle_keyframe = std::move(m);
       }
       for (const json& p : j.at("unpaired")) r.unpaired_first.push_back(xyz(p));
       out.push_back(std::move(r));

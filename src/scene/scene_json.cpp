@@ -1280,6 +1280,8 @@ Scene parse_with_source(const std::string& text, const std::string& label,
 
 }  // namespace
 
+nlohmann::json keyframe_to_json(const Keyframe& keyframe, bool planar) { return keyframe_json(keyframe, planar); }
+
 Scene scene_from_json(const nlohmann::json& j, const std::string& label,
                       const std::string& source_path) {
   return Reader(label).scene(j, source_path);

@@ -273,6 +273,48 @@ TEST(CliKeyframeTopology, Example26KnotOnASphereIsGuided) {
   EXPECT_GT(source.front(), 1.5);
   EXPECT_GT(source.back(), 1.5);
   EXPECT_LT(*std::min_element(source.begin(), source.end()), -0.5) << "the source never attracting";
+  // The key frame that would hold it: the two designed elements at the frame nearest the
+  // middle (t = 15/31), where the plan carries them then (on the sphere, near the pole,
+  // each moved off its first place), each carried from and to its own element; the
+  // warning names it.
+  ASSERT_TRUE(i.contains("middle_keyframe")) << i;
+  const nlohmann::json& middle = i.at("middle_keyframe");
+  EXPECT_NEAR(middle.at("keyframe").at("t").get<double>(), 15.0 / 31, 1e-12) << middle;
+  EXPECT_EQ(middle.at("from"), nlohmann::json::parse("[0, 1]")) << middle;
+  EXPECT_EQ(middle.at("to"), nlohmann::json::parse("[0, 1]")) << middle;
+  const nlohmann::json& held = middle.at("keyframe").at("elements");
+  ASSERT_EQ(held.size(), 2u) << middle;
+  EXPECT_EQ(held[0].at("type"), "source");
+  EXPECT_EQ(held[1].at("type"), "ccw_center");
+  for (const auto& e : held) {
+    const auto p = e.at("at").get<std::array<double, 3>>();
+    EXPECT_NEAR(std::hypot(p[0], p[1], p[2]), 1.0, 0.01) << e;  // on the sphere (its faces' chords)
+    EXPECT_GT(std::min(std::hypot(p[0] + 0.5, p[1]), std::hypot(p[0] - 0.5, p[1])), 0.3) << e;  // half-way
+  }
+  EXPECT_NE(r.generated.output.find("a key frame at t = 0.4839 holding the source at ("), std::string::npos)
+      << r.generated.output;
+
+  // Taken (inserted between the two): no node turns, no warning, the source a source in
+  // every frame, four singularities per frame and no event.
+  nlohmann::json with_middle = read_json(scene);
+  with_middle["keyframes"].insert(with_middle["keyframes"].begin() + 1, middle.at("keyframe"));
+  test::TempDir taken_dir;
+  test::write_text(taken_dir / "scene.json", with_middle.dump());
+  const GeneratedAndAnalysed taken = generate_and_analyze(taken_dir, (taken_dir / "scene.json").string(), " --no-plots");
+  ASSERT_FALSE(taken.analysis.is_null());
+  EXPECT_EQ(taken.generated.output.find("warning"), std::string::npos) << taken.generated.output;
+  for (const auto& interval : taken.topology.at("intervals")) {
+    EXPECT_TRUE(interval.at("guided").get<bool>()) << interval;
+    EXPECT_FALSE(interval.contains("middle_keyframe")) << interval;
+    for (const auto& m : interval.at("matched")) EXPECT_EQ(m.at("phase_turns").get<int>(), 0) << m;
+  }
+  EXPECT_TRUE(taken.analysis.at("bifurcations").empty()) << taken.analysis.at("bifurcations");
+  std::vector<int> taken_count(32, 0);
+  for (const auto& s : taken.analysis.at("singularities")) ++taken_count.at(s.at("frame").get<size_t>());
+  for (size_t f = 0; f < taken_count.size(); ++f) EXPECT_EQ(taken_count[f], 4) << "frame " << f;
+  const std::vector<double> held_source = followed_node_ratios(taken.analysis, {-0.5, 0.0, std::sqrt(0.75)}, 32);
+  ASSERT_EQ(held_source.size(), 32u);
+  for (size_t f = 0; f < held_source.size(); ++f) EXPECT_GT(held_source[f], 1.5) << "the source at frame " << f;
   // Coherent in time up to the second key frame: no frame-to-frame step above 3× the
   // median (1.3× now; 5.7× with a phase correction whose nodes ended on different whole
   // turns, the last step reversing the vectors between them).

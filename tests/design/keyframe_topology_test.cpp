@@ -1142,6 +1142,50 @@ TEST(KeyframeTopology, TheSaddlesOnCGALsCowsThinPartsHaveTheirCharts) {
   EXPECT_EQ(b.face_edges, w.face_edges);
 }
 
+// keyframe_topology.json's "middle_keyframe" (the key frame offered where a node turns a
+// whole turn; Example26KnotOnASphereIsGuided makes and takes one) is a key frame in the
+// scene's form, and reads back as it was, an element given by its Jacobian too.
+TEST(KeyframeTopology, TheOfferedMiddleKeyFrameReadsBack) {
+  KeyframeIntervalReport r;
+  r.t1 = 1;
+  r.guided = true;
+  KeyframeIntervalReport::MiddleKeyframe m;
+  m.keyframe.t = 15.0 / 31;
+  KeyframeElement source;
+  source.kind = "singular";
+  source.type = SingularType::source;
+  source.jacobian = jacobian_of(SingularType::source);
+  source.at = Vec3(0.11, 0.125, 0.985);
+  KeyframeElement custom = source;
+  custom.type.reset();
+  custom.jacobian << 0.5, -1, 1, 0.5;
+  custom.at = Vec3(-0.057, -0.142, 0.987);
+  m.keyframe.elements = {source, custom};
+  m.from = {0, 1};
+  m.to = {1, -1};
+  r.middle_keyframe = m;
+  const nlohmann::json j = keyframe_intervals_json({r});
+  const nlohmann::json& written = j[0].at("middle_keyframe");
+  EXPECT_EQ(written.at("keyframe").at("elements")[0].at("type"), "source") << written;
+  EXPECT_TRUE(written.at("keyframe").at("elements")[1].contains("jacobian")) << written;
+  EXPECT_EQ(written.at("keyframe").at("streamlines"), nlohmann::json::array()) << written;
+  const std::optional<std::vector<KeyframeIntervalReport>> back = keyframe_intervals_from_json({{"intervals", j}});
+  ASSERT_TRUE(back.has_value());
+  ASSERT_TRUE(back->at(0).middle_keyframe.has_value());
+  const KeyframeIntervalReport::MiddleKeyframe& b = *back->at(0).middle_keyframe;
+  EXPECT_EQ(b.keyframe.t, m.keyframe.t);
+  ASSERT_EQ(b.keyframe.elements.size(), 2u);
+  EXPECT_EQ(b.keyframe.elements[0].type, SingularType::source);
+  EXPECT_EQ(b.keyframe.elements[0].at, source.at);
+  EXPECT_FALSE(b.keyframe.elements[1].type.has_value());
+  EXPECT_EQ(b.keyframe.elements[1].jacobian, custom.jacobian);
+  EXPECT_EQ(b.from, m.from);
+  EXPECT_EQ(b.to, m.to);
+  // Without one the key is absent.
+  r.middle_keyframe.reset();
+  EXPECT_FALSE(keyframe_intervals_json({r})[0].contains("middle_keyframe"));
+}
+
 // Two paths on a part of a closed surface thinner than the separation cannot be kept that
 // far apart in space by any detour walked along the surface, and the collision says so,
 // with the part's width:

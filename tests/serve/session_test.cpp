@@ -143,6 +143,16 @@ TEST(ServeSession, TheStatusSaysWhichIntervalLeavesANodeTurning) {
             }),
             1)
       << warnings;
+  // And the key frame that would hold it (the designer's "add this key frame"): the two
+  // designed elements at a frame inside the interval, each carried from and to its own.
+  const json& k = st["keyframe_intervals"][0];
+  ASSERT_TRUE(k.contains("middle_keyframe")) << k;
+  const json& middle = k["middle_keyframe"];
+  EXPECT_EQ(middle.at("keyframe").at("elements").size(), 2u) << middle;
+  EXPECT_GT(middle.at("keyframe").at("t").get<double>(), 0.0) << middle;
+  EXPECT_LT(middle.at("keyframe").at("t").get<double>(), 1.0) << middle;
+  EXPECT_EQ(middle.at("from"), json::parse("[0, 1]")) << middle;
+  EXPECT_EQ(middle.at("to"), json::parse("[0, 1]")) << middle;
 }
 
 // Issue 15: the field is published before its analysis, which follows on its own thread:

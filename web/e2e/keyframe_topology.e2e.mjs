@@ -5,7 +5,8 @@
 // it was guided, and the field's analysis has no bifurcation (free: the solve alone fades
 // the sources out and in). Then the checkbox off drops the links with "matched". On a sphere
 // the same by clicks on the surface: the guide leaves one source turning, which the
-// interval's line counts and a warning names; none with a key frame half-way. A knot the
+// interval's line counts and a warning names; "add this key frame" inserts the key frame the
+// engine offers and then none turns; none with example 26's key frame half-way. A knot the
 // surface guide's check turns down: "show where" rings the place of its first wrong frame.
 // Usage: node e2e/keyframe_topology.e2e.mjs --tvf PATH/TO/tvf [--out DIR]
 import { readFileSync } from "node:fs";
@@ -120,6 +121,26 @@ try {
   const linkWarnings = (await page.locator("#warnings").isVisible()) ? await page.textContent("#warnings") : "";
   check(sphereReport.includes("1 node turning a whole turn (a key frame between the two can hold it)"), "a node left turning is counted");
   check(/^warning: between keyframes\[0\] and keyframes\[1\] the source carried from .* turns 1 whole turn/.test(linkWarnings), `and named: ${linkWarnings}`);
+  // "add this key frame": the key frame the engine offers (the two sources where the plan
+  // carries them half-way) inserted, both links kept through it; no node turns then.
+  const offered = k.middle_keyframe;
+  check(offered && offered.keyframe.elements.length === 2, `the status offers a key frame: ${JSON.stringify(offered)}`);
+  const add = page.locator("#keyframe-report button.add-middle-keyframe");
+  check((await add.count()) === 1, "the line has \"add this key frame\"");
+  const added = await d.change(() => add.click());
+  const withMiddle = (await d.scene()).scene;
+  check(withMiddle.keyframes.length === 3 && Math.abs(withMiddle.keyframes[1].t - offered.keyframe.t) < 1e-12, "the key frame is inserted");
+  const throughLinks = JSON.stringify(withMiddle.solver?.links);
+  check(
+    throughLinks === JSON.stringify([{ from: [0, 0], to: [1, 0] }, { from: [1, 0], to: [2, 1] }, { from: [0, 1], to: [1, 1] }, { from: [1, 1], to: [2, 0] }]),
+    `both links kept through it (${throughLinks})`,
+  );
+  const addedReport = await page.textContent("#keyframe-report");
+  const addedWarnings = (await page.locator("#warnings").isVisible()) ? await page.textContent("#warnings") : "";
+  console.log(`added the offered key frame: ${addedReport}`);
+  check(added.keyframe_intervals?.length === 2 && added.keyframe_intervals.every((i) => i.guided && !i.turning), "both intervals guided, no node turning");
+  check(!addedReport.includes("turning") && addedWarnings === "", `no node turns, no warning (${addedWarnings})`);
+  await d.shot(a.out, "keyframe_topology_sphere_added_keyframe.png");
   const example = (name) => JSON.parse(readFileSync(new URL(`../../examples/26_keyframe_topology/${name}`, import.meta.url), "utf8"));
   await d.applyScene(example("knot_sphere_middle.json"));
   const middle = await page.textContent("#keyframe-report");

@@ -1,6 +1,6 @@
 // The JSON API of `tvf serve` (docs/serve_api.md). Every call returns the parsed body or
 // throws ApiError with the server's one-sentence message.
-import type { Scene } from "./scene";
+import type { Keyframe, Scene } from "./scene";
 
 // `place`: where the error is, when the server knows (docs/serve_api.md): the file, the
 // JSON path of the value ("elements[2].type"), its line and column in the request body.
@@ -146,6 +146,10 @@ export interface Status {
       nearest_type?: string;
       face_edges: number;
     };
+    // Where the guide leaves a node turning: the key frame that would hold it (its
+    // elements where the plan carries them half-way; from/to: each one's element in the
+    // key frames before and after).
+    middle_keyframe?: { keyframe: Keyframe; from: number[]; to: number[] };
   }[];
   seconds?: number;
   // The result's domain id (changes when the mesh does: GET /api/mesh again), its

@@ -387,6 +387,22 @@ function showKeyframeReport(st: Status) {
         };
         line.append(" ", button);
       }
+      // A node left turning: the key frame the engine offers to hold it, one click away.
+      const middle = k.middle_keyframe;
+      if (middle) {
+        const button = document.createElement("button");
+        button.className = "add-middle-keyframe";
+        button.textContent = "add this key frame";
+        const held = (middle.keyframe.elements ?? []).map((e) => (e.type ? e.type.replace(/_/g, " ") : e.kind)).join(" and ");
+        button.title = `Insert a key frame at t = ${middle.keyframe.t.toFixed(3)} holding the ${held} where the plan carries them then: it holds the node${(k.turning ?? 0) > 1 ? "s" : ""} left turning`;
+        button.onclick = () =>
+          void change(
+            (s) => S.insertMiddleKeyframe(s, k.keyframes[0], middle.keyframe, middle.from, middle.to),
+            `a key frame at t = ${middle.keyframe.t.toFixed(3)} added between keyframes[${k.keyframes[0]}] and keyframes[${k.keyframes[1]}], holding the ${held} where the plan carried them`,
+            false, // made for these key frames: not applied on top of another client's change
+          );
+        line.append(" ", button);
+      }
       return line;
     }),
   );

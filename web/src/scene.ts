@@ -271,6 +271,32 @@ function keepKeyframeTopology(s: Scene, before: Keyframe[], removed?: [number, n
   if (after.length !== before.length) delete solver.bifurcation_times;
 }
 
+// Inserts the key frame the engine offers where its guide leaves a node turning (status
+// keyframe_intervals[i].middle_keyframe, docs/serve_api.md) between keyframes[before] and
+// the next: `from[i]` and `to[i]` are the elements of those two that its element i is
+// carried from and to. A link between them through element i is kept as two links through
+// it (any other link across the new key frame is dropped, as for any added key frame).
+// Refused where the key frames no longer leave room for it (the design changed since).
+export function insertMiddleKeyframe(scene: Scene, before: number, key: Keyframe, from: number[], to: number[]): Scene {
+  const s = clone(scene);
+  const keys = s.keyframes ?? [];
+  const j = frameOf(s, key.t);
+  if (before + 1 >= keys.length || !(keys[before].t < key.t && key.t < keys[before + 1].t) || keys.some((k) => frameOf(s, k.t) === j))
+    throw new Error(`the key frames changed: there is no room for a key frame at t = ${key.t.toFixed(3)} between keyframes[${before}] and the next`);
+  const old = [...keys];
+  const through = keyframeLinks(s).filter((l) => l.from[0] === before);
+  keys.splice(before + 1, 0, clone(key));
+  s.keyframes = keys;
+  keepKeyframeTopology(s, old);
+  const links: KeyframeLink[] = [];
+  from.forEach((e, i) => {
+    if (to[i] >= 0 && through.some((l) => l.from[1] === e && l.to[1] === to[i]))
+      links.push({ from: [before, e], to: [before + 1, i] }, { from: [before + 1, i], to: [before + 2, to[i]] });
+  });
+  if (links.length) s.solver = { ...(s.solver ?? {}), links: [...((s.solver?.links as KeyframeLink[] | undefined) ?? []), ...links] };
+  return s;
+}
+
 // Keeps the topology between key frames (or not): with `on`, the spacetime generator
 // matches the singularities of consecutive key frames and carries them (solver
 // "keyframe_topology": "matched"); off, the solve alone (the paper's behaviour).

@@ -242,4 +242,32 @@ describe("topology between key frames", () => {
     expect(gone.keyframes?.length).toBe(1);
     expect(gone.solver).toBeUndefined();
   });
+
+  it("inserts the key frame the engine offers, each link kept through it", () => {
+    // The source linked crosswise (0,0) → (1,1); the center matched by the engine alone.
+    const s = linkKeyframeElements(two(), kf(0, 0), kf(1, 1));
+    const offered = {
+      t: 0.5050505050505051,
+      elements: [
+        { kind: "singular" as const, type: "source", at: [0.1, -0.3] },
+        { kind: "singular" as const, type: "ccw_center", at: [-0.1, 0.3] },
+      ],
+    };
+    const m = S.insertMiddleKeyframe(s, 0, offered, [0, 1], [1, 0]);
+    expect(m.keyframes?.map((k) => k.t)).toEqual([0, 0.5050505050505051, 1]);
+    expect(m.keyframes?.[1]).toEqual(offered);
+    expect(m.solver?.keyframe_topology).toBe("matched");
+    // The link goes on through the new key frame's source; the center had none.
+    expect(keyframeLinks(m)).toEqual([
+      { from: [0, 0], to: [1, 0] },
+      { from: [1, 0], to: [2, 1] },
+    ]);
+    // Without links none is made; the scene given is left as it was.
+    const plain = S.insertMiddleKeyframe(setKeyframeTopology(two(), true), 0, offered, [0, 1], [1, 0]);
+    expect(keyframeLinks(plain)).toEqual([]);
+    expect(s.keyframes?.length).toBe(2);
+    // No room (a key frame already at that frame, or none after the one named): refused.
+    expect(() => S.insertMiddleKeyframe(m, 0, offered, [0, 1], [1, 0])).toThrow(/the key frames changed/);
+    expect(() => S.insertMiddleKeyframe(s, 1, offered, [0, 1], [1, 0])).toThrow(/the key frames changed/);
+  });
 });

@@ -165,6 +165,19 @@ struct KeyframeIntervalReport {
     double face_edges = 0;
   };
   std::optional<WrongFrame> first_wrong;
+  // Where the guide leaves a node turning a whole turn (a Match with phase_turns ≠ 0): a
+  // key frame at the frame nearest the interval's middle holding each singular
+  // element of the first key frame where the plan carries it then, as it was designed, which
+  // holds the nodes to their types (the sphere's knot of example 26: its source a source in
+  // every frame, no warning). Offered where both key frames hold singular elements alone,
+  // each carried, and the interval creates and cancels no pair. `from[i]`, `to[i]`: the
+  // indices in the first and the second key frame of the element keyframe.elements[i] is
+  // carried from and to (so that a client inserting it can keep a link through it).
+  struct MiddleKeyframe {
+    Keyframe keyframe;
+    std::vector<int> from, to;
+  };
+  std::optional<MiddleKeyframe> middle_keyframe;
 };
 
 // Step 2's and 4's matching of two consecutive key frames' singularities (A: the first's,
@@ -239,12 +252,17 @@ private:
 // the interval left free), "unguided_reason" (when not guided), "first_wrong": {"t",
 // "found", "planned", "extra", "type", "at", "distance", "nearest_type" (the last two when
 // the other side holds any), "face_edges"} (when the guide's check turned it down),
-// "unpaired": [[x, y, z], ...]} per interval.
+// "middle_keyframe": {"keyframe" (a key frame in the scene's form, DESIGN §10), "from",
+// "to"} (where one is offered), "unpaired": [[x, y, z], ...]} per interval.
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals);
 
 // An interval's "first_wrong" object (the same in keyframe_topology.json and the server's
 // status).
 nlohmann::json wrong_frame_json(const KeyframeIntervalReport::WrongFrame& w);
+// An interval's "middle_keyframe" object (the same in keyframe_topology.json and the
+// server's status). Only surfaces have one (the planar guide holds every node to its
+// type), so its points are [x, y, z].
+nlohmann::json middle_keyframe_json(const KeyframeIntervalReport::MiddleKeyframe& m);
 
 // The intervals back from keyframe_topology.json ({"intervals": keyframe_intervals_json}),
 // as the design check uses them (what was matched, created and cancelled, guided or left

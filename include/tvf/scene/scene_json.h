@@ -30,5 +30,8 @@ void save_scene(const Scene& scene, const std::string& path);
 // keys in the order of DESIGN §10 and short arrays and objects (points, matrices,
 // transform keys) kept on one line. Ends with a newline.
 std::string scene_to_text(const Scene& scene);
+// One key frame as the scene file holds it ({"t", "elements", "streamlines"} or {"t",
+// "field"}); `planar`: points written [x, y].
+nlohmann::json keyframe_to_json(const Keyframe& keyframe, bool planar);
 
 }  // namespace tvf
