@@ -127,20 +127,26 @@ try {
   check(offered && offered.keyframe.elements.length === 2, `the status offers a key frame: ${JSON.stringify(offered)}`);
   const add = page.locator("#keyframe-report button.add-middle-keyframe");
   check((await add.count()) === 1, "the line has \"add this key frame\"");
-  const added = await d.change(() => add.click());
-  const withMiddle = (await d.scene()).scene;
-  check(withMiddle.keyframes.length === 3 && Math.abs(withMiddle.keyframes[1].t - offered.keyframe.t) < 1e-12, "the key frame is inserted");
-  const throughLinks = JSON.stringify(withMiddle.solver?.links);
-  check(
-    throughLinks === JSON.stringify([{ from: [0, 0], to: [1, 0] }, { from: [1, 0], to: [2, 1] }, { from: [0, 1], to: [1, 1] }, { from: [1, 1], to: [2, 0] }]),
-    `both links kept through it (${throughLinks})`,
-  );
-  const addedReport = await page.textContent("#keyframe-report");
-  const addedWarnings = (await page.locator("#warnings").isVisible()) ? await page.textContent("#warnings") : "";
-  console.log(`added the offered key frame: ${addedReport}`);
-  check(added.keyframe_intervals?.length === 2 && added.keyframe_intervals.every((i) => i.guided && !i.turning), "both intervals guided, no node turning");
-  check(!addedReport.includes("turning") && addedWarnings === "", `no node turns, no warning (${addedWarnings})`);
-  await d.shot(a.out, "keyframe_topology_sphere_added_keyframe.png");
+  // Under the sanitizers (--no-added-solve) it is not clicked: the three-key-frame sphere's
+  // solve takes 2.5 minutes there (6 s in a release build) and holds the next scene's back
+  // (a plan under way is not stopped half-way). The engine's side runs under them in the CLI
+  // test Example26KnotOnASphereIsGuided, the insertion in the web unit tests.
+  if (!process.argv.includes("--no-added-solve")) {
+    const added = await d.change(() => add.click(), 300000);
+    const withMiddle = (await d.scene()).scene;
+    check(withMiddle.keyframes.length === 3 && Math.abs(withMiddle.keyframes[1].t - offered.keyframe.t) < 1e-12, "the key frame is inserted");
+    const throughLinks = JSON.stringify(withMiddle.solver?.links);
+    check(
+      throughLinks === JSON.stringify([{ from: [0, 0], to: [1, 0] }, { from: [1, 0], to: [2, 1] }, { from: [0, 1], to: [1, 1] }, { from: [1, 1], to: [2, 0] }]),
+      `both links kept through it (${throughLinks})`,
+    );
+    const addedReport = await page.textContent("#keyframe-report");
+    const addedWarnings = (await page.locator("#warnings").isVisible()) ? await page.textContent("#warnings") : "";
+    console.log(`added the offered key frame: ${addedReport}`);
+    check(added.keyframe_intervals?.length === 2 && added.keyframe_intervals.every((i) => i.guided && !i.turning), "both intervals guided, no node turning");
+    check(!addedReport.includes("turning") && addedWarnings === "", `no node turns, no warning (${addedWarnings})`);
+    await d.shot(a.out, "keyframe_topology_sphere_added_keyframe.png");
+  }
   const example = (name) => JSON.parse(readFileSync(new URL(`../../examples/26_keyframe_topology/${name}`, import.meta.url), "utf8"));
   await d.applyScene(example("knot_sphere_middle.json"));
   const middle = await page.textContent("#keyframe-report");
