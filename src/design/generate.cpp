@@ -492,11 +492,12 @@ std::vector<cplx> cached_keyframe_field(const DesignSpace& space, const Scene& s
 // The space-time system's constraints frame by frame: key frames (whole frames held
 // fixed), then at every other frame the elements' regions, the matched topology's moving
 // constraints and the streaklines. Built once (the key frames' fields, the plan), then
-// frame(j) is safe to call from several threads.
+// frame(j) is safe to call from several threads. options.cancel stops the building (the
+// key frames' solves, the plan) as it stops the solve.
 class SpaceTimeConstraints {
 public:
   SpaceTimeConstraints(const DesignSpace& space, const Scene& scene, const ConnectionLaplacian& laplacian,
-                       std::vector<KeyframeIntervalReport>* intervals, GenerateCache* cache = nullptr)
+                       std::vector<KeyframeIntervalReport>* intervals, const GenerateOptions& options)
       : space_(space), scene_(scene), key_of_(static_cast<size_t>(scene.time.frames), -1),
         elements_(compile(scene)), d_(scene.falloff / (space.diameter() * space.diameter())),
         streaklines_(space, scene) {
@@ -508,12 +509,13 @@ public:
                                       "use more frames or move the key frame",
                                       scene.keyframes[k].t, j));
       key_of_[j] = static_cast<int>(k);
-      key_fields_.push_back(cached_keyframe_field(space, scene, k, laplacian, cache));
+      check_cancelled(options);
+      key_fields_.push_back(cached_keyframe_field(space, scene, k, laplacian, options.cache));
     }
     // Topology kept between key frames (keyframe_topology.h): moving constraints and
     // templates, added at every other frame.
     if (scene.solver.keyframe_topology == KeyframeTopology::matched) {
-      plan_.emplace(space, scene, key_fields_);
+      plan_.emplace(space, scene, key_fields_, [&options] { check_cancelled(options); });
       if (intervals) *intervals = plan_->intervals();
     }
   }
@@ -551,7 +553,7 @@ void spacetime_constraints(const DesignSpace& space, const Scene& scene, const C
                            std::vector<KeyframeIntervalReport>* intervals) {
   const auto n = static_cast<size_t>(space.mesh().num_vertices());
   const auto frames = static_cast<size_t>(scene.time.frames);
-  const SpaceTimeConstraints constraints(space, scene, laplacian, intervals, options.cache);
+  const SpaceTimeConstraints constraints(space, scene, laplacian, intervals, options);
   fixed.assign(n * frames, 0);
   values.assign(n * frames, cplx(0, 0));
   GenerateOptions quiet = options;
@@ -636,7 +638,7 @@ Field generate_spacetime_shares(const DesignSpace& space, const Scene& scene, co
   const auto n = static_cast<size_t>(nv);
   const auto nf = static_cast<size_t>(scene.time.frames);
   std::vector<KeyframeIntervalReport> intervals;
-  const SpaceTimeConstraints constraints(space, scene, laplacian, &intervals);
+  const SpaceTimeConstraints constraints(space, scene, laplacian, &intervals, options);
   VertexShares shares = petsc_vertex_shares(laplacian);
   const size_t nl = shares.owned.size();
   const auto ranks = static_cast<size_t>(shares.ranks), rank = static_cast<size_t>(shares.rank);

@@ -2118,10 +2118,11 @@ std::string wrong_frame_sentence(const KeyframeIntervalReport::WrongFrame& w) {
 // which differ in the phase correction alone, and the faces' curvature once per interval.
 class PhaseCheck {
  public:
+  // checkpoint: the plan's (called before each frame is made; may throw to stop).
   PhaseCheck(const DesignSpace& space, const std::vector<Track>& tracks, size_t matched,
-             std::span<const double> times)
+             std::span<const double> times, const std::function<void()>& checkpoint)
       : space_(space), tracks_(tracks), matched_(matched), times_(times.begin(), times.end()),
-        curvature_(face_curvatures(space.bundle())) {
+        curvature_(face_curvatures(space.bundle())), checkpoint_(checkpoint) {
     const Mesh& mesh = space.mesh();
     nbr_.resize(static_cast<size_t>(mesh.num_vertices()));
     for (int e = 0; e < mesh.num_halfedges(); ++e) {
@@ -2379,6 +2380,7 @@ class PhaseCheck {
     for (size_t i = 0; i < times_.size(); ++i) {
       const double t = times_[i];
       if (!(t > guide.t0 && t < guide.t1)) continue;
+      if (checkpoint_) checkpoint_();
       frame_logs(g, i, nv, l);
       fixed.assign(nv, 0);
       values.assign(nv, cplx(0, 0));
@@ -2416,6 +2418,7 @@ class PhaseCheck {
   // A choice's frame i as counted: G at every vertex it fixes, the others their fixed
   // neighbours' mean.
   void frame_values(const SurfaceGuide& g, const SurfaceGuide& guide, size_t i, std::span<cplx> values) const {
+    if (checkpoint_) checkpoint_();
     const TangentBundle& bundle = space_.bundle();
     const auto nv = static_cast<size_t>(space_.mesh().num_vertices());
     std::vector<cplx> l;
@@ -2458,6 +2461,7 @@ class PhaseCheck {
   std::vector<double> curvature_;
   std::vector<std::vector<size_t>> nbr_;
   std::vector<size_t> order_;  // the frames' order of counting: from both ends inwards
+  const std::function<void()>& checkpoint_;
 };
 
 // The shortest path on a surface from p to q (points on it), as a curve on the surface:
@@ -2602,8 +2606,10 @@ public:
 
   // keyframe_times: the scene's key frames' times (where the paths' ends are the key
   // frames' singularities; required() never asks a pair for more than those hold it).
-  PathRouter(const DesignSpace& space, double separation, std::vector<double> keyframe_times)
-      : space_(space), separation_(separation), keyframe_times_(std::move(keyframe_times)) {
+  // checkpoint: the plan's (called each round; may throw to stop).
+  PathRouter(const DesignSpace& space, double separation, std::vector<double> keyframe_times,
+             const std::function<void()>& checkpoint)
+      : space_(space), separation_(separation), keyframe_times_(std::move(keyframe_times)), checkpoint_(checkpoint) {
     const Mesh& mesh = space.mesh();
     for (int h = 0; h < mesh.num_halfedges(); ++h)
       if (mesh.is_boundary_halfedge(h)) boundary_.emplace_back(mesh.position(mesh.tail(h)), mesh.position(mesh.head(h)));
@@ -2890,6 +2896,7 @@ public:
     std::vector<char> changed(n, 1);
     std::vector<std::optional<Approach>> approaches(n * n);
     for (int round = 0;; ++round) {
+      if (checkpoint_) checkpoint_();
       for (size_t i = first; i < last; ++i) {
         if (!changed[i - first]) continue;
         coarse[i - first].clear();
@@ -3100,6 +3107,7 @@ public:
       if (items[i].index > 0) plus.push_back(i);
     // Residuals and their Jacobian (sparse rows: the variables of at most two tracks).
     auto evaluate = [&](const Eigen::VectorXd& x, double target, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) {
+      if (checkpoint_) checkpoint_();
       std::vector<Track> cur = items;
       apply(x, cur);
       std::vector<std::vector<Vec3>> pos(m, std::vector<Vec3>(kSamples + 1, Vec3::Zero()));
@@ -3608,6 +3616,7 @@ private:
   const DesignSpace& space_;
   double separation_;
   std::vector<double> keyframe_times_;
+  const std::function<void()>& checkpoint_;
   mutable std::vector<double> caps_;  // set_caps(): caps_[i * caps_n_ + j] for slots i, j
   mutable size_t caps_n_ = 0;
   std::vector<std::pair<Vec3, Vec3>> boundary_;
@@ -3757,7 +3766,8 @@ KeyframeMatch match_keyframe_singularities(std::span<const Singularity> A, std::
 }
 
 KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene& scene,
-                                           const std::vector<std::vector<cplx>>& keyframe_fields) {
+                                           const std::vector<std::vector<cplx>>& keyframe_fields,
+                                           const std::function<void()>& checkpoint) {
   const TangentBundle& bundle = space.bundle();
   const Mesh& mesh = space.mesh();
   const double h = mesh.mean_edge_length();
@@ -3835,7 +3845,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   // How far a node that changes stability may be carried (the last resort below): a
   // quarter of the domain's diameter, at least the separation.
   const double stability_reach = std::max(0.25 * space.diameter(), separation);
-  const PathRouter router(space, separation, keyframe_times);
+  const PathRouter router(space, separation, keyframe_times, checkpoint);
   // The matching rules of the interval from key frame k to k + 1 (the links checked).
   auto interval_rules = [&](size_t k) {
     KeyframeMatchRules rules;
@@ -3945,6 +3955,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
     };
     std::optional<Unguided> unguided;
     for (int attempt = 0; attempt < 2; ++attempt) {
+      if (checkpoint) checkpoint();
       Guide guide;
       std::vector<Track> obstacles;  // the interval's templates, for the router
       const std::vector<Singularity>& A = sing[k];
@@ -4194,11 +4205,12 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         for (const double t : scene.time.times())
           if (t > rep.t0 && t < rep.t1) frame_times.push_back(t);
         const size_t inner_frames = frame_times.size();
-        const PhaseCheck check(space, tracks_, rep.matched.size(), frame_times);
+        const PhaseCheck check(space, tracks_, rep.matched.size(), frame_times, checkpoint);
         std::vector<PhaseCheck::Trial> failed;  // counted on only when no guide is kept
         TubeCache tubes;
         for (const auto& [ramp, shaped] :
              {std::pair{1.0, false}, std::pair{2.0, false}, std::pair{1.0, true}, std::pair{2.0, true}}) {
+          if (checkpoint) checkpoint();
           SurfaceGuide sg;
           sg.t0 = rep.t0;
           sg.t1 = rep.t1;

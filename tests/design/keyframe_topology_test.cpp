@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <regex>
 #include <string>
@@ -1063,14 +1064,43 @@ struct Planned {
   std::unique_ptr<DesignSpace> space;
   std::unique_ptr<KeyframeTopologyPlan> plan;
 };
-Planned plan_of(const std::string& text) {
+Planned plan_of(const std::string& text, const std::function<void()>& checkpoint = {}) {
   Planned p{parse_scene(text, "s"), nullptr, nullptr};
   p.space = make_design_space(p.scene);
   const ConnectionLaplacian lap = connection_laplacian(p.space->bundle(), LaplacianWeights::cotan);
   std::vector<std::vector<cplx>> keys;
   for (size_t k = 0; k < p.scene.keyframes.size(); ++k) keys.push_back(keyframe_field(*p.space, p.scene, k, lap));
-  p.plan = std::make_unique<KeyframeTopologyPlan>(*p.space, p.scene, keys);
+  p.plan = std::make_unique<KeyframeTopologyPlan>(*p.space, p.scene, keys, checkpoint);
   return p;
+}
+
+// The plan calls its checkpoint between its steps, also inside the router and the surface
+// guide's check (a frame counted, a joint-routing evaluation), and a checkpoint that throws
+// stops it there: generation passes its cancellation check, so the designer's newer scene
+// does not wait for a plan it made pointless (CGAL's man knot: its plan ran 11 s to its
+// end; now stopped within 0.35 s of the newest call, docs/benchmarks.md). The checkpoint
+// changes nothing of the plan. The knot of AKnotOnASphereIsGuided (subdivisions 3).
+TEST(KeyframeTopology, ThePlanStopsAtItsCheckpoint) {
+  const double z = std::sqrt(0.75);
+  const std::string text =
+      surface_knot(R"({"sphere": {"subdivisions": 3, "radius": 1}})", Vec3(-0.5, 0, z), Vec3(0.5, 0, z), 0.15, 8);
+  const Planned plain = plan_of(text);
+  ASSERT_TRUE(plain.plan->intervals().at(0).guided);
+  int calls = 0;
+  const Planned counted = plan_of(text, [&] { ++calls; });
+  EXPECT_EQ(keyframe_intervals_json(counted.plan->intervals()), keyframe_intervals_json(plain.plan->intervals()));
+  // At least once a frame the surface guide's check makes (the 30 between the key frames).
+  EXPECT_GE(calls, 30);
+  struct Stop {};
+  for (const int at : {1, calls / 2, calls}) {
+    int seen = 0;
+    EXPECT_THROW(plan_of(text, [&] {
+                   if (++seen == at) throw Stop{};
+                 }),
+                 Stop)
+        << "call " << at << " of " << calls;
+    EXPECT_EQ(seen, at);
+  }
 }
 
 // The knot on CGAL's cow (bench/keyframe_topology_meshes.py's scene): the static solves put

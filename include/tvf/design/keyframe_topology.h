@@ -79,6 +79,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <limits>
 #include <optional>
 #include <span>
@@ -215,9 +216,13 @@ class KeyframeTopologyPlan {
 public:
   // keyframe_fields[k]: the field of scene.keyframes[k] (|V|, vertex bases). Throws
   // tvf::Error naming solver.links[i] when a linked element has no singularity of the
-  // key frame's field near it.
+  // key frame's field near it. checkpoint, when set, is called between the plan's steps
+  // (each interval, each routing round, each guide frame counted: well under a second
+  // apart) and may throw to stop it: generation passes its cancellation check, so that a
+  // newer scene in the designer does not wait for a plan it has made pointless.
   KeyframeTopologyPlan(const DesignSpace& space, const Scene& scene,
-                       const std::vector<std::vector<cplx>>& keyframe_fields);
+                       const std::vector<std::vector<cplx>>& keyframe_fields,
+                       const std::function<void()>& checkpoint = {});
 
   // Adds the plan's constraints at time t (a frame that is not a key frame) to a frame's
   // fixed set and values, as constrain_elements does: d is the falloff's d.
