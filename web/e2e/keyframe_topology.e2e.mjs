@@ -186,18 +186,15 @@ try {
   const ringPixels = () =>
     page.evaluate(async (p) => {
       await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
-      const gl = document.querySelector("#surface canvas");
-      const c = document.createElement("canvas");
-      c.width = gl.width;
-      c.height = gl.height;
-      const g = c.getContext("2d");
-      g.drawImage(gl, 0, 0);
-      const s = gl.width / gl.clientWidth;
-      const [x, y] = window.tvf.surface(p).map((v) => Math.round(v * s));
-      const half = Math.round(40 * s);
-      const px = g.getImageData(x - half, y - half, 2 * half, 2 * half).data;
+      const { data, width, height, scale } = window.tvf.pixels();
+      const [x, y] = window.tvf.surface(p).map((v) => Math.round(v * scale));
+      const half = Math.round(40 * scale);
       let n = 0;
-      for (let i = 0; i < px.length; i += 4) if (Math.abs(px[i] - 6) < 30 && Math.abs(px[i + 1] - 182) < 30 && Math.abs(px[i + 2] - 212) < 30) ++n;
+      for (let v = Math.max(0, y - half); v < Math.min(height, y + half); ++v)
+        for (let u = Math.max(0, x - half); u < Math.min(width, x + half); ++u) {
+          const i = 4 * (v * width + u);
+          if (Math.abs(data[i] - 6) < 30 && Math.abs(data[i + 1] - 182) < 30 && Math.abs(data[i + 2] - 212) < 30) ++n;
+        }
       return n;
     }, w.at);
   const before = await ringPixels();

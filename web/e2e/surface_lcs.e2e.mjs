@@ -116,16 +116,10 @@ function surfaceHelpers(page) {
   const pixels = (points) =>
     page.evaluate(async (pts) => {
       await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
-      const gl = document.querySelector("#surface canvas");
-      const c = document.createElement("canvas");
-      c.width = gl.width;
-      c.height = gl.height;
-      const g = c.getContext("2d");
-      g.drawImage(gl, 0, 0);
-      const s = gl.width / gl.clientWidth;
+      const { data, width, scale } = window.tvf.pixels();
       return pts.map((p) => {
-        const [x, y] = window.tvf.surface(p);
-        return Array.from(g.getImageData(Math.round(x * s), Math.round(y * s), 1, 1).data.slice(0, 3));
+        const [x, y] = window.tvf.surface(p).map((v) => Math.round(v * scale));
+        return Array.from(data.slice(4 * (y * width + x), 4 * (y * width + x) + 3));
       });
     }, points);
   const visible = (points) => page.evaluate((pts) => pts.map((p) => window.tvf.surfaceVisible(p)), points);

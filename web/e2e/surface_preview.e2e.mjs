@@ -53,18 +53,13 @@ try {
   const motion = (p, r = 36, warm = 40, planar = false) =>
     page.evaluate(
       ([q, radius, n, flat, count]) => {
-        const gl = document.querySelector(flat ? "#field" : "#surface canvas");
         const grab = () => {
-          const c = document.createElement("canvas");
-          c.width = gl.width;
-          c.height = gl.height;
-          const x = c.getContext("2d");
-          x.drawImage(gl, 0, 0);
-          const px = x.getImageData(0, 0, c.width, c.height).data;
-          const g = new Float32Array(c.width * c.height);
-          for (let k = 0; k < g.length; ++k) g[k] = px[4 * k];
+          const { data } = window.tvf.pixels(flat ? "field" : "surface");
+          const g = new Float32Array(data.length / 4);
+          for (let k = 0; k < g.length; ++k) g[k] = data[4 * k];
           return g;
         };
+        const gl = document.querySelector(flat ? "#field" : "#surface canvas");
         window.tvf.preview.step(n);
         const [cx, cy] = flat ? window.tvf.view().toCanvas(q) : window.tvf.surface(q).map((v) => (v * gl.width) / gl.clientWidth);
         const sum = { radial: 0, tangential: 0, used: 16 };
@@ -202,16 +197,10 @@ try {
   const probe = [at, greatCircle(at, [0, 0, 1], 0.25), greatCircle(at, [1, 0, 0], 0.25), greatCircle(at, [-1, 0, 0], 0.2)];
   const picture = (pts) =>
     page.evaluate((q) => {
-      const gl = document.querySelector("#surface canvas");
-      const c = document.createElement("canvas");
-      c.width = gl.width;
-      c.height = gl.height;
-      const x = c.getContext("2d");
-      x.drawImage(gl, 0, 0);
-      const px = x.getImageData(0, 0, c.width, c.height).data;
+      const { data, width, scale } = window.tvf.pixels();
       const g = [];
-      for (let k = 0; k < c.width * c.height; ++k) g.push(px[4 * k]);
-      return { g, w: c.width, at: q.map((p) => window.tvf.surface(p).map((v) => Math.round((v * gl.width) / gl.clientWidth))) };
+      for (let k = 0; k < data.length / 4; ++k) g.push(data[4 * k]);
+      return { g, w: width, at: q.map((p) => window.tvf.surface(p).map((v) => Math.round(v * scale))) };
     }, pts);
   const ncc = (A, pa, B, pb, half = 12) => {
     const xs = [];

@@ -1418,6 +1418,20 @@ document.addEventListener("keydown", (e) => {
     step: (n: number) => ticker.step(n),
   },
   ringMotion,
+  // A copy of a view's picture as it is now: RGBA in device pixels, and device pixels per
+  // CSS pixel (surface() and view().toCanvas() give CSS pixels). The tests read colours
+  // at points with it (the surface's renderer keeps its drawing buffer, so it can be read
+  // between animation frames).
+  pixels: (which: "surface" | "field" = "surface") => {
+    const source = which === "surface" ? document.querySelector<HTMLCanvasElement>("#surface canvas") : canvas;
+    if (!source) return undefined;
+    const copy = document.createElement("canvas");
+    copy.width = source.width;
+    copy.height = source.height;
+    const g = copy.getContext("2d")!;
+    g.drawImage(source, 0, 0);
+    return { data: g.getImageData(0, 0, copy.width, copy.height).data, width: copy.width, height: copy.height, scale: source.width / source.clientWidth };
+  },
   timestrip: (i: number) => strip.bifurcationAt(i),
   lcs,
 };
