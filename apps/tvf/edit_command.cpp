@@ -133,6 +133,7 @@ int run_edit(const EditArgs& args) {
   Design design(std::move(scene));
   GenerateOptions options;
   options.progress = [&](int done, int total) { progress.update(done, total); };
+  options.stage = [&](const std::string& what) { progress.note(what); };
   progress.note("generating, then applying the edit");
   const EditReport report = design.edit(requested_edit(args, design.scene()), options);
   progress.note("writing " + args.scene);

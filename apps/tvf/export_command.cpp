@@ -30,6 +30,7 @@ int run_export(const ExportArgs& args) {
   Design design = Design::open(args.input);
   GenerateOptions options;
   options.progress = [&](int done, int total) { progress.update(done, total); };
+  options.stage = [&](const std::string& what) { progress.note(what); };
   if (!design.has_field()) progress.note("generating");
   const Field& field = design.generate(options);
   const TangentBundle& bundle = design.field_space()->bundle();

@@ -67,6 +67,7 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
 
   GenerateOptions options;
   options.progress = [&](int done, int total) { progress.update(done, total); };
+  options.stage = [&](const std::string& what) { progress.note(what); };
   const Field& field = design.generate(options);
   const GenerateReport& report = design.report();
 
@@ -175,6 +176,7 @@ int run_analyze(const AnalyzeArgs& args) {
     design.space();
     GenerateOptions options;
     options.progress = [&](int done, int total) { progress.update(done, total); };
+    options.stage = [&](const std::string& what) { progress.note(what); };
     design.generate(options);
   }
   const std::vector<std::string>& warnings = design.report().warnings;

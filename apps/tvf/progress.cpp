@@ -23,7 +23,7 @@ void Progress::update(int done, int total) {
   const auto now = std::chrono::steady_clock::now();
   if (done < total && now - last_ < std::chrono::milliseconds(100)) return;
   last_ = now;
-  std::fprintf(stderr, "\r%s: %d/%d frames", label_.c_str(), done, total);
+  std::fprintf(stderr, "\r\033[K%s: %d/%d frames", label_.c_str(), done, total);
   std::fflush(stderr);
   open_ = true;
 }

@@ -22,6 +22,7 @@ RenderInput load_render_input(const std::string& input_name, Progress& progress,
     if (!design.space().planar() && !surfaces) throw Error(fmt::format("{}: {}", input_name, surface_note));
     GenerateOptions gen;
     gen.progress = [&](int done, int total) { progress.update(done, total); };
+    gen.stage = [&](const std::string& what) { progress.note(what); };
     design.generate(gen);
     warnings = design.report().warnings;
   }

@@ -515,7 +515,12 @@ public:
     // Topology kept between key frames (keyframe_topology.h): moving constraints and
     // templates, added at every other frame.
     if (scene.solver.keyframe_topology == KeyframeTopology::matched) {
-      plan_.emplace(space, scene, key_fields_, [&options] { check_cancelled(options); });
+      plan_.emplace(
+          space, scene, key_fields_, [&options] { check_cancelled(options); },
+          [&options](size_t k, size_t n) {
+            if (options.stage)
+              options.stage(fmt::format("planning the topology between key frames (interval {} of {})", k + 1, n));
+          });
       if (intervals) *intervals = plan_->intervals();
     }
   }

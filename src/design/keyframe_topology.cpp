@@ -3767,7 +3767,8 @@ KeyframeMatch match_keyframe_singularities(std::span<const Singularity> A, std::
 
 KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene& scene,
                                            const std::vector<std::vector<cplx>>& keyframe_fields,
-                                           const std::function<void()>& checkpoint) {
+                                           const std::function<void()>& checkpoint,
+                                           const std::function<void(size_t k, size_t n)>& on_interval) {
   const TangentBundle& bundle = space.bundle();
   const Mesh& mesh = space.mesh();
   const double h = mesh.mean_edge_length();
@@ -3937,6 +3938,7 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
   int groups = 0;
   size_t previous_first = 0;  // the previous interval's first track
   for (size_t k = 0; k + 1 < nk; ++k) {
+    if (on_interval) on_interval(k, nk - 1);
     const size_t first_track = tracks_.size();
     const size_t first_template = templates_.size();
     const int first_group = groups;

@@ -181,6 +181,9 @@ struct Session::State {
   std::string state = "running";
   std::string error;
   int done = 0, total = 0;
+  // The running solve's step that no frame count measures (GenerateOptions::stage), until
+  // its frames' progress starts; empty otherwise.
+  std::string stage;
   long long cancelled = 0;  // solves stopped because a newer change came
   bool solving = false;     // the worker runs a solve (the analysis thread waits meanwhile)
   std::shared_ptr<const Result> result;
@@ -292,6 +295,7 @@ struct Session::State {
     error.clear();
     done = 0;
     total = design->scene().time.frames;
+    stage.clear();
     work.notify_one();
     touch();
   }
@@ -311,6 +315,7 @@ struct Session::State {
       next_job.reset();
       done = 0;  // this job's progress from here (a status never shows the last job's)
       total = job.scene().time.frames;
+      stage.clear();
       const int first_frame = focus_frame;
       auto flag = std::make_shared<std::atomic<bool>>(false);
       cancel = flag;
@@ -347,6 +352,11 @@ struct Session::State {
           std::lock_guard progress_lock(mutex);
           done = d;
           total = t;
+          stage.clear();
+        };
+        go.stage = [this](const std::string& what) {
+          std::lock_guard stage_lock(mutex);
+          stage = what;
         };
         job.run(go, false);  // the field only: the analysis thread follows
       } catch (const GenerationCancelled&) {
@@ -673,6 +683,7 @@ json Session::put_scene(const json& j, long long on_revision) {
   if (s_->next_job) {  // the worker has not taken the new scene's solve yet: nothing done
     s_->done = 0;
     s_->total = s_->design->scene().time.frames;
+    s_->stage.clear();
   }
   if (s_->held_preview && s_->held_preview->revision == s_->design->revision()) s_->preview = std::move(s_->held_preview);
   s_->held_preview.reset();
@@ -771,6 +782,7 @@ json Session::status() const {
             {"error", s_->error},
             {"cancelled", s_->cancelled},
             {"analyses_stopped", s_->analyses_stopped}};
+  if (!s_->stage.empty() && s_->state == "running") j["stage"] = s_->stage;
   if (s_->result) {
     const Result& r = *s_->result;
     j["warnings"] = r.made->report.warnings;

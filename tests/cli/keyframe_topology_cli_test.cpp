@@ -151,6 +151,25 @@ TEST(CliKeyframeTopology, Example26ReportsItsIntervalAndTheAnalysisAgrees) {
 // Example 26's crossing.json: a source and a sink trading places. `tvf generate` says it
 // bent both paths, keyframe_topology.json gives their detours and closest approach, and
 // the analysis finds the two paths alone, kept apart at every frame.
+// On a terminal (TVF_PROGRESS=1 stands for one) the progress line says when the key-frame
+// topology is being planned, before the frames' count starts (a plan takes seconds on a
+// scanned mesh), each step rewriting the line whole; in a pipeline nothing of it.
+TEST(CliKeyframeTopology, TheProgressLineSaysWhenTheTopologyIsPlanned) {
+  test::TempDir dir;
+  const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/scene.json";
+  const auto args = " generate " + test::quoted(scene) + " -o " + test::quoted(dir / "out") + " --no-vtk";
+  const auto shown = test::run_command("TVF_PROGRESS=1 " + test::quoted(test::cli_path()) + args);
+  ASSERT_EQ(shown.exit_code, 0) << shown.output;
+  const size_t planning = shown.output.find("\r\033[Ktvf generate: planning the topology between key frames (interval 1 of 1)");
+  const size_t frames = shown.output.find("\r\033[Ktvf generate: 60/60 frames");
+  EXPECT_NE(planning, std::string::npos) << shown.output;
+  EXPECT_NE(frames, std::string::npos) << shown.output;
+  EXPECT_LT(planning, frames);
+  const auto piped = test::run_command("TVF_PROGRESS=0 " + test::quoted(test::cli_path()) + args);
+  ASSERT_EQ(piped.exit_code, 0) << piped.output;
+  EXPECT_EQ(piped.output.find("planning the topology"), std::string::npos) << piped.output;
+}
+
 TEST(CliKeyframeTopology, Example26CrossingPathsAreBentApart) {
   test::TempDir dir;
   const std::string scene = test::source_dir() + "/examples/26_keyframe_topology/crossing.json";

@@ -1667,6 +1667,32 @@ std::string corner_scene(int n, const std::string& last) {
                             {"kind": "singular", "type": "sink", "at": [0.6, 0.6]}]}]})";
 }
 
+// Generation says what it does before the frames' progress starts: each interval of the
+// key-frame topology plan, in order (a terminal's progress line and the designer's status
+// show it), then the frames.
+TEST(KeyframeTopology, GenerationSaysWhichIntervalItPlans) {
+  const Scene s = parse_scene(corner_scene(17, "[0.6, -0.4]"), "scene.json");
+  const std::unique_ptr<DesignSpace> space = make_design_space(s);
+  std::vector<std::string> said;
+  GenerateOptions options;
+  options.parallel = false;
+  options.stage = [&](const std::string& what) { said.push_back(what); };
+  options.progress = [&](int done, int total) {
+    if (said.empty() || said.back().rfind("frames", 0) != 0) said.push_back(fmt::format("frames {}/{}", done, total));
+  };
+  generate(*space, s, options);
+  ASSERT_GE(said.size(), 3u);
+  EXPECT_EQ(said[0], "planning the topology between key frames (interval 1 of 2)");
+  EXPECT_EQ(said[1], "planning the topology between key frames (interval 2 of 2)");
+  EXPECT_EQ(said[2].rfind("frames ", 0), 0u) << said[2];
+  // Free (no plan): nothing but frames.
+  said.clear();
+  Scene free = s;
+  free.solver.keyframe_topology = KeyframeTopology::free;
+  generate(*space, free, options);
+  for (const std::string& w : said) EXPECT_EQ(w.rfind("frames ", 0), 0u) << w;
+}
+
 // The largest turn (degrees) between consecutive steps of the repelling node nearest the
 // previous frame's, over the frames, and the frames where it was not found within 0.1.
 std::pair<double, int> largest_step_turn(const Topology& topo, Vec3 at) {

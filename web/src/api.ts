@@ -117,6 +117,8 @@ export interface Status {
   result_revision: number;
   state: "running" | "ready" | "failed";
   progress: [number, number];
+  // While a solve runs a step no frame count measures (the key-frame topology plan).
+  stage?: string;
   error: string;
   warnings?: string[];
   method?: string;

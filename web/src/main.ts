@@ -316,7 +316,8 @@ async function showStatus(st: Status) {
   label.dataset.state = st.state;
   lastState = st.state;
   lastStatus = st;
-  if (st.state === "running") label.textContent = `rev ${st.revision} · solving ${st.progress[0]}/${st.progress[1]}…`;
+  if (st.state === "running")
+    label.textContent = `rev ${st.revision} · ${st.stage ?? `solving ${st.progress[0]}/${st.progress[1]}`}…`;
   else if (st.state === "failed") label.textContent = `rev ${st.revision} · failed: ${st.error}`;
   else label.textContent = `rev ${st.revision} · ready in ${(st.seconds ?? 0).toFixed(2)} s`;
   if (st.state !== "running") {

@@ -220,9 +220,12 @@ public:
   // (each interval, each routing round, each guide frame counted: well under a second
   // apart) and may throw to stop it: generation passes its cancellation check, so that a
   // newer scene in the designer does not wait for a plan it has made pointless.
+  // on_interval, when set, is called as the plan starts interval k of n (from key frame k
+  // to k + 1; n = key frames − 1): generation says so (GenerateOptions::stage).
   KeyframeTopologyPlan(const DesignSpace& space, const Scene& scene,
                        const std::vector<std::vector<cplx>>& keyframe_fields,
-                       const std::function<void()>& checkpoint = {});
+                       const std::function<void()>& checkpoint = {},
+                       const std::function<void(size_t k, size_t n)>& on_interval = {});
 
   // Adds the plan's constraints at time t (a frame that is not a key frame) to a frame's
   // fixed set and values, as constrain_elements does: d is the falloff's d.
