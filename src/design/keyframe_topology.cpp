@@ -2853,9 +2853,12 @@ public:
   // a template, all the interval's paths at once (joint()). When neither keeps them apart,
   // leaves the interval's paths straight and returns why, in one sentence naming `where`.
   // `how` says which routing held: "straight" (nothing came too close), "pairwise" or "joint".
+  // Null when the paths are kept apart; else why not, in one sentence, and `place` says where.
   std::optional<std::string> route(std::vector<Track>& tracks, size_t first, size_t last,
                                    const std::vector<Track>& obstacles, const Scene& scene, const std::string& where,
-                                   const std::string& interval, std::string& how) const {
+                                   const std::string& interval, std::string& how,
+                                   std::optional<KeyframeIntervalReport::Collision>& place) const {
+    place.reset();
     how = "straight";
     if (separation_ <= 0) return std::nullopt;
     set_caps(tracks, first, last);
@@ -2987,6 +2990,17 @@ public:
     std::copy(before.begin(), before.end(), tracks.begin() + static_cast<std::ptrdiff_t>(first));
     const bool planar = space_.planar();
     const double unit = space_.diameter();
+    {
+      const Approach& ap = why ? wap : oap;
+      KeyframeIntervalReport::Collision c;
+      c.t = ap.t;
+      c.points = {at(a, ap.t), at(b, ap.t)};
+      c.types = {a.type, b.type};
+      c.template_ = !why;
+      c.distance = ap.distance;
+      c.required = ap.required;
+      place = c;
+    }
     if (why) {
       // On a surface, where they pass on a part narrower than what they must keep, say so:
       // no separation that wide can be kept there, whatever the routing.
@@ -4126,7 +4140,8 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
           scene.solver.path_separation ? "solver.path_separation" : "solver.keyframe_topology";
       if (off_surface.empty()) {
         if (auto why = router.route(tracks_, first_track, tracks_.size(), obstacles, scene, where,
-                                    fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1), rep.routing))
+                                    fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1), rep.routing,
+                                    rep.collision_at))
           rep.collision = std::move(*why);
       }
       // Where paths were bent, each Jacobian turns with its neighbourhood.
@@ -4389,6 +4404,16 @@ nlohmann::json wrong_frame_json(const KeyframeIntervalReport::WrongFrame& w) {
   return out;
 }
 
+nlohmann::json collision_json(const KeyframeIntervalReport::Collision& c) {
+  auto xyz = [](const Vec3& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
+  return {{"t", c.t},
+          {"points", {xyz(c.points[0]), xyz(c.points[1])}},
+          {"types", {to_string(c.types[0]), to_string(c.types[1])}},
+          {"template", c.template_},
+          {"distance", c.distance},
+          {"required", c.required}};
+}
+
 nlohmann::json middle_keyframe_json(const KeyframeIntervalReport::MiddleKeyframe& m) {
   return {{"keyframe", keyframe_to_json(m.keyframe, false)}, {"from", m.from}, {"to", m.to}};
 }
@@ -4427,6 +4452,7 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
     j["separation"] = r.separation;
     if (std::isfinite(r.closest_approach)) j["closest_approach"] = r.closest_approach;
     if (!r.collision.empty()) j["collision"] = r.collision;
+    if (r.collision_at) j["collision_at"] = collision_json(*r.collision_at);
     j["routing"] = r.routing;
     j["guided"] = r.guided;
     j["fallback"] = r.fallback;
@@ -4480,6 +4506,17 @@ std::optional<std::vector<KeyframeIntervalReport>> keyframe_intervals_from_json(
       r.separation = j.at("separation").get<double>();
       if (j.contains("closest_approach")) r.closest_approach = j.at("closest_approach").get<double>();
       r.collision = j.value("collision", std::string());
+      if (j.contains("collision_at")) {
+        const json& ca = j.at("collision_at");
+        KeyframeIntervalReport::Collision col;
+        col.t = ca.at("t").get<double>();
+        col.points = {xyz(ca.at("points").at(0)), xyz(ca.at("points").at(1))};
+        col.types = {type(ca.at("types").at(0)), type(ca.at("types").at(1))};
+        col.template_ = ca.at("template").get<bool>();
+        col.distance = ca.at("distance").get<double>();
+        col.required = ca.at("required").get<double>();
+        r.collision_at = col;
+      }
       r.routing = j.at("routing").get<std::string>();
       r.guided = j.at("guided").get<bool>();
       r.fallback = j.value("fallback", false);

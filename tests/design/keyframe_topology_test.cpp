@@ -438,6 +438,22 @@ TEST(KeyframeTopology, CrossingPathsWithNoRoomAreReported) {
   EXPECT_NE(std::find(g.report.warnings.begin(), g.report.warnings.end(), r.collision), g.report.warnings.end());
   for (const auto& m : r.matched) EXPECT_EQ(m.detour, 0.0);
   EXPECT_EQ(keyframe_intervals_json(g.report.keyframe_intervals)[0]["collision"], r.collision);
+  // Where, as numbers (the designer's "show where"): the two at t = 0.5, both at the middle.
+  ASSERT_TRUE(r.collision_at.has_value());
+  const KeyframeIntervalReport::Collision& c = *r.collision_at;
+  EXPECT_DOUBLE_EQ(c.t, 0.5);
+  EXPECT_EQ(c.types[0], SingularityType::source);
+  EXPECT_EQ(c.types[1], SingularityType::sink);
+  EXPECT_FALSE(c.template_);
+  EXPECT_NEAR(c.distance, 0, 1e-12);
+  EXPECT_NEAR(c.required, 0.2, 1e-12);
+  for (const Vec3& p : c.points) EXPECT_LT(p.norm(), 1e-12);
+  EXPECT_NEAR((c.points[0] - c.points[1]).norm(), c.distance, 1e-12);
+  // Read back from keyframe_topology.json as written.
+  const auto back = keyframe_intervals_from_json({{"intervals", keyframe_intervals_json(g.report.keyframe_intervals)}});
+  ASSERT_TRUE(back.has_value());
+  ASSERT_TRUE(back->at(0).collision_at.has_value());
+  EXPECT_EQ(collision_json(*back->at(0).collision_at), collision_json(c));
 }
 
 // Three key frames, the middle one's elements linked both ways (a chain 0 → 1 → 2, the

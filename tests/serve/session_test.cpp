@@ -155,6 +155,36 @@ TEST(ServeSession, TheStatusSaysWhichIntervalLeavesANodeTurning) {
   EXPECT_EQ(middle.at("to"), json::parse("[0, 1]")) << middle;
 }
 
+// Two paths that cannot be kept apart (a source and a sink trading places on a sphere, asked
+// to keep 1.5 apart): the status's interval says where they meet (the designer's "show
+// where"), as keyframe_topology.json does.
+TEST(ServeSession, TheStatusSaysWherePathsCouldNotBeKeptApart) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.initial_scene = R"({"tvf": 1, "domain": {"sphere": {"subdivisions": 2, "radius": 1}},
+    "time": {"frames": 16, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.15, "keyframe_topology": "matched", "path_separation": 1.5},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0, 0.866]},
+                            {"kind": "singular", "type": "sink", "at": [0.5, 0, 0.866]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0, 0.866]},
+                            {"kind": "singular", "type": "sink", "at": [-0.5, 0, 0.866]}]}]})";
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(60));
+  const json st = s.status();
+  ASSERT_EQ(st["state"], "ready") << st;
+  const json& k = st.at("keyframe_intervals").at(0);
+  EXPECT_FALSE(k.at("guided").get<bool>()) << k;
+  ASSERT_TRUE(k.contains("collision_at")) << k;
+  const json& c = k["collision_at"];
+  EXPECT_EQ(c.at("t"), 0.5) << c;
+  EXPECT_EQ(c.at("types"), json::parse(R"(["source", "sink"])")) << c;
+  EXPECT_EQ(c.at("required"), 1.5) << c;
+  EXPECT_LT(c.at("distance").get<double>(), 0.1) << c;
+  // Both near the top of the sphere, where the straight paths cross.
+  for (const json& p : c.at("points")) EXPECT_GT(p.at(2).get<double>(), 0.99) << c;
+}
+
 // Issue 15: the field is published before its analysis, which follows on its own thread:
 // a frame read before the analysis has the same singularities (found for that frame alone,
 // "path" −1), the analysis then arrives for that revision, and the domain id stays while

@@ -183,7 +183,7 @@ try {
   const show = page.locator("#keyframe-report button.show-wrong");
   check((await show.textContent()) === "show where", "and offers to show where");
   // Pixels of the ring's colour (#06b6d4) in a box around the place on the picture.
-  const ringPixels = () =>
+  const ringPixels = (at = w.at) =>
     page.evaluate(async (p) => {
       await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
       const { data, width, height, scale } = window.tvf.pixels();
@@ -196,7 +196,7 @@ try {
           if (Math.abs(data[i] - 6) < 30 && Math.abs(data[i + 1] - 182) < 30 && Math.abs(data[i + 2] - 212) < 30) ++n;
         }
       return n;
-    }, w.at);
+    }, at);
   const before = await ringPixels();
   await show.click();
   const frameWanted = Math.round(w.t * 31);
@@ -211,6 +211,38 @@ try {
   await d.shot(a.out, "keyframe_topology_show_where.png");
   await show.click();
   check((await ringPixels()) === 0 && (await show.textContent()) === "show where", "hidden again");
+
+  // Two paths that cannot be kept apart (a source and a sink trading places on the
+  // 162-vertex sphere, asked to keep 1.5 apart): the line names the collision and "show
+  // where" goes to the frame where they come closest and rings both.
+  const pair = (first, second) => [
+    { kind: "singular", type: "source", at: first },
+    { kind: "singular", type: "sink", at: second },
+  ];
+  const collided = await d.applyScene({
+    tvf: 1,
+    domain: { sphere: { subdivisions: 2, radius: 1 } },
+    time: { frames: 16, range: [0, 1] },
+    generator: "spacetime",
+    falloff: 8,
+    solver: { region_radius: 0.15, keyframe_topology: "matched", path_separation: 1.5 },
+    keyframes: [
+      { t: 0, elements: pair([-0.5, 0, z], [0.5, 0, z]) },
+      { t: 1, elements: pair([0.5, 0, z], [-0.5, 0, z]) },
+    ],
+  });
+  const c = collided.keyframe_intervals?.[0]?.collision_at;
+  const collidedReport = await page.textContent("#keyframe-report");
+  check(c && c.types.join(" ") === "source sink" && c.t === 0.5, `the collision's place in the status: ${JSON.stringify(c)}`);
+  check(collidedReport.includes("two of its paths could not be kept apart"), `the line says why: ${collidedReport}`);
+  check((await show.count()) === 1, "and offers to show where");
+  await show.click();
+  await page.waitForFunction((j) => window.tvf.state.frame === j, 8);
+  await d.settled();
+  const ringed = await ringPixels(c.points[0]);
+  check(await page.evaluate((ps) => ps.every((p) => window.tvf.surfaceVisible(p)), c.points), "the camera turned to the two: both are seen");
+  check(ringed > 50, `and they are ringed (${ringed} pixels of the ring's colour)`);
+  await d.shot(a.out, "keyframe_topology_show_collision.png");
 } catch (e) {
   failed = true;
   console.error(e.message);

@@ -148,6 +148,16 @@ export interface Status {
       nearest_type?: string;
       face_edges: number;
     };
+    // Two paths that could not be kept apart: at t the two (`types`; the second a pair's
+    // saddle–node template when `template`) at `points`, `distance` apart of `required`.
+    collision_at?: {
+      t: number;
+      points: [number[], number[]];
+      types: [string, string];
+      template: boolean;
+      distance: number;
+      required: number;
+    };
     // Where the guide leaves a node turning: the key frame that would hold it (its
     // elements where the plan carries them half-way; from/to: each one's element in the
     // key frames before and after).

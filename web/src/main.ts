@@ -76,9 +76,10 @@ interface State {
   stroke?: S.Vec[];
   cancelPicks: number[][];
   linkFrom?: S.Handle; // Link tool: the key-frame element picked first
-  // The place marked on the surface by an interval's "show where" (the surface guide's
-  // first wrong frame, status keyframe_intervals[interval].first_wrong) of that result.
-  wrongPlace?: { revision: number; interval: number; at: number[] };
+  // The places marked on the surface by an interval's "show where" (the surface guide's
+  // first wrong frame, status keyframe_intervals[interval].first_wrong, or the two paths
+  // that could not be kept apart, .collision_at) of that result.
+  wrongPlace?: { revision: number; interval: number; at: number[][] };
   playing: boolean;
   jsonDirty: boolean;
 }
@@ -348,14 +349,31 @@ async function showStatus(st: Status) {
   if (st.analysis === "failed" && st.result_revision === state.resultRevision) say(`the analysis failed: ${st.analysis_error ?? ""}`, true);
 }
 
-// Topology between key frames: one line per interval of the shown result. An interval the
-// surface guide's check turned down has "show where": it goes to the first frame where the
-// guide went wrong and marks the place on the surface (where a link, a key frame or a
-// smaller region would help); the mark stays until it is hidden or the result changes.
+// Where an interval left free went wrong, on a surface: the surface guide's first wrong
+// frame (the extra or missing singularity), or the two singularities whose paths could not
+// be kept apart, at the time they come closest.
+function wrongPlaceOf(k: NonNullable<Status["keyframe_intervals"]>[number]) {
+  if (k.guided) return undefined;
+  const w = k.first_wrong;
+  if (w)
+    return { t: w.t, at: [w.at], title: `mark on the surface where the guide's ${w.extra ? "extra" : "missing"} ${w.type.replace(/_/g, " ")} lay` };
+  const c = k.collision_at;
+  if (c) {
+    const other = c.template ? "the template of a pair" : `the ${c.types[1].replace(/_/g, " ")}`;
+    return { t: c.t, at: c.points, title: `mark the ${c.types[0].replace(/_/g, " ")} and ${other} that come ${c.distance.toPrecision(2)} apart there (${c.required.toPrecision(2)} asked)` };
+  }
+  return undefined;
+}
+
+// Topology between key frames: one line per interval of the shown result. An interval left
+// free on a surface, by the surface guide's check or by two paths that could not be kept
+// apart, has "show where": it goes to that frame and marks the place on the surface
+// (where a link, a key frame or a smaller region or separation would help); the mark
+// stays until it is hidden or the result changes.
 function showKeyframeReport(st: Status) {
   const box = $("keyframe-report");
   const intervals = st.state === "ready" ? (st.keyframe_intervals ?? []) : [];
-  if (state.wrongPlace && (state.wrongPlace.revision !== st.result_revision || !intervals[state.wrongPlace.interval]?.first_wrong))
+  if (state.wrongPlace && (state.wrongPlace.revision !== st.result_revision || !intervals[state.wrongPlace.interval] || !wrongPlaceOf(intervals[state.wrongPlace.interval])))
     markWrongPlace(undefined);
   box.hidden = intervals.length === 0;
   box.classList.toggle("fallback", intervals.some((k) => k.fallback));
@@ -370,19 +388,19 @@ function showKeyframeReport(st: Status) {
       line.textContent = k.guided
         ? `${what}; guided (${k.routing} routing): ${events}${turning}`
         : `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
-      const w = k.first_wrong;
-      if (w && !k.guided && surface && !planar()) {
+      const place = wrongPlaceOf(k);
+      if (place && surface && !planar()) {
         const shown = state.wrongPlace?.interval === i;
         const button = document.createElement("button");
         button.className = "show-wrong";
         button.textContent = shown ? "hide" : "show where";
-        button.title = shown ? "Remove the mark from the surface" : `Go to t = ${w.t.toFixed(3)} and mark on the surface where the guide's ${w.extra ? "extra" : "missing"} ${w.type.replace(/_/g, " ")} lay`;
+        button.title = shown ? "Remove the mark from the surface" : `Go to t = ${place.t.toFixed(3)} and ${place.title}`;
         button.onclick = () => {
           if (shown) markWrongPlace(undefined);
           else {
-            markWrongPlace({ revision: st.result_revision, interval: i, at: w.at });
-            surface?.face(w.at);
-            void showFrame(S.frameOf(scene(), w.t));
+            markWrongPlace({ revision: st.result_revision, interval: i, at: place.at });
+            surface?.face(place.at[0]);
+            void showFrame(S.frameOf(scene(), place.t));
           }
           showKeyframeReport(st);
         };

@@ -58,7 +58,7 @@ export class SurfaceView {
   private ftleOn = false;
   private readonly dye = new THREE.Group();
   private readonly mark = new THREE.Group();
-  private markAt: number[] | undefined;
+  private markAt: number[][] = [];
   private mode: SurfaceMode = "texture";
   private frame: Frame | undefined;
   private markers: number[][] = [];
@@ -224,7 +224,7 @@ export class SurfaceView {
     this.ftleOn = false;
     this.surface = new THREE.Mesh(g, this.material());
     this.scene.add(this.surface);
-    this.markAt = undefined;
+    this.markAt = [];
     this.drawMark();
     this.controls.target.copy(s.center);
     this.camera.position.copy(s.center).add(new THREE.Vector3(0.2, -1, 0.6).normalize().multiplyScalar(3 * s.radius));
@@ -281,10 +281,11 @@ export class SurfaceView {
     this.render();
   }
 
-  // A place to point at (the key-frame report's first wrong frame of a surface guide): a
-  // ring around p in the surface's tangent plane and a dot at p, or undefined for none.
-  setMark(p: number[] | undefined) {
-    this.markAt = p;
+  // Places to point at (the key-frame report's first wrong frame of a surface guide, or the
+  // two singularities whose paths could not be kept apart): a ring around each point in
+  // the surface's tangent plane and a dot at it; undefined or [] for none.
+  setMark(points: number[][] | undefined) {
+    this.markAt = points ?? [];
     this.drawMark();
   }
 
@@ -294,8 +295,7 @@ export class SurfaceView {
       (c as THREE.Mesh).geometry?.dispose();
       ((c as THREE.Mesh).material as THREE.Material | undefined)?.dispose();
     }
-    const p = this.markAt;
-    if (p && this.surface) {
+    for (const p of this.surface ? this.markAt : []) {
       const at = new THREE.Vector3(p[0], p[1], p[2]);
       // The ring is drawn over everything (the faces round a coarse mesh's point tilt away
       // from the vertex normal and would hide part of it; orbited away, it shows through

@@ -79,6 +79,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -130,6 +131,18 @@ struct KeyframeIntervalReport {
   // or no set of detours found): why, in one sentence; the interval's paths then stay
   // straight. The generator also gives it as a warning.
   std::string collision;
+  // Where (with `collision`): at time t the two paths the sentence names, of `types`, are
+  // at `points`, `distance` apart where they must keep `required`; `template_` when the
+  // second is a created or cancelled pair's saddle–node template (its middle), not a path.
+  // The designer's "show where" goes there.
+  struct Collision {
+    double t = 0;
+    std::array<Vec3, 2> points{Vec3::Zero(), Vec3::Zero()};
+    std::array<SingularityType, 2> types{SingularityType::saddle, SingularityType::saddle};
+    bool template_ = false;
+    double distance = 0, required = 0;
+  };
+  std::optional<Collision> collision_at;
   // How the paths were kept apart: "straight" (none came too close, or they could not be
   // kept apart: see collision), "pairwise" (bent one pair at a time) or "joint" (all the
   // interval's paths bent at once, keeping clear of its saddle–node templates too).
@@ -261,12 +274,16 @@ private:
 // "found", "planned", "extra", "type", "at", "distance", "nearest_type" (the last two when
 // the other side holds any), "face_edges"} (when the guide's check turned it down),
 // "middle_keyframe": {"keyframe" (a key frame in the scene's form, DESIGN §10), "from",
-// "to"} (where one is offered), "unpaired": [[x, y, z], ...]} per interval.
+// "to"} (where one is offered), "collision_at": {"t", "points", "types", "template",
+// "distance", "required"} (with "collision"), "unpaired": [[x, y, z], ...]} per interval.
 nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>& intervals);
 
 // An interval's "first_wrong" object (the same in keyframe_topology.json and the server's
 // status).
 nlohmann::json wrong_frame_json(const KeyframeIntervalReport::WrongFrame& w);
+// An interval's "collision_at" object (the same in keyframe_topology.json and the server's
+// status).
+nlohmann::json collision_json(const KeyframeIntervalReport::Collision& c);
 // An interval's "middle_keyframe" object (the same in keyframe_topology.json and the
 // server's status). Only surfaces have one (the planar guide holds every node to its
 // type), so its points are [x, y, z].
