@@ -243,6 +243,43 @@ try {
   check(await page.evaluate((ps) => ps.every((p) => window.tvf.surfaceVisible(p)), c.points), "the camera turned to the two: both are seen");
   check(ringed > 50, `and they are ringed (${ringed} pixels of the ring's colour)`);
   await d.shot(a.out, "keyframe_topology_show_collision.png");
+
+  // The same on the plane (the C++ test CrossingPathsWithNoRoomAreReported: a strip too
+  // narrow to pass): "show where" rings the two on the picture.
+  const strip = await d.applyScene({
+    tvf: 1,
+    domain: { grid: { size: [65, 9], min: [-1, -0.125], max: [1, 0.125] } },
+    time: { frames: 17, range: [0, 1] },
+    generator: "spacetime",
+    falloff: 8,
+    solver: { region_radius: 0.1, keyframe_topology: "matched" },
+    keyframes: [
+      { t: 0, elements: pair([-0.5, 0], [0.5, 0]) },
+      { t: 1, elements: pair([0.5, 0], [-0.5, 0]) },
+    ],
+  });
+  const sc = strip.keyframe_intervals?.[0]?.collision_at;
+  check(sc && sc.t === 0.5, `the strip's collision in the status: ${JSON.stringify(sc)}`);
+  const planeRing = () =>
+    page.evaluate((p) => {
+      const { data, width, height } = window.tvf.pixels("field");
+      const [x, y] = window.tvf.view().toCanvas(p).map(Math.round); // canvas pixels already
+      let n = 0;
+      for (let v = Math.max(0, y - 30); v < Math.min(height, y + 30); ++v)
+        for (let u = Math.max(0, x - 30); u < Math.min(width, x + 30); ++u) {
+          const i = 4 * (v * width + u);
+          if (Math.abs(data[i] - 6) < 30 && Math.abs(data[i + 1] - 182) < 30 && Math.abs(data[i + 2] - 212) < 30) ++n;
+        }
+      return n;
+    }, sc.points[0].slice(0, 2));
+  const planeBefore = await planeRing();
+  check((await show.count()) === 1, "the strip's line offers to show where");
+  await show.click();
+  await page.waitForFunction((j) => window.tvf.state.frame === j, 8);
+  await d.settled();
+  const planeAfter = await planeRing();
+  check(planeBefore === 0 && planeAfter > 30, `and rings them on the plane (${planeBefore} → ${planeAfter} pixels of the ring's colour)`);
+  await d.shot(a.out, "keyframe_topology_show_collision_plane.png");
 } catch (e) {
   failed = true;
   console.error(e.message);

@@ -9,7 +9,7 @@ import "./style.css";
 import { api, ApiError, type Analysis, type Frame, type MeshData, type SceneState, type Status } from "./api";
 import { locateJsonPath } from "./error_place";
 import { ChangeQueue } from "./changes";
-import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAKLINE_COLOR, STREAMLINE_COLOR, typeColor } from "./colors";
+import { BIFURCATION_COLOR, PATHLINE_COLOR, STREAKLINE_COLOR, STREAMLINE_COLOR, typeColor, WRONG_PLACE_COLOR } from "./colors";
 import { CoherencePlot } from "./coherence";
 import type { GridField } from "./lic";
 import { ringMotion } from "./preview/advect";
@@ -349,9 +349,9 @@ async function showStatus(st: Status) {
   if (st.analysis === "failed" && st.result_revision === state.resultRevision) say(`the analysis failed: ${st.analysis_error ?? ""}`, true);
 }
 
-// Where an interval left free went wrong, on a surface: the surface guide's first wrong
-// frame (the extra or missing singularity), or the two singularities whose paths could not
-// be kept apart, at the time they come closest.
+// Where an interval left free went wrong: the surface guide's first wrong frame (the extra
+// or missing singularity), or the two singularities whose paths could not be kept apart
+// (on the plane too), at the time they come closest.
 function wrongPlaceOf(k: NonNullable<Status["keyframe_intervals"]>[number]) {
   if (k.guided) return undefined;
   const w = k.first_wrong;
@@ -366,9 +366,9 @@ function wrongPlaceOf(k: NonNullable<Status["keyframe_intervals"]>[number]) {
 }
 
 // Topology between key frames: one line per interval of the shown result. An interval left
-// free on a surface, by the surface guide's check or by two paths that could not be kept
-// apart, has "show where": it goes to that frame and marks the place on the surface
-// (where a link, a key frame or a smaller region or separation would help); the mark
+// free by the surface guide's check or by two paths that could not be kept apart has
+// "show where": it goes to that frame and marks the place (on a surface the camera turns
+// to it): where a link, a key frame, a smaller region or separation would help; the mark
 // stays until it is hidden or the result changes.
 function showKeyframeReport(st: Status) {
   const box = $("keyframe-report");
@@ -389,17 +389,17 @@ function showKeyframeReport(st: Status) {
         ? `${what}; guided (${k.routing} routing): ${events}${turning}`
         : `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
       const place = wrongPlaceOf(k);
-      if (place && surface && !planar()) {
+      if (place && (planar() || surface)) {
         const shown = state.wrongPlace?.interval === i;
         const button = document.createElement("button");
         button.className = "show-wrong";
         button.textContent = shown ? "hide" : "show where";
-        button.title = shown ? "Remove the mark from the surface" : `Go to t = ${place.t.toFixed(3)} and ${place.title}`;
+        button.title = shown ? "Remove the mark" : `Go to t = ${place.t.toFixed(3)} and ${place.title}`;
         button.onclick = () => {
           if (shown) markWrongPlace(undefined);
           else {
             markWrongPlace({ revision: st.result_revision, interval: i, at: place.at });
-            surface?.face(place.at[0]);
+            if (!planar()) surface?.face(place.at[0]);
             void showFrame(S.frameOf(scene(), place.t));
           }
           showKeyframeReport(st);
@@ -429,7 +429,8 @@ function showKeyframeReport(st: Status) {
 
 function markWrongPlace(place: State["wrongPlace"]) {
   state.wrongPlace = place;
-  surface?.setMark(place?.at);
+  if (planar()) redraw();
+  else surface?.setMark(place?.at);
 }
 
 // The generator's warnings on the shown result (paths that could not be kept apart, a node
@@ -853,6 +854,8 @@ function redraw() {
     if (h) ring(v, h.position, "#f97316", 14);
   }
   if (state.stroke) line(state.stroke, "#f97316", 2);
+  // An interval's "show where": the two paths that could not be kept apart.
+  for (const p of state.wrongPlace?.at ?? []) ring(v, p.slice(0, 2), WRONG_PLACE_COLOR, 16);
   lcs.drawMarks(ctx, v);
 }
 
