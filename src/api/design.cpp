@@ -455,8 +455,13 @@ bool Design::adopt(Solve&& solve) { return s_->adopt(solve); }
 void Design::Solve::run(GenerateOptions options, bool analyze) {
   TVF_CHECK(shared_ != nullptr, "a Solve comes from Design::prepare_solve");
   std::lock_guard lock(shared_->mutex);
-  if (!space_)
-    space_ = given_ && space_key_ == given_key_ ? given_ : std::shared_ptr<const DesignSpace>(make_design_space(scene_));
+  if (!space_ && given_ && space_key_ == given_key_) space_ = given_;
+  if (!space_) {
+    // A new domain (seconds for a scanned mesh of 10⁵ vertices: its point locator, charts
+    // and connection), said before the frames' progress.
+    if (options.stage) options.stage("building the domain");
+    space_ = make_design_space(scene_);
+  }
   auto r = std::make_shared<DesignResult>();
   r->space = space_;
   options.cache = &shared_->cache;

@@ -191,10 +191,15 @@ TEST(Design, SolvesAndEditsRunApartAndAreAdoptedOnlyAtTheirRevision) {
   EXPECT_EQ(design.revision(), 1);
   EXPECT_EQ(design.result(), nullptr);
 
-  // A Solve: the same field as generate(), with its analysis, adopted at revision 1.
+  // A Solve: the same field as generate(), with its analysis, adopted at revision 1. Its
+  // domain is new: it says so before the frames (GenerateOptions::stage).
   Design::Solve solve = design.prepare_solve();
   EXPECT_EQ(solve.revision(), 1);
-  solve.run({}, true);
+  std::vector<std::string> stages;
+  GenerateOptions go;
+  go.stage = [&](const std::string& what) { stages.push_back(what); };
+  solve.run(go, true);
+  EXPECT_EQ(stages, std::vector<std::string>{"building the domain"});
   const auto made = solve.result();
   ASSERT_NE(made, nullptr);
   ASSERT_TRUE(made->topology.has_value());

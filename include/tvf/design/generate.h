@@ -67,8 +67,9 @@ struct GenerateOptions {
   std::function<void(int, int)> progress;
   // Called from the generating thread as it starts a long step that no frame count
   // measures: "planning the topology between key frames (interval 1 of 2)" (the key-frame
-  // topology plan: seconds on a scanned mesh), so that a terminal or the designer says what
-  // it waits for before the frames' progress starts.
+  // topology plan: seconds on a scanned mesh; tvf::Design's solve also says "building the
+  // domain" for a new mesh), so that a terminal or the designer says what it waits for
+  // before the frames' progress starts.
   std::function<void(const std::string&)> stage;
   // Apply the scene's "incompressible" projection (generate() only). `tvf edit` turns it
   // off to check a new edit on the field that the edit will really act on.
