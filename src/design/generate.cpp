@@ -609,6 +609,44 @@ std::string keyframe_turn_warning(const KeyframeIntervalReport& k, const Keyfram
                             m.phase_swing, k.middle_keyframe ? "; " + advice : std::string());
 }
 
+// Pairs created or cancelled within a few frames of a key frame (solver.bifurcation_times
+// set near one): between the event and the key frame the pair's singularities appear (or
+// leave their places) and travel to where the key frame holds them, in those frames, and
+// the field changes that much faster there. Example 26 (60 frames): the frame-to-frame
+// change's max/median 1.5 with the creation 12 frames before the key frame, 2.9 at 6,
+// 5.1 at 3, 9.7 at 1.2 (docs/benchmarks.md).
+constexpr double kPairEventFrames = 4;
+std::optional<std::string> pair_event_warning(const KeyframeIntervalReport& k, const Scene& scene) {
+  if (scene.time.frames < 2) return std::nullopt;
+  const double dt = scene.time.time(1) - scene.time.time(0);
+  for (const bool created : {false, true}) {
+    if ((created ? k.created : k.cancelled).empty()) continue;
+    // Cancelled pairs leave the first key frame's places before t_c; created ones reach the
+    // second's after it.
+    const double room = created ? k.t1 - k.bifurcation_t : k.bifurcation_t - k.t0;
+    if (room >= kPairEventFrames * dt) continue;
+    const int key = created ? k.to_keyframe : k.from_keyframe;
+    const double farthest = created ? k.t1 - kPairEventFrames * dt : k.t0 + kPairEventFrames * dt;
+    // The time given (solver.bifurcation_times), or the interval's middle: then the interval
+    // itself is short.
+    const bool given = static_cast<size_t>(k.from_keyframe) < scene.solver.bifurcation_times.size();
+    const std::string advice =
+        given ? fmt::format("set the time {} frames or more from the key frame (t {} {:.4g}) or use more frames",
+                            kPairEventFrames, created ? "≤" : "≥", farthest)
+              : "use more frames or key frames farther apart";
+    return fmt::format(
+        "{}: {}: between keyframes[{}] and keyframes[{}] the pairs are {} at t = {:.4g}, {:.2g} frames {} "
+        "keyframes[{}] (t = {:.4g}): they {} within those frames, so the field changes abruptly there; {}",
+        scene.label(),
+        given ? fmt::format("solver.bifurcation_times[{}]", k.from_keyframe) : std::string("solver.keyframe_topology"),
+        k.from_keyframe, k.to_keyframe, created ? "created" : "cancelled", k.bifurcation_t, room / dt,
+        created ? "before" : "after", key, created ? k.t1 : k.t0,
+        created ? "appear and reach their places in the key frame" : "leave their places in the key frame and meet",
+        advice);
+  }
+  return std::nullopt;
+}
+
 void report_spacetime(GenerateReport* report, const Scene& scene, int nv, std::chrono::steady_clock::time_point start,
                       const std::string& method, const SolveReport& r,
                       std::vector<KeyframeIntervalReport> intervals) {
@@ -622,6 +660,7 @@ void report_spacetime(GenerateReport* report, const Scene& scene, int nv, std::c
   if (report)
     for (const KeyframeIntervalReport& k : report->keyframe_intervals) {
       if (!k.collision.empty()) report->warnings.push_back(k.collision);
+      if (auto w = pair_event_warning(k, scene)) report->warnings.push_back(std::move(*w));
       for (const KeyframeIntervalReport::Match& m : k.matched)
         if (m.phase_turns != 0 || m.phase_swing > std::numbers::pi / 2)
           report->warnings.push_back(keyframe_turn_warning(k, m));

@@ -13,6 +13,7 @@
 #include "support/test_paths.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <array>
@@ -197,6 +198,31 @@ TEST(KeyframeTopology, UnmatchedPairsAreCancelledAndCreatedAtTheSetTime) {
     // paths where the type turned: 8 paths at 33², 41 frames).
     EXPECT_EQ(g.topology.paths.size(), 2 * g.topology.bifurcations.size()) << creation;
   }
+}
+
+// Pairs created or cancelled within four frames of the key frame they leave or reach: the
+// generator warns (the field changes abruptly there: example 26's max/median
+// frame-to-frame change 5.1 three frames from it, 1.5 at twelve), naming the time set and
+// the latest (earliest) time that has the room; none four frames away or more.
+TEST(KeyframeTopology, PairsCreatedRightBeforeTheKeyFrameAreWarnedOf) {
+  nlohmann::json scene = nlohmann::json::parse(test::read_text(test::source_dir() + "/examples/26_keyframe_topology/scene.json"));
+  ASSERT_EQ(scene["time"]["frames"], 60);  // frames 1/59 apart
+  auto warned = [&](double t) {
+    scene["solver"]["bifurcation_times"] = {t};
+    const Generated g = run(scene.dump());
+    EXPECT_EQ(g.report.keyframe_intervals.at(0).created.size(), 1u);
+    std::string out;
+    for (const std::string& w : g.report.warnings)
+      if (w.find("the pairs are created") != std::string::npos) out = w;
+    return out;
+  };
+  EXPECT_EQ(warned(0.95),
+            "scene: solver.bifurcation_times[0]: between keyframes[0] and keyframes[1] the pairs are created at "
+            "t = 0.95, 3 frames before keyframes[1] (t = 1): they appear and reach their places in the key frame "
+            "within those frames, so the field changes abruptly there; set the time 4 frames or more from the key "
+            "frame (t ≤ 0.9322) or use more frames");
+  EXPECT_EQ(warned(0.93), "");  // 4.1 frames
+  EXPECT_EQ(warned(0.6), "");
 }
 
 // Links override the nearest match. Sources A (−0.6, 0) and B (0, 0) go to C (0.2, 0) and
