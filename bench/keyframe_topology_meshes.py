@@ -133,6 +133,13 @@ def main():
             hopf = "?"
         nv = len(load_off(mesh)[0])
         why = interval.get("unguided_reason", "")
+        # A collision: which two, when, and how close against what they must keep
+        # (keyframe_topology.json's collision_at; the sentence is in "collision").
+        if "collision_at" in interval:
+            c = interval["collision_at"]
+            other = "a pair's template" if c["template"] else f"a {c['types'][1]}"
+            why = (f"collision at t = {c['t']:.3f}: a {c['types'][0]} and {other} come {c['distance']:.3g} apart, "
+                   f"{c['required']:.3g} asked")
         # The longest chord a matched singularity is carried, over the mesh's bounding-box
         # diagonal (the designed pair's is --apart).
         v = load_off(mesh)[0]
