@@ -121,8 +121,11 @@ int run_generate(Scene scene, const GenerateArgs& args, bool demo) {
       });
       std::vector<std::string> notes;
       if (bent > 0)
-        notes.push_back(
-            fmt::format("{} bent{} to keep {:g} apart", bent, k.routing == "joint" ? " together" : "", k.separation));
+        notes.push_back(fmt::format("{} bent{} to keep {:.3g} apart{}", bent, k.routing == "joint" ? " together" : "",
+                                    k.separation,
+                                    k.lowered_from > 0
+                                        ? fmt::format(", the default {:.3g} lowered: no detour kept it", k.lowered_from)
+                                        : std::string()));
       if (turning > 0) notes.push_back(fmt::format("{} changing stability through a center", turning));
       // Nodes the guide does not hold to their types (the warning above says which).
       const auto whole = std::count_if(k.matched.begin(), k.matched.end(), [](const auto& m) { return m.phase_turns != 0; });

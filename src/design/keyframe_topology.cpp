@@ -2606,10 +2606,13 @@ public:
 
   // keyframe_times: the scene's key frames' times (where the paths' ends are the key
   // frames' singularities; required() never asks a pair for more than those hold it).
-  // checkpoint: the plan's (called each round; may throw to stop).
+  // checkpoint: the plan's (called each round; may throw to stop). joint_search: whether
+  // route() may route all the paths at once (joint()) where the pairwise detours do not
+  // hold (seconds on a scanned mesh; the lowered separation's tries go without).
   PathRouter(const DesignSpace& space, double separation, std::vector<double> keyframe_times,
-             const std::function<void()>& checkpoint)
-      : space_(space), separation_(separation), keyframe_times_(std::move(keyframe_times)), checkpoint_(checkpoint) {
+             const std::function<void()>& checkpoint, bool joint_search = true)
+      : space_(space), separation_(separation), keyframe_times_(std::move(keyframe_times)), checkpoint_(checkpoint),
+        joint_search_(joint_search) {
     const Mesh& mesh = space.mesh();
     for (int h = 0; h < mesh.num_halfedges(); ++h)
       if (mesh.is_boundary_halfedge(h)) boundary_.emplace_back(mesh.position(mesh.tail(h)), mesh.position(mesh.head(h)));
@@ -2952,7 +2955,7 @@ public:
       if (drift <= 0.5 * std::numbers::pi) return std::nullopt;
       const std::vector<Track> pairwise(tracks.begin() + static_cast<std::ptrdiff_t>(first),
                                         tracks.begin() + static_cast<std::ptrdiff_t>(last));
-      if (joint(tracks, first, last, obstacles) && interval_phase_error(tracks, first, last) < drift) {
+      if (joint_search_ && joint(tracks, first, last, obstacles) && interval_phase_error(tracks, first, last) < drift) {
         how = "joint";
         return std::nullopt;
       }
@@ -2982,7 +2985,7 @@ public:
       }
       if (!held.empty()) why = held.c_str();
     }
-    if (held.empty() && joint(tracks, first, last, obstacles)) {
+    if (held.empty() && joint_search_ && joint(tracks, first, last, obstacles)) {
       how = "joint";
       return std::nullopt;
     }
@@ -3631,6 +3634,7 @@ private:
   double separation_;
   std::vector<double> keyframe_times_;
   const std::function<void()>& checkpoint_;
+  bool joint_search_;
   mutable std::vector<double> caps_;  // set_caps(): caps_[i * caps_n_ + j] for slots i, j
   mutable size_t caps_n_ = 0;
   std::vector<std::pair<Vec3, Vec3>> boundary_;
@@ -4138,15 +4142,48 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
       // Paths that would come closer than the separation are bent around each other.
       const std::string where =
           scene.solver.path_separation ? "solver.path_separation" : "solver.keyframe_topology";
+      rep.separation = separation;
+      // Whether no second try follows this one (the matching within reach is the same).
+      const bool last_try = attempt == 1 || [&] {
+        KeyframeMatchRules within = rules;
+        within.carry_reach = stability_reach;
+        auto sorted = [](std::vector<std::pair<size_t, size_t>> v) { return std::sort(v.begin(), v.end()), v; };
+        return sorted(match_keyframe_singularities(A, B, within).matched) == sorted(matching.matched);
+      }();
       if (off_surface.empty()) {
-        if (auto why = router.route(tracks_, first_track, tracks_.size(), obstacles, scene, where,
-                                    fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1), rep.routing,
-                                    rep.collision_at))
+        const std::string interval = fmt::format("between keyframes[{}] and keyframes[{}]", k, k + 1);
+        if (auto why = router.route(tracks_, first_track, tracks_.size(), obstacles, scene, where, interval,
+                                    rep.routing, rep.collision_at)) {
           rep.collision = std::move(*why);
+          // The default separation (twice region_radius, no solver.path_separation) is not
+          // the user's: where it cannot be kept, three quarters of it, then of that, are
+          // tried by pairwise detours alone before the interval falls back, on its last try
+          // (a first try that a second, matched within reach, may replace keeps the
+          // default: CGAL's bear is guided so, its far singularities paired, where the
+          // lowered first try carried one 0.52 of the diagonal; and the joint search, which
+          // the held rule spares a pair a key frame holds too close, took 16 s on the
+          // elephant). CGAL's camel knot: two static saddles could not keep 0.143 between
+          // them; at 0.107 every path is routed and the interval guided, no event not
+          // asked for (docs/benchmarks.md).
+          if (!scene.solver.path_separation && last_try)
+            for (const double f : {0.75, 0.75 * 0.75}) {
+              const PathRouter lower(space, f * separation, keyframe_times, checkpoint, false);
+              std::string how;
+              std::optional<KeyframeIntervalReport::Collision> place;
+              if (lower.route(tracks_, first_track, tracks_.size(), obstacles, scene, where, interval, how, place))
+                continue;
+              rep.lowered_from = separation;
+              rep.lowered_because = std::move(rep.collision);
+              rep.collision.clear();
+              rep.collision_at.reset();
+              rep.routing = how;
+              rep.separation = f * separation;
+              break;
+            }
+        }
       }
       // Where paths were bent, each Jacobian turns with its neighbourhood.
       if (rep.routing != "straight") router.turn_with_neighbours(tracks_, first_track, tracks_.size());
-      rep.separation = separation;
       for (size_t m = 0; m < rep.matched.size(); ++m) rep.matched[m].detour = router.detour(tracks_[first_track + m]);
       for (size_t i = first_track; i < tracks_.size(); ++i)
         for (size_t j = i + 1; j < tracks_.size(); ++j)
@@ -4314,19 +4351,15 @@ KeyframeTopologyPlan::KeyframeTopologyPlan(const DesignSpace& space, const Scene
         for (size_t i = first_track; i < tracks_.size(); ++i) tracks_[i].free = true;
         for (size_t i = first_template; i < templates_.size(); ++i) templates_[i].free = true;
       }
-      if (!rep.guided && attempt == 0 && tracks_.size() > first_track) {
-        KeyframeMatchRules within = rules;
-        within.carry_reach = stability_reach;
-        auto sorted = [](std::vector<std::pair<size_t, size_t>> v) { return std::sort(v.begin(), v.end()), v; };
-        if (sorted(match_keyframe_singularities(A, B, within).matched) != sorted(matching.matched)) {
-          unguided = Unguided{{tracks_.begin() + static_cast<std::ptrdiff_t>(first_track), tracks_.end()},
-                              {templates_.begin() + static_cast<std::ptrdiff_t>(first_template), templates_.end()},
-                              std::move(rep), groups};
-          tracks_.resize(first_track);
-          templates_.erase(templates_.begin() + static_cast<std::ptrdiff_t>(first_template), templates_.end());
-          groups = first_group;
-          continue;
-        }
+      // Not guided, and the second try matches otherwise (last_try, above): planned again.
+      if (!rep.guided && !last_try && tracks_.size() > first_track) {
+        unguided = Unguided{{tracks_.begin() + static_cast<std::ptrdiff_t>(first_track), tracks_.end()},
+                            {templates_.begin() + static_cast<std::ptrdiff_t>(first_template), templates_.end()},
+                            std::move(rep), groups};
+        tracks_.resize(first_track);
+        templates_.erase(templates_.begin() + static_cast<std::ptrdiff_t>(first_template), templates_.end());
+        groups = first_group;
+        continue;
       }
       if (!rep.guided && unguided) {
         tracks_.resize(first_track);
@@ -4450,6 +4483,7 @@ nlohmann::json keyframe_intervals_json(const std::vector<KeyframeIntervalReport>
                           {"node_type", to_string(p.node_type)}});
     }
     j["separation"] = r.separation;
+    if (r.lowered_from > 0) j["lowered_from"] = r.lowered_from, j["lowered_because"] = r.lowered_because;
     if (std::isfinite(r.closest_approach)) j["closest_approach"] = r.closest_approach;
     if (!r.collision.empty()) j["collision"] = r.collision;
     if (r.collision_at) j["collision_at"] = collision_json(*r.collision_at);
@@ -4504,6 +4538,8 @@ std::optional<std::vector<KeyframeIntervalReport>> keyframe_intervals_from_json(
           (std::string(key) == "created" ? r.created : r.cancelled).push_back(pair);
         }
       r.separation = j.at("separation").get<double>();
+      r.lowered_from = j.value("lowered_from", 0.0);
+      r.lowered_because = j.value("lowered_because", std::string());
       if (j.contains("closest_approach")) r.closest_approach = j.at("closest_approach").get<double>();
       r.collision = j.value("collision", std::string());
       if (j.contains("collision_at")) {

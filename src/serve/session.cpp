@@ -806,6 +806,8 @@ json Session::status() const {
         if (!k.unguided_reason.empty()) i["unguided_reason"] = k.unguided_reason;
         if (k.first_wrong) i["first_wrong"] = wrong_frame_json(*k.first_wrong);
         if (k.collision_at) i["collision_at"] = collision_json(*k.collision_at);
+        // The default separation lowered where it could not be kept: from what, to what.
+        if (k.lowered_from > 0) i["lowered_from"] = k.lowered_from, i["separation"] = k.separation;
         // The key frame that would hold a turning node (the designer's "add this key frame").
         if (k.middle_keyframe) i["middle_keyframe"] = middle_keyframe_json(*k.middle_keyframe);
         intervals.push_back(std::move(i));

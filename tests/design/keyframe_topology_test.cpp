@@ -443,12 +443,22 @@ TEST(KeyframeTopology, PathsThatDoNotMeetStayStraightBitForBit) {
   EXPECT_EQ(run(scene_to_text(a)).field.data(), run(scene_to_text(b)).field.data());
 }
 
-// A strip too narrow to pass: the paths stay straight, and the report and a warning say
-// so in one sentence naming the two paths.
+// A strip too narrow to pass (the separation asked, 0.2, in a strip 0.25 wide): the paths
+// stay straight, and the report and a warning say so in one sentence naming the two paths.
+std::string no_room_scene(const std::string& separation) {
+  return R"({"tvf": 1, "domain": {"grid": {"size": [65, 9], "min": [-1, -0.125], "max": [1, 0.125]}},
+    "time": {"frames": 17, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.1, "keyframe_topology": "matched")" + separation + R"(},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
+                            {"kind": "singular", "type": "sink", "at": [0.5, 0]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]},
+                            {"kind": "singular", "type": "sink", "at": [-0.5, 0]}]}]})";
+}
 TEST(KeyframeTopology, CrossingPathsWithNoRoomAreReported) {
   const std::string text = R"({"tvf": 1, "domain": {"grid": {"size": [65, 9], "min": [-1, -0.125], "max": [1, 0.125]}},
     "time": {"frames": 17, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
-    "solver": {"region_radius": 0.1, "keyframe_topology": "matched"},
+    "solver": {"region_radius": 0.1, "keyframe_topology": "matched", "path_separation": 0.2},
     "keyframes": [
       {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
                             {"kind": "singular", "type": "sink", "at": [0.5, 0]}]},
@@ -457,7 +467,7 @@ TEST(KeyframeTopology, CrossingPathsWithNoRoomAreReported) {
   const Generated g = run(text);
   const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
   EXPECT_EQ(r.collision,
-            "scene: solver.keyframe_topology: between keyframes[0] and keyframes[1] the paths of the source from "
+            "scene: solver.path_separation: between keyframes[0] and keyframes[1] the paths of the source from "
             "(-0.5, 0) to (0.5, 0) and the sink from (0.5, 0) to (-0.5, 0) come 0 apart at t = 0.5, and no detour "
             "inside the domain keeps them 0.2 apart, so the paths stay straight and the singularities meet; set a "
             "smaller solver.path_separation, link them differently (solver.links) or add a key frame between");
@@ -480,6 +490,35 @@ TEST(KeyframeTopology, CrossingPathsWithNoRoomAreReported) {
   ASSERT_TRUE(back.has_value());
   ASSERT_TRUE(back->at(0).collision_at.has_value());
   EXPECT_EQ(collision_json(*back->at(0).collision_at), collision_json(c));
+  EXPECT_EQ(r.lowered_from, 0.0);  // the separation was asked for: not lowered
+}
+
+// The same strip with no path_separation: the default (twice region_radius, 0.2) is not the
+// user's, and where it cannot be kept three quarters of it are tried, then of that: 0.15
+// does not pass either, 0.1125 does, by pairwise detours; the interval is guided, its report
+// says from what the separation was lowered and why, and no warning is given.
+TEST(KeyframeTopology, TheDefaultSeparationIsLoweredWhereItCannotBeKept) {
+  const Generated g = run(no_room_scene(""));
+  const KeyframeIntervalReport& r = g.report.keyframe_intervals.at(0);
+  EXPECT_TRUE(r.collision.empty()) << r.collision;
+  EXPECT_FALSE(r.collision_at.has_value());
+  EXPECT_EQ(r.lowered_from, 0.2);
+  EXPECT_DOUBLE_EQ(r.separation, 0.2 * 0.75 * 0.75);
+  EXPECT_EQ(r.lowered_because.find("scene: solver.keyframe_topology: between keyframes[0] and keyframes[1] the paths of "
+                                   "the source from (-0.5, 0) to (0.5, 0) and the sink"),
+            0u)
+      << r.lowered_because;
+  EXPECT_EQ(r.routing, "pairwise");
+  EXPECT_TRUE(r.guided) << r.unguided_reason;
+  EXPECT_GE(r.closest_approach, r.separation * (1 - 1e-9));
+  for (const std::string& w : g.report.warnings) EXPECT_EQ(w.find("could not"), std::string::npos) << w;
+  EXPECT_TRUE(g.topology.bifurcations.empty()) << g.topology.bifurcations.size();
+  const nlohmann::json j = keyframe_intervals_json(g.report.keyframe_intervals)[0];
+  EXPECT_EQ(j.at("lowered_from"), 0.2);
+  EXPECT_EQ(j.at("lowered_because"), r.lowered_because);
+  const auto back = keyframe_intervals_from_json({{"intervals", keyframe_intervals_json(g.report.keyframe_intervals)}});
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->at(0).lowered_from, 0.2);
 }
 
 // Three key frames, the middle one's elements linked both ways (a chain 0 → 1 → 2, the

@@ -185,6 +185,30 @@ TEST(ServeSession, TheStatusSaysWherePathsCouldNotBeKeptApart) {
   for (const json& p : c.at("points")) EXPECT_GT(p.at(2).get<double>(), 0.99) << c;
 }
 
+// With no path_separation, a strip too narrow for the default (0.2): the status says the
+// separation was lowered, from what to what (the designer's interval line).
+TEST(ServeSession, TheStatusSaysWhereTheDefaultSeparationWasLowered) {
+  test::TempDir dir;
+  SessionOptions o = options_in(dir);
+  o.initial_scene = R"({"tvf": 1, "domain": {"grid": {"size": [65, 9], "min": [-1, -0.125], "max": [1, 0.125]}},
+    "time": {"frames": 17, "range": [0, 1]}, "generator": "spacetime", "falloff": 8,
+    "solver": {"region_radius": 0.1, "keyframe_topology": "matched"},
+    "keyframes": [
+      {"t": 0, "elements": [{"kind": "singular", "type": "source", "at": [-0.5, 0]},
+                            {"kind": "singular", "type": "sink", "at": [0.5, 0]}]},
+      {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]},
+                            {"kind": "singular", "type": "sink", "at": [-0.5, 0]}]}]})";
+  Session s(o);
+  ASSERT_TRUE(s.wait_idle(60));
+  const json st = s.status();
+  ASSERT_EQ(st["state"], "ready") << st;
+  const json& k = st.at("keyframe_intervals").at(0);
+  EXPECT_TRUE(k.at("guided").get<bool>()) << k;
+  EXPECT_EQ(k.at("lowered_from"), 0.2) << k;
+  EXPECT_DOUBLE_EQ(k.at("separation").get<double>(), 0.2 * 0.75 * 0.75) << k;
+  EXPECT_FALSE(k.contains("collision_at")) << k;
+}
+
 // Issue 15: the field is published before its analysis, which follows on its own thread:
 // a frame read before the analysis has the same singularities (found for that frame alone,
 // "path" −1), the analysis then arrives for that revision, and the domain id stays while

@@ -148,6 +148,9 @@ export interface Status {
       nearest_type?: string;
       face_edges: number;
     };
+    // The default separation lowered where it could not be kept: from what, to what.
+    lowered_from?: number;
+    separation?: number;
     // Two paths that could not be kept apart: at t the two (`types`; the second a pair's
     // saddle–node template when `template`) at `points`, `distance` apart of `required`.
     collision_at?: {

@@ -385,8 +385,9 @@ function showKeyframeReport(st: Status) {
       const turning = k.turning ? `; ${k.turning} node${k.turning > 1 ? "s" : ""} turning a whole turn (a key frame between the two can hold ${k.turning > 1 ? "them" : "it"})` : "";
       // Guided: the analysis should show the planned pairs' events and nothing else.
       const events = k.created + k.cancelled > 0 ? "no bifurcation but the pairs'" : "no bifurcation";
+      const lowered = k.lowered_from && k.separation ? `, separation lowered to ${k.separation.toPrecision(3)} from the default ${k.lowered_from.toPrecision(3)}` : "";
       line.textContent = k.guided
-        ? `${what}; guided (${k.routing} routing): ${events}${turning}`
+        ? `${what}; guided (${k.routing} routing${lowered}): ${events}${turning}`
         : `${what}; not guided, left free (key frames only): ${k.unguided_reason ?? ""}`;
       const place = wrongPlaceOf(k);
       if (place && (planar() || surface)) {

@@ -127,6 +127,11 @@ struct KeyframeIntervalReport {
   // (sampled at 257 times; infinite with fewer than two).
   double separation = 0;
   double closest_approach = std::numeric_limits<double>::infinity();
+  // The default separation (no solver.path_separation: twice region_radius) lowered: it
+  // could not be kept (lowered_because: the collision it met, in one sentence), and
+  // `separation` is the three quarters of it, or of that, that could; 0 when not lowered.
+  double lowered_from = 0;
+  std::string lowered_because;
   // Not empty when two paths could not be kept apart (the domain too narrow for a detour,
   // or no set of detours found): why, in one sentence; the interval's paths then stay
   // straight. The generator also gives it as a warning.
@@ -268,7 +273,8 @@ private:
 // {"interval": [t0, t1], "keyframes": [k0, k1], "bifurcation_t", "matched": [{"type",
 // "from", "to", "linked", "detour", "to_type", "phase_turns", "phase_swing" (guided
 // intervals)}], "created": [{"t", "at", "saddle", "node",
-// "node_type"}], "cancelled": [same], "separation", "closest_approach" (when two or more
+// "node_type"}], "cancelled": [same], "separation", "lowered_from" and "lowered_because"
+// (when the default separation was lowered), "closest_approach" (when two or more
 // are carried), "collision" (when not empty), "routing", "guided", "fallback" (not guided:
 // the interval left free), "unguided_reason" (when not guided), "first_wrong": {"t",
 // "found", "planned", "extra", "type", "at", "distance", "nearest_type" (the last two when
