@@ -182,21 +182,26 @@ try {
   check(rejectedReport.includes(`not guided, left free (key frames only): the surface guide's frames hold other singularities`), "the line says why");
   const show = page.locator("#keyframe-report button.show-wrong");
   check((await show.textContent()) === "show where", "and offers to show where");
-  // Pixels of the ring's colour (#06b6d4) in a box around the place on the picture.
-  const ringPixels = (at = w.at) =>
-    page.evaluate(async (p) => {
-      await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
-      const { data, width, height, scale } = window.tvf.pixels();
-      const [x, y] = window.tvf.surface(p).map((v) => Math.round(v * scale));
-      const half = Math.round(40 * scale);
-      let n = 0;
-      for (let v = Math.max(0, y - half); v < Math.min(height, y + half); ++v)
-        for (let u = Math.max(0, x - half); u < Math.min(width, x + half); ++u) {
-          const i = 4 * (v * width + u);
-          if (Math.abs(data[i] - 6) < 30 && Math.abs(data[i + 1] - 182) < 30 && Math.abs(data[i + 2] - 212) < 30) ++n;
-        }
-      return n;
-    }, at);
+  // Pixels of the ring's colour (#06b6d4) in a box around the place on the picture: on the
+  // surface 40 CSS pixels either side of `at`, on the plane ("field") 30 canvas pixels.
+  const ringPixels = (at = w.at, view = "surface") =>
+    page.evaluate(
+      async ([p, flat]) => {
+        await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+        const { data, width, height, scale } = window.tvf.pixels(flat ? "field" : "surface");
+        // The plane's view maps to canvas pixels already; the surface's to CSS pixels.
+        const [x, y] = (flat ? window.tvf.view().toCanvas(p) : window.tvf.surface(p).map((v) => v * scale)).map(Math.round);
+        const half = flat ? 30 : Math.round(40 * scale);
+        let n = 0;
+        for (let v = Math.max(0, y - half); v < Math.min(height, y + half); ++v)
+          for (let u = Math.max(0, x - half); u < Math.min(width, x + half); ++u) {
+            const i = 4 * (v * width + u);
+            if (Math.abs(data[i] - 6) < 30 && Math.abs(data[i + 1] - 182) < 30 && Math.abs(data[i + 2] - 212) < 30) ++n;
+          }
+        return n;
+      },
+      [at, view === "field"],
+    );
   const before = await ringPixels();
   await show.click();
   const frameWanted = Math.round(w.t * 31);
@@ -260,18 +265,7 @@ try {
   });
   const sc = strip.keyframe_intervals?.[0]?.collision_at;
   check(sc && sc.t === 0.5, `the strip's collision in the status: ${JSON.stringify(sc)}`);
-  const planeRing = () =>
-    page.evaluate((p) => {
-      const { data, width, height } = window.tvf.pixels("field");
-      const [x, y] = window.tvf.view().toCanvas(p).map(Math.round); // canvas pixels already
-      let n = 0;
-      for (let v = Math.max(0, y - 30); v < Math.min(height, y + 30); ++v)
-        for (let u = Math.max(0, x - 30); u < Math.min(width, x + 30); ++u) {
-          const i = 4 * (v * width + u);
-          if (Math.abs(data[i] - 6) < 30 && Math.abs(data[i + 1] - 182) < 30 && Math.abs(data[i + 2] - 212) < 30) ++n;
-        }
-      return n;
-    }, sc.points[0].slice(0, 2));
+  const planeRing = () => ringPixels(sc.points[0].slice(0, 2), "field");
   const planeBefore = await planeRing();
   check((await show.count()) === 1, "the strip's line offers to show where");
   await show.click();
