@@ -617,7 +617,8 @@ std::string keyframe_turn_warning(const KeyframeIntervalReport& k, const Keyfram
 // 5.1 at 3, 9.7 at 1.2 (docs/benchmarks.md).
 constexpr double kPairEventFrames = 4;
 std::optional<std::string> pair_event_warning(const KeyframeIntervalReport& k, const Scene& scene) {
-  if (scene.time.frames < 2) return std::nullopt;
+  // A fallback interval places no template: its pairs are the free solve's, not planned.
+  if (scene.time.frames < 2 || k.fallback) return std::nullopt;
   const double dt = scene.time.time(1) - scene.time.time(0);
   for (const bool created : {false, true}) {
     if ((created ? k.created : k.cancelled).empty()) continue;
