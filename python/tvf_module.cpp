@@ -35,6 +35,7 @@
 #include <filesystem>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <thread>
 
 namespace py = pybind11;
@@ -59,10 +60,17 @@ py::object to_python(const nlohmann::json& j) { return py::module_::import("json
 // handle signals. Ctrl-C (KeyboardInterrupt) or an exception from `progress` cancels the
 // work and is raised once it stopped; a set `cancel`, or `progress` returning False,
 // cancels it and raises tvf.Cancelled (work that finished first returns as usual).
+// `stage(text)` is called, the same way, with what the work does before its frames' count
+// starts (GenerateOptions::stage: "planning the topology between key frames (interval 1
+// of 2)"), when it changed: only the newest of those set within 50 ms is seen.
 template <class Work>
-void run_interruptible(const py::object& progress, const py::object& cancel, Work&& work) {
+void run_interruptible(const py::object& progress, const py::object& cancel, Work&& work,
+                       const py::object& stage = py::none()) {
   std::atomic<bool> flag{false};
   std::atomic<int> done{0}, total{0};
+  std::mutex stage_m;
+  std::string stage_text;
+  int stage_set = 0, stage_shown = 0;  // under stage_m
   std::mutex m;
   std::condition_variable cv;
   bool finished = false;
@@ -73,6 +81,12 @@ void run_interruptible(const py::object& progress, const py::object& cancel, Wor
     done.store(d);
     total.store(t);
   };
+  if (!stage.is_none())
+    options.stage = [&](const std::string& text) {
+      std::lock_guard lock(stage_m);
+      stage_text = text;
+      ++stage_set;
+    };
   // A `cancel` already set stops the work before it starts.
   if (!cancel.is_none() && cancel.attr("is_set")().cast<bool>()) flag.store(true);
   std::thread worker([&] {
@@ -97,6 +111,15 @@ void run_interruptible(const py::object& progress, const py::object& cancel, Wor
     if (!raised) {
       try {
         if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        if (!stage.is_none()) {
+          std::optional<std::string> text;
+          {
+            std::lock_guard lock(stage_m);
+            if (stage_set != stage_shown) text = stage_text, stage_shown = stage_set;
+          }
+          // Like progress: returning False (not None) asks to stop.
+          if (text && stage(*text).is(py::bool_(false))) flag.store(true);
+        }
         if (!progress.is_none() && (done.load() != shown_done || total.load() != shown_total)) {
           shown_done = done.load();
           shown_total = total.load();
@@ -601,14 +624,14 @@ ends at one point raise ValueError.)")
   m.def(
       "generate",
       [](const py::object& scene, const py::object& vertices, const py::object& faces, const py::object& progress,
-         const py::object& cancel, bool parallel) {
+         const py::object& cancel, bool parallel, const py::object& stage) {
         if (!vertices.is_none() || !faces.is_none()) {
           // A mesh from arrays: a Design on it (the library's one path for a given mesh).
           DesignOptions dopt;
           dopt.parallel = parallel;
           Mesh mesh = mesh_of(vertices, faces);
           PyDesign d(Design(scene_of(with_array_domain(scene)), std::move(mesh), dopt));
-          run_interruptible(progress, cancel, [&](GenerateOptions& o) { d.design.generate(o); });
+          run_interruptible(progress, cancel, [&](GenerateOptions& o) { d.design.generate(o); }, stage);
           return d.field();
         }
         const Scene s = scene_of(scene);
@@ -619,12 +642,13 @@ ends at one point raise ValueError.)")
           out->space = g.space;
           out->field = std::make_shared<const Field>(std::move(g.field));
           out->report = std::move(g.report);
-        });
+        }, stage);
         return out;
       },
       py::arg("scene"), py::kw_only(), py::arg("vertices") = py::none(), py::arg("faces") = py::none(),
       py::arg("progress") = py::none(), py::arg("cancel") = py::none(), py::arg("parallel") = true,
-      R"(Generates the field of a scene (a dict of the scene JSON, or a scene file's path).
+      py::arg("stage") = py::none(),
+      R"doc(Generates the field of a scene (a dict of the scene JSON, or a scene file's path).
 
 vertices (|V|, 3) float64 and faces (|F|, 3) int: the domain as arrays instead of the
 scene's own (which they replace; a dict may leave out "domain"; points are [x, y, z, t]
@@ -635,9 +659,12 @@ vertices, flipped orientation); nothing is repaired, so field.vertices are yours
 
 progress(done, total) is called as frames complete (returning False stops the solve,
 as a set `cancel` does); `cancel` is any object with is_set() (threading.Event): once
-set, the solve stops and tvf.Cancelled is raised.
+set, the solve stops and tvf.Cancelled is raised. stage(text) is called with what the
+solve does before its frames' count starts, as the command line's progress line says it
+("building the domain", "planning the topology between key frames (interval 1 of 2)"),
+when it changed (returning False stops the solve too).
 Ctrl-C stops it too (KeyboardInterrupt). Bad input raises ValueError with the command
-line's sentence ("scene: elements[0].type: ...").)");
+line's sentence ("scene: elements[0].type: ...").)doc");
 
   m.def(
       "analyze",
@@ -823,27 +850,27 @@ every later scene with that domain lives on these arrays).)")
           "The scene as a dict (canonical JSON: every key). Assign a dict to change it (validated; undoable).")
       .def(
           "generate",
-          [](PyDesign& d, const py::object& progress, const py::object& cancel) {
-            run_interruptible(progress, cancel, [&](GenerateOptions& o) { d.design.generate(o); });
+          [](PyDesign& d, const py::object& progress, const py::object& cancel, const py::object& stage) {
+            run_interruptible(progress, cancel, [&](GenerateOptions& o) { d.design.generate(o); }, stage);
             return d.field();
           },
-          py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
-          "The field of the current scene (generated unless already there). progress/cancel as tvf.generate.")
+          py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(), py::arg("stage") = py::none(),
+          "The field of the current scene (generated unless already there). progress/cancel/stage as tvf.generate.")
       .def_property_readonly("field", &PyDesign::field, "The field made last (ValueError when there is none).")
       .def_property_readonly("has_field", [](const PyDesign& d) { return d.design.has_field(); },
                              "Whether the current scene's field is there.")
       .def(
           "analyze",
-          [](PyDesign& d, const py::object& progress, const py::object& cancel) {
+          [](PyDesign& d, const py::object& progress, const py::object& cancel, const py::object& stage) {
             nlohmann::json j;
             run_interruptible(progress, cancel, [&](GenerateOptions& o) {
               d.design.generate(o);
               j = d.design.analysis_json();
-            });
+            }, stage);
             return to_python(j);
           },
-          py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(),
-          "The analysis JSON of DESIGN §9 of the current field (generated first if needed).")
+          py::kw_only(), py::arg("progress") = py::none(), py::arg("cancel") = py::none(), py::arg("stage") = py::none(),
+          "The analysis JSON of DESIGN §9 of the current field (generated first if needed; progress/cancel/stage as tvf.generate).")
       .def(
           "check",
           [](PyDesign& d) -> py::object {

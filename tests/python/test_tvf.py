@@ -325,7 +325,12 @@ def test_the_report_has_the_key_frame_intervals_of_keyframe_topology_json(tmp_pa
             {"t": 1, "elements": [{"kind": "singular", "type": "source", "at": [0.5, 0]}]},
         ],
     }
-    report = tvf.generate(scene).report
+    stages = []
+    report = tvf.generate(scene, stage=stages.append).report
+    # What the solve did before its frames' count started, as the command line's progress
+    # line says it (the newest within the 50 ms the calling thread looks, so at least the last).
+    assert stages and stages[-1] == "planning the topology between key frames (interval 1 of 1)"
+    assert "keyframe_intervals" in tvf.Design(scene).generate(stage=stages.append).report
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(scene))
     code, text = cli("generate", path, "-o", tmp_path / "out", "-q", "--no-vtk")
