@@ -25,7 +25,8 @@
 // e^{−4π|μ|} per turn, past 10 % once |μ| > 0.0084. The orbit's points are the streamline through r*,
 // traced forward for an attracting cycle and backward for a repelling one (the direction in
 // which it attracts), one turn. Its period is ∮ ds/|V| along it, in the units of the
-// streamline parameter of the field (dx/dτ = V).
+// streamline parameter of the field (dx/dτ = V), and its multiplier (the forward map's
+// slope at r*) exp(∮ div V dτ) along it.
 //
 // Tracking. An orbit of frame j + 1 continues an orbit of frame j of the same stability
 // whose center lies within `track_distance` edge lengths and whose radius differs by at
@@ -67,7 +68,8 @@ struct PeriodicOrbit {
   int singularity = -1;        // index of that singularity in Topology::singularities[frame]
   double radius = 0.0;         // mean distance of the points from the center
   double period = 0.0;         // ∮ ds/|V|, in the field's streamline parameter
-  double multiplier = 0.0;     // P′(r*): < 1 attracting, > 1 repelling (forward map)
+  double multiplier = 0.0;     // P′(r*) of the forward map, exp(∮ div V dτ) along the orbit:
+                               // < 1 attracting, > 1 repelling (+inf past e^709)
   OrbitStability stability = OrbitStability::attracting;
   std::vector<Vec3> points;    // one turn, world positions, in the direction of the flow
                                // (at most 96: every k-th point of the traced curve)
