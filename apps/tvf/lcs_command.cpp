@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <string>
 #include <tuple>
 
 namespace fs = std::filesystem;
@@ -304,10 +305,18 @@ int LcsCommand::run_ftle() {
     }
     std::vector<VtkScalarArray> vtk;
     for (size_t a = 0; a < arrays.size(); ++a) vtk.push_back({arrays[a].name, kept[a]});
-    write_vtk_scalar_series(stage.stage().string(), "ftle", in.mesh, vtk_times, vtk);
+    // Each file numbered by its frame, as the pictures are (ftle_0016.vtu is frame 16).
+    write_vtk_scalar_series(stage.stage().string(), "ftle", in.mesh, vtk_times, vtk, o.frames);
   }
   write_file_atomically(stage.file("ftle.json"), meta.dump(2) + "\n");
-  const auto files = stage.commit();
+  // What an earlier run into the same folder wrote and this one does not (other frames with
+  // --every, a direction not asked, the VTK series with --no-vtk) goes in the same commit:
+  // ParaView's file-series grouping of ftle_*.vtu would mix the two runs.
+  const auto files = stage.commit([](const std::string& name) {
+    return name == "ftle.json" || name == "ftle.pvd" || name == "ftle_forward.npy" || name == "ftle_backward.npy" ||
+           is_numbered_name(name, "ftle_", ".vtu") || is_numbered_name(name, "ftle_forward_", ".png") ||
+           is_numbered_name(name, "ftle_backward_", ".png");
+  });
   progress.finish();
   for (const auto& w : in.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (!quiet_) {
@@ -325,14 +334,21 @@ int LcsCommand::run_ftle() {
     std::fflush(stdout);
   }
   const int cut = r.forward_cut + r.backward_cut;
-  if (cut > 0 && !quiet_)
-    std::fprintf(stderr,
-                 "note: %d forward and %d backward frames reach past the time range [%g, %g] with T = %g: %s\n",
-                 r.forward_cut, r.backward_cut, in.field.time().t0, in.field.time().t1, horizon_,
-                 o.beyond_range == HorizonPolicy::clamp
-                     ? "their windows were cut at its ends (ftle.json has each frame's span; --beyond-range nan "
-                       "gives them NaN)"
-                     : "they are NaN");
+  if (cut > 0 && !quiet_) {
+    // Naming the directions computed only.
+    std::string which;
+    if (!r.forward.empty()) which = fmt::format("{} forward", r.forward_cut);
+    if (!r.backward.empty()) which += fmt::format("{}{} backward", which.empty() ? "" : " and ", r.backward_cut);
+    const bool one = cut == 1;
+    const std::string what =
+        o.beyond_range == HorizonPolicy::clamp
+            ? fmt::format("{} cut at its ends (ftle.json has each frame's span; --beyond-range nan gives {} NaN)",
+                          one ? "its window was" : "their windows were", one ? "it" : "them")
+            : std::string(one ? "it is NaN" : "they are NaN");
+    std::fprintf(stderr, "note: %s %s past the time range [%g, %g] with T = %g: %s\n", which.c_str(),
+                 one ? "frame reaches" : "frames reach", in.field.time().t0, in.field.time().t1, horizon_,
+                 what.c_str());
+  }
   return 0;
 }
 

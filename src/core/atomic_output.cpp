@@ -305,4 +305,12 @@ std::vector<fs::path> OutputStage::commit(const std::function<bool(const std::st
   return written;
 }
 
+bool is_numbered_name(std::string_view name, std::string_view prefix, std::string_view suffix) {
+  if (name.size() <= prefix.size() + suffix.size() || !name.starts_with(prefix) || !name.ends_with(suffix))
+    return false;
+  for (size_t k = prefix.size(); k < name.size() - suffix.size(); ++k)
+    if (name[k] < '0' || name[k] > '9') return false;
+  return true;
+}
+
 }  // namespace tvf

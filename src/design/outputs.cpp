@@ -21,17 +21,6 @@ namespace tvf {
 
 namespace {
 
-// field_NNNN.vtu, a frame of the VTK series (digits only between the prefix and the
-// suffix). Not std::regex: GCC 12's <regex> warns maybe-uninitialized at -O1.
-bool is_vtk_frame_name(const std::string& name) {
-  constexpr std::string_view prefix = "field_", suffix = ".vtu";
-  if (name.size() <= prefix.size() + suffix.size() || !name.starts_with(prefix) || !name.ends_with(suffix))
-    return false;
-  for (size_t k = prefix.size(); k < name.size() - suffix.size(); ++k)
-    if (name[k] < '0' || name[k] > '9') return false;
-  return true;
-}
-
 bool all_digits(std::string_view s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
@@ -234,7 +223,7 @@ std::vector<std::filesystem::path> write_field_outputs(const std::filesystem::pa
     if (name == "scene.json") return !input_scene_here;
     return name == "field.npy" || name == "vertices.npy" || name == "faces.npy" || name == "times.npy" ||
            name == "field.tvff" || name == "coherence.csv" || name == "divergence.json" ||
-           name == "keyframe_topology.json" || name == "field.pvd" || is_vtk_frame_name(name) ||
+           name == "keyframe_topology.json" || name == "field.pvd" || is_numbered_name(name, "field_", ".vtu") ||
            is_vtk_parallel_name(name);
   });
 }

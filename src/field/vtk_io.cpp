@@ -184,16 +184,18 @@ std::string piece_name(const std::string& stem, int frame, int digits, int rank)
   return fmt::format("{}_{:0{}}_p{}.vtu", stem, frame, digits, rank);
 }
 
+// `numbers`: the files' numbers (default: 0, 1, …).
 void write_collection(const fs::path& folder, const std::string& stem, const std::vector<double>& times, int digits,
-                      bool parallel = false) {
+                      bool parallel = false, std::span<const int> numbers = {}) {
   std::string pvd =
       "<?xml version=\"1.0\"?>\n"
       "<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
       "  <Collection>\n";
-  for (size_t j = 0; j < times.size(); ++j)
+  for (size_t j = 0; j < times.size(); ++j) {
+    const int number = numbers.empty() ? static_cast<int>(j) : numbers[j];
     pvd += fmt::format("    <DataSet timestep=\"{:.17g}\" part=\"0\" file=\"{}\"/>\n", times[j],
-                       xml_escape(parallel ? parallel_frame_name(stem, static_cast<int>(j), digits)
-                                           : frame_name(stem, static_cast<int>(j), digits)));
+                       xml_escape(parallel ? parallel_frame_name(stem, number, digits) : frame_name(stem, number, digits)));
+  }
   pvd += "  </Collection>\n</VTKFile>\n";
   write_whole_file(folder / (stem + ".pvd"), pvd, {}, {});
 }
@@ -201,14 +203,19 @@ void write_collection(const fs::path& folder, const std::string& stem, const std
 }  // namespace
 
 void write_vtk_scalar_series(const std::string& dir, const std::string& stem, const Mesh& mesh,
-                             const std::vector<double>& times, const std::vector<VtkScalarArray>& arrays) {
+                             const std::vector<double>& times, const std::vector<VtkScalarArray>& arrays,
+                             std::span<const int> numbers) {
   const auto nv = static_cast<size_t>(mesh.num_vertices());
   for (const auto& array : arrays)
     TVF_CHECK(array.values.size() == times.size() * nv, "array {} has {} values for {} frames × {} vertices",
               array.name, array.values.size(), times.size(), nv);
+  TVF_CHECK(numbers.empty() || numbers.size() == times.size(), "{} file numbers for {} times", numbers.size(),
+            times.size());
   const fs::path folder(dir);
   int digits = 4;
-  for (auto n = static_cast<long>(times.size()) - 1; n >= 10000; n /= 10) ++digits;
+  long largest = static_cast<long>(times.size()) - 1;
+  for (const int n : numbers) largest = std::max(largest, static_cast<long>(n));
+  for (long n = largest; n >= 10000; n /= 10) ++digits;
   const Geometry g = make_geometry(mesh);
   tbb::parallel_for(0, static_cast<int>(times.size()), [&](int j) {
     Appended a;
@@ -223,9 +230,10 @@ void write_vtk_scalar_series(const std::string& dir, const std::string& stem, co
     }
     const std::string attributes =
         fmt::format("Scalars=\"{}\"", arrays.empty() ? "" : xml_escape(arrays.front().name));
-    write_piece(folder / frame_name(stem, j, digits), times[static_cast<size_t>(j)], g, attributes, data_arrays, a);
+    const int number = numbers.empty() ? j : numbers[static_cast<size_t>(j)];
+    write_piece(folder / frame_name(stem, number, digits), times[static_cast<size_t>(j)], g, attributes, data_arrays, a);
   });
-  write_collection(folder, stem, times, digits);
+  write_collection(folder, stem, times, digits, false, numbers);
 }
 
 void write_vtk_series(const std::string& dir, const std::string& stem, const TangentBundle& bundle,

@@ -70,6 +70,29 @@ TEST(CliLcs, FtleOfTheDoubleGyreWritesArraysPicturesAndVtk) {
   EXPECT_TRUE(std::isnan(f.values[21 * 861 + 400]));
 }
 
+TEST(CliLcs, FtleIntoTheFolderOfAnEarlierRunLeavesOnlyItsOwnFiles) {
+  // Every 10th frame, then every 20th backward alone into the same folder: the earlier run's
+  // other frames (pictures, VTK files: ParaView groups ftle_*.vtu as one series) and its
+  // forward arrays go; a file of the user's stays. Each VTK file is numbered by its frame,
+  // as the pictures are.
+  TempDir dir;
+  write_field(dir / "gyre", GridSpec{41, 21, {0, 0}, {2, 1}}, TimeSampling{0, 10, 41}, test::double_gyre);
+  const std::string run = "ftle " + quoted(dir / "gyre") + " --horizon 2 --dt 0.25 -q -s 64 -o " + quoted(dir / "out");
+  ASSERT_EQ(run_tvf(run + " --every 10 --pictures 5").exit_code, 0);
+  // json, pvd, 5 vtu, 2 npy, 4 + 4 png (frame 40 has no forward window, frame 0 no backward one)
+  EXPECT_EQ(test::listing(dir / "out").size(), 17u);
+  EXPECT_TRUE(fs::exists(dir / "out" / "ftle_0030.vtu"));
+  test::write_text(dir / "out" / "notes.txt", "mine");
+  const auto r = run_tvf(run + " --every 20 --pictures 2 --direction backward");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(test::listing(dir / "out"),
+            (std::vector<std::string>{"ftle.json", "ftle.pvd", "ftle_0000.vtu", "ftle_0020.vtu", "ftle_0040.vtu",
+                                      "ftle_backward.npy", "ftle_backward_0020.png", "ftle_backward_0040.png",
+                                      "notes.txt"}));
+  const std::string pvd = test::read_text(dir / "out" / "ftle.pvd");
+  EXPECT_NE(pvd.find("timestep=\"5\" part=\"0\" file=\"ftle_0020.vtu\""), std::string::npos) << pvd;
+}
+
 TEST(CliLcs, FtleComposedIsCloseToDirect) {
   // --compose (flow-map composition, planar grids): the same arrays to a small error, the
   // same cut windows, and ftle.json says how they were made.

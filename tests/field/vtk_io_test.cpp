@@ -28,20 +28,13 @@ Field moving_field(const Mesh& mesh, const TimeSampling& ts) {
   return field;
 }
 
-std::vector<std::string> listing(const fs::path& dir) {
-  std::vector<std::string> names;
-  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
 TEST(VtkSeries, FilesAndCollection) {
   const Mesh& mesh = test::grid_mesh();
   const TangentBundle bundle(mesh);
   const Field field = moving_field(mesh, TimeSampling{0.0, 1.0, 3});
   TempDir dir;
   write_vtk_series(dir.path().string(), "f", bundle, field);
-  EXPECT_EQ(listing(dir.path()),
+  EXPECT_EQ(test::listing(dir.path()),
             (std::vector<std::string>{"f.pvd", "f_0000.vtu", "f_0001.vtu", "f_0002.vtu"}));
   const std::string pvd = test::read_text(dir / "f.pvd");
   EXPECT_NE(pvd.find("<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">"),
@@ -166,7 +159,7 @@ TEST(VtkSeries, VtkReadsScalarSeries) {
   b[nv + 3] = std::nanf("");
   TempDir dir;
   write_vtk_scalar_series(dir.path().string(), "ftle", mesh, times, {{"ftle_forward", a}, {"ftle_backward", b}});
-  EXPECT_EQ(listing(dir.path()), (std::vector<std::string>{"ftle.pvd", "ftle_0000.vtu", "ftle_0001.vtu"}));
+  EXPECT_EQ(test::listing(dir.path()), (std::vector<std::string>{"ftle.pvd", "ftle_0000.vtu", "ftle_0001.vtu"}));
   const std::string script =
       "import numpy as np\n"
       "from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader\n"

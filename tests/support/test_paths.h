@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace tvf::test {
 
@@ -70,5 +71,7 @@ std::optional<std::filesystem::path> cgal_mesh(const TempDir& dir, const std::st
 // Writes text to a file (test fixtures).
 void write_text(const std::filesystem::path& path, const std::string& text);
 std::string read_text(const std::filesystem::path& path);
+// The names of the files in a folder, sorted.
+std::vector<std::string> listing(const std::filesystem::path& dir);
 
 }  // namespace tvf::test

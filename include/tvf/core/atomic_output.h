@@ -17,6 +17,7 @@
 #include <functional>
 #include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace tvf {
@@ -58,6 +59,10 @@ void write_file_atomically(const std::filesystem::path& path, const std::string&
 // target is left as it was. Throws tvf::Error naming `path` on failure.
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& writer);
+
+// Whether `name` is `prefix`, one or more digits, then `suffix` (field_0042.vtu): the names
+// an OutputStage::commit's `owned` claims for numbered outputs of an earlier run.
+bool is_numbered_name(std::string_view name, std::string_view prefix, std::string_view suffix);
 
 // A staging folder inside `target_dir`: files are written into stage(), and commit()
 // moves them all into target_dir (see the promise above). Destroyed uncommitted, it removes

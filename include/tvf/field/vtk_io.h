@@ -44,8 +44,10 @@ struct VtkScalarArray {
   std::span<const float> values;
 };
 // Writes DIR/<stem>.pvd and DIR/<stem>_NNNN.vtu with the arrays as point data (Float32;
-// NaN kept as NaN), one .vtu per time.
+// NaN kept as NaN), one .vtu per time, NNNN its entry of `numbers` (the field's frame, where
+// only some frames are written) or, without them, 0, 1, ….
 void write_vtk_scalar_series(const std::string& dir, const std::string& stem, const Mesh& mesh,
-                             const std::vector<double>& times, const std::vector<VtkScalarArray>& arrays);
+                             const std::vector<double>& times, const std::vector<VtkScalarArray>& arrays,
+                             std::span<const int> numbers = {});
 
 }  // namespace tvf
