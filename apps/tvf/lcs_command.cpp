@@ -46,12 +46,17 @@ Vec3 point_option(const std::vector<double>& v, size_t first, size_t dims) {
   return {v[first], v[first + 1], dims == 3 ? v[first + 2] : 0.0};
 }
 
-// A point of the user's on the domain: planar domains take X Y (Z ignored if 0), surfaces X Y Z.
+// A point of the user's on the domain: planar domains take X Y (or X Y 0: the domain lies at
+// z = 0), surfaces X Y Z.
 void check_point_dims(const std::vector<double>& v, size_t per_point, bool planar, const char* option) {
   if (!planar && per_point != 3)
     throw Error(fmt::format("{}: the domain is a surface: give X Y Z for each point", option));
   for (const double x : v)
     if (!std::isfinite(x)) throw Error(fmt::format("{}: {} is not a number", option, x));
+  if (planar && per_point == 3)
+    for (size_t k = 2; k < v.size(); k += 3)
+      if (v[k] != 0)
+        throw Error(fmt::format("{}: Z = {} is off the planar domain, which lies at z = 0: give X Y", option, v[k]));
 }
 
 nlohmann::json points_json(const Streakline& s) {
@@ -365,7 +370,6 @@ int LcsCommand::run_streaklines() {
   const TangentBundle& bundle = in.space->bundle();
   // --element: the scene's sketched streakline gives what the options leave out.
   const StreaklineElement* sketch = nullptr;
-  bool seed_from_sketch = false;
   if (element_ >= 0 || streak_->count("--element") > 0) {
     if (!in.scene)
       throw Error(fmt::format("--element {}: {} has no scene to take the element from", element_, input_));
@@ -374,7 +378,6 @@ int LcsCommand::run_streaklines() {
         !(sketch = std::get_if<StreaklineElement>(&in.scene->elements[k])))
       throw Error(fmt::format("--element {}: the scene has no streakline element at that index", element_));
     if (seed_.empty()) {
-      seed_from_sketch = true;
       const Vec3& s0 = sketch->points.front();
       seed_ = bundle.is_flat() ? std::vector<double>{s0.x(), s0.y()} : std::vector<double>{s0.x(), s0.y(), s0.z()};
     }
@@ -392,11 +395,12 @@ int LcsCommand::run_streaklines() {
   o.max_gap = max_gap_;
   o.flow.dt = dt_;
   Vec3 seed = point_option(seed_, 0, seed_.size());
-  // The sketch's seed is where the generator took it: its closest point of the surface (the
-  // scene's own check bounds how far off it may be).
-  if (seed_from_sketch && !bundle.is_flat()) seed = surface_position(bundle.mesh(), in.space->locate(seed));
   progress.note("releasing");
   const Streakline s = on_input(input_, [&] { return trace_streakline(bundle, in.field, seed, o); });
+  // On a surface the dye starts from the seed's closest point of it (the trace refused a seed
+  // too far off; a sketch's seed is where the generator took it): that is the seed written
+  // and drawn.
+  if (!bundle.is_flat()) seed = surface_position(bundle.mesh(), in.space->locate(seed));
   nlohmann::json j = {{"t", s.t},
                       {"from", o.t0},
                       {"seed", {seed.x(), seed.y(), seed.z()}},

@@ -234,8 +234,8 @@ void print_report(const char* what, int frames, int width, int height, double se
 
 namespace {
 
-// The --streakline seeds: X,Y on a planar domain (a Z is allowed there and ignored, as
-// everywhere on planar domains), X,Y,Z on a surface.
+// The --streakline seeds: X,Y on a planar domain (X,Y,0 too: it lies at z = 0), X,Y,Z on a
+// surface.
 std::vector<Vec3> parse_dye_seeds(const std::vector<std::string>& texts, const Mesh& mesh) {
   const bool planar = mesh.is_planar_xy();
   std::vector<Vec3> seeds;
@@ -248,6 +248,8 @@ std::vector<Vec3> parse_dye_seeds(const std::vector<std::string>& texts, const M
       throw Error(fmt::format("--streakline {}: expected X,Y (a point of the planar domain)", text));
     if (!planar && !three)
       throw Error(fmt::format("--streakline {}: expected X,Y,Z (a point on or near the surface)", text));
+    if (planar && three && z != 0)
+      throw Error(fmt::format("--streakline {}: Z = {} is off the planar domain, which lies at z = 0: give X,Y", text, z));
     seeds.push_back(Vec3(x, y, three ? z : 0.0));
   }
   return seeds;

@@ -367,6 +367,14 @@ TEST(CliLcs, BadOptionsAreOneSentenceAndLeaveNothing) {
        "--max-gap 0: must be a positive distance"},
       {"timelines " + in + " --line 0 0 0.5 0 --max-gap inf -o " + quoted(dir / "out.json"),
        "--max-gap inf: must be a positive distance"},
+      // A Z off the plane (z = 0) is a mistake, not a point to project: refused, not traced
+      // from (0.5, 0) (nor called outside the domain for a huge Z).
+      {"streaklines " + in + " --seed 0.5 0 1 -o " + quoted(dir / "out.json"),
+       "--seed: Z = 1 is off the planar domain, which lies at z = 0: give X Y"},
+      {"streaklines " + in + " --seed 0.5 0 1e8 -o " + quoted(dir / "out.json"), "--seed: Z = 100000000 is off"},
+      {"timelines " + in + " --line 0 0 0 0.5 0 0.25 -o " + quoted(dir / "out.json"), "--line: Z = 0.25 is off"},
+      {"render texture " + in + " --streakline 0.5,0,4 -o " + quoted(dir / "out"),
+       "--streakline 0.5,0,4: Z = 4 is off the planar domain"},
       // The surface pictures' camera.
       {"timelines " + in + " --line 0 0 0.5 0 --view 0,0,0 -o " + quoted(dir / "out.json"),
        "--view 0,0,0: must be a direction, three finite numbers not all zero"},

@@ -265,6 +265,10 @@ TEST(Dye, RefusesSeedsOutsideAndTimesBackwards) {
     return "";
   };
   EXPECT_EQ(message({Vec3(0, 0, 0), Vec3(2, 0.5, 0)}, 0), "the dye seed (2, 0.5) is outside the domain");
+  // Off the plane (z = 0): refused, not projected (nor called outside for a huge z).
+  EXPECT_EQ(message({Vec3(0.5, 0.5, 1e8)}, 0),
+            "the dye seed (0.5, 0.5, 100000000) is off the planar domain, which lies at z = 0: give z = 0 or leave it "
+            "out");
   EXPECT_NE(message({Vec3(0, 0, 0)}, 1.5).find("outside the field's time range [0, 1]"), std::string::npos);
   DyeOptions bad;
   bad.release_spacing = -0.1;
