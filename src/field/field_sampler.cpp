@@ -2,6 +2,8 @@
 
 #include "tvf/core/error.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -120,6 +122,16 @@ Vec3 surface_position(const Mesh& mesh, const SurfacePoint& p) {
   const Face& t = mesh.face(p.face);
   return p.bary[0] * mesh.position(t[0]) + p.bary[1] * mesh.position(t[1]) +
          p.bary[2] * mesh.position(t[2]);
+}
+
+std::string planar_point_problem(const Mesh& mesh, const Vec3& x, const Vec3& on, const std::string& what) {
+  if (!mesh.is_planar_xy()) return {};
+  if (x.z() != 0)
+    return fmt::format("{} ({}, {}, {}) is off the planar domain, which lies at z = 0: give z = 0 or leave it out", what,
+                       x.x(), x.y(), x.z());
+  if ((on - x).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
+    return fmt::format("{} ({}, {}) is outside the domain", what, x.x(), x.y());
+  return {};
 }
 
 }  // namespace tvf

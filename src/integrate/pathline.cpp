@@ -21,9 +21,9 @@ Pathline trace_pathline(const TangentBundle& bundle, const Field& field, const V
   const Mesh& mesh = bundle.mesh();
   const SurfacePoint p = closest_point(mesh, seed);
   if (p.face < 0) throw_input_error(mesh.source(), "", "the domain has no faces to trace a pathline on");
-  if (bundle.is_flat() && (surface_position(mesh, p) - seed).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
-    throw_input_error(mesh.source(), "",
-                      fmt::format("the pathline seed ({}, {}) is outside the domain", seed.x(), seed.y()));
+  if (const std::string problem = planar_point_problem(mesh, seed, surface_position(mesh, p), "the pathline seed");
+      !problem.empty())
+    throw_input_error(mesh.source(), "", problem);
   return trace_pathline(bundle, field, p, options);
 }
 

@@ -36,14 +36,8 @@ SurfacePoint locate_seed(const TangentBundle& bundle, const PointLocator& locato
   if (p.face < 0) throw_input_error(mesh.source(), "", "the domain has no faces");
   const Vec3 on = surface_position(mesh, p);
   if (bundle.is_flat()) {
-    // The plane is z = 0: a point off it is a mistake (a surface's point, a typo), not one
-    // to project silently.
-    if (x.z() != 0)
-      throw Error(fmt::format("the {} ({}, {}, {}) is off the planar domain, which lies at z = 0: give z = 0 or "
-                              "leave it out",
-                              what, x.x(), x.y(), x.z()));
-    if ((on - x).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
-      throw Error(fmt::format("the {} ({}, {}) is outside the domain", what, x.x(), x.y()));
+    if (const std::string problem = planar_point_problem(mesh, x, on, fmt::format("the {}", what)); !problem.empty())
+      throw Error(problem);
     return p;
   }
   const double reach = max_distance > 0 ? max_distance : 3.0 * mesh.mean_edge_length();

@@ -56,9 +56,9 @@ Streamline trace_streamline(const TangentBundle& bundle, std::span<const cplx> v
   const Mesh& mesh = bundle.mesh();
   const SurfacePoint p = closest_point(mesh, seed);
   if (p.face < 0) throw_input_error(mesh.source(), "", "the domain has no faces to trace a streamline on");
-  if (bundle.is_flat() && (surface_position(mesh, p) - seed).head<2>().norm() > 1e-9 * std::max(1.0, mesh.diameter()))
-    throw_input_error(mesh.source(), "",
-                      fmt::format("the streamline seed ({}, {}) is outside the domain", seed.x(), seed.y()));
+  if (const std::string problem = planar_point_problem(mesh, seed, surface_position(mesh, p), "the streamline seed");
+      !problem.empty())
+    throw_input_error(mesh.source(), "", problem);
   return trace_streamline(bundle, values, p, options);
 }
 

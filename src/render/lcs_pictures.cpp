@@ -228,7 +228,7 @@ Image curve_picture(const TangentBundle& bundle, const Field& field, double t,
     for (const auto& c : curves) {
       lines.push_back({c, o.color, width, true});
       if (o.dots)
-        for (const Vec3& x : c) markers.push_back({x, o.color, 0.9 * width});
+        for (const Vec3& x : c) markers.push_back({x, o.color, 0.9 * width, 0.0});  // as on the plane: no outline
     }
     for (const Vec3& s : seeds) markers.push_back({s, 0xFFFFFF, 2.5 * width});
     RenderOptions ro;

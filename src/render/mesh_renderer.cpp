@@ -583,7 +583,8 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
     float col[4];
     unpack(mk.color, col);
     const double rx = mk.radius / (0.5 * o.width) * c.w(), ry = mk.radius / (0.5 * o.height) * c.w();
-    const float outline = static_cast<float>(std::clamp(1.3 / std::max(mk.radius, 1e-3), 0.0, 1.0));
+    // Its fraction of the radius; above 0 (the shader's mark of a disc) where there is none.
+    const float outline = static_cast<float>(std::clamp(mk.outline / std::max(mk.radius, 1e-3), 1e-6, 1.0));
     const Eigen::Vector4d q[4] = {c + Eigen::Vector4d(-rx, -ry, 0, 0), c + Eigen::Vector4d(-rx, ry, 0, 0),
                                   c + Eigen::Vector4d(rx, -ry, 0, 0), c + Eigen::Vector4d(rx, ry, 0, 0)};
     const float disc[4][3] = {{-1, -1, outline}, {-1, 1, outline}, {1, -1, outline}, {1, 1, outline}};

@@ -119,5 +119,31 @@ TEST(LcsPictures, OnSurfacesTheCameraFacesTheCurves) {
   EXPECT_GT(curve_pixels(true), 50);
 }
 
+// A streakline's particles close together (as `tvf streaklines` draws them: dots at the
+// default width) are the curve's colour on a surface as on the plane, with a thin casing:
+// each dot had a black outline, and they merged into a black band (4–10 red pixels against
+// ~400 black on a sphere).
+TEST(LcsPictures, OnSurfacesDenseDotsKeepTheCurvesColour) {
+  const Mesh& sphere = test::icosphere_mesh();
+  const TangentBundle bundle(sphere);
+  const Field field = test::field_from(bundle, TimeSampling{0, 1, 3}, [](const Vec3& x, double) {
+    return Vec3(-x.y(), x.x(), 0);
+  });
+  std::vector<Vec3> arc;  // 0.004 apart, facing the camera
+  const Vec3 c = Vec3(1, -0.6, 0.5).normalized(), t = c.cross(Vec3::UnitZ()).normalized();
+  for (int k = -50; k <= 50; ++k) arc.push_back((c + 0.004 * k * t).normalized());
+  CurvePictureOptions o;
+  o.size = 400;
+  o.face_curves = false;
+  const Image img = curve_picture(bundle, field, 0.5, {arc}, std::vector<Vec3>{}, o);
+  int coloured = 0, black = 0;
+  for (const std::uint32_t p : img.pixels) {
+    coloured += (p & 0xFFFFFFu) == o.color;
+    black += (p & 0xFFFFFFu) == 0;
+  }
+  EXPECT_GT(coloured, 100);
+  EXPECT_GT(coloured, black) << coloured << " pixels of the curve's colour, " << black << " black";
+}
+
 }  // namespace
 }  // namespace tvf

@@ -7,6 +7,7 @@
 #include "tvf/mesh/tangent_bundle.h"
 
 #include <optional>
+#include <string>
 
 namespace tvf {
 
@@ -38,5 +39,9 @@ private:
 // scenes place few points, so no spatial index is kept).
 SurfacePoint closest_point(const Mesh& mesh, const Vec3& x);
 Vec3 surface_position(const Mesh& mesh, const SurfacePoint& p);
+// What is wrong with a point a user gave (`what`: "the streamline seed") on a planar mesh
+// (z = 0), `on` its closest point of the mesh: off the plane (z ≠ 0: a mistake, not a point
+// to project), or outside the domain; empty where nothing is, and on surfaces.
+std::string planar_point_problem(const Mesh& mesh, const Vec3& x, const Vec3& on, const std::string& what);
 
 }  // namespace tvf

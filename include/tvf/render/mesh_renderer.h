@@ -64,11 +64,12 @@ struct RenderLine {
   bool underlay = false;
 };
 
-// A disc facing the camera, `radius` pixels, with a thin black outline.
+// A disc facing the camera, `radius` pixels, with a black outline `outline` pixels wide.
 struct RenderMarker {
   Vec3 position{0, 0, 0};
   std::uint32_t color = 0x000000;
   double radius = 5.0;
+  double outline = 1.3;  // 0: none (the dots along a curve: outlined, they were a black band)
 };
 
 struct RenderOptions {
