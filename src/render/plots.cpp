@@ -165,16 +165,18 @@ std::vector<std::string> write_paths_plot(const std::string& stem, const Mesh& m
   const double t1 = topology.times.size() > 1 ? topology.times.back() : t0 + 1;
   return render(stem, options, [&](cairo_t* cr, double w, double h) {
     background(cr);
-    // Oblique view: u to the right, t up, v receding at 30° with half length.
-    const double margin = 70;
+    // Oblique view: u to the right, t up, v receding at 30° with half length. The legend
+    // has the column left of the box to itself (over the box, its last entries were struck
+    // through by the box's top edge once cycles and Hopf events joined it).
+    const double margin = 70, left = 190;
     const double du = std::max(ext[ua], 1e-12), dv = std::max(ext[va], 1e-12);
     const double depth = 0.5, ang = kPi / 6;
     const double box_w = 1 + depth * std::cos(ang) * dv / du;
-    const double scale_u = (w - 2 * margin) / box_w;
+    const double scale_u = (w - left - margin) / box_w;
     const double th = (h - 2 * margin - depth * std::sin(ang) * dv / du * scale_u);
     auto P = [&](double u, double v, double t, double& x, double& y) {
       const double uu = (u - lo[ua]) / du, vv = (v - lo[va]) / du, tt = (t - t0) / (t1 - t0);
-      x = margin + scale_u * (uu + depth * std::cos(ang) * vv);
+      x = left + scale_u * (uu + depth * std::cos(ang) * vv);
       y = h - margin - th * tt - scale_u * depth * std::sin(ang) * vv;
     };
     auto line = [&](double u0, double v0, double s0, double u1, double v1, double s1) {
