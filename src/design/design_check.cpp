@@ -76,6 +76,7 @@ void match_singularity(DesignedFeature& f, const std::vector<Expected>& expected
   f.frames = static_cast<int>(expected.size());
   std::set<int> paths;
   int first_missing = -1, first_differs = -1;
+  double missing_shift = 0;  // the first-order shift of the zero at first_missing
   SingularityType differs_found = SingularityType::source, differs_designed = SingularityType::source;
   for (const Expected& e : expected) {
     const auto& sings = topo.singularities[static_cast<size_t>(e.frame)];
@@ -106,6 +107,7 @@ void match_singularity(DesignedFeature& f, const std::vector<Expected>& expected
       }
     } else if (first_missing < 0) {
       first_missing = e.frame;
+      missing_shift = (e.predicted - e.position).norm();
     }
   }
   f.paths.assign(paths.begin(), paths.end());
@@ -114,10 +116,19 @@ void match_singularity(DesignedFeature& f, const std::vector<Expected>& expected
   std::vector<std::string> notes;
   if (f.frames == 0) notes.push_back("no frame falls in its life span");
   const int missing = f.frames - f.frames_matched - f.frames_type_differs;
-  if (missing > 0)
+  if (missing > 0) {
     notes.push_back(fmt::format("no singularity of index {:+d} within {:.3g} of where the field puts it at {} of {} "
                                 "frames (first at t = {:.3f})",
                                 f.index, tol, missing, f.frames, topo.times[static_cast<size_t>(first_missing)]));
+    // Why, where the rest of the design outweighs the element at its own place (two Hopf
+    // templates on a sphere with falloff 5: each one's cubic far field, at the other's pole,
+    // moved its zero 5.8 away, and the analysis found a sink there and no focus).
+    if (missing_shift > tol)
+      notes.back() += fmt::format(": the rest of the design outweighs it there (its field at the designed point "
+                                  "would move the zero {:.3g} away, |J⁻¹·V|); a larger falloff or the elements "
+                                  "further apart keep their fields apart",
+                                  missing_shift);
+  }
   if (f.frames_type_differs > 0)
     notes.push_back(fmt::format("of another type at {} of {} frames (first at t = {:.3f}: {} where {} is designed)",
                                 f.frames_type_differs, f.frames, topo.times[static_cast<size_t>(first_differs)],

@@ -149,6 +149,36 @@ TEST(DesignCheck, AHopfElementIsItsFocusAndItsHopfEvent) {
   EXPECT_EQ(other.designed[1].note.find("mean edge lengths"), std::string::npos) << other.designed[1].note;
 }
 
+TEST(DesignCheck, AnElementOutweighedByTheRestOfTheDesignSaysSo) {
+  // Two Hopf templates at the poles of a sphere, summed (basis) with falloff 5: each one's
+  // cubic far field at the other pole is the field there (the analysis finds a sink and a
+  // source at the poles, no focus). The note says why, and how to keep them apart; with
+  // falloff 150 both foci are found.
+  auto scene = [](double falloff) {
+    return scene_from_json(nlohmann::json::parse(fmt::format(R"({{"tvf": 1,
+      "domain": {{"sphere": {{"subdivisions": 4}}}}, "time": {{"frames": 5}}, "generator": "basis",
+      "falloff": {},
+      "elements": [
+        {{"kind": "bifurcation", "type": "hopf_supercritical", "at": [0, 0, 1, 0.3], "scale": 0.3, "time_scale": 0.5}},
+        {{"kind": "bifurcation", "type": "hopf_subcritical", "at": [0, 0, -1, 0.7], "scale": 0.3, "time_scale": 0.5}}]}})",
+                                                              falloff)),
+                           "scene");
+  };
+  const Scene weak = scene(5);
+  const Generated g = generate_and_analyze(weak);
+  const DesignCheck check = check_design(weak, *g.space, g.field, g.topology);
+  ASSERT_EQ(check.designed[0].kind, FeatureKind::singularity);
+  EXPECT_FALSE(check.designed[0].found);
+  EXPECT_NE(check.designed[0].note.find("the rest of the design outweighs it there"), std::string::npos)
+      << check.designed[0].note;
+  EXPECT_NE(check.designed[0].note.find("a larger falloff"), std::string::npos) << check.designed[0].note;
+  const Scene strong = scene(150);
+  const Generated h = generate_and_analyze(strong);
+  const DesignCheck fine = check_design(strong, *h.space, h.field, h.topology);
+  EXPECT_TRUE(fine.designed[0].found) << fine.designed[0].note;
+  EXPECT_EQ(fine.designed[0].note.find("outweighs"), std::string::npos) << fine.designed[0].note;
+}
+
 TEST(DesignCheck, ATemplateTooSmallForTheMeshIsNotFoundAndSaysSo) {
   // A Hopf template of scale 0.19 on the 33² grid (2.7 mean edge lengths): the cubic term at
   // one edge from the focus outweighs μ near t0, so the piecewise-linear focus keeps its
