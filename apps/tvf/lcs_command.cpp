@@ -438,6 +438,13 @@ int LcsCommand::run_streaklines() {
   warn_unresolved(s, "streakline",
                   fmt::format("{} added releases", StreaklineOptions{}.max_added),
                   "particles released within 1e-12 of each other", "a smaller --release-spacing");
+  // The distances compare the dye with the sketch as drawn for the element's release; other
+  // times make them the difference between two shapes, not the field's error.
+  if (sketch && !quiet_ && (o.t0 != sketch->from || o.t1 != sketch->t))
+    std::fprintf(stderr,
+                 "note: the dye released over [%g, %g] is compared with elements[%d]'s sketch, drawn for [%g, %g]: "
+                 "the distances are not the field's error at the sketch (leave --from and --to out for that)\n",
+                 o.t0, o.t1, element_, sketch->from, sketch->t);
   if (!quiet_) {
     std::printf("streakline at t = %g: %d particles released from t = %g", s.t, s.released, o.t0);
     if (s.left > 0) std::printf(", %d of them left the domain", s.left);

@@ -211,6 +211,16 @@ TEST(CliLcs, StreaklinesOfASketchedElementDrawTheSketchAndMeasureTheDistance) {
   EXPECT_LT(j["sketch"]["frechet"].get<double>(), 0.5 * j["sketch"]["mean_edge_length"].get<double>()) << j["sketch"];
   EXPECT_NE(r.output.find(", Fréchet "), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(dir / "s.png"));
+  EXPECT_EQ(r.output.find("note:"), std::string::npos) << r.output;
+  // Dye to another time than the sketch's: compared all the same, with a note that the
+  // distances are then two shapes' difference, not the field's error.
+  const auto early = run_tvf("streaklines " + quoted(dir / "scene.json") + " --element 1 --to 0.5 --no-picture -o " +
+                             quoted(dir / "early.json"));
+  ASSERT_EQ(early.exit_code, 0) << early.output;
+  EXPECT_NE(early.output.find("note: the dye released over [0.2, 0.5] is compared with elements[1]'s sketch, drawn "
+                              "for [0.2, 0.8]"),
+            std::string::npos)
+      << early.output;
   const std::pair<std::string, std::string> bad[] = {
       {" --element 0", "--element 0: the scene has no streakline element at that index"},
       {" --element 7", "--element 7: the scene has no streakline element at that index"},
