@@ -540,12 +540,26 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
     }
   };
   const float no_disc[4][3] = {};
+  // A disc (no outline: its fraction of the radius just above 0, the shader's mark of a disc).
+  const float round[4][3] = {{-1, -1, 1e-6f}, {-1, 1, 1e-6f}, {1, -1, 1e-6f}, {1, 1, 1e-6f}};
+  // A line: a quad per segment and a disc of its width at every point, so that its joints and
+  // ends are round (square caps stuck out of a bent line's outer corners: the casing's, 2.2
+  // times as wide, as black spikes beside a sketch's corners).
   auto add_line = [&](const RenderLine& line, double width, std::uint32_t color, double lift) {
     float col[4];
     unpack(color, col);
+    const double shift = 2.2 * line.width;  // the same for the casing and the line
+    const double hw = 0.5 * width;
+    auto offset = [&](const Eigen::Vector4d& c, const Vec2& off) {
+      Eigen::Vector4d r = c;
+      r.x() += off.x() / (0.5 * o.width) * c.w();
+      r.y() += off.y() / (0.5 * o.height) * c.w();
+      return r;
+    };
+    std::vector<Eigen::Vector4d> clip(line.points.size());
+    for (size_t i = 0; i < line.points.size(); ++i) clip[i] = clip_of(line.points[i], lift, shift);
     for (size_t i = 0; i + 1 < line.points.size(); ++i) {
-      const double shift = 2.2 * line.width;  // the same for the casing and the line
-      const Eigen::Vector4d a = clip_of(line.points[i], lift, shift), b = clip_of(line.points[i + 1], lift, shift);
+      const Eigen::Vector4d &a = clip[i], &b = clip[i + 1];
       if (a.w() <= 0 || b.w() <= 0) continue;  // behind the camera
       const Vec2 sa(a.x() / a.w() * 0.5 * o.width, a.y() / a.w() * 0.5 * o.height);
       const Vec2 sb(b.x() / b.w() * 0.5 * o.width, b.y() / b.w() * 0.5 * o.height);
@@ -553,17 +567,14 @@ Image MeshRenderer::render(const Camera& camera, const RenderOptions& o, std::sp
       const double len = d.norm();
       d = len > 1e-9 ? Vec2(d / len) : Vec2(1, 0);
       const Vec2 n(-d.y(), d.x());
-      const double hw = 0.5 * width;
-      // Square caps of half the width close the joints between segments.
-      auto corner = [&](const Eigen::Vector4d& c, double along, double side) {
-        const Vec2 off = hw * (along * d + side * n);
-        Eigen::Vector4d r = c;
-        r.x() += off.x() / (0.5 * o.width) * c.w();
-        r.y() += off.y() / (0.5 * o.height) * c.w();
-        return r;
-      };
-      const Eigen::Vector4d q[4] = {corner(a, -1, -1), corner(a, -1, 1), corner(b, 1, -1), corner(b, 1, 1)};
+      const Eigen::Vector4d q[4] = {offset(a, -hw * n), offset(a, hw * n), offset(b, -hw * n), offset(b, hw * n)};
       push_quad(q, col, no_disc);
+    }
+    for (const Eigen::Vector4d& c : clip) {
+      if (c.w() <= 0) continue;
+      const Eigen::Vector4d q[4] = {offset(c, Vec2(-hw, -hw)), offset(c, Vec2(-hw, hw)), offset(c, Vec2(hw, -hw)),
+                                    offset(c, Vec2(hw, hw))};
+      push_quad(q, col, round);
     }
   };
   for (const auto& line : lines)
