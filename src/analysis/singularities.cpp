@@ -17,6 +17,22 @@ using namespace detail;
 
 namespace {
 
+// The Jacobian of the linear map on face f taking its corners to w (the values in the face
+// frame): w(y) = w0 + J·y with y the face coordinates relative to corner 0, so
+// J·[y1 y2] = [w1 − w0, w2 − w0].
+Mat2 face_linear_jacobian(const TangentBundle& bundle, int f, const std::array<cplx, 3>& w) {
+  const Mesh& mesh = bundle.mesh();
+  const Face& t = mesh.face(f);
+  const Vec3& x0 = mesh.position(t[0]);
+  Mat2 Y, W;
+  for (int c = 1; c < 3; ++c) {
+    const Vec3 d = mesh.position(t[static_cast<size_t>(c)]) - x0;
+    Y.col(c - 1) = Vec2(d.dot(bundle.face_e1(f)), d.dot(bundle.face_e2(f)));
+    W.col(c - 1) = to_vec2(w[static_cast<size_t>(c)] - w[0]);
+  }
+  return W * Y.inverse();
+}
+
 
 
 
@@ -182,6 +198,14 @@ std::vector<double> face_curvatures(const TangentBundle& bundle) {
   return out;
 }
 
+Mat2 face_jacobian(const TangentBundle& bundle, std::span<const cplx> values, int face) {
+  const Face& t = bundle.mesh().face(face);
+  std::array<cplx, 3> w;
+  for (int c = 0; c < 3; ++c)
+    w[static_cast<size_t>(c)] = bundle.corner_to_face(3 * face + c) * values[static_cast<size_t>(t[static_cast<size_t>(c)])];
+  return face_linear_jacobian(bundle, face, w);
+}
+
 std::vector<Singularity> find_singularities(const TangentBundle& bundle,
                                             std::span<const cplx> values) {
   return find_singularities(bundle, values, {});
@@ -214,16 +238,7 @@ std::vector<Singularity> find_singularities(const TangentBundle& bundle,
     for (int c = 0; c < 3; ++c)
       s.position += s.where.bary[c] * mesh.position(t[static_cast<size_t>(c)]);
 
-    // Jacobian in the face frame: w(y) = w0 + J·y with y the face coordinates relative to
-    // corner 0, so J·[y1 y2] = [w1 − w0, w2 − w0].
-    const Vec3& x0 = mesh.position(t[0]);
-    Mat2 Y, W;
-    for (int c = 1; c < 3; ++c) {
-      const Vec3 d = mesh.position(t[static_cast<size_t>(c)]) - x0;
-      Y.col(c - 1) = Vec2(d.dot(bundle.face_e1(f)), d.dot(bundle.face_e2(f)));
-      W.col(c - 1) = to_vec2(w[static_cast<size_t>(c)] - w[0]);
-    }
-    const Mat2 J = W * Y.inverse();  // for the scaled values
+    const Mat2 J = face_linear_jacobian(bundle, f, w);  // for the scaled values
     s.type = type_for(J, k);
     s.jacobian = J.unaryExpr([e = scaled.exponent](double x) { return std::ldexp(x, e); });
     out.push_back(s);

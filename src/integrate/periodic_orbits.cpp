@@ -200,28 +200,10 @@ double period_of(const std::vector<Vec3>& pts, const std::vector<double>& speeds
   return T;
 }
 
-// The divergence of the field's linear interpolant on face f (the trace of its Jacobian in
-// the face frame; on a surface the covariant divergence, the vectors carried into the face).
-double face_divergence(const TangentBundle& bundle, std::span<const cplx> values, int f) {
-  const Mesh& mesh = bundle.mesh();
-  const Face& c = mesh.face(f);
-  std::array<cplx, 3> w;
-  for (int k = 0; k < 3; ++k)
-    w[static_cast<size_t>(k)] = bundle.corner_to_face(3 * f + k) * values[static_cast<size_t>(c[static_cast<size_t>(k)])];
-  const Vec3& x0 = mesh.position(c[0]);
-  Mat2 Y, W;
-  for (int k = 1; k < 3; ++k) {
-    const Vec3 d = mesh.position(c[static_cast<size_t>(k)]) - x0;
-    Y.col(k - 1) = Vec2(d.dot(bundle.face_e1(f)), d.dot(bundle.face_e2(f)));
-    const cplx dw = w[static_cast<size_t>(k)] - w[0];
-    W.col(k - 1) = Vec2(dw.real(), dw.imag());
-  }
-  return (W * Y.inverse()).trace();
-}
-
 // ln P′(r*) of the forward return map: for a flow on a surface the Poincaré map's slope at a
 // periodic orbit is exp(∮ div V dt) (Liouville's formula for the linearised flow; dt =
-// ds/|V| along it), whatever the section. Exact for the template (r′ = μr − r³ at r² = μ:
+// ds/|V| along it), whatever the section; div V on each face is the trace of the field's
+// linear interpolant's Jacobian there (the covariant divergence on surfaces). Exact for the template (r′ = μr − r³ at r² = μ:
 // div V = 2μ − 4r² = −2μ over a period of 2π, ln P′ = −4πμ), and, unlike the slope of D
 // by differences, resolved however strongly the cycle attracts: where P′ < 1e-2 the
 // differences of D over ±¼ edge length were the integrator's noise (P′ of the μ = 1 cycle
@@ -230,7 +212,7 @@ double log_multiplier(const TangentBundle& bundle, std::span<const cplx> values,
                       const std::vector<double>& speeds, const std::vector<int>& faces) {
   std::vector<double> rate(pts.size());  // div V / |V| at each point
   for (size_t k = 0; k < pts.size(); ++k)
-    rate[k] = speeds[k] > 0 ? face_divergence(bundle, values, faces[k]) / speeds[k] : 0.0;
+    rate[k] = speeds[k] > 0 ? face_jacobian(bundle, values, faces[k]).trace() / speeds[k] : 0.0;
   double sum = 0;
   for (size_t k = 0; k < pts.size(); ++k) {
     const size_t l = (k + 1) % pts.size();

@@ -89,6 +89,11 @@ inline constexpr double kRealTolerance = 0.1;     // |Im λ| ≤ this·|Re λ|: 
 // is what pair cancellation needs.
 std::vector<int> face_indices(const TangentBundle& bundle, std::span<const cplx> values);
 
+// The Jacobian of the field's linear interpolant on face f, in the face frame (face_e1,
+// face_e2): the vertex values carried into the face (corner_to_face); on a surface the
+// covariant derivative. Its trace is the face's divergence.
+Mat2 face_jacobian(const TangentBundle& bundle, std::span<const cplx> values, int face);
+
 // Ω_f above: the rotation of a vector transported counter-clockwise around face f by the
 // bundle's connection (radians; positive where the surface is positively curved), i.e.
 // the argument of the product of the three transports, lifted to the real line next to
