@@ -145,7 +145,10 @@ json Session::streakline(const json& request) const {
   o.max_added = static_cast<long>(kMaxParticles - std::floor((o.t1 - o.t0) / o.release_spacing));
   const auto start = std::chrono::steady_clock::now();
   try {
-    return curve(trace_streakline(*f.bundle, *f.field, x, o), f.planar, f.revision, since(start));
+    // Traced before the clock is read: a function's arguments are evaluated in no set order,
+    // and GCC read it first (the reply said 26 ns for 600 particles).
+    const Streakline s = trace_streakline(*f.bundle, *f.field, x, o);
+    return curve(s, f.planar, f.revision, since(start));
   } catch (const Error& e) {
     throw RequestError(422, fmt::format("streakline: {}", e.what()));
   }
@@ -172,7 +175,8 @@ json Session::timeline(const json& request) const {
   }
   const auto start = std::chrono::steady_clock::now();
   try {
-    return curve(trace_timeline(*f.bundle, *f.field, a, b, o), f.planar, f.revision, since(start));
+    const Streakline s = trace_timeline(*f.bundle, *f.field, a, b, o);  // before the clock (above)
+    return curve(s, f.planar, f.revision, since(start));
   } catch (const Error& e) {
     throw RequestError(422, fmt::format("timeline: {}", e.what()));
   }
