@@ -193,6 +193,18 @@ try {
   await page.waitForFunction(() => Math.abs(window.tvf.lcs.dye[0]?.t - 5) < 1e-9, null, { timeout: 60000 });
   const dye5 = await page.evaluate(() => window.tvf.lcs.dye[0]);
   check(dye5.points.length < dye10.points.length, `at t = 5 the streak is younger (${dye5.points.length} points)`);
+  // A seed above the domain (in the white margin): refused with the server's sentence, and
+  // dropped; the good streakline stays drawn, and once the time moves the sentence goes.
+  await d.click([1.0, 1.3]);
+  await page.waitForFunction(() => document.getElementById("message").textContent.includes("outside the domain"), null, { timeout: 60000 });
+  const afterBad = await page.evaluate(() => ({ seeds: window.tvf.lcs.seeds.length, dye: window.tvf.lcs.dye.length }));
+  check(afterBad.seeds === 1 && afterBad.dye === 1, `a seed outside the domain is refused and dropped, the other kept (${afterBad.seeds} seed, ${afterBad.dye} streakline)`);
+  await d.goto(12);
+  await page.waitForFunction(() => Math.abs(window.tvf.lcs.dye[0]?.t - 6) < 1e-9, null, { timeout: 60000 });
+  const said = await page.evaluate(() => document.getElementById("message").textContent);
+  check(!said.includes("outside the domain"), `the refusal leaves the status line once the dye is drawn again ("${said}")`);
+  await d.goto(10);
+  await page.waitForFunction(() => Math.abs(window.tvf.lcs.dye[0]?.t - 5) < 1e-9, null, { timeout: 60000 });
   // A timeline: the segment y = 0.5 dragged at t = 5, then seen at t = 10, wound round
   // the gyres and refined where it stretches.
   await page.selectOption("#lcs-mode", "off");

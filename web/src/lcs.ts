@@ -113,10 +113,26 @@ export class LcsOverlay {
   private ticket = 0;
   private dyeTicket = 0;
 
+  // The sentences handed to onError that still stand (the FTLE's, the dye's): once that
+  // part works again, onCleared takes each back (the page's status line showed a refused
+  // horizon after a good one had drawn its picture).
+  private reported: { ftle?: string; dye?: string } = {};
+
   constructor(
     private readonly onChange: () => void,
     private readonly onError: (message: string) => void,
+    private readonly onCleared: (message: string) => void = () => {},
   ) {}
+
+  private report(part: "ftle" | "dye", message: string) {
+    this.reported[part] = message;
+    this.onError(message);
+  }
+  private cleared(part: "ftle" | "dye") {
+    const m = this.reported[part];
+    this.reported[part] = undefined;
+    if (m !== undefined) this.onCleared(m);
+  }
 
   // The current time or field changed (or the settings): fetch what is shown again.
   // `grid`: the planar domain's grid (the FTLE becomes a picture over it); undefined on a
@@ -161,12 +177,13 @@ export class LcsOverlay {
       this.image = grid ? picture(a, grid) : undefined;
       this.lastUpdateMs = performance.now() - start;
       this.error = "";
+      this.cleared("ftle");
     } catch (e) {
       if (ticket !== this.ticket) return;
       this.ftle = undefined;
       this.image = undefined;
       this.error = (e as Error).message;
-      if (!(e instanceof ApiError && e.status === 409)) this.onError(this.error);
+      if (!(e instanceof ApiError && e.status === 409)) this.report("ftle", this.error);
     }
     this.onChange();
   }
@@ -179,20 +196,29 @@ export class LcsOverlay {
       this.onChange();  // the surface view and the notes drop what was shown
       return;
     }
-    try {
-      const [streaks, material] = await Promise.all([
-        Promise.all(this.seeds.map((s) => lcsApi.streakline(s, t0, t))),
-        Promise.all(this.lines.map((l) => lcsApi.timeline(l.line, l.t, t))),
-      ]);
-      if (ticket !== this.dyeTicket) return;
-      this.dye = streaks;
-      this.timelines = material;
-    } catch (e) {
-      if (ticket !== this.dyeTicket) return;
-      this.dye = [];
-      this.timelines = [];
-      if (!(e instanceof ApiError && e.status === 409)) this.onError((e as Error).message);
-    }
+    // Each seed and line on its own: one the server refuses (a seed outside the domain, a
+    // line end off the surface) is dropped with its sentence, and the others stay drawn
+    // (one refusal had cleared every curve, and the refused seed, kept, failed again at
+    // every time).
+    const seeds = this.seeds, lines = this.lines;
+    const [streaks, material] = await Promise.all([
+      Promise.allSettled(seeds.map((s) => lcsApi.streakline(s, t0, t))),
+      Promise.allSettled(lines.map((l) => lcsApi.timeline(l.line, l.t, t))),
+    ]);
+    if (ticket !== this.dyeTicket) return;
+    const refused = (r: PromiseSettledResult<CurveAnswer>) =>
+      r.status === "rejected" && r.reason instanceof ApiError && r.reason.status !== 409 && r.reason.status < 500;
+    const problems = [...streaks, ...material].filter((r) => r.status === "rejected");
+    // Only what these results judged: seeds and lines added meanwhile stay.
+    this.seeds = this.seeds.filter((s) => { const i = seeds.indexOf(s); return i < 0 || !refused(streaks[i]); });
+    this.lines = this.lines.filter((l) => { const i = lines.indexOf(l); return i < 0 || !refused(material[i]); });
+    const kept = <T>(all: PromiseSettledResult<T>[]) =>
+      all.flatMap((r) => (r.status === "fulfilled" ? [r.value] : []));
+    this.dye = kept(streaks);
+    this.timelines = kept(material);
+    const shown = problems.find((r) => !(r.status === "rejected" && r.reason instanceof ApiError && r.reason.status === 409));
+    if (shown && shown.status === "rejected") this.report("dye", (shown.reason as Error).message);
+    else if (problems.length === 0) this.cleared("dye");
     this.onChange();
   }
 
@@ -323,15 +349,22 @@ export function drawLegend(ctx: CanvasRenderingContext2D, a: FtleAnswer) {
   const w = 160;
   ctx.fillStyle = "rgba(255,255,255,0.85)";
   ctx.fillRect(x - 6, y - 18, w + 12, 54);
+  const labels = legendLabels(a);
+  ctx.font = "11px sans-serif";
+  ctx.textAlign = "left";
+  if (a.span <= 0) {
+    // No window (every value undefined, the picture grey): words, not a bar claiming a range.
+    ctx.fillStyle = "#111827";
+    ctx.fillText(labels.title, x, y - 5);
+    ctx.fillText(labels.low, x, y + 12);
+    return;
+  }
   for (let i = 0; i < w; ++i) {
     const [r, g, b] = magma(i / (w - 1));
     ctx.fillStyle = `rgb(${r},${g},${b})`;
     ctx.fillRect(x + i, y, 1, 12);
   }
-  const labels = legendLabels(a);
   ctx.fillStyle = "#111827";
-  ctx.font = "11px sans-serif";
-  ctx.textAlign = "left";
   ctx.fillText(labels.title, x, y - 5);
   ctx.fillText(labels.low, x, y + 26);
   ctx.textAlign = "right";
@@ -341,6 +374,14 @@ export function drawLegend(ctx: CanvasRenderingContext2D, a: FtleAnswer) {
 
 // The legend's words: the direction and horizon, and the colour range's ends.
 export function legendLabels(a: FtleAnswer): { title: string; low: string; high: string } {
+  // At the end of the time range (forward) or its start (backward) there is no time to
+  // integrate over: every value is undefined.
+  if (a.span <= 0)
+    return {
+      title: `FTLE ${a.direction}: none at t = ${Number(a.t.toFixed(4))}`,
+      low: `no time ${a.direction === "backward" ? "before" : "after"} it in the field's range`,
+      high: "",
+    };
   return {
     title: `FTLE ${a.direction}, T = ${a.span < a.horizon ? `${a.span.toFixed(3)} (cut)` : a.horizon}`,
     low: a.range[0].toPrecision(3),

@@ -108,6 +108,11 @@ const lcs = new LcsOverlay(
     showLcsNotes();
   },
   (m) => say(m, true),
+  // A refusal that no longer stands (a good horizon after a bad one) leaves the status line,
+  // if it is still what the line says.
+  (m) => {
+    if (message.textContent === m) say("");
+  },
 );
 // Under the view: which dye lines and timelines the server could not resolve, and why
 // (their chords are not the flow's curve there).

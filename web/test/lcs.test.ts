@@ -1,5 +1,5 @@
-import { describe, expect, it } from "vitest";
-import { curveRuns, legendLabels, magma, unresolvedNotes, vertexColors, type CurveAnswer, type FtleAnswer } from "../src/lcs";
+import { afterEach, describe, expect, it, vi } from "vitest";
+import { LcsOverlay, curveRuns, legendLabels, magma, unresolvedNotes, vertexColors, type CurveAnswer, type FtleAnswer } from "../src/lcs";
 
 // The overlay's colours are tvf ftle's (render/lcs_pictures.cpp's magma stops).
 describe("magma", () => {
@@ -58,6 +58,68 @@ describe("legendLabels", () => {
   it("names the direction, the horizon (cut where the window was shortened) and the range", () => {
     expect(legendLabels(answer([], [0.0123456, 2.5]))).toEqual({ title: "FTLE forward, T = 1", low: "0.0123", high: "2.50" });
     expect(legendLabels(answer([], [0, 1], { direction: "backward", horizon: 2, span: 0.75, cut: true })).title).toBe("FTLE backward, T = 0.750 (cut)");
+  });
+  it("says there is no FTLE where the window is empty, instead of a range", () => {
+    expect(legendLabels(answer([null, null], [0, 1], { t: 20, span: 0, cut: true }))).toEqual({
+      title: "FTLE forward: none at t = 20",
+      low: "no time after it in the field's range",
+      high: "",
+    });
+    expect(legendLabels(answer([null], [0, 1], { direction: "backward", span: 0 })).low).toBe("no time before it in the field's range");
+  });
+});
+
+// The overlay against a server stub: what it keeps when the server refuses a seed, and when
+// it takes a refusal back.
+describe("LcsOverlay", () => {
+  afterEach(() => vi.unstubAllGlobals());
+  const curve = (x: number): CurveAnswer => ({
+    revision: 1, t: 1, points: [[x, 0]], gaps: [], released: 1, left: 0, resolution: 1, largest_gap: 0, unresolved: 0,
+    unresolved_by: null, seconds: 0.01,
+  });
+  // POST api/streakline answers per seed: x > 1 is outside the domain (422).
+  function serve(ftleHorizonOk: (h: number) => boolean) {
+    vi.stubGlobal("fetch", async (path: string, init: RequestInit) => {
+      const reply = (status: number, body: unknown) => ({ ok: status < 300, status, json: async () => body });
+      if (path.startsWith("api/ftle")) {
+        const h = Number(new URLSearchParams(path.split("?")[1]).get("horizon"));
+        return ftleHorizonOk(h) ? reply(200, answer([1, 2], [1, 2], { horizon: h })) : reply(400, { error: `ftle: "horizon" = ${h} is too short` });
+      }
+      const body = JSON.parse(init.body as string);
+      if (path === "api/streakline")
+        return body.seed[0] > 1 ? reply(422, { error: `streakline: the streakline seed (${body.seed[0]}, 0) is outside the domain` }) : reply(200, curve(body.seed[0]));
+      return reply(200, curve(body.line[0][0]));
+    });
+  }
+  it("drops a refused seed with its sentence and keeps drawing the others", async () => {
+    serve(() => true);
+    const errors: string[] = [], cleared: string[] = [];
+    const lcs = new LcsOverlay(() => {}, (m) => errors.push(m), (m) => cleared.push(m));
+    lcs.seeds = [[0.5, 0], [1.5, 0], [0.25, 0]];
+    lcs.lines = [{ line: [[0, 0], [0.5, 0]], t: 0 }];
+    await lcs.update(1, 0, undefined);
+    expect(lcs.seeds).toEqual([[0.5, 0], [0.25, 0]]);
+    expect(lcs.dye.map((d) => d.points[0][0])).toEqual([0.5, 0.25]);
+    expect(lcs.timelines.length).toBe(1);
+    expect(errors).toEqual(["streakline: the streakline seed (1.5, 0) is outside the domain"]);
+    // The next update draws the kept ones and takes the sentence back.
+    await lcs.update(0.5, 0, undefined);
+    expect(lcs.dye.length).toBe(2);
+    expect(cleared).toEqual(["streakline: the streakline seed (1.5, 0) is outside the domain"]);
+  });
+  it("takes back a refused horizon once a good one is drawn", async () => {
+    serve((h) => h > 0.01);
+    const errors: string[] = [], cleared: string[] = [];
+    const lcs = new LcsOverlay(() => {}, (m) => errors.push(m), (m) => cleared.push(m));
+    lcs.direction = "forward";
+    lcs.horizon = 1e-9;
+    await lcs.update(0, 0, undefined);
+    expect(lcs.ftle).toBeUndefined();
+    expect(errors).toEqual(['ftle: "horizon" = 1e-9 is too short']);
+    lcs.horizon = 10;
+    await lcs.update(0, 0, undefined);
+    expect(lcs.ftle?.horizon).toBe(10);
+    expect(cleared).toEqual(['ftle: "horizon" = 1e-9 is too short']);
   });
 });
 
