@@ -24,6 +24,7 @@ import { TimeStrip } from "./surface/timestrip";
 import { resample } from "./stroke";
 import { rounded, View } from "./view";
 import { DYE_COLOR, drawLegend, LcsOverlay, unresolvedNotes, vertexColors } from "./lcs";
+import { orbitsAt } from "./orbits";
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
 
@@ -608,6 +609,7 @@ async function loadAnalysis(revision: number) {
     state.analysis = analysis;
     state.analysisRevision = analysis.revision;
     showAnalysis(analysis);
+    if (!planar()) surface?.setOrbits(orbitsAt(analysis, state.frame));
     mark(`analysis shown ${analysis.revision}`);
   } catch (e) {
     if (!(e instanceof ApiError && e.status === 409)) say((e as Error).message, true);
@@ -680,6 +682,7 @@ async function showFrame(j: number) {
     if (f.frame !== state.frame) return;
     if (!planar() && surface) {
       surface.setFrame(f, markers());
+      surface.setOrbits(orbitsAt(state.analysis, j));
       state.shownRevision = f.revision;
       showDesignCurves();
     }
@@ -852,6 +855,8 @@ function redraw() {
     const at = e?.elements?.[state.linkFrom.index]?.at;
     if (e && at && S.frameOf(s, e.t) === j) ring(v, at, LINK_COLOR, 15);
   }
+  // The periodic orbits the analysis found at this frame (under the singularities' dots).
+  for (const o of orbitsAt(state.analysis, j)) line(o.points, o.color, 2.5);
   // Singularities of the field at this frame.
   for (const sg of f?.singularities ?? []) dot(v, sg.position, typeColor(sg.type), 6, "#fff");
   for (const p of state.cancelPicks) ring(v, p, "#111827", 12);

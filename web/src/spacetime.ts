@@ -10,6 +10,7 @@ import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import type { Analysis } from "./api";
 import { BIFURCATION_COLOR, PATHLINE_COLOR, typeColor } from "./colors";
+import { orbitColor } from "./orbits";
 import { intersect, timePlane, uprightPlane, type Plane, type Ray, type V3 } from "./spacetime_draw";
 import { formatTicks, niceTicks } from "./ticks";
 
@@ -270,7 +271,7 @@ export class SpaceTimeView {
       for (let k = 0; k < list.length; k += stride) {
         const o = list[k];
         const pts = o.points.map((p) => this.map(p[0], p[1], o.t));
-        const color = o.stability === "attracting" ? 0xee800d : 0x009999;
+        const color = new THREE.Color(orbitColor(o));
         this.content.add(new THREE.LineLoop(new THREE.BufferGeometry().setFromPoints(pts), new THREE.LineBasicMaterial({ color })));
       }
     }

@@ -57,6 +57,7 @@ export class SurfaceView {
   private readonly ftleMaterial = new THREE.ShaderMaterial({ vertexShader: ftleVertex, fragmentShader: ftleFragment, side: THREE.DoubleSide });
   private ftleOn = false;
   private readonly dye = new THREE.Group();
+  private readonly orbits = new THREE.Group();
   private readonly mark = new THREE.Group();
   private markAt: number[][] = [];
   private mode: SurfaceMode = "texture";
@@ -94,6 +95,7 @@ export class SurfaceView {
     this.scene.add(this.design);
     this.scene.add(this.paths);
     this.scene.add(this.dye);
+    this.scene.add(this.orbits);
     this.scene.add(this.mark);
     this.strokeLine = new THREE.Line(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0xf97316, depthTest: false }));
     this.strokeLine.renderOrder = 2;
@@ -277,6 +279,24 @@ export class SurfaceView {
       const ball = new THREE.Mesh(new THREE.SphereGeometry(0.016 * this.radius, 12, 8), new THREE.MeshBasicMaterial({ color: seedColor }));
       ball.position.set(p[0], p[1], p[2]);
       this.dye.add(ball);
+    }
+    this.render();
+  }
+
+  // The periodic orbits of the shown frame (orbits.ts): closed tubes on the mesh, a little
+  // thicker than the dye's.
+  setOrbits(loops: { points: number[][]; color: string }[]) {
+    for (const c of [...this.orbits.children]) {
+      this.orbits.remove(c);
+      (c as THREE.Mesh).geometry?.dispose();
+      ((c as THREE.Mesh).material as THREE.Material | undefined)?.dispose();
+    }
+    for (const loop of loops) {
+      const pts = loop.points.slice(0, -1).map((p) => new THREE.Vector3(p[0], p[1], p[2]));
+      if (pts.length < 3) continue;
+      const curve = new THREE.CatmullRomCurve3(pts, true, "centripetal");
+      const segments = Math.min(2000, Math.max(24, 3 * pts.length));
+      this.orbits.add(new THREE.Mesh(new THREE.TubeGeometry(curve, segments, 0.008 * this.radius, 6, true), new THREE.MeshBasicMaterial({ color: loop.color })));
     }
     this.render();
   }
