@@ -700,7 +700,7 @@ function listBifurcations() {
   a.bifurcations.forEach((b, i) => {
     const row = document.createElement("div");
     row.className = "bifurcation" + (i === state.selectedBifurcation ? " selected" : "");
-    row.textContent = `${b.kind}${b.criticality ? ` (${b.criticality})` : ""} at t = ${b.t.toFixed(3)} (${b.position.slice(0, planar() ? 2 : 3).map((v) => v.toFixed(2)).join(", ")})`;
+    row.textContent = `${b.kind}${b.criticality ? ` (${b.criticality})` : ""} at t = ${b.t.toFixed(3)} (${b.position.slice(0, planar() ? 2 : 3).map((v) => (Math.abs(v) < 0.005 ? 0 : v).toFixed(2)).join(", ")})`;
     const go = document.createElement("button");
     go.textContent = "go to";
     go.onclick = () => {
@@ -733,6 +733,15 @@ function selectBifurcation(i: number) {
   strip.highlight(i);
   if (!planar() && surface && state.analysis) showSurfacePaths();
   listBifurcations();
+}
+// A clicked bifurcation's scale on the shown mesh (S.clickedBifurcationScale); the mean edge
+// length measured once per mesh.
+let edgeOf: { mesh?: MeshData; h: number } = { h: 0 };
+function clickScale(type: string): number {
+  const m = state.mesh;
+  if (!m) return 0.25;
+  if (edgeOf.mesh !== m) edgeOf = { mesh: m, h: S.meanEdgeLength(m.vertices, m.faces) };
+  return S.clickedBifurcationScale(type, edgeOf.h);
 }
 function showSurfacePaths() {
   const a = state.analysis!;
@@ -1083,7 +1092,7 @@ canvas.addEventListener("pointerup", (e) => {
       void change((s) => S.addDeformStreamline(s, stroke[0], d, t, turn), `streamline from (${stroke[0].join(", ")}) moved by (${d.join(", ")}) at t = ${t}`);
     } else if (state.tool === "bifurcation") {
       const kind = $<HTMLSelectElement>("bifurcation-type").value;
-      const { scale, angle } = S.bifurcationAxis(isClick ? undefined : [p[0] - stroke[0][0], p[1] - stroke[0][1]]);
+      const { scale, angle } = S.bifurcationAxis(isClick ? undefined : [p[0] - stroke[0][0], p[1] - stroke[0][1]], clickScale(kind));
       void change((s) => S.addBifurcation(s, kind, stroke[0], t, scale, angle), `${kind} at t = ${t}`);
     }
   } catch (err) {
@@ -1114,7 +1123,8 @@ function surfacePick(p: number[]) {
     else void change((s) => S.addSingular(s, type, at, undefined, t0), `fixed ${type} placed`);
   } else if (state.tool === "bifurcation") {
     const kind = $<HTMLSelectElement>("bifurcation-type").value;
-    void change((s) => S.addBifurcation(s, kind, at, t), `${kind} at t = ${t} (drag on the surface to give its axis and size)`);
+    const scale = clickScale(kind);
+    void change((s) => S.addBifurcation(s, kind, at, t, scale), `${kind} at t = ${t}, scale ${scale} (drag on the surface to give its axis and size)`);
   } else if (state.tool === "cancel") {
     pickForCancel(at, 0.2);
   } else if (state.tool === "link") {

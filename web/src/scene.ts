@@ -190,9 +190,9 @@ export function addBifurcation(scene: Scene, type: string, at: Vec, t: number, s
 // A bifurcation's scale and angle from a drag: `coords` the drag's end in the chart
 // around its start ([u, v]: on grids the difference, on surfaces the server's log map,
 // api.chartCoordinates). The pair moves along the drag, as far apart as it is long (at
-// least 0.05); a click (no drag) is the defaults, 0.25 along +x.
-export function bifurcationAxis(coords?: number[]): { scale: number; angle: number } {
-  if (!coords) return { scale: 0.25, angle: 0 };
+// least 0.05); a click (no drag) is the defaults, `clickScale` (0.25 unless given) along +x.
+export function bifurcationAxis(coords?: number[], clickScale = 0.25): { scale: number; angle: number } {
+  if (!coords) return { scale: clickScale, angle: 0 };
   const r = Math.hypot(coords[0], coords[1]);
   return { scale: Math.max(0.05, Math.round(r * 1000) / 1000), angle: Math.round(Math.atan2(coords[1], coords[0]) * 1000) / 1000 };
 }
@@ -584,4 +584,23 @@ export function setDeformTransform(scene: Scene, theta: number, sx = 1, sy = 1):
     { t: t1, sx, sy, theta },
   ];
   return s;
+}
+
+// The mean edge length of a mesh given as flat vertex and face arrays (each edge counted
+// once per face using it, as the server's mean over the faces' edges).
+export function meanEdgeLength(vertices: number[], faces: number[]): number {
+  let sum = 0;
+  for (let f = 0; f + 2 < faces.length; f += 3)
+    for (let k = 0; k < 3; ++k) {
+      const a = 3 * faces[f + k], b = 3 * faces[f + ((k + 1) % 3)];
+      sum += Math.hypot(vertices[a] - vertices[b], vertices[a + 1] - vertices[b + 1], vertices[a + 2] - vertices[b + 2]);
+    }
+  return faces.length >= 3 ? sum / faces.length : 0;
+}
+
+// A clicked bifurcation's scale: 0.25, or for a Hopf template at least seven mean edge
+// lengths (the analysis resolves its event from about six: a click on the default sphere,
+// 0.25 = 3.3 edge lengths, made a template whose event was never found).
+export function clickedBifurcationScale(type: string, meanEdge: number): number {
+  return type.startsWith("hopf") ? Math.max(0.25, Math.round(7 * meanEdge * 1000) / 1000) : 0.25;
 }

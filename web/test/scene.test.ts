@@ -107,6 +107,17 @@ describe("scene changes", () => {
     const s = S.addBifurcation(S.emptyScene(), "saddle_sink_creation", [0.6, 0, 0.8], 0.4, 0.3, 1.571);
     expect(s.elements?.[0]).toEqual({ kind: "bifurcation", type: "saddle_sink_creation", at: [0.6, 0, 0.8, 0.4], scale: 0.3, time_scale: 0.25, angle: 1.571 });
   });
+
+  it("give a clicked Hopf template seven edge lengths where 0.25 is fewer", () => {
+    // Two right triangles with legs 1: edges 1, 1, √2 each.
+    const h = S.meanEdgeLength([0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0], [0, 1, 2, 0, 2, 3]);
+    expect(h).toBeCloseTo((2 + Math.SQRT2) / 3, 12);
+    expect(S.clickedBifurcationScale("hopf_supercritical", 0.0755)).toBe(0.529); // the default sphere
+    expect(S.clickedBifurcationScale("hopf_subcritical", 0.02)).toBe(0.25); // fine enough for 0.25
+    expect(S.clickedBifurcationScale("saddle_sink_creation", 0.0755)).toBe(0.25);
+    expect(S.bifurcationAxis(undefined, 0.529)).toEqual({ scale: 0.529, angle: 0 });
+    expect(S.bifurcationAxis([0, 0.3], 0.529).scale).toBe(0.3); // a drag gives its own
+  });
 });
 
 describe("deformation", () => {
