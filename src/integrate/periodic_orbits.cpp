@@ -42,7 +42,29 @@ bool searched(SingularityType type, bool include_nodes) {
 // frame's largest |V| (StreamlineOptions::max_speed).
 struct FrameScales {
   double edge = 0, diameter = 0, max_speed = 0;
+  std::vector<std::pair<Vec3, Vec3>> boundary;  // the domain's boundary edges
 };
+
+FrameScales frame_scales(const Mesh& mesh, std::span<const cplx> values) {
+  FrameScales s{mesh.mean_edge_length(), mesh.diameter(), max_speed(values), {}};
+  for (int h = 0; h < mesh.num_halfedges(); ++h)
+    if (mesh.is_boundary_halfedge(h)) s.boundary.emplace_back(mesh.position(mesh.tail(h)), mesh.position(mesh.head(h)));
+  return s;
+}
+
+// The closest any point of `pts` comes to the boundary edges (infinity on a closed mesh).
+double boundary_distance(const std::vector<Vec3>& pts, const std::vector<std::pair<Vec3, Vec3>>& boundary) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& [a, b] : boundary) {
+    const Vec3 e = b - a;
+    const double n2 = e.squaredNorm();
+    for (const Vec3& x : pts) {
+      const double u = n2 > 0 ? std::clamp((x - a).dot(e) / n2, 0.0, 1.0) : 0.0;
+      best = std::min(best, (x - a - u * e).norm());
+    }
+  }
+  return best;
+}
 
 // The Poincaré section of one focus: a ray in the plane of its face.
 class Section {
@@ -231,7 +253,7 @@ std::vector<PeriodicOrbit> find_frame_orbits(const TangentBundle& bundle, std::s
   for (size_t k = 0; k < singularities.size(); ++k) {
     const Singularity& focus = singularities[k];
     if (focus.index != 1 || !searched(focus.type, options.include_nodes)) continue;
-    if (!scales) scales = FrameScales{bundle.mesh().mean_edge_length(), bundle.mesh().diameter(), max_speed(values)};
+    if (!scales) scales = frame_scales(bundle.mesh(), values);
     const Section section(bundle, values, focus, singularities, options, *scales);
     const double r0 = section.r_min(), r1 = section.r_max();
     if (!(r1 > r0)) continue;
@@ -291,6 +313,11 @@ std::vector<PeriodicOrbit> find_frame_orbits(const TangentBundle& bundle, std::s
       // side it contracts (a cycle whose divergence says otherwise is not resolved).
       const double log_p = log_multiplier(bundle, values, turn.points, turn.speeds, turn.faces);
       if ((orbit.stability == OrbitStability::attracting) != (log_p < 0)) continue;
+      // Nor a loop within half an edge length of the domain's boundary: there the wall, a
+      // streamline of the design, and the corners' saddles make a polycycle that the
+      // piecewise-linear field closes into "cycles" of either stability (the double gyre's
+      // cells: repelling loops 0.008 from the walls, multiplier 1.15, in single frames).
+      if (boundary_distance(turn.points, scales->boundary) < 0.5 * scales->edge) continue;
       orbit.multiplier = std::exp(log_p);  // +inf past e^709: JSON null
       if (sign < 0) {
         std::reverse(turn.points.begin(), turn.points.end());

@@ -10,6 +10,8 @@
 #include "tvf/analysis/topology.h"
 #include "tvf/scene/design_space.h"
 #include "tvf/design/generate.h"
+#include "tvf/mesh/grid.h"
+#include "support/test_fields.h"
 
 #include <gtest/gtest.h>
 
@@ -185,6 +187,22 @@ TEST(PeriodicOrbits, ACentersClosedOrbitsAreNeutralNotCycles) {
   const auto sings = find_singularities(space->bundle(), field, 1);
   ASSERT_EQ(sings.size(), 1u);
   EXPECT_TRUE(find_frame_orbits(space->bundle(), field.frame(1), sings).empty());
+}
+
+TEST(PeriodicOrbits, TheDoubleGyresCellsHoldNoCycles) {
+  // Each frozen frame of the double gyre is area-preserving: its closed orbits are neutral,
+  // and the cells' walls and corner saddles a polycycle, not a limit cycle. On 65 × 65 over
+  // [0, 2] × [0, 1], 101 frames over [0, 20], loops hugging the walls (0.008 from them)
+  // were reported as repelling cycles at 4 frames (multiplier 1.15).
+  const Mesh grid = make_grid(GridSpec{65, 65, {0, 0}, {2, 1}});
+  const TangentBundle bundle(grid);
+  const Field field = test::field_from(bundle, TimeSampling{0, 20, 101}, test::double_gyre);
+  int found = 0;
+  for (const int j : {29, 46, 79, 96, 0, 50}) {
+    const auto sings = find_singularities(bundle, field, j);
+    found += static_cast<int>(find_frame_orbits(bundle, field.frame(j), sings).size());
+  }
+  EXPECT_EQ(found, 0);
 }
 
 TEST(PeriodicOrbits, FoundOnASphere) {
