@@ -318,6 +318,13 @@ std::vector<PeriodicOrbit> find_frame_orbits(const TangentBundle& bundle, std::s
       // piecewise-linear field closes into "cycles" of either stability (the double gyre's
       // cells: repelling loops 0.008 from the walls, multiplier 1.15, in single frames).
       if (boundary_distance(turn.points, scales->boundary) < 0.5 * scales->edge) continue;
+      // Nor, on a surface, a loop that runs where the surface faces away from the focus's
+      // tangent plane: radius and winding are measured in that plane, which folds there
+      // (on a sphere a loop from 30° to 150° off the focus projected to radii 0.49–0.52 and
+      // closed; it was the other focus's cycle seen through the fold).
+      const Vec3 up = bundle.face_normal(focus.where.face);
+      if (std::any_of(turn.faces.begin(), turn.faces.end(), [&](int f) { return bundle.face_normal(f).dot(up) <= 0; }))
+        continue;
       orbit.multiplier = std::exp(log_p);  // +inf past e^709: JSON null
       if (sign < 0) {
         std::reverse(turn.points.begin(), turn.points.end());

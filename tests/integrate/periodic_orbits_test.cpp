@@ -205,6 +205,33 @@ TEST(PeriodicOrbits, TheDoubleGyresCellsHoldNoCycles) {
   EXPECT_EQ(found, 0);
 }
 
+TEST(PeriodicOrbits, OnASphereNoLoopIsSeenThroughTheFold) {
+  // A supercritical template on a sphere, spacetime: the field has a second repelling focus
+  // at the antipode, and the attracting cycle separates the two. Seen from the antipode's
+  // tangent plane it lies at 149°, where the plane's projection folds; loops from 30° to
+  // 150° off that focus projected to one radius and were reported as a second cycle of
+  // radius 1.66. Every orbit now stays on its focus's side of the sphere.
+  Scene s;
+  s.domain.sphere = SphereSpec{4, 1.0};
+  s.time = TimeSampling{0.0, 1.0, 21};
+  s.generator = Generator::spacetime;
+  BifurcationElement b;
+  b.type = BifurcationType::hopf_supercritical;
+  b.at = {Vec3(0.8, -0.48, 0.36), 0.3};
+  b.scale = 0.45;
+  b.time_scale = 0.4;
+  s.elements.push_back(b);
+  const auto space = make_design_space(s);
+  const Field field = generate(*space, s);
+  const auto sings = find_singularities(space->bundle(), field, 18);
+  const auto orbits = find_frame_orbits(space->bundle(), field.frame(18), sings);
+  ASSERT_FALSE(orbits.empty());
+  for (const PeriodicOrbit& o : orbits) {
+    EXPECT_EQ(o.stability, OrbitStability::attracting);
+    for (const Vec3& x : o.points) EXPECT_GT(x.dot(o.center), 0) << "radius " << o.radius;
+  }
+}
+
 TEST(PeriodicOrbits, FoundOnASphere) {
   // A supercritical template on the unit sphere at μ = 1: a cycle of geodesic radius s,
   // chord 2 sin(s/2) from the focus.
