@@ -7,7 +7,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -225,11 +224,11 @@ double period_of(const std::vector<Vec3>& pts, const std::vector<double>& speeds
 // ln P′(r*) of the forward return map: for a flow on a surface the Poincaré map's slope at a
 // periodic orbit is exp(∮ div V dt) (Liouville's formula for the linearised flow; dt =
 // ds/|V| along it), whatever the section; div V on each face is the trace of the field's
-// linear interpolant's Jacobian there (the covariant divergence on surfaces). Exact for the template (r′ = μr − r³ at r² = μ:
-// div V = 2μ − 4r² = −2μ over a period of 2π, ln P′ = −4πμ), and, unlike the slope of D
-// by differences, resolved however strongly the cycle attracts: where P′ < 1e-2 the
-// differences of D over ±¼ edge length were the integrator's noise (P′ of the μ = 1 cycle
-// of example 23 came out −0.005, e^{−4π} = 3.5e-6).
+// linear interpolant's Jacobian there (the covariant divergence on surfaces). Exact for the
+// template (r′ = μr − r³ at r² = μ: div V = 2μ − 4r² = −2μ over a period of 2π, ln P′ =
+// −4πμ), and, unlike the slope of D by differences, resolved however strongly the cycle
+// attracts: where P′ < 1e-2 the differences of D over ±¼ edge length were the integrator's
+// noise (P′ of the μ = 1 cycle of example 23 came out −0.005, e^{−4π} = 3.5e-6).
 double log_multiplier(const TangentBundle& bundle, std::span<const cplx> values, const std::vector<Vec3>& pts,
                       const std::vector<double>& speeds, const std::vector<int>& faces) {
   std::vector<double> rate(pts.size());  // div V / |V| at each point
