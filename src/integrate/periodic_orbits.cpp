@@ -317,12 +317,21 @@ std::vector<PeriodicOrbit> find_frame_orbits(const TangentBundle& bundle, std::s
       // piecewise-linear field closes into "cycles" of either stability (the double gyre's
       // cells: repelling loops 0.008 from the walls, multiplier 1.15, in single frames).
       if (boundary_distance(turn.points, scales->boundary) < 0.5 * scales->edge) continue;
-      // Nor, on a surface, a loop that runs where the surface faces away from the focus's
-      // tangent plane: radius and winding are measured in that plane, which folds there
-      // (on a sphere a loop from 30° to 150° off the focus projected to radii 0.49–0.52 and
-      // closed; it was the other focus's cycle seen through the fold).
+      // Nor, on a surface, a loop that runs through the fold of the focus's plane: radius and
+      // winding are measured in that plane, which sees the surface one to one only until it
+      // has turned by 90°; past it, points 30° and 150° round a sphere project to one radius,
+      // and a sphere's Hopf cycle was found a second time from the antipodal focus as a
+      // "cycle" of radius 1.66. Measured by the points' elevation over the plane seen from
+      // the focus: those loops reached 74–82° (past 140° round the sphere), true cycles 18°
+      // on the sphere and up to 60° on CGAL's cow and elephant, where the focus face's
+      // normal is a scan's (one face normal facing away had dropped the cow's cycle).
       const Vec3 up = bundle.face_normal(focus.where.face);
-      if (std::any_of(turn.faces.begin(), turn.faces.end(), [&](int f) { return bundle.face_normal(f).dot(up) <= 0; }))
+      const double steep = std::tan(70 * std::numbers::pi / 180);
+      if (std::any_of(turn.points.begin(), turn.points.end(), [&](const Vec3& x) {
+            const Vec3 d = x - focus.position;
+            const double h = d.dot(up);
+            return std::abs(h) > steep * (d - h * up).norm();
+          }))
         continue;
       orbit.multiplier = std::exp(log_p);  // +inf past e^709: JSON null
       if (sign < 0) {
