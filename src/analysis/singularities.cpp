@@ -17,22 +17,6 @@ using namespace detail;
 
 namespace {
 
-// The Jacobian of the linear map on face f taking its corners to w (the values in the face
-// frame): w(y) = w0 + J·y with y the face coordinates relative to corner 0, so
-// J·[y1 y2] = [w1 − w0, w2 − w0].
-Mat2 face_linear_jacobian(const TangentBundle& bundle, int f, const std::array<cplx, 3>& w) {
-  const Mesh& mesh = bundle.mesh();
-  const Face& t = mesh.face(f);
-  const Vec3& x0 = mesh.position(t[0]);
-  Mat2 Y, W;
-  for (int c = 1; c < 3; ++c) {
-    const Vec3 d = mesh.position(t[static_cast<size_t>(c)]) - x0;
-    Y.col(c - 1) = Vec2(d.dot(bundle.face_e1(f)), d.dot(bundle.face_e2(f)));
-    W.col(c - 1) = to_vec2(w[static_cast<size_t>(c)] - w[0]);
-  }
-  return W * Y.inverse();
-}
-
 
 
 
@@ -196,6 +180,20 @@ std::vector<double> face_curvatures(const TangentBundle& bundle) {
   for (int f = 0; f < bundle.mesh().num_faces(); ++f)
     out[static_cast<size_t>(f)] = face_curvature(bundle, f);
   return out;
+}
+
+// w(y) = w0 + J·y with y the face coordinates relative to corner 0, so J·[y1 y2] = [w1 − w0, w2 − w0].
+Mat2 face_linear_jacobian(const TangentBundle& bundle, int f, const std::array<cplx, 3>& w) {
+  const Mesh& mesh = bundle.mesh();
+  const Face& t = mesh.face(f);
+  const Vec3& x0 = mesh.position(t[0]);
+  Mat2 Y, W;
+  for (int c = 1; c < 3; ++c) {
+    const Vec3 d = mesh.position(t[static_cast<size_t>(c)]) - x0;
+    Y.col(c - 1) = Vec2(d.dot(bundle.face_e1(f)), d.dot(bundle.face_e2(f)));
+    W.col(c - 1) = to_vec2(w[static_cast<size_t>(c)] - w[0]);
+  }
+  return W * Y.inverse();
 }
 
 Mat2 face_jacobian(const TangentBundle& bundle, std::span<const cplx> values, int face) {

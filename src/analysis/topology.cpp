@@ -281,14 +281,7 @@ public:
     s.where.bary = zero_barycentric(w);
     s.position = Vec3::Zero();
     for (int c = 0; c < 3; ++c) s.position += s.where.bary[c] * mesh_.position(t[static_cast<size_t>(c)]);
-    const Vec3& x0 = mesh_.position(t[0]);
-    Mat2 Y, W;
-    for (int c = 1; c < 3; ++c) {
-      const Vec3 d = mesh_.position(t[static_cast<size_t>(c)]) - x0;
-      Y.col(c - 1) = Vec2(d.dot(bundle_.face_e1(f)), d.dot(bundle_.face_e2(f)));
-      W.col(c - 1) = to_vec2(w[static_cast<size_t>(c)] - w[0]);
-    }
-    const Mat2 J = W * Y.inverse();
+    const Mat2 J = face_linear_jacobian(bundle_, f, w);
     if (index < 0) {
       s.type = SingularityType::saddle;
     } else {

@@ -37,6 +37,7 @@
 #include "tvf/field/field_sampler.h"
 #include "tvf/mesh/tangent_bundle.h"
 
+#include <array>
 #include <span>
 #include <string>
 #include <vector>
@@ -93,6 +94,8 @@ std::vector<int> face_indices(const TangentBundle& bundle, std::span<const cplx>
 // face_e2): the vertex values carried into the face (corner_to_face); on a surface the
 // covariant derivative. Its trace is the face's divergence.
 Mat2 face_jacobian(const TangentBundle& bundle, std::span<const cplx> values, int face);
+// The same from the face's three corner values already carried into the face frame.
+Mat2 face_linear_jacobian(const TangentBundle& bundle, int face, const std::array<cplx, 3>& w);
 
 // Ω_f above: the rotation of a vector transported counter-clockwise around face f by the
 // bundle's connection (radians; positive where the surface is positively curved), i.e.
