@@ -206,19 +206,23 @@ export class LcsOverlay {
       Promise.allSettled(lines.map((l) => lcsApi.timeline(l.line, l.t, t))),
     ]);
     if (ticket !== this.dyeTicket) return;
-    const refused = (r: PromiseSettledResult<CurveAnswer>) =>
-      r.status === "rejected" && r.reason instanceof ApiError && r.reason.status !== 409 && r.reason.status < 500;
-    const problems = [...streaks, ...material].filter((r) => r.status === "rejected");
+    const failure = (r: PromiseSettledResult<CurveAnswer>) => (r.status === "rejected" ? (r.reason as Error) : undefined);
+    // 409: the field changed meanwhile (a newer update follows); 5xx: the server's fault.
+    const stale = (e: Error) => e instanceof ApiError && e.status === 409;
+    const refused = (r: PromiseSettledResult<CurveAnswer>) => {
+      const e = failure(r);
+      return e instanceof ApiError && !stale(e) && e.status < 500;
+    };
     // Only what these results judged: seeds and lines added meanwhile stay.
     this.seeds = this.seeds.filter((s) => { const i = seeds.indexOf(s); return i < 0 || !refused(streaks[i]); });
     this.lines = this.lines.filter((l) => { const i = lines.indexOf(l); return i < 0 || !refused(material[i]); });
-    const kept = <T>(all: PromiseSettledResult<T>[]) =>
-      all.flatMap((r) => (r.status === "fulfilled" ? [r.value] : []));
+    const kept = (all: PromiseSettledResult<CurveAnswer>[]) => all.flatMap((r) => (r.status === "fulfilled" ? [r.value] : []));
     this.dye = kept(streaks);
     this.timelines = kept(material);
-    const shown = problems.find((r) => !(r.status === "rejected" && r.reason instanceof ApiError && r.reason.status === 409));
-    if (shown && shown.status === "rejected") this.report("dye", (shown.reason as Error).message);
-    else if (problems.length === 0) this.cleared("dye");
+    const failures = [...streaks, ...material].flatMap((r) => failure(r) ?? []);
+    const shown = failures.find((e) => !stale(e));
+    if (shown) this.report("dye", shown.message);
+    else if (failures.length === 0) this.cleared("dye");
     this.onChange();
   }
 

@@ -38,6 +38,16 @@ void main() {
   gl_FragColor = vec4(vColor * (0.75 + 0.25 * abs(normalize(vNormal).z)), 1.0);
 }`;
 
+// Takes every child out of a group, freeing its geometry (and its material, where the
+// group's children each have their own; the design's and the paths' share theirs).
+function emptyGroup(group: THREE.Group, materials: boolean) {
+  for (const c of [...group.children]) {
+    group.remove(c);
+    (c as THREE.Mesh).geometry?.dispose();
+    if (materials) ((c as THREE.Mesh).material as THREE.Material | undefined)?.dispose();
+  }
+}
+
 export class SurfaceView {
   private readonly renderer: THREE.WebGLRenderer;
   private readonly scene = new THREE.Scene();
@@ -136,10 +146,7 @@ export class SurfaceView {
   // paths, so that the analysis's time-coloured path under it stays visible).
   // `ends`: dots at the first and last point only (a link drawn over the surface).
   setDesign(lines: { points: number[][]; color: string; dashed?: boolean; ends?: boolean }[]) {
-    for (const c of [...this.design.children]) {
-      this.design.remove(c);
-      (c as THREE.Mesh).geometry?.dispose();
-    }
+    emptyGroup(this.design, false);
     for (const line of lines) {
       if (line.points.length < 2) continue;
       const pts = line.points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
@@ -263,11 +270,7 @@ export class SurfaceView {
   // The dye: curves of [x, y, z] points on the mesh (each an unbroken run) drawn as thin
   // tubes through them, and the seeds as balls.
   setDye(curves: { points: number[][]; color: string }[], seeds: number[][], seedColor: string) {
-    for (const c of [...this.dye.children]) {
-      this.dye.remove(c);
-      (c as THREE.Mesh).geometry?.dispose();
-      ((c as THREE.Mesh).material as THREE.Material | undefined)?.dispose();
-    }
+    emptyGroup(this.dye, true);
     for (const c of curves) {
       if (c.points.length < 2) continue;
       const pts = c.points.map((p) => new THREE.Vector3(p[0], p[1], p[2]));
@@ -286,11 +289,7 @@ export class SurfaceView {
   // The periodic orbits of the shown frame (orbits.ts): closed tubes on the mesh, a little
   // thicker than the dye's.
   setOrbits(loops: { points: number[][]; color: string }[]) {
-    for (const c of [...this.orbits.children]) {
-      this.orbits.remove(c);
-      (c as THREE.Mesh).geometry?.dispose();
-      ((c as THREE.Mesh).material as THREE.Material | undefined)?.dispose();
-    }
+    emptyGroup(this.orbits, true);
     for (const loop of loops) {
       const pts = loop.points.slice(0, -1).map((p) => new THREE.Vector3(p[0], p[1], p[2]));
       if (pts.length < 3) continue;
@@ -310,11 +309,7 @@ export class SurfaceView {
   }
 
   private drawMark() {
-    for (const c of [...this.mark.children]) {
-      this.mark.remove(c);
-      (c as THREE.Mesh).geometry?.dispose();
-      ((c as THREE.Mesh).material as THREE.Material | undefined)?.dispose();
-    }
+    emptyGroup(this.mark, true);
     for (const p of this.surface ? this.markAt : []) {
       const at = new THREE.Vector3(p[0], p[1], p[2]);
       // The ring is drawn over everything (the faces round a coarse mesh's point tilt away
@@ -425,10 +420,7 @@ export class SurfaceView {
   // The analysis's singularity paths coloured by time over `range` (surface/paths.ts);
   // undefined hides them.
   setPaths(analysis: Analysis | undefined, range: [number, number], selected = -1) {
-    for (const c of [...this.paths.children]) {
-      this.paths.remove(c);
-      (c as THREE.Mesh).geometry?.dispose();
-    }
+    emptyGroup(this.paths, false);
     if (analysis) for (const o of pathObjects(analysis, range, this.radius, selected)) this.paths.add(o);
     this.render();
   }
